@@ -1,0 +1,33 @@
+# The two commands of the README. Both set up .venv (Python >= 3.10, the package, an OpenCL CPU runtime).
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+.PHONY: demo test setup clean docs bench
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml scripts/install-opencl.sh
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV) || { \
+	  echo "python3 -m venv failed; trying Debian's python3-venv"; \
+	  apt-get update -qq && apt-get install -y -qq python3-venv >/dev/null && $(PYTHON) -m venv $(VENV); }
+	$(PY) -m pip install -q --disable-pip-version-check -e '.[test]'
+	bash scripts/install-opencl.sh $(PY)
+	@touch $(STAMP)
+
+demo: $(STAMP)
+	$(VENV)/bin/waveoptics info
+	$(VENV)/bin/waveoptics demo -o out/demo --overwrite
+
+test: $(STAMP)
+	$(PY) -m pytest -q -ra
+
+docs: $(STAMP)
+	$(PY) scripts/make_docs.py
+
+bench: $(STAMP)
+	$(PY) -m waveoptics bench
+
+clean:
+	rm -rf $(VENV) out build dist .pytest_cache

@@ -1,0 +1,65 @@
+"""Command-line interface: ``waveoptics <command> ...`` (also ``python -m waveoptics``).
+
+Each sub-command lives in its own module in this package and exposes ``register(subparsers)``, which adds
+its parser and sets ``func`` to the function that runs it. Modules are discovered automatically, so adding
+a command means adding one file. Any :class:`ValueError` / :class:`TypeError` raised while running (every
+user mistake is one) is printed as one line on stderr with exit code 2; ``--debug`` shows the traceback.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+
+from .. import __version__
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors (no usage dump) and exit code 2."""
+
+    def error(self, message):  # noqa: D401 - argparse API
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="waveoptics",
+                     description="Spectral wave-optics diffraction simulator (Kirchhoff scattering + microfacets).")
+    parser.add_argument("--version", action="version", version=f"waveoptics {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        if info.name.startswith("_"):
+            continue
+        mod = importlib.import_module(f"{__name__}.{info.name}")
+        if hasattr(mod, "register"):
+            mod.register(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``waveoptics`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    debug = getattr(args, "debug", False)
+    try:
+        rc = args.func(args)
+    except KeyboardInterrupt:
+        print("waveoptics: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, TypeError) as exc:
+        if debug:
+            raise
+        msg = str(exc).strip().splitlines()
+        first = msg[0] if msg else type(exc).__name__
+        print(f"waveoptics {args.command}: error: {first}", file=sys.stderr)
+        if len(msg) > 1 and "build" in first:
+            print("\n".join(msg[1:]), file=sys.stderr)
+        return 2
+    except OSError as exc:
+        if debug:
+            raise
+        print(f"waveoptics {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
+              file=sys.stderr)
+        return 2
+    return int(rc or 0)

@@ -1,0 +1,39 @@
+"""Options and output helpers shared by all sub-commands."""
+from __future__ import annotations
+
+import sys
+
+from ..io import to_json
+
+
+def add_common(parser, *, json: bool = True, device: bool = True) -> None:
+    """Add ``--device``, ``--json`` and ``--debug`` to a sub-command parser."""
+    if device:
+        parser.add_argument("--device", metavar="NAME",
+                            help="OpenCL device: substring of 'platform device' or P:D indices "
+                                 "(default: $WAVEOPTICS_DEVICE, else first GPU, else PoCL CPU)")
+    if json:
+        parser.add_argument("--json", action="store_true", help="print machine-readable JSON on stdout")
+    parser.add_argument("--debug", action="store_true", help="show the Python traceback on errors")
+
+
+def add_output(parser, *, required: bool = True, help: str = "output directory") -> None:
+    """Add ``-o/--output`` and ``--overwrite``."""
+    parser.add_argument("-o", "--output", required=required, metavar="OUTDIR", help=help)
+    parser.add_argument("--overwrite", action="store_true", help="replace outputs that already exist")
+
+
+def emit(args, data, text: str | None = None) -> None:
+    """Print *data* as JSON with ``--json``, else *text* (or the JSON if no text is given)."""
+    if getattr(args, "json", False) or text is None:
+        print(to_json(data, indent=2))
+    else:
+        print(text)
+
+
+def progress(iterable=None, *, total=None, desc=None, args=None):
+    """A tqdm progress bar on stderr, silent under ``--json`` or when stderr is not a terminal."""
+    from tqdm.auto import tqdm
+
+    quiet = (args is not None and getattr(args, "json", False)) or not sys.stderr.isatty()
+    return tqdm(iterable, total=total, desc=desc, disable=quiet, file=sys.stderr, leave=False)

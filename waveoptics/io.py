@@ -1,0 +1,148 @@
+"""File output that never leaves a half-written file under a final name, plus JSON and OpenEXR helpers.
+
+Every writer goes through :func:`atomic_path`: the data is written to a temporary name in the same
+directory and moved into place with :func:`os.replace` only when complete, so an interrupted or failed
+run leaves the previous result (if any) untouched.
+"""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import OutputExistsError, WaveopticsError
+
+
+@contextlib.contextmanager
+def atomic_path(final, *, overwrite: bool = True):
+    """Yield a temporary path next to *final*; on success it is renamed to *final*.
+
+    Parameters
+    ----------
+    final : str or Path
+        The destination file.
+    overwrite : bool
+        When False and *final* exists, raise :class:`OutputExistsError` before writing anything.
+    """
+    final = Path(final)
+    if final.exists() and not overwrite:
+        raise OutputExistsError(f"output {str(final)!r} already exists; pass --overwrite to replace it")
+    parent = final.parent if str(final.parent) else Path(".")
+    if not parent.is_dir():
+        raise WaveopticsError(f"output directory {str(parent)!r} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=f".partial{final.suffix}", dir=parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, final)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def prepare_outdir(path, *, overwrite: bool = False, expected=()) -> Path:
+    """Create output directory *path* (with parents) and check it is writable.
+
+    Parameters
+    ----------
+    expected : iterable of str
+        File names the run will write; if any exists and *overwrite* is False, refuse before computing.
+    """
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise WaveopticsError(f"output directory {str(p)!r} is a file, not a directory")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise WaveopticsError(f"cannot create output directory {str(p)!r}: {exc.strerror}") from None
+    if not os.access(p, os.W_OK | os.X_OK):
+        raise WaveopticsError(f"output directory {str(p)!r} is not writable")
+    if not overwrite:
+        clash = [name for name in expected if (p / name).exists()]
+        if clash:
+            raise OutputExistsError(f"output {str(p / clash[0])!r} already exists; pass --overwrite to replace it")
+    return p
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if np.isfinite(v) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def to_json(data, **kw) -> str:
+    """JSON text of *data*, converting numpy types; non-finite floats become ``null``."""
+    return json.dumps(_jsonable(data), **kw)
+
+
+def write_json(path, data, *, overwrite: bool = True) -> Path:
+    """Write *data* as indented JSON atomically."""
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        tmp.write_text(to_json(data, indent=2) + "\n")
+    return Path(path)
+
+
+def write_exr(path, channels: dict, header: dict | None = None, *, overwrite: bool = True,
+              half: bool = False) -> Path:
+    """Write a scanline OpenEXR file atomically.
+
+    Parameters
+    ----------
+    channels : dict of str -> ndarray (H, W)
+        Channel name to pixels; stored as float32 (or float16 with *half*).
+    header : dict
+        Extra header attributes. Floats that need full precision should be passed as strings,
+        because OpenEXR stores Python floats as 32-bit.
+    """
+    import OpenEXR
+
+    dtype = np.float16 if half else np.float32
+    chans = {}
+    shape = None
+    for name, arr in channels.items():
+        a = np.ascontiguousarray(np.asarray(arr, dtype=dtype))
+        if a.ndim != 2:
+            raise WaveopticsError(f"EXR channel {name!r} must be 2-D, got shape {a.shape}")
+        if shape is not None and a.shape != shape:
+            raise WaveopticsError(f"EXR channel {name!r} has shape {a.shape}, others {shape}")
+        shape = a.shape
+        chans[name] = a
+    hdr = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    hdr.update(header or {})
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        OpenEXR.File(hdr, chans).write(str(tmp))
+    return Path(path)
+
+
+def read_exr(path) -> tuple[dict, dict]:
+    """Read an OpenEXR file: returns (channels as float arrays, header dict)."""
+    import OpenEXR
+
+    p = Path(path)
+    if not p.is_file():
+        raise WaveopticsError(f"file {str(p)!r} does not exist")
+    try:
+        f = OpenEXR.File(str(p))
+        chans = {name: np.asarray(c.pixels) for name, c in f.channels().items()}
+        header = dict(f.header())
+    except Exception as exc:  # noqa: BLE001 - the bindings raise plain RuntimeError/Exception
+        raise WaveopticsError(f"{str(p)!r} is not a readable OpenEXR file ({exc})") from None
+    return chans, header

@@ -1,0 +1,270 @@
+"""OpenCL runtime: device choice, contexts, queues and the program cache.
+
+This module is the only one that creates OpenCL contexts or builds programs. Everything else asks it for
+a :class:`Runtime` (context + queue + device facts) and for built programs.
+
+Device choice
+-------------
+``select_device(spec)`` takes *spec* from the argument, else the ``WAVEOPTICS_DEVICE`` environment variable,
+else ``PYOPENCL_TEST`` (the pyopencl test-suite convention), and matches it as a case-insensitive substring
+of ``"<platform name> <device name>"``; a spec of the form ``P:D`` picks platform index P, device index D.
+With no spec the first GPU wins, else the PoCL CPU device, else any device.
+
+Programs
+--------
+Kernel sources live in ``kernels/*.cl`` (inside the installed package as ``waveoptics/kernels``).
+:func:`build_program` builds each (context, file, options) once and keeps it; the kernel directory is on the
+include path so kernels can ``#include "wo_common.h"``, and pyopencl adds its own include directory so
+``#include <pyopencl-complex.h>`` works. A failed build raises with the kernel file name and the build log.
+"""
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import threading
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from .errors import NoOpenCLError, WaveopticsError
+
+INSTALL_HINT = ("no OpenCL platform found; install a CPU runtime with 'apt-get install pocl-opencl-icd' "
+                "(or 'pip install pocl-binary-distribution'), or run 'make demo' which does it")
+
+
+def kernel_dir() -> Path:
+    """Directory holding the ``.cl`` sources: inside the installed package, else the source checkout."""
+    try:
+        packaged = Path(str(resources.files("waveoptics") / "kernels"))
+        if packaged.is_dir():
+            return packaged
+    except (ModuleNotFoundError, TypeError):  # pragma: no cover - exotic loaders
+        pass
+    checkout = Path(__file__).resolve().parent.parent / "kernels"
+    if checkout.is_dir():
+        return checkout
+    raise WaveopticsError("kernel sources not found: neither waveoptics/kernels nor ./kernels exists")
+
+
+def kernel_source(filename: str) -> str:
+    """Text of one kernel file, e.g. ``kernel_source("fresnel.cl")``."""
+    path = kernel_dir() / filename
+    if not path.is_file():
+        raise WaveopticsError(f"kernel file {filename!r} not found in {kernel_dir()}")
+    return path.read_text()
+
+
+def _cl():
+    try:
+        import pyopencl as cl
+    except ImportError as exc:  # pragma: no cover - dependency is mandatory
+        raise NoOpenCLError(f"pyopencl is not importable ({exc}); reinstall with 'make demo'") from None
+    return cl
+
+
+def platforms():
+    """All OpenCL platforms, or ``[]`` when there is no ICD loader or no platform."""
+    cl = _cl()
+    try:
+        return cl.get_platforms()
+    except cl.Error:  # PLATFORM_NOT_FOUND_KHR when no ICD is registered
+        return []
+
+
+def opencl_available() -> bool:
+    """Whether at least one OpenCL device exists."""
+    return any(_devices(p) for p in platforms())
+
+
+def _devices(platform):
+    cl = _cl()
+    try:
+        return platform.get_devices()
+    except cl.Error:
+        return []
+
+
+def _device_label(platform, device) -> str:
+    return f"{platform.name.strip()} {device.name.strip()}"
+
+
+def device_spec_from_env() -> str | None:
+    """The device request from ``WAVEOPTICS_DEVICE`` or ``PYOPENCL_TEST``, if any."""
+    return os.environ.get("WAVEOPTICS_DEVICE") or os.environ.get("PYOPENCL_TEST") or None
+
+
+def select_device(spec: str | None = None):
+    """Choose an OpenCL device.
+
+    Parameters
+    ----------
+    spec : str, optional
+        Substring of ``"<platform> <device>"`` (case-insensitive) or ``"P:D"`` indices.
+        Defaults to the environment (see module docstring).
+
+    Returns
+    -------
+    pyopencl.Device
+    """
+    cl = _cl()
+    spec = spec if spec else device_spec_from_env()
+    plats = platforms()
+    pairs = [(p, d) for p in plats for d in _devices(p)]
+    if not pairs:
+        raise NoOpenCLError(INSTALL_HINT)
+    if spec:
+        s = spec.strip()
+        if ":" in s and all(part.isdigit() for part in s.split(":", 1)):
+            pi, di = (int(x) for x in s.split(":", 1))
+            try:
+                return _devices(plats[pi])[di]
+            except IndexError:
+                pass
+        else:
+            for p, d in pairs:
+                if s.lower() in _device_label(p, d).lower():
+                    return d
+        labels = "; ".join(_device_label(p, d) for p, d in pairs)
+        raise NoOpenCLError(f"no OpenCL device matches {spec!r}; available: {labels}")
+    for p, d in pairs:
+        if d.type & cl.device_type.GPU:
+            return d
+    for p, d in pairs:
+        if "portable computing language" in p.name.lower() or "pocl" in p.name.lower():
+            return d
+    return pairs[0][1]
+
+
+def has_fp64(device) -> bool:
+    """Whether *device* supports double precision (``cl_khr_fp64`` or a non-zero double FP config)."""
+    try:
+        if device.double_fp_config:
+            return True
+    except Exception:  # noqa: BLE001 - some drivers raise instead of returning 0
+        pass
+    return "cl_khr_fp64" in device.extensions
+
+
+@dataclass(frozen=True)
+class Runtime:
+    """A context, an in-order queue and facts about the device."""
+
+    context: object
+    queue: object
+    device: object
+    fp64: bool
+
+    @property
+    def name(self) -> str:
+        return self.device.name.strip()
+
+    def require_fp64(self, what: str) -> None:
+        """Raise a clear error when *what* needs float64 and the device lacks it."""
+        if not self.fp64:
+            raise WaveopticsError(f"{what} needs float64, but device {self.name!r} has no fp64 support; "
+                                  "use precision='float32' or choose another device with --device")
+
+    def real_dtype(self, precision: str):
+        """numpy dtype for 'float32'/'float64', checking fp64 support."""
+        if precision in ("float64", "double", "fp64"):
+            self.require_fp64("precision float64")
+            return np.float64
+        if precision in ("float32", "single", "fp32"):
+            return np.float32
+        raise WaveopticsError(f"precision {precision!r} is not allowed; use float32 or float64")
+
+
+_lock = threading.RLock()
+_runtimes: dict = {}
+
+
+def get_runtime(device: str | None = None) -> Runtime:
+    """The process-wide :class:`Runtime` for a device spec (created once and kept)."""
+    cl = _cl()
+    dev = select_device(device)
+    key = (dev.platform.name, dev.name, dev.int_ptr)
+    with _lock:
+        rt = _runtimes.get(key)
+        if rt is None:
+            ctx = cl.Context([dev])
+            rt = Runtime(ctx, cl.CommandQueue(ctx), dev, has_fp64(dev))
+            _runtimes[key] = rt
+        return rt
+
+
+_programs: dict = {}
+
+
+def build_options(precision_dtype=np.float32, extra=()) -> tuple[str, ...]:
+    """Standard ``-D`` options: ``WO_DOUBLE`` for float64 builds, plus *extra*."""
+    opts = []
+    if np.dtype(precision_dtype) == np.float64:
+        opts.append("-DWO_DOUBLE=1")
+    opts.extend(extra)
+    return tuple(opts)
+
+
+def build_program(runtime: Runtime, filename: str, options=()):
+    """Build kernel file *filename* for *runtime* with *options*, once; later calls return the same program.
+
+    Raises
+    ------
+    WaveopticsError
+        With the kernel file name and the compiler's build log when the build fails.
+    """
+    cl = _cl()
+    src = kernel_source(filename)
+    opts = tuple(options) + (f"-I{kernel_dir()}",)
+    # headers included by the file count in the key so that an edited header rebuilds
+    digest = hashlib.sha1(src.encode())
+    for hdr in sorted(kernel_dir().glob("*.h")):
+        digest.update(hdr.read_bytes())
+    key = (id(runtime.context), filename, digest.hexdigest(), opts)
+    with _lock:
+        prg = _programs.get(key)
+        if prg is not None:
+            return prg
+        try:
+            prg = cl.Program(runtime.context, src).build(options=list(opts))
+        except cl.RuntimeError as exc:
+            raise WaveopticsError(f"OpenCL build of kernels/{filename} failed on {runtime.name!r} "
+                                  f"with options {' '.join(opts)}:\n{exc}") from None
+        _programs[key] = prg
+        return prg
+
+
+def program_cache_size() -> int:
+    """Number of programs built so far (used by tests of the build-once rule)."""
+    return len(_programs)
+
+
+@functools.lru_cache(maxsize=1)
+def pocl_version() -> str | None:
+    """PoCL version string from its platform, if PoCL is present."""
+    for p in platforms():
+        if "portable computing language" in p.name.lower():
+            return p.version
+    return None
+
+
+def describe() -> dict:
+    """Platforms and devices as plain data (used by ``waveoptics info``)."""
+    out = []
+    for p in platforms():
+        devs = []
+        for d in _devices(p):
+            devs.append({
+                "name": d.name.strip(),
+                "type": _cl().device_type.to_string(d.type),
+                "compute_units": int(d.max_compute_units),
+                "fp64": bool(has_fp64(d)),
+                "max_work_group_size": int(d.max_work_group_size),
+                "global_mem_bytes": int(d.global_mem_size),
+                "opencl_version": d.version.strip(),
+            })
+        out.append({"name": p.name.strip(), "vendor": p.vendor.strip(), "version": p.version.strip(),
+                    "devices": devs})
+    return {"platforms": out}

@@ -1,0 +1,156 @@
+"""Parsing of quantities with units, as typed on the command line or in scene files.
+
+Lengths carry an SI suffix (``5nm``, ``1.2um``, ``64 µm``, ``0.5mm``, ``1e-6m``); wavelengths are
+in nanometres; angles are in degrees. Every parser raises :class:`~waveoptics.errors.WaveopticsError`
+naming the bad text and the accepted forms.
+"""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from .errors import WaveopticsError
+
+#: metres per unit
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "A": 1e-10}
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_QTY = re.compile(rf"^\s*({_NUMBER})\s*([a-zA-Zµμ]*)\s*$")
+
+
+def parse_length(text, *, default_unit: str | None = None, name: str = "length",
+                 allow_zero: bool = False, allow_negative: bool = False) -> float:
+    """Parse a length such as ``"5nm"`` or ``"1.2um"`` and return it in metres.
+
+    Parameters
+    ----------
+    text : str or float
+        The quantity. A bare number is taken in *default_unit*; without one it is refused.
+    default_unit : str, optional
+        Unit of bare numbers (one of :data:`LENGTH_UNITS`).
+    name : str
+        Name used in error messages (e.g. ``"--sigma"``).
+
+    Returns
+    -------
+    float
+        Length in metres.
+    """
+    if isinstance(text, (int, float, np.floating, np.integer)):
+        if default_unit is None:
+            raise WaveopticsError(f"{name} {text!r} needs a unit (e.g. 5nm, 1.2um, 0.5mm)")
+        value, unit = float(text), default_unit
+    else:
+        m = _QTY.match(str(text))
+        if not m:
+            raise WaveopticsError(f"{name} {text!r} is not a length; write a number and a unit, "
+                                  f"e.g. 5nm, 1.2um, 0.5mm (units: {', '.join(LENGTH_UNITS)})")
+        value, unit = float(m.group(1)), m.group(2) or default_unit
+        if unit is None:
+            raise WaveopticsError(f"{name} {text!r} needs a unit (e.g. 5nm, 1.2um, 0.5mm)")
+        if unit not in LENGTH_UNITS:
+            raise WaveopticsError(f"{name} {text!r} has unknown unit {unit!r}; allowed: {', '.join(LENGTH_UNITS)}")
+    metres = value * LENGTH_UNITS[unit]
+    if not math.isfinite(metres):
+        raise WaveopticsError(f"{name} {text!r} is not finite")
+    if metres < 0 and not allow_negative:
+        raise WaveopticsError(f"{name} {text!r} is negative; it must be >= 0")
+    if metres == 0 and not allow_zero:
+        raise WaveopticsError(f"{name} {text!r} is zero; it must be > 0")
+    return metres
+
+
+def parse_number_list(text, *, name: str = "value") -> np.ndarray:
+    """Parse ``"a:b:step"`` (inclusive of *b* when it falls on the grid) or ``"a,b,c"`` or ``"a"``."""
+    s = str(text).strip()
+    try:
+        if ":" in s:
+            parts = [float(p) for p in s.split(":")]
+            if len(parts) != 3:
+                raise ValueError
+            a, b, step = parts
+            if step <= 0 or b < a:
+                raise WaveopticsError(f"{name} {text!r}: a range START:STOP:STEP needs STEP > 0 and STOP >= START")
+            n = int(math.floor((b - a) / step + 1e-9)) + 1
+            return a + step * np.arange(n)
+        return np.array([float(p) for p in s.split(",") if p.strip() != ""], dtype=float)
+    except WaveopticsError:
+        raise
+    except ValueError:
+        raise WaveopticsError(f"{name} {text!r} is not a number list; write START:STOP:STEP or A,B,C") from None
+
+
+def parse_wavelengths(text, *, name: str = "--wavelengths") -> np.ndarray:
+    """Parse wavelengths in nm (``"400:700:10"``, ``"450,550,650"``, ``"550"``, units ``nm``/``um`` allowed).
+
+    Returns
+    -------
+    numpy.ndarray
+        Wavelengths in nanometres, each > 0 and finite.
+    """
+    s = str(text).strip().replace("nm", "")
+    if "um" in s or "µm" in s:
+        vals = np.array([parse_length(p, name=name) * 1e9 for p in s.split(",")])
+    else:
+        vals = parse_number_list(s, name=name)
+    check_wavelengths(vals, name=name)
+    return vals
+
+
+def check_wavelengths(wavelength_nm, *, name: str = "wavelength") -> np.ndarray:
+    """Validate wavelengths in nm: finite and > 0. Returns them as a float array."""
+    w = np.atleast_1d(np.asarray(wavelength_nm, dtype=float))
+    if w.size == 0:
+        raise WaveopticsError(f"{name}: no wavelengths given")
+    bad = w[~np.isfinite(w) | (w <= 0)]
+    if bad.size:
+        raise WaveopticsError(f"{name} {bad[0]!r} nm is not allowed; wavelengths must be finite and > 0 nm")
+    return w
+
+
+def parse_direction(text, *, name: str = "--incident", need_phi: bool = False) -> tuple[float, float]:
+    """Parse ``"THETA[,PHI]"`` in degrees; θ from the normal in [0, 90], φ about the normal (any value).
+
+    Returns
+    -------
+    (theta_deg, phi_deg) : tuple of float
+    """
+    parts = [p.strip().replace("deg", "") for p in str(text).split(",")]
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        raise WaveopticsError(f"{name} {text!r} is not THETA[,PHI] in degrees") from None
+    if len(vals) not in ((2,) if need_phi else (1, 2)):
+        raise WaveopticsError(f"{name} {text!r}: give {'THETA,PHI' if need_phi else 'THETA[,PHI]'} in degrees")
+    theta = vals[0]
+    phi = vals[1] if len(vals) == 2 else 0.0
+    check_theta(theta, name=name)
+    if not math.isfinite(phi):
+        raise WaveopticsError(f"{name} φ {phi!r} is not finite")
+    return theta, phi
+
+
+def check_theta(theta_deg, *, name: str = "theta") -> None:
+    """Refuse zenith angles outside [0°, 90°] (directions below the surface are not inputs)."""
+    t = np.atleast_1d(np.asarray(theta_deg, dtype=float))
+    bad = t[~np.isfinite(t) | (t < 0) | (t > 90)]
+    if bad.size:
+        raise WaveopticsError(f"{name} θ={bad[0]!r}° is outside the allowed range [0, 90] degrees")
+
+
+def direction_from_angles(theta_deg, phi_deg=0.0) -> np.ndarray:
+    """Unit vector(s) (x, y, z) for zenith θ and azimuth φ in degrees; z is the macro normal."""
+    t = np.radians(np.asarray(theta_deg, dtype=float))
+    p = np.radians(np.asarray(phi_deg, dtype=float))
+    t, p = np.broadcast_arrays(t, p)
+    return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+
+
+def angles_from_direction(w) -> tuple[np.ndarray, np.ndarray]:
+    """Zenith and azimuth in degrees of unit vector(s) ``w[..., 3]``."""
+    w = np.asarray(w, dtype=float)
+    theta = np.degrees(np.arccos(np.clip(w[..., 2], -1.0, 1.0)))
+    phi = np.degrees(np.arctan2(w[..., 1], w[..., 0]))
+    return theta, phi
