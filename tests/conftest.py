@@ -1,0 +1,35 @@
+"""Shared fixtures: OpenCL runtime chosen like pyopencl's test suite (WAVEOPTICS_DEVICE / PYOPENCL_TEST),
+precision parametrization with float64 gated on device support, and tolerances kept in one place."""
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from waveoptics import runtime as _runtime  # noqa: E402
+
+#: kernel-vs-NumPy tolerances per precision (absolute, on quantities of order 1)
+KERNEL_ATOL = {"float32": 2e-5, "float64": 1e-12}
+
+
+@pytest.fixture(scope="session")
+def rt():
+    """The OpenCL Runtime under test (skips with the install hint when there is no OpenCL)."""
+    if not _runtime.opencl_available():
+        pytest.skip(_runtime.INSTALL_HINT)
+    return _runtime.get_runtime()
+
+
+@pytest.fixture(params=["float32", "float64"])
+def precision(request, rt):
+    """Both precisions; float64 only where the device supports it."""
+    if request.param == "float64" and not rt.fp64:
+        pytest.skip(f"device {rt.name!r} has no fp64")
+    return request.param
+
+
+@pytest.fixture
+def rng():
+    """A seeded generator (seed 12345)."""
+    return np.random.default_rng(12345)
