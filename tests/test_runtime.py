@@ -1,0 +1,83 @@
+"""OpenCL runtime: device choice, build-once cache, build-failure reporting, packaging of kernels."""
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+
+from waveoptics import runtime
+from waveoptics.cli import main
+from waveoptics.errors import NoOpenCLError, WaveopticsError
+
+
+def test_kernel_dir_has_sources():
+    assert (runtime.kernel_dir() / "fresnel.cl").is_file()
+    assert "#include" in runtime.kernel_source("fresnel.cl")
+
+
+def test_program_built_once_per_context_and_options(rt):
+    before = runtime.program_cache_size()
+    p1 = runtime.build_program(rt, "fresnel.cl", runtime.build_options(np.float32))
+    p2 = runtime.build_program(rt, "fresnel.cl", runtime.build_options(np.float32))
+    assert p1 is p2
+    after_one = runtime.program_cache_size()
+    assert after_one - before <= 1
+    runtime.build_program(rt, "fresnel.cl", runtime.build_options(np.float32, ("-DWO_UNUSED_SWITCH=1",)))
+    assert runtime.program_cache_size() == after_one + 1
+
+
+def test_build_failure_names_file_and_shows_log(rt, tmp_path, monkeypatch):
+    (tmp_path / "broken.cl").write_text("__kernel void k(__global float *x) { x[0] = undefined_symbol; }\n")
+    for h in runtime.kernel_dir().glob("*.h"):
+        (tmp_path / h.name).write_text(h.read_text())
+    monkeypatch.setattr(runtime, "kernel_dir", lambda: tmp_path)
+    with pytest.raises(WaveopticsError, match=r"kernels/broken.cl failed") as exc:
+        runtime.build_program(rt, "broken.cl")
+    assert "undefined_symbol" in str(exc.value)
+
+
+def test_device_selection_by_substring_and_env(rt, monkeypatch):
+    label = rt.device.name.strip()[:6]
+    assert runtime.select_device(label).name == rt.device.name
+    monkeypatch.setenv("WAVEOPTICS_DEVICE", label)
+    assert runtime.select_device().name == rt.device.name
+    assert runtime.select_device("0:0") is not None
+    with pytest.raises(NoOpenCLError, match="no OpenCL device matches 'no-such-device'"):
+        runtime.select_device("no-such-device")
+
+
+def test_fp64_detection_is_reported(rt):
+    assert isinstance(rt.fp64, bool)
+    assert rt.real_dtype("float32") == np.float32
+    with pytest.raises(WaveopticsError, match="precision"):
+        rt.real_dtype("float16")
+
+
+def test_no_platform_gives_install_hint_and_exit_2(monkeypatch, capsys):
+    monkeypatch.setattr(runtime, "platforms", lambda: [])
+    with pytest.raises(NoOpenCLError, match="pocl-opencl-icd"):
+        runtime.select_device()
+    assert main(["info"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pocl-opencl-icd" in err[0] and "Traceback" not in err[0]
+
+
+def test_info_json(capsys):
+    import json
+
+    assert main(["info", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["platforms"] and data["platforms"][0]["devices"][0]["compute_units"] >= 1
+    assert {"waveoptics", "numpy", "pyopencl", "colour", "pocl"} <= set(data)
+
+
+@pytest.mark.slow
+def test_wheel_contains_kernels(tmp_path):
+    """The built wheel carries kernels/*.cl inside the package (force-include)."""
+    root = runtime.kernel_dir().parent
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
+                    str(tmp_path), str(root)], check=True)
+    wheel = next(tmp_path.glob("waveoptics-*.whl"))
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "waveoptics/kernels/fresnel.cl" in names and "waveoptics/kernels/wo_common.h" in names
