@@ -1,17 +1,47 @@
-"""Height fields: surface nanogeometry on a regular grid.
+"""Height fields: surface nanogeometry on a regular grid — type, generators, file formats and statistics.
 
-Heights and spacings are in metres. Arrays are indexed ``h[iy, ix]`` with x along axis 1.
+Heights and spacings are in metres. Arrays are indexed ``h[iy, ix]`` with x along axis 1 (spacing ``dx``) and
+y along axis 0 (spacing ``dy``). A patch of ``nx`` samples at spacing ``dx`` is ``Lx = nx dx`` long.
+
+Random surfaces are synthesized spectrally: real white Gaussian noise is Fourier transformed, filtered by the
+square root of the two-sided power spectral density (PSD) and transformed back, so each generated field is one
+period of a periodic, stationary, Gaussian surface [1]_ [2]_. PSD conventions (``∫ S d²f = σ²``, f in cycles/m):
+
+============  ==============================  ===========================================
+model         correlation C(r)                PSD S(f)
+============  ==============================  ===========================================
+gaussian      σ² exp(−r²/T²)                  π σ² T² exp(−π² T² f²)
+exponential   σ² exp(−r/T)                    2π σ² T² / (1 + (2π T f)²)^{3/2}
+abc           K-correlation (Bessel K)        A / (1 + (B f)²)^{C/2},  σ² = 2πA / (B²(C−2))
+============  ==============================  ===========================================
+
+For Gaussian heights with Gaussian correlation the rms of |∇h| is 2σ/T, the Beckmann roughness α that the
+geometric-optics limit of Kirchhoff scattering predicts [3]_; the rms slope along one axis is √2 σ/T.
+
+References
+----------
+.. [1] J. A. Ogilvy, *Theory of Wave Scattering from Random Rough Surfaces*, Adam Hilger, 1991, §2.2 (correlation
+   functions) and §4.2 (spectral synthesis).
+.. [2] E. L. Church, P. Z. Takacs, "The optimal estimation of finish parameters", Proc. SPIE 1530, 71–85, 1991
+   (ABC / K-correlation PSD); and E. L. Church, P. Z. Takacs, T. A. Leonard, "The prediction of BRDFs from
+   surface profile measurements", Proc. SPIE 1165, 136–150, 1989 (two-sided PSD normalization, profile PSDs).
+.. [3] P. Beckmann, A. Spizzichino, *The Scattering of Electromagnetic Waves from Rough Surfaces*, Pergamon,
+   1963, ch. 5 (Gaussian surface, slope variance 2σ²/T² per axis).
 """
 from __future__ import annotations
 
+import inspect
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.special import gammaln
 
-from .errors import WaveopticsError
+from .errors import WaveopticsError, unknown
+from .units import parse_length
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class HeightField:
     """Surface heights on a regular grid.
 
@@ -25,7 +55,14 @@ class HeightField:
         True where the height is valid (measured); invalid samples are excluded from statistics and
         from the scattering aperture.
     meta : dict
-        Free-form provenance (generator, parameters, seed, source file).
+        Free-form provenance (generator, parameters, seed, source file). ``meta["periodic"]`` is True when the
+        field is one period of a periodic surface (spectral generators), which the statistics use to skip
+        the leakage window.
+
+    Notes
+    -----
+    Height fields on the same grid add (``hf1 + hf2``: e.g. a micro-scale band plus a nano-scale band) and scale
+    by a real number (``0.5 * hf``). The sum's mask is the intersection of the masks.
     """
 
     heights: np.ndarray
@@ -35,7 +72,10 @@ class HeightField:
     meta: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        h = np.asarray(self.heights, dtype=np.float64)
+        h = np.asarray(self.heights)
+        if h.dtype.kind not in "fiu":
+            raise WaveopticsError(f"height field dtype {h.dtype} is not allowed; heights must be real numbers")
+        h = np.asarray(h, dtype=np.float64)
         if h.ndim == 1:
             h = h[None, :]
         if h.ndim != 2 or h.size == 0:
@@ -44,16 +84,21 @@ class HeightField:
             raise WaveopticsError("height field holds NaN or Inf values; heights must be finite (use a mask)")
         dy = self.dx if self.dy is None else self.dy
         for name, v in (("dx", self.dx), ("dy", dy)):
-            if not np.isfinite(v) or v <= 0:
+            try:
+                ok = np.isfinite(v) and v > 0
+            except TypeError:
+                ok = False
+            if not ok:
                 raise WaveopticsError(f"height-field spacing {name}={v!r} m is not allowed; it must be finite and > 0")
         object.__setattr__(self, "heights", h)
         object.__setattr__(self, "dx", float(self.dx))
         object.__setattr__(self, "dy", float(dy))
         if self.mask is not None:
-            m = np.asarray(self.mask, dtype=bool)
+            m = np.asarray(self.mask)
             if m.shape != h.shape:
                 raise WaveopticsError(f"mask shape {m.shape} differs from heights shape {h.shape}")
-            object.__setattr__(self, "mask", m)
+            object.__setattr__(self, "mask", m.astype(bool))
+        object.__setattr__(self, "meta", dict(self.meta or {}))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -66,7 +111,573 @@ class HeightField:
         ny, nx = self.shape
         return nx * self.dx, ny * self.dy
 
+    @property
+    def valid(self) -> np.ndarray:
+        """Boolean (ny, nx): the mask, or all True when there is none."""
+        return np.ones(self.shape, bool) if self.mask is None else self.mask
+
     def coords(self) -> tuple[np.ndarray, np.ndarray]:
         """Sample positions x (nx,) and y (ny,) in metres, centred on the patch."""
         ny, nx = self.shape
         return (np.arange(nx) - (nx - 1) / 2) * self.dx, (np.arange(ny) - (ny - 1) / 2) * self.dy
+
+    def same_grid(self, other: "HeightField") -> bool:
+        """True when *other* has the same shape and spacings (to 1e-9 relative)."""
+        return (self.shape == other.shape and math.isclose(self.dx, other.dx, rel_tol=1e-9)
+                and math.isclose(self.dy, other.dy, rel_tol=1e-9))
+
+    def __add__(self, other):
+        if isinstance(other, (int, float)) and other == 0:  # lets sum() start from 0
+            return self
+        if not isinstance(other, HeightField):
+            return NotImplemented
+        if not self.same_grid(other):
+            raise WaveopticsError(f"cannot add height fields on different grids: {self.shape} at "
+                                  f"({self.dx:g}, {self.dy:g}) m vs {other.shape} at ({other.dx:g}, {other.dy:g}) m")
+        if self.mask is None and other.mask is None:
+            mask = None
+        else:
+            mask = self.valid & other.valid
+        meta = {"model": "sum", "components": [self.meta, other.meta],
+                "periodic": bool(self.meta.get("periodic") and other.meta.get("periodic"))}
+        return HeightField(self.heights + other.heights, self.dx, self.dy, mask, meta)
+
+    __radd__ = __add__
+
+    def __mul__(self, factor):
+        if not isinstance(factor, (int, float, np.integer, np.floating)) or not np.isfinite(factor):
+            return NotImplemented
+        meta = {"model": "scaled", "factor": float(factor), "component": self.meta,
+                "periodic": bool(self.meta.get("periodic"))}
+        return HeightField(self.heights * float(factor), self.dx, self.dy, self.mask, meta)
+
+    __rmul__ = __mul__
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Power spectral densities (two-sided, ∫ S d²f = σ²) and their profile (1-D marginal) forms ∫ S(fx, fy) dfy.
+# ----------------------------------------------------------------------------------------------------------------
+
+def psd_gaussian(f, sigma, T):
+    """Two-sided 2-D PSD of a Gaussian-correlated surface, C(r) = σ² exp(−r²/T²).
+
+    Parameters
+    ----------
+    f : array_like, 1/m
+        Radial spatial frequency |f| (cycles per metre).
+    sigma : float, m
+        rms height σ.
+    T : float, m
+        Correlation length (C(T) = σ²/e).
+
+    Returns
+    -------
+    ndarray, m⁴
+        S(f) = π σ² T² exp(−π² T² f²), with ∫ S d²f = σ².
+
+    References
+    ----------
+    .. [1] Ogilvy 1991, §2.2; Church, Takacs & Leonard 1989 (two-sided normalization).
+    """
+    f = np.asarray(f, dtype=float)
+    return np.pi * sigma**2 * T**2 * np.exp(-(np.pi * T * f) ** 2)
+
+
+def psd_gaussian_profile(f, sigma, T):
+    """1-D PSD of a straight profile through a Gaussian-correlated surface: √π σ² T exp(−π² T² f²), m³.
+
+    It is ∫ S(fx, fy) dfy of :func:`psd_gaussian`, with ∫ S₁ df = σ² (Church, Takacs & Leonard 1989).
+    """
+    f = np.asarray(f, dtype=float)
+    return math.sqrt(math.pi) * sigma**2 * T * np.exp(-(np.pi * T * f) ** 2)
+
+
+def psd_exponential(f, sigma, T):
+    """Two-sided 2-D PSD of an exponentially correlated surface, C(r) = σ² exp(−r/T).
+
+    Parameters
+    ----------
+    f : array_like, 1/m
+        Radial spatial frequency.
+    sigma, T : float, m
+        rms height and correlation length (C(T) = σ²/e).
+
+    Returns
+    -------
+    ndarray, m⁴
+        S(f) = 2π σ² T² / (1 + (2π T f)²)^{3/2}; it is the ABC PSD with A = 2πσ²T², B = 2πT, C = 3.
+
+    References
+    ----------
+    .. [1] Ogilvy 1991, §2.2; Church & Takacs 1991 (K-correlation family, C = 3).
+    """
+    f = np.asarray(f, dtype=float)
+    return 2 * np.pi * sigma**2 * T**2 / (1 + (2 * np.pi * T * f) ** 2) ** 1.5
+
+
+def psd_exponential_profile(f, sigma, T):
+    """1-D PSD of a profile through an exponentially correlated surface: 2 σ² T / (1 + (2π T f)²), m³."""
+    f = np.asarray(f, dtype=float)
+    return 2 * sigma**2 * T / (1 + (2 * np.pi * T * f) ** 2)
+
+
+def psd_abc(f, A, B, C):
+    """ABC (K-correlation) PSD S(f) = A / (1 + (B f)²)^{C/2}.
+
+    Parameters
+    ----------
+    f : array_like, 1/m
+        Radial spatial frequency.
+    A : float, m⁴
+        Low-frequency plateau S(0).
+    B : float, m
+        Knee: the PSD bends over near f = 1/B.
+    C : float
+        Fall-off exponent (> 2 for a finite rms height); at high f, S ∝ f^(−C).
+
+    Returns
+    -------
+    ndarray, m⁴
+
+    References
+    ----------
+    .. [1] E. L. Church, P. Z. Takacs, Proc. SPIE 1530, 1991; σ² = 2πA / (B² (C − 2)).
+    """
+    f = np.asarray(f, dtype=float)
+    return A / (1 + (B * f) ** 2) ** (C / 2)
+
+
+def psd_abc_profile(f, A, B, C):
+    """1-D profile PSD of the ABC surface: A √π Γ((C−1)/2) / (B Γ(C/2)) · (1 + (B f)²)^{(1−C)/2}, m³.
+
+    From ∫ (1 + B²(fx² + fy²))^{−C/2} dfy; it integrates to the same σ² as :func:`psd_abc`.
+    """
+    f = np.asarray(f, dtype=float)
+    pref = A * math.sqrt(math.pi) / B * math.exp(gammaln((C - 1) / 2) - gammaln(C / 2))
+    return pref * (1 + (B * f) ** 2) ** ((1 - C) / 2)
+
+
+def abc_sigma(A, B, C) -> float:
+    """rms height σ (m) of the ABC PSD: σ² = 2π A / (B² (C − 2)), C > 2 (Church & Takacs 1991)."""
+    if not C > 2:
+        raise WaveopticsError(f"ABC exponent C={C!r} is not allowed; it must be > 2 for a finite rms height")
+    return math.sqrt(2 * math.pi * A / (B**2 * (C - 2)))
+
+
+def abc_A(sigma, B, C) -> float:
+    """ABC plateau A (m⁴) giving rms height σ: A = σ² B² (C − 2) / (2π)."""
+    if not C > 2:
+        raise WaveopticsError(f"ABC exponent C={C!r} is not allowed; it must be > 2 for a finite rms height")
+    return sigma**2 * B**2 * (C - 2) / (2 * math.pi)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Generators
+# ----------------------------------------------------------------------------------------------------------------
+
+def _length(value, name: str, *, allow_zero: bool = False) -> float:
+    """A length in metres from a number (m) or a string with a unit ('5nm')."""
+    if isinstance(value, str):
+        return parse_length(value, name=name, allow_zero=allow_zero)
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise WaveopticsError(f"{name} {value!r} is not a length in metres") from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise WaveopticsError(f"{name}={value!r} m is not allowed; it must be finite and "
+                              f"{'>= 0' if allow_zero else '> 0'}")
+    return v
+
+
+def _number(value, name: str, *, lo=None, lo_open=False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise WaveopticsError(f"{name} {value!r} is not a number") from None
+    if not math.isfinite(v) or (lo is not None and (v <= lo if lo_open else v < lo)):
+        bound = "" if lo is None else f" and {'>' if lo_open else '>='} {lo:g}"
+        raise WaveopticsError(f"{name}={value!r} is not allowed; it must be finite{bound}")
+    return v
+
+
+def _grid(size, samples) -> tuple[int, int, float, float]:
+    """(nx, ny, dx, dy) from *size* (L or (Lx, Ly), m) and *samples* (n or (nx, ny)).
+
+    A scalar size is the longer side with square pixels: dx = dy = size / max(nx, ny).
+    """
+    if isinstance(samples, str):
+        parts = samples.lower().replace("x", ",").split(",")
+        samples = parts[0] if len(parts) == 1 else parts
+    ns = np.atleast_1d(samples)
+    if ns.ndim != 1 or len(ns) not in (1, 2):
+        raise WaveopticsError(f"samples {samples!r} is not allowed; give N or (NX, NY)")
+    try:
+        nsf = [float(n) for n in ns]
+    except (TypeError, ValueError):
+        raise WaveopticsError(f"samples {samples!r} is not an integer count") from None
+    if any(not math.isfinite(n) or n != int(n) or n < 1 for n in nsf):
+        raise WaveopticsError(f"samples {samples!r} is not allowed; counts must be integers >= 1")
+    nx, ny = (int(nsf[0]), int(nsf[0])) if len(nsf) == 1 else (int(nsf[0]), int(nsf[1]))
+    if nx * ny > 2**27:
+        raise WaveopticsError(f"samples {nx}x{ny} is too many; at most 2^27 samples per field")
+    if isinstance(size, str) and "," in size:
+        size = size.split(",")
+    if isinstance(size, (list, tuple, np.ndarray)):
+        if len(size) != 2:
+            raise WaveopticsError(f"size {size!r} is not allowed; give L or (Lx, Ly)")
+        dx = _length(size[0], "size Lx") / nx
+        dy = _length(size[1], "size Ly") / ny
+    else:
+        dx = dy = _length(size, "size") / max(nx, ny)
+    return nx, ny, dx, dy
+
+
+def _rng_seed(seed):
+    """(Generator, seed actually used): a fresh seed is drawn and recorded when *seed* is None."""
+    if seed is None:
+        seed = int(np.random.SeedSequence().entropy % (2**63))
+    try:
+        seed = int(seed)
+    except (TypeError, ValueError):
+        raise WaveopticsError(f"seed {seed!r} is not an integer") from None
+    if seed < 0:
+        raise WaveopticsError(f"seed {seed!r} is not allowed; it must be >= 0")
+    return np.random.default_rng(seed), seed
+
+
+def _spectral(psd2d, psd1d, nx, ny, dx, dy, rng, sigma, *, renormalize: bool, exact_rms: bool):
+    """Gaussian random field with PSD *psd2d* (or *psd1d* for a single row/column) on a periodic grid.
+
+    Real white noise w (unit variance) is filtered in Fourier space by a_k = √(S(f_k) / (dx dy)), which makes
+    E[h²] = Σ_k S(f_k) Δfx Δfy, the grid's share of σ² (the mean, k = 0, is set to zero). A 1×N or N×1 grid is
+    a straight profile of the 2-D surface and uses the profile PSD ∫ S dfy instead.
+
+    Returns
+    -------
+    h : ndarray (ny, nx), m
+    fraction : float
+        Σ_k S Δf² / σ²: the part of the variance the grid resolves (below 1 when L is not ≫ T or dx not ≪ T).
+    """
+    if nx * ny < 2:
+        raise WaveopticsError("a random surface needs at least 2 samples")
+    if ny == 1 or nx == 1:
+        n, d = (nx, dx) if ny == 1 else (ny, dy)
+        S = psd1d(np.abs(np.fft.fftfreq(n, d)))
+        S[0] = 0.0
+        var = S.sum() / (n * d)
+        amp = np.sqrt(psd1d(np.fft.rfftfreq(n, d)) / d)
+        amp[0] = 0.0
+        h = np.fft.irfft(np.fft.rfft(rng.standard_normal(n)) * amp, n)
+        h = h.reshape(ny, nx)
+    else:
+        fy = np.fft.fftfreq(ny, dy)[:, None]
+        S = psd2d(np.hypot(fy, np.fft.fftfreq(nx, dx)[None, :]))
+        S[0, 0] = 0.0
+        var = S.sum() / (nx * dx * ny * dy)
+        del S
+        amp = np.sqrt(psd2d(np.hypot(fy, np.fft.rfftfreq(nx, dx)[None, :])) / (dx * dy))
+        amp[0, 0] = 0.0
+        h = np.fft.irfft2(np.fft.rfft2(rng.standard_normal((ny, nx))) * amp, s=(ny, nx))
+    fraction = var / sigma**2
+    if not fraction > 1e-12:
+        raise WaveopticsError(f"the grid (spacing {dx:g} x {dy:g} m, {nx}x{ny} samples) resolves none of the "
+                              "surface's spectrum; make the patch larger than, and the spacing finer than, "
+                              "the correlation length")
+    if exact_rms:
+        rms = float(np.sqrt(np.mean(h**2)))
+        if rms > 0:
+            h *= sigma / rms
+    elif renormalize:
+        h *= 1.0 / math.sqrt(fraction)
+    return h, fraction
+
+
+def _random_meta(model, params, seed, fraction, renormalize, exact_rms):
+    return {"model": model, **params, "seed": seed, "periodic": True, "psd_variance_fraction": fraction,
+            "renormalize": renormalize, "exact_rms": exact_rms, "units": "m"}
+
+
+def flat(size, samples) -> HeightField:
+    """A flat surface h = 0.
+
+    Parameters
+    ----------
+    size : float or str or (Lx, Ly), m
+        Patch size; a scalar is the longer side with square pixels.
+    samples : int or (nx, ny)
+        Grid samples.
+    """
+    nx, ny, dx, dy = _grid(size, samples)
+    return HeightField(np.zeros((ny, nx)), dx, dy, meta={"model": "flat", "periodic": True, "units": "m"})
+
+
+def gaussian(sigma, corr_length, size, samples, seed=None, *, renormalize=True, exact_rms=False) -> HeightField:
+    """Gaussian random surface with Gaussian correlation C(r) = σ² exp(−r²/T²).
+
+    Parameters
+    ----------
+    sigma : float or str, m
+        rms height σ.
+    corr_length : float or str, m
+        Correlation length T (C(T) = σ²/e). The rms of |∇h| is α = 2σ/T; per axis √2 σ/T.
+    size : float or str or (Lx, Ly), m
+        Patch size; a scalar is the longer side with square pixels.
+    samples : int or (nx, ny)
+        Grid samples; a 1×N grid is a straight profile of the 2-D surface.
+    seed : int, optional
+        Seed for ``numpy.random.default_rng``; drawn and recorded in ``meta["seed"]`` when None.
+    renormalize : bool
+        Scale the spectrum so that the *ensemble* mean square on this grid is σ² (default). The fraction of σ²
+        the grid resolves before that scaling is ``meta["psd_variance_fraction"]``; when it is well below 1
+        (patch not ≫ T or spacing not ≪ T) the surface is a band-limited version of the one asked for.
+        False keeps S(f) exactly as specified (ensemble rms σ·√fraction).
+    exact_rms : bool
+        Rescale this realization so its own rms is exactly σ (not physical for an ensemble; off by default).
+
+    Returns
+    -------
+    HeightField
+        One period of a periodic surface (``meta["periodic"] = True``); each realization has zero mean.
+
+    References
+    ----------
+    .. [1] Ogilvy 1991, §2.2, §4.2; Beckmann & Spizzichino 1963, ch. 5.
+    """
+    sigma = _length(sigma, "sigma")
+    T = _length(corr_length, "corr_length")
+    nx, ny, dx, dy = _grid(size, samples)
+    rng, seed = _rng_seed(seed)
+    h, frac = _spectral(lambda f: psd_gaussian(f, sigma, T), lambda f: psd_gaussian_profile(f, sigma, T),
+                        nx, ny, dx, dy, rng, sigma, renormalize=renormalize, exact_rms=exact_rms)
+    meta = _random_meta("gaussian", {"sigma": sigma, "corr_length": T}, seed, frac, renormalize, exact_rms)
+    return HeightField(h, dx, dy, meta=meta)
+
+
+def exponential(sigma, corr_length, size, samples, seed=None, *, renormalize=True,
+                exact_rms=False) -> HeightField:
+    """Gaussian random surface with exponential correlation C(r) = σ² exp(−r/T).
+
+    Parameters are those of :func:`gaussian`. The slope variance of this surface diverges logarithmically
+    with the highest resolved frequency, so its rms slope depends on the spacing (there is no finite α).
+
+    References
+    ----------
+    .. [1] Ogilvy 1991, §2.2; Church & Takacs 1991.
+    """
+    sigma = _length(sigma, "sigma")
+    T = _length(corr_length, "corr_length")
+    nx, ny, dx, dy = _grid(size, samples)
+    rng, seed = _rng_seed(seed)
+    h, frac = _spectral(lambda f: psd_exponential(f, sigma, T), lambda f: psd_exponential_profile(f, sigma, T),
+                        nx, ny, dx, dy, rng, sigma, renormalize=renormalize, exact_rms=exact_rms)
+    meta = _random_meta("exponential", {"sigma": sigma, "corr_length": T}, seed, frac, renormalize, exact_rms)
+    return HeightField(h, dx, dy, meta=meta)
+
+
+def abc(B, C, size, samples, seed=None, *, A=None, sigma=None, renormalize=True, exact_rms=False) -> HeightField:
+    """Gaussian random surface with the ABC (K-correlation, fractal-like) PSD A / (1 + (B f)²)^{C/2}.
+
+    Parameters
+    ----------
+    B : float or str, m
+        Knee length (the PSD bends at f ≈ 1/B).
+    C : float
+        Fall-off exponent, > 2.
+    size, samples, seed, renormalize, exact_rms
+        As in :func:`gaussian`.
+    A : float, m⁴, optional
+        Plateau. Give exactly one of *A* and *sigma*.
+    sigma : float or str, m, optional
+        rms height; A = σ² B² (C − 2) / (2π).
+
+    References
+    ----------
+    .. [1] Church & Takacs, Proc. SPIE 1530, 1991; Holzschuch & Pacanowski, ACM TOG 36(4), 2017 (use in rendering).
+    """
+    B = _length(B, "B")
+    C = _number(C, "C", lo=2, lo_open=True)
+    if (A is None) == (sigma is None):
+        raise WaveopticsError("ABC surface: give exactly one of A (m^4) and sigma (m)")
+    if sigma is not None:
+        sigma = _length(sigma, "sigma")
+        A = abc_A(sigma, B, C)
+    else:
+        A = _number(A, "A", lo=0, lo_open=True)
+        sigma = abc_sigma(A, B, C)
+    nx, ny, dx, dy = _grid(size, samples)
+    rng, seed = _rng_seed(seed)
+    h, frac = _spectral(lambda f: psd_abc(f, A, B, C), lambda f: psd_abc_profile(f, A, B, C),
+                        nx, ny, dx, dy, rng, sigma, renormalize=renormalize, exact_rms=exact_rms)
+    meta = _random_meta("abc", {"A": A, "B": B, "C": C, "sigma": sigma}, seed, frac, renormalize, exact_rms)
+    return HeightField(h, dx, dy, meta=meta)
+
+
+def sinusoid(amplitude, period, size, samples, orientation_deg=0.0, phase_deg=0.0) -> HeightField:
+    """Sinusoidal grating h = a sin(2π (x cos φ + y sin φ) / Λ + φ₀).
+
+    Parameters
+    ----------
+    amplitude : float or str, m
+        Amplitude a (rms height a/√2 over whole periods; rms of |∇h| = √2 π a / Λ).
+    period : float or str, m
+        Period Λ.
+    size, samples
+        As in :func:`gaussian`.
+    orientation_deg : float, degrees
+        Direction φ of the grating vector from the x axis (grooves run perpendicular to it).
+    phase_deg : float, degrees
+        Phase φ₀ at the patch centre.
+
+    Notes
+    -----
+    ``meta["periodic"]`` is True only when the patch holds a whole number of periods along both axes; the
+    diffraction orders are at sin θ_m = sin θ_i + m λ/Λ (physics.md §5).
+    """
+    a = _length(amplitude, "amplitude", allow_zero=True)
+    P = _length(period, "period")
+    phi = math.radians(_number(orientation_deg, "orientation_deg"))
+    ph0 = math.radians(_number(phase_deg, "phase_deg"))
+    nx, ny, dx, dy = _grid(size, samples)
+    hf0 = HeightField(np.zeros((ny, nx)), dx, dy)
+    x, y = hf0.coords()
+    u = x[None, :] * math.cos(phi) + y[:, None] * math.sin(phi)
+    h = a * np.sin(2 * np.pi * u / P + ph0)
+    kx, ky = nx * dx * math.cos(phi) / P, ny * dy * math.sin(phi) / P
+    periodic = bool(abs(kx - round(kx)) < 1e-9 and abs(ky - round(ky)) < 1e-9)
+    meta = {"model": "sinusoid", "amplitude": a, "period": P, "orientation_deg": math.degrees(phi),
+            "phase_deg": math.degrees(ph0), "periodic": periodic, "units": "m"}
+    return HeightField(h, dx, dy, meta=meta)
+
+
+def scratches(count, width, depth, size, samples, orientation_deg=0.0, spread_deg=0.0, length=None,
+              variation=0.0, seed=None) -> HeightField:
+    """Random straight scratches (grooves) on a flat surface at h = 0.
+
+    Each scratch is a groove of Gaussian cross-section, −d exp(−4 ln2 s² / w²) at distance s from its axis
+    (w is the full width at half depth), through a uniformly random point of the patch. Where grooves overlap
+    the deeper one wins (material removed once).
+
+    Parameters
+    ----------
+    count : int
+        Number of scratches, >= 0.
+    width : float or str, m
+        Full width at half depth w.
+    depth : float or str, m
+        Depth d (the groove bottom is at −d).
+    size, samples
+        As in :func:`gaussian`.
+    orientation_deg : float, degrees
+        Mean direction of the scratches from the x axis.
+    spread_deg : float, degrees
+        Directions are uniform in [orientation − spread, orientation + spread].
+    length : float or str, m, optional
+        Scratch length (rounded ends); None: they cross the whole patch.
+    variation : float
+        Relative spread of each scratch's width and depth: uniform in [1 − v, 1 + v], 0 <= v < 1.
+    seed : int, optional
+        RNG seed (recorded in ``meta["seed"]``).
+
+    Notes
+    -----
+    The result is not periodic; scattering solvers see the patch edges as edges of the grooves.
+    """
+    n = _number(count, "count", lo=0)
+    if n != int(n):
+        raise WaveopticsError(f"count={count!r} is not allowed; it must be a whole number >= 0")
+    n = int(n)
+    w = _length(width, "width")
+    d = _length(depth, "depth", allow_zero=True)
+    th0 = _number(orientation_deg, "orientation_deg")
+    spread = _number(spread_deg, "spread_deg", lo=0)
+    ln = None if length is None else _length(length, "length")
+    v = _number(variation, "variation", lo=0)
+    if v >= 1:
+        raise WaveopticsError(f"variation={variation!r} is not allowed; it must be in [0, 1)")
+    nx, ny, dx, dy = _grid(size, samples)
+    rng, seed = _rng_seed(seed)
+    hf0 = HeightField(np.zeros((ny, nx)), dx, dy)
+    x, y = hf0.coords()
+    Lx, Ly = hf0.extent
+    X, Y = x[None, :], y[:, None]
+    h = np.zeros((ny, nx))
+    for _ in range(n):
+        px, py = rng.uniform(-Lx / 2, Lx / 2), rng.uniform(-Ly / 2, Ly / 2)
+        th = math.radians(th0 + rng.uniform(-spread, spread))
+        wi = w * rng.uniform(1 - v, 1 + v)
+        di = d * rng.uniform(1 - v, 1 + v)
+        s = -(X - px) * math.sin(th) + (Y - py) * math.cos(th)   # across the groove
+        if ln is not None:
+            t = (X - px) * math.cos(th) + (Y - py) * math.sin(th)  # along the groove
+            s = np.hypot(s, np.maximum(np.abs(t) - ln / 2, 0.0))
+        np.minimum(h, -di * np.exp(-4 * math.log(2) * s**2 / wi**2), out=h)
+    meta = {"model": "scratches", "count": n, "width": w, "depth": d, "orientation_deg": th0,
+            "spread_deg": spread, "length": ln, "variation": v, "seed": seed, "periodic": False, "units": "m"}
+    return HeightField(h, dx, dy, meta=meta)
+
+
+def _sum(components, size, samples, seed=None) -> HeightField:
+    """Sum of several models on one grid (e.g. a micro-scale band plus a nano-scale band).
+
+    Parameters
+    ----------
+    components : list of dict
+        Each ``{"model": name, **params}`` without size/samples; random components get independent seeds
+        spawned from *seed* unless they give their own.
+    """
+    if not isinstance(components, (list, tuple)) or not components:
+        raise WaveopticsError("sum: components must be a non-empty list of {'model': ..., params} dicts")
+    _, seed = _rng_seed(seed)
+    children = np.random.SeedSequence(seed).spawn(len(components))
+    total = None
+    for comp, child in zip(components, children):
+        if not isinstance(comp, dict) or "model" not in comp:
+            raise WaveopticsError(f"sum: component {comp!r} is not a dict with a 'model' key")
+        params = {k: v for k, v in comp.items() if k != "model"}
+        if "seed" in inspect.signature(GENERATORS.get(comp["model"], flat)).parameters:
+            params.setdefault("seed", int(child.generate_state(1, np.uint64)[0] >> np.uint64(1)))
+        hf = generate(comp["model"], size=size, samples=samples, **params)
+        total = hf if total is None else total + hf
+    meta = dict(total.meta, model="sum", seed=seed)
+    return HeightField(total.heights, total.dx, total.dy, total.mask, meta)
+
+
+#: model name -> generator; every generator takes ``size`` and ``samples``
+GENERATORS = {
+    "flat": flat,
+    "gaussian": gaussian,
+    "exponential": exponential,
+    "abc": abc,
+    "sinusoid": sinusoid,
+    "scratches": scratches,
+    "sum": _sum,
+}
+
+
+def generate(model: str, **params) -> HeightField:
+    """Generate a height field by model name (the registry :data:`GENERATORS`), as the CLI and scene files do.
+
+    Parameters
+    ----------
+    model : str
+        One of :data:`GENERATORS`.
+    **params
+        The generator's parameters; lengths may be strings with units ('5nm', '1.2um').
+
+    Raises
+    ------
+    WaveopticsError
+        Unknown model, unknown or missing parameter, or a bad value.
+    """
+    if model not in GENERATORS:
+        raise unknown("surface model", model, GENERATORS)
+    fn = GENERATORS[model]
+    sig = inspect.signature(fn)
+    bad = [k for k in params if k not in sig.parameters]
+    if bad:
+        raise WaveopticsError(f"surface model {model!r} has no parameter {bad[0]!r}; allowed: "
+                              f"{', '.join(sig.parameters)}")
+    missing = [k for k, p in sig.parameters.items() if p.default is inspect.Parameter.empty and k not in params]
+    if missing:
+        raise WaveopticsError(f"surface model {model!r} needs parameter {missing[0]!r}")
+    return fn(**params)
