@@ -1327,16 +1327,30 @@ def _text_array(rows) -> np.ndarray:
         raise
 
 
-def _grid_axis(v, what):
-    """(index of each value on a regular grid, spacing) for coordinates *v*; spacing None for a single value."""
+def _grid_axis(v, what, origin=None, step=None):
+    """(index of each value on a regular grid, spacing) for coordinates *v*; spacing None for a single value.
+
+    *origin* and *step* (the file's first grid coordinate and spacing, when its header states them) keep the
+    indices right when whole edge rows or columns are missing.
+    """
     u = np.unique(v)
-    if u.size == 1:
+    if u.size == 1 and step is None:
         return np.zeros(v.size, dtype=np.int64), None
-    d = float(np.min(np.diff(u)))
-    idx = np.rint((v - u[0]) / d).astype(np.int64)
-    if np.max(np.abs(v - (u[0] + idx * d))) > 1e-3 * d:
+    d = float(np.min(np.diff(u))) if step is None else step
+    o = u[0] if origin is None else min(origin, u[0])
+    idx = np.rint((v - o) / d).astype(np.int64)
+    if np.max(np.abs(v - (o + idx * d))) > 1e-3 * d:
         raise WaveopticsError(f"{what} coordinates are not on a regular grid (spacing {d:g})")
     return idx, d
+
+
+def _float_header(header, key):
+    if key not in header:
+        return None
+    try:
+        return float(header[key])
+    except ValueError:
+        raise WaveopticsError(f"header {key} = {header[key]!r} is not a number") from None
 
 
 def _int_header(header, key) -> int:
@@ -1382,8 +1396,9 @@ def _load_text(p, sp, units, layout, nan_is_mask):
         raise WaveopticsError(f"xyz layout needs 3 columns (x y z), found {a.shape[1]}")
     if not np.all(np.isfinite(a[:, :2])):
         raise WaveopticsError("x/y columns hold NaN or Inf")
-    ix, dx = _grid_axis(a[:, 0], "x")
-    iy, dy = _grid_axis(a[:, 1], "y")
+    hdr_dx = _float_header(header, "dx")
+    ix, dx = _grid_axis(a[:, 0], "x", _float_header(header, "x0"), hdr_dx)
+    iy, dy = _grid_axis(a[:, 1], "y", _float_header(header, "y0"), _float_header(header, "dy") or hdr_dx)
     if dx is None and dy is None and sp is None:
         raise WaveopticsError("holds a single point; no grid")
     nx, ny = int(ix.max()) + 1, int(iy.max()) + 1
@@ -1470,7 +1485,7 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
             X, Y = np.broadcast_arrays(x[None, :], y[:, None])
             keep = hf.valid.ravel()
             cols = np.stack([X.ravel()[keep], Y.ravel()[keep], hf.heights.ravel()[keep]], axis=1)
-            lines.insert(1, "# layout = xyz")
+            lines[1:1] = ["# layout = xyz", f"# x0 = {float(x[0])!r}", f"# y0 = {float(y[0])!r}"]
             body = cols
             delim = " "
         else:
