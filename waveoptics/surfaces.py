@@ -754,13 +754,14 @@ def rms_slopes(hf: HeightField) -> tuple[float | None, float | None]:
 def rms_slope(hf: HeightField) -> float:
     """rms of |∇h| (dimensionless), i.e. √(s_x² + s_y²); for Gaussian correlation it is α = 2σ/T.
 
-    For a single-row (or column) profile the surface is assumed isotropic: √2 times the profile's rms slope.
+    A single-row (or column) field is taken as the profile it is (h constant across it), so this is the rms
+    of dh/dx along it. For a profile cut through an *isotropic* surface the 2-D rms of |∇h| is √2 times that.
     """
     sx, sy = rms_slopes(hf)
     if sx is None and sy is None:
         raise WaveopticsError("rms slope needs at least 2 samples along one axis")
     if sx is None or sy is None:
-        return math.sqrt(2) * (sx if sy is None else sy)
+        return sx if sy is None else sy
     return math.hypot(sx, sy)
 
 
@@ -999,7 +1000,8 @@ def stats(hf: HeightField, detrend: str = "mean") -> dict:
         ``corr_length_m`` T (1/e point of the autocovariance, :func:`correlation_length`);
         ``beckmann_alpha`` = 2σ/T, the Beckmann roughness that the geometric-optics limit predicts for a
         Gaussian-correlated surface (compare with ``rms_slope``: they agree only for that correlation);
-        ``profile`` (True for a single row or column: the slope assumes isotropy).
+        ``profile`` (True for a single row or column: ``rms_slope`` is then the profile's rms dh/dx, which is
+        1/√2 of the 2-D rms |∇h| of an isotropic surface, while ``beckmann_alpha`` stays the 2-D value 2σ/T).
 
     References
     ----------
@@ -1499,3 +1501,52 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
         with atomic_path(p, overwrite=overwrite) as tmp:
             tmp.write_text("\n".join(lines) + "\n" + buf.getvalue())
     return p
+
+
+def plot(hf: HeightField, path, *, fits=(), overwrite: bool = False):
+    """PNG with the height map (nm) and the radial PSD with fitted models, written atomically.
+
+    Parameters
+    ----------
+    hf : HeightField
+    path : str or Path
+        Output .png.
+    fits : iterable of dict
+        Results of :func:`fit_psd` to overlay.
+    overwrite : bool
+        Replace an existing file.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .io import atomic_path
+
+    f, S = psd_radial(hf)
+    profile = 1 in hf.shape
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 4.5))
+    x, y = hf.coords()
+    h_nm = np.where(hf.valid, hf.heights, np.nan) * 1e9
+    if profile:
+        ax0.plot((x if hf.shape[0] == 1 else y) * 1e6, h_nm.ravel(), lw=0.8)
+        ax0.set(xlabel="position (µm)", ylabel="height (nm)")
+    else:
+        im = ax0.imshow(h_nm, origin="lower", cmap="viridis",
+                        extent=[x[0] * 1e6, x[-1] * 1e6, y[0] * 1e6, y[-1] * 1e6])
+        fig.colorbar(im, ax=ax0, label="height (nm)")
+        ax0.set(xlabel="x (µm)", ylabel="y (µm)")
+    ax0.set_title(str(hf.meta.get("model", hf.meta.get("source", "height field"))))
+    ax1.loglog(f * 1e-6, S, ".", ms=3, label="radial periodogram")
+    for fit in fits:
+        fn = PSD_MODELS[fit["model"]][1 if profile else 0]
+        args = ((fit["A_m4"], fit["B_m"], fit["C"]) if fit["model"] == "abc"
+                else (fit["sigma_m"], fit["corr_length_m"]))
+        ax1.loglog(f * 1e-6, fn(f, *args), lw=1.2, label=f"{fit['model']} fit")
+    ax1.set(xlabel="spatial frequency |f| (1/µm)", ylabel="PSD (m³)" if profile else "PSD (m⁴)",
+            ylim=(max(S.min(), S.max() * 1e-12), S.max() * 10))
+    ax1.legend()
+    fig.tight_layout()
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    plt.close(fig)

@@ -1,0 +1,158 @@
+"""``waveoptics surface generate|stats``: make height fields and measure them (logic in :mod:`waveoptics.surfaces`)."""
+from __future__ import annotations
+
+import inspect
+
+from ..errors import WaveopticsError
+from ._common import add_common, emit
+
+#: CLI option -> generator parameter (lengths stay strings with units; the generators parse them)
+_MODEL_OPTIONS = {
+    "sigma": ("--sigma", "rms height σ with unit, e.g. 5nm (gaussian, exponential, abc)"),
+    "corr_length": ("--corr-length", "correlation length T with unit, e.g. 1.2um (gaussian, exponential)"),
+    "A": ("--A", "ABC plateau A in m^4 (abc; alternative to --sigma)"),
+    "B": ("--B", "ABC knee length B with unit, e.g. 10um (abc)"),
+    "C": ("--C", "ABC fall-off exponent C > 2 (abc)"),
+    "amplitude": ("--amplitude", "grating amplitude with unit, e.g. 20nm (sinusoid)"),
+    "period": ("--period", "grating period with unit, e.g. 4um (sinusoid)"),
+    "orientation_deg": ("--orientation", "direction in degrees from x: grating vector (sinusoid), mean scratch "
+                                         "direction (scratches)"),
+    "phase_deg": ("--phase", "grating phase at the patch centre, degrees (sinusoid)"),
+    "count": ("--count", "number of scratches (scratches)"),
+    "width": ("--width", "scratch full width at half depth with unit (scratches)"),
+    "depth": ("--depth", "scratch depth with unit (scratches)"),
+    "spread_deg": ("--spread", "scratch directions uniform within ± this many degrees (scratches)"),
+    "length": ("--length", "scratch length with unit; default: across the patch (scratches)"),
+    "variation": ("--variation", "relative spread of scratch width and depth, 0..1 (scratches)"),
+}
+_FLOAT_PARAMS = {"A", "C", "orientation_deg", "phase_deg", "spread_deg", "variation"}
+MODELS = ("flat", "gaussian", "exponential", "abc", "sinusoid", "scratches")
+
+
+def register(sub):
+    p = sub.add_parser("surface", help="generate height fields and measure their statistics",
+                       description="Surface nanogeometry: generate random or deterministic height fields and "
+                                   "compute rms height, slopes, correlation length, PSD fits.")
+    ss = p.add_subparsers(dest="surface_command", metavar="ACTION", parser_class=type(p))
+    ss.required = True
+
+    g = ss.add_parser("generate", help="generate a height field and write it to a file",
+                      description="Generate a height field (heights in metres) and write it as .npz, .npy "
+                                  "(+ .json sidecar), .exr or a text grid, chosen by the extension of -o.")
+    g.add_argument("--model", required=True, choices=MODELS, help="surface model")
+    g.add_argument("--size", default="64um", help="patch size L or LX,LY with unit (default 64um)")
+    g.add_argument("--samples", default="1024", help="grid samples N, NXxNY or NX,NY (default 1024)")
+    g.add_argument("--seed", type=int, default=None, help="random seed (default: drawn and recorded)")
+    for name, (flag, text) in _MODEL_OPTIONS.items():
+        g.add_argument(flag, dest=f"m_{name}", metavar="VALUE", help=text)
+    g.add_argument("--exact-rms", action="store_true",
+                   help="rescale this realization to exactly σ (default: ensemble rms σ)")
+    g.add_argument("--no-renormalize", action="store_true",
+                   help="keep the PSD as given even where the grid resolves only part of σ²")
+    g.add_argument("-o", "--output", required=True, metavar="FILE", help="output file (.npz .npy .exr .txt .csv .xyz)")
+    g.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    add_common(g, device=False)
+    g.set_defaults(func=run_generate, command="surface generate")
+
+    s = ss.add_parser("stats", help="statistics of a height-field file",
+                      description="rms height, rms slope, correlation length (1/e of the autocovariance), "
+                                  "Beckmann α = 2σ/T and optional PSD fits.")
+    s.add_argument("file", help="height-field file (.npz .npy .exr .txt .dat .asc .csv .xyz)")
+    s.add_argument("--spacing", help="grid spacing D or DX,DY with unit, when the file does not state it")
+    s.add_argument("--units", help="units of the values in a text or foreign file, e.g. um")
+    s.add_argument("--layout", choices=("matrix", "xyz"), help="text layout (default: detected)")
+    s.add_argument("--nan-is-mask", action="store_true", help="treat NaN heights as missing samples")
+    s.add_argument("--detrend", choices=("mean", "plane", "none"), default="mean",
+                   help="remove the mean (default) or a least-squares plane before the statistics")
+    s.add_argument("--fit", action="append", choices=("gaussian", "exponential", "abc"), default=[],
+                   help="fit this PSD model (repeatable)")
+    s.add_argument("--plot", metavar="PNG", help="write the height map and radial PSD (with fits) as PNG")
+    s.add_argument("--overwrite", action="store_true", help="replace an existing --plot file")
+    add_common(s, device=False)
+    s.set_defaults(func=run_stats, command="surface stats")
+
+
+def _model_params(args) -> dict:
+    from .. import surfaces
+
+    accepted = inspect.signature(surfaces.GENERATORS[args.model]).parameters
+    params = {"size": args.size, "samples": args.samples}
+    for name, (flag, _) in _MODEL_OPTIONS.items():
+        value = getattr(args, f"m_{name}")
+        if value is None:
+            continue
+        if name not in accepted:
+            raise WaveopticsError(f"{flag} is not an option of model {args.model!r}")
+        if name in _FLOAT_PARAMS or name == "count":
+            try:
+                value = float(value)
+            except ValueError:
+                raise WaveopticsError(f"{flag} {value!r} is not a number") from None
+        params[name] = value
+    for name, par in accepted.items():
+        if par.default is inspect.Parameter.empty and name not in params:
+            raise WaveopticsError(f"model {args.model!r} needs {_MODEL_OPTIONS[name][0]}")
+    if "seed" in accepted:
+        params["seed"] = args.seed
+    elif args.seed is not None:
+        raise WaveopticsError(f"--seed is not an option of model {args.model!r} (it is deterministic)")
+    if "exact_rms" in accepted:
+        params["exact_rms"] = args.exact_rms
+        params["renormalize"] = not args.no_renormalize
+    elif args.exact_rms or args.no_renormalize:
+        raise WaveopticsError(f"--exact-rms/--no-renormalize apply to random spectral models, not {args.model!r}")
+    return params
+
+
+def run_generate(args):
+    from .. import surfaces
+
+    params = _model_params(args)
+    hf = surfaces.generate(args.model, **params)
+    path = surfaces.save(hf, args.output, overwrite=args.overwrite)
+    st = surfaces.stats(hf)
+    data = {"output": str(path), "model": args.model, "meta": hf.meta, "stats": st}
+    text = (f"wrote {path}: {args.model}, {st['samples'][0]}x{st['samples'][1]} samples at "
+            f"{st['spacing_m'][0] * 1e9:.4g} x {st['spacing_m'][1] * 1e9:.4g} nm, rms height "
+            f"{st['rms_height_m'] * 1e9:.4g} nm, rms slope {st['rms_slope']:.4g}")
+    emit(args, data, text)
+    return 0
+
+
+def run_stats(args):
+    from .. import surfaces
+
+    hf = surfaces.load(args.file, spacing=args.spacing, units=args.units, layout=args.layout,
+                       nan_is_mask=args.nan_is_mask)
+    st = surfaces.stats(hf, detrend=args.detrend)
+    fits = [surfaces.fit_psd(hf, m, detrend=args.detrend) for m in dict.fromkeys(args.fit)]
+    if fits:
+        st["psd_fit"] = {f["model"]: f for f in fits}
+    if args.plot:
+        surfaces.plot(hf, args.plot, fits=fits, overwrite=args.overwrite)
+        st["plot"] = args.plot
+
+    def nm(v):
+        return "n/a" if v is None else f"{v * 1e9:.4g} nm"
+
+    def num(v):
+        return "n/a" if v is None else f"{v:.4g}"
+
+    lines = [f"file            {args.file}",
+             f"samples         {st['samples'][0]} x {st['samples'][1]}"
+             f"{' (profile)' if st['profile'] else ''}, valid {st['valid_fraction']:.1%}",
+             f"spacing         {nm(st['spacing_m'][0])} x {nm(st['spacing_m'][1])}",
+             f"rms height      {nm(st['rms_height_m'])}",
+             f"rms slope       {num(st['rms_slope'])} (x {num(st['rms_slope_x'])}, y {num(st['rms_slope_y'])})",
+             f"corr. length    {nm(st['corr_length_m'])} (1/e of the autocovariance)",
+             f"Beckmann alpha  {num(st['beckmann_alpha'])} (2 sigma / T)"]
+    for f in fits:
+        if f["model"] == "abc":
+            lines.append(f"fit abc         A {f['A_m4']:.4g} m^4, B {nm(f['B_m'])}, C {f['C']:.4g}, "
+                         f"sigma {nm(f['sigma_m'])}")
+        else:
+            lines.append(f"fit {f['model']:<12}sigma {nm(f['sigma_m'])}, T {nm(f['corr_length_m'])}")
+    if args.plot:
+        lines.append(f"plot            {args.plot}")
+    emit(args, st, "\n".join(lines))
+    return 0
