@@ -745,6 +745,29 @@ def metamer_laser_weights(target_spd, lines_nm, observer=DEFAULT_OBSERVER) -> np
     return P
 
 
+def metamer_summary(target_spd, lines_nm, observer=DEFAULT_OBSERVER) -> dict:
+    """The laser metamer of a light as plain data (for the CLI and docs).
+
+    Returns
+    -------
+    dict
+        ``target``, ``observer``, ``lines_nm``, ``powers`` (target units × nm, see
+        :func:`metamer_laser_weights`), ``power_fractions`` (sum 1), ``XYZ_target`` and ``XYZ_mix`` (scaled so the
+        target's Y = 1) and ``xy`` (chromaticity of the target).
+    """
+    import colour
+
+    target = _as_spd(target_spd)
+    lines = check_wavelengths(lines_nm, name="laser line")
+    P = metamer_laser_weights(target, lines, observer)
+    XYZ_t = spd_to_XYZ(target, observer)
+    XYZ_m = spd_to_XYZ(laser(lines, P), observer)
+    return {"target": target.name, "observer": observer_name(observer), "lines_nm": lines.tolist(),
+            "powers": P.tolist(), "power_fractions": (P / P.sum()).tolist(),
+            "XYZ_target": (XYZ_t / XYZ_t[1]).tolist(), "XYZ_mix": (XYZ_m / XYZ_t[1]).tolist(),
+            "xy": colour.XYZ_to_xy(XYZ_t).tolist()}
+
+
 def plot_metamers(target_spd, lines_nm, powers, path, *, observer=DEFAULT_OBSERVER,
                   overwrite: bool = False) -> Path:
     """PNG plot of a continuous SPD and its laser-line metamer (stems), with both chromaticities.
@@ -787,7 +810,7 @@ def plot_metamers(target_spd, lines_nm, powers, path, *, observer=DEFAULT_OBSERV
         ax2.annotate(f"{lam:g} nm", (lam, p), textcoords="offset points", xytext=(0, 4), ha="center", fontsize=8)
     ax2.set_ylabel("laser line power (× 1 nm)")
     ax2.set_ylim(0, 1.15 * mix.values.max())
-    for i, name in enumerate("x̄ȳz̄"):
+    for i in range(3):
         ax.plot(w_cmf, c[:, i] / c.max() * ax.get_ylim()[1] * 0.5, ":", lw=0.8, color="grey",
                 label="CMFs (scaled)" if i == 0 else None)
     ax.legend(loc="upper left", fontsize=8)

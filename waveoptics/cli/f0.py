@@ -1,0 +1,43 @@
+"""``waveoptics f0 MATERIAL...``: characteristic specular colour F0 = F(0°), computed spectrally."""
+from __future__ import annotations
+
+from ._common import add_common, emit
+
+
+def register(sub):
+    p = sub.add_parser(
+        "f0", help="specular colour F0 of materials (spectral, linear sRGB and 8-bit sRGB)",
+        description="Normal-incidence reflectance F0(λ) of each material weighted by the illuminant and the "
+                    "colour-matching functions to XYZ, then linear sRGB (not clipped: gold's red exceeds 1) and "
+                    "8-bit sRGB (clipped), with the category by F0 (metal >= 0.45, dielectric < 0.2, "
+                    "semiconductor in the 0.2-0.45 'forbidden zone').")
+    p.add_argument("materials", nargs="+", metavar="MATERIAL",
+                   help="preset (Au, gold, Si, BK7, ...), refractiveindex.info shelf/book/page, n+kj or f0:...")
+    p.add_argument("--illuminant", default="D65", metavar="SPD",
+                   help="D65 (default), D50, A, F1..F12, E, blackbody:5500K, laser:465,532,638, rgb-laser or a CSV")
+    p.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer", metavar="NAME",
+                   help="CIE 1931 2 Degree Standard Observer (default) or CIE 1964 10 Degree Standard Observer "
+                        "(aliases 2, 10)")
+    add_common(p, device=False)
+    p.set_defaults(func=run)
+
+
+def run(args):
+    from .. import spectral
+    from ..materials import get_material
+
+    spd = spectral.illuminant(args.illuminant)
+    observer = spectral.observer_name(args.observer)
+    keys = ("material", "f0_linear", "f0_srgb8", "category", "source")
+    rows, lines = [], []
+    for spec in args.materials:
+        d = spectral.f0_colour(get_material(spec), spd, observer)
+        rows.append({k: d[k] for k in keys})
+        r, g, b = d["f0_linear"]
+        flag = "  (forbidden zone 0.2-0.45)" if d["forbidden_zone"] else ""
+        lines.append(f"{d['material']:<16} {r:7.4f} {g:7.4f} {b:7.4f}   {str(tuple(d['f0_srgb8'])):<16} "
+                     f"{d['category']:<13} {d['source']}{flag}")
+    header = (f"F0 under {spd.name}, {observer}, linear sRGB (unclipped) and 8-bit sRGB\n"
+              f"{'material':<16} {'R':>7} {'G':>7} {'B':>7}   {'sRGB8':<16} {'category':<13} source")
+    emit(args, rows, "\n".join([header, *lines]))
+    return 0

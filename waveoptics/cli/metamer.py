@@ -1,0 +1,47 @@
+"""``waveoptics metamer``: three laser lines mixed to the same colour (XYZ) as a broadband light."""
+from __future__ import annotations
+
+from ._common import add_common, emit
+
+
+def register(sub):
+    p = sub.add_parser(
+        "metamer", help="laser-line powers whose mix matches a light's XYZ (RGB laser projector vs daylight)",
+        description="Solve for the powers of three laser lines whose mix has the same CIE XYZ as the target "
+                    "light (a metamer: same colour, very different spectrum) and optionally plot both spectra.")
+    p.add_argument("--target", default="D65", metavar="SPD",
+                   help="light to match: D65 (default), D50, A, F1..F12, E, blackbody:5500K or a CSV")
+    p.add_argument("--lines", default="467,532,630", metavar="NM,NM,NM",
+                   help="three laser wavelengths in nm (default: the BT.2020 primaries 467,532,630)")
+    p.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer", metavar="NAME",
+                   help="observer name or alias (2, 10)")
+    p.add_argument("-o", "--output", metavar="PNG", help="write a plot of both spectra to this PNG file")
+    p.add_argument("--overwrite", action="store_true", help="replace the PNG if it exists")
+    add_common(p, device=False)
+    p.set_defaults(func=run)
+
+
+def run(args):
+    from .. import spectral
+    from ..units import parse_wavelengths
+
+    target = spectral.illuminant(args.target)
+    observer = spectral.observer_name(args.observer)
+    lines = parse_wavelengths(args.lines, name="--lines")
+    data = spectral.metamer_summary(target, lines, observer)
+    if args.output:
+        spectral.plot_metamers(target, lines, data["powers"], args.output, observer=observer,
+                               overwrite=args.overwrite)
+        data["plot"] = str(args.output)
+    parts = [f"{lam:g} nm: {f:.4f}" for lam, f in zip(data["lines_nm"], data["power_fractions"])]
+    text = (f"{target.name} is matched by lasers with power fractions {', '.join(parts)}\n"
+            f"XYZ target {_fmt(data['XYZ_target'])}  mix {_fmt(data['XYZ_mix'])}  "
+            f"xy ({data['xy'][0]:.4f}, {data['xy'][1]:.4f})")
+    if args.output:
+        text += f"\nplot: {args.output}"
+    emit(args, data, text)
+    return 0
+
+
+def _fmt(v):
+    return "(" + ", ".join(f"{x:.5f}" for x in v) + ")"
