@@ -629,7 +629,7 @@ def spectral_grid(illuminant, step_nm: float = 5.0, observer=DEFAULT_OBSERVER) -
 
 
 @functools.lru_cache(maxsize=1)
-def _default_test_reflectances() -> tuple[np.ndarray, np.ndarray]:
+def reference_reflectances() -> tuple[np.ndarray, np.ndarray]:
     """Smooth test reflectances at 1 nm over 360–830 nm: the 24 ColorChecker patches (Ohta, Sprague-
     interpolated) and four metal-like absorption edges 0.05 + 0.9/(1 + exp(-(λ-λ0)/15 nm)), λ0 = 450..600 nm."""
     import colour
@@ -654,7 +654,7 @@ def step_errors(illuminant, steps_nm=STEPS_NM, observer=DEFAULT_OBSERVER, reflec
     Parameters
     ----------
     reflectances : (wavelengths_nm (m,), R (k, m)) or None
-        Finely sampled test spectra; default :func:`_default_test_reflectances` (ColorChecker + metal edges).
+        Finely sampled test spectra; default :func:`reference_reflectances` (ColorChecker + metal edges).
     method : str
         Tristimulus method used on the coarse grids (see :func:`tristimulus_weights`).
 
@@ -664,7 +664,7 @@ def step_errors(illuminant, steps_nm=STEPS_NM, observer=DEFAULT_OBSERVER, reflec
         step_nm -> (max ΔE2000, number of wavelengths).
     """
     spd = _as_spd(illuminant)
-    w_ref, R_ref = reflectances if reflectances is not None else _default_test_reflectances()
+    w_ref, R_ref = reflectances if reflectances is not None else reference_reflectances()
     w_ref, R_ref = np.asarray(w_ref, float), np.atleast_2d(np.asarray(R_ref, float))
     XYZ_ref = reflectance_to_XYZ(R_ref, w_ref, spd, observer)
     white = white_XYZ(spd, observer)
