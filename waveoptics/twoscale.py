@@ -1,0 +1,327 @@
+"""Two-scale BRDF: microfacets (geometric optics) carrying nano-roughness (diffraction).
+
+Structure (Holzschuch & Pacanowski 2017; physics.md §7). Micro-geometry, much larger than λ, is described by a
+microfacet NDF D with roughness α; each microfacet carries nano-roughness of rms height σ_nano about λ or smaller.
+Per microfacet the light splits into
+
+* a coherent part, the fraction A(λ, θ_d) = exp(−(4π σ_nano cos θ_d / λ)²) of the Fresnel-reflected light, that
+  keeps the microfacet specular lobe:  f_c = A · F G D / (4 cosθ_i cosθ_o);
+* a diffracted part, the nano-roughness scattering lobe f_n (PSD series or a Kirchhoff solver on a nano height
+  field), carried by each microfacet, i.e. tilted with the facet normal and so convolved with the micro NDF;
+* for dielectrics, a diffuse term with the diffuse-specular trade-off (metals have none).
+
+Evaluation on the direction-cosine plane
+----------------------------------------
+Lobes live on a :class:`waveoptics.diffraction.DirectionGrid` over (u, v) = (sinθ cosφ, sinθ sinφ), where
+cosθ_o dω_o = du dv. A facet tilted by a small slope moves the mirror direction by a shift in (u, v), so the
+per-facet tilt of the nano lobe is a 2-D convolution of f_n (an energy density on the (u, v) plane) with the
+*micro kernel* K: the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the mirror direction, whose sum is the F = 1 micro albedo
+(masking and shadowing included). Both limits hold exactly on the grid: σ_nano → 0 gives A = 1 and f_n = 0
+(the microfacet model), and α → 0 makes K a unit impulse (the pure nano lobe). The convolution is paraxial: it
+shifts the nano lobe instead of rotating it, which is accurate for micro slopes up to ~0.3 and away from the
+horizon; energy pushed beyond the horizon is lost, as shadowing would do.
+
+A specular lobe narrower than the grid (α ≲ du) cannot be sampled: its energy F·A·ρ_mf is deposited in the
+mirror cell as a spike of height E/(du dv), which keeps albedo and colour exact on the grid.
+
+References
+----------
+.. [1] N. Holzschuch, R. Pacanowski, "A two-scale microfacet reflectance model combining reflection and
+   diffraction", ACM TOG 36(4), 66, 2017.
+.. [2] B. Walter, S. Marschner, H. Li, K. Torrance, "Microfacet models for refraction through rough surfaces",
+   EGSR 2007 (microfacet BRDF of a general facet BRDF, eq. 14).
+.. [3] H. Davies, Proc. IEE 101, 209 (1954) (coherent fraction).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import signal
+
+from . import microfacet, psd
+from .diffraction import DirectionGrid, integrate
+from .errors import WaveopticsError, unknown
+from .materials import Material, get_material
+from .surfaces import HeightField
+from .units import check_wavelengths
+
+
+@dataclass(frozen=True)
+class Micro:
+    """Micro-scale roughness: an NDF name in :data:`waveoptics.microfacet.NDFS`, α (and α_y), shadowing."""
+
+    alpha: float = 0.05
+    alpha_y: float | None = None
+    ndf: str = "ggx"
+    shadowing: str = "smith-correlated"
+
+    def __post_init__(self):
+        for name, a in (("alpha", self.alpha), ("alpha_y", self.alpha_y)):
+            if a is not None and (not np.isfinite(a) or a < 0):
+                raise WaveopticsError(f"micro {name}={a!r} is not allowed; it must be >= 0")
+
+    def kw(self) -> dict:
+        a = max(self.alpha, microfacet.ALPHA_MIN)
+        ay = None if self.alpha_y is None else max(self.alpha_y, microfacet.ALPHA_MIN)
+        return {"alpha": a, "alpha_y": ay, "ndf": self.ndf, "shadowing": self.shadowing}
+
+
+@dataclass(frozen=True)
+class Nano:
+    """Nano-scale roughness: height statistics (:class:`waveoptics.psd.PSDModel`) or a height field.
+
+    With a height field the diffracted lobe comes from a Kirchhoff solver (``solver`` "fft" or "direct"); with
+    statistics it comes from the PSD series (:mod:`waveoptics.psd`).
+    """
+
+    model: psd.PSDModel | None = None
+    surface: HeightField | None = None
+
+    def __post_init__(self):
+        if (self.model is None) == (self.surface is None):
+            raise WaveopticsError("nano roughness needs exactly one of: PSD statistics or a height field")
+
+    @property
+    def sigma(self) -> float:
+        """rms height (m) of the nano-roughness."""
+        if self.model is not None:
+            return self.model.sigma
+        h = self.surface.heights
+        return float(np.std(h[self.surface.mask] if self.surface.mask is not None else h))
+
+    def coherent_amplitude2(self, cos_theta_d, wavelength_nm):
+        """A(λ, θ_d): fraction of the light a facet reflects coherently.
+
+        exp(−(4πσ cosθ_d/λ)²) for Gaussian statistics (Davies 1954); for a height field, its own characteristic
+        function |⟨exp(i 2k cosθ_d h)⟩|² over the surface (e.g. J0² for a sinusoid), which equals the former for
+        Gaussian heights.
+        """
+        c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
+        if self.model is not None:
+            return psd.coherent_fraction(c, wavelength_nm, self.model.sigma)
+        h = self.surface.heights - self.surface.heights.mean()  # guard: phase must not depend on an offset
+        hv = h[self.surface.mask] if self.surface.mask is not None else h.ravel()
+        hist, edges = np.histogram(hv, bins=min(2048, max(64, hv.size // 16)))
+        centres = 0.5 * (edges[1:] + edges[:-1])
+        p = hist / hist.sum()
+        vz = 2 * (2 * np.pi / (np.asarray(wavelength_nm, dtype=float) * 1e-9)) * c
+        phase = np.exp(1j * vz[..., None] * centres)
+        return np.abs(phase @ p) ** 2
+
+
+@dataclass
+class Lobes:
+    """A two-scale evaluation for one incident direction on a direction grid.
+
+    Arrays are (n_λ, n_v, n_u) in 1/sr: ``coherent`` (micro specular × A), ``diffraction`` (nano lobe convolved
+    with the micro kernel), ``diffuse`` (dielectrics), ``total``; ``microfacet`` is the plain microfacet model
+    (same micro roughness and material, no nano-roughness) for comparison.
+    """
+
+    grid: DirectionGrid
+    wi: np.ndarray
+    wavelengths_nm: np.ndarray
+    coherent: np.ndarray
+    diffraction: np.ndarray
+    diffuse: np.ndarray
+    microfacet: np.ndarray
+    info: dict = field(default_factory=dict)
+
+    @property
+    def total(self) -> np.ndarray:
+        return self.coherent + self.diffraction + self.diffuse
+
+    def albedo(self, part: str = "total") -> np.ndarray:
+        """Directional albedo per wavelength of a part (``total``, ``coherent``, ``diffraction``, ...)."""
+        return integrate(getattr(self, part), self.grid)
+
+    def coherent_specular_fraction(self) -> np.ndarray:
+        """Share of the specularly reflected energy that stays coherent: E_c / (E_c + E_diffraction)."""
+        c, d = self.albedo("coherent"), self.albedo("diffraction")
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(c + d > 0, c / (c + d), 1.0)
+
+
+def _mirror(wi):
+    return np.array([-wi[0], -wi[1], wi[2]])
+
+
+def _mirror_cell(grid: DirectionGrid, wi):
+    """(row, col) of the cell containing the mirror direction, or None if outside the grid."""
+    u, v = -wi[0], -wi[1]
+    j = int(np.floor((u - grid.u_range[0]) / grid.du))
+    i = int(np.floor((v - grid.v_range[0]) / grid.dv))
+    if 0 <= i < grid.n_v and 0 <= j < grid.n_u:
+        return i, j
+    return None
+
+
+def _sharp(micro: Micro, grid: DirectionGrid) -> bool:
+    """Whether the micro lobe is narrower than a grid cell (then it is a spike on this grid)."""
+    a = micro.alpha if micro.alpha_y is None else min(micro.alpha, micro.alpha_y)
+    return a < 0.75 * min(grid.du, grid.dv)
+
+
+def micro_kernel(wi, micro: Micro, grid: DirectionGrid) -> np.ndarray:
+    """The F = 1 micro lobe f_mf du dv (energy per cell), re-centred on the mirror direction, as a (2n_v−1, 2n_u−1) kernel.
+
+    Its sum is the F = 1 microfacet albedo ρ_mf(ω_i) ≤ 1 (masking-shadowing and the horizon included); for a
+    lobe narrower than a cell it is a unit impulse times ρ_mf. Used to convolve per-facet lobes.
+    """
+    n_v, n_u = grid.n_v, grid.n_u
+    K = np.zeros((2 * n_v - 1, 2 * n_u - 1))
+    wi = np.asarray(wi, dtype=float)
+    rho = float(microfacet.albedo(wi, fresnel="one", **micro.kw())) if wi[2] > 0 else 0.0
+    if _sharp(micro, grid):
+        K[n_v - 1, n_u - 1] = rho
+        return K
+    m = _mirror(wi)
+    du = (np.arange(2 * n_u - 1) - (n_u - 1)) * grid.du
+    dv = (np.arange(2 * n_v - 1) - (n_v - 1)) * grid.dv
+    U, V = np.meshgrid(m[0] + du, m[1] + dv)
+    s2 = U * U + V * V
+    inside = s2 < 1.0
+    wo = np.stack([U, V, np.sqrt(np.clip(1 - s2, 0, 1))], axis=-1)
+    f = microfacet.specular(wi, wo, fresnel="one", **micro.kw())
+    K = np.where(inside, f, 0.0) * grid.du * grid.dv
+    # f du dv = f cosθ_o dω_o: K holds the energy per cell. Rescale to the accurate quadrature albedo so
+    # that coarse grids neither add nor lose energy.
+    s = K.sum()
+    return K * (rho / s) if s > 0 else K
+
+
+def _convolve(lobe, K, grid):
+    """Convolve lobes f (n_λ, n_v, n_u), which are energy densities on the (u, v) plane, with kernel K."""
+    n_v, n_u = grid.n_v, grid.n_u
+    out = signal.fftconvolve(lobe, K[None], mode="full", axes=(-2, -1))
+    out = out[..., n_v - 1:2 * n_v - 1, n_u - 1:2 * n_u - 1]
+    return np.maximum(out, 0.0)  # guard: FFT round-off gives tiny negatives
+
+
+def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver: str = "auto",
+              device=None, precision="float32"):
+    """The diffracted (incoherent) nano lobe f_n (n_λ, n_v, n_u) in 1/sr for incidence *wi* on *grid*.
+
+    Parameters
+    ----------
+    F : callable (cos_theta_d, wavelength_nm) -> reflectance
+        Fresnel factor at the half-vector angle (physics.md §1).
+    solver : str
+        ``"psd"`` (statistics), ``"fft"`` or ``"direct"`` (height field), ``"auto"`` picks by what is given.
+    """
+    w = check_wavelengths(wavelengths_nm)
+    wo = grid.directions()
+    wi = np.asarray(wi, dtype=float)
+    h = wi[None, None, :] + wo
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
+    if solver == "auto":
+        solver = "psd" if nano.model is not None else "fft"
+    if solver == "psd":
+        if nano.model is None:
+            raise WaveopticsError("solver 'psd' needs nano statistics, not a height field; use fft or direct")
+        out = np.empty((w.size, grid.n_v, grid.n_u))
+        for i, lam in enumerate(w):
+            Fi = F(cos_d, lam)
+            out[i] = psd.scattered_lobe(wi, wo, lam, nano.model, F=Fi)
+        return np.where(grid.inside, out, 0.0)
+    if solver in ("fft", "direct"):
+        from . import diffraction
+
+        if nano.surface is None:
+            raise WaveopticsError(f"solver {solver!r} needs a nano height field (--surface or --nano MODEL:...)")
+        return diffraction.scattered_lobe(nano.surface, wi, grid, w, F=F, solver=solver, device=device,
+                                          precision=precision)
+    raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
+
+
+def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid: DirectionGrid, *,
+             solver: str = "auto", kd=0.5, diffuse: str = "lambert", device=None, precision="float32") -> Lobes:
+    """Two-scale BRDF for one incident direction on *grid* at each wavelength, plus the plain microfacet BRDF.
+
+    Parameters
+    ----------
+    wi : array_like (3,)
+        Unit vector towards the light (z = macro normal, wi_z > 0).
+    wavelengths_nm : array_like
+        Wavelengths in nm.
+    material : str or Material
+        Surface material (metals get no diffuse term).
+    micro : Micro
+        Micro roughness (α = 0 allowed: a mirror-like micro surface).
+    nano : Nano or None
+        Nano roughness; None (or σ = 0) gives the microfacet model exactly.
+    grid : DirectionGrid
+        Output directions.
+    kd : float or array (n_λ,)
+        Diffuse albedo of a dielectric's substrate (ignored for metals).
+
+    Returns
+    -------
+    Lobes
+    """
+    mat: Material = get_material(material)
+    w = check_wavelengths(wavelengths_nm)
+    wi = np.asarray(wi, dtype=float)
+    wi = wi / np.linalg.norm(wi)
+    if not wi[2] > 0:
+        raise WaveopticsError("the incident direction must be above the surface (θ_i < 90°)")
+    wo = grid.directions()
+    inside = grid.inside
+    shape = (w.size, grid.n_v, grid.n_u)
+
+    def F(cos_d, lam):
+        return mat.F(cos_d, lam)
+
+    h = wi[None, None, :] + wo
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
+
+    # --- micro specular lobe with F (plain microfacet) and the coherent fraction A --------------------------
+    sigma_nano = 0.0 if nano is None else nano.sigma
+    if _sharp(micro, grid):
+        mf = np.zeros(shape)
+        cell = _mirror_cell(grid, wi)
+        rho = float(microfacet.albedo(wi, fresnel="one", **micro.kw()))
+        if cell is not None:
+            Fi = np.array([float(F(wi[2], lam)) for lam in w])
+            mf[:, cell[0], cell[1]] = Fi * rho / (grid.du * grid.dv)
+        A = np.array([float(nano.coherent_amplitude2(wi[2], lam)) if sigma_nano > 0 else 1.0 for lam in w])
+        coherent = mf * A[:, None, None]
+    else:
+        mf = np.empty(shape)
+        coherent = np.empty(shape)
+        for i, lam in enumerate(w):
+            f1 = microfacet.specular(wi, wo, fresnel="one", **micro.kw())
+            mf[i] = f1 * F(cos_d, lam)
+            A = nano.coherent_amplitude2(cos_d, lam) if sigma_nano > 0 else 1.0
+            coherent[i] = mf[i] * A
+        mf = np.where(inside, mf, 0.0)
+        coherent = np.where(inside, coherent, 0.0)
+
+    # --- diffraction: nano lobe carried by the facets --------------------------------------------------------
+    if sigma_nano > 0:
+        fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision)
+        K = micro_kernel(wi, micro, grid)
+        diffraction = np.where(inside, _convolve(fn, K, grid), 0.0)
+        used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")
+    else:
+        diffraction = np.zeros(shape)
+        used = "none"
+
+    # --- diffuse (dielectrics only) ---------------------------------------------------------------------------
+    if mat.is_metal or np.all(np.asarray(kd) == 0) or diffuse == "none":
+        diff = np.zeros(shape)
+    else:
+        kd_arr = np.broadcast_to(np.asarray(kd, dtype=float), (w.size,))
+        diff = np.empty(shape)
+        for i, lam in enumerate(w):
+            base = microfacet.DIFFUSES[diffuse][0](wi[None, None, :], wo, kd_arr[i], 0.0)
+            weight = microfacet.diffuse_tradeoff(wi[None, None, :], wo, lambda c, lam=lam: mat.F(c, lam))
+            diff[i] = np.where(inside, base * weight, 0.0)
+    mf_total = mf + diff
+    return Lobes(grid=grid, wi=wi, wavelengths_nm=w, coherent=coherent, diffraction=diffraction, diffuse=diff,
+                 microfacet=mf_total,
+                 info={"solver": used, "sigma_nano_m": sigma_nano, "micro": micro.__dict__,
+                       "material": mat.name, "sharp_micro_lobe": _sharp(micro, grid)})
