@@ -37,3 +37,14 @@ def progress(iterable=None, *, total=None, desc=None, args=None):
 
     quiet = (args is not None and getattr(args, "json", False)) or not sys.stderr.isatty()
     return tqdm(iterable, total=total, desc=desc, disable=quiet, file=sys.stderr, leave=False)
+
+
+def add_colour(parser, *, illuminant: bool = True) -> None:
+    """Add ``--illuminant`` (unless *illuminant* is False) and ``--observer`` (see :mod:`waveoptics.spectral`)."""
+    if illuminant:
+        parser.add_argument("--illuminant", default="D65", metavar="SPD",
+                            help="light: D65 (default), D50, A, F1..F12, E, blackbody:5500K, laser:465,532,638, "
+                                 "rgb-laser or a CSV file")
+    parser.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer", metavar="NAME",
+                        help="CIE 1931 2 Degree Standard Observer (default) or CIE 1964 10 Degree Standard Observer "
+                             "(aliases 2, 10)")

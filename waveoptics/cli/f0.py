@@ -1,7 +1,7 @@
 """``waveoptics f0 MATERIAL...``: characteristic specular colour F0 = F(0°), computed spectrally."""
 from __future__ import annotations
 
-from ._common import add_common, emit
+from ._common import add_colour, add_common, emit
 
 
 def register(sub):
@@ -13,11 +13,7 @@ def register(sub):
                     "semiconductor in the 0.2-0.45 'forbidden zone').")
     p.add_argument("materials", nargs="+", metavar="MATERIAL",
                    help="preset (Au, gold, Si, BK7, ...), refractiveindex.info shelf/book/page, n+kj or f0:...")
-    p.add_argument("--illuminant", default="D65", metavar="SPD",
-                   help="D65 (default), D50, A, F1..F12, E, blackbody:5500K, laser:465,532,638, rgb-laser or a CSV")
-    p.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer", metavar="NAME",
-                   help="CIE 1931 2 Degree Standard Observer (default) or CIE 1964 10 Degree Standard Observer "
-                        "(aliases 2, 10)")
+    add_colour(p)
     add_common(p, device=False)
     p.set_defaults(func=run)
 

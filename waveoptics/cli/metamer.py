@@ -1,7 +1,7 @@
 """``waveoptics metamer``: three laser lines mixed to the same colour (XYZ) as a broadband light."""
 from __future__ import annotations
 
-from ._common import add_common, emit
+from ._common import add_colour, add_common, emit
 
 
 def register(sub):
@@ -13,8 +13,7 @@ def register(sub):
                    help="light to match: D65 (default), D50, A, F1..F12, E, blackbody:5500K or a CSV")
     p.add_argument("--lines", default="467,532,630", metavar="NM,NM,NM",
                    help="three laser wavelengths in nm (default: the BT.2020 primaries 467,532,630)")
-    p.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer", metavar="NAME",
-                   help="observer name or alias (2, 10)")
+    add_colour(p, illuminant=False)
     p.add_argument("-o", "--output", metavar="PNG", help="write a plot of both spectra to this PNG file")
     p.add_argument("--overwrite", action="store_true", help="replace the PNG if it exists")
     add_common(p, device=False)
