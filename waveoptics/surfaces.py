@@ -729,6 +729,8 @@ def rms_height(hf: HeightField, detrend: str = "mean") -> float:
 def rms_slopes(hf: HeightField) -> tuple[float | None, float | None]:
     """Per-axis rms slopes (dimensionless) from forward differences between adjacent valid samples.
 
+    Periodic fields (``meta["periodic"]``, no mask) include the difference across the wrap-around.
+
     Returns
     -------
     (s_x, s_y) : float or None
@@ -740,13 +742,18 @@ def rms_slopes(hf: HeightField) -> tuple[float | None, float | None]:
     it underestimates the slope variance by about E[k⁴] dx² / (12 E[k²]) (0.05 % for T = 10 dx, Gaussian).
     """
     h, v = hf.heights, hf.valid
+    periodic = hf.meta.get("periodic") and hf.mask is None
     out = []
     for axis, d in ((1, hf.dx), (0, hf.dy)):
         if h.shape[axis] < 2:
             out.append(None)
             continue
-        g = np.diff(h, axis=axis) / d
-        ok = v[:, 1:] & v[:, :-1] if axis == 1 else v[1:, :] & v[:-1, :]
+        if periodic:  # one period of a periodic surface: the last sample's neighbour is the first
+            g = (np.roll(h, -1, axis=axis) - h) / d
+            ok = v
+        else:
+            g = np.diff(h, axis=axis) / d
+            ok = v[:, 1:] & v[:, :-1] if axis == 1 else v[1:, :] & v[:-1, :]
         out.append(float(np.sqrt(np.mean(g[ok] ** 2))) if ok.any() else None)
     return out[0], out[1]
 
@@ -865,7 +872,8 @@ def _psd(hf: HeightField, window="auto", detrend: str = "mean"):
         n, d = (nx, hf.dx) if ny == 1 else (ny, hf.dy)
         P = np.abs(np.fft.fft((w * h).ravel())) ** 2 * d / wsum2
         f = np.abs(np.fft.fftfreq(n, d))
-        return _radial_bins(f, P, np.ones_like(f), 1.0 / (n * d), 0.5 / d)
+        fr, S, cnt = _radial_bins(f, P, np.ones_like(f), 1.0 / (n * d), 0.5 / d)
+        return fr[1:], S[1:], cnt[1:]
     P = np.abs(np.fft.fft2(w * h)) ** 2 * hf.dx * hf.dy / wsum2
     f = np.hypot(np.fft.fftfreq(ny, hf.dy)[:, None], np.fft.fftfreq(nx, hf.dx)[None, :])
     df = max(1.0 / (nx * hf.dx), 1.0 / (ny * hf.dy))
@@ -922,7 +930,8 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
     window, detrend
         As in :func:`psd_radial`.
     floor : float
-        Annuli with S below ``floor · max(S)`` are left out (window leakage and round-off live there).
+        The fitted band stops where the PSD (smoothed over ~11 annuli) first falls below ``floor · max(S)``;
+        window leakage and round-off live beyond.
 
     Returns
     -------
@@ -932,15 +941,19 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
 
     Notes
     -----
-    Each annulus's periodogram mean has a relative variance of 1/count (χ² with 2 degrees of freedom per
-    Fourier coefficient), so the log residuals are weighted by √count. Single-row fields are fitted with the
-    profile PSD of the model.
+    Each periodogram value is S(f) times an exponential (χ²₂/2) variable; an annulus averages m independent ones
+    (half its coefficients, since P(f) = P(−f) for real heights). Its log is biased by ψ(m) − ln m (−0.58 for a
+    single value, as in every bin of a profile) with variance ψ′(m); the fit removes that bias and weights the
+    residuals by 1/√ψ′(m) [2]_. Single-row fields are fitted with the profile PSD of the model.
 
     References
     ----------
     .. [1] Church & Takacs, Proc. SPIE 1530, 1991 (fitting finish parameters to measured PSDs).
+    .. [2] M. Vaughan, "A simple test for periodic signals in red noise", A&A 431, 391–403, 2005, §3
+       (bias ψ(m) − ln m and variance ψ′(m) of the log of an averaged periodogram).
     """
     from scipy.optimize import least_squares
+    from scipy.special import digamma, polygamma
 
     if model not in PSD_MODELS:
         raise unknown("PSD model", model, PSD_MODELS)
@@ -948,12 +961,23 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
     profile = 1 in hf.shape
     psd2, psd1, names = PSD_MODELS[model]
     fn = psd1 if profile else psd2
-    keep = S > floor * S.max() if S.size else S > 0
+    # the band ends where a running mean of S (over ~11 bins) first falls below floor·max: choosing bins by
+    # their own noisy values would keep only the upward fluctuations in the tail and bias the fit
+    from scipy.ndimage import uniform_filter1d
+
+    smooth = uniform_filter1d(S, size=min(11, max(1, S.size)), mode="nearest") if S.size else S
+    below = np.nonzero(smooth < floor * smooth.max())[0] if S.size else []
+    stop = below[0] if len(below) else S.size
+    keep = np.arange(S.size) < stop
     f, S, n = f[keep], S[keep], n[keep]
     if f.size < len(names) + 1:
         raise WaveopticsError(f"PSD fit '{model}': only {f.size} usable frequency bins; use a larger grid")
-    logS, sw = np.log(S), np.sqrt(n)
-    var = float(np.sum(S * (2 * f if profile else 2 * np.pi * f)) * np.median(np.diff(f)))
+    # a real field has P(f) = P(−f): an annulus of n coefficients holds m = n/2 independent χ²₂ values, whose
+    # mean has E[log] = log S + ψ(m) − log m and Var[log] = ψ′(m) (Gamma distribution)
+    m = np.maximum(n / 2.0, 1.0)
+    logS = np.log(S) - (digamma(m) - np.log(m))
+    sw = 1.0 / np.sqrt(polygamma(1, m))
+    var = float(np.sum(S * (2.0 if profile else 2 * np.pi * f)) * np.median(np.diff(f)))
     T0 = correlation_length(hf, detrend)
     if not np.isfinite(T0):
         T0 = 1.0 / f[len(f) // 2]
@@ -977,7 +1001,7 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
     sol = least_squares(resid, x0, bounds=(lo, hi), x_scale="jac")
     pars = unpack(sol.x)
     out = {"model": model, "profile": profile, "f_range_per_m": [float(f[0]), float(f[-1])],
-           "rms_log_residual": float(np.sqrt(np.sum(sol.fun**2) / np.sum(n)))}
+           "rms_log_residual": float(np.sqrt(np.mean(sol.fun**2)))}
     if model == "abc":
         A, B, C = pars
         out.update(A_m4=float(A), B_m=float(B), C=float(C), sigma_m=abc_sigma(A, B, C))
@@ -1170,8 +1194,8 @@ def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False) -> H
     kind = _sniff(head)
     expect = {".npy": "a NumPy .npy file", ".npz": "a zip/.npz archive", ".exr": "an OpenEXR image"}.get(ext, "text")
     if kind != expect:
-        raise WaveopticsError(f"{str(p)!r} is not {expect if ext in expect else 'a ' + ext + ' text grid'} "
-                              f"(its content looks like {kind})")
+        what = f"a {ext} text grid" if expect == "text" else expect
+        raise WaveopticsError(f"{str(p)!r} is not {what} (its content looks like {kind})")
     sp = _spacing_arg(spacing)
     try:
         if ext == ".npz":
