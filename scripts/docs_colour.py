@@ -125,8 +125,10 @@ line would need negative power). `waveoptics metamer --target D65 --lines 465,53
 
 The two lights have the same XYZ (difference {metamer_residual:.1e}) but are not interchangeable for objects:
 the 24 ColorChecker patches seen under the BT.2020 `rgb-laser` instead of D65 (both adapted to the same white)
-differ by ΔE2000 {cc_mean:.1f} on average and up to {cc_max:.1f} ({cc_worst}) — metameric failure. This is why
-waveoptics integrates the simulated spectra under the actual light instead of multiplying RGB values.
+differ by ΔE2000 {cc_mean:.1f} on average and up to {cc_max:.1f} ({cc_worst}) — metameric failure. The match also
+depends on the observer: the `rgb-laser` mix is calibrated to D65 for the 2° observer, and for the 10° observer its
+white is ΔE2000 {obs_dE:.1f} away from D65 (observer metamerism). This is why waveoptics integrates the simulated
+spectra under the actual light instead of multiplying RGB values.
 
 ## References
 - CIE 015:2018, *Colorimetry*, 4th ed. (tristimulus integration, 1 nm tables, Planck's law constants).
@@ -242,7 +244,9 @@ def metamer_section():
     w, R = spectral.reference_reflectances()
     R = R[: len(names)]
     dE = spectral.delta_e2000(spectral.reflectance_to_rgb(R, w, "D65"), spectral.reflectance_to_rgb(R, w, "rgb-laser"))
-    return table, residual, float(dE.mean()), float(dE.max()), names[int(np.argmax(dE))]
+    w10, d10 = spectral.white_XYZ("rgb-laser", "10"), spectral.white_XYZ("D65", "10")
+    obs_dE = float(spectral.delta_e2000(spectral.XYZ_to_rgb(w10), spectral.XYZ_to_rgb(d10)))
+    return table, residual, float(dE.mean()), float(dE.max()), names[int(np.argmax(dE))], obs_dE
 
 
 def main():
@@ -255,7 +259,7 @@ def main():
     srgb_white = np.abs(spectral.reflectance_to_rgb(np.ones(grid.size), grid, "D65") - 1.0).max()
     metal_table, all_table, swatches = f0_tables()
     plot_swatches(swatches, IMG / "colour_f0_metals.png")
-    metamer_table, residual, cc_mean, cc_max, cc_worst = metamer_section()
+    metamer_table, residual, cc_mean, cc_max, cc_worst, obs_dE = metamer_section()
     ag = spectral.f0_colour(materials.get_material("main/Ag/Hagemann"))["f0_linear"]
     text = HEAD.format(
         colour_version=colour.__version__, white_table=whites, white_residual=white_residual,
@@ -264,7 +268,7 @@ def main():
         gold_spread=_blue_spread(["main/Au/Johnson", "main/Au/McPeak", "main/Au/Babar", "main/Au/Olmon-sc"]),
         silver_spread=_blue_spread(["main/Ag/Johnson", "main/Ag/McPeak", "main/Ag/Hagemann", "main/Ag/Werner"]),
         ag_hagemann=f"({_fmt3(ag, 2)})", metamer_table=metamer_table, metamer_residual=residual,
-        cc_mean=cc_mean, cc_max=cc_max, cc_worst=cc_worst)
+        cc_mean=cc_mean, cc_max=cc_max, cc_worst=cc_worst, obs_dE=obs_dE)
     with atomic_path(DOC) as tmp:
         tmp.write_text(text)
     print(f"wrote {DOC}")

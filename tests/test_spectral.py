@@ -322,6 +322,12 @@ def test_rgb_laser_projector_white_is_d65():
     np.testing.assert_allclose(spectral.white_XYZ("rgb-laser"), spectral.white_XYZ("D65"), atol=EXACT)
 
 
+def test_laser_metamer_is_observer_dependent():
+    """Calibrated for the 2° observer, the laser white is visibly off D65 for the 10° observer."""
+    w10, d10 = spectral.white_XYZ("rgb-laser", D10), spectral.white_XYZ("D65", D10)
+    assert spectral.delta_e2000(spectral.XYZ_to_rgb(w10), spectral.XYZ_to_rgb(d10)) > 2.0
+
+
 def test_metamer_errors():
     with pytest.raises(WaveopticsError, match="line 520 nm would need negative power"):
         spectral.metamer_laser_weights("D65", [500.0, 520.0, 540.0])
