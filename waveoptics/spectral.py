@@ -96,7 +96,7 @@ SPACES = {
 #: chromatic adaptation transform used to map the illuminant white to the RGB space white
 CAT = "CAT02"
 
-#: visible range (nm) used for simulation grids; the CMFs are negligible outside it (ȳ < 1e-4 of its peak)
+#: visible range (nm) used for simulation grids (ȳ < 1e-4 of its peak outside it); R is held constant beyond it
 VISIBLE_NM = (380.0, 780.0)
 
 #: BT.2020 monochromatic primaries (nm): wavelengths of the "rgb-laser" projector [7]_
