@@ -1,0 +1,228 @@
+"""``waveoptics brdf``: evaluate a BRDF model at given directions and wavelengths, or its directional albedo.
+
+The command is shared by all BRDF models. Each model is one entry of :data:`MODELS`: a function adding its
+options (in its own argument group) and evaluator functions; direction and wavelength parsing, looping and the
+text/JSON output live here once. Adding a model (e.g. ``kirchhoff`` with ``--surface FILE --solver ...``)
+means adding one :class:`Model` entry.
+
+JSON output: ``{"model": ..., "values": [{"incident": [θ, φ], "outgoing": [θ, φ], "wavelength_nm": λ,
+"brdf": f}, ...]}`` with f in 1/sr (not multiplied by cos θ_o), or with ``--albedo``
+``{"model": ..., "albedo": [{"incident": [θ, φ], "wavelength_nm": λ, "albedo": E}, ...]}``.
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..errors import WaveopticsError
+from ._common import add_common, emit, progress
+
+
+@dataclass(frozen=True)
+class Model:
+    """A BRDF model offered by ``waveoptics brdf --model NAME``.
+
+    Attributes
+    ----------
+    add_arguments : callable(group)
+        Adds the model's options to an argparse argument group.
+    evaluate : callable(args, wi, wo, wavelength_nm) -> ndarray (n_λ, n_in, n_out)
+        BRDF in 1/sr for unit directions wi (n_in, 3) and wo (n_out, 3).
+    albedo : callable(args, wi, wavelength_nm) -> ndarray (n_λ, n_in)
+        Directional albedo ∫ f cos θ_o dω_o.
+    describe : callable(args) -> dict
+        Model parameters echoed in the JSON output.
+    help : str
+    """
+
+    add_arguments: Callable
+    evaluate: Callable
+    albedo: Callable
+    describe: Callable
+    help: str
+
+
+# ----------------------------------------------------------------------------------------------------------
+# microfacet
+
+
+def _microfacet_arguments(g) -> None:
+    from .. import microfacet as mf
+
+    g.add_argument("--ndf", choices=sorted(mf.NDFS), default="ggx", help="normal distribution (default ggx)")
+    g.add_argument("--shadowing", choices=sorted(mf.SHADOWINGS), default="smith-correlated",
+                   help="masking-shadowing term (default smith-correlated)")
+    g.add_argument("--alpha", type=float, metavar="A",
+                   help="NDF slope scale α in [0, 2] (α_x if anisotropic); 0 = sharpest representable")
+    g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
+    g.add_argument("--alpha-y", type=float, metavar="A", help="α_y for anisotropic ggx/beckmann")
+    g.add_argument("--abc-c", type=float, default=mf.ABC_C_DEFAULT, metavar="C",
+                   help=f"tail exponent C of the abc NDF (default {mf.ABC_C_DEFAULT:g})")
+    g.add_argument("--material", metavar="NAME", help="material preset, shelf/book/page, or f0:VALUE "
+                                                     "(see 'waveoptics materials')")
+    g.add_argument("--ior", metavar="N+Kj", help="constant complex index, e.g. 1.5 or 0.2+3.1j")
+    g.add_argument("--fresnel", choices=sorted(mf.FRESNELS), default="exact",
+                   help="Fresnel factor: exact, schlick, or one (F = 1, white furnace)")
+    g.add_argument("--diffuse", choices=sorted(mf.DIFFUSES), default="lambert", help="diffuse term (default lambert)")
+    g.add_argument("--kd", type=float, default=0.0, metavar="C", help="diffuse albedo in [0, 1] (default 0)")
+    g.add_argument("--sigma", type=float, default=0.0, metavar="DEG",
+                   help="Oren-Nayar roughness σ in degrees (separate from the specular α)")
+    g.add_argument("--no-tradeoff", action="store_true",
+                   help="do not weight the diffuse term by (1 - F(θi))(1 - F(θo)) / (1 - F̄)")
+    g.add_argument("--backend", choices=["numpy", "opencl"], default="numpy",
+                   help="evaluate with NumPy (default) or the OpenCL kernel (albedo always uses NumPy)")
+    g.add_argument("--precision", choices=["float32", "float64"], default="float32",
+                   help="OpenCL precision (default float32)")
+
+
+def _microfacet_params(args, wavelength_nm) -> dict:
+    """Keyword arguments of microfacet.brdf for these options; Fresnel inputs per wavelength (n_λ,)."""
+    from .. import microfacet as mf
+
+    if (args.alpha is None) == (args.roughness is None):
+        raise WaveopticsError("give exactly one of --alpha A or --roughness R for --model microfacet")
+    alpha = args.alpha if args.alpha is not None else float(mf.alpha_from_roughness(args.roughness))
+    if args.material is not None and args.ior is not None:
+        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
+    spec = args.material if args.material is not None else args.ior
+    if spec is None:
+        if args.fresnel != "one":
+            raise WaveopticsError("the microfacet model needs --material NAME or --ior N+Kj "
+                                  "(or --fresnel one for a white furnace)")
+        fi = {"fresnel": "one", "eta": None, "F0": None}
+    else:
+        fi = mf.fresnel_inputs(spec, wavelength_nm, args.fresnel)
+        _report_clamped(spec, wavelength_nm, args)
+    if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
+        raise WaveopticsError(f"--sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
+                              "[0, 90] degrees")
+    return dict(alpha=alpha, alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing, abc_c=args.abc_c,
+                diffuse=args.diffuse, kd=args.kd, sigma=float(np.radians(args.sigma)),
+                tradeoff=not args.no_tradeoff, **fi)
+
+
+def _report_clamped(spec, wavelength_nm, args) -> None:
+    from ..materials import get_material
+
+    mat = get_material(spec)
+    if mat.schlick_only:
+        return
+    bad = np.asarray(wavelength_nm)[mat.out_of_range(wavelength_nm)]
+    if bad.size and not getattr(args, "json", False):
+        lo, hi = mat.wavelength_range_nm
+        print(f"waveoptics brdf: note: {mat.name} index clamped at {', '.join(f'{b:g}' for b in bad)} nm "
+              f"(data range {lo:g}-{hi:g} nm)", file=sys.stderr)
+
+
+def _per_wavelength(kw: dict, n_axes: int) -> dict:
+    """Reshape the per-wavelength arrays of *kw* to (n_λ, 1, ..., 1) for NumPy broadcasting."""
+    out = dict(kw)
+    for key in ("eta", "F0"):
+        if out.get(key) is not None:
+            out[key] = np.asarray(out[key]).reshape((-1,) + (1,) * n_axes)
+    return out
+
+
+def _microfacet_evaluate(args, wi, wo, wavelength_nm):
+    from .. import microfacet as mf
+
+    kw = _microfacet_params(args, wavelength_nm)
+    n_w = len(wavelength_nm)
+    if args.backend == "opencl":
+        from ..runtime import get_runtime
+
+        a = np.repeat(wi, len(wo), axis=0)
+        b = np.tile(wo, (len(wi), 1))
+        fk = dict(kw)
+        for key in ("eta", "F0"):
+            if fk.get(key) is None:
+                fk.pop(key)
+        f = mf.brdf_cl(a, b, runtime=get_runtime(args.device), precision=args.precision, **fk)
+        return np.broadcast_to(f, (n_w, a.shape[0])).reshape(n_w, len(wi), len(wo))
+    f = mf.brdf(wi[None, :, None, :], wo[None, None, :, :], **_per_wavelength(kw, 2))
+    return np.broadcast_to(f, (n_w, len(wi), len(wo)))
+
+
+def _microfacet_albedo(args, wi, wavelength_nm):
+    from .. import microfacet as mf
+
+    kw = _per_wavelength(_microfacet_params(args, wavelength_nm), 1)
+    out = [mf.albedo(w, **kw) for w in progress(wi, desc="albedo", args=args)]
+    return np.broadcast_to(np.stack(out, axis=-1), (len(wavelength_nm), len(wi)))
+
+
+def _microfacet_describe(args) -> dict:
+    d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
+                                       "fresnel", "diffuse", "kd", "backend")}
+    if args.ndf == "abc":
+        d["abc_c"] = args.abc_c
+    if args.diffuse == "oren-nayar":
+        d["sigma_deg"] = args.sigma
+    d["tradeoff"] = not args.no_tradeoff
+    return d
+
+
+#: BRDF models offered by ``waveoptics brdf --model``
+MODELS: dict[str, Model] = {
+    "microfacet": Model(_microfacet_arguments, _microfacet_evaluate, _microfacet_albedo, _microfacet_describe,
+                        "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term"),
+}
+
+
+# ----------------------------------------------------------------------------------------------------------
+# the command
+
+
+def register(sub) -> None:
+    p = sub.add_parser("brdf", help="evaluate a BRDF model (or its directional albedo) at given directions",
+                       description="Evaluate a BRDF f (1/sr, not times cosine) for incident and outgoing "
+                                   "directions at one or more wavelengths. Angles in degrees: θ from the "
+                                   "normal, φ about it. Models: " +
+                                   "; ".join(f"{k}: {m.help}" for k, m in MODELS.items()))
+    p.add_argument("--model", choices=sorted(MODELS), default="microfacet", help="BRDF model (default microfacet)")
+    p.add_argument("--wavelength", default="550", metavar="NM[,NM...]",
+                   help="wavelengths in nm: 550, 450,550,650 or 400:700:10 (default 550)")
+    p.add_argument("--incident", action="append", required=True, metavar="THETA[,PHI]",
+                   help="direction to the light in degrees (repeat for several)")
+    p.add_argument("--outgoing", action="append", metavar="THETA,PHI",
+                   help="direction to the viewer in degrees (repeat for several)")
+    p.add_argument("--albedo", action="store_true",
+                   help="print the directional albedo ∫ f cos θo dωo of each incident direction instead")
+    for name, model in MODELS.items():
+        model.add_arguments(p.add_argument_group(f"--model {name}"))
+    add_common(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from ..units import direction_from_angles, parse_direction, parse_wavelengths
+
+    model = MODELS[args.model]
+    wl = parse_wavelengths(args.wavelength, name="--wavelength")
+    inc = [parse_direction(t, name="--incident") for t in args.incident]
+    wi = direction_from_angles([t for t, _ in inc], [p for _, p in inc])
+    head = {"model": args.model, "parameters": model.describe(args)}
+    if args.albedo:
+        E = np.asarray(model.albedo(args, wi, wl))
+        rows = [{"incident": list(inc[i]), "wavelength_nm": float(wl[j]), "albedo": float(E[j, i])}
+                for i in range(len(inc)) for j in range(len(wl))]
+        text = "\n".join(f"incident θ={r['incident'][0]:g}° φ={r['incident'][1]:g}°  λ={r['wavelength_nm']:g} nm  "
+                         f"albedo={r['albedo']:.6g}" for r in rows)
+        emit(args, {**head, "albedo": rows}, text)
+        return 0
+    if not args.outgoing:
+        raise WaveopticsError("give at least one --outgoing THETA,PHI (or --albedo)")
+    out = [parse_direction(t, name="--outgoing", need_phi=True) for t in args.outgoing]
+    wo = direction_from_angles([t for t, _ in out], [p for _, p in out])
+    f = np.asarray(model.evaluate(args, wi, wo, wl))
+    rows = [{"incident": list(inc[i]), "outgoing": list(out[k]), "wavelength_nm": float(wl[j]),
+             "brdf": float(f[j, i, k])}
+            for i in range(len(inc)) for k in range(len(out)) for j in range(len(wl))]
+    text = "\n".join(f"incident θ={r['incident'][0]:g}° φ={r['incident'][1]:g}°  "
+                     f"outgoing θ={r['outgoing'][0]:g}° φ={r['outgoing'][1]:g}°  λ={r['wavelength_nm']:g} nm  "
+                     f"f={r['brdf']:.6g} 1/sr" for r in rows)
+    emit(args, {**head, "values": rows}, text)
+    return 0
