@@ -2,7 +2,6 @@
 PSD fits and the cost of generation, every number computed by the code."""
 from __future__ import annotations
 
-import math
 import time
 from pathlib import Path
 

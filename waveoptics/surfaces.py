@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import gammaln
 
+from . import psd as _psdlib
 from .errors import WaveopticsError, unknown
 from .units import parse_length
 
@@ -158,29 +159,8 @@ class HeightField:
 # Power spectral densities (two-sided, ∫ S d²f = σ²) and their profile (1-D marginal) forms ∫ S(fx, fy) dfy.
 # ----------------------------------------------------------------------------------------------------------------
 
-def psd_gaussian(f, sigma, T):
-    """Two-sided 2-D PSD of a Gaussian-correlated surface, C(r) = σ² exp(−r²/T²).
-
-    Parameters
-    ----------
-    f : array_like, 1/m
-        Radial spatial frequency |f| (cycles per metre).
-    sigma : float, m
-        rms height σ.
-    T : float, m
-        Correlation length (C(T) = σ²/e).
-
-    Returns
-    -------
-    ndarray, m⁴
-        S(f) = π σ² T² exp(−π² T² f²), with ∫ S d²f = σ².
-
-    References
-    ----------
-    .. [1] Ogilvy 1991, §2.2; Church, Takacs & Leonard 1989 (two-sided normalization).
-    """
-    f = np.asarray(f, dtype=float)
-    return np.pi * sigma**2 * T**2 * np.exp(-(np.pi * T * f) ** 2)
+#: Gaussian-correlation PSD π σ² T² exp(−π² T² f²) (f in 1/m, σ and T in m): the one in :mod:`waveoptics.psd`
+psd_gaussian = _psdlib.S_gaussian
 
 
 def psd_gaussian_profile(f, sigma, T):
@@ -192,27 +172,9 @@ def psd_gaussian_profile(f, sigma, T):
     return math.sqrt(math.pi) * sigma**2 * T * np.exp(-(np.pi * T * f) ** 2)
 
 
-def psd_exponential(f, sigma, T):
-    """Two-sided 2-D PSD of an exponentially correlated surface, C(r) = σ² exp(−r/T).
-
-    Parameters
-    ----------
-    f : array_like, 1/m
-        Radial spatial frequency.
-    sigma, T : float, m
-        rms height and correlation length (C(T) = σ²/e).
-
-    Returns
-    -------
-    ndarray, m⁴
-        S(f) = 2π σ² T² / (1 + (2π T f)²)^{3/2}; it is the ABC PSD with A = 2πσ²T², B = 2πT, C = 3.
-
-    References
-    ----------
-    .. [1] Ogilvy 1991, §2.2; Church & Takacs 1991 (K-correlation family, C = 3).
-    """
-    f = np.asarray(f, dtype=float)
-    return 2 * np.pi * sigma**2 * T**2 / (1 + (2 * np.pi * T * f) ** 2) ** 1.5
+#: Exponential-correlation PSD 2π σ² T² / (1 + (2π T f)²)^{3/2}: the one in :mod:`waveoptics.psd`; it is the
+#: ABC PSD with A = 2πσ²T², B = 2πT, C = 3
+psd_exponential = _psdlib.S_exponential
 
 
 def psd_exponential_profile(f, sigma, T):
@@ -268,7 +230,7 @@ def abc_A(sigma, B, C) -> float:
     """ABC plateau A (m⁴) giving rms height σ: A = σ² B² (C − 2) / (2π)."""
     if not C > 2:
         raise WaveopticsError(f"ABC exponent C={C!r} is not allowed; it must be > 2 for a finite rms height")
-    return sigma**2 * B**2 * (C - 2) / (2 * math.pi)
+    return _psdlib.abc_A(sigma, B, C)
 
 
 # ----------------------------------------------------------------------------------------------------------------
