@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml scripts/install-opencl.sh
 
 demo: $(STAMP)
 	$(VENV)/bin/waveoptics info
-	$(VENV)/bin/waveoptics demo -o out/demo --overwrite
+	$(VENV)/bin/waveoptics simulate -o out/demo --overwrite
 
 test: $(STAMP)
 	$(PY) -m pytest -q -ra

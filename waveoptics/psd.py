@@ -40,6 +40,7 @@ References
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -273,7 +274,8 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
     if model.sigma == 0:
         out = np.zeros(np.broadcast(q, g).shape)
         return (out, np.ones_like(out)) if return_captured else out
-    q_max = float(np.max(q)) * 1.001 + 1.0
+    # round the table range up to a power of two so that one table serves a whole spectrum (cache hit)
+    q_max = 2.0 ** math.ceil(math.log2(float(np.max(q)) * 1.001 + 1.0))
     tab = series_tables(model, q_max, m_max)
     q_b, g_b = np.broadcast_arrays(q, g)
     # terms beyond g + 8√g + 10 carry < 1e-12 of the Poisson mass: skip them

@@ -292,8 +292,8 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     else:
         mf = np.empty(shape)
         coherent = np.empty(shape)
+        f1 = microfacet.specular(wi, wo, fresnel="one", **micro.kw())
         for i, lam in enumerate(w):
-            f1 = microfacet.specular(wi, wo, fresnel="one", **micro.kw())
             mf[i] = f1 * F(cos_d, lam)
             A = nano.coherent_amplitude2(cos_d, lam) if sigma_nano > 0 else 1.0
             coherent[i] = mf[i] * A
