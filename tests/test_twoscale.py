@@ -1,0 +1,119 @@
+"""Two-scale BRDF limits (physics.md §7): σ_nano → 0, α_micro → 0, energy, smoothness in λ, diffuse rules."""
+import numpy as np
+import pytest
+
+from waveoptics import materials, microfacet, psd, twoscale
+from waveoptics.diffraction import DirectionGrid, integrate
+from waveoptics.units import direction_from_angles
+
+GRID = DirectionGrid.hemisphere(96)
+W = np.array([400.0, 500.0, 600.0, 700.0])
+ABC = psd.PSDModel("abc", sigma=10e-9, B=3e-6, C=2.8)
+
+
+def test_zero_nano_roughness_is_exactly_the_microfacet_model():
+    wi = direction_from_angles(35.0, 20.0)
+    micro = twoscale.Micro(alpha=0.2, ndf="ggx")
+    zero = twoscale.Nano(model=psd.PSDModel("abc", sigma=0.0, B=3e-6, C=2.8))
+    for nano in (None, zero):
+        L = twoscale.evaluate(wi, W, "Au", micro, nano, GRID)
+        np.testing.assert_array_equal(L.total, L.microfacet)
+        assert np.all(L.diffraction == 0)
+    # and the microfacet part is the microfacet module's BRDF itself (independent evaluation)
+    wo = GRID.directions()
+    eta = materials.get_material("Au").eta(W)
+    ref = microfacet.specular(wi, wo[None], alpha=0.2, ndf="ggx", fresnel="exact", eta=eta[:, None, None])
+    np.testing.assert_allclose(L.microfacet, np.where(GRID.inside, ref, 0), rtol=1e-12, atol=1e-14)
+
+
+def test_zero_micro_roughness_is_exactly_the_nano_diffraction_lobe():
+    wi = direction_from_angles(30.0, 0.0)
+    nano = twoscale.Nano(model=ABC)
+    mat = materials.get_material("Al")
+    L = twoscale.evaluate(wi, W, mat, twoscale.Micro(alpha=0.0), nano, GRID)
+    wo = GRID.directions()
+    h = wi + wo
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    cos_d = np.clip(h @ wi, 0, 1)
+    rho = microfacet.albedo(wi, fresnel="one", alpha=microfacet.ALPHA_MIN)  # = 1 up to 1e-6
+    for i, lam in enumerate(W):
+        ref = psd.scattered_lobe(wi, wo, lam, ABC, F=mat.F(cos_d, lam))
+        np.testing.assert_allclose(L.diffraction[i], np.where(GRID.inside, ref, 0) * rho, rtol=1e-9, atol=1e-12)
+    # the coherent part is a spike holding F(θi)·exp(−g) at the mirror direction
+    g = (4 * np.pi * ABC.sigma * wi[2] / (W * 1e-9)) ** 2
+    np.testing.assert_allclose(L.albedo("coherent"), mat.F(wi[2], W) * np.exp(-g) * rho, rtol=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_albedo_never_exceeds_fresnel(seed):
+    """Σ energy ≤ F(θ_i) + 0.01 (the single-scattering microfacet error is far below that at these α)."""
+    rng = np.random.default_rng(seed)
+    theta = rng.uniform(0, 80)
+    alpha = rng.choice([0.0, 0.01, 0.05, 0.2, 0.5])
+    model = psd.PSDModel("abc", sigma=rng.uniform(1, 60) * 1e-9, B=rng.uniform(0.5, 20) * 1e-6,
+                         C=rng.uniform(2.3, 4.0))
+    mat = rng.choice(["Au", "Ag", "Al", "Cu"])
+    wi = direction_from_angles(theta, rng.uniform(0, 360))
+    L = twoscale.evaluate(wi, W, mat, twoscale.Micro(alpha=alpha, ndf=rng.choice(["ggx", "beckmann"])),
+                          twoscale.Nano(model=model), GRID)
+    F = materials.get_material(mat).F(wi[2], W)
+    assert np.all(np.isfinite(L.total)) and np.all(L.total >= 0)
+    assert np.all(L.albedo() <= F + 0.01)
+
+
+def test_energy_split_matches_tis_for_smooth_metal():
+    """α = 0, normal incidence: coherent ≈ F e^{−g}, diffraction ≈ F (1 − e^{−g}) (physics.md §2), 2 % here."""
+    wi = direction_from_angles(0.0, 0.0)
+    model = psd.PSDModel("gaussian", sigma=15e-9, T=4e-6)
+    grid = DirectionGrid.hemisphere(256)
+    L = twoscale.evaluate(wi, W, "Al", twoscale.Micro(alpha=0.0), twoscale.Nano(model=model), grid)
+    F = materials.get_material("Al").F(1.0, W)
+    g = (4 * np.pi * model.sigma / (W * 1e-9)) ** 2
+    np.testing.assert_allclose(L.albedo("coherent"), F * np.exp(-g), rtol=1e-3)
+    np.testing.assert_allclose(L.albedo("diffraction"), F * -np.expm1(-g), rtol=0.02)
+
+
+def test_result_is_smooth_in_wavelength():
+    w = np.arange(400.0, 701.0, 10.0)
+    L = twoscale.evaluate(direction_from_angles(20.0, 0.0), w, "Ag", twoscale.Micro(alpha=0.05),
+                          twoscale.Nano(model=ABC), GRID)
+    a = L.albedo()
+    d2 = np.abs(np.diff(a, 2))
+    assert d2.max() < 0.01  # no jumps: second differences stay small at 10 nm steps
+    frac = L.coherent_specular_fraction()
+    assert np.all(np.diff(frac) > 0)  # longer wavelengths see a smoother surface: more coherent light
+
+
+def test_dielectric_gets_diffuse_metal_does_not():
+    wi = direction_from_angles(30.0, 0.0)
+    for mat, expect in (("BK7", True), ("Au", False)):
+        L = twoscale.evaluate(wi, W, mat, twoscale.Micro(alpha=0.1), twoscale.Nano(model=ABC), GRID, kd=0.6)
+        assert (L.albedo("diffuse") > 0.3).all() == expect
+        assert (L.albedo("diffuse") == 0).all() != expect
+    # the diffuse layer gets only what the interface did not reflect: albedo ≈ kd (1 − F(θi)) ≤ kd
+    L = twoscale.evaluate(wi, W, "BK7", twoscale.Micro(alpha=0.1), None, GRID, kd=0.6)
+    F = materials.get_material("BK7").F(wi[2], W)
+    np.testing.assert_allclose(L.albedo("diffuse"), 0.6 * (1 - F), rtol=0.03)
+
+
+def test_micro_kernel_sums_to_micro_albedo_and_is_centred():
+    wi = direction_from_angles(40.0, 0.0)
+    micro = twoscale.Micro(alpha=0.15, ndf="beckmann")
+    K = twoscale.micro_kernel(wi, micro, GRID)
+    assert K.sum() == pytest.approx(microfacet.albedo(wi, fresnel="one", alpha=0.15, ndf="beckmann"), rel=1e-12)
+    n = GRID.n_u
+    iy, ix = np.unravel_index(np.argmax(K), K.shape)
+    assert abs(iy - (n - 1)) <= 1 and abs(ix - (n - 1)) <= 3  # peak at (near) zero shift from the mirror
+
+
+def test_height_field_coherent_fraction_is_its_characteristic_function():
+    """For a sinusoid h = a sin(2πx/Λ): A = J0²(2k a cos θ) (Jacobi-Anger; physics.md §5)."""
+    from scipy import special
+
+    from waveoptics import surfaces
+
+    hf = surfaces.sinusoid(amplitude=40e-9, period=2e-6, size=64e-6, samples=4096)
+    nano = twoscale.Nano(surface=hf)
+    for lam, c in ((500.0, 1.0), (650.0, 0.7)):
+        k = 2 * np.pi / (lam * 1e-9)
+        assert nano.coherent_amplitude2(c, lam) == pytest.approx(special.j0(2 * k * 40e-9 * c) ** 2, abs=2e-3)
