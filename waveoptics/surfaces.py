@@ -38,7 +38,7 @@ import numpy as np
 from scipy.special import gammaln
 
 from . import psd as _psdlib
-from .errors import WaveopticsError, unknown
+from .errors import OutputExistsError, WaveopticsError, unknown
 from .units import parse_length
 
 
@@ -1449,7 +1449,6 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
     elif ext == ".npy":
         side = p.with_name(p.name + ".json")
         if side.exists() and not overwrite:
-            from .errors import OutputExistsError
             raise OutputExistsError(f"output {str(side)!r} already exists; pass --overwrite to replace it")
         with atomic_path(p, overwrite=overwrite) as tmp, open(tmp, "wb") as fh:
             np.save(fh, h_nan)
