@@ -137,8 +137,10 @@ inline real_t D_blinn_phong(real3_t m, real_t ax)
 {
     if (m.z <= R(0.0)) return R(0.0);
     real_t ap = R(2.0) / (ax * ax) - R(2.0);
-    real_t s2 = fmin(m.x * m.x + m.y * m.y, R(1.0));
-    return (ap + R(2.0)) / (R(2.0) * WO_PI) * exp(ap * R(0.5) * log1p(-s2));
+    real_t s2 = m.x * m.x + m.y * m.y;
+    /* log m.z: from 1 - m.z^2 near the normal (no cancellation), from m.z near the horizon (finite) */
+    real_t logc = (s2 < R(0.5)) ? R(0.5) * log1p(-s2) : log(m.z);
+    return (ap + R(2.0)) / (R(2.0) * WO_PI) * exp(ap * logc);
 }
 
 /* ---- ABC, D = A (1 + B (1 - n.m))^-C, B = 2/alpha^2 (Loew et al. 2012, sec. 5) ---- */
@@ -280,7 +282,8 @@ inline real_t specular(real3_t wi, real3_t wo, real_t ax, real_t ay, real_t c, c
     real_t g = G(wi, wo, h, ax, ay, c);
     if (g <= R(0.0)) return R(0.0);
     real_t cos_d = wo_clamp(dot(wi, h), R(0.0), R(1.0));
-    return F_term(cos_d, eta, F0) * g * D(h, ax, ay, c) / (R(4.0) * wi.z * wo.z);
+    /* guard: cosines of the denominator floored at COS_MIN = 1e-7 (f ~ 1/cos at the horizon; twin: _specular) */
+    return F_term(cos_d, eta, F0) * g * D(h, ax, ay, c) / (R(4.0) * fmax(wi.z, R(1e-7)) * fmax(wo.z, R(1e-7)));
 }
 
 /* Oren-Nayar qualitative model (Oren & Nayar 1994 eq. 30); sigma = 0 is Lambert kd/pi */

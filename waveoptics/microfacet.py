@@ -61,6 +61,8 @@ from .errors import WaveopticsError, unknown
 ALPHA_MIN = 1e-4
 #: largest accepted α (mean slope 2, i.e. facets at 63° on average; larger is not a surface model any more)
 ALPHA_MAX = 2.0
+#: floor of the cosines in the specular denominator (guard against 1/cos θ growth at the horizon)
+COS_MIN = 1e-7
 #: default tail exponent C of the ABC NDF (C = 2 has the same core as GGX)
 ABC_C_DEFAULT = 2.0
 #: Gauss-Legendre order of the radial quadrature used for Λ of NDFs without a closed form (ABC), and of the
@@ -259,7 +261,8 @@ def D_blinn_phong(m, ax, ay=None, c=None):
     mz = m[..., 2]
     s2 = np.minimum(m[..., 0] ** 2 + m[..., 1] ** 2, 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        logc = 0.5 * np.log1p(-s2)  # log m_z, accurate near the normal
+        # log m_z: from 1 − m_z² near the normal (no cancellation), from m_z near the horizon (finite)
+        logc = np.where(s2 < 0.5, 0.5 * np.log1p(-np.minimum(s2, 0.5)), np.log(np.maximum(mz, 1e-300)))
         val = (ap + 2.0) / (2.0 * np.pi) * np.exp(ap * logc)
     return np.where(mz > 0, val, 0.0)
 
@@ -723,7 +726,10 @@ def _specular(wi, wo, spec, ax, ay, c, gfn, F_fn):
     cos_d = np.clip(_dot(wi, h), 0.0, 1.0)
     g = gfn(wi, wo, h, lambda w: spec.Lambda(w, ax, ay, c))
     d = spec.D(h, ax, ay, c)
-    denom = 4.0 * np.where(up, wi[..., 2] * wo[..., 2], 1.0)
+    # guard: f grows like 1/cos θ towards the horizon (G ~ cos θ / α); flooring the cosines of the denominator
+    # at COS_MIN bounds f (below float32 overflow for α >= ALPHA_MIN) and only changes θ > 89.999994°, where
+    # f then goes continuously to 0 with G
+    denom = 4.0 * np.where(up, np.maximum(wi[..., 2], COS_MIN) * np.maximum(wo[..., 2], COS_MIN), 1.0)
     val = F_fn(cos_d) * g * d / denom
     # guard: 0 below the surface (and in the product of 0 and a huge D at exactly grazing directions)
     return np.where(up & (g > 0), val, 0.0)
@@ -892,7 +898,9 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
     if diffuse != "none" and np.any(kd > 0):
         fd = DIFFUSES[diffuse][0](wi, wo, kd, sigma)
         if tradeoff:
-            fd = fd * diffuse_tradeoff(wi, wo, F_fn, batch_ndim=wi.ndim - 1)
+            # F̄ must broadcast like F(θ): as many axes as the directions' batch or the Fresnel parameters
+            nb = max(wi.ndim - 1, np.ndim(eta) if eta is not None else 0, np.ndim(F0) if F0 is not None else 0)
+            fd = fd * diffuse_tradeoff(wi, wo, F_fn, batch_ndim=nb)
         f = f + fd
     return f
 
@@ -999,7 +1007,8 @@ def normal_quadrature(alpha=1.0, alpha_y=None, *, n_rho=16, n_phi=64):
 
     Slope space is sampled in polar coordinates stretched by (α_x, α_y): Gauss-Legendre (*n_rho* nodes) on
     geometrically growing radial segments from 1/8 α to slope 8, a mapped tail to infinite slope, and the
-    midpoint rule (spectrally accurate for periodic integrands) with *n_phi* nodes in φ. dω = cos³θ d²slope.
+    midpoint rule (spectrally accurate for periodic integrands) with *n_phi* nodes in φ, multiplied by
+    ⌈α_max/(3 α_min)⌉ for anisotropic lobes. dω = cos³θ d²slope.
 
     Parameters
     ----------
@@ -1015,7 +1024,11 @@ def normal_quadrature(alpha=1.0, alpha_y=None, *, n_rho=16, n_phi=64):
     """
     ax = max(float(alpha), ALPHA_MIN)
     ay = ax if alpha_y is None else max(float(alpha_y), ALPHA_MIN)
-    return _normal_nodes(ax, ay, int(n_rho), int(n_phi))
+    # far from the lobe an anisotropic stretch makes the φ integrand peaked (width ~ α_min/α_max): scale the
+    # number of φ nodes with the anisotropy ratio (measured: Σ weights = 2π to 1e-8 up to a ratio of 100)
+    ratio = max(ax, ay) / min(ax, ay)
+    n_phi = int(n_phi) * max(1, int(np.ceil(ratio / 3.0)))
+    return _normal_nodes(ax, ay, int(n_rho), n_phi)
 
 
 def directional_albedo(f: Callable, wi, *, alpha=1.0, alpha_y=None, n_rho=16, n_phi=64):
