@@ -165,10 +165,90 @@ def _microfacet_describe(args) -> dict:
     return d
 
 
+# ----------------------------------------------------------------------------------------------------------
+# kirchhoff (wave optics of a height-field file; logic in waveoptics.diffraction)
+
+
+def _kirchhoff_arguments(g) -> None:
+    g.add_argument("--surface", metavar="FILE", help="height-field file (.npz .npy .exr .txt .xyz)")
+    g.add_argument("--spacing", metavar="D[,DY]", help="grid spacing with unit, when the file does not state it")
+    g.add_argument("--solver", choices=("direct", "fft"), default="direct",
+                   help="direct Kirchhoff sum (default; --backend numpy|opencl) or fft on a hemisphere grid "
+                        "(interpolated at the outgoing directions)")
+    g.add_argument("--resolution", type=int, metavar="N",
+                   help="fft grid / --albedo grid cells per side (default: resolves the specular spike, albedo 256)")
+    g.add_argument("--realizations", type=int, default=1, metavar="N", help="average over N tiles of the surface")
+    g.add_argument("--window", default="hann", metavar="NAME", help="taper over the patch (default hann)")
+
+
+def _kirchhoff_setup(args, wavelength_nm):
+    from .. import surfaces
+    from ..errors import WaveopticsError
+
+    if not args.surface:
+        raise WaveopticsError("--model kirchhoff needs --surface FILE")
+    if args.material is not None and args.ior is not None:
+        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
+    spec = args.material if args.material is not None else args.ior
+    if args.fresnel == "one" or spec is None:
+        if args.fresnel != "one":
+            raise WaveopticsError("the kirchhoff model needs --material NAME or --ior N+Kj (or --fresnel one)")
+        F = None
+    else:
+        from ..materials import get_material
+
+        mat = get_material(spec)
+        _report_clamped(spec, wavelength_nm, args)
+        if args.fresnel == "schlick":
+            from ..fresnel import F_schlick
+
+            def F(c, w, _m=mat):
+                return F_schlick(c, _m.F0(w))
+        else:
+            F = mat
+    hf = surfaces.load(args.surface, spacing=args.spacing)
+    rt = None
+    if args.backend == "opencl" and args.solver == "direct":
+        from ..runtime import get_runtime
+
+        rt = get_runtime(args.device)
+    return hf, F, rt
+
+
+def _kirchhoff_evaluate(args, wi, wo, wavelength_nm):
+    from .. import diffraction
+
+    hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
+    out = [diffraction.brdf(hf, w, wo, wavelength_nm, F, solver=args.solver, backend=args.backend,
+                            precision=args.precision, window_name=args.window, resolution=args.resolution,
+                            realizations=args.realizations, runtime=rt)
+           for w in progress(wi, desc="kirchhoff", args=args)]
+    return np.stack(out, axis=1)
+
+
+def _kirchhoff_albedo(args, wi, wavelength_nm):
+    from .. import diffraction
+
+    hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
+    out = [diffraction.scatter(hf, w, wavelength_nm, F, solver=args.solver, backend=args.backend,
+                               precision=args.precision, window_name=args.window,
+                               resolution=args.resolution or 256, realizations=args.realizations,
+                               runtime=rt).albedo
+           for w in progress(wi, desc="albedo", args=args)]
+    return np.stack(out, axis=1)
+
+
+def _kirchhoff_describe(args) -> dict:
+    return {k: getattr(args, k) for k in ("surface", "solver", "material", "ior", "fresnel", "backend",
+                                          "precision", "window", "realizations", "resolution")}
+
+
 #: BRDF models offered by ``waveoptics brdf --model``
 MODELS: dict[str, Model] = {
     "microfacet": Model(_microfacet_arguments, _microfacet_evaluate, _microfacet_albedo, _microfacet_describe,
                         "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term"),
+    "kirchhoff": Model(_kirchhoff_arguments, _kirchhoff_evaluate, _kirchhoff_albedo, _kirchhoff_describe,
+                       "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.diffraction)"),
 }
 
 
