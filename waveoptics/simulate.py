@@ -118,6 +118,7 @@ class Simulation:
     table_microfacet: np.ndarray
     illuminant: str
     params: dict
+    nano: twoscale.Nano | None = None
     timings_s: dict = field(default_factory=dict)
 
     @property
@@ -214,7 +215,7 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
               "solver": lobes.info["solver"], "kd": 0.0 if mat.is_metal else kd, "precision": precision,
               "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": seed}
     return Simulation(lobes=lobes, table_thetas_deg=thetas, table_total=tab_total, table_microfacet=tab_mf,
-                      illuminant=illuminant, params=params, timings_s=timings)
+                      illuminant=illuminant, params=params, timings_s=timings, nano=nano_obj)
 
 
 OUTPUT_FILES = ("brdf_spectral.exr", "brdf_rgb.exr", "brdf.png", "sphere_wave.png", "sphere_microfacet.png",

@@ -4,17 +4,12 @@ from __future__ import annotations
 from ._common import add_common, add_output, emit, progress
 
 
-def register(sub):
-    p = sub.add_parser(
-        "simulate", help="simulate a two-scale (micro + nano) surface and compare with the microfacet model",
-        description="Two-scale BRDF: microfacet NDF for the micro-roughness, Kirchhoff diffraction for the "
-                    "nano-roughness, integrated over the spectrum to RGB; writes spectral and RGB EXRs, PNG "
-                    "previews, sphere renders of both models and their ΔE2000, lobe cross-sections and "
-                    "summary.json. With no options it runs a nano-rough aluminium under D65.")
+def add_scene_options(p) -> None:
+    """Options that describe the surface, light and sampling (shared by simulate and compare)."""
     src = p.add_mutually_exclusive_group()
     src.add_argument("--surface", metavar="FILE", help="nano height field (.npz/.npy/.exr/.txt); fft or direct solver")
     src.add_argument("--nano", metavar="MODEL:PARAMS", default=None,
-                     help="nano roughness, e.g. abc:sigma=10nm,B=5um,C=3 | gaussian:sigma=5nm,T=1um | "
+                     help="nano roughness, e.g. abc:sigma=10nm,B=2um,C=2.6 | gaussian:sigma=5nm,T=1um | "
                           "exponential:sigma=5nm,T=1um | sinusoid:amplitude=40nm,period=2um | "
                           "scratches:count=20,width=200nm,depth=30nm (default abc:sigma=10nm,B=2um,C=2.6; "
                           "sigma=0 disables it)")
@@ -34,19 +29,15 @@ def register(sub):
     p.add_argument("--solver", default="auto", choices=["auto", "direct", "fft", "psd"],
                    help="nano lobe: psd (statistics), fft or direct (height field); auto picks (default)")
     p.add_argument("--kd", type=float, default=0.5, help="diffuse albedo of a dielectric (metals: none)")
-    p.add_argument("--sphere-size", type=int, default=256, metavar="PX", help="sphere render size (default 256)")
     p.add_argument("--precision", default="float32", choices=["float32", "float64"],
                    help="OpenCL precision for height-field solvers (default float32)")
     p.add_argument("--seed", type=int, default=0, help="seed of generated nano surfaces (default 0)")
-    add_output(p)
-    add_common(p)
-    p.set_defaults(func=run)
 
 
-def run(args):
+def simulation_from_args(args, bar=None):
+    """Validate the scene options and run :func:`waveoptics.simulate.simulate`."""
     from .. import simulate as sim_mod
     from ..errors import WaveopticsError
-    from ..io import prepare_outdir
     from ..units import parse_direction, parse_wavelengths
 
     theta, phi = parse_direction(args.incident, name="--incident")
@@ -61,18 +52,44 @@ def run(args):
     if not (0 < args.accuracy < 100):
         raise WaveopticsError(f"--accuracy {args.accuracy!r} is not allowed; use a ΔE2000 in (0, 100)")
     w = parse_wavelengths(args.wavelengths) if args.wavelengths else None
+    return sim_mod.simulate(args.material, nano=args.nano or sim_mod.DEFAULT_NANO, surface=args.surface,
+                            micro_alpha=args.micro_alpha, ndf=args.ndf, incident=(theta, phi),
+                            illuminant=args.illuminant, wavelengths=w, accuracy_dE=args.accuracy,
+                            resolution=args.resolution, solver=args.solver, kd=args.kd, seed=args.seed,
+                            device=args.device, precision=args.precision,
+                            progress=None if bar is None else bar.update)
+
+
+def register(sub):
+    p = sub.add_parser(
+        "simulate", help="simulate a two-scale (micro + nano) surface and compare with the microfacet model",
+        description="Two-scale BRDF: microfacet NDF for the micro-roughness, Kirchhoff diffraction for the "
+                    "nano-roughness, integrated over the spectrum to RGB; writes spectral and RGB EXRs, PNG "
+                    "previews, sphere renders of both models and their ΔE2000, lobe cross-sections and "
+                    "summary.json. With no options it runs a nano-rough aluminium under D65.")
+    add_scene_options(p)
+    p.add_argument("--sphere-size", type=int, default=256, metavar="PX", help="sphere render size (default 256)")
+    add_output(p)
+    add_common(p)
+    p.set_defaults(func=run)
+
+
+def run(args):
+    from .. import simulate as sim_mod
+    from ..errors import WaveopticsError
+    from ..io import prepare_outdir
+
+    if not (16 <= args.sphere_size <= 4096):
+        raise WaveopticsError(f"--sphere-size {args.sphere_size} is not allowed; use 16..4096 pixels")
     prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.OUTPUT_FILES)
     bar = progress(total=1 + len(sim_mod.SPHERE_THETAS_DEG), desc="simulate", args=args)
     try:
-        sim = sim_mod.simulate(args.material, nano=args.nano or sim_mod.DEFAULT_NANO, surface=args.surface,
-                               micro_alpha=args.micro_alpha, ndf=args.ndf, incident=(theta, phi),
-                               illuminant=args.illuminant, wavelengths=w, accuracy_dE=args.accuracy,
-                               resolution=args.resolution, solver=args.solver, kd=args.kd, seed=args.seed,
-                               device=args.device, precision=args.precision, progress=bar.update)
+        sim = simulation_from_args(args, bar)
     finally:
         bar.close()
     summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size)
     d = summary["delta_e2000"]
+    theta = sim.params["incident_deg"][0]
     text = (f"{sim.params['material']} θi={theta:g}°: albedo {summary['rgb_albedo'].round(3).tolist()} (two-scale) vs "
             f"{summary['microfacet_rgb_albedo'].round(3).tolist()} (microfacet), sphere ΔE2000 mean {d['mean']:.2f} "
             f"max {d['max']:.2f}, solver {summary['solver']}, {sum(summary['timings_s'].values()):.1f} s\n"
