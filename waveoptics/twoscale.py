@@ -292,7 +292,13 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     else:
         mf = np.empty(shape)
         coherent = np.empty(shape)
-        f1 = microfacet.specular(wi, wo, fresnel="one", **micro.kw())
+        f1 = np.where(inside, microfacet.specular(wi, wo, fresnel="one", **micro.kw()), 0.0)
+        # energy-preserving sampling: near grazing a narrow lobe is squeezed against the rim of the (u, v) disc and
+        # the cell quadrature over- or under-counts it; scale the F = 1 lobe to the accurate quadrature albedo
+        grid_rho = float(f1.sum()) * grid.du * grid.dv
+        rho = float(microfacet.albedo(wi, fresnel="one", **micro.kw()))
+        if grid_rho > 0:
+            f1 = f1 * (rho / grid_rho)
         for i, lam in enumerate(w):
             mf[i] = f1 * F(cos_d, lam)
             A = nano.coherent_amplitude2(cos_d, lam) if sigma_nano > 0 else 1.0
