@@ -121,3 +121,33 @@ def test_height_field_coherent_fraction_is_its_characteristic_function():
     for lam, c in ((500.0, 1.0), (650.0, 0.7)):
         k = 2 * np.pi / (lam * 1e-9)
         assert nano.coherent_amplitude2(c, lam) == pytest.approx(special.j0(2 * k * 40e-9 * c) ** 2, abs=2e-3)
+
+
+def test_height_field_route_matches_psd_route_for_gaussian_surface():
+    """A generated Gaussian nano surface through the Kirchhoff fft solver gives the PSD-series energies (5 %)."""
+    from waveoptics import surfaces
+
+    wi = direction_from_angles(20.0, 0.0)
+    w = np.array([450.0, 650.0])
+    grid = DirectionGrid.hemisphere(96)
+    model = psd.PSDModel("gaussian", sigma=15e-9, T=1e-6)
+    diff = []
+    for seed in (1, 2):
+        hf = surfaces.gaussian(sigma=15e-9, corr_length=1e-6, size=32e-6, samples=256, seed=seed)
+        L = twoscale.evaluate(wi, w, "Al", twoscale.Micro(alpha=0.0), twoscale.Nano(surface=hf), grid,
+                              solver="fft")
+        diff.append(L.albedo("diffraction"))
+    P = twoscale.evaluate(wi, w, "Al", twoscale.Micro(alpha=0.0), twoscale.Nano(model=model), grid)
+    np.testing.assert_allclose(np.mean(diff, axis=0), P.albedo("diffraction"), rtol=0.05)
+
+
+def test_fft_and_direct_nano_lobes_agree(rt):
+    from waveoptics import surfaces
+
+    wi = direction_from_angles(25.0, 30.0)
+    grid = DirectionGrid.hemisphere(32)
+    hf = surfaces.gaussian(sigma=10e-9, corr_length=0.8e-6, size=8e-6, samples=96, seed=3)
+    F = lambda c, lam: np.ones(np.broadcast_shapes(np.shape(c), np.shape(lam)))  # noqa: E731
+    a = twoscale.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="fft")
+    b = twoscale.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="direct", precision="float32")
+    assert np.max(np.abs(a - b)) < 1e-3 * a.max()
