@@ -190,7 +190,7 @@ def test_albedo_quadrature_against_scipy_dblquad(case):
     assert E == pytest.approx(ref, abs=TOL["albedo_vs_dblquad"])
 
 
-@pytest.mark.parametrize("alpha", [0.001, 0.1, 1.0])
+@pytest.mark.parametrize("alpha", [0.001, 0.01, 0.1, 1.0])
 def test_lambert_albedo_is_one(alpha):
     th = np.array([0.0, 30.0, 60.0, 85.0, 89.9])
     E = mf.directional_albedo(lambda a, b: mf.lambert(a, b, 1.0), dirs(th), alpha=alpha)
@@ -219,11 +219,11 @@ def test_tradeoff_with_schlick_is_shirley_1997():
 
 def test_total_albedo_of_dielectric_with_white_diffuse_at_most_one():
     # specular + coupled diffuse with kd = 1; the only excess allowed is the specular lobe averaging F over
-    # θ_d around θ_i (F is convex there), measured below 6e-5 (docs/microfacet.md)
-    th = np.array([0.0, 60.0, 85.0])
-    for alpha in (0.001, 0.01, 0.3):
+    # θ_d around θ_i (F is convex there), measured up to 4.6e-4 at α = 0.1, θ_i = 40° (docs/microfacet.md)
+    th = np.array([0.0, 40.0, 60.0, 85.0])
+    for alpha in (0.001, 0.01, 0.1, 0.3):
         E = mf.albedo(dirs(th), alpha=alpha, eta=1.5, kd=1.0)
-        assert np.all(E <= 1.0 + 1e-4), (alpha, E)
+        assert np.all(E <= 1.0 + 1e-3), (alpha, E)
 
 
 def test_oren_nayar_limits():

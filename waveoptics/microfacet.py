@@ -978,7 +978,13 @@ def _normal_nodes(ax, ay, n_rho, n_phi):
     # radial segments in stretched slope units ρ (slope = (α_x ρ cos φ, α_y ρ sin φ)): geometric edges from
     # ρ = 1/8 until the slope reaches 8 (θ_m ≈ 83°), then a tail [ρ_K, ∞) mapped by ρ = ρ_K / t
     kmax = int(np.ceil(np.log2(8.0 / amin)))
-    edges = np.concatenate([[0.0], 2.0 ** np.arange(-3, max(kmax, -2) + 1)])
+    edges = 2.0 ** np.arange(-3, max(kmax, -2) + 1)
+    # also an edge at slope 1 (θ_m = 45°), where the reflected direction of normal incidence meets the horizon
+    # (a kink of the integrand of directional_albedo): it replaces the geometric edge closest to it
+    k1 = 1.0 / max(ax, ay)
+    if edges[0] < k1 < edges[-1]:
+        edges[np.argmin(np.abs(np.log(edges / k1)))] = k1
+    edges = np.concatenate([[0.0], np.sort(edges)])
     rho, wr = [], []
     for a, b in zip(edges[:-1], edges[1:]):
         rho.append(a + (b - a) * x)
