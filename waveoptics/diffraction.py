@@ -253,7 +253,7 @@ class Samples:
     ix, iy : ndarray of int32
         Grid indices (column, row).
     h : ndarray of float64, m
-        Heights with the w²-weighted mean removed (a constant offset changes only the phase of U).
+        Heights with the w²-weighted mean (or plane) removed, see :func:`samples`.
     w : ndarray of float64
         Window weights.
     dx, dy : float, m
@@ -289,16 +289,36 @@ class Samples:
         return h, w
 
 
-def samples(hf: HeightField, window_name=DEFAULT_WINDOW) -> Samples:
-    """Window the height field and list the samples with w > 0 (see :class:`Samples`)."""
+def samples(hf: HeightField, window_name=DEFAULT_WINDOW, detrend: str = "mean") -> Samples:
+    """Window the height field and list the samples with w > 0 (see :class:`Samples`).
+
+    Parameters
+    ----------
+    detrend : {'mean', 'plane', 'none'}
+        'plane' also removes the patch's tilt (least squares weighted by w², the weight of each sample in |U|²).
+        A finite patch of a random surface has a mean slope; the Kirchhoff model reflects it like a tilted
+        mirror, whose albedo differs from the untilted one by about tan θ_i times that slope. The (weighted)
+        mean is removed in every case except 'none' — it changes only the phase of U, but float32 rounding of
+        h v_z grows with |h|.
+    """
+    from .surfaces import DETRENDS
+
     if not isinstance(hf, HeightField):
         raise WaveopticsError(f"surface must be a HeightField, got {type(hf).__name__}")
+    if detrend not in DETRENDS:
+        raise unknown("detrend", detrend, DETRENDS)
     w = window(hf, window_name)
     iy, ix = np.nonzero(w > 0)
     ww = w[iy, ix]
     hh = hf.heights[iy, ix]
     w2 = ww**2
-    hh = hh - np.sum(w2 * hh) / np.sum(w2)
+    # least squares weighted by w² (the weight each sample has in |U|²): mean, or mean and tilt
+    cols = [np.ones_like(hh)]
+    if detrend == "plane":
+        cols += [c - np.sum(w2 * c) / np.sum(w2) for c in (ix * hf.dx, iy * hf.dy) if np.ptp(c) > 0]
+    X = np.stack(cols, axis=1)
+    coef, *_ = np.linalg.lstsq(X * ww[:, None], hh * ww, rcond=None)
+    hh = hh - X @ coef
     ny, nx = hf.shape
     if max(nx, ny) > 2**30:
         raise WaveopticsError(f"patch {nx}x{ny} is too large; at most 2^30 samples per side")
@@ -854,8 +874,9 @@ def sampling_warnings(smp: Samples, wi, wavelengths_nm, grid: DirectionGrid | No
 
 
 def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direct", backend: str = "opencl",
-         precision: str = "float32", window_name=DEFAULT_WINDOW, order="auto", resolution: int | None = None,
-         realizations=None, seed: int = 0, runtime=None, progress=None) -> np.ndarray:
+         precision: str = "float32", window_name=DEFAULT_WINDOW, detrend: str = "mean", order="auto",
+         resolution: int | None = None, realizations=None, seed: int = 0, runtime=None,
+         progress=None) -> np.ndarray:
     """Kirchhoff BRDF for arbitrary outgoing directions, averaged over realizations.
 
     Parameters
@@ -873,6 +894,7 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
         at the shortest wavelength) and interpolates bilinearly in (u, v).
     backend : {'opencl', 'numpy'}
         For ``direct``: the kernel or its float64 NumPy twin.
+    window_name, detrend : see :func:`window` and :func:`samples`.
 
     Returns
     -------
@@ -886,7 +908,7 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
     hfs = _realizations(surface, realizations, seed)
     acc = np.zeros((wl.size, wo.shape[0]))
     for hf in hfs:
-        smp = samples(hf, window_name)
+        smp = samples(hf, window_name, detrend)
         if solver == "direct":
             for m in sampling_warnings(smp, wi, wl, wo=wo):
                 _warn(m)
@@ -973,8 +995,8 @@ class ScatterResult:
 
 def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", resolution: int = 256,
             grid: DirectionGrid | None = None, realizations=None, seed: int = 0, backend: str = "opencl",
-            precision: str = "float32", window_name=DEFAULT_WINDOW, order="auto", tol: float = FFT_TOL,
-            runtime=None, progress=None) -> ScatterResult:
+            precision: str = "float32", window_name=DEFAULT_WINDOW, detrend: str = "mean", order="auto",
+            tol: float = FFT_TOL, runtime=None, progress=None) -> ScatterResult:
     """Kirchhoff lobes over the projected hemisphere, per wavelength, with albedo and coherent/scattered split.
 
     Parameters
@@ -993,6 +1015,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
         A custom (sub-)grid of the direction-cosine plane.
     realizations : int, optional
     backend, precision : for the ``direct`` solver (OpenCL float32/float64, or the NumPy twin).
+    window_name, detrend : see :func:`window` and :func:`samples`.
     order, tol : for the ``fft`` solver (see :func:`fft_plan`).
     progress : callable, optional
         Called with the number of finished work units (wavelengths × realizations); total is
@@ -1023,7 +1046,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     t_solve = t_flat = 0.0
     d_in = dirs[inside]
     for r, hf in enumerate(hfs):
-        smp = samples(hf, window_name)
+        smp = samples(hf, window_name, detrend)
         for m in sampling_warnings(smp, wi, wl, grid=grid):
             if m not in msgs:
                 _warn(m, msgs)

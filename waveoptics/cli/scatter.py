@@ -40,6 +40,8 @@ def register(sub) -> None:
                         "0 freezes v_z (paraxial)")
     p.add_argument("--window", default="hann", metavar="NAME",
                    help="taper over the patch: a scipy.signal.windows name (default hann; boxcar = none)")
+    p.add_argument("--detrend", choices=("mean", "plane", "none"), default="mean",
+                   help="remove the mean (default) or also the tilt (plane) of each patch, weighted by the window")
     p.add_argument("--precision", choices=("float32", "float64"), default="float32",
                    help="direct solver precision (default float32)")
     p.add_argument("--backend", choices=("opencl", "numpy"), default="opencl",
@@ -82,7 +84,8 @@ def run(args) -> int:
         warnings.simplefilter("always", diffraction.DiffractionWarning)
         res = diffraction.scatter(hf, (theta, phi), wl, material_spec(args.material), solver=args.solver,
                                   resolution=args.resolution, realizations=args.realizations, order=order,
-                                  window_name=args.window, precision=args.precision, backend=args.backend,
+                                  window_name=args.window, detrend=args.detrend, precision=args.precision,
+                                  backend=args.backend,
                                   runtime=rt, progress=bar.update)
     bar.close()
     extra = {"surface": str(args.surface), "material": str(args.material)}
