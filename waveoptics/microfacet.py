@@ -1072,7 +1072,7 @@ def directional_albedo(f: Callable, wi, *, alpha=1.0, alpha_y=None, n_rho=16, n_
     out = []
     for w1 in wi2:
         ih = m @ w1
-        wo = 2.0 * ih[:, None] * m - w1
+        wo = reflect(w1, m)
         jac = np.where((ih > 0) & (wo[:, 2] > 0), 4.0 * ih * wm * np.maximum(wo[:, 2], 0.0), 0.0)
         vals = np.asarray(f(w1[None, :], wo))
         out.append(np.sum(np.where(jac > 0, vals, 0.0) * jac, axis=-1))
