@@ -748,7 +748,7 @@ def field_fft(smp: Samples, wi, grid: DirectionGrid, wavelength_nm: float, order
 # ----------------------------------------------------------------------------------------------------------------
 
 def coherent_amplitude(smp: Samples, wi, wavelength_nm) -> complex:
-    """χ̂ = Σ w² exp(i v_z h) / Σ w², v_z = 2 k cos θ_i: the patch estimate of ⟨exp(i v_z h)⟩ (physics.md §2).
+    """χ̂ = Σ w² exp(i v_z h) / Σ w², v_z = 2 k cos θ_i: the patch estimate of ⟨exp(i v_z h)⟩ (physics.md §2)
 
     The ensemble-mean field is ⟨U⟩ = χ · U_flat, so the coherent (specular) fraction is |χ|² = exp(−g) for
     Gaussian heights. The spatial average over the patch replaces the ensemble average (ergodicity); the w²
@@ -852,8 +852,8 @@ def sampling_warnings(smp: Samples, wi, wavelengths_nm, grid: DirectionGrid | No
     msgs = []
     lam = np.asarray(wavelengths_nm, dtype=float) * 1e-9
     if grid is not None:
-        sx = np.abs(wi[0] + grid.u)[None, :][grid.inside.any(axis=0)[None, :]].max()
-        sy = np.abs(wi[1] + grid.v)[grid.inside.any(axis=1)].max()
+        sx = np.abs(wi[0] + grid.u[grid.inside.any(axis=0)]).max()
+        sy = np.abs(wi[1] + grid.v[grid.inside.any(axis=1)]).max()
     else:
         wo = np.asarray(wo)
         sx = float(np.max(np.abs(wo[:, 0] + wi[0])))
@@ -1031,6 +1031,9 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     wl = check_wavelengths(wavelengths_nm)
     F = fresnel_function(material)
     grid = grid if grid is not None else DirectionGrid.hemisphere(resolution)
+    if not grid.inside.any():
+        raise WaveopticsError(f"direction grid u_range={grid.u_range}, v_range={grid.v_range} has no cell centre "
+                              "inside the unit disc (above the horizon)")
     hfs = _realizations(surface, realizations, seed)
     dirs = grid.directions()
     inside = grid.inside
