@@ -76,8 +76,9 @@ def run(args) -> int:
     wl = parse_wavelengths(args.wavelengths)
     theta, phi = parse_direction(args.incident, name="--incident")
     order = _order(args.order)
-    prepare_outdir(args.output, overwrite=args.overwrite, expected=diffraction.SCATTER_FILES)
     hf = surfaces.load(args.surface, spacing=args.spacing)
+    diffraction.fresnel_function(material_spec(args.material))      # refuse a bad material before computing
+    prepare_outdir(args.output, overwrite=args.overwrite, expected=diffraction.SCATTER_FILES)
     rt = get_runtime(args.device) if args.solver == "direct" and args.backend == "opencl" else None
     bar = progress(total=len(wl) * max(1, args.realizations), desc="scatter", args=args)
     with warnings.catch_warnings(record=True) as caught:
