@@ -270,6 +270,22 @@ def _nano(case: Case, r: int, wavelengths_nm: np.ndarray, surface=None) -> twosc
 # Dask plumbing shared by tables and sweeps
 # ----------------------------------------------------------------------------------------------------------------
 
+#: LocalCluster options that keep every socket on loopback. ``dashboard_address=None`` alone is not enough: the
+#: scheduler and each worker still serve health/metrics over HTTP, on all interfaces (0.0.0.0:8787 and a random
+#: port) unless given an address; the dashboard itself stays off.
+LOOPBACK = dict(dashboard_address=None, worker_dashboard_address="127.0.0.1:0",
+                scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"})
+
+
+def _check_cluster_args(workers, scheduler) -> None:
+    if workers is not None and scheduler is not None:
+        raise WaveopticsError("give either --workers N (a local cluster) or --scheduler ADDRESS, not both")
+    if scheduler is not None and "://" not in str(scheduler):
+        raise WaveopticsError(f"--scheduler {scheduler!r} is not a scheduler address; write tcp://HOST:PORT")
+    if workers is not None and (int(workers) != workers or workers < 1):
+        raise WaveopticsError(f"--workers {workers!r} is not allowed; use an integer >= 1")
+
+
 @contextlib.contextmanager
 def dask_client(workers: int | None = None, scheduler: str | None = None):
     """A ``distributed.Client``: embedded in-process (default), local processes (*workers*) or *scheduler*.
@@ -283,11 +299,8 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
     """
     from distributed import Client, LocalCluster
 
-    if workers is not None and scheduler is not None:
-        raise WaveopticsError("give either --workers N (a local cluster) or --scheduler ADDRESS, not both")
+    _check_cluster_args(workers, scheduler)
     if scheduler is not None:
-        if "://" not in str(scheduler):
-            raise WaveopticsError(f"--scheduler {scheduler!r} is not a scheduler address; write tcp://HOST:PORT")
         try:
             client = Client(str(scheduler), timeout="20s")
         except (OSError, TimeoutError) as exc:
@@ -296,12 +309,10 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
             yield client
         return
     if workers is not None:
-        if int(workers) != workers or workers < 1:
-            raise WaveopticsError(f"--workers {workers!r} is not allowed; use an integer >= 1")
         cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=None)
-    else:
-        cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None)
+                               **LOOPBACK)
+    else:  # in-process transport (inproc://), no host to bind
+        cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, **LOOPBACK)
     with cluster, Client(cluster) as client:
         yield client
 
@@ -378,6 +389,8 @@ def _refuse_or_prepare(final: Path, partial: Path, *, resume: bool, overwrite: b
         raise WaveopticsError(f"output directory {str(parent)!r} does not exist")
     if final.exists() and not overwrite and not resume:
         raise OutputExistsError(f"output {str(final)!r} already exists; pass --overwrite to replace it")
+    if partial.exists() and not any((partial / "items").glob("[!.]*")):
+        shutil.rmtree(partial)  # a run that stopped before its first result: nothing to resume
     if partial.exists() and not resume:
         if not overwrite:
             raise OutputExistsError(f"{str(partial)!r} holds an interrupted run; pass --resume to continue it or "
@@ -596,8 +609,9 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
         return {"output": str(final), "tasks": n, "computed": 0, "skipped": n, "written": [],
                 "wall_s": time.perf_counter() - t0, "task_cost_s": 0.0, "complete": True}
     case = spec.case.validate()
-    _refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
     _check_realizations(case, spec.realizations)
+    _check_cluster_args(workers, scheduler)
+    _refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
     if surface is not None:
         tiles = split_patch(surface, spec.realizations) if spec.realizations > 1 else [surface]
         digest = surface_digest(surface)
@@ -1002,6 +1016,7 @@ def run_sweep(base: Case, varies: list[tuple[str, list]], output, *, surface=Non
     if resume and final.exists() and not partial.exists():
         return {"output": str(final), "rows": read_sweep(final), "points": len(points), "computed": 0,
                 "skipped": len(points), "wall_s": time.perf_counter() - t0}
+    _check_cluster_args(workers, scheduler)
     _refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
     store = _Store(partial, {"kind": "sweep", "token": token, "parameters": params}, resume=resume)
     names = [f"p{i:05d}" for i in range(len(points))]
