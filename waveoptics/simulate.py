@@ -35,6 +35,22 @@ _ALIASES = {"corr": "T", "corr_length": "T", "corr-length": "T", "a": "amplitude
 
 DEFAULT_NANO = "abc:sigma=10nm,B=2um,C=2.6"
 
+#: nano height fields larger than this per side are cropped to a central tile for the solvers (the statistics of
+#: a stationary surface are the same on the tile; the cost is not)
+MAX_NANO_SAMPLES = 512
+
+
+def crop(hf: surfaces.HeightField, n: int) -> surfaces.HeightField:
+    """The central tile of at most n × n samples of *hf* (unchanged if already that small)."""
+    ny, nx = hf.shape
+    if ny <= n and nx <= n:
+        return hf
+    y0, x0 = max(0, (ny - n) // 2), max(0, (nx - n) // 2)
+    sl = (slice(y0, y0 + min(n, ny)), slice(x0, x0 + min(n, nx)))
+    meta = {k: v for k, v in hf.meta.items() if k != "periodic"}  # a tile of a periodic field is not periodic
+    meta["cropped_from"] = [ny, nx]
+    return surfaces.HeightField(hf.heights[sl], hf.dx, hf.dy, None if hf.mask is None else hf.mask[sl], meta)
+
 
 def parse_nano(text: str) -> tuple[str, dict]:
     """Parse ``MODEL:key=value,...`` (e.g. ``abc:sigma=10nm,B=5um,C=3``) into (model, params in SI units)."""
@@ -100,7 +116,7 @@ def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None) -> t
            "abc": dict(sigma=p.get("sigma"), B=p.get("B"), C=p.get("C")),
            "sinusoid": dict(amplitude=p.get("amplitude"), period=p.get("period"),
                             orientation_deg=p.get("orientation", 0.0)),
-           "scratches": dict(count=int(p.get("count", 10)), width=p.get("width"), depth=p.get("depth"),
+           "scratches": dict(count=p.get("count", 10), width=p.get("width"), depth=p.get("depth"),
                              orientation_deg=p.get("orientation", 0.0), spread_deg=p.get("spread", 0.0))}[model]
     if model not in ("sinusoid",):
         gen["seed"] = seed
@@ -143,7 +159,7 @@ class Simulation:
 def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05, ndf="beckmann",
              shadowing="smith-correlated", incident=(30.0, 0.0), illuminant="D65", wavelengths=None,
              accuracy_dE=1.0, resolution=128, solver="auto", kd=0.5, sphere=True, seed=0, device=None,
-             precision="float32", progress=None) -> Simulation:
+             precision="float32", progress=None, split=False) -> Simulation:
     """Simulate a two-scale surface and the plain microfacet model.
 
     Parameters
@@ -169,6 +185,9 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
         Diffuse albedo of a dielectric substrate (metals have none).
     sphere : bool
         Also tabulate lobes over incidence angles for sphere renders.
+    split : bool
+        *surface* holds both scales: split it (:func:`waveoptics.twoscale.split_scales`); the micro NDF's α comes
+        from the long-period part's slopes (*micro_alpha* is ignored) and the short-period part diffracts.
 
     Returns
     -------
@@ -185,7 +204,18 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
     if solver not in ("auto", "psd", "fft", "direct"):
         raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
     micro = twoscale.Micro(alpha=micro_alpha, ndf=ndf, shadowing=shadowing)
-    nano_obj = make_nano(nano, w, solver=solver, seed=seed, surface=surface)
+    split_info = None
+    if split:
+        if surface is None:
+            raise WaveopticsError("--split needs --surface FILE holding both scales")
+        hf = surface if isinstance(surface, surfaces.HeightField) else surfaces.load(surface)
+        micro, nano_hf, split_info = twoscale.split_scales(hf, w, ndf=ndf)
+        micro = twoscale.Micro(alpha=micro.alpha, alpha_y=micro.alpha_y, ndf=ndf, shadowing=shadowing)
+        nano_obj = twoscale.Nano(surface=crop(nano_hf, MAX_NANO_SAMPLES))
+    else:
+        nano_obj = make_nano(nano, w, solver=solver, seed=seed, surface=surface)
+        if nano_obj is not None and nano_obj.surface is not None:
+            nano_obj = twoscale.Nano(surface=crop(nano_obj.surface, MAX_NANO_SAMPLES))
     grid = DirectionGrid.hemisphere(resolution)
     timings = {"setup": time.perf_counter() - t0}
 
@@ -213,7 +243,8 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
               else None, "micro_alpha": micro_alpha, "ndf": ndf, "shadowing": shadowing,
               "incident_deg": [theta, phi], "illuminant": spd.name, "resolution": resolution,
               "solver": lobes.info["solver"], "kd": 0.0 if mat.is_metal else kd, "precision": precision,
-              "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": seed}
+              "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": seed, "split": split_info,
+              "micro_alpha_used": [micro.alpha, micro.alpha_y]}
     return Simulation(lobes=lobes, table_thetas_deg=thetas, table_total=tab_total, table_microfacet=tab_mf,
                       illuminant=illuminant, params=params, timings_s=timings, nano=nano_obj)
 

@@ -47,6 +47,10 @@ from .surfaces import HeightField
 from .units import check_wavelengths
 
 
+#: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
+SERIES_MIN_CAPTURED = 0.99
+
+
 @dataclass(frozen=True)
 class Micro:
     """Micro-scale roughness: an NDF name in :data:`waveoptics.microfacet.NDFS`, α (and α_y), shadowing."""
@@ -105,9 +109,17 @@ class Nano:
         hist, edges = np.histogram(hv, bins=min(2048, max(64, hv.size // 16)))
         centres = 0.5 * (edges[1:] + edges[:-1])
         p = hist / hist.sum()
-        vz = 2 * (2 * np.pi / (np.asarray(wavelength_nm, dtype=float) * 1e-9)) * c
-        phase = np.exp(1j * vz[..., None] * centres)
-        return np.abs(phase @ p) ** 2
+        # A(cos θ_d) is smooth: evaluate the characteristic function on 513 cosines and interpolate
+        c_tab = np.linspace(0.0, 1.0, 513)
+        lam = np.asarray(wavelength_nm, dtype=float)
+        out = np.empty(np.broadcast(c, lam).shape)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        for l_val in np.unique(lam_b):
+            vz = 2 * (2 * np.pi / (l_val * 1e-9)) * c_tab
+            tab = np.abs(np.exp(1j * vz[:, None] * centres[None, :]) @ p) ** 2
+            sel = lam_b == l_val
+            out[sel] = np.interp(c_b[sel], c_tab, tab)
+        return out if out.ndim else float(out)
 
 
 @dataclass
@@ -224,7 +236,16 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
         out = np.empty((w.size, grid.n_v, grid.n_u))
         for i, lam in enumerate(w):
             Fi = F(cos_d, lam)
-            out[i] = psd.scattered_lobe(wi, wo, lam, nano.model, F=Fi)
+            out[i], cap = psd.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True)
+            # guard: the truncated series misses the light of its terms m > m_max once g = (kσ(cosθ_i + cosθ_o))²
+            # ≳ 30 (σ ≳ λ/2): refuse rather than return a lobe that silently lacks that energy
+            low = float(np.min(np.where(grid.inside, cap, 1.0)))
+            if low < SERIES_MIN_CAPTURED:
+                raise WaveopticsError(
+                    f"nano-roughness sigma = {nano.model.sigma * 1e9:.4g} nm is too rough for the PSD series at "
+                    f"{lam:g} nm (it holds only {100 * low:.3g}% of the scattered light in some directions); use a "
+                    "nano height field (solver fft or direct), or describe roughness this large by the micro "
+                    "NDF (alpha)")
         return np.where(grid.inside, out, 0.0)
     if solver in ("fft", "direct"):
         if nano.surface is None:
@@ -278,6 +299,34 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
                                 precision=precision).reshape(w.size, -1)
         out[:, inside] = dif.brdf_from_field(U - chi[:, None] * U0, wi, wo, w, smp.area, F)
     return np.where(inside, np.maximum(out, 0.0), 0.0)
+
+
+def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
+    """Scale the diffracted lobes down where they hold more light than the coherent lobe gave up.
+
+    guard: the tangent-plane obliquity |s|⁴ / (4 λ² cosθ_i cosθ_o (cosθ_i + cosθ_o)²) grows as 1/cos θ_i, so near
+    grazing incidence the Kirchhoff lobe's albedo diverges (PSD route, Gaussian σ = 100 nm, T = 1 µm, λ = 500 nm,
+    F = 1: 1.32 at θ_i = 89°, 11.9 at 89.9°, 1.2e3 at 89.999°), while the light left for scattering,
+    F (1 − exp(−g)) with g = (4πσ cosθ_d / λ)² per facet (Davies 1954; physics.md §2), goes to 0. The diffracted
+    light is the light the coherent lobe lost, so its albedo is capped at that (energy conservation of the
+    two-scale sum, physics.md §7). Away from grazing incidence the cap does not act: there the paraxial
+    convolution pushes some diffracted light beyond the horizon and the lobes hold less than their share.
+
+    Parameters
+    ----------
+    diffraction, lost : ndarray (n_λ, n_v, n_u), 1/sr
+        The diffracted lobes and the microfacet lobe minus the coherent lobe.
+
+    Returns
+    -------
+    diffraction : ndarray (n_λ, n_v, n_u)
+    scale : ndarray (n_λ,)
+        The factor applied per wavelength (1 where the lobe was within its share).
+    """
+    got = integrate(diffraction, grid)
+    budget = np.maximum(integrate(lost, grid), 0.0)
+    scale = np.where(got > budget, budget / np.where(got > 0, got, 1.0), 1.0)
+    return diffraction * scale[:, None, None], scale
 
 
 def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid: DirectionGrid, *,
@@ -355,10 +404,12 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision)
         K = micro_kernel(wi, micro, grid)
         diffraction = np.where(inside, _convolve(fn, K, grid), 0.0)
+        diffraction, energy_scale = _cap_to_coherent_loss(diffraction, mf - coherent, grid)
         used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")
     else:
         diffraction = np.zeros(shape)
         used = "none"
+        energy_scale = np.ones(w.size)
 
     # --- diffuse (dielectrics only) ---------------------------------------------------------------------------
     if mat.is_metal or np.all(np.asarray(kd) == 0) or diffuse == "none":
@@ -374,4 +425,63 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     return Lobes(grid=grid, wi=wi, wavelengths_nm=w, coherent=coherent, diffraction=diffraction, diffuse=diff,
                  microfacet=mf_total,
                  info={"solver": used, "sigma_nano_m": sigma_nano, "micro": micro.__dict__,
-                       "material": mat.name, "sharp_micro_lobe": _sharp(micro, grid)})
+                       "material": mat.name, "sharp_micro_lobe": _sharp(micro, grid),
+                       "diffraction_energy_scale": energy_scale.tolist()})
+
+
+#: default split: spatial periods longer than this many λ_max are micro-geometry (geometric optics)
+SPLIT_PERIODS_OF_LAMBDA = 10.0
+
+
+def split_scales(surface: HeightField, wavelengths_nm, *, cutoff_period_m: float | None = None,
+                 ndf: str = "beckmann"):
+    """Split a height field holding both scales into a micro NDF and a nano height field.
+
+    The surface spectrum is cut at the spatial frequency f_c = 1 / Λ_c (default Λ_c = 10 λ_max): components of
+    longer period form the micro-geometry, the rest the nano-geometry. The split is a smooth (Gaussian-edged)
+    partition of unity in frequency, so micro + nano = surface exactly. The micro part's per-axis rms slopes give
+    the NDF roughness: for Gaussian slopes the Beckmann α along an axis is √2 times the rms slope along it
+    (physics.md §1: α = rms |∇h| = 2σ/T for an isotropic Gaussian surface).
+
+    Why 10 λ_max: a component of period Λ deflects light by sin θ = λ/Λ; beyond 10 λ that is < 0.1 (6°), where
+    a slope distribution describes the deflection (stationary phase, physics.md §1), while shorter periods
+    scatter into wide angles only diffraction describes. Pass *cutoff_period_m* to choose another scale.
+
+    Returns
+    -------
+    micro : Micro
+        NDF (α_x, α_y) from the micro part's slopes (α_y omitted when isotropic within 5 %).
+    nano : HeightField
+        The high-pass part (same grid).
+    info : dict
+        ``cutoff_period_m``, micro/nano rms heights and slopes.
+
+    References
+    ----------
+    .. [1] Holzschuch & Pacanowski 2017, §3 (scale separation); Beckmann & Spizzichino 1963 (slope statistics).
+    """
+    from . import surfaces
+
+    w = check_wavelengths(wavelengths_nm)
+    Lc = float(cutoff_period_m) if cutoff_period_m is not None else SPLIT_PERIODS_OF_LAMBDA * float(w.max()) * 1e-9
+    if not np.isfinite(Lc) or Lc <= 0:
+        raise WaveopticsError(f"cut-off period {cutoff_period_m!r} m is not allowed; it must be > 0")
+    h = surface.heights - surface.heights.mean()
+    ny, nx = h.shape
+    fx = np.fft.fftfreq(nx, surface.dx)
+    fy = np.fft.fftfreq(ny, surface.dy)
+    f = np.hypot(fx[None, :], fy[:, None])
+    low = np.exp(-np.log(2) * (f * Lc) ** 2)  # 1/2 at f = 1/Λ_c, smooth edge (no ringing)
+    micro_h = np.real(np.fft.ifft2(np.fft.fft2(h) * low))
+    nano_h = h - micro_h
+    meta = dict(surface.meta)
+    micro_hf = HeightField(micro_h, surface.dx, surface.dy, surface.mask, dict(meta))
+    nano_hf = HeightField(nano_h, surface.dx, surface.dy, surface.mask, {**meta, "split_cutoff_period_m": Lc})
+    sx, sy = surfaces.rms_slopes(micro_hf)
+    ax = np.sqrt(2) * (sx if sx is not None else sy)
+    ay = np.sqrt(2) * (sy if sy is not None else sx)
+    iso = abs(ax - ay) <= 0.05 * max(ax, ay)
+    micro = Micro(alpha=float(np.sqrt(ax * ay)) if iso else float(ax), alpha_y=None if iso else float(ay), ndf=ndf)
+    info = {"cutoff_period_m": Lc, "micro_rms_height_m": float(micro_h.std()), "micro_rms_slopes": [sx, sy],
+            "nano_rms_height_m": float(nano_h.std()), "micro_alpha": [float(ax), float(ay)]}
+    return micro, nano_hf, info

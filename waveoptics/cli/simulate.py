@@ -32,6 +32,9 @@ def add_scene_options(p) -> None:
     p.add_argument("--precision", default="float32", choices=["float32", "float64"],
                    help="OpenCL precision for height-field solvers (default float32)")
     p.add_argument("--seed", type=int, default=0, help="seed of generated nano surfaces (default 0)")
+    p.add_argument("--split", action="store_true",
+                   help="--surface holds both scales: split it at a cut-off period of 10 λmax; the micro α comes "
+                        "from the long-period slopes, the short-period part diffracts")
 
 
 def simulation_from_args(args, bar=None):
@@ -56,7 +59,7 @@ def simulation_from_args(args, bar=None):
                             micro_alpha=args.micro_alpha, ndf=args.ndf, incident=(theta, phi),
                             illuminant=args.illuminant, wavelengths=w, accuracy_dE=args.accuracy,
                             resolution=args.resolution, solver=args.solver, kd=args.kd, seed=args.seed,
-                            device=args.device, precision=args.precision,
+                            device=args.device, precision=args.precision, split=args.split,
                             progress=None if bar is None else bar.update)
 
 
