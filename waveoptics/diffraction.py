@@ -65,6 +65,8 @@ HORIZON_SIN = 0.95
 FFT_TOL = 1e-8
 #: largest |Δv_z h| (rad) a Taylor band may span in "auto" order (terms stay ≤ e^4, so no cancellation)
 FFT_BAND_X = 4.0
+#: largest albedo of the F = 1 lobe that :func:`scatter` accepts without an "energy not conserved" warning
+ENERGY_TOL = 1.05
 #: the incident cosine is floored here: at exactly θ_i = 90° the BRDF's 1/cos θ_i has no finite limit
 COS_I_MIN = 1e-4
 #: samples per SIMD step in kernels/kirchhoff.cl (16 measured fastest under PoCL on AVX-512; GPUs unroll it)
@@ -787,13 +789,17 @@ def _check_solver(solver, backend):
 
 def _realizations(surface, realizations, seed=0) -> list[HeightField]:
     """The list of height fields to average over (see :func:`scatter`)."""
+    n = 1 if realizations is None else realizations
+    try:
+        ok = not isinstance(n, bool) and float(n) == int(n) and int(n) >= 1
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise WaveopticsError(f"realizations={realizations!r} is not allowed; it must be an integer >= 1")
+    n = int(n)
     if isinstance(surface, HeightField):
-        n = 1 if realizations is None else int(realizations)
         return split_patch(surface, n) if n > 1 else [surface]
     if callable(surface):
-        n = 1 if realizations is None else int(realizations)
-        if n < 1:
-            raise WaveopticsError(f"realizations={realizations!r} is not allowed; it must be >= 1")
         return [surface(seed + r) for r in range(n)]
     try:
         hfs = list(surface)
@@ -1101,6 +1107,17 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
                                                     "order='auto' or solver='direct'"
                                                     if solver == "fft" and order != "auto" else ""), msgs)
     Fspec = np.asarray(F(np.full(n_wl, wi[2]), wl), dtype=float)
+    # energy check: the lobe with F = 1 must not reflect more than the light that arrives (the flat patch's
+    # albedo on this grid is 1 to quadrature accuracy); near grazing incidence the tangent-plane obliquity
+    # factor grows as 1/cos θ_i and the model, which has no shadowing, breaks this (albedo 260 at 90°)
+    Fg = np.asarray(F(cos_theta_d(wi, dirs)[None], wl[:, None, None]), dtype=float)
+    alb1 = integrate(np.where(Fg > 0, f_mean / np.where(Fg > 0, Fg, 1.0), 0.0), grid)
+    if np.any(alb1 > ENERGY_TOL):
+        i = int(np.argmax(alb1))
+        _warn(f"energy not conserved: the Kirchhoff albedo with F = 1 is {alb1[i]:.3g} > 1 at {wl[i]:g} nm for "
+              f"theta_i = {math.degrees(math.acos(min(1.0, wi[2]))):.4g} deg; the tangent-plane model fails this "
+              "close to grazing incidence (obliquity ~ 1/cos theta_i, no shadowing) and these lobes are not "
+              "physical", msgs)
     timings = {"solve": t_solve, "flat_and_coherent": t_flat, "total": time.perf_counter() - t0}
     return ScatterResult(wl, grid, f_mean, alb, alb_in, coh, scat, flat, Fspec, wi, solver, R, timings, msgs, info)
 

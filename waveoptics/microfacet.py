@@ -887,7 +887,7 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
         raise unknown("diffuse model", diffuse, DIFFUSES)
     kd = np.asarray(kd, dtype=float)
     if np.any(~np.isfinite(kd) | (kd < 0) | (kd > 1)):
-        raise WaveopticsError(f"kd={kd!r} is not allowed; the diffuse albedo must be in [0, 1]")
+        raise WaveopticsError(f"kd={np.asarray(kd).tolist()!r} is not allowed; the diffuse albedo must be in [0, 1]")
     sigma = float(sigma)
     if not np.isfinite(sigma) or sigma < 0:
         raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")
@@ -1203,7 +1203,7 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlat
     F_fn = _fresnel_fn(fresnel, eta, F0)
     kd_a = np.atleast_1d(np.asarray(kd, dtype=float))
     if np.any(~np.isfinite(kd_a) | (kd_a < 0) | (kd_a > 1)):
-        raise WaveopticsError(f"kd={kd!r} is not allowed; the diffuse albedo must be in [0, 1]")
+        raise WaveopticsError(f"kd={np.asarray(kd).tolist()!r} is not allowed; the diffuse albedo must be in [0, 1]")
     sigma = float(sigma)
     if not np.isfinite(sigma) or sigma < 0:
         raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")

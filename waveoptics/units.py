@@ -106,7 +106,7 @@ def check_wavelengths(wavelength_nm, *, name: str = "wavelength") -> np.ndarray:
         raise WaveopticsError(f"{name}: no wavelengths given")
     bad = w[~np.isfinite(w) | (w <= 0)]
     if bad.size:
-        raise WaveopticsError(f"{name} {bad[0]!r} nm is not allowed; wavelengths must be finite and > 0 nm")
+        raise WaveopticsError(f"{name} {float(bad[0])!r} nm is not allowed; wavelengths must be finite and > 0 nm")
     return w
 
 
@@ -137,7 +137,7 @@ def check_theta(theta_deg, *, name: str = "theta") -> None:
     t = np.atleast_1d(np.asarray(theta_deg, dtype=float))
     bad = t[~np.isfinite(t) | (t < 0) | (t > 90)]
     if bad.size:
-        raise WaveopticsError(f"{name} θ={bad[0]!r}° is outside the allowed range [0, 90] degrees")
+        raise WaveopticsError(f"{name} θ={float(bad[0])!r}° is outside the allowed range [0, 90] degrees")
 
 
 def direction_from_angles(theta_deg, phi_deg=0.0) -> np.ndarray:
