@@ -33,6 +33,24 @@ def test_simulate_writes_every_output_with_documented_keys(tmp_path, capsys):
     assert list(io.read_exr(out / "brdf_rgb.exr")[0]) in (["RGB"], ["B", "G", "R"])  # bindings may group RGB
 
 
+def test_acescg_on_request(tmp_path, capsys):
+    from waveoptics import spectral
+
+    assert main(["simulate", "-o", str(tmp_path / "a"), *FAST, "--colourspace", "ACEScg", "--json"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["colourspace"] == "linear ACEScg"
+    # same light, other primaries: converting back through XYZ gives the sRGB albedo of a default run
+    assert main(["simulate", "-o", str(tmp_path / "b"), *FAST, "--json"]) == 0
+    s2 = json.loads(capsys.readouterr().out)
+    import colour
+
+    cs = colour.RGB_COLOURSPACES["ACEScg"]
+    xyz = colour.RGB_to_XYZ(np.array(s["rgb_albedo"]), cs, illuminant=cs.whitepoint,
+                            chromatic_adaptation_transform=None)
+    back = spectral.XYZ_to_rgb(xyz, "sRGB", white=colour.xy_to_XYZ(cs.whitepoint))
+    np.testing.assert_allclose(back, s2["rgb_albedo"], atol=2e-3)
+
+
 def test_existing_outputs_are_refused_and_kept(tmp_path, capsys):
     out = tmp_path / "run"
     out.mkdir()

@@ -286,8 +286,12 @@ def plane_of_incidence(sim: Simulation, which, n=721):
     return np.degrees(np.arcsin(s)), out
 
 
-def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256) -> dict:
-    """Write the files of ``waveoptics simulate`` (see :data:`OUTPUT_FILES`) and return the summary."""
+def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, space="sRGB") -> dict:
+    """Write the files of ``waveoptics simulate`` (see :data:`OUTPUT_FILES`) and return the summary.
+
+    *space* (``"sRGB"``, ``"ACEScg"``, ``"Display P3"``) is the linear RGB space of ``brdf_rgb.exr`` and of the
+    summary's RGB albedos; PNG previews and sphere renders are always sRGB.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -304,10 +308,12 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256) 
                 "waveoptics_material": sim.params["material"], "waveoptics_quantity": "BRDF f (1/sr), not x cos"})
     io.write_spectral_exr(out / "brdf_spectral.exr", {float(lam): L.total[i] for i, lam in
                                                       enumerate(sim.wavelengths_nm)}, header=hdr, overwrite=True)
-    rgb = sim.rgb_lobe("total")
+    space = spectral.space_name(space)
+    rgb_out = sim.rgb_lobe("total", space)
+    rgb = sim.rgb_lobe("total") if space != "sRGB" else rgb_out
     rgb_mf = sim.rgb_lobe("microfacet")
-    io.write_exr(out / "brdf_rgb.exr", {"R": rgb[..., 0], "G": rgb[..., 1], "B": rgb[..., 2]},
-                 header={**hdr, "waveoptics_colourspace": "linear sRGB (D65 white), adapted to "
+    io.write_exr(out / "brdf_rgb.exr", {"R": rgb_out[..., 0], "G": rgb_out[..., 1], "B": rgb_out[..., 2]},
+                 header={**hdr, "waveoptics_colourspace": f"linear {space}, white-balanced (CAT02) from "
                                                           f"{sim.params['illuminant']}"}, overwrite=True)
     _plot_hemispheres(rgb, rgb_mf, g, out / "brdf.png", sim)
     wave, mf, dE, mask = render_spheres(sim, sphere_size)
@@ -333,8 +339,9 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256) 
         "microfacet_albedo": L.albedo("microfacet"),
         "coherent_specular_fraction": L.coherent_specular_fraction(),
         "diffraction_albedo": L.albedo("diffraction"),
-        "rgb_albedo": sim.rgb_albedo("total"),
-        "microfacet_rgb_albedo": sim.rgb_albedo("microfacet"),
+        "rgb_albedo": sim.rgb_albedo("total", space),
+        "microfacet_rgb_albedo": sim.rgb_albedo("microfacet", space),
+        "colourspace": f"linear {space}",
         "delta_e2000": {"mean": float(dE[mask].mean()) if mask.any() else 0.0,
                         "max": float(dE[mask].max()) if mask.any() else 0.0},
         "solver": sim.params["solver"],

@@ -13,7 +13,7 @@ def register(sub):
                                    "--material shelf/book/page.")
     p.add_argument("query", nargs="?", help="search words, e.g. 'gold' or 'TiO2'")
     p.add_argument("--limit", type=int, default=30, help="maximum number of search results (default 30)")
-    add_common(p, device=False)
+    add_common(p)
     p.set_defaults(func=run)
 
 

@@ -72,6 +72,8 @@ def register(sub):
                     "summary.json. With no options it runs a nano-rough aluminium under D65.")
     add_scene_options(p)
     p.add_argument("--sphere-size", type=int, default=256, metavar="PX", help="sphere render size (default 256)")
+    p.add_argument("--colourspace", default="sRGB", choices=["sRGB", "ACEScg", "Display P3"],
+                   help="linear RGB space of brdf_rgb.exr and the RGB albedos (default sRGB; PNGs are sRGB)")
     add_output(p)
     add_common(p)
     p.set_defaults(func=run)
@@ -90,7 +92,8 @@ def run(args):
         sim = simulation_from_args(args, bar)
     finally:
         bar.close()
-    summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size)
+    summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size,
+                                    space=args.colourspace)
     d = summary["delta_e2000"]
     theta = sim.params["incident_deg"][0]
     text = (f"{sim.params['material']} θi={theta:g}°: albedo {summary['rgb_albedo'].round(3).tolist()} (two-scale) vs "
