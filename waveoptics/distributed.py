@@ -98,6 +98,7 @@ TABLE_LAYOUT = {
     "albedo_rgb": "(theta_i, channel) float64 — linear sRGB of the directional albedo spectrum",
     "microfacet_albedo_rgb": "(theta_i, channel) float64",
     "task_cost_s": "(realization, theta_i, batch) float64, s — wall time of each task on its worker",
+    "task_cpu_s": "(realization, theta_i, batch) float64, s — CPU time of each task's thread on its worker",
 }
 
 
@@ -479,7 +480,7 @@ class TableSpec:
                 "surface_digest": self.surface_digest}
 
     def token(self) -> str:
-        return _token(self.params())
+        return _token({**self.params(), "format_version": TABLE_VERSION})
 
 
 class TableTask(NamedTuple):
@@ -521,9 +522,10 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
     -------
     dict
         ``total`` and ``microfacet`` (n_batch, n_v, n_u) float32 in 1/sr, their albedos (n_batch,) float64,
-        ``cost_s`` (wall time, s), ``solver`` and the worker's ``host``/``pid``.
+        ``cost_s`` (wall time, s), ``cpu_s`` (CPU time of the task's thread, s), ``solver`` and the worker's
+        ``host``/``pid``.
     """
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.thread_time()
     case = spec.case
     w = case.wavelengths()
     nano = _nano(case, task.r, w, surface)
@@ -540,7 +542,8 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
                                   "negative values")
     return {"total": total.astype(np.float32), "microfacet": mf.astype(np.float32), "albedo": L.albedo("total"),
             "microfacet_albedo": L.albedo("microfacet"), "solver": L.info["solver"],
-            "cost_s": time.perf_counter() - t0, "host": socket.gethostname(), "pid": os.getpid()}
+            "cost_s": time.perf_counter() - t0, "cpu_s": time.thread_time() - c0, "host": socket.gethostname(),
+            "pid": os.getpid()}
 
 
 def _table_surface(case: Case, realizations: int):
@@ -594,8 +597,10 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
     -------
     dict
         ``output``, ``tasks`` (total), ``computed`` (this run), ``skipped`` (already done), ``written`` (task
-        names in the order they were stored), ``wall_s``, ``task_cost_s`` (sum over tasks computed now),
-        ``complete`` (True).
+        names in the order they were stored), ``wall_s``, ``task_cost_s`` (sum of the tasks' wall times),
+        ``task_costs_s`` / ``task_cpu_s`` (per task computed now, in storage order: wall and CPU seconds on the
+        worker), ``timings_s`` (client side: ``start_s``, ``compute_s``, ``store_s``, ``stop_s``, ``assemble_s``)
+        and ``complete`` (True).
     """
     t0 = time.perf_counter()
     final = Path(output)
@@ -607,7 +612,8 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
                                   "pass --overwrite to recompute it")
         n = len(table_tasks(spec))
         return {"output": str(final), "tasks": n, "computed": 0, "skipped": n, "written": [],
-                "wall_s": time.perf_counter() - t0, "task_cost_s": 0.0, "complete": True}
+                "wall_s": time.perf_counter() - t0, "task_cost_s": 0.0, "task_costs_s": [], "task_cpu_s": [],
+                "timings_s": {}, "complete": True}
     case = spec.case.validate()
     _check_realizations(case, spec.realizations)
     _check_cluster_args(workers, scheduler)
@@ -623,28 +629,54 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
     tasks = table_tasks(spec)
     todo = [t for t in tasks if not store.has(t.name, ".npz")]
     written: list[str] = []
-    cost = [0.0]
+    costs: list[float] = []
+    cpus: list[float] = []
+    timings = dict.fromkeys(("start_s", "compute_s", "store_s", "stop_s", "assemble_s"), 0.0)
 
     def on_result(job, block):
+        t = time.perf_counter()
         task = job.args[1]
         with io.atomic_path(store.path(task.name, ".npz")) as tmp:
             np.savez(tmp, **{k: v for k, v in block.items() if k not in ("solver", "host")},
                      solver=np.array(block["solver"]), host=np.array(block["host"]))
         written.append(task.name)
-        cost[0] += float(block["cost_s"])
+        costs.append(float(block["cost_s"]))
+        cpus.append(float(block["cpu_s"]))
+        timings["store_s"] += time.perf_counter() - t
 
-    with contextlib.ExitStack() as stack:
-        if todo:
-            cl = client if client is not None else stack.enter_context(dask_client(workers, scheduler))
-            _warm(cl, [case], device)
-            tile_refs = cl.scatter(tiles, broadcast=False, hash=False) if tiles is not None else None
-            jobs = [_Job(f"wo-table-{token}-{t.name}", task_fn,
-                         (spec, t, None if tile_refs is None else tile_refs[t.r], device)) for t in todo]
-            _run_jobs(cl, jobs, on_result, retries=retries, progress=progress)
+    def submit(cl):
+        _warm(cl, [case], device)
+        tile_refs = cl.scatter(tiles, broadcast=False, hash=False) if tiles is not None else None
+        return [_Job(f"wo-table-{token}-{t.name}", task_fn,
+                     (spec, t, None if tile_refs is None else tile_refs[t.r], device)) for t in todo]
+
+    _run_timed(client, workers, scheduler, bool(todo), submit, on_result, timings, retries=retries,
+               progress=progress)
+    t = time.perf_counter()
     _assemble_table(spec, token, store, final, overwrite=overwrite or resume)
     store.remove()
+    timings["assemble_s"] = time.perf_counter() - t
     return {"output": str(final), "tasks": len(tasks), "computed": len(written), "skipped": len(tasks) - len(todo),
-            "written": written, "wall_s": time.perf_counter() - t0, "task_cost_s": cost[0], "complete": True}
+            "written": written, "wall_s": time.perf_counter() - t0, "task_cost_s": float(sum(costs)),
+            "task_costs_s": costs, "task_cpu_s": cpus, "timings_s": timings, "complete": True}
+
+
+def _run_timed(client, workers, scheduler, needed: bool, submit, on_result, timings: dict, *, retries, progress):
+    """Open a client (unless *client* is given), build the jobs with ``submit(client)``, run them, close; record
+    ``start_s`` (cluster start, worker warm-up, scatter), ``compute_s`` (first submit to last stored result) and
+    ``stop_s`` (cluster shutdown) in *timings*."""
+    if not needed:
+        return
+    t = time.perf_counter()
+    with contextlib.ExitStack() as stack:
+        cl = client if client is not None else stack.enter_context(dask_client(workers, scheduler))
+        jobs = submit(cl)
+        t1 = time.perf_counter()
+        timings["start_s"] = t1 - t
+        _run_jobs(cl, jobs, on_result, retries=retries, progress=progress)
+        t = time.perf_counter()
+        timings["compute_s"] = t - t1
+    timings["stop_s"] = time.perf_counter() - t
 
 
 def table_plan(spec: TableSpec, output, *, resume: bool = False) -> dict:
@@ -702,6 +734,7 @@ def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, 
         alb = np.zeros((n_t, n_l))
         alb_mf = np.zeros((n_t, n_l))
         cost = np.zeros((n_r, n_t, nb))
+        cpu = np.zeros((n_r, n_t, nb))
         by_tb = {}
         for t in tasks:
             by_tb.setdefault((t.t, t.b), []).append(t)
@@ -715,6 +748,7 @@ def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, 
                         d_real[task.r, it, task.lo:task.hi] = tot
                     alb[it, task.lo:task.hi] += z["albedo"] / n_r
                     cost[task.r, it, ib] = float(z["cost_s"])
+                    cpu[task.r, it, ib] = float(z["cpu_s"])
                     solvers.add(str(z["solver"]))
                     if task.r == 0:  # the microfacet model does not depend on the nano realization
                         d_mf[it, task.lo:task.hi] = z["microfacet"]
@@ -731,13 +765,14 @@ def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, 
         f.create_dataset("albedo_rgb", data=spectral.reflectance_to_rgb(alb, w, case.illuminant))
         f.create_dataset("microfacet_albedo_rgb", data=spectral.reflectance_to_rgb(alb_mf, w, case.illuminant))
         f.create_dataset("task_cost_s", data=cost).attrs["units"] = "s"
+        f.create_dataset("task_cpu_s", data=cpu).attrs["units"] = "s"
         f.attrs["solver"] = ",".join(sorted(solvers))
         dims = {"brdf": ("theta_i", "wavelength", "v", "u"), "microfacet": ("theta_i", "wavelength", "v", "u"),
                 "brdf_realizations": ("realization", "theta_i", "wavelength", "v", "u"),
                 "albedo": ("theta_i", "wavelength"), "microfacet_albedo": ("theta_i", "wavelength"),
                 "rgb": ("theta_i", "v", "u", "channel"), "microfacet_rgb": ("theta_i", "v", "u", "channel"),
                 "albedo_rgb": ("theta_i", "channel"), "microfacet_albedo_rgb": ("theta_i", "channel"),
-                "task_cost_s": ("realization", "theta_i", None)}
+                "task_cost_s": ("realization", "theta_i", None), "task_cpu_s": ("realization", "theta_i", None)}
         for name, axes in dims.items():
             if name not in f:
                 continue
@@ -1022,20 +1057,23 @@ def run_sweep(base: Case, varies: list[tuple[str, list]], output, *, surface=Non
     names = [f"p{i:05d}" for i in range(len(points))]
     todo = [i for i, n in enumerate(names) if not store.has(n, ".json")]
     computed = []
+    timings = dict.fromkeys(("start_s", "compute_s", "store_s", "stop_s"), 0.0)
 
     def on_result(job, row):
+        t = time.perf_counter()
         i = job.args[0]
         io.write_json(store.path(names[i], ".json"), row)
         computed.append(names[i])
+        timings["store_s"] += time.perf_counter() - t
 
-    with contextlib.ExitStack() as stack:
-        if todo:
-            cl = client if client is not None else stack.enter_context(dask_client(workers, scheduler))
-            _warm(cl, [c for _, c in points], device)
-            hf_ref = cl.scatter(hf, broadcast=False, hash=False) if hf is not None else None
-            jobs = [_Job(f"wo-sweep-{token}-{names[i]}", _sweep_task,
-                         (i, points[i][1], task_fn, hf_ref, sphere_size, device)) for i in todo]
-            _run_jobs(cl, jobs, on_result, retries=retries, progress=progress)
+    def submit(cl):
+        _warm(cl, [c for _, c in points], device)
+        hf_ref = cl.scatter(hf, broadcast=False, hash=False) if hf is not None else None
+        return [_Job(f"wo-sweep-{token}-{names[i]}", _sweep_task,
+                     (i, points[i][1], task_fn, hf_ref, sphere_size, device)) for i in todo]
+
+    _run_timed(client, workers, scheduler, bool(todo), submit, on_result, timings, retries=retries,
+               progress=progress)
     rows = []
     for i, (vals, case) in enumerate(points):
         row = json.loads(store.path(names[i], ".json").read_text())
@@ -1043,7 +1081,7 @@ def run_sweep(base: Case, varies: list[tuple[str, list]], output, *, surface=Non
     _write_rows(rows, final, [n for n, _ in varies], overwrite=overwrite or resume)
     store.remove()
     return {"output": str(final), "rows": rows, "points": len(points), "computed": len(computed),
-            "skipped": len(points) - len(todo), "wall_s": time.perf_counter() - t0}
+            "skipped": len(points) - len(todo), "wall_s": time.perf_counter() - t0, "timings_s": timings}
 
 
 def _sweep_task(i, case, task_fn, surface, sphere_size, device):
