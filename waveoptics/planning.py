@@ -214,14 +214,31 @@ def grating_orders(amplitude_m: float, period_m: float, wavelength_nm: float) ->
 class CostModel:
     """Seconds per unit of work, measured by :func:`calibrate` (``direct_term`` by :func:`calibrate_direct`)."""
 
-    cell: float            # per direction cell and evaluation (micro geometry)
-    cell_wl: float         # per cell and wavelength (Fresnel, coherent part)
+    call: float             # per two-scale evaluation on one grid (set-up, micro albedo quadrature)
+    cell: float             # per direction cell (micro geometry)
+    cell_wl: float          # per cell and wavelength (Fresnel, coherent part)
     diffuse_cell_wl: float  # per cell and wavelength (diffuse term of dielectrics)
-    psd_cell_wl: float     # per cell and wavelength (nano lobe set-up, micro convolution)
-    psd_term: float        # per cell, wavelength and PSD series term
-    fft_unit: float        # per chirp-z work unit (see fft_units)
+    psd_wl: float           # per grid and wavelength (nano lobe set-up)
+    psd_cell_wl: float      # per cell and wavelength (nano lobe, micro convolution)
+    psd_term: float         # per cell, wavelength and PSD series term
+    fft_unit: float         # per chirp-z work unit (see fft_units)
     calibration_s: float
-    direct_term: float | None = None  # per sample x direction x wavelength (OpenCL)
+
+    def evaluation(self, cells, n_wl: int, *, diffuse: bool = False, psd_terms: int | None = None,
+                   nano_lobe: bool = False) -> float:
+        """Seconds of one two-scale evaluation over grids with *cells* cells each (a list), *n_wl* wavelengths.
+
+        *psd_terms*: the PSD series' number of terms (PSD route); *nano_lobe*: a height-field lobe is convolved
+        (its solver's own cost comes on top).
+        """
+        t = 0.0
+        for c in cells:
+            t += self.call + c * (self.cell + n_wl * (self.cell_wl + (self.diffuse_cell_wl if diffuse else 0.0)))
+            if psd_terms is not None:
+                t += n_wl * (self.psd_wl + c * (self.psd_cell_wl + psd_terms * self.psd_term))
+            elif nano_lobe:
+                t += n_wl * (self.psd_wl + c * self.psd_cell_wl)
+        return t
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -244,44 +261,60 @@ def fft_units(n_samples_xy, n_cells_uv) -> float:
     return ny * lx * math.log2(lx) + nu * ly * math.log2(ly)
 
 
+def psd_terms(sigma_m: float, wavelength_nm: float) -> int:
+    """Series terms :func:`waveoptics.psd.scattered_lobe` sums: g + 8√g + 10 (at most 48), g ≤ (2kσ)²."""
+    g = float(g_factor(sigma_m, 1.0, wavelength_nm))
+    return int(min(48, math.ceil(g + 8 * math.sqrt(g) + 10)))
+
+
 @functools.lru_cache(maxsize=1)
 def calibrate() -> CostModel:
-    """Time tiny runs of each code path (twoscale micro, diffuse, PSD lobe; the fft transform) on this machine."""
+    """Time tiny runs of each code path (two-scale micro, diffuse, PSD lobe; a chirp-z transform) on this machine.
+
+    Three grid sizes / wavelength counts per path give the per-call, per-cell and per-cell-wavelength costs
+    exactly (three equations, three unknowns); best of a few repeats each.
+    """
     from . import diffraction
 
     t0 = time.perf_counter()
-    n = 32
-    grid = DirectionGrid.hemisphere(n)
-    cells = n * n
     wi = direction_from_angles(30.0, 0.0)
     metal, diel = get_material("f0:0.9"), get_material("1.5")
     micro = twoscale.Micro(0.2, ndf="ggx")
-    w1, w6 = np.array([550.0]), np.linspace(420.0, 680.0, 6)
+    grids = {n: DirectionGrid.hemisphere(n) for n in (8, 32)}
+    w1, w3, w6 = np.array([550.0]), np.array([450.0, 550.0, 650.0]), np.linspace(420.0, 680.0, 6)
 
-    def ev(mat, w, nano=None, kd=0.5):
-        return lambda: twoscale.evaluate(wi, w, mat, micro, nano, grid, kd=kd)
+    def t(n, w, mat=metal, nano=None, repeat=3):
+        f = lambda: twoscale.evaluate(wi, w, mat, micro, nano, grids[n], kd=0.5)  # noqa: E731
+        return _best(f, repeat)
 
-    t1, t6 = _best(ev(metal, w1)), _best(ev(metal, w6))
-    cell_wl = max(t6 - t1, 1e-9) / (5 * cells)
-    cell = max(t1 / cells - cell_wl, 1e-12)
-    diffuse = max(_best(ev(diel, w6)) - t6, 0.0) / (6 * cells)
-    # PSD lobe: two roughnesses with different numbers of series terms; tables built before timing
-    w3 = np.array([450.0, 550.0, 650.0])
-    terms, times = [], []
-    for sigma in (0.2e-9, 25e-9):
-        nano = twoscale.Nano(model=psd.PSDModel("gaussian", sigma=sigma, T=1e-6))
-        ev(metal, w3, nano)()
-        g = float(np.max(g_factor(sigma, (1.0 + wi[2]) / 2, w3)))  # (k σ (cosθi + cosθo))² at cosθo = 1
-        terms.append(min(48, math.ceil(g + 8 * math.sqrt(g) + 10)))
-        times.append(max(_best(ev(metal, w3, nano), 2) - _best(ev(metal, w3), 2), 1e-9) / (3 * cells))
-    psd_term = max((times[1] - times[0]) / max(terms[1] - terms[0], 1), 1e-12)
-    psd_cell_wl = max(times[0] - psd_term * terms[0], 1e-12)
+    c8, c32 = 64, 1024
+    t8, t32, t32_6 = t(8, w1), t(32, w1), t(32, w6)
+    cell_wl = max(t32_6 - t32, 0.0) / (5 * c32)
+    per_cell = max(t32 - t8, 0.0) / (c32 - c8)               # cell + cell_wl
+    call = max(t8 - c8 * per_cell, 0.0)
+    cell = max(per_cell - cell_wl, 0.0)
+    diffuse = max(t(32, w6, diel) - t32_6, 0.0) / (6 * c32)
+    # PSD lobe on top of the micro model: two grid sizes and two roughnesses (different series lengths)
+    m8, m32 = t(8, w3), t(32, w3)
+    small, big = 0.2e-9, 25e-9
+    nanos = {sg: twoscale.Nano(model=psd.PSDModel("gaussian", sigma=sg, T=1e-6)) for sg in (small, big)}
+    for sg in nanos:
+        t(32, w3, nano=nanos[sg], repeat=1)                   # builds the series tables (not timed)
+    k_s, k_b = psd_terms(small, 450.0), psd_terms(big, 450.0)
+    d8 = max(t(8, w3, nano=nanos[small], repeat=2) - m8, 0.0) / 3
+    d32s = max(t(32, w3, nano=nanos[small], repeat=2) - m32, 0.0) / 3
+    d32b = max(t(32, w3, nano=nanos[big], repeat=2) - m32, 0.0) / 3
+    psd_term = max(d32b - d32s, 0.0) / (c32 * max(k_b - k_s, 1))
+    per = max(d32s - d8, 0.0) / (c32 - c8)                   # psd_cell_wl + k_s psd_term
+    psd_cell_wl = max(per - k_s * psd_term, 0.0)
+    psd_wl = max(d8 - c8 * per, 0.0)
     # fft: one chirp-z transform of a 128² patch onto a 32² grid
     hf = surfaces.generate("flat", size=128 * 100e-9, samples=128)
     smp = diffraction.samples(hf)
-    t_fft = _best(lambda: diffraction.field_fft(smp, wi, grid, 550.0, order=0), 2)
-    fft_unit = t_fft / fft_units((smp.nx, smp.ny), (n, n))
-    return CostModel(cell, cell_wl, diffuse, psd_cell_wl, psd_term, fft_unit, time.perf_counter() - t0)
+    t_fft = _best(lambda: diffraction.field_fft(smp, wi, grids[32], 550.0, order=0), 2)
+    fft_unit = t_fft / fft_units((smp.nx, smp.ny), (32, 32))
+    return CostModel(call, cell, cell_wl, diffuse, psd_wl, psd_cell_wl, psd_term, fft_unit,
+                     time.perf_counter() - t0)
 
 
 @functools.lru_cache(maxsize=4)
@@ -421,17 +454,6 @@ def _fmt_nm(w) -> str:
 # Nano surfaces: the object the solver uses and a PSD proxy for the estimate
 # ----------------------------------------------------------------------------------------------------------------
 
-def _nano_height_field(spec: MaterialSpec, seed: int) -> surfaces.HeightField:
-    n = spec.nano
-    if n.kind == "file":
-        return surfaces.load(n.path, **n.params)
-    params = dict(n.params)
-    model = params.pop("model")
-    if model != "sinusoid" and model != "flat":
-        params.setdefault("seed", seed)
-    return surfaces.generate(model, **params)
-
-
 def _proxy_model(spec: MaterialSpec, hf) -> psd.PSDModel:
     """PSD statistics standing in for a height field in the colour estimate (the generator's own when known)."""
     from .simulate import parse_nano
@@ -513,15 +535,21 @@ def _constant_over(mat: Material, w) -> bool:
     return bool(np.all(np.ptp(F, axis=1) <= F_FLAT_TOL * np.maximum(F.max(axis=1), 1e-300)))
 
 
-def _patch_grids(views_deg, du, half_width) -> list[DirectionGrid]:
-    """One sub-grid of the direction-cosine plane around each view direction, with cells of about *du*."""
+def _patch_grids(views_deg, resolution: int, half_width: float) -> list[DirectionGrid]:
+    """Sub-grids of the *resolution*² hemisphere grid around each view direction, ±*half_width* wide.
+
+    The patches keep the hemisphere's cell edges, so a patch evaluates exactly the cells the hemisphere would.
+    """
+    du = 2.0 / resolution
     out = []
     for th, ph in views_deg:
         d = direction_from_angles(th, ph)
         rng = []
         for c in (d[0], d[1]):
-            a, b = max(-1.0, c - half_width), min(1.0, c + half_width)
-            rng.append((a, b, max(4, int(math.ceil((b - a) / du)))))
+            i0 = max(0, int(math.floor((c - half_width + 1.0) / du)))
+            i1 = min(resolution, max(int(math.ceil((c + half_width + 1.0) / du)), i0 + 2))
+            i0 = min(i0, i1 - 2)
+            rng.append((-1.0 + i0 * du, -1.0 + i1 * du, i1 - i0))
         (ua, ub, nu), (va, vb, nv) = rng
         out.append(DirectionGrid(nu, nv, (ua, ub), (va, vb)))
     return out
@@ -575,7 +603,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
         decisions.append(("diffraction", "off", "no nano surface given: the microfacet model is the whole BRDF"))
     else:
         if spec.nano.kind != "statistics":
-            hf = _nano_height_field(spec, scene.seed)
+            hf = spec.nano.height_field(scene.seed)
         proxy = _proxy_model(spec, hf)
         probe = twoscale.Nano(surface=hf) if hf is not None else twoscale.Nano(model=proxy)
         s = float(np.max(scattered_fraction(probe, cos_max, lam_min)))
@@ -703,69 +731,88 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
                             "rainbow free of gaps on this grid")
             metrics["wavelength_count"] = int(w_sim.size)
 
-    # --- directions ----------------------------------------------------------------------------------------------
+    # --- directions and (height-field) solver, by cost ------------------------------------------------------------
     hemi_needed = sphere or out.rgb_images or out.spectral_brdf
     s_tot = math.sqrt(sum(s * s for s in widths.values())) if widths else 0.0
     half = PATCH_SIGMAS * s_tot + 2 * du
-    patches = _patch_grids(views, du, half) if views else []
-    hemi_cells = N * N
-    patch_cells = sum(g.n_u * g.n_v for g in patches)
+    hemi = DirectionGrid.hemisphere(N)
+    options = {"hemisphere": [hemi]}
     if force.get("directions") == "views" and (hemi_needed or not views):
         raise WaveopticsError("--force directions=views needs view directions and outputs that show no "
                               "hemisphere (tables only, no camera)")
-    if force.get("directions"):
-        directions = force["directions"]
-        decisions.append(("directions", directions, "forced"))
-    elif hemi_needed:
-        directions = "hemisphere"
-        need = [n for n, on in (("sphere camera", sphere), ("RGB images", out.rgb_images),
-                                ("spectral BRDF", out.spectral_brdf)) if on]
-        decisions.append(("directions", "hemisphere", f"the outputs show it: {', '.join(need)}"))
-    elif patches and patch_cells < hemi_cells:
-        directions = "views"
-        decisions.append(("directions", "views", f"{len(patches)} patches of ±{half:.2g} around the view directions "
-                                                 f"({patch_cells} cells) instead of the hemisphere ({hemi_cells})"))
-    else:
-        directions = "hemisphere"
-        decisions.append(("directions", "hemisphere", f"view patches ±{half:.2g} would need {patch_cells} cells, "
-                                                      f"the hemisphere {hemi_cells}"))
-    eval_cells = patch_cells if directions == "views" else hemi_cells
+    if views and not hemi_needed and force.get("directions") != "hemisphere":
+        options["views"] = _patch_grids(views, N, half)
+    if force.get("directions") == "views":
+        del options["hemisphere"]
     n_eval = len(light.directions_deg) + (len(SPHERE_THETAS_DEG) if sphere else 0)
     n_w = max(w_sim.size, 1)
-
-    # --- height-field solver by cost -----------------------------------------------------------------------------
-    direct_term = None
-    if diffraction_on and solver in (None, "fft", "direct"):
+    w_eval = w_sim if w_sim.size else np.array([LAMBDA_REF_NM])
+    terms = psd_terms(nano_obj.model.sigma, lam_min) if solver == "psd" else None
+    costs = {}                                     # (directions, solver) -> seconds
+    hf_solvers = diffraction_on and solver in (None, "fft", "direct")
+    if hf_solvers:
         from . import runtime as _rt
 
         smp = diffraction.samples(hf)
-        grids = [DirectionGrid.hemisphere(N)] if directions == "hemisphere" else patches
-        wi0 = direction_from_angles(*light.directions_deg[0])
-        tr = sum(sum(K + 1 for _, K, _ in diffraction.fft_plan(smp, wi0, g, float(lam), "auto"))
-                 * fft_units((smp.nx, smp.ny), (g.n_u, g.n_v)) for g in grids for lam in (w_sim if w_sim.size
-                                                                                           else [LAMBDA_REF_NM]))
-        cost_fft = tr * cm.fft_unit * n_eval
         has_cl = _rt.opencl_available()
-        if has_cl:
-            direct_term = calibrate_direct(device)
-        dirs_n = sum(int(g.inside.sum()) for g in grids)
-        cost_direct = (direct_term * smp.size * dirs_n * n_w * n_eval) if direct_term else math.inf
-        metrics.update(height_field_samples=smp.size, cost_fft_s=cost_fft, cost_direct_s=cost_direct)
-        if solver is None:
-            solver = "direct" if cost_direct < cost_fft else "fft"
-            why = (f"height field of {smp.nx}x{smp.ny} samples: direct sum {_fmt_s(cost_direct)} vs fft "
-                   f"{_fmt_s(cost_fft)} (both exact Kirchhoff)" if has_cl else
-                   "height field; no OpenCL device for the direct sum")
+        direct_term = calibrate_direct(device) if has_cl else None
+        wi0 = direction_from_angles(*light.directions_deg[0])
+        # the height field's own coherent fraction (a histogram of its heights) is computed per grid and λ
+        probe = twoscale.Nano(surface=hf)
+        t_char = _best(lambda: probe.coherent_amplitude2(cos_max, lam_min), 1)
+        metrics.update(height_field_samples=smp.size, opencl=has_cl, direct_term_s=direct_term,
+                       coherent_fraction_s=t_char)
+    for dname, grids in options.items():
+        cells = [g.n_u * g.n_v for g in grids]
+        base = n_eval * cm.evaluation(cells, n_w, diffuse=diffuse, psd_terms=terms, nano_lobe=hf_solvers)
+        if dname == "views":  # each patch normalizes its micro lobe on the whole grid
+            base += n_eval * len(grids) * N * N * cm.cell
+        if hf_solvers:
+            base += n_eval * len(grids) * n_w * t_char
+        if not hf_solvers:
+            costs[(dname, solver)] = base
+            continue
+        # the incoherent lobe is U − χ U_flat: the height field's transforms plus one for the flat patch
+        units = sum((1 + sum(K + 1 for _, K, _ in diffraction.fft_plan(smp, wi0, g, float(lam), "auto")))
+                    * fft_units((smp.nx, smp.ny), (g.n_u, g.n_v)) for g in grids for lam in w_eval)
+        costs[(dname, "fft")] = base + n_eval * units * cm.fft_unit
+        if direct_term is not None:
+            dirs = sum(int(g.inside.sum()) for g in grids)
+            costs[(dname, "direct")] = base + n_eval * 2 * direct_term * smp.size * dirs * n_w
+    if hf_solvers and solver == "direct" and not any(k[1] == "direct" for k in costs):
+        raise WaveopticsError("--force solver=direct needs an OpenCL device; none found")
+    allowed = {k: v for k, v in costs.items() if solver in (None, k[1])}
+    (directions, solver), t = min(allowed.items(), key=lambda kv: kv[1])
+    metrics["costs_s"] = {f"{d}/{s_}": v for (d, s_), v in costs.items()}
+    if force.get("directions"):
+        decisions.append(("directions", directions, "forced"))
+    elif hemi_needed:
+        need = [n for n, on in (("sphere camera", sphere), ("RGB images", out.rgb_images),
+                                ("spectral BRDF", out.spectral_brdf)) if on]
+        decisions.append(("directions", "hemisphere", f"the outputs show it: {', '.join(need)}"))
+    elif "views" in options:
+        other = "hemisphere" if directions == "views" else "views"
+        t_other = min(v for (d, _), v in allowed.items() if d == other)
+        n_p = sum(g.n_u * g.n_v for g in options["views"])
+        decisions.append(("directions", directions,
+                          f"{len(views)} patches of ±{half:.2g} around the view directions ({n_p} cells): "
+                          f"{_fmt_s(t if directions == 'views' else t_other)}; the hemisphere ({N * N} cells): "
+                          f"{_fmt_s(t_other if directions == 'views' else t)}"))
+    else:
+        decisions.append(("directions", "hemisphere", "no view directions: the whole hemisphere"))
+    if hf_solvers:
+        if "solver" in force:
+            decisions.append(("solver", solver, "forced"))
+        else:
+            alt = {s_: v for (d, s_), v in costs.items() if d == directions}
+            why = (f"height field of {smp.nx}x{smp.ny} samples, both exact Kirchhoff: " +
+                   ", ".join(f"{k} {_fmt_s(v)}" for k, v in sorted(alt.items(), key=lambda kv: kv[1])))
+            if not has_cl:
+                why += " (no OpenCL device for the direct sum)"
             if spec.nano.kind == "statistics":
                 why = f"g = {g_max:.3g} > {PSD_G_MAX:g} is beyond the PSD series; generated {why}"
             decisions.append(("solver", solver, why))
-        else:
-            decisions.append(("solver", solver, "forced"))
-        if solver == "direct" and not has_cl:
-            raise WaveopticsError("--force solver=direct needs an OpenCL device; none found")
-        if not hasattr(diffraction, "scattered_lobe"):
-            decisions.append(("warning", "height-field solver", "this build has no diffraction.scattered_lobe "
-                                                               "for the two-scale model: 'run' will refuse"))
+    patches = options.get("views", []) if directions == "views" else []
 
     # --- precision -----------------------------------------------------------------------------------------------
     if solver == "direct":
@@ -791,24 +838,13 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
         precision = "float64"
         decisions.append(("precision", "float64", "NumPy float64 throughout (no OpenCL kernel on this route)"))
 
-    # --- cost ----------------------------------------------------------------------------------------------------
-    t = n_eval * eval_cells * (cm.cell + n_w * (cm.cell_wl + (cm.diffuse_cell_wl if diffuse else 0.0)))
-    if solver == "psd":
-        g_top = float(g_factor(nano_obj.model.sigma, 1.0, lam_min))  # (k σ (cosθi + cosθo))² ≤ (2kσ)²
-        terms = min(48, math.ceil(g_top + 8 * math.sqrt(g_top) + 10))
-        t += n_eval * eval_cells * n_w * (cm.psd_cell_wl + cm.psd_term * terms)
-    elif solver == "fft":
-        t += metrics["cost_fft_s"] + n_eval * eval_cells * n_w * cm.psd_cell_wl
-    elif solver == "direct":
-        t += metrics["cost_direct_s"] + n_eval * eval_cells * n_w * cm.psd_cell_wl
     effects = {"specular": True, "diffraction": bool(diffraction_on), "diffuse": bool(diffuse),
                "spectral": not lam_independent, "sphere": sphere}
     return EntryPlan(spec=spec, light_name=light.name, spd=spd, material=mat,
                      light_directions_deg=light.directions_deg, micro=micro, nano=nano_obj, effects=effects,
                      solver=solver, resolution=N, directions=directions, view_directions_deg=views,
                      wavelengths_nm=w_sim, colour_wavelengths_nm=w_colour, precision=precision, kd=kd,
-                     sphere=sphere, estimated_time_s=float(t),
-                     patches=patches if directions == "views" else [], decisions=decisions, metrics=metrics,
+                     sphere=sphere, estimated_time_s=float(t), patches=patches, decisions=decisions, metrics=metrics,
                      forced=dict(force))
 
 
@@ -892,13 +928,8 @@ class EntryResult:
 
 def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
     """Evaluate the planned two-scale (or microfacet) BRDF of one entry."""
-    from . import diffraction
     from .simulate import SPHERE_THETAS_DEG
 
-    if e.nano is not None and e.nano.surface is not None and not hasattr(diffraction, "scattered_lobe"):
-        raise WaveopticsError(f"material {e.name!r}: the {e.solver} solver of the two-scale model needs "
-                              "diffraction.scattered_lobe, which this build lacks; use --force solver=psd for "
-                              "statistics or --force diffraction=off")
     t0 = time.perf_counter()
     w = e.wavelengths_nm if e.wavelengths_nm.size else np.array([LAMBDA_REF_NM])
     kw = dict(solver=e.solver if e.nano is not None else "auto", kd=e.kd, diffuse="lambert" if e.kd > 0 else "none",
@@ -907,7 +938,8 @@ def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
     hemi = DirectionGrid.hemisphere(e.resolution)
 
     def ev(wi, grid):
-        L = twoscale.evaluate(wi, w, e.material, e.micro, nano, grid, **kw)
+        ref = None if grid is hemi else hemi            # view patches are normalized on the hemisphere grid
+        L = twoscale.evaluate(wi, w, e.material, e.micro, nano, grid, reference_grid=ref, **kw)
         return L if e.wavelengths_nm.size else _broadcast(L, e.colour_wavelengths_nm)
 
     lobes = {}

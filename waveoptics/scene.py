@@ -88,6 +88,18 @@ class NanoSpec:
     params: dict = field(default_factory=dict)
     path: Path | None = None
 
+    def height_field(self, seed: int = 0):
+        """The height field of a ``file`` or ``generator`` nano surface (generators get *seed* when they take one)."""
+        if self.kind == "file":
+            return surfaces.load(self.path, **self.params)
+        if self.kind != "generator":
+            raise WaveopticsError(f"nano {self.describe()} is statistics, not a height field")
+        params = dict(self.params)
+        model = params.pop("model")
+        if "seed" in inspect.signature(surfaces.GENERATORS[model]).parameters:
+            params.setdefault("seed", seed)
+        return surfaces.generate(model, **params)
+
     def describe(self) -> str:
         if self.kind == "statistics":
             return f"statistics {self.text}"
