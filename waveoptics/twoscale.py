@@ -330,7 +330,8 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
 
 
 def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid: DirectionGrid, *,
-             solver: str = "auto", kd=0.5, diffuse: str = "lambert", device=None, precision="float32") -> Lobes:
+             solver: str = "auto", kd=0.5, diffuse: str = "lambert", device=None, precision="float32",
+             reference_grid: DirectionGrid | None = None) -> Lobes:
     """Two-scale BRDF for one incident direction on *grid* at each wavelength, plus the plain microfacet BRDF.
 
     Parameters
@@ -349,6 +350,10 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         Output directions.
     kd : float or array (n_λ,)
         Diffuse albedo of a dielectric's substrate (ignored for metals).
+    reference_grid : DirectionGrid, optional
+        When *grid* is a patch of a larger grid (same cells, e.g. around a view direction), that grid: the micro
+        lobe is normalized on it, so the patch holds the same values as the larger grid at its cells. The
+        coherent-loss cap needs the whole lobe and is not applied on a patch (it only acts near grazing incidence).
 
     Returns
     -------
@@ -389,6 +394,10 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         # energy-preserving sampling: near grazing a narrow lobe is squeezed against the rim of the (u, v) disc and
         # the cell quadrature over- or under-counts it; scale the F = 1 lobe to the accurate quadrature albedo
         grid_rho = float(f1.sum()) * grid.du * grid.dv
+        if reference_grid is not None:  # a patch: the quadrature of the whole grid it belongs to
+            ref = reference_grid
+            f_ref = microfacet.specular(wi, ref.directions(), fresnel="one", **micro.kw())
+            grid_rho = float(np.sum(np.where(ref.inside, f_ref, 0.0))) * ref.du * ref.dv
         rho = float(microfacet.albedo(wi, fresnel="one", **micro.kw()))
         if grid_rho > 0:
             f1 = f1 * (rho / grid_rho)
@@ -404,7 +413,10 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision)
         K = micro_kernel(wi, micro, grid)
         diffraction = np.where(inside, _convolve(fn, K, grid), 0.0)
-        diffraction, energy_scale = _cap_to_coherent_loss(diffraction, mf - coherent, grid)
+        if reference_grid is None:
+            diffraction, energy_scale = _cap_to_coherent_loss(diffraction, mf - coherent, grid)
+        else:
+            energy_scale = np.ones(w.size)
         used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")
     else:
         diffraction = np.zeros(shape)
