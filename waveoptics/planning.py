@@ -318,13 +318,21 @@ def calibrate() -> CostModel:
 
 
 @functools.lru_cache(maxsize=4)
-def calibrate_direct(device: str | None = None, precision: str = "float32") -> float | None:
-    """Seconds per sample·direction·wavelength of the OpenCL direct sum (None without OpenCL)."""
-    from . import diffraction, runtime
+def calibrate_direct(device: str | None = None, precision: str = "float32") -> tuple[float | None, str]:
+    """(seconds per sample·direction·wavelength of the OpenCL direct sum, "") or (None, why it is unavailable)."""
+    from . import runtime
 
     if not runtime.opencl_available():
-        return None
-    rt = runtime.get_runtime(device)
+        return None, "no OpenCL platform"
+    try:
+        return _time_direct(runtime.get_runtime(device), precision), ""
+    except WaveopticsError as exc:  # no device of that name, or the kernel does not build here
+        return None, str(exc).splitlines()[0]
+
+
+def _time_direct(rt, precision):
+    from . import diffraction
+
     if precision == "float64" and not rt.fp64:
         precision = "float32"
     hf = surfaces.generate("sinusoid", amplitude=40e-9, period=1.6e-6, size=128 * 100e-9, samples=128)
@@ -751,11 +759,9 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
     costs = {}                                     # (directions, solver) -> seconds
     hf_solvers = diffraction_on and solver in (None, "fft", "direct")
     if hf_solvers:
-        from . import runtime as _rt
-
         smp = diffraction.samples(hf)
-        has_cl = _rt.opencl_available()
-        direct_term = calibrate_direct(device) if has_cl else None
+        direct_term, no_direct = calibrate_direct(device)
+        has_cl = direct_term is not None
         wi0 = direction_from_angles(*light.directions_deg[0])
         # the height field's own coherent fraction (a histogram of its heights) is computed per grid and λ
         probe = twoscale.Nano(surface=hf)
@@ -779,8 +785,8 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
         if direct_term is not None:
             dirs = sum(int(g.inside.sum()) for g in grids)
             costs[(dname, "direct")] = base + n_eval * 2 * direct_term * smp.size * dirs * n_w
-    if hf_solvers and solver == "direct" and not any(k[1] == "direct" for k in costs):
-        raise WaveopticsError("--force solver=direct needs an OpenCL device; none found")
+    if hf_solvers and solver == "direct" and not has_cl:
+        raise WaveopticsError(f"--force solver=direct needs the OpenCL direct sum, unavailable here: {no_direct}")
     allowed = {k: v for k, v in costs.items() if solver in (None, k[1])}
     (directions, solver), t = min(allowed.items(), key=lambda kv: kv[1])
     metrics["costs_s"] = {f"{d}/{s_}": v for (d, s_), v in costs.items()}
@@ -808,7 +814,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
             why = (f"height field of {smp.nx}x{smp.ny} samples, both exact Kirchhoff: " +
                    ", ".join(f"{k} {_fmt_s(v)}" for k, v in sorted(alt.items(), key=lambda kv: kv[1])))
             if not has_cl:
-                why += " (no OpenCL device for the direct sum)"
+                why += f" (direct sum unavailable: {no_direct})"
             if spec.nano.kind == "statistics":
                 why = f"g = {g_max:.3g} > {PSD_G_MAX:g} is beyond the PSD series; generated {why}"
             decisions.append(("solver", solver, why))

@@ -250,7 +250,7 @@ def _directions(ctx, value, key, *, theta_max: float) -> tuple:
         k = f"{key}[{i}]"
         if not (isinstance(d, list) and len(d) in (1, 2)):
             raise ctx.err(k, f"= {d!r} is not allowed; write [theta, phi] in degrees")
-        th = _number(ctx, d[0], k + " theta", lo=0.0, hi=90.0)
+        th = _number(ctx, d[0], k + " theta", lo=0.0)
         ph = _number(ctx, d[1], k + " phi") if len(d) == 2 else 0.0
         if th >= theta_max:
             raise ctx.err(k, f"theta = {th:g} deg is not allowed; use 0 <= theta < {theta_max:g}")
