@@ -244,7 +244,9 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
               "incident_deg": [theta, phi], "illuminant": spd.name, "resolution": resolution,
               "solver": lobes.info["solver"], "kd": 0.0 if mat.is_metal else kd, "precision": precision,
               "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": seed, "split": split_info,
-              "micro_alpha_used": [micro.alpha, micro.alpha_y]}
+              "micro_alpha_used": [micro.alpha, micro.alpha_y],
+              # materials clamp their index outside the measured data (materials.py policy): say where
+              "clamped_wavelengths_nm": [float(x) for x in w[mat.out_of_range(w)]]}
     return Simulation(lobes=lobes, table_thetas_deg=thetas, table_total=tab_total, table_microfacet=tab_mf,
                       illuminant=illuminant, params=params, timings_s=timings, nano=nano_obj)
 
