@@ -1159,6 +1159,8 @@ def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False) -> H
         what = f"a {ext} text grid" if expect == "text" else expect
         raise WaveopticsError(f"{str(p)!r} is not {what} (its content looks like {kind})")
     sp = _spacing_arg(spacing)
+    if units is not None:
+        _unit_scale(units)  # refuse an unknown unit even where the file states its own
     try:
         if ext == ".npz":
             hf = _load_npz(p, sp, units, nan_is_mask)
@@ -1185,7 +1187,8 @@ def _load_npz(p, sp, units, nan_is_mask):
     import zipfile
 
     try:
-        with np.load(p, allow_pickle=False) as z:
+        # an open handle of our own: np.load leaks the one it opens when the zip is broken
+        with open(p, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             data = {k: z[k] for k in z.files}
     except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
         raise WaveopticsError(f"is truncated or not a valid .npz archive ({str(exc).splitlines()[0]})") from None
