@@ -269,52 +269,50 @@ def psd_terms(sigma_m: float, wavelength_nm: float) -> int:
 
 @functools.lru_cache(maxsize=1)
 def calibrate() -> CostModel:
-    """Time tiny runs of each code path (two-scale micro, diffuse, PSD lobe; a chirp-z transform) on this machine.
+    """Time small runs of each code path (two-scale micro, diffuse, PSD lobe; a chirp-z transform) on this machine.
 
-    Three grid sizes / wavelength counts per path give the per-call, per-cell and per-cell-wavelength costs
-    exactly (three equations, three unknowns); best of a few repeats each.
+    Each cost is a non-negative least-squares fit (scipy ``nnls``) of timed runs on grids of 16² to 64² cells with
+    1 to 6 wavelengths and 11 or 41 PSD series terms to the linear model of :meth:`CostModel.evaluation`; best of
+    a few repeats each, so that a busy machine inflates the fit as little as possible.
     """
+    from scipy.optimize import nnls
+
     from . import diffraction
 
     t0 = time.perf_counter()
     wi = direction_from_angles(30.0, 0.0)
     metal, diel = get_material("f0:0.9"), get_material("1.5")
     micro = twoscale.Micro(0.2, ndf="ggx")
-    grids = {n: DirectionGrid.hemisphere(n) for n in (8, 32)}
-    w1, w3, w6 = np.array([550.0]), np.array([450.0, 550.0, 650.0]), np.linspace(420.0, 680.0, 6)
+    grids = {n: DirectionGrid.hemisphere(n) for n in (16, 32, 64)}
+    wls = {k: np.linspace(420.0, 680.0, k) for k in (1, 3, 6)}
 
-    def t(n, w, mat=metal, nano=None, repeat=3):
-        f = lambda: twoscale.evaluate(wi, w, mat, micro, nano, grids[n], kd=0.5)  # noqa: E731
+    def t(n, k, mat=metal, nano=None, repeat=3):
+        f = lambda: twoscale.evaluate(wi, wls[k], mat, micro, nano, grids[n], kd=0.5)  # noqa: E731
         return _best(f, repeat)
 
-    c8, c32 = 64, 1024
-    t8, t32, t32_6 = t(8, w1), t(32, w1), t(32, w6)
-    cell_wl = max(t32_6 - t32, 0.0) / (5 * c32)
-    per_cell = max(t32 - t8, 0.0) / (c32 - c8)               # cell + cell_wl
-    call = max(t8 - c8 * per_cell, 0.0)
-    cell = max(per_cell - cell_wl, 0.0)
-    diffuse = max(t(32, w6, diel) - t32_6, 0.0) / (6 * c32)
-    # PSD lobe on top of the micro model: two grid sizes and two roughnesses (different series lengths)
-    m8, m32 = t(8, w3), t(32, w3)
-    small, big = 0.2e-9, 25e-9
-    nanos = {sg: twoscale.Nano(model=psd.PSDModel("gaussian", sigma=sg, T=1e-6)) for sg in (small, big)}
-    for sg in nanos:
-        t(32, w3, nano=nanos[sg], repeat=1)                   # builds the series tables (not timed)
-    k_s, k_b = psd_terms(small, 450.0), psd_terms(big, 450.0)
-    d8 = max(t(8, w3, nano=nanos[small], repeat=2) - m8, 0.0) / 3
-    d32s = max(t(32, w3, nano=nanos[small], repeat=2) - m32, 0.0) / 3
-    d32b = max(t(32, w3, nano=nanos[big], repeat=2) - m32, 0.0) / 3
-    psd_term = max(d32b - d32s, 0.0) / (c32 * max(k_b - k_s, 1))
-    per = max(d32s - d8, 0.0) / (c32 - c8)                   # psd_cell_wl + k_s psd_term
-    psd_cell_wl = max(per - k_s * psd_term, 0.0)
-    psd_wl = max(d8 - c8 * per, 0.0)
+    runs = [(16, 1), (64, 1), (64, 6), (32, 3)]
+    mf = {r: t(*r) for r in runs}
+    A = np.array([[1.0, n * n, n * n * k] for n, k in runs])
+    (call, cell, cell_wl), _ = nnls(A, np.array([mf[r] for r in runs]))
+    diffuse = max(t(64, 6, diel) - mf[(64, 6)], 0.0) / (6 * 64 * 64)
+    # PSD lobe on top of the micro model: series tables built first (not timed)
+    nanos = {sg: twoscale.Nano(model=psd.PSDModel("gaussian", sigma=sg, T=1e-6)) for sg in (0.2e-9, 100e-9)}
+    for nano in nanos.values():
+        t(16, 3, nano=nano, repeat=1)
+    runs = [(16, 0.2e-9), (64, 0.2e-9), (64, 100e-9), (32, 100e-9)]
+    rows, y = [], []
+    for n, sg in runs:
+        k = psd_terms(sg, 420.0)
+        rows.append([3.0, 3.0 * n * n, 3.0 * n * n * k])
+        y.append(max(t(n, 3, nano=nanos[sg], repeat=2) - t(n, 3, repeat=2), 0.0))
+    (psd_wl, psd_cell_wl, psd_term), _ = nnls(np.array(rows), np.array(y))
     # fft: one chirp-z transform of a 128² patch onto a 32² grid
     hf = surfaces.generate("flat", size=128 * 100e-9, samples=128)
     smp = diffraction.samples(hf)
     t_fft = _best(lambda: diffraction.field_fft(smp, wi, grids[32], 550.0, order=0), 2)
     fft_unit = t_fft / fft_units((smp.nx, smp.ny), (32, 32))
-    return CostModel(call, cell, cell_wl, diffuse, psd_wl, psd_cell_wl, psd_term, fft_unit,
-                     time.perf_counter() - t0)
+    return CostModel(float(call), float(cell), float(cell_wl), diffuse, float(psd_wl), float(psd_cell_wl),
+                     float(psd_term), fft_unit, time.perf_counter() - t0)
 
 
 @functools.lru_cache(maxsize=4)
@@ -771,7 +769,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
     for dname, grids in options.items():
         cells = [g.n_u * g.n_v for g in grids]
         base = n_eval * cm.evaluation(cells, n_w, diffuse=diffuse, psd_terms=terms, nano_lobe=hf_solvers)
-        if dname == "views":  # each patch normalizes its micro lobe on the whole grid
+        if dname == "views" and spec.roughness >= 0.75 * du:  # a patch normalizes its micro lobe on the whole grid
             base += n_eval * len(grids) * N * N * cm.cell
         if hf_solvers:
             base += n_eval * len(grids) * n_w * t_char
