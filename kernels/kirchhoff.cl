@@ -10,40 +10,61 @@
  * ix a_x + iy a_y with a = s dx / lambda in cycles per sample. The host reduces a modulo 1 in double precision and
  * splits it into a 32-bit fixed-point part A (a = A / 2^32 + lo, |lo| <= 2^-33): ix * A + iy * A_y is computed in
  * 32-bit unsigned integer arithmetic, which is exact modulo 2^32, i.e. exact modulo one cycle, for any patch size.
- * The rest (ix lo, h cz, the constant c0) is small and is added in real_t. The phase is reduced to [-1/2, 1/2]
- * cycles before sinpi/cospi, so the float32 error stays ~1e-6 cycles however large k x grows (naive float32 k x loses
- * ~1e-2 rad at 10^4 wavelengths). Heights arrive with their mean removed (|U|^2 does not depend on a constant
- * offset, but the rounding of h cz does).
+ * The rest (ix lo, h cz, the constant c0) is small and is added in real_t, so the float32 phase error stays ~1e-6
+ * cycles however large k x grows (naive float32 k x loses ~1e-2 rad at 10^4 wavelengths). Heights arrive with their
+ * mean removed (|U|^2 does not depend on a constant offset, but the rounding of h cz does).
  *
- * Layout: one work-item per pair; it streams all samples WO_VW at a time as explicit vectors, so that a CPU
- * device (PoCL) evaluates sinpi/cospi on SIMD lanes (the work-items of a group read the same samples at the same
- * time, which caches serve). Partial sums over blocks of 256 samples are added to the running total (two-level
- * summation keeps float32 round-off near sqrt(n_blocks) rather than n_samples ulps). A local-memory tiled variant
- * for GPUs is left to the performance issue.
+ * Speed (issue 6; measured figures in docs/performance.md, produced by `waveoptics bench`):
+ *   - cos/sin of the phase come from wo_sincos_2pi (wo_sincos.h): one exact argument reduction shared by both and
+ *     two short polynomials, accurate to the last bit of float32 (float64), instead of two SLEEF calls
+ *     sinpi/cospi that each reduce and handle special cases;
+ *   - register blocking: each work-item sums WO_ND pairs, so the WO_VW samples it loads (ix, iy, h, w and their
+ *     conversions) serve WO_ND phases;
+ *   - one work-item per work-group on CPU devices (the host passes local size 1): PoCL then runs the explicit
+ *     WO_VW-wide vector code as written instead of trying to vectorize across work-items (2x by itself).
+ * Partial sums over blocks of 256 samples are added to the running total (two-level summation keeps float32
+ * round-off near sqrt(n_blocks) rather than n_samples ulps).
+ *
+ * kirchhoff_U_naive is the straightforward kernel a user would write first (one pair per work-item, scalar loop,
+ * float phase k s.x, native_sin/native_cos); it is kept only as the benchmark's baseline (waveoptics bench), and its
+ * error is measured there and in tests/test_diffraction.py against the same twin.
  */
 #include "wo_common.h"
 
 #define WO_2POW_M32 R(2.3283064365386962890625e-10)
 
 /* Vector width of the inner loop over samples (the host pads the sample arrays to a multiple of it with w = 0).
- * On CPU devices (PoCL) explicit vectors put sinpi/cospi on SIMD lanes; on GPUs they are simply unrolled. */
+ * On CPU devices (PoCL) explicit vectors put the arithmetic on SIMD lanes; on GPUs they are simply unrolled. */
 #ifndef WO_VW
 #define WO_VW 16
+#endif
+/* Pairs per work-item (register blocking). */
+#ifndef WO_ND
+#define WO_ND 8
 #endif
 #define WO_CAT_(a, b) a##b
 #define WO_CAT(a, b) WO_CAT_(a, b)
 #ifdef WO_DOUBLE
 #define WO_RV(n) WO_CAT(double, n)
+#define WO_RIV(n) WO_CAT(long, n)
 #else
 #define WO_RV(n) WO_CAT(float, n)
+#define WO_RIV(n) WO_CAT(int, n)
 #endif
 typedef WO_RV(WO_VW) realv_t;
+typedef WO_RIV(WO_VW) rintv_t;
 typedef WO_CAT(int, WO_VW) intv_t;
 typedef WO_CAT(uint, WO_VW) uintv_t;
 #define WO_VLOAD WO_CAT(vload, WO_VW)
+#define WO_VSTORE WO_CAT(vstore, WO_VW)
 #define WO_TO_REALV WO_CAT(convert_, WO_RV(WO_VW))
+#define WO_AS_REALV WO_CAT(as_, WO_RV(WO_VW))
+#define WO_CONV_RINTV WO_CAT(convert_, WO_RIV(WO_VW))
+#define WO_AS_RINTV WO_CAT(as_, WO_RIV(WO_VW))
 #define WO_AS_INTV WO_CAT(as_int, WO_VW)
 #define WO_AS_UINTV WO_CAT(as_uint, WO_VW)
+
+#include "wo_sincos.h"
 
 /* Phase of WO_VW samples (ix, iy, h) for one pair, in cycles, reduced to [-1/2, 1/2]. */
 inline realv_t kirchhoff_phase_v(intv_t vix, intv_t viy, realv_t vh, uint ax, uint ay, real_t lx, real_t ly,
@@ -64,41 +85,90 @@ __kernel void kirchhoff_phase(__global const int *ix, __global const int *iy, __
     int b = get_global_id(0);
     if (b >= n_samples / WO_VW) return;
     realv_t ph = kirchhoff_phase_v(WO_VLOAD(b, ix), WO_VLOAD(b, iy), WO_VLOAD(b, h), Ax, Ay, lox, loy, cz, c0);
-    WO_CAT(vstore, WO_VW)(ph, b, phase);
+    WO_VSTORE(ph, b, phase);
 }
 
-/* Field U_p (without the dx dy factor) for n_pairs pairs, one work-item per pair; n_samples a multiple of WO_VW. */
+/* Field U_p (without the dx dy factor) for n_pairs pairs, WO_ND pairs per work-item (global size
+ * ceil(n_pairs / WO_ND)); n_samples a multiple of WO_VW. */
 __kernel void kirchhoff_U(__global const int *ix, __global const int *iy, __global const real_t *h,
                           __global const real_t *w, const int n_samples,
                           __global const uint *Ax, __global const uint *Ay, __global const real_t *lox,
                           __global const real_t *loy, __global const real_t *cz, __global const real_t *c0,
                           const int n_pairs, __global real_t *U_re, __global real_t *U_im)
 {
-    const int p = get_global_id(0);
-    if (p >= n_pairs) return;
-    const uint ax = Ax[p], ay = Ay[p];
-    const real_t lx = lox[p], ly = loy[p], z = cz[p], c = c0[p];
-    real_t sre = R(0.0), sim = R(0.0);
+    const int p0 = get_global_id(0) * WO_ND;
+    if (p0 >= n_pairs) return;
+    uint ax[WO_ND], ay[WO_ND];
+    real_t lx[WO_ND], ly[WO_ND], z[WO_ND], c[WO_ND], sre[WO_ND], sim[WO_ND];
+    for (int d = 0; d < WO_ND; ++d) {
+        const int p = min(p0 + d, n_pairs - 1);     /* the last item repeats a pair it does not store */
+        ax[d] = Ax[p]; ay[d] = Ay[p]; lx[d] = lox[p]; ly[d] = loy[p]; z[d] = cz[p]; c[d] = c0[p];
+        sre[d] = R(0.0); sim[d] = R(0.0);
+    }
     const int nv = n_samples / WO_VW;
     const int block = 256 / WO_VW;               /* samples per partial sum: two-level summation */
     for (int b0 = 0; b0 < nv; b0 += block) {
-        realv_t tre = (realv_t)(R(0.0)), tim = (realv_t)(R(0.0));
+        realv_t tre[WO_ND], tim[WO_ND];
+        for (int d = 0; d < WO_ND; ++d) { tre[d] = (realv_t)(R(0.0)); tim[d] = (realv_t)(R(0.0)); }
         const int b1 = min(b0 + block, nv);
         for (int b = b0; b < b1; ++b) {
-            realv_t ph = kirchhoff_phase_v(WO_VLOAD(b, ix), WO_VLOAD(b, iy), WO_VLOAD(b, h), ax, ay, lx, ly, z, c);
-            realv_t vw = WO_VLOAD(b, w);
-            realv_t cs = cospi(R(2.0) * ph);    /* sinpi/cospi: exact argument scaling, faster than */
-            realv_t sn = sinpi(R(2.0) * ph);    /* sincos(2 pi ph) under PoCL and twice as accurate  */
-            tre += vw * cs;
-            tim += vw * sn;
+            const intv_t vix = WO_VLOAD(b, ix), viy = WO_VLOAD(b, iy);
+            const realv_t vh = WO_VLOAD(b, h), vw = WO_VLOAD(b, w);
+            const realv_t fx = WO_TO_REALV(vix), fy = WO_TO_REALV(viy);
+            const uintv_t ux = WO_AS_UINTV(vix), uy = WO_AS_UINTV(viy);
+#pragma unroll
+            for (int d = 0; d < WO_ND; ++d) {
+                /* the phase of kirchhoff_phase_v without its rint: wo_sincos_2pi reduces it exactly */
+                const intv_t fixed = WO_AS_INTV(ux * ax[d] + uy * ay[d]);
+                const realv_t ph = WO_TO_REALV(fixed) * WO_2POW_M32 + (fx * lx[d] + fy * ly[d]) + (vh * z[d] + c[d]);
+                realv_t sn, cs;
+                wo_sincos_2pi(ph, &sn, &cs);
+                tre[d] += vw * cs;
+                tim[d] += vw * sn;
+            }
         }
-        real_t lre[WO_VW], lim[WO_VW];
-        WO_CAT(vstore, WO_VW)(tre, 0, lre);
-        WO_CAT(vstore, WO_VW)(tim, 0, lim);
-        real_t pre = R(0.0), pim = R(0.0);
-        for (int k = 0; k < WO_VW; ++k) { pre += lre[k]; pim += lim[k]; }
-        sre += pre;
-        sim += pim;
+        for (int d = 0; d < WO_ND; ++d) {
+            real_t lre[WO_VW], lim[WO_VW];
+            WO_VSTORE(tre[d], 0, lre);
+            WO_VSTORE(tim[d], 0, lim);
+            real_t pre = R(0.0), pim = R(0.0);
+            for (int k = 0; k < WO_VW; ++k) { pre += lre[k]; pim += lim[k]; }
+            sre[d] += pre;
+            sim[d] += pim;
+        }
+    }
+    for (int d = 0; d < WO_ND; ++d) {
+        if (p0 + d < n_pairs) { U_re[p0 + d] = sre[d]; U_im[p0 + d] = sim[d]; }
+    }
+}
+
+/* cos/sin(2 pi t) of n values by wo_sincos_2pi (n a multiple of WO_VW), for checking it against its twin. */
+__kernel void sincos_2pi(__global const real_t *t, const int n, __global real_t *s, __global real_t *c)
+{
+    const int b = get_global_id(0);
+    if (b >= n / WO_VW) return;
+    realv_t sn, cs;
+    wo_sincos_2pi(WO_VLOAD(b, t), &sn, &cs);
+    WO_VSTORE(sn, b, s);
+    WO_VSTORE(cs, b, c);
+}
+
+/* Baseline for the benchmark: the naive direct sum (float phase v . (x, y, h) in radians from the patch centre,
+ * native_sin/native_cos, one pair per work-item, scalar loop). vx, vy, vz in rad/m; x = (ix - cx) dx. */
+__kernel void kirchhoff_U_naive(__global const int *ix, __global const int *iy, __global const real_t *h,
+                                __global const real_t *w, const int n_samples, __global const real_t *vx,
+                                __global const real_t *vy, __global const real_t *vz, const real_t dx,
+                                const real_t dy, const real_t cx, const real_t cy, const int n_pairs,
+                                __global real_t *U_re, __global real_t *U_im)
+{
+    const int p = get_global_id(0);
+    if (p >= n_pairs) return;
+    const real_t kx = vx[p], ky = vy[p], kz = vz[p];
+    real_t sre = R(0.0), sim = R(0.0);
+    for (int j = 0; j < n_samples; ++j) {
+        const real_t ph = kx * (((real_t)ix[j] - cx) * dx) + ky * (((real_t)iy[j] - cy) * dy) + kz * h[j];
+        sre += w[j] * native_cos(ph);
+        sim += w[j] * native_sin(ph);
     }
     U_re[p] = sre;
     U_im[p] = sim;

@@ -46,6 +46,7 @@ References
 """
 from __future__ import annotations
 
+import functools
 import math
 import time
 import warnings
@@ -559,6 +560,73 @@ def kirchhoff_U(smp: Samples, coef: PhaseCoefficients, *, chunk_terms: int = 2**
     return out * (smp.dx * smp.dy)
 
 
+#: pairs summed by one work-item of ``kirchhoff_U`` (register blocking; measured fastest under PoCL on 2 cores:
+#: float32 8 (5.2 G terms/s vs 4.7 for 4 and 5.1 for 16), float64 4 (1.9 vs 1.7 for 8); see docs/performance.md)
+PAIRS_PER_ITEM = {"float32": 8, "float64": 4}
+#: (sine, cosine) polynomial lengths of the kernels' sin/cos(2πt): sin(fπ/2) = f S(f²), cos(fπ/2) = 1 + f² C'(f²)
+SINCOS_TERMS = {"float32": (4, 3), "float64": (7, 7)}
+
+
+def _precision_name(dtype) -> str:
+    return "float64" if np.dtype(dtype) == np.float64 else "float32"
+
+
+@functools.lru_cache(maxsize=4)
+def sincos_poly(precision: str = "float32") -> tuple[np.ndarray, np.ndarray]:
+    """Coefficients (S, C) of the kernels' sin/cos polynomials (``kernels/wo_sincos.h``).
+
+    sin(f π/2) ≈ f Σ_n S_n f^{2n} and cos(f π/2) ≈ Σ_n C_n f^{2n} (C_0 = 1) on |f| ≤ ½, fitted by least squares
+    on 4000 Chebyshev nodes (relative error for the sine, absolute for the cosine), which is within a few per
+    cent of the minimax error (Muller, *Elementary Functions*, 2016, ch. 3). Truncation error: float32 2.6e-9 /
+    3.4e-8 (below half an ulp of 1), float64 7.8e-16 / 3.3e-16.
+
+    Returns
+    -------
+    S, C : ndarray of float64
+    """
+    n_sin, n_cos = SINCOS_TERMS[precision]
+    k = np.arange(4000)
+    f = 0.25 + 0.25 * np.cos(np.pi * (k + 0.5) / 4000)       # Chebyshev nodes on (0, 1/2)
+    x = f * f
+    ys = np.sin(0.5 * np.pi * f) / f
+    S = np.linalg.lstsq(np.vander(x, n_sin, increasing=True) / ys[:, None], np.ones_like(ys), rcond=None)[0]
+    C = np.linalg.lstsq(np.vander(x, n_cos + 1, increasing=True)[:, 1:], np.cos(0.5 * np.pi * f) - 1.0,
+                        rcond=None)[0]
+    return S, np.concatenate([[1.0], C])
+
+
+def _sincos_options(precision: str) -> tuple[str, ...]:
+    """``-DWO_SIN_C<n>=...`` / ``-DWO_COS_C<n>=...`` build options carrying :func:`sincos_poly`."""
+    S, C = sincos_poly(precision)
+    suffix = "f" if precision == "float32" else ""
+    return (tuple(f"-DWO_SIN_C{n}={c!r}{suffix}" for n, c in enumerate(S.tolist()))
+            + tuple(f"-DWO_COS_C{n}={c!r}{suffix}" for n, c in enumerate(C.tolist()) if n > 0))
+
+
+def sincos_2pi(t, precision: str = "float32") -> tuple[np.ndarray, np.ndarray]:
+    """NumPy twin of ``wo_sincos_2pi`` (``kernels/wo_sincos.h``): (sin 2πt, cos 2πt) in *precision*.
+
+    4t = q + f with q = rint(4t) (exact), then the polynomials of :func:`sincos_poly` in f and the quadrant q.
+
+    References
+    ----------
+    .. [1] W. J. Cody, W. Waite, *Software Manual for the Elementary Functions*, Prentice-Hall, 1980, ch. 8.
+    """
+    dt = np.float64 if precision == "float64" else np.float32
+    S, C = (c.astype(dt) for c in sincos_poly(precision))
+    t4 = dt(4) * np.asarray(t, dt)
+    qf = np.rint(t4)
+    f = t4 - qf
+    x = f * f
+    sp = f * np.polynomial.polynomial.polyval(x, S).astype(dt)
+    cp = np.polynomial.polynomial.polyval(x, C).astype(dt)
+    q = qf.astype(np.int64)
+    odd = (q & 1) != 0
+    s = np.where(odd, cp, sp) * np.where(q & 2, -1, 1)
+    c = np.where(odd, sp, cp) * np.where((q + 1) & 2, -1, 1)
+    return s.astype(dt), c.astype(dt)
+
+
 def _cl_setup(runtime, precision, vector_width, smp: Samples):
     """(runtime, real dtype, program, queue, padded device sample arrays (ix, iy, h, w), padded count)."""
     import pyopencl.array as cla
@@ -567,10 +635,12 @@ def _cl_setup(runtime, precision, vector_width, smp: Samples):
 
     rt = runtime if runtime is not None else get_runtime()
     dt = rt.real_dtype(precision)
+    pname = _precision_name(dt)
     vw = int(vector_width or VECTOR_WIDTH)
     if vw not in (2, 4, 8, 16):
         raise WaveopticsError(f"vector_width={vw!r} is not allowed; use 2, 4, 8 or 16")
-    prg = build_program(rt, "kirchhoff.cl", build_options(dt, (f"-DWO_VW={vw}",)))
+    extra = (f"-DWO_VW={vw}", f"-DWO_ND={PAIRS_PER_ITEM[pname]}") + _sincos_options(pname)
+    prg = build_program(rt, "kirchhoff.cl", build_options(dt, extra))
     q = rt.queue
     pad = (-smp.size) % vw                       # padding samples carry w = 0
 
@@ -579,6 +649,14 @@ def _cl_setup(runtime, precision, vector_width, smp: Samples):
 
     arrays = (dev(smp.ix, np.int32), dev(smp.iy, np.int32), dev(smp.h, dt), dev(smp.w, dt))
     return rt, dt, prg, q, arrays, smp.size + pad
+
+
+def _default_local_size(rt):
+    """1 on CPU devices (PoCL then runs the kernels' explicit vectors as written: measured 2x), else the
+    driver's choice."""
+    import pyopencl as cl
+
+    return 1 if rt.device.type & cl.device_type.CPU else None
 
 
 def kirchhoff_phase_cl(smp: Samples, coef: PhaseCoefficients, pair: int = 0, *, runtime=None,
@@ -598,8 +676,32 @@ def kirchhoff_phase_cl(smp: Samples, coef: PhaseCoefficients, pair: int = 0, *, 
     return d_out.get()[: smp.size].astype(np.float64)
 
 
+def sincos_2pi_cl(t, *, runtime=None, precision: str = "float32") -> tuple[np.ndarray, np.ndarray]:
+    """OpenCL ``sincos_2pi`` (the kernels' sin/cos of 2πt; twin: :func:`sincos_2pi`)."""
+    import pyopencl as cl
+    import pyopencl.array as cla
+
+    t = np.asarray(t, dtype=float).ravel()
+    empty = Samples(*(np.zeros(0, np.int32),) * 2, np.zeros(0), np.zeros(0), 1.0, 1.0, 1, 1, 0.0)
+    rt, dt, prg, q, _, _ = _cl_setup(runtime, precision, None, empty)
+    n = t.size + (-t.size) % VECTOR_WIDTH
+    d_t = cla.to_device(q, np.concatenate([t.astype(dt), np.zeros(n - t.size, dt)]))
+    s, c = cla.empty(q, n, dt), cla.empty(q, n, dt)
+    cl.Kernel(prg, "sincos_2pi")(q, (max(1, n // VECTOR_WIDTH),), None, d_t.data, np.int32(n), s.data, c.data)
+    return s.get()[: t.size], c.get()[: t.size]
+
+
+#: direct-sum kernels of kernels/kirchhoff.cl (the ``kernel=`` registry of :func:`kirchhoff_U_cl`)
+DIRECT_KERNELS = {
+    "kirchhoff_U": "exact fixed-point phase, shared-reduction sin/cos polynomials, register-blocked pairs (default)",
+    "kirchhoff_U_naive": "baseline for the benchmark: float phase in radians, native_sin/native_cos, one pair per "
+                         "work-item (inaccurate for large phases in float32)",
+}
+
+
 def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, precision: str = "float32",
-                   local_size: int | None = None, vector_width: int | None = None, progress=None) -> np.ndarray:
+                   local_size: int | None = None, vector_width: int | None = None, progress=None,
+                   kernel: str = "kirchhoff_U") -> np.ndarray:
     """OpenCL direct sum (``kernels/kirchhoff.cl``), twin of :func:`kirchhoff_U`.
 
     All pairs (every direction × wavelength) go through one program; launches are split into chunks of about
@@ -611,9 +713,11 @@ def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, preci
     precision : {'float32', 'float64'}
         float64 needs device fp64 support (``rt.fp64``).
     local_size : int, optional
-        Work-group size (default: the driver's choice).
+        Work-group size (default: 1 on CPU devices, else the driver's choice).
     vector_width : int, optional
         Samples per SIMD step of the inner loop (``-DWO_VW``; default :data:`VECTOR_WIDTH`).
+    kernel : str
+        A name in :data:`DIRECT_KERNELS`; ``kirchhoff_U_naive`` is the benchmark's baseline.
 
     Returns
     -------
@@ -622,21 +726,37 @@ def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, preci
     import pyopencl as cl
     import pyopencl.array as cla
 
+    if kernel not in DIRECT_KERNELS:
+        raise unknown("kernel", kernel, DIRECT_KERNELS)
     rt, dt, prg, q, (d_ix, d_iy, d_h, d_w), ns = _cl_setup(runtime, precision, vector_width, smp)
-    knl = cl.Kernel(prg, "kirchhoff_U")
+    knl = cl.Kernel(prg, kernel)
+    naive = kernel == "kirchhoff_U_naive"
+    nd = 1 if naive else PAIRS_PER_ITEM[_precision_name(dt)]
     n = coef.size
     out = np.empty(n, np.complex128)
-    lsz = local_size
+    lsz = _default_local_size(rt) if local_size is None else int(local_size)
     chunk = max(256, TERMS_PER_LAUNCH // max(ns, 1))
+    chunk -= chunk % nd
+    if naive:
+        # radians per metre from the cycles-per-sample coefficients (reduced mod 1 cycle: same exp)
+        lat = [(np.asarray(A, np.float64) * 2.0**-32 + lo) for A, lo in ((coef.Ax, coef.lox), (coef.Ay, coef.loy))]
+        lat = [np.where(a >= 0.5, a - 1.0, a) for a in lat]
+        kx, ky, kz = 2 * np.pi * lat[0] / smp.dx, 2 * np.pi * lat[1] / smp.dy, 2 * np.pi * coef.cz
     for a in range(0, n, chunk):
         c = coef.take(slice(a, a + chunk))
         m = c.size
-        dev = [cla.to_device(q, np.ascontiguousarray(x)) for x in
-               (c.Ax, c.Ay, c.lox.astype(dt), c.loy.astype(dt), c.cz.astype(dt), c.c0.astype(dt))]
+        if naive:
+            dev = [cla.to_device(q, np.ascontiguousarray(x[a:a + m].astype(dt))) for x in (kx, ky, kz)]
+            args = (*[d.data for d in dev], dt(smp.dx), dt(smp.dy), dt((smp.nx - 1) / 2), dt((smp.ny - 1) / 2))
+        else:
+            dev = [cla.to_device(q, np.ascontiguousarray(x)) for x in
+                   (c.Ax, c.Ay, c.lox.astype(dt), c.loy.astype(dt), c.cz.astype(dt), c.c0.astype(dt))]
+            args = tuple(d.data for d in dev)
         re, im = cla.empty(q, m, dt), cla.empty(q, m, dt)
-        gsz = m if lsz is None else -(-m // lsz) * lsz
+        items = -(-m // nd)
+        gsz = items if lsz is None else -(-items // lsz) * lsz
         knl(q, (gsz,), None if lsz is None else (lsz,), d_ix.data, d_iy.data, d_h.data, d_w.data,
-            np.int32(ns), *[d.data for d in dev], np.int32(m), re.data, im.data)
+            np.int32(ns), *args, np.int32(m), re.data, im.data)
         out[a:a + m] = re.get() + 1j * im.get()
         if progress is not None:
             progress(m)
