@@ -294,3 +294,46 @@ def test_cli_run_writes_outputs_and_refuses_to_overwrite(tmp_path):
     assert plan["materials"][0]["measured_time_s"] > 0
     r = _cli("run", SCENES / "smooth-plastic.toml", "-o", out, "--max-resolution", "32")
     assert r.returncode == 2 and "already exists" in r.stderr
+
+
+def test_height_field_file_fft_and_direct_agree_at_the_views(tmp_path, rt):
+    """A grating given as a file: diffraction on, a Kirchhoff solver; fft and direct give the same orders."""
+    from waveoptics import surfaces
+
+    hf = surfaces.generate("sinusoid", amplitude="40nm", period="1.6um", size="12um", samples=128)
+    surfaces.save(hf, tmp_path / "grating.npz")
+    (tmp_path / "g.toml").write_text(
+        '[[materials]]\nname = "grating"\nmaterial = "Al"\nroughness = 0.005\n'
+        '[materials.nano]\nfile = "grating.npz"\n'
+        '[[lights]]\nname = "laser"\nspd = "laser:532"\ndirections_deg = [[20, 0]]\n'
+        '[view]\ndirections_deg = [[20, 180], [0.545, 180], [18.85, 0]]\n'
+        '[output]\nrgb_images = false\ntables = true\nresolution = 128\n')
+    sc = scene.load(tmp_path / "g.toml")
+    vals = {}
+    for solver in ("fft", "direct"):
+        e = planning.plan_scene(sc, force={"solver": solver, "directions": "views"}).entries[0]
+        assert e.effects["diffraction"] and e.solver == solver and e.directions == "views"
+        assert e.wavelengths_nm.tolist() == [532.0]
+        if solver == "direct":
+            assert e.precision == "float32" and any("noise floor" in r for r in e.reasons)
+        vals[solver] = np.array([r["brdf"] for r in planning.view_values(planning.run_entry(e))]).ravel()
+    np.testing.assert_allclose(vals["direct"], vals["fft"], rtol=1e-4)
+    # orders 1 and 2 at the same incidence: their ratio follows the Raman-Nath efficiencies within a factor 2
+    x = 4 * np.pi * 40e-9 / 532e-9 * math.cos(math.radians(20))
+    assert 0.5 < (vals["fft"][1] / vals["fft"][2]) / (jv(1, x) ** 2 / jv(2, x) ** 2) < 2
+    auto = planning.plan_scene(sc).entries[0]
+    assert auto.solver in ("fft", "direct") and any("both exact Kirchhoff" in r for r in auto.reasons)
+
+
+def test_grating_under_daylight_samples_wavelengths_finer_than_one_cell_per_order():
+    """Grating equation: order m moves by m Δλ/Λ in direction cosine, so Δλ ≤ Λ du / m keeps the rainbow whole."""
+    sc = plastic(materials=[{"name": "g", "material": "Al", "roughness": 0.005,
+                             "nano": {"generator": {"model": "sinusoid", "amplitude": "40nm", "period": "1.6um",
+                                                    "size": "12um", "samples": 128}}}],
+                 output={"rgb_images": True})
+    e = planning.plan_scene(sc, max_resolution=64).entries[0]
+    du = 2.0 / e.resolution
+    m = planning.grating_orders(40e-9, 1.6e-6, float(e.wavelengths_nm.min()))
+    step = float(np.diff(e.wavelengths_nm)[0])
+    assert step <= 1.6e-6 * du / m * 1e9 and step < 20.0
+    assert any("periodic nano surface" in r for r in e.reasons)
