@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import special, stats
@@ -158,8 +158,9 @@ class SeriesTables:
         out = np.empty((self.H.shape[0],) + q.shape)
         for i in range(1, self.H.shape[0]):
             out[i] = np.interp(q, self.q, self.H[i], right=0.0)
-        # m = 1 is the PSD itself, exactly (no quadrature error, and correct tails)
-        out[0] = self.model.S(q / (2 * np.pi)) / max(self.model.sigma, 1e-300) ** 2
+        # m = 1 is the PSD itself, exactly (no quadrature error, and correct tails); S ∝ σ², so S/σ² is the PSD
+        # at σ = 1 (guard: σ² underflows to 0 for σ < 1e-154 m, and S/σ² was then NaN)
+        out[0] = replace(self.model, sigma=1.0).S(q / (2 * np.pi))
         return out
 
 
