@@ -615,8 +615,10 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
         s = float(np.max(scattered_fraction(probe, cos_max, lam_min)))
         Fmax = float(np.max(mat.F(np.array([cos_max]), w_colour)))
         g_max = float(g_factor(proxy.sigma, cos_max, lam_min))
+        # the PSD series' own g = (kσ(cosθ_i + cosθ_o))² peaks towards the normal (physics.md §3)
+        g_series = float(g_factor(proxy.sigma, (1.0 + cos_max) / 2, lam_min))
         metrics.update(sigma_nano_nm=proxy.sigma * 1e9, sigma_over_lambda=proxy.sigma / (lam_min * 1e-9),
-                       g_max=g_max, scattered_fraction_max=s, tis_max=s * Fmax)
+                       g_max=g_max, g_series_max=g_series, scattered_fraction_max=s, tis_max=s * Fmax)
         why = (f"σ = {proxy.sigma * 1e9:.3g} nm, σ/λ_min = {proxy.sigma / (lam_min * 1e-9):.3g}, g ≤ {g_max:.3g}, "
                f"scattered fraction ≤ {s:.2g} (TIS ≤ {s * Fmax:.2g})")
         if force.get("diffraction") is not None or "solver" in force:
@@ -625,9 +627,11 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
         elif s < FLAT_SCATTER:
             diffraction_on = False
             decisions.append(("diffraction", "off", f"{why}: the nano surface is flat at these wavelengths"))
-        elif g_max > PSD_G_MAX:
+        elif g_series > PSD_G_MAX:
             diffraction_on = True
-            decisions.append(("diffraction", "on", f"{why}: g > {PSD_G_MAX:g}, no coherent reflection is left"))
+            decisions.append(("diffraction", "on", f"{why}: g(θ_o = 0) = {g_series:.3g} > {PSD_G_MAX:g}, almost "
+                                                   "no coherent reflection is left (and the PSD estimate does not "
+                                                   "apply)"))
         else:
             hemi = sphere or out.rgb_images or out.spectral_brdf or not views
             dirs = list(light.directions_deg) + ([(t, 0.0) for t in ESTIMATE_SPHERE_THETAS] if sphere else [])
@@ -679,7 +683,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
         if want == "psd" and not statistical:
             raise WaveopticsError(f"--force solver=psd: material {spec.name!r} has a {spec.nano.describe()} "
                                   "without Gaussian statistics; use fft or direct")
-        if want == "psd" or (want is None and statistical and g_max <= PSD_G_MAX):
+        if want == "psd" or (want is None and statistical and g_series <= PSD_G_MAX):
             solver = "psd"
             nano_obj = twoscale.Nano(model=proxy)
             decisions.append(("solver", "psd", "forced" if want else
@@ -708,11 +712,13 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
         need = {k: int(math.ceil(2.0 / grid_step(s, dE))) for k, s in widths.items() if s > 0}
         if hf is not None and diffraction_on:
             L = max(hf.extent)
-            need["specular spike λ/L"] = int(math.ceil(2.0 * L / (lam_min * 1e-9)))
+            need["the height field's specular spike"] = int(math.ceil(2.0 * L / (lam_min * 1e-9)))
         if need:
             key = max(need, key=need.get)
             N = int(np.clip(need[key], lo, hi))
-            note = f"{key} needs {need[key]} cells per side for interpolation within ΔE {dE:g}"
+            note = f"{key} needs {need[key]} cells per side " + (
+                f"(du ≤ λ_min/L, L = {L * 1e6:.3g} µm)" if key.startswith("the height") else
+                f"(linear interpolation within ΔE {dE:g}: du ≤ {grid_step(widths[key], dE):.3g})")
             if need[key] > hi:
                 note += f"; capped at {hi} (narrower lobes keep their energy and colour, not their shape)"
             elif need[key] < lo:
@@ -814,7 +820,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
             if not has_cl:
                 why += f" (direct sum unavailable: {no_direct})"
             if spec.nano.kind == "statistics":
-                why = f"g = {g_max:.3g} > {PSD_G_MAX:g} is beyond the PSD series; generated {why}"
+                why = f"g(θ_o = 0) = {g_series:.3g} > {PSD_G_MAX:g} is beyond the PSD series; generated {why}"
             decisions.append(("solver", solver, why))
     patches = options.get("views", []) if directions == "views" else []
 
