@@ -265,35 +265,48 @@ def test_estimate_tracks_measured_time(tmp_path):
 
 # ------------------------------------------------------------------------------------------------------- CLI
 
-def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "waveoptics", *map(str, args)], capture_output=True, text=True,
-                          timeout=300)
+def _cli(capsys, *args):
+    """Run the CLI dispatcher in this process: (exit code, stdout, stderr)."""
+    from waveoptics.cli import main
+
+    rc = main([str(a) for a in args])
+    out = capsys.readouterr()
+    return rc, out.out, out.err
 
 
-def test_cli_plan_json_and_errors(tmp_path):
-    r = _cli("plan", SCENES / "gold-sphere-daylight.toml", "--json", "--max-resolution", "32")
-    assert r.returncode == 0, r.stderr
-    d = json.loads(r.stdout)
+def test_cli_plan_json_and_errors(tmp_path, capsys):
+    rc, out, err = _cli(capsys, "plan", SCENES / "gold-sphere-daylight.toml", "--json", "--max-resolution", "32")
+    assert rc == 0, err
+    d = json.loads(out)
     m = d["materials"][0]
     assert {"name", "effects", "solver", "wavelengths_nm", "precision", "estimated_time_s", "reasons"} <= set(m)
     assert m["name"] == "gold" and m["effects"]["diffuse"] is False and m["solver"] == "none"
     bad = tmp_path / "bad.toml"
     bad.write_text('[[materials]]\nname = "x"\nmaterial = "Au"\nroughness = "rough"\n'
                    '[[lights]]\nname = "l"\n')
-    r = _cli("plan", bad)
-    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "materials[0].roughness" in r.stderr
+    rc, _, err = _cli(capsys, "plan", bad)
+    assert rc == 2 and err.count("\n") == 1 and "materials[0].roughness" in err
+    rc, _, err = _cli(capsys, "plan", bad.with_name("none.toml"))
+    assert rc == 2 and "does not exist" in err
 
 
-def test_cli_run_writes_outputs_and_refuses_to_overwrite(tmp_path):
+def test_cli_run_writes_outputs_and_refuses_to_overwrite(tmp_path, capsys):
     out = tmp_path / "out"
-    r = _cli("run", SCENES / "smooth-plastic.toml", "-o", out, "--max-resolution", "32")
-    assert r.returncode == 0, r.stderr
+    rc, text, err = _cli(capsys, "run", SCENES / "smooth-plastic.toml", "-o", out, "--max-resolution", "32")
+    assert rc == 0, err
+    assert "estimated" in text and "measured" in text
     for f in ("plan.json", "results.json", "plastic_sphere.png", "plastic_table.csv", "plastic_i30_0_brdf.png"):
         assert (out / f).is_file(), f
     plan = json.loads((out / "plan.json").read_text())
     assert plan["materials"][0]["measured_time_s"] > 0
-    r = _cli("run", SCENES / "smooth-plastic.toml", "-o", out, "--max-resolution", "32")
-    assert r.returncode == 2 and "already exists" in r.stderr
+    rc, _, err = _cli(capsys, "run", SCENES / "smooth-plastic.toml", "-o", out, "--max-resolution", "32")
+    assert rc == 2 and "already exists" in err and err.count("\n") == 1
+
+
+def test_cli_is_a_console_command():
+    r = subprocess.run([sys.executable, "-m", "waveoptics", "plan", "--help"], capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0 and "--force" in r.stdout
 
 
 def test_height_field_file_fft_and_direct_agree_at_the_views(tmp_path, rt):

@@ -22,6 +22,7 @@ def register(sub):
 def run(args):
     from .. import io, planning
 
+    io.prepare_outdir(args.output, overwrite=args.overwrite, expected=["plan.json", "results.json"])  # before work
     plan = make_plan(args)
     io.prepare_outdir(args.output, overwrite=args.overwrite, expected=planning.output_files(plan))
     bar = progress(total=sum(e.evaluations for e in plan.entries), desc="run", args=args)
