@@ -627,7 +627,7 @@ def sincos_2pi(t, precision: str = "float32") -> tuple[np.ndarray, np.ndarray]:
     return s.astype(dt), c.astype(dt)
 
 
-def _cl_setup(runtime, precision, vector_width, smp: Samples):
+def _cl_setup(runtime, precision, vector_width, smp: Samples, fast_math: bool = False):
     """(runtime, real dtype, program, queue, padded device sample arrays (ix, iy, h, w), padded count)."""
     import pyopencl.array as cla
 
@@ -640,6 +640,8 @@ def _cl_setup(runtime, precision, vector_width, smp: Samples):
     if vw not in (2, 4, 8, 16):
         raise WaveopticsError(f"vector_width={vw!r} is not allowed; use 2, 4, 8 or 16")
     extra = (f"-DWO_VW={vw}", f"-DWO_ND={PAIRS_PER_ITEM[pname]}") + _sincos_options(pname)
+    if fast_math:
+        extra += ("-cl-fast-relaxed-math",)
     prg = build_program(rt, "kirchhoff.cl", build_options(dt, extra))
     q = rt.queue
     pad = (-smp.size) % vw                       # padding samples carry w = 0
@@ -701,7 +703,7 @@ DIRECT_KERNELS = {
 
 def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, precision: str = "float32",
                    local_size: int | None = None, vector_width: int | None = None, progress=None,
-                   kernel: str = "kirchhoff_U") -> np.ndarray:
+                   kernel: str = "kirchhoff_U", fast_math: bool = False) -> np.ndarray:
     """OpenCL direct sum (``kernels/kirchhoff.cl``), twin of :func:`kirchhoff_U`.
 
     All pairs (every direction × wavelength) go through one program; launches are split into chunks of about
@@ -713,11 +715,14 @@ def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, preci
     precision : {'float32', 'float64'}
         float64 needs device fp64 support (``rt.fp64``).
     local_size : int, optional
-        Work-group size (default: 1 on CPU devices, else the driver's choice).
+        Work-group size (default: 1 on CPU devices, else the driver's choice; 0: the driver's choice).
     vector_width : int, optional
         Samples per SIMD step of the inner loop (``-DWO_VW``; default :data:`VECTOR_WIDTH`).
     kernel : str
         A name in :data:`DIRECT_KERNELS`; ``kirchhoff_U_naive`` is the benchmark's baseline.
+    fast_math : bool
+        Build with ``-cl-fast-relaxed-math`` (lets the compiler reassociate sums and use faster, less accurate
+        math; its effect on speed and error is measured by ``waveoptics bench``). Default off.
 
     Returns
     -------
@@ -728,13 +733,13 @@ def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, preci
 
     if kernel not in DIRECT_KERNELS:
         raise unknown("kernel", kernel, DIRECT_KERNELS)
-    rt, dt, prg, q, (d_ix, d_iy, d_h, d_w), ns = _cl_setup(runtime, precision, vector_width, smp)
+    rt, dt, prg, q, (d_ix, d_iy, d_h, d_w), ns = _cl_setup(runtime, precision, vector_width, smp, fast_math)
     knl = cl.Kernel(prg, kernel)
     naive = kernel == "kirchhoff_U_naive"
     nd = 1 if naive else PAIRS_PER_ITEM[_precision_name(dt)]
     n = coef.size
     out = np.empty(n, np.complex128)
-    lsz = _default_local_size(rt) if local_size is None else int(local_size)
+    lsz = _default_local_size(rt) if local_size is None else (int(local_size) or None)   # 0: driver's choice
     chunk = max(256, TERMS_PER_LAUNCH // max(ns, 1))
     chunk -= chunk % nd
     if naive:

@@ -1,0 +1,100 @@
+"""``waveoptics cost``: what accuracy costs in time — one configuration at a ladder of settings (solver, grid
+resolution, wavelengths, realizations, precision) against a reference computed once; errors, wall times, the
+Pareto front and the cheapest setting meeting ``--target-error`` (logic in :mod:`waveoptics.cost`).
+"""
+from __future__ import annotations
+
+from ._common import add_common, emit, progress
+
+
+def _list(text, conv, name):
+    from ..errors import WaveopticsError
+
+    try:
+        vals = [conv(t.strip()) for t in str(text).split(",") if t.strip()]
+    except ValueError:
+        raise WaveopticsError(f"{name} {text!r} is not allowed; give a comma-separated list") from None
+    if not vals:
+        raise WaveopticsError(f"{name} {text!r} is empty")
+    return vals
+
+
+def register(sub) -> None:
+    p = sub.add_parser("cost", help="accuracy-cost study: error vs time over solver/grid/wavelength settings",
+                       description="Run the same Kirchhoff configuration at a ladder of settings against a "
+                                   "high-accuracy reference (direct solver, float64, finest grid, dense spectrum) "
+                                   "and report for each the relative L2 error of the lobe, the albedo error, the "
+                                   "ΔE2000 of the albedo colour and the wall time; mark the Pareto front and "
+                                   "recommend the fastest setting meeting --target-error.")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--surface", metavar="FILE", help="height-field file (see 'waveoptics surface')")
+    src.add_argument("--model", default="gaussian:sigma=20nm,corr_length=1um", metavar="MODEL:k=v,...",
+                     help="surface generator and parameters (default gaussian:sigma=20nm,corr_length=1um; e.g. "
+                          "sinusoid:amplitude=40nm,period=1.6um)")
+    p.add_argument("--spacing", metavar="D[,DY]", help="grid spacing with unit, when the file does not state it")
+    p.add_argument("--size", default="12.8um", help="model patch size with unit (default 12.8um)")
+    p.add_argument("--samples", default="128", help="model grid samples per side (default 128)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the first realization (default 0)")
+    p.add_argument("--material", default="Al", metavar="M", help="material (default Al; 'one' for F = 1)")
+    p.add_argument("--incident", default="30,0", metavar="THETA[,PHI]", help="direction to the light, degrees")
+    p.add_argument("--illuminant", default="D65", metavar="SPD", help="light source (default D65)")
+    p.add_argument("--solvers", default="fft0,fft,direct", help="solvers of the ladder (default fft0,fft,direct)")
+    p.add_argument("--resolutions", default="32,64,128",
+                   help="direction-grid resolutions; each must divide the largest (default 32,64,128)")
+    p.add_argument("--colour-accuracy", default="4,1,0.5", metavar="DE,...",
+                   help="wavelength grids chosen for these ΔE2000 colour accuracies (default 4,1,0.5)")
+    p.add_argument("--realizations", default=None,
+                   help="realization counts (default 1,2 for random models, 1 otherwise)")
+    p.add_argument("--precisions", default="float32,float64", help="direct solver precisions")
+    p.add_argument("--budget", type=float, default=None, metavar="SECONDS",
+                   help="time for the ladder after the reference; settings predicted to overrun are skipped")
+    p.add_argument("--target-error", type=float, default=None, metavar="E",
+                   help="recommend the fastest setting whose --metric is <= E")
+    p.add_argument("--metric", default="error_rel_l2", choices=("error_rel_l2", "error_albedo", "delta_e2000"),
+                   help="error used for the Pareto front and the recommendation (default error_rel_l2)")
+    p.add_argument("-o", "--output", metavar="OUTDIR", help="write cost.json, cost.png (error vs time), cost.md")
+    p.add_argument("--overwrite", action="store_true", help="replace outputs that already exist")
+    add_common(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from .. import cost, surfaces
+    from ..io import prepare_outdir
+    from ..runtime import get_runtime
+    from ..units import parse_direction
+    from .scatter import material_spec
+
+    theta, phi = parse_direction(args.incident, name="--incident")
+    mat = material_spec(args.material)
+    from ..diffraction import fresnel_function
+
+    fresnel_function(mat)                                   # refuse a bad material before computing
+    if args.surface:
+        hf = surfaces.load(args.surface, spacing=args.spacing)
+        cfg = cost.Config(hf, mat, (theta, phi), args.illuminant, False, args.seed, str(args.surface))
+    else:
+        cfg = cost.model_config(args.model, args.size, int(_list(args.samples, int, "--samples")[0]), material=mat,
+                                incident=(theta, phi), illuminant=args.illuminant, seed=args.seed)
+    reals = (_list(args.realizations, int, "--realizations") if args.realizations
+             else ([1, 2] if cfg.random else [1]))
+    settings = cost.ladder(_list(args.solvers, str, "--solvers"), _list(args.resolutions, int, "--resolutions"),
+                           _list(args.colour_accuracy, float, "--colour-accuracy"), reals,
+                           _list(args.precisions, str, "--precisions"))
+    out = prepare_outdir(args.output, overwrite=args.overwrite, expected=cost.FILES) if args.output else None
+    rt = get_runtime(args.device)          # the reference uses the direct solver
+    bar = progress(total=len(settings) + 1, desc="cost", args=args)
+    res = cost.study(cfg, settings, budget_s=args.budget, target_error=args.target_error, metric=args.metric,
+                     runtime=rt, progress=bar.update)
+    bar.close()
+    if out is not None:
+        paths = cost.write(res, out, overwrite=args.overwrite)
+        res["outputs"] = {k: str(v) for k, v in paths.items()}
+    ref = res["reference"]
+    rec = res["recommendation"]
+    text = (f"reference: {ref['solver']} {ref['precision']} {ref['resolution']}² {ref['wavelengths']} wavelengths "
+            f"x{ref['realizations']} ({ref['time_s']:.3g} s)\n{cost.table(res)}\n"
+            f"Pareto front ({res['metric']}): {res['pareto']}"
+            + (f"\nrecommended: {rec.get('setting', '-')} — {rec['reason']}" if rec else ""))
+    emit(args, res, text)
+    return 0
