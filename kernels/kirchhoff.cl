@@ -25,6 +25,7 @@
  * Partial sums over blocks of 256 samples are added to the running total (two-level summation keeps float32
  * round-off near sqrt(n_blocks) rather than n_samples ulps).
  *
+ * kirchhoff_U_sinpi is the kernel before these changes (benchmark's before/after).
  * kirchhoff_U_naive is the straightforward kernel a user would write first (one pair per work-item, scalar loop,
  * float phase k s.x, native_sin/native_cos); it is kept only as the benchmark's baseline (waveoptics bench), and its
  * error is measured there and in tests/test_diffraction.py against the same twin.
@@ -140,6 +141,42 @@ __kernel void kirchhoff_U(__global const int *ix, __global const int *iy, __glob
     for (int d = 0; d < WO_ND; ++d) {
         if (p0 + d < n_pairs) { U_re[p0 + d] = sre[d]; U_im[p0 + d] = sim[d]; }
     }
+}
+
+/* The previous kernel (before issue 6), kept for the benchmark's before/after: one pair per work-item, the same exact
+ * phase, SLEEF sinpi/cospi per term. Same arguments and results as kirchhoff_U (global size n_pairs). */
+__kernel void kirchhoff_U_sinpi(__global const int *ix, __global const int *iy, __global const real_t *h,
+                                __global const real_t *w, const int n_samples,
+                                __global const uint *Ax, __global const uint *Ay, __global const real_t *lox,
+                                __global const real_t *loy, __global const real_t *cz, __global const real_t *c0,
+                                const int n_pairs, __global real_t *U_re, __global real_t *U_im)
+{
+    const int p = get_global_id(0);
+    if (p >= n_pairs) return;
+    const uint ax = Ax[p], ay = Ay[p];
+    const real_t lx = lox[p], ly = loy[p], z = cz[p], c = c0[p];
+    real_t sre = R(0.0), sim = R(0.0);
+    const int nv = n_samples / WO_VW;
+    const int block = 256 / WO_VW;
+    for (int b0 = 0; b0 < nv; b0 += block) {
+        realv_t tre = (realv_t)(R(0.0)), tim = (realv_t)(R(0.0));
+        const int b1 = min(b0 + block, nv);
+        for (int b = b0; b < b1; ++b) {
+            realv_t ph = kirchhoff_phase_v(WO_VLOAD(b, ix), WO_VLOAD(b, iy), WO_VLOAD(b, h), ax, ay, lx, ly, z, c);
+            realv_t vw = WO_VLOAD(b, w);
+            tre += vw * cospi(R(2.0) * ph);
+            tim += vw * sinpi(R(2.0) * ph);
+        }
+        real_t lre[WO_VW], lim[WO_VW];
+        WO_VSTORE(tre, 0, lre);
+        WO_VSTORE(tim, 0, lim);
+        real_t pre = R(0.0), pim = R(0.0);
+        for (int k = 0; k < WO_VW; ++k) { pre += lre[k]; pim += lim[k]; }
+        sre += pre;
+        sim += pim;
+    }
+    U_re[p] = sre;
+    U_im[p] = sim;
 }
 
 /* cos/sin(2 pi t) of n values by wo_sincos_2pi (n a multiple of WO_VW), for checking it against its twin. */

