@@ -310,8 +310,14 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
             yield client
         return
     if workers is not None:
-        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, host="127.0.0.1",
-                               **LOOPBACK)
+        # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in new workers by default (to return memory to the OS);
+        # that also fixes glibc's mmap threshold at 128 KiB, so every array of a lobe is a fresh mmap with page
+        # faults, and a table task takes about twice the CPU time (measured in docs/scaling.md). Not set here.
+        import dask
+
+        with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, host="127.0.0.1",
+                                   **LOOPBACK)
     else:  # in-process transport (inproc://), no host to bind
         cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, **LOOPBACK)
     with cluster, Client(cluster) as client:
