@@ -55,9 +55,7 @@ def reference(tmp_path_factory):
 @pytest.fixture(scope="module")
 def cluster():
     """A LocalCluster with 2 single-threaded worker processes on loopback."""
-    from distributed import LocalCluster
-
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", **D.LOOPBACK) as c:
+    with D.local_cluster(2) as c:
         yield c
 
 
@@ -139,6 +137,16 @@ def test_clusters_listen_on_loopback_only(workers):
         procs = [me, *me.children(recursive=True)]
         listening = [c.laddr for p in procs for c in p.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN]
     assert listening and all(a.ip == "127.0.0.1" for a in listening), listening
+
+
+def test_workers_get_no_memory_trim_setting_from_dask(cluster):
+    """Dask's default MALLOC_TRIM_THRESHOLD_=65536 doubles a task's CPU time (docs/scaling.md): workers must see
+    the client's environment, not Dask's value."""
+    from distributed import Client
+
+    with Client(cluster) as client:
+        seen = set(client.run(os.environ.get, "MALLOC_TRIM_THRESHOLD_").values())
+    assert seen == {os.environ.get("MALLOC_TRIM_THRESHOLD_")}
 
 
 def test_local_cluster_gives_the_same_table(reference, cluster, tmp_path):

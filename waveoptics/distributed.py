@@ -298,7 +298,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
     scheduler : str, optional
         Address of an existing scheduler, ``tcp://HOST:PORT``.
     """
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     _check_cluster_args(workers, scheduler)
     if scheduler is not None:
@@ -309,19 +309,25 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
         with client:
             yield client
         return
-    if workers is not None:
-        # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in new workers by default (to return memory to the OS);
-        # that also fixes glibc's mmap threshold at 128 KiB, so every array of a lobe is a fresh mmap with page
-        # faults, and a table task takes about twice the CPU time (measured in docs/scaling.md). Not set here.
-        import dask
-
-        with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
-            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, host="127.0.0.1",
-                                   **LOOPBACK)
-    else:  # in-process transport (inproc://), no host to bind
-        cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, **LOOPBACK)
-    with cluster, Client(cluster) as client:
+    with local_cluster(workers) as cluster, Client(cluster) as client:
         yield client
+
+
+def local_cluster(workers: int | None = None):
+    """The ``LocalCluster`` behind :func:`dask_client`: *workers* single-threaded processes on 127.0.0.1, or (None)
+    one in-process worker thread; no dashboard, every socket on loopback (:data:`LOOPBACK`)."""
+    from distributed import LocalCluster
+
+    if workers is None:  # in-process transport (inproc://), no host to bind
+        return LocalCluster(n_workers=1, threads_per_worker=1, processes=False, **LOOPBACK)
+    # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in new workers by default (to return memory to the OS); that
+    # also fixes glibc's mmap threshold at 128 KiB, so every array of a lobe is a fresh mmap with page faults, and
+    # a table task takes about twice the CPU time (measured in docs/scaling.md). Not set here.
+    import dask
+
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+        return LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, host="127.0.0.1",
+                            **LOOPBACK)
 
 
 class WarmWorker(WorkerPlugin):
