@@ -167,6 +167,12 @@ class Case:
             return np.asarray(self.wavelengths_nm, dtype=float)
         return spectral.simulation_wavelengths(spectral.illuminant(self.illuminant), self.accuracy_dE)
 
+    def resolved(self) -> "Case":
+        """This case with its wavelength list fixed (picked once in the client, not again on every worker)."""
+        if self.wavelengths_nm is not None:
+            return self
+        return dataclasses.replace(self, wavelengths_nm=tuple(float(x) for x in self.wavelengths()))
+
     def micro(self) -> twoscale.Micro:
         return twoscale.Micro(alpha=self.micro_alpha, ndf=self.ndf, shadowing=self.shadowing)
 
@@ -465,6 +471,7 @@ class TableSpec:
     surface_digest: str | None = None
 
     def __post_init__(self):
+        object.__setattr__(self, "case", self.case.resolved())
         th = tuple(float(t) for t in np.atleast_1d(self.thetas_deg))
         object.__setattr__(self, "thetas_deg", th)
         if not th:
@@ -967,7 +974,7 @@ def sweep_points(base: Case, varies: list[tuple[str, list]]) -> list[tuple[dict,
         case = base
         for n, v in zip(names, combo):
             case = apply_vary(case, n, v)
-        out.append((dict(zip(names, combo)), case))
+        out.append((dict(zip(names, combo)), case.resolved()))
     return out
 
 
