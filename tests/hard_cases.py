@@ -577,6 +577,12 @@ def _cases() -> list[HardCase]:
                      lambda env, s=s: _twoscale(0.0, "Au", sigma=s, T=10e-6),
                      refuse=r"too rough for the PSD series.*height field",
                      fixed=f"twoscale.py: nano_lobe refuses; before, the albedo came out {before} without a word"))
+    for T, what in ((1e-12, "1 pm (≪ λ: tangent plane invalid, scattered light lost, never created)"),
+                    (1e-3, "1 mm (lobe narrower than a grid cell)")):
+        add(HardCase(f"nano-corr-length-{T:g}m", "roughness", f"nano correlation length {what}",
+                     lambda env, T=T: _twoscale(30.0, "Au", sigma=5e-9, T=T),
+                     _all_of(_at_most("albedo", "microfacet_albedo", excess=TOL["albedo_excess"]),
+                             _at_most("albedo", "F", excess=TOL["albedo_excess"]))))
     add(HardCase("sigma-nano-1um-heightfield", "roughness", "σ_nano = 1 µm (2 λ) as a height field (fft solver)",
                  _nano_heightfield(1e-6), _at_most("albedo", "F", excess=TOL["albedo_excess"])))
 
@@ -965,6 +971,20 @@ def _bad_inputs() -> list[BadInput]:
                  api=lambda tmp: surfaces.gaussian("5nm", "1um", "8um", "0", seed=1),
                  argv=lambda tmp: ["surface", "generate", "--model", "gaussian", "--sigma", "5nm", "--corr-length",
                                    "1um", "--samples", "0", "-o", str(tmp / "g.npz")], same=True))
+    add(BadInput("roughness-negative", "parameter", "perceptual roughness r = −1", r"roughness=-1\.0 is not allowed",
+                 api=lambda tmp: mf.alpha_from_roughness(-1.0),
+                 argv=lambda tmp: _brdf_argv("--roughness=-1", alpha=None), same=True,
+                 fixed="microfacet.py: alpha_from_roughness squared r = −1 into α = 1 and brdf ran"))
+    add(BadInput("angles-empty", "parameter", "compare --angles ''", r"--angles '' holds no number",
+                 api=lambda tmp: units.parse_number_list("", name="--angles"),
+                 argv=lambda tmp: ["compare", "--angles", ""], same=True,
+                 fixed="units.py: an empty list was accepted and compare printed an empty table"))
+    add(BadInput("scratch-count-huge", "parameter", "scratches --count 1e9", r"count=1000000000\.0 is not allowed; "
+                 r"it must be a whole number in 0\.\.10000",
+                 api=lambda tmp: surfaces.scratches(1e9, "1um", "5nm", "8um", 8),
+                 argv=lambda tmp: ["surface", "generate", "--model", "scratches", "--count", "1e9", "--width", "1um",
+                                   "--depth", "5nm", "--samples", "8", "-o", str(tmp / "g.npz")], same=True,
+                 fixed="surfaces.py: a billion scratches were accepted (one grid pass each: a run of days)"))
     add(BadInput("length-without-unit", "parameter", "--sigma 5 (no unit)", r"sigma '5' needs a unit",
                  argv=lambda tmp: ["surface", "generate", "--model", "gaussian", "--sigma", "5", "--corr-length",
                                    "1um", "-o", str(tmp / "g.npz")]))

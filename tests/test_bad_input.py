@@ -202,3 +202,18 @@ def test_read_only_output_directory(tmp_path, capsys):
     finally:
         ro.chmod(0o700)
         shutil.rmtree(ro)
+
+
+def test_out_of_memory_is_one_line(tmp_path, monkeypatch, capsys):
+    """A request too large for memory (numpy raises MemoryError) is one line and exit code 2, not a traceback."""
+    from waveoptics import surfaces
+
+    def huge(*a, **kw):
+        raise MemoryError("Unable to allocate 646. GiB for an array")
+
+    monkeypatch.setattr(surfaces, "load", huge)
+    rc = cli_main(["surface", "stats", str(H._good_surface(tmp_path))])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and "not enough memory" in err and "Traceback" not in err
+    with pytest.raises(MemoryError):
+        cli_main(["surface", "stats", str(tmp_path / "ok.npz"), "--debug"])

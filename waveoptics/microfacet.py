@@ -86,7 +86,12 @@ def alpha_from_roughness(roughness):
     ----------
     .. [1] B. Burley, "Physically-Based Shading at Disney", SIGGRAPH 2012 course notes, §5.4.
     """
-    return np.asarray(roughness, dtype=float) ** 2
+    r = np.asarray(roughness, dtype=float)
+    if np.any(~np.isfinite(r) | (r < 0)):
+        bad = r[~np.isfinite(r) | (r < 0)].ravel()[0] if r.ndim else r
+        raise WaveopticsError(f"roughness={float(bad)!r} is not allowed; the perceptual roughness r must be >= 0 "
+                              "(α = r²)")
+    return r ** 2
 
 
 def roughness_from_alpha(alpha):

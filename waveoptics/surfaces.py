@@ -511,6 +511,10 @@ def sinusoid(amplitude, period, size, samples, orientation_deg=0.0, phase_deg=0.
     return HeightField(h, dx, dy, meta=meta)
 
 
+#: most scratches :func:`scratches` draws (a billion would run for days, one grid pass each)
+MAX_SCRATCHES = 10000
+
+
 def scratches(count, width, depth, size, samples, orientation_deg=0.0, spread_deg=0.0, length=None,
               variation=0.0, seed=None) -> HeightField:
     """Random straight scratches (grooves) on a flat surface at h = 0.
@@ -545,8 +549,9 @@ def scratches(count, width, depth, size, samples, orientation_deg=0.0, spread_de
     The result is not periodic; scattering solvers see the patch edges as edges of the grooves.
     """
     n = _number(count, "count", lo=0)
-    if n != int(n):
-        raise WaveopticsError(f"count={count!r} is not allowed; it must be a whole number >= 0")
+    if n != int(n) or n > MAX_SCRATCHES:
+        raise WaveopticsError(f"count={count!r} is not allowed; it must be a whole number in 0..{MAX_SCRATCHES} "
+                              "(each scratch costs a pass over the grid)")
     n = int(n)
     w = _length(width, "width")
     d = _length(depth, "depth", allow_zero=True)

@@ -75,7 +75,10 @@ def parse_number_list(text, *, name: str = "value") -> np.ndarray:
                 raise WaveopticsError(f"{name} {text!r}: a range START:STOP:STEP needs STEP > 0 and STOP >= START")
             n = int(math.floor((b - a) / step + 1e-9)) + 1
             return a + step * np.arange(n)
-        return np.array([float(p) for p in s.split(",") if p.strip() != ""], dtype=float)
+        vals = np.array([float(p) for p in s.split(",") if p.strip() != ""], dtype=float)
+        if vals.size == 0:
+            raise WaveopticsError(f"{name} {text!r} holds no number; write START:STOP:STEP or A,B,C")
+        return vals
     except WaveopticsError:
         raise
     except ValueError:

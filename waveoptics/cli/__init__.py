@@ -56,6 +56,12 @@ def main(argv=None) -> int:
         if len(msg) > 1 and "build" in first:
             print("\n".join(msg[1:]), file=sys.stderr)
         return 2
+    except MemoryError:
+        if debug:
+            raise
+        print(f"waveoptics {args.command}: error: not enough memory for this request; use fewer samples, "
+              "wavelengths or a coarser --resolution", file=sys.stderr)
+        return 2
     except OSError as exc:
         if debug:
             raise
