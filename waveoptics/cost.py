@@ -70,8 +70,7 @@ DEFAULT_SOLVERS = ("fft0", "fft", "direct")
 DEFAULT_RESOLUTIONS = (32, 64, 128)
 DEFAULT_COLOUR_DE = (4.0, 1.0, 0.5)
 DEFAULT_PRECISIONS = ("float32", "float64")
-#: the reference's colour accuracy (a denser wavelength grid than any default setting) and its realizations
-REFERENCE_COLOUR_DE = 0.1
+#: realizations of the reference for random surfaces (at least twice the ladder's largest)
 REFERENCE_REALIZATIONS = 4
 
 
@@ -315,11 +314,11 @@ def _units(s: Setting, n_wl: int) -> float:
 
 def reference_setting(settings, cfg: Config, solver: str = "direct", precision: str = "float64",
                       runtime=None) -> Setting:
-    """The reference: the finest resolution of the ladder, :data:`REFERENCE_COLOUR_DE` (or finer than the
-    ladder's finest), :data:`REFERENCE_REALIZATIONS` for random surfaces. ``direct`` needs OpenCL; float64 falls
+    """The reference: the finest resolution of the ladder, half the ladder's finest colour accuracy ΔE (a denser
+    wavelength grid), :data:`REFERENCE_REALIZATIONS` (or twice the ladder's largest) for random surfaces. ``direct`` needs OpenCL; float64 falls
     back to the ``fft`` solver (exact Kirchhoff to 1e-8 Σw) where the device has no fp64."""
     res = max(s.resolution for s in settings)
-    de = min(REFERENCE_COLOUR_DE, min(s.colour_de for s in settings) / 2)
+    de = min(s.colour_de for s in settings) / 2
     n = max(REFERENCE_REALIZATIONS, 2 * max(s.realizations for s in settings)) if cfg.random else 1
     if solver == "direct" and precision == "float64" and runtime is not None and not runtime.fp64:
         solver = "fft"
@@ -484,16 +483,14 @@ def plot(result: dict, path, *, overwrite: bool = True, title: str | None = None
     metric = result["metric"]
     rows = result["settings"]
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    markers = {"fft0": "s", "fft": "o", "direct": "^"}
-    for solver, mk in markers.items():
-        for prec, fill in (("float32", None), ("float64", "none")):
-            pts = [(r["time_s"], r[metric]) for r in rows if r["solver"] == solver and r["time_s"] is not None
-                   and (solver != "direct" or r["precision"] == prec) and (solver == "direct" or prec == "float64")]
-            if pts:
-                t, e = zip(*pts)
-                lab = f"{solver} {prec}" if solver == "direct" else solver
-                ax.scatter(t, np.maximum(e, 1e-16), marker=mk, label=lab, s=28,
-                           facecolors=fill if fill else None)
+    styles = (("fft0", "float64", "s", "C0", "fft0"), ("fft", "float64", "o", "C1", "fft"),
+              ("direct", "float32", "^", "C2", "direct float32"), ("direct", "float64", "v", "C3", "direct float64"))
+    for solver, prec, mk, col, lab in styles:
+        pts = [(r["time_s"], r[metric]) for r in rows if r["solver"] == solver and r["time_s"] is not None
+               and (solver != "direct" or r["precision"] == prec)]
+        if pts:
+            t, e = zip(*pts)
+            ax.scatter(t, np.maximum(e, 1e-16), marker=mk, color=col, label=lab, s=28, alpha=0.85)
     fr = result["pareto"]
     if fr:
         ax.plot([rows[i]["time_s"] for i in fr], [max(rows[i][metric], 1e-16) for i in fr], "k--", lw=1,
