@@ -187,6 +187,33 @@ def test_workers_option_starts_a_local_cluster(reference, tmp_path):
     assert_same_table(out, reference)
 
 
+def _runtimes_in_this_process():
+    from waveoptics import runtime
+
+    return len(runtime._runtimes)
+
+
+def test_direct_solver_builds_one_opencl_context_per_worker(rt, cluster, tmp_path):
+    """The OpenCL route on worker processes: each worker creates its context once (the WarmWorker plugin, then
+    runtime.get_runtime's per-process cache), and the table matches the in-process one."""
+    from distributed import Client
+
+    from waveoptics import surfaces
+
+    hf = surfaces.generate("gaussian", sigma="15nm", corr_length="1um", size="8um", samples=64, seed=2)
+    case = D.Case(material="Al", nano=None, surface="generated", micro_alpha=0.0, wavelengths_nm=(500.0, 600.0),
+                  resolution=16, solver="direct")
+    spec = D.TableSpec(case, thetas_deg=(0.0, 30.0, 50.0), batch=2)
+    D.run_table(spec, tmp_path / "ref.h5", surface=hf)
+    with Client(cluster) as client:
+        D.run_table(spec, tmp_path / "direct.h5", surface=hf, client=client)
+        counts = client.run(_runtimes_in_this_process)
+    assert set(counts.values()) == {1}, counts
+    a, b = D.read_table(tmp_path / "ref.h5"), D.read_table(tmp_path / "direct.h5")
+    assert np.all(np.isfinite(a.brdf)) and a.albedo.max() > 0
+    assert np.array_equal(a.brdf, b.brdf)
+
+
 # ------------------------------------------------------------------------------------------------ resume
 
 def _fail_on(spec, task, surface=None, device=None, *, bad):
@@ -351,6 +378,7 @@ def test_cli_table_and_sweep(tmp_path, capsys):
     (["table", "--incident-angles", "0:90:30"], "above the horizon"),
     (["table", "--scheduler", "localhost:8786"], "tcp://HOST:PORT"),
     (["table", "--workers", "0"], "--workers 0"),
+    (["table", "--batch", "0"], "--batch 0"),
     (["table", "--nano", "abc:sigma=5nm", "--material", "Au"], "lacks B, C"),
     (["table", "--material", "Unobtainium"], "Unobtainium"),
     (["sweep", "--vary", "colour=red"], "unknown --vary parameter 'colour'"),

@@ -126,13 +126,15 @@ def register(sub):
 
 
 def run(args):
+    import numpy as np
+
     from .. import distributed
     from ..units import parse_number_list
 
     case, surface = case_from_args(args, source=args.source)
     thetas = parse_number_list(args.incident_angles, name="--incident-angles")
     spec = distributed.TableSpec(case, thetas_deg=tuple(thetas), phi_deg=args.phi, realizations=args.realizations,
-                                 batch=args.batch or distributed.DEFAULT_BATCH)
+                                 batch=args.batch if args.batch is not None else distributed.DEFAULT_BATCH)
     plan = distributed.table_plan(spec, args.output, resume=args.resume)
     bar = progress(total=plan["todo"], desc="table", args=args)
     try:
@@ -142,9 +144,10 @@ def run(args):
     finally:
         bar.close()
     n = res["computed"]
-    out = {k: v for k, v in res.items() if k != "written"}
+    out = {k: v for k, v in res.items() if k not in ("written", "task_costs_s", "task_cpu_s")}
     out.update(incident_angles_deg=list(spec.thetas_deg), wavelengths=plan["wavelengths"],
-               resolution=case.resolution, task_cost_mean_s=res["task_cost_s"] / n if n else None)
+               resolution=case.resolution, task_cost_mean_s=res["task_cost_s"] / n if n else None,
+               task_cpu_median_s=float(np.median(res["task_cpu_s"])) if n else None)
     text = (f"table {res['output']}: {len(spec.thetas_deg)} incident angles × {plan['wavelengths']} wavelengths × "
             f"{case.resolution}² directions"
             + (f" × {spec.realizations} realizations" if spec.realizations > 1 else "")
