@@ -260,8 +260,8 @@ waveoptics table ... -o gold.h5 --resume
 
 ## Table layout (HDF5)
 
-One file, readable with any HDF5 tool; every array dimension has an HDF5 dimension scale (netCDF-4 style
-coordinates, so `xarray.open_dataset(path, engine="h5netcdf", phony_dims="access")` can read it too). File
+One file, readable with any HDF5 tool; every array dimension is labelled and has an HDF5 dimension scale
+attached (the coordinate values, the way netCDF-4 stores coordinates). File
 attributes: `format` = `waveoptics-brdf-table`, `format_version`, `parameters` (JSON: material, nano, micro
 roughness, NDF, solver, wavelengths, incident angles, seed, …), `material`, `illuminant`, `incident_phi_deg`,
 `realizations`, `solver`, `quantity`, `layout` (this table as JSON) and `grid_*` (the direction-cosine grid:
