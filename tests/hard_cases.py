@@ -577,12 +577,20 @@ def _cases() -> list[HardCase]:
                      lambda env, s=s: _twoscale(0.0, "Au", sigma=s, T=10e-6),
                      refuse=r"too rough for the PSD series.*height field",
                      fixed=f"twoscale.py: nano_lobe refuses; before, the albedo came out {before} without a word"))
-    for T, what in ((1e-12, "1 pm (≪ λ: tangent plane invalid, scattered light lost, never created)"),
-                    (1e-3, "1 mm (lobe narrower than a grid cell)")):
-        add(HardCase(f"nano-corr-length-{T:g}m", "roughness", f"nano correlation length {what}",
-                     lambda env, T=T: _twoscale(30.0, "Au", sigma=5e-9, T=T),
+    add(HardCase("nano-corr-length-1e-12m", "roughness", "nano correlation length 1 pm (≪ λ: tangent plane "
+                 "invalid; scattered light may be lost, never created)",
+                 lambda env: _twoscale(30.0, "Au", sigma=5e-9, T=1e-12),
+                 _all_of(_at_most("albedo", "microfacet_albedo", excess=TOL["albedo_excess"]),
+                         _at_most("albedo", "F", excess=TOL["albedo_excess"]))))
+    for T, n in ((30e-6, 128), (1e-4, 48)):
+        add(HardCase(f"nano-corr-length-{T * 1e6:g}um-grid{n}", "roughness", f"nano correlation length "
+                     f"{T * 1e6:g} µm (σ = 20 nm): a lobe narrower than the cells of a {n}² grid keeps its energy",
+                     lambda env, T=T, n=n: _twoscale(30.0, "Au", alpha=0.0, sigma=20e-9, T=T, grid_n=n),
                      _all_of(_at_most("albedo", "microfacet_albedo", excess=TOL["albedo_excess"]),
-                             _at_most("albedo", "F", excess=TOL["albedo_excess"]))))
+                             _at_most("microfacet_albedo", "albedo", excess=TOL["albedo_excess"])),
+                     fixed="twoscale.py: a PSD nano lobe narrower than the grid cells is resampled preserving its "
+                           "energy (_resample_narrow_lobe); before, cell-centre sampling lost 18 % of the light at "
+                           "450 nm (T = 30 µm, 128² grid) and 11-21 % on a 48² grid (T = 10-100 µm)"))
     add(HardCase("sigma-nano-1um-heightfield", "roughness", "σ_nano = 1 µm (2 λ) as a height field (fft solver)",
                  _nano_heightfield(1e-6), _at_most("albedo", "F", excess=TOL["albedo_excess"])))
 

@@ -49,6 +49,8 @@ from .units import check_wavelengths
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
 SERIES_MIN_CAPTURED = 0.99
+#: a PSD nano lobe narrower than this many grid cells (width λ/(π T)) is resampled preserving its energy
+NARROW_CELLS = 2.0
 
 
 @dataclass(frozen=True)
@@ -246,13 +248,37 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
                     f"{lam:g} nm (it holds only {100 * low:.3g}% of the scattered light in some directions); use a "
                     "nano height field (solver fft or direct), or describe roughness this large by the micro "
                     "NDF (alpha)")
-        return np.where(grid.inside, out, 0.0)
+        out = np.where(grid.inside, out, 0.0)
+        if np.min(w) * 1e-9 / (np.pi * nano.model.length_scale) < NARROW_CELLS * max(grid.du, grid.dv):
+            out = _resample_narrow_lobe(out, wi, w, nano, grid, F)
+        return out
     if solver in ("fft", "direct"):
         if nano.surface is None:
             raise WaveopticsError(f"solver {solver!r} needs a nano height field (--surface or --nano MODEL:...)")
         return kirchhoff_scattered_lobe(nano.surface, wi, grid, w, F, solver=solver, device=device,
                                         precision=precision)
     raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
+
+
+def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F):
+    """Energy-preserving sampling of a nano lobe narrower than the grid cells (PSD route).
+
+    guard: the lobe is ~λ/(π T) wide in direction cosines; sampled at cell centres, a narrower one is missed or
+    over-counted (measured: Au, σ = 20 nm, T = 30 µm, 128² grid: 18 % of the light at 450 nm lost). Such a lobe
+    hugs the mirror direction, where the series is paraxial and its F = 1 albedo is 1 − exp(−g_i), g_i =
+    (4πσ cosθ_i / λ)² (physics.md §3): the lobe is scaled to that energy, or, when no cell centre falls on it,
+    deposited in the mirror cell (as a micro lobe narrower than a cell is, see :func:`evaluate`).
+    """
+    cell = _mirror_cell(grid, wi)
+    for i, lam in enumerate(wavelengths_nm):
+        share = 1.0 - float(nano.coherent_amplitude2(wi[2], lam))
+        Fi = float(F(wi[2], lam))
+        got = float(integrate(out[i], grid))
+        if got > 0:
+            out[i] *= Fi * share / got
+        elif cell is not None and grid.inside[cell]:
+            out[i, cell[0], cell[1]] = Fi * share / (grid.du * grid.dv)
+    return out
 
 
 def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wavelengths_nm, F, *,
