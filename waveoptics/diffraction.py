@@ -301,8 +301,8 @@ def samples(hf: HeightField, window_name=DEFAULT_WINDOW, detrend: str = "mean") 
         'plane' also removes the patch's tilt (least squares weighted by w², the weight of each sample in |U|²).
         A finite patch of a random surface has a mean slope; the Kirchhoff model reflects it like a tilted
         mirror, whose albedo differs from the untilted one by about tan θ_i times that slope. The (weighted)
-        mean is removed in every case except 'none' — it changes only the phase of U, but float32 rounding of
-        h v_z grows with |h|.
+        mean is removed in every case, 'none' included — it changes only the phase of U, but float32 rounding
+        of h v_z grows with |h| (a 1 m offset changes nothing: ``tests/hard_cases.py``, offset cases).
     """
     from .surfaces import DETRENDS
 
