@@ -25,7 +25,7 @@ TOL = {
 }
 
 ROW_KEYS = {"solver", "resolution", "wavelengths", "precision", "error_rel_l2", "error_albedo", "delta_e2000",
-            "time_s", "realizations", "colour_de", "wavelengths_nm", "warnings", "skipped"}
+            "time_s", "realizations", "colour_de", "wavelengths_nm", "warnings", "skipped", "same_as_reference"}
 
 
 @pytest.fixture(scope="module")
@@ -112,7 +112,8 @@ def test_exact_solvers_agree_with_the_reference(small_study):
     rows = {(s.solver, s.precision, s.resolution, s.realizations): r for s, r in zip(st_, res["settings"])}
     for n in (1, 2):
         assert rows[("fft", "float64", 16, n)]["error_rel_l2"] < TOL["fft_vs_direct64"]
-        assert rows[("direct", "float64", 16, n)]["error_rel_l2"] < 1e-12
+        same = rows[("direct", "float64", 16, n)]
+        assert same["error_rel_l2"] < 1e-12 and same["same_as_reference"]
         assert rows[("direct", "float32", 16, n)]["error_rel_l2"] < TOL["direct32"]
         assert rows[("fft0", "float64", 16, n)]["error_rel_l2"] > 100 * TOL["fft_vs_direct64"]
     # the coarse grid is charged for what it misses
@@ -123,10 +124,12 @@ def test_recommendation_meets_target_and_is_fastest(small_study):
     _, _, res = small_study
     rec = res["recommendation"]
     rows = res["settings"]
-    ok = [i for i, r in enumerate(rows) if r["error_rel_l2"] <= 1e-3]
+    ok = [i for i, r in enumerate(rows) if r["error_rel_l2"] <= 1e-3 and not r["same_as_reference"]]
     assert rec["index"] in ok
     assert rows[rec["index"]]["time_s"] == min(rows[i]["time_s"] for i in ok)
     assert rec["index"] in res["pareto"]           # the fastest one meeting a threshold is never dominated
+    assert not rows[rec["index"]]["same_as_reference"]
+    assert not any(rows[i]["same_as_reference"] for i in res["pareto"])
 
 
 def test_budget_skips_what_would_overrun():

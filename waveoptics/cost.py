@@ -353,7 +353,10 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
         ``{"config", "reference", "settings": [...], "pareto": [indices], "metric", "target_error",
         "recommendation", "skipped": [...], "budget_s", "time_s"}``; each setting row holds ``solver``,
         ``resolution``, ``wavelengths`` (count), ``wavelengths_nm``, ``colour_de``, ``realizations``,
-        ``precision``, ``error_rel_l2``, ``error_albedo``, ``delta_e2000``, ``time_s``, ``warnings``.
+        ``precision``, ``error_rel_l2``, ``error_albedo``, ``delta_e2000``, ``time_s``, ``warnings``,
+        ``same_as_reference`` (the reference's own solver, precision, grid and wavelengths: error 0 by
+        construction, so never on the Pareto front nor recommended), ``skipped`` (why, or None), and for random
+        surfaces ``ensemble_rel_l2``.
     """
     t_start = time.perf_counter()
     if metric not in METRICS:
@@ -413,6 +416,11 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
         s = settings[i]
         wl = wavelengths(s.colour_de)
         row = {**dataclasses.asdict(s), "wavelengths": int(wl.size), "wavelengths_nm": wl}
+        # a setting that computes what the reference computes has error 0 by construction: it is timed, but kept
+        # out of the Pareto front and the recommendation
+        row["same_as_reference"] = bool((s.solver, s.precision, s.resolution) == (ref_s.solver, ref_s.precision,
+                                                                                   ref_s.resolution)
+                                        and wl.size == wl_ref.size and np.allclose(wl, wl_ref))
         key = (s.solver, s.precision)
         units = _units(s, wl.size)
         predicted = rate[key] * units if key in rate else None
@@ -434,11 +442,11 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
             progress(1)
     nan = float("nan")
     times = [r["time_s"] if r["time_s"] is not None else nan for r in rows]
-    errs = [r[metric] if r[metric] is not None else nan for r in rows]
+    errs = [r[metric] if r[metric] is not None and not r["same_as_reference"] else nan for r in rows]
     front = pareto_front(times, errs)
     rec = None
     if target_error is not None:
-        k = recommend(rows, target_error, metric)
+        k = recommend([r if not r["same_as_reference"] else {} for r in rows], target_error, metric)
         if k is None:
             done = [i for i in range(len(rows)) if np.isfinite(errs[i])]
             best = min(done, key=lambda i: errs[i]) if done else None
@@ -454,7 +462,8 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
 
 
 def table(result: dict) -> str:
-    """The study as a Markdown table (Pareto members marked ★, the recommendation ►)."""
+    """The study as a Markdown table (Pareto members marked ★, the recommendation ►, the reference's own setting
+    "= reference")."""
     rec = (result.get("recommendation") or {}).get("index")
     lines = ["| # | solver | precision | resolution | wavelengths | realizations | rel. L2 | albedo err. | ΔE2000 "
              "| time (s) | |", "|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -463,7 +472,8 @@ def table(result: dict) -> str:
         return "—" if v is None else format(v, fmt)
 
     for i, r in enumerate(result["settings"]):
-        mark = ("►" if i == rec else "") + ("★" if i in result["pareto"] else "")
+        mark = ("►" if i == rec else "") + ("★" if i in result["pareto"] else "") + \
+            ("= reference" if r.get("same_as_reference") else "")
         prec = r["precision"] if r["solver"] == "direct" else "float64"
         lines.append(f"| {i} | {r['solver']} | {prec} | {r['resolution']} | {r['wavelengths']} | {r['realizations']} "
                      f"| {f(r['error_rel_l2'], '.2e')} | {f(r['error_albedo'], '.2e')} | {f(r['delta_e2000'], '.3f')} "
