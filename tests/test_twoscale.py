@@ -151,3 +151,19 @@ def test_fft_and_direct_nano_lobes_agree(rt):
     a = twoscale.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="fft")
     b = twoscale.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="direct", precision="float32")
     assert np.max(np.abs(a - b)) < 1e-3 * a.max()
+
+
+def test_split_scales_recovers_micro_alpha_and_nano_sigma():
+    """micro (σ=200 nm, T=20 µm: α = 2σ/T = 0.02) + nano (σ = 5 nm, T = 0.5 µm), split at 10 λ_max."""
+    from waveoptics import surfaces
+
+    micro = surfaces.gaussian(sigma=200e-9, corr_length=20e-6, size=256e-6, samples=2048, seed=1)
+    nano = surfaces.gaussian(sigma=5e-9, corr_length=0.5e-6, size=256e-6, samples=2048, seed=2)
+    both = micro + nano
+    m, n, info = twoscale.split_scales(both, [400.0, 700.0])
+    assert info["cutoff_period_m"] == pytest.approx(7e-6)
+    assert m.alpha == pytest.approx(0.02, rel=0.1)
+    assert m.alpha_y is None  # isotropic
+    assert n.heights.std() == pytest.approx(5e-9, rel=0.12)
+    low = both.heights - both.heights.mean() - n.heights  # the micro part: keeps the large heights
+    assert low.std() == pytest.approx(200e-9, rel=0.1)
