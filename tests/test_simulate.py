@@ -103,6 +103,8 @@ def test_compare_table_and_files(tmp_path, capsys):
     (["--nano", "abc:sigma=3nm,B=2um"], "lacks C"),
     (["--illuminant", "D66"], "did you mean"),
     (["--wavelengths", "0,500"], "must be finite and > 0"),
+    (["--wavelengths", ""], "holds no number"),
+    (["--nano", "abc:sigma=3nm,B=2um,C=3,C=4"], "given twice"),
 ])
 def test_bad_options_one_line_exit_2(tmp_path, capsys, argv, needle):
     assert main(["simulate", "-o", str(tmp_path / "x"), *FAST[:4], *argv]) == 2

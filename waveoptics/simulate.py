@@ -66,6 +66,8 @@ def parse_nano(text: str) -> tuple[str, dict]:
         if not eq or key not in NANO_PARAMS[model]:
             raise WaveopticsError(f"--nano {text!r}: parameter {item!r} is not allowed for {model}; "
                                   f"use {', '.join(k + '=...' for k in NANO_PARAMS[model])}")
+        if key in params:
+            raise WaveopticsError(f"--nano {text!r}: parameter {key!r} is given twice")
         kind = NANO_PARAMS[model][key]
         if kind == "length":
             params[key] = parse_length(val, name=f"--nano {key}", allow_zero=(key in ("sigma", "depth", "amplitude")))

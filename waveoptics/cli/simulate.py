@@ -54,7 +54,7 @@ def simulation_from_args(args, bar=None):
         raise WaveopticsError(f"--kd {args.kd!r} is not allowed; the diffuse albedo must be in [0, 1]")
     if not (0 < args.accuracy < 100):
         raise WaveopticsError(f"--accuracy {args.accuracy!r} is not allowed; use a ΔE2000 in (0, 100)")
-    w = parse_wavelengths(args.wavelengths) if args.wavelengths else None
+    w = parse_wavelengths(args.wavelengths) if args.wavelengths is not None else None
     return sim_mod.simulate(args.material, nano=args.nano or sim_mod.DEFAULT_NANO, surface=args.surface,
                             micro_alpha=args.micro_alpha, ndf=args.ndf, incident=(theta, phi),
                             illuminant=args.illuminant, wavelengths=w, accuracy_dE=args.accuracy,
