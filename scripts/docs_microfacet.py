@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from waveoptics import fresnel, microfacet as mf  # noqa: E402
+from waveoptics import microfacet as mf  # noqa: E402
 from waveoptics.units import direction_from_angles  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from waveoptics import compare, materials, microfacet, psd, render, simulate, spectral, twoscale
+from waveoptics import compare, materials, microfacet, psd, render, simulate, twoscale
 from waveoptics.diffraction import DirectionGrid
 from waveoptics.units import direction_from_angles
 

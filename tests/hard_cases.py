@@ -22,7 +22,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import io
-import math
 import re
 import warnings
 from dataclasses import dataclass, field
@@ -36,7 +35,6 @@ from waveoptics import fresnel, materials, psd, spectral, surfaces, twoscale, un
 from waveoptics import io as wio
 from waveoptics import microfacet as mf
 from waveoptics import simulate as wsim
-from waveoptics.errors import WaveopticsError
 from waveoptics.surfaces import HeightField
 from waveoptics.units import direction_from_angles
 

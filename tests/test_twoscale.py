@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from waveoptics import materials, microfacet, psd, twoscale
-from waveoptics.diffraction import DirectionGrid, integrate
+from waveoptics.diffraction import DirectionGrid
 from waveoptics.units import direction_from_angles
 
 GRID = DirectionGrid.hemisphere(96)

@@ -78,19 +78,9 @@ def F_sp(cos_theta_i, eta):
 
 
 def F(cos_theta_i, eta):
-    """Unpolarized Fresnel reflectance (R_s + R_p)/2 of a dielectric or conductor.
+    """Unpolarized Fresnel reflectance (R_s + R_p)/2 of a dielectric or conductor, in [0, 1].
 
-    Parameters
-    ----------
-    cos_theta_i : array_like
-        Cosine of the incidence angle (clamped to [0, 1]).
-    eta : array_like of complex
-        Relative complex index n + ik.
-
-    Returns
-    -------
-    ndarray
-        Reflectance in [0, 1].
+    Takes the same arguments as :func:`F_sp` (cos θ_i clamped to [0, 1]; η = n + ik) and broadcasts them.
 
     References
     ----------

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import fresnel
-from .errors import WaveopticsError, did_you_mean, unknown
+from .errors import WaveopticsError, unknown
 from .units import check_wavelengths
 
 #: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
