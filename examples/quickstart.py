@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from waveoptics import simulate, spectral
+from waveoptics import colour
+from waveoptics import simulate
 
 fast = "--fast" in sys.argv
 out = Path(next((a for a in sys.argv[1:] if not a.startswith("--")), "out/quickstart"))
@@ -25,7 +26,7 @@ print("albedo, microfacet:", sim.lobes.albedo("microfacet").round(4))
 print("coherent fraction :", sim.lobes.coherent_specular_fraction().round(4))
 rgb, rgb_mf = sim.rgb_albedo(), sim.rgb_albedo("microfacet")
 print("linear sRGB albedo:", rgb.round(4), "vs microfacet", rgb_mf.round(4),
-      f"ΔE2000 {float(spectral.delta_e2000(rgb, rgb_mf)):.2f}")
+      f"ΔE2000 {float(colour.delta_e2000(rgb, rgb_mf)):.2f}")
 
 # 3. files: spectral EXR, previews, spheres, lobes, summary.json
 summary = simulate.write_outputs(sim, out, overwrite=True, sphere_size=64 if fast else 256)

@@ -103,7 +103,7 @@ def main(argv=None):
     args = argv if argv is not None else sys.argv[1:]
     quick = "--quick" in args
     from waveoptics.bench import machine
-    from waveoptics.io import atomic_path, write_json
+    from waveoptics.io.files import atomic_path, write_json
     from waveoptics.runtime import get_runtime
 
     rt = get_runtime()
@@ -121,7 +121,7 @@ def main(argv=None):
         parts.append(section(key, title, res))
         print(f"{key}: {res['time_s']:.1f} s", flush=True)
     m = machine(rt)
-    from waveoptics.spectral import simulation_wavelengths
+    from waveoptics.colour.sampling import simulation_wavelengths
 
     def wl(de):
         return f"ΔE {de:g} → {simulation_wavelengths('D65', de).size} wavelengths"

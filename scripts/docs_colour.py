@@ -5,8 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-from waveoptics import materials, spectral
-from waveoptics.io import atomic_path
+from waveoptics import materials
+from waveoptics import colour as wcolour
+from waveoptics.io.files import atomic_path
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "colour.md"
@@ -25,7 +26,7 @@ All colorimetry (CIE colour-matching functions, CIE illuminants, Planck's law, R
 CIEDE2000, the sRGB curve, ASTM E2022 weights, CSV spectra) comes from colour-science {colour_version}.
 
 ## Light sources
-`--illuminant` (and `spectral.illuminant(spec)`) understands:
+`--illuminant` (and `wcolour.illuminant(spec)`) understands:
 
 | spec | light |
 |---|---|
@@ -37,7 +38,7 @@ CIEDE2000, the sRGB curve, ASTM E2022 weights, CSV spectra) comes from colour-sc
 
 Continuous SPDs are linearly interpolated to the 1 nm CMF grid (360–830 nm) and held constant beyond their table
 (CIE 015 practice). Line spectra stay lines: a simulation under lasers computes only the laser wavelengths
-(`spectral.simulation_wavelengths`).
+(`wcolour.simulation_wavelengths`).
 
 ## From a spectrum to XYZ
 For a reflectance R(λ) (or any spectral factor: BRDF, F0) under a light S(λ), CIE 015:
@@ -108,7 +109,7 @@ gold data sets alone span {gold_spread} in blue and its silver sets {silver_spre
 give {ag_hagemann}, within 0.02 of the table.
 
 ### Classification by F0
-`spectral.classify_f0(Y)` sorts by the luminance Y of F0 (Hoffman, SIGGRAPH 2015 "Physics and Math of Shading"):
+`wcolour.classify_f0(Y)` sorts by the luminance Y of F0 (Hoffman, SIGGRAPH 2015 "Physics and Math of Shading"):
 dielectrics ~0.02–0.05 (gems up to ~0.17), metals ≥ ~0.5 (threshold 0.45 here), and the **forbidden zone**
 0.2–0.45, which real production surfaces avoid and only semiconductors occupy. All presets:
 
@@ -159,7 +160,7 @@ def _table(header, rows):
 def white_table():
     rows, worst = [], 0.0
     for ill, obs, cie in CIE_WHITES:
-        ours = 100 * spectral.white_XYZ(ill, obs)
+        ours = 100 * wcolour.white_XYZ(ill, obs)
         diff = np.abs(ours - cie).max() / 100
         worst = max(worst, diff)
         rows.append((ill, f"{obs}°", _fmt3(ours), _fmt3(cie), f"{diff:.1e}"))
@@ -168,10 +169,10 @@ def white_table():
 
 def step_tables():
     lights = ("D65", "A", "F2", "F11", "E")
-    steps = spectral.STEPS_NM[:-1]
+    steps = wcolour.STEPS_NM[:-1]
     rows, worse = [], []
     for ill in lights:
-        errs = {m: spectral.step_errors(ill, steps, method=m) for m in ("linear", "spline")}
+        errs = {m: wcolour.step_errors(ill, steps, method=m) for m in ("linear", "spline")}
         for method, err in errs.items():
             rows.append((ill, method, *(f"{err[s][0]:.3f} ({err[s][1]})" for s in steps)))
         worse += [f"{ill} at {s:g} nm" for s in steps if errs["spline"][s][0] > errs["linear"][s][0]]
@@ -182,7 +183,7 @@ def step_tables():
     for ill in lights:
         cells = []
         for target in (1.0, 0.5, 0.2):
-            n = [spectral.simulation_wavelengths(ill, target, method=m) for m in ("linear", "spline")]
+            n = [wcolour.simulation_wavelengths(ill, target, method=m) for m in ("linear", "spline")]
             cells.append(" / ".join(f"{np.diff(g)[0]:g} nm ({g.size})" for g in n))
         rows.append((ill, *cells))
     rows.append(("rgb-laser", *["3 lines"] * 3))
@@ -193,7 +194,7 @@ def step_tables():
 def f0_tables():
     metals, others, swatches = [], [], []
     for name, preset in materials.PRESETS.items():
-        d = spectral.f0_colour(materials.get_material(name))
+        d = wcolour.f0_colour(materials.get_material(name))
         ref = HOFFMAN_RTR3.get(name)
         if preset.category == "metal":
             metals.append((f"`{name}`", _fmt3(d["f0_linear"]), str(tuple(d["f0_srgb8"])), f"{d['Y']:.3f}",
@@ -208,7 +209,7 @@ def f0_tables():
 
 
 def _blue_spread(pages):
-    blues = [spectral.f0_colour(materials.get_material(p))["f0_linear"][2] for p in pages]
+    blues = [wcolour.f0_colour(materials.get_material(p))["f0_linear"][2] for p in pages]
     return f"{min(blues):.2f}–{max(blues):.2f}"
 
 
@@ -229,23 +230,23 @@ def plot_swatches(swatches, path):
 
 def metamer_section():
     rows = []
-    for lines in ((465.0, 532.0, 638.0), spectral.RGB_LASER_NM):
-        s = spectral.metamer_summary("D65", lines)
+    for lines in ((465.0, 532.0, 638.0), wcolour.RGB_LASER_NM):
+        s = wcolour.metamer_summary("D65", lines)
         rows.append((", ".join(f"{x:g}" for x in s["lines_nm"]), _fmt3(s["power_fractions"]),
                      _fmt3(s["XYZ_target"], 5), _fmt3(s["XYZ_mix"], 5)))
     table = _table(("lines (nm)", "power fractions", "XYZ D65", "XYZ lasers"), rows)
-    P = spectral.metamer_laser_weights("D65", (465.0, 532.0, 638.0))
-    spectral.plot_metamers("D65", (465.0, 532.0, 638.0), P, IMG / "colour_metamer_d65.png", overwrite=True)
-    residual = np.abs(spectral.spd_to_XYZ(spectral.laser((465.0, 532.0, 638.0), P))
-                      - spectral.spd_to_XYZ("D65")).max() / spectral.spd_to_XYZ("D65")[1]
+    P = wcolour.metamer_laser_weights("D65", (465.0, 532.0, 638.0))
+    wcolour.plot_metamers("D65", (465.0, 532.0, 638.0), P, IMG / "colour_metamer_d65.png", overwrite=True)
+    residual = np.abs(wcolour.spd_to_XYZ(wcolour.laser((465.0, 532.0, 638.0), P))
+                      - wcolour.spd_to_XYZ("D65")).max() / wcolour.spd_to_XYZ("D65")[1]
     import colour
 
     names = list(colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"])
-    w, R = spectral.reference_reflectances()
+    w, R = wcolour.reference_reflectances()
     R = R[: len(names)]
-    dE = spectral.delta_e2000(spectral.reflectance_to_rgb(R, w, "D65"), spectral.reflectance_to_rgb(R, w, "rgb-laser"))
-    w10, d10 = spectral.white_XYZ("rgb-laser", "10"), spectral.white_XYZ("D65", "10")
-    obs_dE = float(spectral.delta_e2000(spectral.XYZ_to_rgb(w10), spectral.XYZ_to_rgb(d10)))
+    dE = wcolour.delta_e2000(wcolour.reflectance_to_rgb(R, w, "D65"), wcolour.reflectance_to_rgb(R, w, "rgb-laser"))
+    w10, d10 = wcolour.white_XYZ("rgb-laser", "10"), wcolour.white_XYZ("D65", "10")
+    obs_dE = float(wcolour.delta_e2000(wcolour.XYZ_to_rgb(w10), wcolour.XYZ_to_rgb(d10)))
     return table, residual, float(dE.mean()), float(dE.max()), names[int(np.argmax(dE))], obs_dE
 
 
@@ -255,12 +256,12 @@ def main():
     IMG.mkdir(parents=True, exist_ok=True)
     step_table, choice_table, spline_worse = step_tables()
     whites, white_residual = white_table()
-    grid = spectral.spectral_grid("D65", 5.0)
-    srgb_white = np.abs(spectral.reflectance_to_rgb(np.ones(grid.size), grid, "D65") - 1.0).max()
+    grid = wcolour.spectral_grid("D65", 5.0)
+    srgb_white = np.abs(wcolour.reflectance_to_rgb(np.ones(grid.size), grid, "D65") - 1.0).max()
     metal_table, all_table, swatches = f0_tables()
     plot_swatches(swatches, IMG / "colour_f0_metals.png")
     metamer_table, residual, cc_mean, cc_max, cc_worst, obs_dE = metamer_section()
-    ag = spectral.f0_colour(materials.get_material("main/Ag/Hagemann"))["f0_linear"]
+    ag = wcolour.f0_colour(materials.get_material("main/Ag/Hagemann"))["f0_linear"]
     text = HEAD.format(
         colour_version=colour.__version__, white_table=whites, white_residual=white_residual,
         srgb_white=srgb_white, step_table=step_table, spline_worse=spline_worse,

@@ -5,7 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
-from waveoptics import fresnel, materials
+from waveoptics.materials import fresnel
+from waveoptics import materials
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "materials-fresnel.md"
 

@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from waveoptics import microfacet as mf  # noqa: E402
+from waveoptics import brdf
 from waveoptics.units import direction_from_angles  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -33,9 +33,9 @@ evaluated by `kernels/microfacet.cl` through `D_cl`, `Lambda_cl` and `brdf_cl`.
 
 ```python
 from waveoptics import microfacet as mf
-f = mf.brdf(wi, wo, alpha=0.2, ndf="ggx", shadowing="smith-correlated", eta=0.2 + 3.1j)
-f = mf.spectral_brdf(wi, wo, [450, 550, 650], "Au", alpha=0.2)          # (3, n)
-E = mf.albedo(wi, alpha=0.2, fresnel="one")                             # ∫ f cos θo dωo
+f = brdf.brdf(wi, wo, alpha=0.2, ndf="ggx", shadowing="smith-correlated", eta=0.2 + 3.1j)
+f = brdf.spectral_brdf(wi, wo, [450, 550, 650], "Au", alpha=0.2)          # (3, n)
+E = brdf.albedo(wi, alpha=0.2, fresnel="one")                             # ∫ f cos θo dωo
 ```
 ```
 waveoptics brdf --model microfacet --ndf ggx --shadowing smith --alpha 0.2 --material Au \
@@ -233,20 +233,20 @@ def identities():
     from scipy import integrate
 
     rows = []
-    for ndf in mf.NDFS:
+    for ndf in brdf.NDFS:
         nerr, serr = 0.0, 0.0
         for a in ALPHAS:
             def integrand(u):
                 t = np.arctan(a * u)
-                return float(mf.D(_dirs(np.degrees(t)), a, ndf=ndf)) * np.cos(t) * np.sin(t) * 2 * np.pi * a / (
+                return float(brdf.D(_dirs(np.degrees(t)), a, ndf=ndf)) * np.cos(t) * np.sin(t) * 2 * np.pi * a / (
                     1 + (a * u) ** 2)
             val = integrate.quad(integrand, 0, 4, limit=400)[0] + integrate.quad(integrand, 4, np.inf, limit=400)[0]
             nerr = max(nerr, abs(val - 1))
-            m, w = mf.normal_quadrature(a, n_phi=128)
-            d = mf.D(m, a, ndf=ndf)
+            m, w = brdf.normal_quadrature(a, n_phi=128)
+            d = brdf.D(m, a, ndf=ndf)
             for th in (0.0, 30.0, 60.0, 80.0, 89.0):
                 v = _dirs(th, 25.0)
-                lhs = np.sum(w * mf.G1(v, m, a, ndf=ndf) * np.maximum(0, m @ v) * d)
+                lhs = np.sum(w * brdf.G1(v, m, a, ndf=ndf) * np.maximum(0, m @ v) * d)
                 serr = max(serr, abs(lhs / v[2] - 1))
         th = np.array([0.1, 10, 30, 60, 80, 89, 89.9, 89.99])
         lerr = "—"
@@ -254,8 +254,8 @@ def identities():
             e = 0.0
             for a in ALPHAS:
                 P22 = _P22(ndf, a)
-                g_q = 1 / (1 + mf.Lambda_radial(_dirs(th), P22, a))
-                g_e = 1 / (1 + mf.NDFS[ndf].Lambda(_dirs(th), a, a, None))
+                g_q = 1 / (1 + brdf.Lambda_radial(_dirs(th), P22, a))
+                g_e = 1 / (1 + brdf.NDFS[ndf].Lambda(_dirs(th), a, a, None))
                 e = max(e, np.max(np.abs(g_q - g_e)))
             lerr = f"{e:.1e}"
         rows.append([f"`{ndf}`", f"{nerr:.1e}", f"{serr:.1e}", lerr])
@@ -272,7 +272,7 @@ def _P22(ndf, a):
         return lambda r: 1 / (np.pi * a * a * (1 + r * r / (a * a)) ** 2)
     if ndf == "beckmann":
         return lambda r: np.exp(-r * r / (a * a)) / (np.pi * a * a)
-    ap = mf.blinn_phong_exponent(a)
+    ap = brdf.blinn_phong_exponent(a)
     return lambda r: (ap + 2) / (2 * np.pi) * (1 + r * r) ** (-(ap + 4) / 2)
 
 
@@ -282,18 +282,18 @@ def quadrature_accuracy():
     rows = []
     th = np.array([0.0, 30.0, 60.0, 85.0, 89.9])
     for a in ALPHAS:
-        E = mf.directional_albedo(lambda x, y: mf.lambert(x, y, 1.0), _dirs(th), alpha=a)
+        E = brdf.directional_albedo(lambda x, y: brdf.lambert(x, y, 1.0), _dirs(th), alpha=a)
         rows.append([f"Lambert kd = 1, nodes for α = {a:g}", f"{np.max(np.abs(E - 1)):.1e}"])
     for ndf, sh, a, t in (("beckmann", "smith", 0.1, 85.0), ("ggx", "smith-correlated", 0.5, 60.0),
                           ("abc", "cook-torrance", 0.3, 30.0)):
         wi = _dirs(t)
 
         def g(tt, pp):
-            return float(mf.brdf(wi, _dirs(np.degrees(tt), np.degrees(pp)), alpha=a, ndf=ndf, shadowing=sh,
+            return float(brdf.brdf(wi, _dirs(np.degrees(tt), np.degrees(pp)), alpha=a, ndf=ndf, shadowing=sh,
                                  fresnel="one")) * np.cos(tt) * np.sin(tt)
 
         ref = 2 * integrate.dblquad(g, 0, np.pi, 0, np.pi / 2, epsabs=2e-6, epsrel=2e-6)[0]
-        E = float(mf.albedo(wi, alpha=a, ndf=ndf, shadowing=sh, fresnel="one"))
+        E = float(brdf.albedo(wi, alpha=a, ndf=ndf, shadowing=sh, fresnel="one"))
         rows.append([f"{ndf}, {sh}, α = {a:g}, θ_i = {t:g}° vs `scipy.integrate.dblquad`", f"{abs(E - ref):.1e}"])
     return _table(["case", "max abs. error of E"], rows)
 
@@ -306,29 +306,29 @@ def _loss(E):
 def energy_tables():
     th = np.array([0.0, 60.0, 80.0])
     alphas = [0.0, 0.001, 0.01, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0]
-    ndfs = list(mf.NDFS)
+    ndfs = list(brdf.NDFS)
     rows = []
     for a in alphas:
         r = [f"{a:g}"]
         for ndf in ndfs:
-            E = mf.albedo(_dirs(th), alpha=a, ndf=ndf, fresnel="one")
+            E = brdf.albedo(_dirs(th), alpha=a, ndf=ndf, fresnel="one")
             r.append(" / ".join(_loss(e) for e in E))
         rows.append(r)
     loss = _table(["α"] + [f"`{n}` 0° / 60° / 80°" for n in ndfs], rows)
     rows = []
     for a in alphas:
         r = [f"{a:g}"]
-        for sh in mf.SHADOWINGS:
-            E = mf.albedo(_dirs(th), alpha=a, ndf="ggx", shadowing=sh, fresnel="one")
+        for sh in brdf.SHADOWINGS:
+            E = brdf.albedo(_dirs(th), alpha=a, ndf="ggx", shadowing=sh, fresnel="one")
             r.append(" / ".join(_loss(e) for e in E))
         rows.append(r)
-    shadow = _table(["α"] + [f"`{s}`" for s in mf.SHADOWINGS], rows)
+    shadow = _table(["α"] + [f"`{s}`" for s in brdf.SHADOWINGS], rows)
     emax = 0.0
     tgrid = np.array([0.0, 30.0, 60.0, 75.0, 85.0, 89.0])
     for ndf in ndfs:
-        for sh in mf.SHADOWINGS:
+        for sh in brdf.SHADOWINGS:
             for a in (0.0, 0.001, 0.01, 0.1, 0.3, 0.5, 1.0):
-                emax = max(emax, float(np.max(mf.albedo(_dirs(tgrid), alpha=a, ndf=ndf, shadowing=sh,
+                emax = max(emax, float(np.max(brdf.albedo(_dirs(tgrid), alpha=a, ndf=ndf, shadowing=sh,
                                                         fresnel="one"))))
     return loss, shadow, emax
 
@@ -337,7 +337,7 @@ def tradeoff_excess():
     th = np.array([0.0, 20.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0, 89.0])
     ex = -np.inf
     for a in (0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 0.5):
-        ex = max(ex, float(np.max(mf.albedo(_dirs(th), alpha=a, eta=1.5, kd=1.0) - 1)))
+        ex = max(ex, float(np.max(brdf.albedo(_dirs(th), alpha=a, eta=1.5, kd=1.0) - 1)))
     return ex
 
 
@@ -345,11 +345,11 @@ def oren_nayar_max():
     best = (0.0, 0.0, 0.0)
     th = np.array([0.0, 45.0, 70.0, 80.0, 85.0, 89.0, 89.9])
     for s in np.linspace(0.05, 1.0, 20):
-        E = mf.directional_albedo(lambda x, y: mf.oren_nayar(x, y, 1.0, s), _dirs(th), alpha=1.0)
+        E = brdf.directional_albedo(lambda x, y: brdf.oren_nayar(x, y, 1.0, s), _dirs(th), alpha=1.0)
         i = int(np.argmax(E))
         if E[i] > best[0]:
             best = (float(E[i]), float(s), float(th[i]))
-    total = mf.albedo(_dirs(th), alpha=0.3, eta=1.5, kd=1.0, diffuse="oren-nayar", sigma=best[1])
+    total = brdf.albedo(_dirs(th), alpha=0.3, eta=1.5, kd=1.0, diffuse="oren-nayar", sigma=best[1])
     return best + (float(np.max(total)),)
 
 
@@ -371,12 +371,12 @@ def kernel_agreement(rt, n=20000):
     kd = np.array([0.2, 0.0, 0.9])
     precisions = ["float32"] + (["float64"] if rt.fp64 else [])
     rows = []
-    for ndf in mf.NDFS:
-        for sh in mf.SHADOWINGS:
+    for ndf in brdf.NDFS:
+        for sh in brdf.SHADOWINGS:
             r = [f"`{ndf}`", f"`{sh}`"]
-            ref = mf.brdf(wi[None], wo[None], alpha=0.3, ndf=ndf, shadowing=sh, eta=eta[:, None], kd=kd[:, None])
+            ref = brdf.brdf(wi[None], wo[None], alpha=0.3, ndf=ndf, shadowing=sh, eta=eta[:, None], kd=kd[:, None])
             for p in precisions:
-                fc = mf.brdf_cl(wi, wo, alpha=0.3, ndf=ndf, shadowing=sh, eta=eta, kd=kd, runtime=rt, precision=p)
+                fc = brdf.brdf_cl(wi, wo, alpha=0.3, ndf=ndf, shadowing=sh, eta=eta, kd=kd, runtime=rt, precision=p)
                 r.append(f"{np.max(np.abs(fc - ref) / np.maximum(np.abs(ref), 1e-3)):.1e}")
             rows.append(r)
     return _table(["NDF", "G"] + precisions, rows)
@@ -397,12 +397,12 @@ def throughput(rt, n=200000):
             ts.append(time.perf_counter() - t0)
         return 3 * n / min(ts)
 
-    rows = [["NumPy (float64)", f"{best(lambda: mf.brdf(wi[None], wo[None], alpha=0.3, eta=eta[:, None], kd=kd[:, None])):.3g}"]]
+    rows = [["NumPy (float64)", f"{best(lambda: brdf.brdf(wi[None], wo[None], alpha=0.3, eta=eta[:, None], kd=kd[:, None])):.3g}"]]
     for p in ["float32"] + (["float64"] if rt.fp64 else []):
-        rows.append([f"OpenCL {p}", f"{best(lambda: mf.brdf_cl(wi, wo, runtime=rt, precision=p, **kw)):.3g}"])
+        rows.append([f"OpenCL {p}", f"{best(lambda: brdf.brdf_cl(wi, wo, runtime=rt, precision=p, **kw)):.3g}"])
     for ndf in ("abc",):
         rows.append([f"OpenCL float32, `{ndf}` (Λ by 32-point quadrature)",
-                     f"{best(lambda: mf.brdf_cl(wi, wo, ndf=ndf, runtime=rt, precision='float32', **kw)):.3g}"])
+                     f"{best(lambda: brdf.brdf_cl(wi, wo, ndf=ndf, runtime=rt, precision='float32', **kw)):.3g}"])
     return _table(["backend", "evaluations / s"], rows)
 
 
@@ -414,7 +414,7 @@ def figure():
     styles = {"beckmann": dict(ndf="beckmann"), "ggx": dict(ndf="ggx"), "blinn-phong": dict(ndf="blinn-phong"),
               "abc (C = 0.75)": dict(ndf="abc", abc_c=0.75)}
     for label, kw in styles.items():
-        ax1.semilogy(np.degrees(t), mf.D(m, a, **kw) * np.cos(t), label=label)
+        ax1.semilogy(np.degrees(t), brdf.D(m, a, **kw) * np.cos(t), label=label)
     ax1.set_xlabel("θ_m (degrees)")
     ax1.set_ylabel("D(m) cos θ_m  (1/sr)")
     ax1.set_title(f"NDF lobes, α = {a}")
@@ -425,7 +425,7 @@ def figure():
     wo = _dirs(np.abs(to), np.where(to < 0, 180.0, 0.0))
     wi = _dirs(thi, 180.0)
     for label, kw in styles.items():
-        ax2.semilogy(to, mf.brdf(wi, wo, alpha=a, fresnel="one", **kw), label=label)
+        ax2.semilogy(to, brdf.brdf(wi, wo, alpha=a, fresnel="one", **kw), label=label)
     ax2.axvline(thi, color="0.7", lw=0.8)
     ax2.set_xlabel("θ_o in the plane of incidence (degrees; mirror at +45°)")
     ax2.set_ylabel("f (1/sr), F = 1")
@@ -433,7 +433,7 @@ def figure():
     ax2.set_ylim(1e-5, 50)
     ax2.legend()
     fig.tight_layout()
-    from waveoptics.io import atomic_path
+    from waveoptics.io.files import atomic_path
 
     IMG.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(IMG) as tmp:
@@ -450,7 +450,7 @@ def main():
     on = oren_nayar_max()
     n_pairs, n_eval = 20000, 200000
     values = {
-        "abc_c": f"{mf.ABC_C_DEFAULT:g}", "quad_table": quadrature_accuracy(), "ident_table": identities(),
+        "abc_c": f"{brdf.ABC_C_DEFAULT:g}", "quad_table": quadrature_accuracy(), "ident_table": identities(),
         "loss_table": loss, "shadow_table": shadow, "emax": f"{emax:.10f}",
         "tradeoff_excess": f"{tradeoff_excess():+.1e}", "on_max": f"{on[0]:.4f}", "on_sigma": f"{on[1]:.2f}",
         "on_theta": f"{on[2]:g}", "on_total": f"{on[3]:.4f}", "kernel_table": kernel_agreement(rt, n_pairs), "n_pairs": str(n_pairs),
@@ -460,7 +460,7 @@ def main():
         text = text.replace(f"@{key}@", val)
     assert "@" not in re.sub(r"`[^`]*`", "", text), "unfilled placeholder"
     figure()
-    from waveoptics.io import atomic_path
+    from waveoptics.io.files import atomic_path
 
     with atomic_path(DOC) as tmp:
         tmp.write_text(text)

@@ -11,7 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from waveoptics import bench  # noqa: E402
+from waveoptics import bench
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "performance.md"
@@ -34,7 +34,7 @@ here.
 
 ## How the direct kernel got faster
 
-The direct Kirchhoff sum U = Σ_j w_j exp(2πi φ_j) (physics.md §1) costs one complex exponential per sample ×
+The direct Kirchhoff sum U = Σ_j w_j exp(2πi φ_j) (docs/physics.md §1) costs one complex exponential per sample ×
 direction × wavelength ("term"). `kernels/kirchhoff.cl` `kirchhoff_U` now
 
 * evaluates cos/sin(2πφ) with one exact argument reduction shared by both and two short polynomials
@@ -85,7 +85,7 @@ def figure(res):
         ax.grid(alpha=0.3, which="both")
     axes[0].legend(fontsize=8)
     fig.suptitle("Direct Kirchhoff sum: time against samples and directions (log-log)", fontsize=10)
-    from waveoptics.render import save_figure
+    from waveoptics.io.figures import save_figure
 
     save_figure(fig, IMG)
 
@@ -158,7 +158,7 @@ def conclusions(res) -> str:
 
 def main(argv=None):
     quick = "--quick" in (argv if argv is not None else sys.argv[1:])
-    from waveoptics.io import atomic_path, write_json
+    from waveoptics.io.files import atomic_path, write_json
     from waveoptics.runtime import get_runtime
 
     res = bench.run_all(get_runtime(), quick=quick)

@@ -10,8 +10,10 @@ from pathlib import Path
 
 import numpy as np
 
-from waveoptics import planning, scene, spectral
-from waveoptics.io import atomic_path
+from waveoptics import colour
+from waveoptics import planning
+from waveoptics.planning import scene
+from waveoptics.io.files import atomic_path
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "planning.md"
@@ -98,7 +100,7 @@ def build(tmp: Path) -> str:
          "## Decisions", "",
          "For every (material, light) pair, in this order:", ""]
     # the decision rules: the planning module's own description (single source)
-    doc = planning.__doc__.split("For every (material, light) pair of a :class:`waveoptics.scene.Scene` the planner "
+    doc = planning.planner.__doc__.split("For every (material, light) pair of a :class:`waveoptics.scene.Scene` the planner "
                                  "takes, in order:", 1)[1].split("References", 1)[0]
     doc = re.sub(r":(?:data|func|mod|class):`~?([^`]+)`", r"`\1`", doc)
     doc = re.sub(r"``([^`]+)``", r"`\1`", doc)
@@ -156,7 +158,7 @@ def build(tmp: Path) -> str:
     p1, d1, r1 = _run(sc, tmp / "plastic-forced", diffraction=True)
     v0 = np.array([v["rgb"] for v in r0["materials"][0]["views"]])
     v1 = np.array([v["rgb"] for v in r1["materials"][0]["views"]])
-    dE_views = spectral.delta_e2000(v0, v1)
+    dE_views = colour.delta_e2000(v0, v1)
     a0 = np.array(r0["materials"][0]["albedo"]["i30_0"]["rgb"])
     a1 = np.array(r1["materials"][0]["albedo"]["i30_0"]["rgb"])
     t0, t1 = d0["measured_time_s"], d1["measured_time_s"]
@@ -170,7 +172,7 @@ def build(tmp: Path) -> str:
           f"{d1['materials'][0]['estimated_time_s']:.3g} s |",
           f"| speed-up | {t1 / t0:.0f}x | |",
           f"| largest ΔE2000 at the view directions | {float(np.max(dE_views)):.2g} | (reference) |",
-          f"| ΔE2000 of the albedo colour | {float(spectral.delta_e2000(a0, a1)):.2g} | (reference) |",
+          f"| ΔE2000 of the albedo colour | {float(colour.delta_e2000(a0, a1)):.2g} | (reference) |",
           f"| sphere: ΔE2000 two-scale vs microfacet (max) | 0 | "
           f"{r1['materials'][0]['sphere']['delta_e2000_vs_microfacet']['max']:.2g} |", "",
           f"Both stay far inside the target ΔE2000 ≤ {sc.delta_e:g}: the skipped diffraction was invisible.", ""]
@@ -186,7 +188,7 @@ def build(tmp: Path) -> str:
     q1, _, s1 = _run(probe, tmp / "haze-off", diffraction=False)
     h0 = np.array([v["rgb"] for v in s0["materials"][0]["views"]])
     h1 = np.array([v["rgb"] for v in s1["materials"][0]["views"]])
-    dE_h = spectral.delta_e2000(h0, h1)
+    dE_h = colour.delta_e2000(h0, h1)
     L += [f"The opposite case, polished aluminium (α = {sc.materials[0].roughness:g}, nano "
           f"{sc.materials[0].nano.text}): the planner estimates ΔE2000 "
           f"{q0.entries[0].metrics['estimated_delta_e']:.3g} and keeps diffraction; forcing it off "

@@ -14,13 +14,14 @@ import numpy as np
 
 from waveoptics import distributed as D
 from waveoptics import io
+from waveoptics.request import SimulationRequest
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "scaling.md"
 IMG = ROOT / "docs" / "img"
 
 #: the benchmark table: gold with ABC nano-roughness, 18 incident angles x 31 wavelengths on a 128^2 grid
-BENCH_CASE = D.Case(material="Au", nano="abc:sigma=10nm,B=2um,C=2.6", micro_alpha=0.1,
+BENCH_CASE = SimulationRequest(material="Au", nano="abc:sigma=10nm,B=2um,C=2.6", micro_alpha=0.1,
                     wavelengths_nm=tuple(np.arange(400.0, 701.0, 10.0)), resolution=128)
 THETAS = tuple(float(t) for t in np.arange(0.0, 86.0, 5.0))
 BATCH = 8
@@ -86,7 +87,8 @@ def _per_task(case, thetas, *, tasks=3, batch=BATCH, realizations=1) -> dict:
 _MALLOC_PROBE = """
 import os, statistics, numpy as np
 from waveoptics import distributed as D
-spec = D.TableSpec(D.Case(**{case}), {thetas}, batch={batch})
+from waveoptics.request import SimulationRequest
+spec = D.TableSpec(SimulationRequest(**{case}), {thetas}, batch={batch})
 tasks = D.table_tasks(spec)
 D.compute_block(spec, tasks[0])
 t0 = os.times()
@@ -175,7 +177,7 @@ def _figure(s, configs) -> str:
     ax.grid(alpha=0.3, which="both")
     ax.set_title("BRDF tables on Dask: measured and projected speed-up", fontsize=10)
     name = "scaling_speedup.png"
-    from waveoptics.render import save_figure
+    from waveoptics.io.figures import save_figure
 
     save_figure(fig, IMG / name)
     return name
@@ -293,9 +295,9 @@ def main():
     with tempfile.TemporaryDirectory() as td:
         tmp = Path(td)
         bench = _measure_bench(tmp)
-        fine = _per_task(D.Case(**{**BENCH_CASE.__dict__, "wavelengths_nm": tuple(np.arange(400.0, 701.0, 5.0)),
+        fine = _per_task(SimulationRequest(**{**BENCH_CASE.__dict__, "wavelengths_nm": tuple(np.arange(400.0, 701.0, 5.0)),
                                    "resolution": 256}), THETAS)
-        hf_case = D.Case(material="Au", nano="gaussian:sigma=20nm,T=1um", micro_alpha=0.05, solver="fft",
+        hf_case = SimulationRequest(material="Au", nano="gaussian:sigma=20nm,T=1um", micro_alpha=0.05, solver="fft",
                          wavelengths_nm=BENCH_CASE.wavelengths_nm, resolution=128)
         hfield = _per_task(hf_case, THETAS, realizations=8)
     load1 = os.getloadavg()

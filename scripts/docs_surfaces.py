@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from waveoptics import surfaces as S
-from waveoptics.io import atomic_path
+from waveoptics.io.files import atomic_path
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "surfaces.md"
@@ -129,9 +129,9 @@ def _figure():
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for label, hf, model, args in (
-            ("gaussian", S.gaussian(SIG, T, 64e-6, 512, 3), S.psd_gaussian, (SIG, T)),
-            ("exponential", S.exponential(SIG, T, 64e-6, 512, 3, renormalize=False), S.psd_exponential, (SIG, T)),
-            ("ABC", S.abc(4e-6, 3.5, 64e-6, 512, 3, sigma=SIG), S.psd_abc, (S.abc_A(SIG, 4e-6, 3.5), 4e-6, 3.5))):
+            ("gaussian", S.gaussian(SIG, T, 64e-6, 512, 3), S.S_gaussian, (SIG, T)),
+            ("exponential", S.exponential(SIG, T, 64e-6, 512, 3, renormalize=False), S.S_exponential, (SIG, T)),
+            ("ABC", S.abc(4e-6, 3.5, 64e-6, 512, 3, sigma=SIG), S.S_abc, (SIG, 4e-6, 3.5))):
         f, P = S.psd_radial(hf)
         line, = ax.loglog(f * 1e-6, P, ".", ms=2, alpha=0.6, label=f"{label}: radial periodogram")
         ax.loglog(f * 1e-6, model(f, *args), color=line.get_color(), lw=1.2, label=f"{label}: closed form")

@@ -8,9 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
-from waveoptics import compare, materials, microfacet, psd, render, simulate, twoscale
-from waveoptics.diffraction import DirectionGrid
+from waveoptics import brdf, scatter, surfaces
+from waveoptics import compare, simulate
+from waveoptics import materials
+from waveoptics.brdf import twoscale
+from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.units import direction_from_angles
+from waveoptics import colour, render
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "two-scale.md"
@@ -21,9 +25,9 @@ def limits_table() -> str:
     grid = DirectionGrid.hemisphere(96)
     w = np.array([400.0, 550.0, 700.0])
     wi = direction_from_angles(30.0, 0.0)
-    model = psd.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)
+    model = surfaces.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)
     rows = ["| check | measured | tolerance in tests |", "|---|---|---|"]
-    zero = twoscale.Nano(model=psd.PSDModel("abc", sigma=0.0, B=2e-6, C=2.6))
+    zero = twoscale.Nano(model=surfaces.PSDModel("abc", sigma=0.0, B=2e-6, C=2.6))
     L = twoscale.evaluate(wi, w, "Au", twoscale.Micro(alpha=0.2), zero, grid)
     rows.append(f"| σ_nano = 0: max abs(two-scale − microfacet) | {np.abs(L.total - L.microfacet).max():.1e} | exact |")
     mat = materials.get_material("Al")
@@ -32,8 +36,8 @@ def limits_table() -> str:
     h = wi + wo
     h /= np.linalg.norm(h, axis=-1, keepdims=True)
     cos_d = np.clip(h @ wi, 0, 1)
-    rho = microfacet.albedo(wi, fresnel="one", alpha=microfacet.ALPHA_MIN)
-    err = max(np.abs(L.diffraction[i] - np.where(grid.inside, psd.scattered_lobe(wi, wo, lam, model,
+    rho = brdf.albedo(wi, fresnel="one", alpha=brdf.ALPHA_MIN)
+    err = max(np.abs(L.diffraction[i] - np.where(grid.inside, scatter.scattered_lobe(wi, wo, lam, model,
                                                                                F=mat.F(cos_d, lam)), 0) * rho).max()
               / L.diffraction[i].max() for i, lam in enumerate(w))
     rows.append(f"| α_micro = 0: max rel. difference to the pure nano lobe | {err:.1e} | 1e-9 |")
@@ -41,7 +45,7 @@ def limits_table() -> str:
     rng = np.random.default_rng(0)
     for _ in range(20):
         th = rng.uniform(0, 80)
-        m = psd.PSDModel("abc", sigma=rng.uniform(1, 60) * 1e-9, B=rng.uniform(0.5, 20) * 1e-6, C=rng.uniform(2.3, 4))
+        m = surfaces.PSDModel("abc", sigma=rng.uniform(1, 60) * 1e-9, B=rng.uniform(0.5, 20) * 1e-6, C=rng.uniform(2.3, 4))
         name = rng.choice(["Au", "Ag", "Al", "Cu"])
         wi2 = direction_from_angles(th, 0.0)
         L = twoscale.evaluate(wi2, w, name, twoscale.Micro(alpha=rng.choice([0.0, 0.05, 0.2, 0.5])),
@@ -61,7 +65,7 @@ def main():
         for name in ("lobes.png", "brdf.png", "sphere_diff.png"):
             shutil.copy(Path(tmp) / name, IMG / f"two_scale_{name}")
     wave, mf, dE, mask = simulate.render_spheres(sim, 256)
-    pos = (wave @ compare.LUMA)[mask]
+    pos = colour.luminance(wave)[mask]
     exposure = min(0.18 / float(np.exp(np.mean(np.log(pos[pos > 1e-8])))), 4.0)
     render.plot_spheres([render.tonemap(wave, exposure), render.tonemap(mf, exposure)],
                         ["two-scale (diffraction)", "microfacet only"], IMG / "two_scale_spheres.png",
@@ -75,7 +79,7 @@ def main():
 
 ## Model
 Micro-geometry (≫ λ, below a pixel) is a microfacet NDF D with roughness α; each microfacet carries
-nano-roughness (≈ λ or smaller) of rms height σ. Following Holzschuch & Pacanowski (2017) and physics.md §7, the
+nano-roughness (≈ λ or smaller) of rms height σ. Following Holzschuch & Pacanowski (2017) and docs/physics.md §7, the
 light a facet reflects splits into
 
 * a **coherent** part, the fraction A(λ, θ_d) = exp(−(4πσ cos θ_d / λ)²) (Davies 1954) that stays in the

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 from scipy.special import jv
 
-from waveoptics import diffraction as D
-from waveoptics import microfacet, surfaces
-from waveoptics.io import atomic_path
+from waveoptics import brdf, scatter
+from waveoptics import surfaces
+from waveoptics.io.files import atomic_path
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "wave-optics.md"
@@ -28,7 +28,7 @@ L = LAM * 1e-9
 
 def _quiet(fn, *a, **kw):
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", D.DiffractionWarning)
+        warnings.simplefilter("ignore", scatter.DiffractionWarning)
         return fn(*a, **kw)
 
 
@@ -54,7 +54,7 @@ def _flat_table(rt):
     for theta in (0.0, 30.0, 60.0, 75.0):
         for solver in ("fft", "direct") if rt is not None else ("fft",):
             hf = surfaces.flat(28.8e-6, 256)
-            res = _quiet(D.scatter, hf, (theta, 0.0), wl, mat, solver=solver, resolution=128, runtime=rt)
+            res = _quiet(scatter.scatter, hf, (theta, 0.0), wl, mat, solver=solver, resolution=128, runtime=rt)
             r = res.albedo / mat.F(math.cos(math.radians(theta)), wl)
             rows.append(f"| {theta:g}° | {solver} | {', '.join(f'{x:.5f}' for x in r)} |")
     return "\n".join(rows)
@@ -66,7 +66,7 @@ def _coherent_table():
     F = 0.9
     for sigma in (10e-9, 20e-9, 40e-9):
         for theta in (0.0, 30.0, 60.0):
-            res = _quiet(D.scatter, lambda s: surfaces.gaussian(sigma, 1e-6, 256 * L / 4, 256, seed=s),
+            res = _quiet(scatter.scatter, lambda s: surfaces.gaussian(sigma, 1e-6, 256 * L / 4, 256, seed=s),
                          (theta, 0.0), [LAM], F, resolution=128, realizations=8, seed=100)
             g = (4 * np.pi * sigma * math.cos(math.radians(theta)) / L) ** 2
             rows.append(f"| {sigma * 1e9:g} nm | {theta:g}° | {g:.4f} | {math.exp(-g):.4f} | "
@@ -77,19 +77,19 @@ def _coherent_table():
 
 def _grating(theta=20.0, amplitudes=(20e-9, 60e-9, 120e-9), solver="fft", rt=None):
     period = 8 * L
-    grid = D.DirectionGrid(256, 64, (-1, 1), (-0.25, 0.25))
+    grid = scatter.DirectionGrid(256, 64, (-1, 1), (-0.25, 0.25))
     si, ci = math.sin(math.radians(theta)), math.cos(math.radians(theta))
     out = {}
     for a in amplitudes:
         hf = surfaces.sinusoid(a, period, (64 * L, 16 * L), (256, 64))
-        res = _quiet(D.scatter, hf, (theta, 0.0), [LAM], grid=grid, solver=solver, runtime=rt)
+        res = _quiet(scatter.scatter, hf, (theta, 0.0), [LAM], grid=grid, solver=solver, runtime=rt)
         rows = []
         for m in range(-5, 6):
             um = -(si + m * L / period)
             if abs(um) >= 0.97:
                 continue
             box = np.broadcast_to(np.abs(grid.u - um)[None, :] < 0.5 * L / period, grid.inside.shape)
-            eta = D.integrate(res.brdf[0], grid, region=box)
+            eta = scatter.integrate(res.brdf[0], grid, region=box)
             cm = math.sqrt(1 - um**2)
             s2 = (si + um) ** 2 + (ci + cm) ** 2
             pred = s2**2 / (4 * ci * cm * (ci + cm) ** 2) * jv(m, 2 * np.pi / L * a * (ci + cm)) ** 2
@@ -112,13 +112,13 @@ def _grating_table(gr):
 def _beckmann(realizations=64):
     sigma, alpha = L, 0.3
     T = 2 * sigma / alpha
-    grid = D.DirectionGrid.hemisphere(64)
+    grid = scatter.DirectionGrid.hemisphere(64)
     make = lambda s: surfaces.gaussian(sigma, T, 128 * L / 2, 128, seed=s)  # noqa: E731
-    res = _quiet(D.scatter, make, (0.0, 0.0), [LAM], grid=grid, realizations=realizations, seed=100)
-    res0 = _quiet(D.scatter, make, (0.0, 0.0), [LAM], grid=grid, realizations=realizations, seed=100, order=0)
+    res = _quiet(scatter.scatter, make, (0.0, 0.0), [LAM], grid=grid, realizations=realizations, seed=100)
+    res0 = _quiet(scatter.scatter, make, (0.0, 0.0), [LAM], grid=grid, realizations=realizations, seed=100, order=0)
     d = grid.directions()
-    h = microfacet.half_vector(res.incident, d)
-    fb = np.where(grid.inside, microfacet.D(h, alpha, ndf="beckmann") / (4 * np.maximum(d[..., 2], 1e-9)), 0.0)
+    h = brdf.half_vector(res.incident, d)
+    fb = np.where(grid.inside, brdf.D(h, alpha, ndf="beckmann") / (4 * np.maximum(d[..., 2], 1e-9)), 0.0)
     th_h = np.degrees(np.arccos(np.clip(h[..., 2], -1, 1)))
     rings = []
     for a in range(0, 40, 4):
@@ -132,9 +132,9 @@ def _beckmann_table(res, res0, fb, rings, grid):
     sep = "|---" * (len(rings) + 1) + "|"
     r1 = "| Kirchhoff (exact) / Beckmann | " + " | ".join(f"{r:.3f}" for _, r, _ in rings) + " |"
     r0 = "| fft order 0 (frozen v_z) / Beckmann | " + " | ".join(f"{r:.3f}" for _, _, r in rings) + " |"
-    alb = (f"\n\nAlbedo: Kirchhoff {res.albedo[0]:.4f} (inside sin θ_o ≤ {D.HORIZON_SIN}: {res.albedo_inner[0]:.4f}), "
+    alb = (f"\n\nAlbedo: Kirchhoff {res.albedo[0]:.4f} (inside sin θ_o ≤ {scatter.HORIZON_SIN}: {res.albedo_inner[0]:.4f}), "
            f"frozen v_z {res0.albedo[0]:.4f} (inside: {res0.albedo_inner[0]:.4f}), Beckmann without shadowing "
-           f"{D.integrate(fb, grid):.4f}.")
+           f"{scatter.integrate(fb, grid):.4f}.")
     return "\n".join([head, sep, r1, r0]) + alb
 
 
@@ -144,13 +144,13 @@ def _frozen_table():
     for name, sigma, T in (("σ = λ/20, T = 2λ", L / 20, 2 * L), ("σ = λ/4, T = 4λ", L / 4, 4 * L),
                            ("σ = λ, T = 6.7λ", L, 6.7 * L)):
         hf = surfaces.gaussian(sigma, T, 64 * L, 256, seed=5)
-        smp = D.samples(hf)
-        wi = D._incident((30.0, 0.0))
-        grid = D.DirectionGrid.hemisphere(96)
+        smp = scatter.samples(hf)
+        wi = scatter.grid._incident((30.0, 0.0))
+        grid = scatter.DirectionGrid.hemisphere(96)
         d = grid.directions()
-        f0 = D.brdf_from_field(D.field_fft(smp, wi, grid, LAM, 0)[0][None], wi, d, [LAM], smp.area)[0]
-        Ua, info = D.field_fft(smp, wi, grid, LAM)
-        fa = D.brdf_from_field(Ua[None], wi, d, [LAM], smp.area)[0]
+        f0 = scatter.brdf_from_field(scatter.field_fft(smp, wi, grid, LAM, 0)[0][None], wi, d, [LAM], smp.area)[0]
+        Ua, info = scatter.field_fft(smp, wi, grid, LAM)
+        fa = scatter.brdf_from_field(Ua[None], wi, d, [LAM], smp.area)[0]
         dist = np.hypot(d[..., 0] + wi[0], d[..., 1] + wi[1])
         cells = []
         for r0, r1 in ((0, 0.05), (0.05, 0.2), (0.2, 0.5), (0.5, 1.0), (1.0, 2.0)):
@@ -165,42 +165,42 @@ def _cost_table(rt):
     phase = ""
     for n, res_ in ((128, 128), (256, 256)):
         hf = surfaces.gaussian(L / 4, 4 * L, n * L / 4, n, seed=1)
-        smp = D.samples(hf)
-        grid = D.DirectionGrid.hemisphere(res_)
+        smp = scatter.samples(hf)
+        grid = scatter.DirectionGrid.hemisphere(res_)
         dirs = grid.directions()[grid.inside]
         nd = dirs.shape[0]
-        wi = D._incident((30.0, 0.0))
+        wi = scatter.grid._incident((30.0, 0.0))
         for order in (0, "auto"):
             t = time.perf_counter()
-            _, info = D.field_fft(smp, wi, grid, LAM, order)
+            _, info = scatter.field_fft(smp, wi, grid, LAM, order)
             dt = time.perf_counter() - t
             lab = "fft order 0" if order == 0 else f"fft auto ({info['bands']} bands, {info['transforms']} transforms)"
             rows.append(f"| {n}² | {res_}² | {nd} | {lab} | {dt:.3f} | – |")
-        coef = D.phase_coefficients(smp, wi, dirs, [LAM])
+        coef = scatter.phase_coefficients(smp, wi, dirs, [LAM])
         if rt is not None:
             for prec in ("float32", "float64") if rt.fp64 else ("float32",):
-                D.kirchhoff_U_cl(smp, coef.take(slice(0, 64)), runtime=rt, precision=prec)   # build + warm up
+                scatter.kirchhoff_U_cl(smp, coef.take(slice(0, 64)), runtime=rt, precision=prec)   # build + warm up
                 t = time.perf_counter()
-                D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=prec)
+                scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=prec)
                 dt = time.perf_counter() - t
                 rows.append(f"| {n}² | {res_}² | {nd} | direct OpenCL {prec} | {dt:.3f} | "
                             f"{smp.size * nd / dt / 1e9:.3f} |")
         sub = coef.take(slice(0, 256))
         t = time.perf_counter()
-        D.kirchhoff_U(smp, sub)
+        scatter.kirchhoff_U(smp, sub)
         dt = (time.perf_counter() - t) * nd / sub.size
         rows.append(f"| {n}² | {res_}² | {nd} | direct NumPy float64 (extrapolated from 256 directions) | {dt:.2f} | "
                     f"{smp.size * nd / dt / 1e9:.4f} |")
     if rt is not None:
         nx = 2**16
         hf = surfaces.HeightField(np.random.default_rng(7).normal(0.0, 50e-9, (2, nx)), L / 4)
-        smp = D.samples(hf, "boxcar")
-        wi = D._incident((60.0, 0.0))
+        smp = scatter.samples(hf, "boxcar")
+        wi = scatter.grid._incident((60.0, 0.0))
         wo = np.array([[-math.sin(math.radians(75)), 0.0, math.cos(math.radians(75))]])
-        coef = D.phase_coefficients(smp, wi, wo, [LAM])
-        ref = D.kirchhoff_phase(smp.ix, smp.iy, smp.h, coef.Ax[0], coef.Ay[0], coef.lox[0], coef.loy[0], coef.cz[0],
+        coef = scatter.phase_coefficients(smp, wi, wo, [LAM])
+        ref = scatter.kirchhoff_phase(smp.ix, smp.iy, smp.h, coef.Ax[0], coef.Ay[0], coef.lox[0], coef.loy[0], coef.cz[0],
                                 coef.c0[0])
-        e = D.kirchhoff_phase_cl(smp, coef, 0, runtime=rt, precision="float32") - ref
+        e = scatter.kirchhoff_phase_cl(smp, coef, 0, runtime=rt, precision="float32") - ref
         err = 2 * np.pi * np.abs(e - np.round(e)).max()
         x = hf.coords()[0][smp.ix]
         k = np.float32(2 * np.pi / L)
@@ -223,10 +223,10 @@ def _lobe_figure(gr, beck):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    smooth = _quiet(D.scatter, surfaces.gaussian(20e-9, 1e-6, 256 * L / 4, 256, seed=3), (30.0, 0.0), [LAM],
+    smooth = _quiet(scatter.scatter, surfaces.gaussian(20e-9, 1e-6, 256 * L / 4, 256, seed=3), (30.0, 0.0), [LAM],
                     resolution=256)
     res_b = beck[0]
-    grating = _quiet(D.scatter, surfaces.sinusoid(60e-9, 8 * L, 64 * L, 256), (20.0, 0.0), [LAM], resolution=256)
+    grating = _quiet(scatter.scatter, surfaces.sinusoid(60e-9, 8 * L, 64 * L, 256), (20.0, 0.0), [LAM], resolution=256)
     fig, axes = plt.subplots(1, 3, figsize=(13, 4.2), layout="constrained")
     for ax, (title, res, dec) in zip(axes, (("grating a = 60 nm, Λ = 8λ, θ_i = 20°", grating, 6),
                                             ("Gaussian σ = 20 nm, T = 1 µm, θ_i = 30°", smooth, 6),
@@ -295,7 +295,7 @@ kirchhoff`.
 
 ### Model
 For a height-field patch h(x, y), a direction to the light ω_i and to the viewer ω_o, s = ω_i + ω_o, k = 2π/λ
-and a smooth window w over the patch (physics.md §1; Beckmann & Spizzichino 1963):
+and a smooth window w over the patch (docs/physics.md §1; Beckmann & Spizzichino 1963):
 
     U(ω_i, ω_o) = ∫ w exp(i k s · (x, y, h)) dx dy        A_w = ∫ w² dx dy
     f(ω_i, ω_o) = F(θ_d) |s|⁴ / (4 λ² A_w cos θ_i cos θ_o (cos θ_i + cos θ_o)²) · |U|²        [1/sr]
@@ -310,7 +310,7 @@ the cells inside the unit disc (`DirectionGrid`, cell centres, row = v, column =
 
 Per wavelength `diffraction.scatter` returns the ensemble-mean BRDF over the grid, the albedo (whole disc and
 inside sin θ_o ≤ {hs}), the **coherent specular fraction** |⟨χ̂⟩|² with χ̂ = Σ w² exp(2i k cos θ_i h) / Σ w² (the
-patch estimate of ⟨exp(i v_z h)⟩, physics.md §2) and the **scattered fraction** = albedo − |⟨χ̂⟩|² · E_flat, where
+patch estimate of ⟨exp(i v_z h)⟩, docs/physics.md §2) and the **scattered fraction** = albedo − |⟨χ̂⟩|² · E_flat, where
 E_flat is the albedo of the same window without heights on the same grid (so that a flat patch scatters exactly
 0, whatever the quadrature error). The w² weights make exp(i v_z h) − χ̂ orthogonal to w, so the coherent and the
 scattered lobes add without a cross term. Ensembles: a list of height fields, a generator `seed -> HeightField`
@@ -322,7 +322,7 @@ with `realizations=N`, or one field split into N tiles (`split_patch`).
   masking**: at grazing angles rough surfaces reflect too much (the Beckmann limit below is the microfacet model
   *without* G). The σ ≫ λ test shows the remaining difference.
 - **Fresnel at θ_d**: exact for a flat surface and in the σ ≫ λ limit; for smooth surfaces the scattered part
-  carries F(θ_d) instead of the Rayleigh-Rice polarization factor Q (physics.md §4).
+  carries F(θ_d) instead of the Rayleigh-Rice polarization factor Q (docs/physics.md §4).
 - **Near the horizon** the 1/cos θ_o of the BRDF amplifies any error, and the model is least trustworthy there.
   `ScatterResult.albedo_inner` excludes sin θ_o > {hs}; a warning names the share of the albedo beyond it when it
   exceeds 5 %. The frozen-v_z fft approximation (below) is what fails worst there: see the Beckmann table.
@@ -368,15 +368,15 @@ def main():
     ring = {}
     for name in ("boxcar", "hann"):
         hf = surfaces.flat(32e-6, 128)
-        r = D.scatter(hf, (0.0, 0.0), [LAM], resolution=128, window_name=name)
-        ring[name] = D.integrate(r.brdf[0], r.grid, region=r.grid.sin_theta > 16 * L / hf.extent[0]) / r.albedo[0]
+        r = scatter.scatter(hf, (0.0, 0.0), [LAM], resolution=128, window_name=name)
+        ring[name] = scatter.integrate(r.brdf[0], r.grid, region=r.grid.sin_theta > 16 * L / hf.extent[0]) / r.albedo[0]
     gr, _ = _grating()
     beck = _beckmann()
     cost, phase = _cost_table(rt)
     img_lobes = _lobe_figure(gr, beck)
     img_curves = _curve_figure(gr, beck)
-    parts = [TEXT_MODEL.format(device=device, ring_box=ring["boxcar"], ring_hann=ring["hann"], hs=D.HORIZON_SIN,
-                               tol=D.FFT_TOL, bx=D.FFT_BAND_X)]
+    parts = [TEXT_MODEL.format(device=device, ring_box=ring["boxcar"], ring_hann=ring["hann"], hs=scatter.HORIZON_SIN,
+                               tol=scatter.FFT_TOL, bx=scatter.FFT_BAND_X)]
     parts.append("\nMeasured cost on this machine (one wavelength, θ_i = 30°, Gaussian σ = λ/4, T = 4λ, dx = λ/4; "
                  "directions = grid cells inside the disc):\n\n" + cost + "\n\n" + phase + "\n")
     parts.append("\nError of the frozen-v_z fft (`order=0`) against the exact lobe (`order='auto'`, itself equal to "
@@ -397,14 +397,14 @@ def main():
                  "**Sinusoidal grating** h = a sin(2πx/Λ), Λ = 8λ, θ_i = 20°: power in each order (the BRDF "
                  "summed over a strip of width λ/Λ around sin θ_m = sin θ_i + mλ/Λ) against the Kirchhoff "
                  "prediction O_m J_m²(k a (cos θ_i + cos θ_m)) with O_m = |s|⁴/(4 cos θ_i cos θ_m (cos θ_i + "
-                 "cos θ_m)²) (physics.md §5), and against the paraxial J_m²(2 k a cos θ_i).\n\n"
+                 "cos θ_m)²) (docs/physics.md §5), and against the paraxial J_m²(2 k a cos θ_i).\n\n"
                  + _grating_table(gr) + "\n\n"
                  f"![grating and Beckmann](img/{img_curves})\n\n"
                  "**Gaussian surface, σ ≫ λ** (σ = λ, T = 2σ/0.3 so α = 2σ/T = 0.3, 128² at λ/2, 64 realizations, "
                  "normal incidence): ring means in θ_h of the averaged lobe over Beckmann D / (4 cos θ_i cos θ_o) "
                  "(F = 1, no shadowing). Within θ_h < 24° the exact Kirchhoff lobe is within a few percent; the "
                  "far tail is heavier — at finite g = (4πσ/λ)² ≈ 158 the Kirchhoff lobe is a Poisson mixture of "
-                 "Gaussians of different widths (physics.md §3), and the patch's diffraction blurs the lobe by "
+                 "Gaussians of different widths (docs/physics.md §3), and the patch's diffraction blurs the lobe by "
                  "~λ/L. The frozen v_z (order 0) maps slopes with the wrong v_z and puts far too much light near "
                  "the horizon.\n\n" + _beckmann_table(*beck[:4], beck[4]) + "\n")
     parts.append("""

@@ -7,7 +7,7 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from waveoptics import runtime as _runtime  # noqa: E402
+from waveoptics import runtime as _runtime
 
 #: kernel-vs-NumPy tolerances per precision (absolute, on quantities of order 1)
 KERNEL_ATOL = {"float32": 2e-5, "float64": 1e-12}

@@ -30,13 +30,19 @@ from typing import Callable
 
 import numpy as np
 
-from waveoptics import diffraction as D
-from waveoptics import fresnel, materials, psd, spectral, surfaces, twoscale, units
+from waveoptics import brdf, colour, scatter, surfaces
+from waveoptics import units
+from waveoptics.materials import fresnel
+from waveoptics import materials
+from waveoptics.brdf import twoscale
 from waveoptics import io as wio
-from waveoptics import microfacet as mf
 from waveoptics import simulate as wsim
-from waveoptics.surfaces import HeightField
+from waveoptics.request import parse_nano
+from waveoptics.surfaces.heightfield import HeightField
 from waveoptics.units import direction_from_angles
+from waveoptics.cli import build_parser, command_parser
+from waveoptics.cli._common import field_flags
+from waveoptics.errors import FieldError
 
 LAM = 500.0                       # nm
 L = LAM * 1e-9                    # m
@@ -199,7 +205,7 @@ def _dirs(theta, phi=0.0):
 
 
 def _grid(n=48):
-    return D.DirectionGrid.hemisphere(n)
+    return scatter.DirectionGrid.hemisphere(n)
 
 
 def _twoscale(theta, material="Ag", *, alpha=0.05, alpha_y=None, nano="gaussian", sigma=100e-9, T=1e-6,
@@ -210,7 +216,7 @@ def _twoscale(theta, material="Ag", *, alpha=0.05, alpha_y=None, nano="gaussian"
     if surface is not None:
         n = twoscale.Nano(surface=surface)
     elif sigma > 0:
-        n = twoscale.Nano(model=psd.PSDModel(nano, sigma=sigma, T=T))
+        n = twoscale.Nano(model=surfaces.PSDModel(nano, sigma=sigma, T=T))
     else:
         n = None
     mat = materials.get_material(material)
@@ -251,7 +257,7 @@ def _rough(sigma, shape=(48, 48), corr_px=4.0, seed=2):
 
 def _scatter(hf, theta=30.0, **kw):
     kw.setdefault("resolution", 32)
-    res = D.scatter(hf, (theta, 0.0), [LAM], **kw)
+    res = scatter.scatter(hf, (theta, 0.0), [LAM], **kw)
     return {"brdf": res.brdf, "albedo": res.albedo, "coherent": res.coherent_specular_fraction}
 
 
@@ -260,7 +266,7 @@ def _scatter(hf, theta=30.0, **kw):
 def _microfacet_albedo_grazing(theta):
     def run(env):
         wi = _dirs(theta)[0]
-        return {f"E_{ndf}": mf.albedo(wi, alpha=0.1, ndf=ndf, fresnel="one") for ndf in ("ggx", "beckmann")}
+        return {f"E_{ndf}": brdf.albedo(wi, alpha=0.1, ndf=ndf, fresnel="one") for ndf in ("ggx", "beckmann")}
     return run
 
 
@@ -268,27 +274,27 @@ def _nl_zero(env):
     up = _dirs([0.0, 45.0, 89.9])
     flat = _dirs([90.0, 90.0], [0.0, 135.0])
     out = {}
-    for ndf in mf.NDFS:
-        out[f"f_{ndf}_l"] = mf.brdf(flat[:, None], up[None], alpha=0.3, ndf=ndf, eta=1.5, kd=0.5)
-        out[f"f_{ndf}_v"] = mf.brdf(up[:, None], flat[None], alpha=0.3, ndf=ndf, eta=1.5, kd=0.5)
+    for ndf in brdf.NDFS:
+        out[f"f_{ndf}_l"] = brdf.brdf(flat[:, None], up[None], alpha=0.3, ndf=ndf, eta=1.5, kd=0.5)
+        out[f"f_{ndf}_v"] = brdf.brdf(up[:, None], flat[None], alpha=0.3, ndf=ndf, eta=1.5, kd=0.5)
     return out
 
 
 def _l_equals_v(env):
     w = _dirs([0.0, 45.0, 89.0, 89.999])
-    return {f"f_{ndf}": mf.brdf(w, w, alpha=a, ndf=ndf, eta=0.2 + 3.1j, kd=0.0)
-            for ndf in mf.NDFS for a in (0.0, 0.3)}
+    return {f"f_{ndf}": brdf.brdf(w, w, alpha=a, ndf=ndf, eta=0.2 + 3.1j, kd=0.0)
+            for ndf in brdf.NDFS for a in (0.0, 0.3)}
 
 
 def _l_minus_v(env):
     w = _dirs([0.0, 30.0, 89.9])
     refl = w * np.array([-1.0, -1.0, 1.0])
     out = {}
-    for sh in mf.SHADOWINGS:
-        out[f"anti_{sh}"] = mf.brdf(w, -w, alpha=0.2, shadowing=sh, eta=1.5, kd=0.5)
-        out[f"refl_{sh}"] = mf.brdf(w, -refl, alpha=0.2, shadowing=sh, eta=1.5, kd=0.5)
+    for sh in brdf.SHADOWINGS:
+        out[f"anti_{sh}"] = brdf.brdf(w, -w, alpha=0.2, shadowing=sh, eta=1.5, kd=0.5)
+        out[f"refl_{sh}"] = brdf.brdf(w, -refl, alpha=0.2, shadowing=sh, eta=1.5, kd=0.5)
     if env.rt is not None:
-        out["kernel"] = mf.brdf_cl(np.r_[w, w], np.r_[-w, -refl], alpha=0.2, eta=1.5, kd=0.5, runtime=env.rt)
+        out["kernel"] = brdf.brdf_cl(np.r_[w, w], np.r_[-w, -refl], alpha=0.2, eta=1.5, kd=0.5, runtime=env.rt)
     return out
 
 
@@ -296,9 +302,9 @@ def _psd_grazing(theta):
     def run(env):
         wi = _dirs(theta)[0]
         wo = np.r_[_dirs([0.0, 45.0, 89.0, 89.999, 90.0], 180.0), [[0.3, 0.0, -0.95]]]
-        m = psd.PSDModel("exponential", sigma=20e-9, T=1e-6)
-        return {"series": psd.scattered_lobe(wi, wo, LAM, m), "rayleigh_rice": psd.rayleigh_rice(wi, wo, LAM, m),
-                "horizon": np.r_[psd.scattered_lobe(wi, wo[4:], LAM, m), psd.rayleigh_rice(wi, wo[4:], LAM, m)]}
+        m = surfaces.PSDModel("exponential", sigma=20e-9, T=1e-6)
+        return {"series": scatter.scattered_lobe(wi, wo, LAM, m), "rayleigh_rice": scatter.rayleigh_rice(wi, wo, LAM, m),
+                "horizon": np.r_[scatter.scattered_lobe(wi, wo[4:], LAM, m), scatter.rayleigh_rice(wi, wo[4:], LAM, m)]}
     return run
 
 
@@ -307,7 +313,7 @@ def _kirchhoff_brdf_grazing(env):
     wo = np.r_[_dirs([0.0, 45.0, 89.0, 89.9, 89.999, 90.0], 180.0), [[0.3, 0.1, -0.9]]]
     out = {}
     for th in GRAZING:
-        f = D.brdf(hf, (th, 0.0), wo, [LAM], solver="direct", backend="numpy")
+        f = scatter.brdf(hf, (th, 0.0), wo, [LAM], solver="direct", backend="numpy")
         out[f"f_{th:g}"] = f
         out[f"horizon_{th:g}"] = f[:, 5:]
     return out
@@ -317,7 +323,7 @@ def _scatter_grazing(theta):
     def run(env):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            res = D.scatter(_hf(0.1 * L, (64, 64), T=2 * L), (theta, 0.0), [LAM], resolution=48)
+            res = scatter.scatter(_hf(0.1 * L, (64, 64), T=2 * L), (theta, 0.0), [LAM], resolution=48)
         warned = [str(w.message) for w in caught if "energy not conserved" in str(w.message)]
         return {"brdf": res.brdf, "albedo": res.albedo, "energy_warnings": [len(warned)]}
     return run
@@ -332,8 +338,8 @@ def _twoscale_grazing(theta):
 def _furnace(alpha, alpha_y, ndfs=("ggx", "beckmann")):
     def run(env):
         wi = _dirs(60.0, 30.0)[0]
-        out = {f"E_{n}": mf.albedo(wi, alpha=alpha, alpha_y=alpha_y, ndf=n, fresnel="one") for n in ndfs}
-        out["f"] = mf.brdf(_dirs([10.0, 60.0, 89.9], 30.0)[:, None], _dirs([0.0, 45.0, 89.99], 200.0)[None],
+        out = {f"E_{n}": brdf.albedo(wi, alpha=alpha, alpha_y=alpha_y, ndf=n, fresnel="one") for n in ndfs}
+        out["f"] = brdf.brdf(_dirs([10.0, 60.0, 89.9], 30.0)[:, None], _dirs([0.0, 45.0, 89.99], 200.0)[None],
                            alpha=alpha, alpha_y=alpha_y, ndf=ndfs[0], eta=10 + 100j)
         return out
     return run
@@ -341,7 +347,7 @@ def _furnace(alpha, alpha_y, ndfs=("ggx", "beckmann")):
 
 def _sigma_zero(env):
     o = _twoscale(30.0, "Au", sigma=0.0)
-    zero = twoscale.Nano(model=psd.PSDModel("abc", sigma=0.0, B=2e-6, C=2.6))
+    zero = twoscale.Nano(model=surfaces.PSDModel("abc", sigma=0.0, B=2e-6, C=2.6))
     lob = twoscale.evaluate(_dirs(30.0)[0], [450.0, 650.0], "Au", twoscale.Micro(alpha=0.05), zero, _grid())
     return {**o, "difference": np.abs(lob.total - lob.microfacet)}
 
@@ -438,7 +444,7 @@ def _illuminant_case(make):
     def run(env):
         ill = make(env)
         o = _simulate("Au", illuminant=ill, wavelengths=None)
-        o["white_rgb"] = spectral.reflectance_to_rgb(np.ones(3), np.array([450.0, 550.0, 650.0]), ill)
+        o["white_rgb"] = colour.reflectance_to_rgb(np.ones(3), np.array([450.0, 550.0, 650.0]), ill)
         return o
     return run
 
@@ -451,12 +457,12 @@ def _strip_field(precision, sigma):
         n = 40000
         h = np.random.default_rng(3).normal(0.0, sigma, (1, n)) if sigma > 0 else np.zeros((1, n))
         hf = HeightField(h, L / 4)
-        smp = D.samples(hf)
-        wi = D._incident((30.0, 0.0))
+        smp = scatter.samples(hf)
+        wi = scatter.grid._incident((30.0, 0.0))
         th = 30.0 + np.array([0.0, 1e-3, 0.01, 0.1, 1.0, 10.0, 40.0, 59.9])
-        coef = D.phase_coefficients(smp, wi, direction_from_angles(th, 180.0), [LAM])
-        ref = D.kirchhoff_U(smp, coef)
-        U = D.kirchhoff_U_cl(smp, coef, runtime=env.rt, precision=precision)
+        coef = scatter.phase_coefficients(smp, wi, direction_from_angles(th, 180.0), [LAM])
+        ref = scatter.kirchhoff_U(smp, coef)
+        U = scatter.kirchhoff_U_cl(smp, coef, runtime=env.rt, precision=precision)
         peak = smp.w.sum() * smp.dx * smp.dy
         err = np.abs(U - ref) / peak
         I, Iref = np.abs(U) ** 2 / peak ** 2, np.abs(ref) ** 2 / peak ** 2
@@ -483,12 +489,12 @@ def _kernel_heights(precision, sigma, offset=0.0):
     def run(env):
         hf = _rough(sigma)
         hf = HeightField(hf.heights + offset, hf.dx)
-        smp = D.samples(hf)
-        wi = D._incident((40.0, 30.0))
+        smp = scatter.samples(hf)
+        wi = scatter.grid._incident((40.0, 30.0))
         wo = direction_from_angles(np.linspace(0.0, 85.0, 60), np.linspace(0.0, 350.0, 60))
-        coef = D.phase_coefficients(smp, wi, wo, [400.0, 700.0])
-        ref = D.kirchhoff_U(smp, coef)
-        U = D.kirchhoff_U_cl(smp, coef, runtime=env.rt, precision=precision)
+        coef = scatter.phase_coefficients(smp, wi, wo, [400.0, 700.0])
+        ref = scatter.kirchhoff_U(smp, coef)
+        U = scatter.kirchhoff_U_cl(smp, coef, runtime=env.rt, precision=precision)
         peak = smp.w.sum() * smp.dx * smp.dy
         return {"abs_error": np.abs(U - ref) / peak, "intensity": np.abs(U) ** 2 / peak ** 2}
     return run
@@ -555,7 +561,7 @@ def _cases() -> list[HardCase]:
                      lambda env, a=a: _twoscale(30.0, "Au", alpha=a, sigma=20e-9),
                      _at_most("albedo", "F", excess=TOL["albedo_excess"])))
     add(HardCase("alpha-10", "roughness", "α = 10 (policy: α ∈ [0, 2], refused)",
-                 lambda env: mf.brdf(_dirs(30.0), _dirs(40.0), alpha=10.0, eta=1.5),
+                 lambda env: brdf.brdf(_dirs(30.0), _dirs(40.0), alpha=10.0, eta=1.5),
                  refuse=r"alpha=10\.0 is not allowed; α must be in \[0, 2\]"))
     add(HardCase("twoscale-alpha-10", "roughness", "two-scale with micro α = 10 (refused)",
                  lambda env: _twoscale(30.0, alpha=10.0), refuse=r"alpha=10\.0 is not allowed"))
@@ -706,22 +712,22 @@ def _prop_brdf(ex):
     wi, wo, alpha, ndf, sh, eta = ex
     if ndf == "blinn-phong":
         alpha = min(alpha, 1.0)
-    f = mf.brdf(wi, wo, alpha=alpha, ndf=ndf, shadowing=sh, eta=eta, kd=0.3)
-    g = mf.brdf(wo, wi, alpha=alpha, ndf=ndf, shadowing=sh, eta=eta, kd=0.3)
+    f = brdf.brdf(wi, wo, alpha=alpha, ndf=ndf, shadowing=sh, eta=eta, kd=0.3)
+    g = brdf.brdf(wo, wi, alpha=alpha, ndf=ndf, shadowing=sh, eta=eta, kd=0.3)
     assert np.isfinite(f) and f >= 0, (ex, f)
     assert abs(f - g) <= 1e-9 * max(abs(f), 1.0), ("reciprocity", ex, f, g)
 
 
 def _prop_albedo(ex):
     theta, alpha, ndf = ex
-    e = float(mf.albedo(_dirs(theta)[0], alpha=alpha, ndf=ndf, fresnel="one"))
+    e = float(brdf.albedo(_dirs(theta)[0], alpha=alpha, ndf=ndf, fresnel="one"))
     assert np.isfinite(e) and 0.0 <= e <= 1.0 + TOL["furnace_excess"], (ex, e)
 
 
 def _prop_psd(ex):
     wi, wo, sigma, T, lam = ex
-    m = psd.PSDModel("gaussian", sigma=sigma, T=T)
-    a, b = psd.scattered_lobe(wi, wo, lam, m), psd.scattered_lobe(wo, wi, lam, m)
+    m = surfaces.PSDModel("gaussian", sigma=sigma, T=T)
+    a, b = scatter.scattered_lobe(wi, wo, lam, m), scatter.scattered_lobe(wo, wi, lam, m)
     assert np.isfinite(a) and a >= 0, (ex, a)
     assert abs(a - b) <= 1e-9 * max(abs(a), 1e-300), ("reciprocity", ex, a, b)
 
@@ -742,8 +748,8 @@ def _strategies():
     eta = st.tuples(st.floats(0.05, 5.0), st.floats(0.0, 10.0)).map(lambda t: complex(*t))
     return {
         "fresnel": st.tuples(st.floats(1e-3, 1e3), st.floats(0.0, 1e3), st.floats(-0.5, 1.5)),
-        "brdf": st.tuples(direction(), direction(), st.floats(0.0, 2.0), st.sampled_from(sorted(mf.NDFS)),
-                          st.sampled_from(sorted(mf.SHADOWINGS)), eta),
+        "brdf": st.tuples(direction(), direction(), st.floats(0.0, 2.0), st.sampled_from(sorted(brdf.NDFS)),
+                          st.sampled_from(sorted(brdf.SHADOWINGS)), eta),
         "albedo": st.tuples(st.floats(0.0, 90.0), st.floats(1e-3, 2.0), st.sampled_from(["ggx", "beckmann"])),
         "psd": st.tuples(direction(), direction(), st.floats(0.0, 60e-9), st.floats(0.2e-6, 3e-6),
                          st.floats(380.0, 780.0)),
@@ -898,10 +904,10 @@ def _bad_inputs() -> list[BadInput]:
                                    "1um", "--samples", "32", "-o", str(tmp / "g.npz")], same=True))
     add(BadInput("nano-sigma-negative", "parameter", "negative σ_nano (simulate --nano)",
                  r"--nano sigma '-5nm' is negative",
-                 api=lambda tmp: wsim.parse_nano("gaussian:sigma=-5nm,T=1um"),
+                 api=lambda tmp: parse_nano("gaussian:sigma=-5nm,T=1um"),
                  argv=lambda tmp: _simulate_argv(tmp, "--nano", "gaussian:sigma=-5nm,T=1um"), same=True))
     add(BadInput("psd-sigma-negative", "parameter", "negative σ (PSD model)", r"sigma=-1e-09 m is not allowed",
-                 api=lambda tmp: psd.PSDModel("gaussian", sigma=-1e-9, T=1e-6)))
+                 api=lambda tmp: surfaces.PSDModel("gaussian", sigma=-1e-9, T=1e-6)))
     for w in ("0", "-5"):
         add(BadInput(f"wavelength-{w}", "parameter", f"λ = {w} nm", rf"--wavelengths {float(w)!r} nm is not "
                      r"allowed; wavelengths must be finite and > 0",
@@ -909,14 +915,14 @@ def _bad_inputs() -> list[BadInput]:
                      argv=lambda tmp, w=w: _scatter_argv(tmp)[:-4] + ["--wavelengths", w, "-o", str(tmp / "out")],
                      same=True, fixed="units.py: the message showed np.float64(...) instead of the number"))
     add(BadInput("wavelength-api-zero", "parameter", "λ = 0 nm (Kirchhoff API)", r"wavelength 0\.0 nm is not allowed",
-                 api=lambda tmp: D.scatter(_hf(0.0, (8, 8)), (30.0, 0.0), [0.0], resolution=8)))
+                 api=lambda tmp: scatter.scatter(_hf(0.0, (8, 8)), (30.0, 0.0), [0.0], resolution=8)))
     add(BadInput("wavelength-range-empty", "parameter", "λ range 700:400:10", r"STEP > 0 and STOP >= START",
                  argv=lambda tmp: _scatter_argv(tmp, "--wavelengths", "700:400:10")))
     add(BadInput("alpha-negative", "parameter", "α < 0", r"alpha=-0\.1 is not allowed; α must be in \[0, 2\]",
-                 api=lambda tmp: mf.brdf(_dirs(30.0), _dirs(40.0), alpha=-0.1, eta=1.5),
+                 api=lambda tmp: brdf.brdf(_dirs(30.0), _dirs(40.0), alpha=-0.1, eta=1.5),
                  argv=lambda tmp: _brdf_argv("--alpha=-0.1", alpha=None)))
     add(BadInput("alpha-nan", "parameter", "α = NaN", r"alpha=nan is not allowed",
-                 api=lambda tmp: mf.D(_dirs(10.0), float("nan")),
+                 api=lambda tmp: brdf.D(_dirs(10.0), float("nan")),
                  argv=lambda tmp: _brdf_argv(alpha="nan")))
     add(BadInput("micro-alpha-negative", "parameter", "micro α < 0 (simulate)", r"micro-alpha -1\.0 is not allowed",
                  argv=lambda tmp: _simulate_argv(tmp, "--micro-alpha=-1")))
@@ -929,13 +935,13 @@ def _bad_inputs() -> list[BadInput]:
                      argv=lambda tmp, th=th: _brdf_argv(f"--incident={th}", incident=None),
                      same=True, fixed="units.py: the message showed np.float64(...) instead of the number"))
     add(BadInput("theta-api", "parameter", "θ_i = 95° (Kirchhoff API)", r"θ=95\.0° is outside the allowed range",
-                 api=lambda tmp: D.scatter(_hf(0.0, (8, 8)), (95.0, 0.0), [LAM], resolution=8)))
+                 api=lambda tmp: scatter.scatter(_hf(0.0, (8, 8)), (95.0, 0.0), [LAM], resolution=8)))
     add(BadInput("theta-90-simulate", "parameter", "θ_i = 90° in simulate (light below the horizon)",
                  r"--incident θ=90° is not allowed", argv=lambda tmp: _simulate_argv(tmp, "--incident", "90")))
     add(BadInput("outgoing-phi-inf", "parameter", "φ_o = inf", r"φ inf is not finite",
                  argv=lambda tmp: _brdf_argv(outgoing="40,inf")))
     add(BadInput("kd-out-of-range", "parameter", "diffuse albedo kd = 2", r"kd=2\.0 is not allowed",
-                 api=lambda tmp: mf.brdf(_dirs(30.0), _dirs(40.0), alpha=0.1, eta=1.5, kd=2.0),
+                 api=lambda tmp: brdf.brdf(_dirs(30.0), _dirs(40.0), alpha=0.1, eta=1.5, kd=2.0),
                  argv=lambda tmp: _brdf_argv("--kd", "2"), same=True,
                  fixed="microfacet.py: the message showed array(2.) instead of the number"))
     add(BadInput("ior-negative", "parameter", "IOR n = −1.5", r"IOR '-1\.5' is not allowed; need n > 0",
@@ -943,12 +949,12 @@ def _bad_inputs() -> list[BadInput]:
                  argv=lambda tmp: _brdf_argv("--ior=-1.5", ior=None), same=True))
     for r in ("0", "-2"):
         add(BadInput(f"realizations-{r}", "parameter", f"--realizations {r}", rf"realizations={r} is not allowed",
-                     setup=setup_ok, api=lambda tmp, r=r: D.scatter(_hf(0.0, (8, 8)), (30.0, 0.0), [LAM],
+                     setup=setup_ok, api=lambda tmp, r=r: scatter.scatter(_hf(0.0, (8, 8)), (30.0, 0.0), [LAM],
                                                                    resolution=8, realizations=int(r)),
                      argv=lambda tmp, r=r: _scatter_argv(tmp, f"--realizations={r}"), same=True,
                      fixed="diffraction.py: _realizations treated n < 1 as 1 and computed a result"))
     add(BadInput("resolution-zero", "parameter", "--resolution 0", r"direction grid n_u=0 is not allowed",
-                 setup=setup_ok, api=lambda tmp: D.DirectionGrid.hemisphere(0),
+                 setup=setup_ok, api=lambda tmp: scatter.DirectionGrid.hemisphere(0),
                  argv=lambda tmp: _scatter_argv(tmp, "--resolution", "0"), same=True))
     add(BadInput("order-negative", "parameter", "--order -1", r"fft order -1 is not allowed", setup=setup_ok,
                  argv=lambda tmp: _scatter_argv(tmp, "--order=-1")))
@@ -960,10 +966,10 @@ def _bad_inputs() -> list[BadInput]:
     add(BadInput("accuracy-zero", "parameter", "--accuracy 0", r"--accuracy 0\.0 is not allowed",
                  argv=lambda tmp: ["simulate", "--accuracy", "0", "-o", str(tmp / "sim")]))
     add(BadInput("blackbody-negative", "parameter", "blackbody:-5K", r"blackbody temperature -5\.0 K is not allowed",
-                 api=lambda tmp: spectral.illuminant("blackbody:-5K"),
+                 api=lambda tmp: colour.illuminant("blackbody:-5K"),
                  argv=lambda tmp: _simulate_argv(tmp, "--illuminant", "blackbody:-5K"), same=True))
     add(BadInput("abc-c-too-small", "parameter", "ABC exponent C = 1.5", r"ABC parameter C=1\.5 is not allowed",
-                 api=lambda tmp: psd.PSDModel("abc", sigma=5e-9, B=1e-6, C=1.5),
+                 api=lambda tmp: surfaces.PSDModel("abc", sigma=5e-9, B=1e-6, C=1.5),
                  argv=lambda tmp: _simulate_argv(tmp, "--nano", "abc:sigma=5nm,B=1um,C=1.5"), same=True))
     add(BadInput("nano-too-rough", "parameter", "σ_nano = 5 µm for the PSD series", r"too rough for the PSD series",
                  argv=lambda tmp: _simulate_argv(tmp, "--nano", "gaussian:sigma=5um,T=10um"),
@@ -978,11 +984,11 @@ def _bad_inputs() -> list[BadInput]:
                  argv=lambda tmp: ["surface", "generate", "--model", "gaussian", "--sigma", "5nm", "--corr-length",
                                    "1um", "--samples", "0", "-o", str(tmp / "g.npz")], same=True))
     add(BadInput("roughness-negative", "parameter", "perceptual roughness r = −1", r"roughness=-1\.0 is not allowed",
-                 api=lambda tmp: mf.alpha_from_roughness(-1.0),
+                 api=lambda tmp: brdf.alpha_from_roughness(-1.0),
                  argv=lambda tmp: _brdf_argv("--roughness=-1", alpha=None), same=True,
                  fixed="microfacet.py: alpha_from_roughness squared r = −1 into α = 1 and brdf ran"))
     add(BadInput("angles-empty", "parameter", "compare --angles ''", r"--angles '' holds no number",
-                 api=lambda tmp: units.parse_number_list("", name="--angles"),
+                 api=lambda tmp: units.parse_number_list("", name="angles_deg"),
                  argv=lambda tmp: ["compare", "--angles", ""], same=True,
                  fixed="units.py: an empty list was accepted and compare printed an empty table"))
     add(BadInput("scratch-count-huge", "parameter", "scratches --count 1e9", r"count=1000000000\.0 is not allowed; "
@@ -1002,22 +1008,22 @@ def _bad_inputs() -> list[BadInput]:
     add(BadInput("material-unknown-f0", "name", "unknown material in f0", r"unknown material 'coper' \(did you mean "
                  r"'copper'\?\)", argv=lambda tmp: ["f0", "coper"]))
     add(BadInput("illuminant-unknown", "name", "unknown illuminant 'D66'", r"unknown illuminant 'D66' \(did you "
-                 r"mean 'D65'\?\)", api=lambda tmp: spectral.illuminant("D66"),
+                 r"mean 'D65'\?\)", api=lambda tmp: colour.illuminant("D66"),
                  argv=lambda tmp: _simulate_argv(tmp, "--illuminant", "D66"), same=True))
     add(BadInput("illuminant-missing-csv", "name", "illuminant CSV that does not exist", r"SPD file .* does not exist",
-                 api=lambda tmp: spectral.illuminant(str(tmp / "lamp.csv")),
+                 api=lambda tmp: colour.illuminant(str(tmp / "lamp.csv")),
                  argv=lambda tmp: _simulate_argv(tmp, "--illuminant", str(tmp / "lamp.csv")), same=True))
     add(BadInput("observer-unknown", "name", "unknown observer '11'", r"unknown observer '11' \(did you mean '10'\?\)",
-                 api=lambda tmp: spectral.observer_name("11"), argv=lambda tmp: ["f0", "Au", "--observer", "11"],
+                 api=lambda tmp: colour.observer_name("11"), argv=lambda tmp: ["f0", "Au", "--observer", "11"],
                  same=True))
     add(BadInput("nano-model-unknown", "name", "unknown nano model 'gausian'", r"unknown nano model 'gausian' \(did "
                  r"you mean 'gaussian'\?\)",
-                 api=lambda tmp: wsim.parse_nano("gausian:sigma=5nm,T=1um"),
+                 api=lambda tmp: parse_nano("gausian:sigma=5nm,T=1um"),
                  argv=lambda tmp: _simulate_argv(tmp, "--nano", "gausian:sigma=5nm,T=1um"), same=True))
     add(BadInput("ndf-unknown", "name", "unknown NDF 'ggz'", r"ggz.*ggx",
-                 api=lambda tmp: mf.D(_dirs(10.0), 0.1, ndf="ggz"), argv=lambda tmp: _brdf_argv("--ndf", "ggz")))
+                 api=lambda tmp: brdf.D(_dirs(10.0), 0.1, ndf="ggz"), argv=lambda tmp: _brdf_argv("--ndf", "ggz")))
     add(BadInput("solver-unknown", "name", "unknown solver 'ray'", r"unknown solver 'ray'",
-                 api=lambda tmp: D.scatter(_hf(0.0, (8, 8)), (30.0, 0.0), [LAM], solver="ray", resolution=8)))
+                 api=lambda tmp: scatter.scatter(_hf(0.0, (8, 8)), (30.0, 0.0), [LAM], solver="ray", resolution=8)))
     add(BadInput("units-unknown", "name", "unknown units 'furlong'", r"unknown units 'furlong'", setup=setup_ok,
                  api=lambda tmp: surfaces.load(_good_surface(tmp), units="furlong"),
                  argv=lambda tmp: ["surface", "stats", str(_good_surface(tmp)), "--units", "furlong"], same=True,
@@ -1055,7 +1061,7 @@ def _bad_inputs() -> list[BadInput]:
     add(BadInput("output-exists-scatter", "output", "scatter into a directory holding lobes.exr",
                  r"output .*lobes\.exr' already exists; pass --overwrite", setup=existing_scatter,
                  api=lambda tmp: wio.prepare_outdir(tmp / "out",
-                                                                                expected=D.SCATTER_FILES),
+                                                                                expected=scatter.SCATTER_FILES),
                  argv=lambda tmp: _scatter_argv(tmp), same=True))
 
     def existing_sim(tmp):
@@ -1109,6 +1115,11 @@ def _prepare(bad: BadInput, tmp: Path) -> dict:
     return snapshot(tmp)
 
 
+def _cli_flags(argv: list) -> dict:
+    """Field → flag map of the sub-command *argv* runs."""
+    return field_flags(command_parser(build_parser(), argv))
+
+
 def judge_api(bad: BadInput, tmp: Path) -> tuple[list, str]:
     """Problems with the Python API's answer to *bad* (empty when right), and its message with the scratch
     directory written ``<tmp>``."""
@@ -1118,12 +1129,18 @@ def judge_api(bad: BadInput, tmp: Path) -> tuple[list, str]:
             warnings.simplefilter("ignore")
             bad.api(tmp)
     except (ValueError, TypeError) as exc:
-        msg = str(exc).replace(str(tmp), "<tmp>")
+        library = str(exc)
+        # a field error is written with the flags of the command that makes the same call (issue 12: only the
+        # CLI knows its flags); that is the text the CLI line must contain
+        msg = (exc.render(_cli_flags(bad.argv(tmp))) if isinstance(exc, FieldError) and bad.argv else library)
+        msg = msg.replace(str(tmp), "<tmp>")
     except Exception as exc:  # noqa: BLE001 - anything else is exactly what this catalogue hunts
         return [f"raised {type(exc).__name__} (not ValueError/TypeError): {exc}"], ""
     else:
         return ["accepted the bad input (no error)"], ""
     problems = []
+    if re.search(r"(?<![\w-])--[a-z]", library):
+        problems.append(f"library message {library!r} names a command-line flag")
     if "\n" in msg.strip():
         problems.append(f"message has {msg.strip().count(chr(10)) + 1} lines")
     if not re.search(bad.match, msg):

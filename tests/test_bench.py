@@ -10,9 +10,9 @@ import sys
 import numpy as np
 import pytest
 
+from waveoptics import scatter
 from waveoptics import bench
-from waveoptics import diffraction as D
-from waveoptics.surfaces import HeightField
+from waveoptics.surfaces.heightfield import HeightField
 from waveoptics.units import direction_from_angles
 
 #: tolerances, in one place
@@ -35,18 +35,18 @@ def problem():
     h = rng.normal(0.0, 70e-9, (30, 37))
     mask = np.ones_like(h, bool)
     mask[4:7, 5:20] = False
-    smp = D.samples(HeightField(h, 125e-9, 110e-9, mask))
-    wi = D._incident((40.0, 15.0))
+    smp = scatter.samples(HeightField(h, 125e-9, 110e-9, mask))
+    wi = scatter.grid._incident((40.0, 15.0))
     wo = direction_from_angles(rng.uniform(0, 85, 61), rng.uniform(0, 360, 61))   # 61: not a multiple of 8 or 4
-    coef = D.phase_coefficients(smp, wi, wo, [450.0, 633.0])
-    return smp, wi, wo, coef, D.kirchhoff_U(smp, coef), float(np.sum(smp.w) * smp.dx * smp.dy)
+    coef = scatter.phase_coefficients(smp, wi, wo, [450.0, 633.0])
+    return smp, wi, wo, coef, scatter.kirchhoff_U(smp, coef), float(np.sum(smp.w) * smp.dx * smp.dy)
 
 
 def test_sincos_poly_twin_is_sin_and_cos():
     t = np.concatenate([np.linspace(-2.0, 2.0, 40001), np.random.default_rng(1).uniform(-3e3, 3e3, 20000)])
     for p, tol in (("float32", TOL["poly32"]), ("float64", TOL["poly64"])):
         tt = t.astype(np.float32 if p == "float32" else np.float64)
-        s, c = D.sincos_2pi(tt, p)
+        s, c = scatter.sincos_2pi(tt, p)
         t64 = tt.astype(np.float64)
         x = 2 * np.pi * (t64 - np.rint(t64))          # exact reduction: the reference keeps its digits
         assert np.abs(s - np.sin(x)).max() < tol
@@ -54,15 +54,15 @@ def test_sincos_poly_twin_is_sin_and_cos():
     # quadrant boundaries are exact: sin(2π k/4) and cos are 0, ±1
     k = np.arange(-8, 9)
     for p in ("float32", "float64"):
-        s, c = D.sincos_2pi(k / 4.0, p)
+        s, c = scatter.sincos_2pi(k / 4.0, p)
         assert np.array_equal(s, np.array([0.0, 1.0, 0.0, -1.0])[k % 4])
         assert np.array_equal(c, np.array([1.0, 0.0, -1.0, 0.0])[k % 4])
 
 
 def test_sincos_kernel_matches_twin(rt, precision):
     t = np.random.default_rng(5).uniform(-100.0, 100.0, 5001)
-    s, c = D.sincos_2pi_cl(t, runtime=rt, precision=precision)
-    s2, c2 = D.sincos_2pi(t, precision)
+    s, c = scatter.sincos_2pi_cl(t, runtime=rt, precision=precision)
+    s2, c2 = scatter.sincos_2pi(t, precision)
     tol = TOL["twin" + precision[-2:]]
     assert np.abs(s - s2).max() < tol and np.abs(c - c2).max() < tol
     t64 = t.astype(s.dtype).astype(np.float64)
@@ -75,25 +75,25 @@ def test_direct_kernel_variants_match_twin(rt, precision, problem, local_size, v
     """Register blocking leaves a tail of pairs (122 = 15·8 + 2); work-group sizes and vector widths do not
     change the result."""
     smp, _, _, coef, U_ref, scale = problem
-    U = D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, local_size=local_size,
+    U = scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, local_size=local_size,
                          vector_width=vector_width)
     assert np.abs(U - U_ref).max() / scale < TOL["U" + precision[-2:]]
 
 
 def test_fast_math_previous_and_naive_kernels_match_twin(rt, precision, problem):
     smp, _, _, coef, U_ref, scale = problem
-    U = D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, fast_math=True)
+    U = scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, fast_math=True)
     assert np.abs(U - U_ref).max() / scale < (TOL["U32_fast"] if precision == "float32" else 1e-10)
-    Un = D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, kernel="kirchhoff_U_naive")
+    Un = scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, kernel="kirchhoff_U_naive")
     assert np.abs(Un - U_ref).max() / scale < TOL["naive" + precision[-2:]]
-    Us = D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, kernel="kirchhoff_U_sinpi")
+    Us = scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision, kernel="kirchhoff_U_sinpi")
     assert np.abs(Us - U_ref).max() / scale < TOL["U" + precision[-2:]]
 
 
 def test_unknown_kernel_is_refused(rt, problem):
     smp, _, _, coef, _, _ = problem
     with pytest.raises(ValueError, match="kernel"):
-        D.kirchhoff_U_cl(smp, coef, runtime=rt, kernel="kirchhoff_U_fast")
+        scatter.kirchhoff_U_cl(smp, coef, runtime=rt, kernel="kirchhoff_U_fast")
 
 
 def test_naive_float32_loses_accuracy_on_a_long_patch(rt):
@@ -112,10 +112,10 @@ def test_numpy_alternatives_are_the_same_sums(problem):
     n = wo.shape[0]
     assert np.allclose(np.abs(Un), np.abs(U_ref[:n]), atol=1e-12 * scale)
     hf = HeightField(np.random.default_rng(3).normal(0, 30e-9, (32, 32)), 125e-9)
-    s = D.samples(hf)
-    grid = D.DirectionGrid.hemisphere(32)
-    wi30 = D._incident((30.0, 0.0))               # s_x dx / λ = (0.5 + u) / 4 falls on bins k / 256
-    U0 = D.field_fft(s, wi30, grid, 500.0, 0)[0]
+    s = scatter.samples(hf)
+    grid = scatter.DirectionGrid.hemisphere(32)
+    wi30 = scatter.grid._incident((30.0, 0.0))               # s_x dx / λ = (0.5 + u) / 4 falls on bins k / 256
+    U0 = scatter.field_fft(s, wi30, grid, 500.0, 0)[0]
     Up = bench.numpy_fft_pipeline(s, wi30, grid, 500.0, pad=256)
     top = float(np.sum(s.w) * s.dx * s.dy)
     assert np.abs(Up - U0).max() < 1e-12 * top

@@ -1,6 +1,6 @@
 """The accuracy–cost study machinery (waveoptics.cost): Pareto dominance, the recommendation, the error measures
 (pooling onto coarser grids, spectral interpolation), the reference (the exact fft solver agrees with the direct
-float64 sum, physics.md §1), the budget, the JSON layout and the CLI. Nothing here checks a timing.
+float64 sum, docs/physics.md §1), the budget, the JSON layout and the CLI. Nothing here checks a timing.
 """
 import json
 import subprocess
@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from waveoptics import cost
-from waveoptics.diffraction import DirectionGrid
+from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.errors import WaveopticsError
 
 LASER = "laser:465,532,638"       # three wavelengths whatever the colour accuracy: small and fast
@@ -107,7 +107,7 @@ def test_study_json_layout(small_study):
 
 def test_exact_solvers_agree_with_the_reference(small_study):
     """At the reference resolution the fft solver with the banded Taylor series is exact Kirchhoff, so it matches
-    the direct float64 sum; float32 adds only round-off; the frozen-v_z fft does not (physics.md §1)."""
+    the direct float64 sum; float32 adds only round-off; the frozen-v_z fft does not (docs/physics.md §1)."""
     _, st_, res = small_study
     rows = {(s.solver, s.precision, s.resolution, s.realizations): r for s, r in zip(st_, res["settings"])}
     for n in (1, 2):

@@ -17,10 +17,12 @@ import h5py
 import numpy as np
 import pytest
 
+from waveoptics import colour
+from waveoptics.request import SimulationRequest
 from waveoptics import distributed as D
-from waveoptics import spectral, twoscale
+from waveoptics.brdf import twoscale
 from waveoptics.cli import main
-from waveoptics.diffraction import DirectionGrid
+from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.errors import OutputExistsError, WaveopticsError
 from waveoptics.units import direction_from_angles
 
@@ -28,7 +30,7 @@ from waveoptics.units import direction_from_angles
 cloudpickle.register_pickle_by_value(sys.modules[__name__])
 
 NANO = "abc:sigma=8nm,B=2um,C=2.6"
-CASE = D.Case(material="Au", nano=NANO, micro_alpha=0.1, wavelengths_nm=(450.0, 520.0, 590.0, 660.0), resolution=32)
+CASE = SimulationRequest(material="Au", nano=NANO, micro_alpha=0.1, wavelengths_nm=(450.0, 520.0, 590.0, 660.0), resolution=32)
 SPEC = D.TableSpec(CASE, thetas_deg=(0.0, 30.0, 60.0), batch=2)  # 3 angles x 2 batches = 6 tasks
 
 
@@ -62,7 +64,7 @@ def cluster():
 # ------------------------------------------------------------------------------------------------ task split
 
 def test_tasks_cover_every_angle_and_wavelength_once():
-    spec = D.TableSpec(D.Case(wavelengths_nm=tuple(range(400, 710, 10)), resolution=16), thetas_deg=(0, 45),
+    spec = D.TableSpec(SimulationRequest(wavelengths_nm=tuple(range(400, 710, 10)), resolution=16), thetas_deg=(0, 45),
                        batch=8)
     tasks = D.table_tasks(spec)
     assert spec.n_batches == 4 and len(tasks) == 2 * 4
@@ -79,8 +81,9 @@ def test_table_spec_rejects_bad_values():
         D.TableSpec(CASE, thetas_deg=(0, 90))
     with pytest.raises(WaveopticsError, match="appears twice"):
         D.TableSpec(CASE, thetas_deg=(10, 10))
-    with pytest.raises(WaveopticsError, match="--batch 0"):
+    with pytest.raises(WaveopticsError, match="^batch 0 is not allowed") as exc:   # the field, not the CLI flag
         D.TableSpec(CASE, thetas_deg=(10,), batch=0)
+    assert exc.value.field == "batch"
     with pytest.raises(WaveopticsError, match="PSD route is already the ensemble mean"):
         D.run_table(D.TableSpec(CASE, thetas_deg=(10,), realizations=2), "/nonexistent-dir-xyz/t.h5")
 
@@ -103,22 +106,22 @@ def test_table_layout_and_values(reference):
     assert np.all(np.isfinite(t.brdf)) and np.all(t.brdf >= 0)
     # each block equals a direct evaluation of the whole spectrum at that angle (batching changes nothing)
     L = twoscale.evaluate(direction_from_angles(30.0, 0.0), CASE.wavelengths(), "Au", CASE.micro(),
-                          D._nano(CASE, 0, CASE.wavelengths()), DirectionGrid.hemisphere(32))
+                          D.cases._nano(CASE, 0, CASE.wavelengths()), DirectionGrid.hemisphere(32))
     np.testing.assert_allclose(t.brdf[1], L.total.astype(np.float32), rtol=1e-6, atol=0)
     np.testing.assert_allclose(t.albedo[1], L.albedo(), rtol=1e-12)
     # RGB of the albedo spectrum is the colour pipeline's, per incident angle
-    np.testing.assert_allclose(t.albedo_rgb, spectral.reflectance_to_rgb(t.albedo, t.wavelengths_nm), rtol=1e-12)
+    np.testing.assert_allclose(t.albedo_rgb, colour.reflectance_to_rgb(t.albedo, t.wavelengths_nm), rtol=1e-12)
     # physics: nano-roughness only removes energy from the microfacet lobe (albedo <= microfacet, metals)
     assert np.all(t.albedo <= t.microfacet_albedo * (1 + 1e-9))
     assert t.grid.n_u == 32 and t.grid.u_range == (-1.0, 1.0)
 
 
 def test_existing_outputs_are_refused_and_complete_resume_is_a_no_op(reference, tmp_path):
-    with pytest.raises(OutputExistsError, match="--overwrite"):
+    with pytest.raises(OutputExistsError, match="overwrite=True"):
         D.run_table(SPEC, reference)
     res = D.run_table(SPEC, reference, resume=True)
     assert res["computed"] == 0 and res["skipped"] == 6
-    other = D.TableSpec(D.Case(**{**CASE.__dict__, "material": "Ag"}), thetas_deg=SPEC.thetas_deg, batch=2)
+    other = D.TableSpec(SimulationRequest(**{**CASE.__dict__, "material": "Ag"}), thetas_deg=SPEC.thetas_deg, batch=2)
     with pytest.raises(WaveopticsError, match="different parameters"):
         D.run_table(other, reference, resume=True)
 
@@ -201,7 +204,7 @@ def test_direct_solver_builds_one_opencl_context_per_worker(rt, cluster, tmp_pat
     from waveoptics import surfaces
 
     hf = surfaces.generate("gaussian", sigma="15nm", corr_length="1um", size="8um", samples=64, seed=2)
-    case = D.Case(material="Al", nano=None, surface="generated", micro_alpha=0.0, wavelengths_nm=(500.0, 600.0),
+    case = SimulationRequest(material="Al", nano=None, surface="generated", micro_alpha=0.0, wavelengths_nm=(500.0, 600.0),
                   resolution=16, solver="direct")
     spec = D.TableSpec(case, thetas_deg=(0.0, 30.0, 50.0), batch=2)
     D.run_table(spec, tmp_path / "ref.h5", surface=hf)
@@ -234,7 +237,7 @@ def test_resume_after_a_failed_run_completes_the_table(reference, tmp_path):
     assert not (part / "items" / f"{bad}.npz").exists()
     # a half-written block (temporary name of io.atomic_path) never counts as done
     (part / "items" / f".{bad}.npz.xyz.partial.npz").write_bytes(b"half")
-    with pytest.raises(OutputExistsError, match="--resume"):
+    with pytest.raises(OutputExistsError, match="pass resume=True"):
         D.run_table(SPEC, out)
     other = D.TableSpec(CASE, thetas_deg=(0.0, 30.0, 60.0), batch=4)
     with pytest.raises(WaveopticsError, match="different parameters.*batch"):
@@ -252,7 +255,8 @@ def test_resume_after_the_client_process_is_killed(reference, tmp_path):
         import os, functools
         from pathlib import Path
         from waveoptics import distributed as D
-        from waveoptics.distributed import Case, TableSpec
+        from waveoptics.distributed import TableSpec
+        from waveoptics.request import SimulationRequest
 
         SPEC = {SPEC!r}
         items = D.partial_path({str(out)!r}) / "items"
@@ -282,7 +286,7 @@ def test_realizations_of_a_height_field_average_into_brdf(tmp_path):
     from waveoptics import surfaces
 
     hf = surfaces.generate("gaussian", sigma="20nm", corr_length="1um", size="32um", samples=256, seed=1)
-    case = D.Case(material="Al", nano=None, surface="generated", micro_alpha=0.0, wavelengths_nm=(500.0, 600.0),
+    case = SimulationRequest(material="Al", nano=None, surface="generated", micro_alpha=0.0, wavelengths_nm=(500.0, 600.0),
                   resolution=16, solver="fft")
     spec = D.TableSpec(case, thetas_deg=(20.0,), realizations=2, batch=2)
     out = tmp_path / "real.h5"
@@ -306,7 +310,7 @@ def test_parse_vary_lists():
     assert D.parse_vary("nano.B=1um,5um", CASE)[1] == pytest.approx([1e-6, 5e-6])
     assert D.parse_vary("micro_alpha=0.1:0.3:0.1")[1] == pytest.approx([0.1, 0.2, 0.3])
     assert D.value_text("sigma_nano", 6e-9) == "6nm" and D.value_text("nano.B", 2e-6) == "2um"
-    with pytest.raises(WaveopticsError, match="unknown --vary parameter 'sigma_nanoo'.*did you mean 'sigma_nano'"):
+    with pytest.raises(WaveopticsError, match="vary: unknown parameter 'sigma_nanoo'.*did you mean 'sigma_nano'"):
         D.parse_vary("sigma_nanoo=1nm")
     with pytest.raises(WaveopticsError, match="NAME=VALUES"):
         D.parse_vary("material")
@@ -323,7 +327,7 @@ def test_sweep_points_are_the_cartesian_product():
         D.sweep_points(CASE, [("kd", [0.1]), ("kd", [0.2])])
 
 
-SWEEP_BASE = D.Case(material="Au", nano=NANO, micro_alpha=0.1, wavelengths_nm=(450.0, 600.0), resolution=16)
+SWEEP_BASE = SimulationRequest(material="Au", nano=NANO, micro_alpha=0.1, wavelengths_nm=(450.0, 600.0), resolution=16)
 SWEEP_VARY = [("material", ["Au", "Ag"]), ("sigma_nano", [0.5e-9, 4e-9, 12e-9])]
 
 
@@ -381,7 +385,7 @@ def test_cli_table_and_sweep(tmp_path, capsys):
     (["table", "--batch", "0"], "--batch 0"),
     (["table", "--nano", "abc:sigma=5nm", "--material", "Au"], "lacks B, C"),
     (["table", "--material", "Unobtainium"], "Unobtainium"),
-    (["sweep", "--vary", "colour=red"], "unknown --vary parameter 'colour'"),
+    (["sweep", "--vary", "colour=red"], "--vary: unknown parameter 'colour'"),
     (["sweep", "--vary", "material=Au", "--light", "sun"], "--light names a light of a scene file"),
 ])
 def test_cli_errors_are_one_line(argv, message, tmp_path, capsys):
@@ -418,7 +422,7 @@ def test_scene_file_gives_the_case(tmp_path):
         [output]
         resolution = 24
     """))
-    from waveoptics import scene as scene_mod
+    from waveoptics.planning import scene as scene_mod
 
     case, hf = D.case_from_scene(scene_mod.load(scene))
     assert hf is None

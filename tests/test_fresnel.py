@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from waveoptics import fresnel
+from waveoptics.materials import fresnel
 from waveoptics.errors import WaveopticsError
 from conftest import KERNEL_ATOL
 

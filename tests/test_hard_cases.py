@@ -59,7 +59,7 @@ def test_cases_report_failures_honestly(tmp_path):
     assert H.run_case(mk({"a": [1.0, -1e-3]}), env).status == "negative"
     assert H.run_case(mk({"a": [2.0]}, check=H._below("a", 1.0)), env).status == "check failed"
     assert H.run_case(mk({"a": [0.5]}, refuse="nope"), env).status == "not refused"
-    raising = H.HardCase("y", "grazing", "y", lambda env: H.mf.D(H._dirs(10.0), -1.0))
+    raising = H.HardCase("y", "grazing", "y", lambda env: H.brdf.D(H._dirs(10.0), -1.0))
     assert H.run_case(raising, env).status == "error"
 
 

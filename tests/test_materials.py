@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from waveoptics import fresnel, materials
+from waveoptics.materials import fresnel
+from waveoptics import materials
 from waveoptics.errors import WaveopticsError
 
 W = np.linspace(380, 780, 41)

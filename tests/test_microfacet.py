@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from waveoptics import fresnel, microfacet as mf
+from waveoptics import brdf
+from waveoptics.materials import fresnel
 from waveoptics.cli import main as cli_main
 from waveoptics.errors import WaveopticsError
 from waveoptics.runtime import kernel_source
@@ -41,7 +42,7 @@ def random_upper(rng, n):
 
 
 def all_ndf_alpha(alphas=ALPHAS):
-    return [(n, a) for n in mf.NDFS for a in alphas]
+    return [(n, a) for n in brdf.NDFS for a in alphas]
 
 
 # ---------------------------------------------------------------------------------------------- NDF identities
@@ -53,7 +54,7 @@ def test_ndf_normalization_isotropic(ndf, alpha):
     def integrand(u):
         t = np.arctan(alpha * u)
         m = dirs(np.degrees(t))
-        return float(mf.D(m, alpha, ndf=ndf)) * np.cos(t) * np.sin(t) * 2 * np.pi * alpha / (1 + (alpha * u) ** 2)
+        return float(brdf.D(m, alpha, ndf=ndf)) * np.cos(t) * np.sin(t) * 2 * np.pi * alpha / (1 + (alpha * u) ** 2)
 
     val = integrate.quad(integrand, 0, 4, limit=400, epsabs=1e-12)[0] + \
         integrate.quad(integrand, 4, np.inf, limit=400, epsabs=1e-12)[0]
@@ -64,7 +65,7 @@ def test_ndf_normalization_isotropic(ndf, alpha):
 @pytest.mark.parametrize("alpha", [0.01, 0.3, 2.0])
 def test_abc_normalization_including_log_cases(alpha, c):
     # C = 1 and C = 2 are the logarithmic limits of the closed form
-    val = integrate.quad(lambda t: float(mf.D(dirs(np.degrees(t)), alpha, ndf="abc", abc_c=c))
+    val = integrate.quad(lambda t: float(brdf.D(dirs(np.degrees(t)), alpha, ndf="abc", abc_c=c))
                          * np.cos(t) * np.sin(t) * 2 * np.pi, 0, np.pi / 2, points=[alpha, 3 * alpha], limit=400)[0]
     assert val == pytest.approx(1.0, abs=1e-7)
 
@@ -72,30 +73,30 @@ def test_abc_normalization_including_log_cases(alpha, c):
 @pytest.mark.parametrize("ndf", ["ggx", "beckmann"])
 @pytest.mark.parametrize("ax,ay", ANISO)
 def test_ndf_normalization_anisotropic(ndf, ax, ay):
-    m, w = mf.normal_quadrature(ax, ay, n_phi=128)
-    assert np.sum(w * mf.D(m, ax, ay, ndf=ndf) * m[:, 2]) == pytest.approx(1.0, abs=TOL["norm_nodes"])
+    m, w = brdf.normal_quadrature(ax, ay, n_phi=128)
+    assert np.sum(w * brdf.D(m, ax, ay, ndf=ndf) * m[:, 2]) == pytest.approx(1.0, abs=TOL["norm_nodes"])
     assert np.sum(w) == pytest.approx(2 * np.pi, rel=1e-9)
 
 
 @pytest.mark.parametrize("ndf,alpha", all_ndf_alpha([0.001, 0.1, 0.5, 1.0]))
 def test_smith_identity(ndf, alpha):
     # ∫ G1(v, m) max(0, v·m) D(m) dω_m = n·v (Heitz 2014 eq. 43)
-    m, w = mf.normal_quadrature(alpha, n_phi=128)
-    d = mf.D(m, alpha, ndf=ndf)
+    m, w = brdf.normal_quadrature(alpha, n_phi=128)
+    d = brdf.D(m, alpha, ndf=ndf)
     for theta in (0.0, 30.0, 60.0, 80.0, 89.0):
         v = dirs(theta, 25.0)
-        lhs = np.sum(w * mf.G1(v, m, alpha, ndf=ndf) * np.maximum(0, m @ v) * d)
+        lhs = np.sum(w * brdf.G1(v, m, alpha, ndf=ndf) * np.maximum(0, m @ v) * d)
         assert lhs == pytest.approx(v[2], rel=TOL["smith"]), theta
 
 
 @pytest.mark.parametrize("ndf", ["ggx", "beckmann"])
 @pytest.mark.parametrize("ax,ay", ANISO)
 def test_smith_identity_anisotropic(ndf, ax, ay):
-    m, w = mf.normal_quadrature(ax, ay, n_phi=256)
-    d = mf.D(m, ax, ay, ndf=ndf)
+    m, w = brdf.normal_quadrature(ax, ay, n_phi=256)
+    d = brdf.D(m, ax, ay, ndf=ndf)
     for theta, phi in ((45.0, 0.0), (70.0, 90.0), (80.0, 33.0)):
         v = dirs(theta, phi)
-        lhs = np.sum(w * mf.G1(v, m, ax, ay, ndf=ndf) * np.maximum(0, m @ v) * d)
+        lhs = np.sum(w * brdf.G1(v, m, ax, ay, ndf=ndf) * np.maximum(0, m @ v) * d)
         assert lhs == pytest.approx(v[2], rel=TOL["smith"])
 
 
@@ -105,23 +106,23 @@ def test_radial_lambda_matches_closed_forms(ndf, alpha):
     # the quadrature used for ABC (and by the kernel for Blinn-Phong) reproduces the closed forms
     th = np.array([0.1, 10, 30, 60, 80, 89, 89.9, 89.99])
     w = dirs(th)
-    spec = mf.NDFS[ndf]
-    a = max(alpha, mf.ALPHA_MIN)
+    spec = brdf.NDFS[ndf]
+    a = max(alpha, brdf.ALPHA_MIN)
     if ndf == "ggx":
         P22 = lambda r: 1 / (np.pi * a * a * (1 + r * r / (a * a)) ** 2)  # noqa: E731
     elif ndf == "beckmann":
         P22 = lambda r: np.exp(-r * r / (a * a)) / (np.pi * a * a)  # noqa: E731
     else:
-        ap = mf.blinn_phong_exponent(a)
+        ap = brdf.blinn_phong_exponent(a)
         P22 = lambda r: (ap + 2) / (2 * np.pi) * (1 + r * r) ** (-(ap + 4) / 2)  # noqa: E731
-    g_quad = 1 / (1 + mf.Lambda_radial(w, P22, a))
+    g_quad = 1 / (1 + brdf.Lambda_radial(w, P22, a))
     g_exact = 1 / (1 + spec.Lambda(w, a, a, None))
     np.testing.assert_allclose(g_quad, g_exact, atol=TOL["lambda_radial"])
 
 
 def test_gauss_legendre_table_in_kernel_header():
     src = kernel_source("microfacet.h")
-    x, w = np.polynomial.legendre.leggauss(mf.LAMBDA_GL_ORDER)
+    x, w = np.polynomial.legendre.leggauss(brdf.LAMBDA_GL_ORDER)
     x, w = 0.5 * (x + 1), 0.5 * w
     for name, ref in (("MF_GL_X", x[:16]), ("MF_GL_W", w[:16])):
         body = re.search(name + r"\[16\] = \{(.*?)\};", src, re.S).group(1)
@@ -131,13 +132,13 @@ def test_gauss_legendre_table_in_kernel_header():
 
 def test_conversions_round_trip_and_blinn_phong_tends_to_beckmann():
     a = np.array([0.01, 0.1, 0.5, 1.0])
-    np.testing.assert_allclose(mf.alpha_from_blinn_phong(mf.blinn_phong_exponent(a)), a, rtol=1e-12)
-    np.testing.assert_allclose(mf.roughness_from_alpha(mf.alpha_from_roughness(a)), a, rtol=1e-12)
-    assert mf.blinn_phong_exponent(1.0) == 0.0
+    np.testing.assert_allclose(brdf.alpha_from_blinn_phong(brdf.blinn_phong_exponent(a)), a, rtol=1e-12)
+    np.testing.assert_allclose(brdf.roughness_from_alpha(brdf.alpha_from_roughness(a)), a, rtol=1e-12)
+    assert brdf.blinn_phong_exponent(1.0) == 0.0
     # Walter et al.'s equivalence: near the peak the two lobes agree, closer as α -> 0
     for alpha, tol in ((0.1, 2e-2), (0.02, 1e-3)):
         m = dirs(np.degrees(np.arctan(alpha * np.linspace(0, 1.5, 16))))
-        np.testing.assert_allclose(mf.D(m, alpha, ndf="blinn-phong"), mf.D(m, alpha, ndf="beckmann"), rtol=tol)
+        np.testing.assert_allclose(brdf.D(m, alpha, ndf="blinn-phong"), brdf.D(m, alpha, ndf="beckmann"), rtol=tol)
 
 
 def test_isotropic_ggx_and_beckmann_closed_forms():
@@ -146,19 +147,19 @@ def test_isotropic_ggx_and_beckmann_closed_forms():
     m = dirs(np.degrees(t))
     ggx = alpha ** 2 / (np.pi * np.cos(t) ** 4 * (alpha ** 2 + np.tan(t) ** 2) ** 2)  # Walter 2007 eq. 33
     beck = np.exp(-np.tan(t) ** 2 / alpha ** 2) / (np.pi * alpha ** 2 * np.cos(t) ** 4)  # eq. 25
-    np.testing.assert_allclose(mf.D(m, alpha, ndf="ggx"), ggx, rtol=1e-12)
-    np.testing.assert_allclose(mf.D(m, alpha, ndf="beckmann"), beck, rtol=1e-12)
+    np.testing.assert_allclose(brdf.D(m, alpha, ndf="ggx"), ggx, rtol=1e-12)
+    np.testing.assert_allclose(brdf.D(m, alpha, ndf="beckmann"), beck, rtol=1e-12)
 
 
 # ---------------------------------------------------------------------------------------------- energy
 
 
-@pytest.mark.parametrize("ndf", list(mf.NDFS))
-@pytest.mark.parametrize("shadowing", list(mf.SHADOWINGS))
+@pytest.mark.parametrize("ndf", list(brdf.NDFS))
+@pytest.mark.parametrize("shadowing", list(brdf.SHADOWINGS))
 def test_white_furnace_albedo_at_most_one(ndf, shadowing):
     th = np.array([0.0, 45.0, 75.0, 89.0])
     for alpha in (0.0, 0.001, 0.1, 0.5, 1.0):
-        E = mf.albedo(dirs(th), alpha=alpha, ndf=ndf, shadowing=shadowing, fresnel="one")
+        E = brdf.albedo(dirs(th), alpha=alpha, ndf=ndf, shadowing=shadowing, fresnel="one")
         assert np.all(E <= 1 + TOL["furnace_excess"]), (alpha, E)
         assert np.all(E > 0)
         if shadowing != "implicit" and alpha <= 0.001:
@@ -166,8 +167,8 @@ def test_white_furnace_albedo_at_most_one(ndf, shadowing):
 
 
 def test_energy_loss_grows_with_roughness():
-    # single-scattering models lose energy as α grows (physics.md §6)
-    E = [float(mf.albedo(dirs(0.0), alpha=a, fresnel="one")) for a in (0.05, 0.2, 0.5, 1.0)]
+    # single-scattering models lose energy as α grows (docs/physics.md §6)
+    E = [float(brdf.albedo(dirs(0.0), alpha=a, fresnel="one")) for a in (0.05, 0.2, 0.5, 1.0)]
     assert all(e1 > e2 for e1, e2 in zip(E, E[1:]))
     # GGX with α = 1 is D = 1/π; at normal incidence only facets within 45° reflect upwards: E < 1/2
     assert E[-1] < 0.5
@@ -181,19 +182,19 @@ def test_albedo_quadrature_against_scipy_dblquad(case):
 
     def g(t, p):
         wo = dirs(np.degrees(t), np.degrees(p))
-        f = mf.brdf(wi, wo, alpha=alpha, ndf=ndf, shadowing=sh, fresnel="one")
+        f = brdf.brdf(wi, wo, alpha=alpha, ndf=ndf, shadowing=sh, fresnel="one")
         return float(f) * np.cos(t) * np.sin(t)
 
     # the lobe is symmetric about the plane of incidence (φ = 0): integrate φ in [0, π] and double
     ref = 2 * integrate.dblquad(g, 0, np.pi, 0, np.pi / 2, epsabs=5e-6, epsrel=5e-6)[0]
-    E = mf.albedo(wi, alpha=alpha, ndf=ndf, shadowing=sh, fresnel="one")
+    E = brdf.albedo(wi, alpha=alpha, ndf=ndf, shadowing=sh, fresnel="one")
     assert E == pytest.approx(ref, abs=TOL["albedo_vs_dblquad"])
 
 
 @pytest.mark.parametrize("alpha", [0.001, 0.01, 0.1, 1.0])
 def test_lambert_albedo_is_one(alpha):
     th = np.array([0.0, 30.0, 60.0, 85.0, 89.9])
-    E = mf.directional_albedo(lambda a, b: mf.lambert(a, b, 1.0), dirs(th), alpha=alpha)
+    E = brdf.directional_albedo(lambda a, b: brdf.lambert(a, b, 1.0), dirs(th), alpha=alpha)
     np.testing.assert_allclose(E, 1.0, atol=TOL["lambert_albedo"])
 
 
@@ -202,8 +203,8 @@ def test_diffuse_tradeoff_albedo_is_kd_times_transmittance(eta):
     # with the (1-F)(1-F)/(1-F̄) weight the Lambertian albedo is exactly kd (1 - F(θ_i))
     th = np.array([0.0, 40.0, 70.0, 85.0])
     kd = 0.8
-    fd = lambda a, b: mf.lambert(a, b, kd) * mf.diffuse_tradeoff(a, b, lambda c: fresnel.F(c, eta))  # noqa: E731
-    E = mf.directional_albedo(fd, dirs(th), alpha=1.0)
+    fd = lambda a, b: brdf.lambert(a, b, kd) * brdf.diffuse_tradeoff(a, b, lambda c: fresnel.F(c, eta))  # noqa: E731
+    E = brdf.directional_albedo(fd, dirs(th), alpha=1.0)
     np.testing.assert_allclose(E, kd * (1 - fresnel.F(np.cos(np.radians(th)), eta)), atol=1e-4)
 
 
@@ -211,8 +212,8 @@ def test_tradeoff_with_schlick_is_shirley_1997():
     F0, kd = 0.04, 0.7
     rng = np.random.default_rng(7)
     wi, wo = random_upper(rng, 50), random_upper(rng, 50)
-    f = mf.brdf(wi, wo, alpha=0.3, fresnel="schlick", F0=F0, kd=kd) - \
-        mf.specular(wi, wo, alpha=0.3, fresnel="schlick", F0=F0)
+    f = brdf.brdf(wi, wo, alpha=0.3, fresnel="schlick", F0=F0, kd=kd) - \
+        brdf.specular(wi, wo, alpha=0.3, fresnel="schlick", F0=F0)
     shirley = 21 / (20 * np.pi) * kd * (1 - F0) * (1 - (1 - wi[:, 2]) ** 5) * (1 - (1 - wo[:, 2]) ** 5)
     np.testing.assert_allclose(f, shirley, rtol=1e-12)
 
@@ -222,29 +223,29 @@ def test_total_albedo_of_dielectric_with_white_diffuse_at_most_one():
     # θ_d around θ_i (F is convex there), measured up to 4.6e-4 at α = 0.1, θ_i = 40° (docs/microfacet.md)
     th = np.array([0.0, 40.0, 60.0, 85.0])
     for alpha in (0.001, 0.01, 0.1, 0.3):
-        E = mf.albedo(dirs(th), alpha=alpha, eta=1.5, kd=1.0)
+        E = brdf.albedo(dirs(th), alpha=alpha, eta=1.5, kd=1.0)
         assert np.all(E <= 1.0 + 1e-3), (alpha, E)
 
 
 def test_oren_nayar_limits():
     rng = np.random.default_rng(3)
     wi, wo = random_upper(rng, 200), random_upper(rng, 200)
-    np.testing.assert_allclose(mf.oren_nayar(wi, wo, 0.6, 0.0), 0.6 / np.pi)
+    np.testing.assert_allclose(brdf.oren_nayar(wi, wo, 0.6, 0.0), 0.6 / np.pi)
     s = 0.5
     A = 1 - 0.5 * s * s / (s * s + 0.33)
     # at normal incidence β = 0, so the albedo is A exactly
-    E = mf.directional_albedo(lambda a, b: mf.oren_nayar(a, b, 1.0, s), dirs(0.0), alpha=1.0)
+    E = brdf.directional_albedo(lambda a, b: brdf.oren_nayar(a, b, 1.0, s), dirs(0.0), alpha=1.0)
     assert E == pytest.approx(A, abs=1e-4)
     # backscatter brighter than forward scatter at oblique incidence (retro-reflection of rough matte surfaces)
-    back = mf.oren_nayar(dirs(60.0, 0.0), dirs(60.0, 0.0), 1.0, s)
-    fwd = mf.oren_nayar(dirs(60.0, 0.0), dirs(60.0, 180.0), 1.0, s)
+    back = brdf.oren_nayar(dirs(60.0, 0.0), dirs(60.0, 0.0), 1.0, s)
+    fwd = brdf.oren_nayar(dirs(60.0, 0.0), dirs(60.0, 180.0), 1.0, s)
     assert back > fwd
 
 
 # ---------------------------------------------------------------------------------------------- properties
 
 
-MODEL_CASES = [dict(ndf=n, shadowing=s) for n in mf.NDFS for s in mf.SHADOWINGS] + [
+MODEL_CASES = [dict(ndf=n, shadowing=s) for n in brdf.NDFS for s in brdf.SHADOWINGS] + [
     dict(ndf="ggx", alpha_y=0.05), dict(ndf="beckmann", alpha_y=0.6, shadowing="smith"),
     dict(ndf="ggx", diffuse="oren-nayar", kd=0.7, sigma=0.4), dict(ndf="beckmann", kd=0.5, fresnel="schlick")]
 
@@ -255,10 +256,10 @@ def test_reciprocity(case):
     wi, wo = random_upper(rng, 400), random_upper(rng, 400)
     kw = dict(alpha=0.25, eta=0.47 + 2.4j)
     kw.update(case)
-    np.testing.assert_allclose(mf.brdf(wi, wo, **kw), mf.brdf(wo, wi, **kw), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(brdf.brdf(wi, wo, **kw), brdf.brdf(wo, wi, **kw), rtol=1e-12, atol=0)
 
 
-@pytest.mark.parametrize("ndf", list(mf.NDFS))
+@pytest.mark.parametrize("ndf", list(brdf.NDFS))
 def test_hard_cases_finite_nonnegative(ndf):
     th = np.array([0.0, 45.0, 89.0, 89.9, 89.9999, 90.0])
     ph = np.array([0.0, 180.0, 90.0])
@@ -267,8 +268,8 @@ def test_hard_cases_finite_nonnegative(ndf):
     w[T.ravel() == 90.0, 2] = 0.0  # exactly in the tangent plane (cos 90° rounds to 6e-17)
     wi, wo = w[:, None, :], w[None, :, :]
     for alpha in (0.0, 1e-7, 0.001, 1.0):
-        for sh in mf.SHADOWINGS:
-            f = mf.brdf(wi, wo, alpha=alpha, ndf=ndf, shadowing=sh, eta=1.4 + 7.5j, kd=0.3)
+        for sh in brdf.SHADOWINGS:
+            f = brdf.brdf(wi, wo, alpha=alpha, ndf=ndf, shadowing=sh, eta=1.4 + 7.5j, kd=0.3)
             assert np.all(np.isfinite(f)) and np.all(f >= 0), (alpha, sh)
             assert f.max() < 1e30  # bounded even at θ = 89.9999° (fits float32)
             # exactly grazing (θ = 90°) gives 0
@@ -277,34 +278,34 @@ def test_hard_cases_finite_nonnegative(ndf):
 
 def test_below_surface_is_zero():
     up, down = dirs(30.0), -dirs(40.0, 20.0)
-    for ndf in mf.NDFS:
+    for ndf in brdf.NDFS:
         kw = dict(alpha=0.3, ndf=ndf, eta=1.5, kd=0.9, diffuse="oren-nayar", sigma=0.3)
-        assert mf.brdf(up, down, **kw) == 0 and mf.brdf(down, up, **kw) == 0 and mf.brdf(down, down, **kw) == 0
-        assert mf.Lambda(down, 0.3, ndf=ndf) == np.inf
-        assert mf.G1(down, np.array([0, 0, 1.0]), 0.3, ndf=ndf) == 0
+        assert brdf.brdf(up, down, **kw) == 0 and brdf.brdf(down, up, **kw) == 0 and brdf.brdf(down, down, **kw) == 0
+        assert brdf.Lambda(down, 0.3, ndf=ndf) == np.inf
+        assert brdf.G1(down, np.array([0, 0, 1.0]), 0.3, ndf=ndf) == 0
 
 
 def test_broadcasting_n_dimensional_and_spectral():
     rng = np.random.default_rng(5)
     wi, wo = random_upper(rng, 24), random_upper(rng, 24)
     kw = dict(alpha=0.2, eta=1.5, kd=0.4)
-    flat = mf.brdf(wi, wo, **kw)
-    np.testing.assert_array_equal(mf.brdf(wi.reshape(2, 3, 4, 3), wo.reshape(2, 3, 4, 3), **kw),
+    flat = brdf.brdf(wi, wo, **kw)
+    np.testing.assert_array_equal(brdf.brdf(wi.reshape(2, 3, 4, 3), wo.reshape(2, 3, 4, 3), **kw),
                                   flat.reshape(2, 3, 4))
     etas = np.array([1.5, 0.2 + 3.1j, 2.4 + 0j])
     kd = np.array([0.1, 0.0, 0.9])
-    spec = mf.brdf(wi, wo, alpha=0.2, eta=etas[:, None], kd=kd[:, None])
+    spec = brdf.brdf(wi, wo, alpha=0.2, eta=etas[:, None], kd=kd[:, None])
     assert spec.shape == (3, 24)
     for j in range(3):
-        np.testing.assert_allclose(spec[j], mf.brdf(wi, wo, alpha=0.2, eta=etas[j], kd=kd[j]), rtol=1e-13)
+        np.testing.assert_allclose(spec[j], brdf.brdf(wi, wo, alpha=0.2, eta=etas[j], kd=kd[j]), rtol=1e-13)
 
 
 def test_spectral_brdf_with_material_equals_raw_eta():
     mat = pytest.importorskip("waveoptics.materials").get_material("Au")
     wl = np.array([450.0, 550.0, 650.0])
     wi, wo = dirs([10.0, 50.0]), dirs([30.0, 70.0], [180.0, 90.0])
-    f = mf.spectral_brdf(wi, wo, wl, "Au", alpha=0.2)
-    ref = mf.brdf(wi, wo, alpha=0.2, eta=mat.eta(wl)[:, None])
+    f = brdf.spectral_brdf(wi, wo, wl, "Au", alpha=0.2)
+    ref = brdf.brdf(wi, wo, alpha=0.2, eta=mat.eta(wl)[:, None])
     np.testing.assert_allclose(f, ref, rtol=1e-13)
     assert f[2].sum() > f[0].sum()  # gold reflects red more than blue
 
@@ -312,23 +313,23 @@ def test_spectral_brdf_with_material_equals_raw_eta():
 def test_bad_inputs_name_the_value():
     m = dirs(10.0)
     with pytest.raises(WaveopticsError, match="unknown NDF 'ggz'.*did you mean 'ggx'"):
-        mf.D(m, 0.1, ndf="ggz")
+        brdf.D(m, 0.1, ndf="ggz")
     with pytest.raises(WaveopticsError, match=r"alpha=-0.1 is not allowed"):
-        mf.D(m, -0.1)
+        brdf.D(m, -0.1)
     with pytest.raises(WaveopticsError, match="isotropic"):
-        mf.D(m, 0.1, 0.2, ndf="abc")
+        brdf.D(m, 0.1, 0.2, ndf="abc")
     with pytest.raises(WaveopticsError, match="blinn-phong; need α <= 1"):
-        mf.D(m, 1.2, ndf="blinn-phong")
+        brdf.D(m, 1.2, ndf="blinn-phong")
     with pytest.raises(WaveopticsError, match="kd="):
-        mf.brdf(m, m, alpha=0.1, eta=1.5, kd=1.5)
+        brdf.brdf(m, m, alpha=0.1, eta=1.5, kd=1.5)
     with pytest.raises(WaveopticsError, match="needs eta"):
-        mf.brdf(m, m, alpha=0.1)
+        brdf.brdf(m, m, alpha=0.1)
     with pytest.raises(WaveopticsError, match="unknown shadowing model"):
-        mf.brdf(m, m, alpha=0.1, eta=1.5, shadowing="smit")
+        brdf.brdf(m, m, alpha=0.1, eta=1.5, shadowing="smit")
     with pytest.raises(WaveopticsError, match="non-finite"):
-        mf.brdf(np.array([np.nan, 0, 1]), m, alpha=0.1, eta=1.5)
+        brdf.brdf(np.array([np.nan, 0, 1]), m, alpha=0.1, eta=1.5)
     with pytest.raises(WaveopticsError, match="abc_c"):
-        mf.D(m, 0.1, ndf="abc", abc_c=0.0)
+        brdf.D(m, 0.1, ndf="abc", abc_c=0.0)
 
 
 # ---------------------------------------------------------------------------------------------- OpenCL twins
@@ -340,7 +341,7 @@ def _kernel_close(fc, fn, precision):
     return err
 
 
-KERNEL_CASES = [dict(ndf=n, shadowing=s) for n in mf.NDFS for s in mf.SHADOWINGS] + [
+KERNEL_CASES = [dict(ndf=n, shadowing=s) for n in brdf.NDFS for s in brdf.SHADOWINGS] + [
     dict(fresnel="schlick"), dict(fresnel="one"), dict(diffuse="oren-nayar", sigma=0.4),
     dict(diffuse="none"), dict(tradeoff=False), dict(ndf="beckmann", alpha_y=0.1),
     dict(ndf="abc", abc_c=0.7)]
@@ -357,21 +358,21 @@ def test_brdf_kernel_matches_numpy(rt, precision, case):
     kd = np.array([0.2, 0.0, 0.9])
     kw = dict(alpha=0.3, eta=eta, kd=kd)
     kw.update(case)
-    fc = mf.brdf_cl(wi, wo, runtime=rt, precision=precision, **kw)
+    fc = brdf.brdf_cl(wi, wo, runtime=rt, precision=precision, **kw)
     kw.update(eta=eta[:, None], kd=kd[:, None])
-    _kernel_close(fc, mf.brdf(wi[None], wo[None], **kw), precision)
+    _kernel_close(fc, brdf.brdf(wi[None], wo[None], **kw), precision)
 
 
-@pytest.mark.parametrize("ndf", list(mf.NDFS))
+@pytest.mark.parametrize("ndf", list(brdf.NDFS))
 def test_D_and_Lambda_kernels_match_numpy(rt, precision, ndf):
     rng = np.random.default_rng(4)
     w = random_upper(rng, 500)
     w[:5] = dirs([0.0, 89.0, 89.9, 89.99, 90.0])
     for alpha in (0.01, 0.3, 1.0):
-        dn, dc = mf.D(w, alpha, ndf=ndf), mf.D_cl(w, alpha, ndf=ndf, runtime=rt, precision=precision)
+        dn, dc = brdf.D(w, alpha, ndf=ndf), brdf.D_cl(w, alpha, ndf=ndf, runtime=rt, precision=precision)
         _kernel_close(dc, dn, precision)
-        gn = 1 / (1 + mf.Lambda(w, alpha, ndf=ndf))
-        gc = 1 / (1 + mf.Lambda_cl(w, alpha, ndf=ndf, runtime=rt, precision=precision))
+        gn = 1 / (1 + brdf.Lambda(w, alpha, ndf=ndf))
+        gc = 1 / (1 + brdf.Lambda_cl(w, alpha, ndf=ndf, runtime=rt, precision=precision))
         np.testing.assert_allclose(gc, gn, atol=1e-5 if precision == "float32" else 1e-8)
 
 
@@ -382,9 +383,9 @@ def test_kernel_hard_cases_finite(rt, precision):
     w[T.ravel() == 90.0, 2] = 0.0  # exactly in the tangent plane
     wi = np.repeat(w, len(w), axis=0)
     wo = np.tile(w, (len(w), 1))
-    for ndf in mf.NDFS:
+    for ndf in brdf.NDFS:
         for alpha in (0.0, 0.001, 1.0):
-            f = mf.brdf_cl(wi, wo, alpha=alpha, ndf=ndf, eta=[1.5, 1.4 + 7.5j], kd=[0.5, 0.0], runtime=rt,
+            f = brdf.brdf_cl(wi, wo, alpha=alpha, ndf=ndf, eta=[1.5, 1.4 + 7.5j], kd=[0.5, 0.0], runtime=rt,
                            precision=precision)
             assert np.all(np.isfinite(f)) and np.all(f >= 0), (ndf, alpha)
             assert np.all(f[:, (wi[:, 2] <= 0) | (wo[:, 2] <= 0)] == 0)
@@ -408,7 +409,7 @@ def test_cli_json_values_match_library(capsys):
     vals = data["values"]
     assert len(vals) == 4 and set(vals[0]) == {"incident", "outgoing", "wavelength_nm", "brdf"}
     for v in vals:
-        ref = mf.brdf(dirs(*v["incident"]), dirs(*v["outgoing"]), alpha=0.2, ndf="beckmann", shadowing="smith",
+        ref = brdf.brdf(dirs(*v["incident"]), dirs(*v["outgoing"]), alpha=0.2, ndf="beckmann", shadowing="smith",
                       eta=0.2 + 3.1j)
         assert v["brdf"] == pytest.approx(float(ref), rel=1e-12)
 

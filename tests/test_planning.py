@@ -12,7 +12,10 @@ import numpy as np
 import pytest
 from scipy.special import jv
 
-from waveoptics import io, planning, psd, scene, spectral, twoscale
+from waveoptics import colour, scatter
+from waveoptics import io, planning
+from waveoptics.planning import scene
+from waveoptics.brdf import twoscale
 from waveoptics.errors import WaveopticsError
 
 SCENES = Path(__file__).resolve().parent.parent / "examples" / "scenes"
@@ -101,9 +104,12 @@ def test_scene_file_errors(tmp_path):
 # ------------------------------------------------------------------------------------- decisions from physics
 
 def test_g_factor_is_the_davies_exponent():
+    """g at the mirror direction is Davies' (4πσ cosθ_i / λ)² (written here from the paper), and the coherent
+    fraction is exp(−g); the planner and the series share this one g."""
     sigma, lam, c = 5e-9, 450.0, 0.8
-    assert np.exp(-planning.g_factor(sigma, c, lam)) == pytest.approx(float(psd.coherent_fraction(c, lam, sigma)),
-                                                                       rel=1e-12)
+    davies = (4 * np.pi * sigma * c / (lam * 1e-9)) ** 2
+    assert float(scatter.roughness_g(sigma, 2 * c, lam)) == pytest.approx(davies, rel=1e-12)
+    assert float(scatter.coherent_fraction(c, lam, sigma)) == pytest.approx(np.exp(-davies), rel=1e-12)
 
 
 @pytest.mark.parametrize("width, dE", [(0.02, 1.0), (0.1, 0.5), (0.05, 3.0)])
@@ -145,7 +151,7 @@ def test_smooth_plastic_plans_no_diffraction_and_no_wavelengths():
     assert e.metrics["estimated_delta_e"] < planning.ESTIMATE_SHARE * 1.0
     w = np.array([420.0, 560.0, 690.0])
     L = twoscale.evaluate(np.array([0.5, 0, math.sqrt(0.75)]), w, e.material, e.micro, None,
-                          planning.DirectionGrid.hemisphere(24), kd=e.kd)
+                          scatter.DirectionGrid.hemisphere(24), kd=e.kd)
     assert np.array_equal(L.total[0], L.total[1]) and np.array_equal(L.total[0], L.total[2])
 
 
@@ -192,10 +198,10 @@ def test_plastic_is_many_times_faster_than_forced_diffraction_with_the_same_resu
     t, t_f = data["measured_time_s"], data_f["measured_time_s"]
     assert t_f > 5 * t, (t, t_f)
     # the same result within the accuracy target: at the view directions, on the sphere, in the albedo
-    dE = spectral.delta_e2000(view_rgb(res), view_rgb(res_f))
+    dE = colour.delta_e2000(view_rgb(res), view_rgb(res_f))
     assert np.max(dE) <= sc.delta_e
     a, a_f = (np.array(r["materials"][0]["albedo"]["i30_0"]["rgb"]) for r in (res, res_f))
-    assert spectral.delta_e2000(a, a_f) <= sc.delta_e
+    assert colour.delta_e2000(a, a_f) <= sc.delta_e
     assert res_f["materials"][0]["sphere"]["delta_e2000_vs_microfacet"]["max"] <= sc.delta_e
     # plan.json holds the measured time beside the estimate
     saved = json.loads((tmp_path / "planned" / "plan.json").read_text())
@@ -215,7 +221,7 @@ def test_forcing_diffraction_off_removes_the_haze(tmp_path):
     plan_off, _, res_off = run(sc, tmp_path, "off", diffraction=False)
     assert plan.entries[0].effects["diffraction"] and not plan_off.entries[0].effects["diffraction"]
     assert plan_off.entries[0].decisions[1][2].startswith("forced")
-    dE = spectral.delta_e2000(view_rgb(res), view_rgb(res_off))
+    dE = colour.delta_e2000(view_rgb(res), view_rgb(res_off))
     assert np.max(dE) > sc.delta_e
 
 

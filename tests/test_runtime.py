@@ -2,6 +2,7 @@
 import subprocess
 import sys
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -74,8 +75,8 @@ def test_info_json(capsys):
 
 @pytest.mark.slow
 def test_wheel_contains_kernels(tmp_path):
-    """The built wheel carries kernels/*.cl inside the package (force-include)."""
-    root = runtime.kernel_dir().parent
+    """The built wheel carries the kernels inside the package (waveoptics/kernels/*.cl, *.h)."""
+    root = Path(runtime.__file__).resolve().parent.parent
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
                     str(tmp_path), str(root)], check=True)
     wheel = next(tmp_path.glob("waveoptics-*.whl"))

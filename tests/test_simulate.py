@@ -34,7 +34,7 @@ def test_simulate_writes_every_output_with_documented_keys(tmp_path, capsys):
 
 
 def test_acescg_on_request(tmp_path, capsys):
-    from waveoptics import spectral
+    from waveoptics import colour as wcolour
 
     assert main(["simulate", "-o", str(tmp_path / "a"), *FAST, "--colourspace", "ACEScg", "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
@@ -47,7 +47,7 @@ def test_acescg_on_request(tmp_path, capsys):
     cs = colour.RGB_COLOURSPACES["ACEScg"]
     xyz = colour.RGB_to_XYZ(np.array(s["rgb_albedo"]), cs, illuminant=cs.whitepoint,
                             chromatic_adaptation_transform=None)
-    back = spectral.XYZ_to_rgb(xyz, "sRGB", white=colour.xy_to_XYZ(cs.whitepoint))
+    back = wcolour.XYZ_to_rgb(xyz, "sRGB", white=colour.xy_to_XYZ(cs.whitepoint))
     np.testing.assert_allclose(back, s2["rgb_albedo"], atol=2e-3)
 
 

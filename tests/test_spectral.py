@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from waveoptics import spectral
+from waveoptics import colour as wcolour
 from waveoptics.cli import main
 from waveoptics.errors import WaveopticsError
 from waveoptics.materials import get_material
@@ -32,38 +32,38 @@ def _smooth_R(w):
 
 def test_white_reflector_under_D65_is_Y1_and_srgb_white():
     w = np.arange(380.0, 781.0, 5.0)
-    XYZ = spectral.reflectance_to_XYZ(np.ones(w.size), w, "D65")
+    XYZ = wcolour.reflectance_to_XYZ(np.ones(w.size), w, "D65")
     assert XYZ[1] == pytest.approx(1.0, abs=EXACT)
-    rgb = spectral.reflectance_to_rgb(np.ones(w.size), w, "D65")
+    rgb = wcolour.reflectance_to_rgb(np.ones(w.size), w, "D65")
     np.testing.assert_allclose(rgb, 1.0, atol=SRGB_WHITE)
-    np.testing.assert_allclose(spectral.reflectance_to_rgb(np.ones(w.size), w, "D65", adapt=False), 1.0,
+    np.testing.assert_allclose(wcolour.reflectance_to_rgb(np.ones(w.size), w, "D65", adapt=False), 1.0,
                                atol=SRGB_WHITE)
 
 
 @pytest.mark.parametrize("space", ["ACEScg", "Display P3", "p3", "acescg"])
 @pytest.mark.parametrize("illum", ["D65", "A", "F2", "blackbody:3000K", "rgb-laser"])
 def test_white_reflector_adapts_to_space_white(space, illum):
-    grid = spectral.spectral_grid(illum, 10.0)
-    rgb = spectral.reflectance_to_rgb(np.ones(grid.size), grid, illum, space=space)
+    grid = wcolour.spectral_grid(illum, 10.0)
+    rgb = wcolour.reflectance_to_rgb(np.ones(grid.size), grid, illum, space=space)
     np.testing.assert_allclose(rgb, 1.0, atol=1e-9)
 
 
 def test_without_adaptation_illuminant_A_looks_orange():
-    grid = spectral.spectral_grid("A", 10.0)
-    r, g, b = spectral.reflectance_to_rgb(np.ones(grid.size), grid, "A", adapt=False)
+    grid = wcolour.spectral_grid("A", 10.0)
+    r, g, b = wcolour.reflectance_to_rgb(np.ones(grid.size), grid, "A", adapt=False)
     assert r > g > b and b < 0.5
 
 
 @pytest.mark.parametrize("method", ["linear", "spline"])
 @pytest.mark.parametrize("illum", ["D65", "A", "F2", "E", "blackbody:5500K"])
 def test_normalization_independent_of_step(illum, method):
-    white = spectral.white_XYZ(illum)
+    white = wcolour.white_XYZ(illum)
     for step in (1.0, 5.0, 10.0, 20.0, 40.0):
         w = np.arange(380.0, 780.0 + step / 2, step)
-        XYZ = spectral.reflectance_to_XYZ(np.ones(w.size), w, illum, method=method)
+        XYZ = wcolour.reflectance_to_XYZ(np.ones(w.size), w, illum, method=method)
         np.testing.assert_allclose(XYZ, white, atol=EXACT)
     w = np.array([377.0, 401.5, 450.0, 452.0, 530.0, 611.0, 700.0, 790.0])  # non-uniform grid
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(np.ones(w.size), w, illum, method=method), white,
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(np.ones(w.size), w, illum, method=method), white,
                                atol=EXACT)
 
 
@@ -72,40 +72,40 @@ def test_linear_reflectance_is_exact_on_every_step(step):
     """Linear interpolation reproduces R = a + bλ exactly when the grid spans the CMF table (360-830 nm)."""
     fine = np.arange(360.0, 831.0)
     R = lambda w: 0.2 + 0.001 * (w - 360.0)  # noqa: E731
-    ref = spectral.reflectance_to_XYZ(R(fine), fine, "D65")
+    ref = wcolour.reflectance_to_XYZ(R(fine), fine, "D65")
     w = np.arange(360.0, 830.0 + step, step)
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(R(w), w, "D65"), ref, atol=EXACT)
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(R(w), w, "D65"), ref, atol=EXACT)
 
 
 @pytest.mark.parametrize("step", [5.0, 10.0, 20.0])
 def test_cubic_reflectance_is_exact_with_spline_method(step):
     fine = np.arange(360.0, 831.0)
     R = lambda w: 0.3 + 1e-3 * (w - 360) - 3e-6 * (w - 360) ** 2 + 4e-9 * (w - 360) ** 3  # noqa: E731
-    ref = spectral.reflectance_to_XYZ(R(fine), fine, "A")
+    ref = wcolour.reflectance_to_XYZ(R(fine), fine, "A")
     w = np.arange(360.0, 830.0 + step, step)
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(R(w), w, "A", method="spline"), ref, atol=1e-10)
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(R(w), w, "A", method="spline"), ref, atol=1e-10)
 
 
 @pytest.mark.parametrize("step,tol", [(5.0, 2e-4), (10.0, 1e-3), (20.0, 4e-3)])
 def test_smooth_reflectance_converges_with_step(step, tol):
     fine = np.arange(360.0, 831.0)
-    ref = spectral.reflectance_to_XYZ(_smooth_R(fine), fine, "D65")
+    ref = wcolour.reflectance_to_XYZ(_smooth_R(fine), fine, "D65")
     w = np.arange(380.0, 780.0 + step / 2, step)
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(_smooth_R(w), w, "D65"), ref, atol=tol)
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(_smooth_R(w), w, "D65"), ref, atol=tol)
 
 
 @pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning")
 def test_matches_colour_science_integration_at_1nm_and_astm_e308_at_10nm():
     cmfs = colour.MSDS_CMFS[D2]
-    d65 = spectral.illuminant("D65")
+    d65 = wcolour.illuminant("D65")
     S = colour.SpectralDistribution(d65(cmfs.wavelengths), cmfs.wavelengths)
     fine = np.arange(360.0, 831.0)
     R = _smooth_R(fine)
     ref = colour.sd_to_XYZ(colour.SpectralDistribution(R, fine), cmfs, S, method="Integration") / 100
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(R, fine, d65), ref, atol=EXACT)
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(R, fine, d65), ref, atol=EXACT)
     w = np.arange(360.0, 831.0, 10.0)
     astm = colour.sd_to_XYZ(colour.SpectralDistribution(_smooth_R(w), w), cmfs, S, method="ASTM E308") / 100
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(_smooth_R(w), w, d65, method="ASTM E2022"), astm,
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(_smooth_R(w), w, d65, method="ASTM E2022"), astm,
                                atol=1e-5)
 
 
@@ -116,18 +116,18 @@ def test_matches_colour_science_integration_at_1nm_and_astm_e308_at_10nm():
 ])
 def test_white_points_match_cie_tables(illum, observer, cie):
     """CIE 015:2004 Table T.3 (ASTM E308) white points of the perfect reflecting diffuser."""
-    np.testing.assert_allclose(100 * spectral.white_XYZ(illum, observer), cie, atol=100 * CIE_TABLE)
+    np.testing.assert_allclose(100 * wcolour.white_XYZ(illum, observer), cie, atol=100 * CIE_TABLE)
 
 
 def test_n_dimensional_and_unsorted_grids():
     rng = np.random.default_rng(7)
     w = np.arange(380.0, 781.0, 20.0)
     R = rng.uniform(0, 1, size=(2, 3, 4, w.size))
-    XYZ = spectral.reflectance_to_XYZ(R, w, "D50")
+    XYZ = wcolour.reflectance_to_XYZ(R, w, "D50")
     assert XYZ.shape == (2, 3, 4, 3)
-    np.testing.assert_allclose(XYZ[1, 2, 3], spectral.reflectance_to_XYZ(R[1, 2, 3], w, "D50"), atol=EXACT)
+    np.testing.assert_allclose(XYZ[1, 2, 3], wcolour.reflectance_to_XYZ(R[1, 2, 3], w, "D50"), atol=EXACT)
     perm = rng.permutation(w.size)
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(R[..., perm], w[perm], "D50"), XYZ, atol=EXACT)
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(R[..., perm], w[perm], "D50"), XYZ, atol=EXACT)
 
 
 @settings(max_examples=40, deadline=None, derandomize=True)
@@ -138,67 +138,67 @@ def test_linear_weights_bound_xyz_between_min_and_max_reflectance(values, gaps):
     n = min(len(values), len(gaps) + 1)
     R = np.array(values[:n])
     w = 370.0 + np.concatenate([[0.0], np.cumsum(gaps[: n - 1])])
-    XYZ = spectral.reflectance_to_XYZ(R, w, "F11")
-    white = spectral.white_XYZ("F11")
+    XYZ = wcolour.reflectance_to_XYZ(R, w, "F11")
+    white = wcolour.white_XYZ("F11")
     assert np.all(XYZ >= R.min() * white - 1e-12) and np.all(XYZ <= R.max() * white + 1e-12)
 
 
 def test_bad_reflectance_inputs():
     w = np.arange(400.0, 701.0, 100.0)
     with pytest.raises(WaveopticsError, match="last axis must have one value per wavelength"):
-        spectral.reflectance_to_XYZ(np.ones(3), w)
+        wcolour.reflectance_to_XYZ(np.ones(3), w)
     with pytest.raises(WaveopticsError, match="NaN or Inf"):
-        spectral.reflectance_to_XYZ([1.0, np.nan, 1.0, 1.0], w)
+        wcolour.reflectance_to_XYZ([1.0, np.nan, 1.0, 1.0], w)
     with pytest.raises(WaveopticsError, match="repeated"):
-        spectral.reflectance_to_XYZ([1.0, 1.0], [500.0, 500.0])
+        wcolour.reflectance_to_XYZ([1.0, 1.0], [500.0, 500.0])
     with pytest.raises(WaveopticsError, match="unknown tristimulus method 'cubic'"):
-        spectral.reflectance_to_XYZ(np.ones(4), w, method="cubic")
+        wcolour.reflectance_to_XYZ(np.ones(4), w, method="cubic")
     with pytest.raises(WaveopticsError, match="ASTM E2022' needs a uniform integer-nm grid"):
-        spectral.reflectance_to_XYZ(np.ones(4), w + 0.5, method="ASTM E2022")
+        wcolour.reflectance_to_XYZ(np.ones(4), w + 0.5, method="ASTM E2022")
 
 
 # --- closed-form spectra ---------------------------------------------------------------------------------------
 
 def test_single_laser_line_has_spectral_locus_chromaticity():
-    wl, c = spectral.cmfs(D2)
+    wl, c = wcolour.cmfs(D2)
     i = int(np.nonzero(wl == 532.0)[0][0])
-    XYZ = spectral.reflectance_to_XYZ([1.0], [532.0], "laser:532nm")
+    XYZ = wcolour.reflectance_to_XYZ([1.0], [532.0], "laser:532nm")
     np.testing.assert_allclose(XYZ, c[i] / c[i, 1], atol=EXACT)
 
 
 def test_laser_lines_are_discrete_sums():
     lines, P = np.array([465.0, 532.0, 638.0]), np.array([2.0, 1.0, 3.0])
-    src = spectral.laser(lines, P)
+    src = wcolour.laser(lines, P)
     R = np.array([0.2, 0.9, 0.5])
-    c = spectral.cmf_at(lines, D2)
+    c = wcolour.cmf_at(lines, D2)
     expected = (P * R) @ c / (P @ c[:, 1])
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(R, lines, src), expected, atol=EXACT)
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(R, lines, src), expected, atol=EXACT)
     # R on another grid is linearly interpolated at the lines: exact for linear R
     grid = np.arange(400.0, 701.0, 50.0)
     lin = lambda w: 0.1 + 0.001 * (w - 400.0)  # noqa: E731
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(lin(grid), grid, src),
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(lin(grid), grid, src),
                                (P * lin(lines)) @ c / (P @ c[:, 1]), atol=EXACT)
 
 
 def test_simulation_wavelengths_of_lasers_are_the_visible_lines():
-    np.testing.assert_array_equal(spectral.simulation_wavelengths("laser:638,465,532"), [465.0, 532.0, 638.0])
-    np.testing.assert_array_equal(spectral.simulation_wavelengths("laser:1064,532"), [532.0])
+    np.testing.assert_array_equal(wcolour.simulation_wavelengths("laser:638,465,532"), [465.0, 532.0, 638.0])
+    np.testing.assert_array_equal(wcolour.simulation_wavelengths("laser:1064,532"), [532.0])
     with pytest.raises(WaveopticsError, match="no visible"):
-        spectral.simulation_wavelengths("laser:1064")
+        wcolour.simulation_wavelengths("laser:1064")
 
 
 def test_equal_energy_white_is_achromatic_and_a_plain_cmf_sum():
-    xy = colour.XYZ_to_xy(spectral.white_XYZ("E"))
+    xy = colour.XYZ_to_xy(wcolour.white_XYZ("E"))
     np.testing.assert_allclose(xy, (1 / 3, 1 / 3), atol=1e-4)  # CIE 1931 CMF areas are equal to 1e-4
-    wl, c = spectral.cmfs(D2)
+    wl, c = wcolour.cmfs(D2)
     R = _smooth_R(wl)
-    np.testing.assert_allclose(spectral.reflectance_to_XYZ(R, wl, "E"), R @ c / c[:, 1].sum(), atol=EXACT)
+    np.testing.assert_allclose(wcolour.reflectance_to_XYZ(R, wl, "E"), R @ c / c[:, 1].sum(), atol=EXACT)
 
 
 @pytest.mark.parametrize("T", [1500.0, 2856.0, 5500.0, 10000.0])
 def test_blackbody_follows_planck(T):
     """Relative SPD equals Planck's law λ^-5 / (exp(c2/λT) - 1), c2 = 1.4388e-2 m·K (CIE 015)."""
-    bb = spectral.illuminant(f"blackbody:{T:g}K")
+    bb = wcolour.illuminant(f"blackbody:{T:g}K")
     lam = np.array([380.0, 450.0, 560.0, 650.0, 780.0])
     planck = lambda l: (l * 1e-9) ** -5 / np.expm1(1.4388e-2 / (l * 1e-9 * T))  # noqa: E731
     np.testing.assert_allclose(bb(lam), 100 * planck(lam) / planck(560.0), rtol=1e-9)
@@ -206,8 +206,8 @@ def test_blackbody_follows_planck(T):
 
 def test_blackbody_reproduces_cie_illuminant_A():
     """CIE A is Planckian at 2848 K with c2 = 1.435e-2, i.e. 2848·1.4388/1.435 K with today's c2."""
-    bb = spectral.blackbody(2848 * 1.4388 / 1.435)
-    A = spectral.illuminant("A")
+    bb = wcolour.blackbody(2848 * 1.4388 / 1.435)
+    A = wcolour.illuminant("A")
     lam = np.arange(380.0, 781.0, 5.0)
     np.testing.assert_allclose(bb(lam), A(lam), rtol=2e-5)
 
@@ -215,13 +215,13 @@ def test_blackbody_reproduces_cie_illuminant_A():
 # --- sources parsing --------------------------------------------------------------------------------------------
 
 def test_illuminant_names_and_aliases():
-    assert not spectral.illuminant("D65").lines
-    np.testing.assert_array_equal(spectral.illuminant("F7").values, spectral.illuminant("FL7").values)
-    assert spectral.illuminant("f12").name == "F12"
-    assert spectral.illuminant("rgb-laser").lines
-    np.testing.assert_array_equal(spectral.illuminant("rgb-laser").wavelengths_nm, sorted(spectral.RGB_LASER_NM))
-    assert spectral.illuminant("laser:465, 532,638nm").wavelengths_nm.tolist() == [465.0, 532.0, 638.0]
-    assert spectral.illuminant("blackbody:6500").name == "blackbody 6500 K"
+    assert not wcolour.illuminant("D65").lines
+    np.testing.assert_array_equal(wcolour.illuminant("F7").values, wcolour.illuminant("FL7").values)
+    assert wcolour.illuminant("f12").name == "F12"
+    assert wcolour.illuminant("rgb-laser").lines
+    np.testing.assert_array_equal(wcolour.illuminant("rgb-laser").wavelengths_nm, sorted(wcolour.RGB_LASER_NM))
+    assert wcolour.illuminant("laser:465, 532,638nm").wavelengths_nm.tolist() == [465.0, 532.0, 638.0]
+    assert wcolour.illuminant("blackbody:6500").name == "blackbody 6500 K"
 
 
 @pytest.mark.parametrize("spec,message", [
@@ -234,37 +234,37 @@ def test_illuminant_names_and_aliases():
 ])
 def test_bad_illuminants(spec, message):
     with pytest.raises(WaveopticsError, match=message):
-        spectral.illuminant(spec)
+        wcolour.illuminant(spec)
 
 
 def test_observer_aliases():
-    assert spectral.observer_name("10") == D10
+    assert wcolour.observer_name("10") == D10
     with pytest.raises(WaveopticsError, match=r"unknown observer '11' \(did you mean '10'\?\)"):
-        spectral.observer_name("11")
+        wcolour.observer_name("11")
 
 
 def test_csv_spd_round_trip(tmp_path):
-    d65 = spectral.illuminant("D65")
+    d65 = wcolour.illuminant("D65")
     p = tmp_path / "lamp.csv"
     p.write_text("wavelength,lamp\n" + "\n".join(f"{w:g},{v:.6f}" for w, v in zip(d65.wavelengths_nm, d65.values)))
-    lamp = spectral.illuminant(str(p))
-    np.testing.assert_allclose(spectral.white_XYZ(lamp), spectral.white_XYZ(d65), atol=1e-7)
+    lamp = wcolour.illuminant(str(p))
+    np.testing.assert_allclose(wcolour.white_XYZ(lamp), wcolour.white_XYZ(d65), atol=1e-7)
     two = tmp_path / "two.csv"
     two.write_text("wavelength,a,b\n400,1,2\n500,1,2\n600,1,2\n700,1,2\n")
     with pytest.raises(WaveopticsError, match="has 2 spectra"):
-        spectral.illuminant(str(two))
-    assert spectral.illuminant(f"{two}:b").values.tolist() == [2.0] * 4
+        wcolour.illuminant(str(two))
+    assert wcolour.illuminant(f"{two}:b").values.tolist() == [2.0] * 4
     with pytest.raises(WaveopticsError, match=r"unknown column of two.csv 'c'"):
-        spectral.illuminant(f"{two}:c")
+        wcolour.illuminant(f"{two}:c")
 
 
 # --- RGB, 8-bit, ΔE ----------------------------------------------------------------------------------------------
 
 def test_rgb_to_srgb8():
-    np.testing.assert_array_equal(spectral.rgb_to_srgb8([0.0, 0.5, 1.0]), [0, 188, 255])
-    np.testing.assert_array_equal(spectral.rgb_to_srgb8([[1.2, -0.1, 0.0031308]]), [[255, 0, 10]])  # 12.92·x·255
+    np.testing.assert_array_equal(wcolour.rgb_to_srgb8([0.0, 0.5, 1.0]), [0, 188, 255])
+    np.testing.assert_array_equal(wcolour.rgb_to_srgb8([[1.2, -0.1, 0.0031308]]), [[255, 0, 10]])  # 12.92·x·255
     with pytest.raises(WaveopticsError, match="NaN"):
-        spectral.rgb_to_srgb8([np.nan, 0, 0])
+        wcolour.rgb_to_srgb8([np.nan, 0, 0])
 
 
 def test_delta_e2000_matches_sharma_reference_pair():
@@ -274,13 +274,13 @@ def test_delta_e2000_matches_sharma_reference_pair():
     lab = np.array([[50.0, 2.6772, -79.7751], [50.0, 0.0, -82.7485]])
     # invert colour's RGB->XYZ exactly (the IEC 61966-2-1 XYZ->RGB matrix is its inverse only to 4 decimals)
     rgb = np.linalg.solve(cs.matrix_RGB_to_XYZ, colour.Lab_to_XYZ(lab, white).T).T
-    assert spectral.delta_e2000(rgb[0], rgb[1]) == pytest.approx(2.0425, abs=1e-4)
-    assert spectral.delta_e2000(rgb, rgb).tolist() == [0.0, 0.0]
+    assert wcolour.delta_e2000(rgb[0], rgb[1]) == pytest.approx(2.0425, abs=1e-4)
+    assert wcolour.delta_e2000(rgb, rgb).tolist() == [0.0, 0.0]
 
 
 def test_unknown_space():
     with pytest.raises(WaveopticsError, match=r"unknown RGB space 'sRBG' \(did you mean 'sRGB'\?\)"):
-        spectral.XYZ_to_rgb([0.5, 0.5, 0.5], "sRBG")
+        wcolour.XYZ_to_rgb([0.5, 0.5, 0.5], "sRBG")
 
 
 # --- simulation grids -----------------------------------------------------------------------------------------
@@ -288,9 +288,9 @@ def test_unknown_space():
 @pytest.mark.parametrize("method", ["linear", "spline"])
 @pytest.mark.parametrize("target", [0.2, 0.5, 1.0])
 def test_simulation_wavelengths_meet_the_requested_accuracy(method, target):
-    grid = spectral.simulation_wavelengths("D65", target, method=method)
+    grid = wcolour.simulation_wavelengths("D65", target, method=method)
     step = float(np.diff(grid)[0])
-    errors = spectral.step_errors("D65", [step, step * 2], method=method)
+    errors = wcolour.step_errors("D65", [step, step * 2], method=method)
     assert errors[step][0] <= target
     if step * 2 <= 40:  # the next coarser candidate would have failed
         assert errors[step * 2][0] > target
@@ -298,50 +298,50 @@ def test_simulation_wavelengths_meet_the_requested_accuracy(method, target):
 
 
 def test_spline_needs_fewer_wavelengths_than_linear_for_smooth_spectra():
-    assert spectral.simulation_wavelengths("D65", 0.5, method="spline").size < \
-        spectral.simulation_wavelengths("D65", 0.5, method="linear").size
+    assert wcolour.simulation_wavelengths("D65", 0.5, method="spline").size < \
+        wcolour.simulation_wavelengths("D65", 0.5, method="linear").size
 
 
 # --- metamers --------------------------------------------------------------------------------------------------
 
 def test_laser_metamer_of_d65_has_equal_xyz_but_different_object_colours():
     lines = [465.0, 532.0, 638.0]
-    P = spectral.metamer_laser_weights("D65", lines)
+    P = wcolour.metamer_laser_weights("D65", lines)
     assert np.all(P > 0)
-    mix = spectral.laser(lines, P)
-    np.testing.assert_allclose(spectral.spd_to_XYZ(mix), spectral.spd_to_XYZ("D65"), rtol=1e-12)
+    mix = wcolour.laser(lines, P)
+    np.testing.assert_allclose(wcolour.spd_to_XYZ(mix), wcolour.spd_to_XYZ("D65"), rtol=1e-12)
     # metameric failure: the same ColorChecker-like reflectance looks different under the two lights
     w = np.arange(380.0, 781.0, 5.0)
     R = 0.05 + 0.9 / (1.0 + np.exp(-(w - 600.0) / 15.0))
-    under_d65 = spectral.reflectance_to_rgb(R, w, "D65")
-    under_lasers = spectral.reflectance_to_rgb(R, w, mix)
-    assert spectral.delta_e2000(under_d65, under_lasers) > 2.0
+    under_d65 = wcolour.reflectance_to_rgb(R, w, "D65")
+    under_lasers = wcolour.reflectance_to_rgb(R, w, mix)
+    assert wcolour.delta_e2000(under_d65, under_lasers) > 2.0
 
 
 def test_rgb_laser_projector_white_is_d65():
-    np.testing.assert_allclose(spectral.white_XYZ("rgb-laser"), spectral.white_XYZ("D65"), atol=EXACT)
+    np.testing.assert_allclose(wcolour.white_XYZ("rgb-laser"), wcolour.white_XYZ("D65"), atol=EXACT)
 
 
 def test_laser_metamer_is_observer_dependent():
     """Calibrated for the 2° observer, the laser white is visibly off D65 for the 10° observer."""
-    w10, d10 = spectral.white_XYZ("rgb-laser", D10), spectral.white_XYZ("D65", D10)
-    assert spectral.delta_e2000(spectral.XYZ_to_rgb(w10), spectral.XYZ_to_rgb(d10)) > 2.0
+    w10, d10 = wcolour.white_XYZ("rgb-laser", D10), wcolour.white_XYZ("D65", D10)
+    assert wcolour.delta_e2000(wcolour.XYZ_to_rgb(w10), wcolour.XYZ_to_rgb(d10)) > 2.0
 
 
 def test_metamer_errors():
     with pytest.raises(WaveopticsError, match="line 520 nm would need negative power"):
-        spectral.metamer_laser_weights("D65", [500.0, 520.0, 540.0])
+        wcolour.metamer_laser_weights("D65", [500.0, 520.0, 540.0])
     with pytest.raises(WaveopticsError, match="exactly 3 distinct laser lines"):
-        spectral.metamer_laser_weights("D65", [465.0, 532.0])
+        wcolour.metamer_laser_weights("D65", [465.0, 532.0])
 
 
 def test_plot_metamers_writes_png(tmp_path):
     out = tmp_path / "m.png"
-    P = spectral.metamer_laser_weights("D65", [465.0, 532.0, 638.0])
-    spectral.plot_metamers("D65", [465.0, 532.0, 638.0], P, out)
+    P = wcolour.metamer_laser_weights("D65", [465.0, 532.0, 638.0])
+    wcolour.plot_metamers("D65", [465.0, 532.0, 638.0], P, out)
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 10_000
     with pytest.raises(WaveopticsError, match="already exists"):
-        spectral.plot_metamers("D65", [465.0, 532.0, 638.0], P, out)
+        wcolour.plot_metamers("D65", [465.0, 532.0, 638.0], P, out)
 
 
 # --- F0 ------------------------------------------------------------------------------------------------------
@@ -350,18 +350,18 @@ def test_plot_metamers_writes_png(tmp_path):
                                         (0.2, ("semiconductor", True)), (0.35, ("semiconductor", True)),
                                         (0.45, ("metal", False)), (0.95, ("metal", False))])
 def test_classify_f0(y, expected):
-    assert spectral.classify_f0(y) == expected
+    assert wcolour.classify_f0(y) == expected
 
 
 @pytest.mark.parametrize("bad", [-0.1, 1.5, float("nan")])
 def test_classify_f0_refuses_impossible_values(bad):
     with pytest.raises(WaveopticsError, match="F0 luminance"):
-        spectral.classify_f0(bad)
+        wcolour.classify_f0(bad)
 
 
 def test_constant_index_dielectric_f0_is_grey_fresnel():
     """n = 1.5 everywhere: F0 = ((n-1)/(n+1))^2 = 0.04 at every wavelength, hence RGB = 0.04·white."""
-    d = spectral.f0_colour(get_material("1.5"))
+    d = wcolour.f0_colour(get_material("1.5"))
     np.testing.assert_allclose(d["f0_linear"], 0.04, atol=0.04 * SRGB_WHITE)
     assert d["category"] == "dielectric" and not d["forbidden_zone"]
 
@@ -377,20 +377,20 @@ def test_constant_index_dielectric_f0_is_grey_fresnel():
     ("main/Ag/Hagemann", (0.95, 0.93, 0.88), HOFFMAN_SAME_DATA),  # older data like the table's: agrees closely
 ])
 def test_f0_of_metals_against_hoffman(spec, reference, tol):
-    d = spectral.f0_colour(get_material(spec))
+    d = wcolour.f0_colour(get_material(spec))
     rgb = np.minimum(d["f0_linear"], 1.0)  # the table clips gold's red at 1.00
     assert np.all(np.abs(rgb - reference) <= np.asarray(tol)), (spec, d["f0_linear"])
     assert d["category"] == "metal"
 
 
 def test_gold_red_is_out_of_gamut_and_not_clipped():
-    d = spectral.f0_colour(get_material("Au"))
+    d = wcolour.f0_colour(get_material("Au"))
     assert d["f0_linear"][0] > 1.0 and d["f0_srgb8"][0] == 255
     assert d["f0_linear"][2] < 0.45
 
 
 def test_silicon_is_in_the_forbidden_zone():
-    d = spectral.f0_colour(get_material("Si"))
+    d = wcolour.f0_colour(get_material("Si"))
     assert d["category"] == "semiconductor" and d["forbidden_zone"]
 
 

@@ -1,5 +1,5 @@
 """Height fields: generators against closed-form statistics, PSD normalization and fits, file round trips,
-bad files, CLI. Closed forms from physics.md §1, §4, §5."""
+bad files, CLI. Closed forms from docs/physics.md §1, §4, §5."""
 import json
 import math
 
@@ -32,13 +32,13 @@ def _mean_over_seeds(fn):
 # ---------------------------------------------------------------------------------------------------- PSD models
 
 @pytest.mark.parametrize("psd2, psd1, args, sigma", [
-    (S.psd_gaussian, S.psd_gaussian_profile, (SIG, T), SIG),
-    (S.psd_exponential, S.psd_exponential_profile, (SIG, T), SIG),
-    (S.psd_abc, S.psd_abc_profile, (1e-28, 3e-6, 3.3), S.abc_sigma(1e-28, 3e-6, 3.3)),
+    (S.S_gaussian, S.S1_gaussian, (SIG, T), SIG),
+    (S.S_exponential, S.S1_exponential, (SIG, T), SIG),
+    (S.S_abc, S.S1_abc, (S.abc_sigma(1e-28, 3e-6, 3.3), 3e-6, 3.3), S.abc_sigma(1e-28, 3e-6, 3.3)),
 ])
 def test_psd_models_integrate_to_sigma2(psd2, psd1, args, sigma):
-    """∫ S d²f = ∫ 2πf S df = σ² and the profile PSD ∫ S₁ df over −∞..∞ = σ² (physics.md §4)."""
-    scale = 1 / args[1]   # T or B: frequencies of interest are ~1/scale
+    """∫ S d²f = ∫ 2πf S df = σ² and the profile PSD ∫ S₁ df over −∞..∞ = σ² (docs/physics.md §4)."""
+    scale = 1 / args[1]   # T or B (the first shape parameter): frequencies of interest are ~1/scale
     v2, _ = quad(lambda f: 2 * np.pi * f * psd2(f, *args), 0, np.inf, limit=400, points=None)
     v1, _ = quad(lambda f: 2 * psd1(f, *args), 0, np.inf, limit=400)
     assert v2 == pytest.approx(sigma**2, rel=1e-7)
@@ -55,8 +55,9 @@ def test_abc_sigma_formula_and_exponential_special_case():
     assert S.abc_sigma(A, B, C) ** 2 == pytest.approx(2 * np.pi * A / (B**2 * (C - 2)), rel=1e-14)
     assert S.abc_A(S.abc_sigma(A, B, C), B, C) == pytest.approx(A, rel=1e-14)
     f = np.logspace(3, 8, 50)
-    np.testing.assert_allclose(S.psd_abc(f, 2 * np.pi * SIG**2 * T**2, 2 * np.pi * T, 3.0),
-                               S.psd_exponential(f, SIG, T), rtol=1e-12)
+    np.testing.assert_allclose(S.S_abc(f, S.abc_sigma(2 * np.pi * SIG**2 * T**2, 2 * np.pi * T, 3.0),
+                                       2 * np.pi * T, 3.0),
+                               S.S_exponential(f, SIG, T), rtol=1e-12)
     with pytest.raises(WaveopticsError, match="C=2.0 .*> 2"):
         S.abc_sigma(A, B, 2.0)
 
@@ -252,7 +253,7 @@ def test_psd_matches_model_and_fits_recover_parameters():
     """The radial periodogram follows πσ²T² exp(−π²T²f²); Gaussian and exponential fits recover σ, T."""
     f, P = S.psd_radial(S.gaussian(SIG, T, N * DX, N, 11))
     band = (f > 0.1 / T) & (f < 0.6 / T)
-    ratio = P[band] / S.psd_gaussian(f[band], SIG, T)
+    ratio = P[band] / S.S_gaussian(f[band], SIG, T)
     assert np.median(ratio) == pytest.approx(1.0, rel=0.1)
 
     def one(seed):

@@ -1,20 +1,22 @@
-"""Two-scale BRDF limits (physics.md §7): σ_nano → 0, α_micro → 0, energy, smoothness in λ, diffuse rules."""
+"""Two-scale BRDF limits (docs/physics.md §7): σ_nano → 0, α_micro → 0, energy, smoothness in λ, diffuse rules."""
 import numpy as np
 import pytest
 
-from waveoptics import materials, microfacet, psd, twoscale
-from waveoptics.diffraction import DirectionGrid
+from waveoptics import brdf, scatter, surfaces
+from waveoptics import materials
+from waveoptics.brdf import twoscale
+from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.units import direction_from_angles
 
 GRID = DirectionGrid.hemisphere(96)
 W = np.array([400.0, 500.0, 600.0, 700.0])
-ABC = psd.PSDModel("abc", sigma=10e-9, B=3e-6, C=2.8)
+ABC = surfaces.PSDModel("abc", sigma=10e-9, B=3e-6, C=2.8)
 
 
 def test_zero_nano_roughness_is_exactly_the_microfacet_model():
     wi = direction_from_angles(35.0, 20.0)
     micro = twoscale.Micro(alpha=0.2, ndf="ggx")
-    zero = twoscale.Nano(model=psd.PSDModel("abc", sigma=0.0, B=3e-6, C=2.8))
+    zero = twoscale.Nano(model=surfaces.PSDModel("abc", sigma=0.0, B=3e-6, C=2.8))
     for nano in (None, zero):
         L = twoscale.evaluate(wi, W, "Au", micro, nano, GRID)
         np.testing.assert_array_equal(L.total, L.microfacet)
@@ -22,7 +24,7 @@ def test_zero_nano_roughness_is_exactly_the_microfacet_model():
     # and the microfacet part is the microfacet module's BRDF itself (independent evaluation)
     wo = GRID.directions()
     eta = materials.get_material("Au").eta(W)
-    ref = np.where(GRID.inside, microfacet.specular(wi, wo[None], alpha=0.2, ndf="ggx", fresnel="exact",
+    ref = np.where(GRID.inside, brdf.specular(wi, wo[None], alpha=0.2, ndf="ggx", fresnel="exact",
                                                     eta=eta[:, None, None]), 0)
     # up to the energy-preserving scale factor (accurate quadrature albedo / grid albedo), one for the whole lobe
     scale = L.microfacet[ref > 0] / ref[ref > 0]
@@ -39,9 +41,9 @@ def test_zero_micro_roughness_is_exactly_the_nano_diffraction_lobe():
     h = wi + wo
     h /= np.linalg.norm(h, axis=-1, keepdims=True)
     cos_d = np.clip(h @ wi, 0, 1)
-    rho = microfacet.albedo(wi, fresnel="one", alpha=microfacet.ALPHA_MIN)  # = 1 up to 1e-6
+    rho = brdf.albedo(wi, fresnel="one", alpha=brdf.ALPHA_MIN)  # = 1 up to 1e-6
     for i, lam in enumerate(W):
-        ref = psd.scattered_lobe(wi, wo, lam, ABC, F=mat.F(cos_d, lam))
+        ref = scatter.scattered_lobe(wi, wo, lam, ABC, F=mat.F(cos_d, lam))
         np.testing.assert_allclose(L.diffraction[i], np.where(GRID.inside, ref, 0) * rho, rtol=1e-9, atol=1e-12)
     # the coherent part is a spike holding F(θi)·exp(−g) at the mirror direction
     g = (4 * np.pi * ABC.sigma * wi[2] / (W * 1e-9)) ** 2
@@ -54,7 +56,7 @@ def test_albedo_never_exceeds_fresnel(seed):
     rng = np.random.default_rng(seed)
     theta = rng.uniform(0, 80)
     alpha = rng.choice([0.0, 0.01, 0.05, 0.2, 0.5])
-    model = psd.PSDModel("abc", sigma=rng.uniform(1, 60) * 1e-9, B=rng.uniform(0.5, 20) * 1e-6,
+    model = surfaces.PSDModel("abc", sigma=rng.uniform(1, 60) * 1e-9, B=rng.uniform(0.5, 20) * 1e-6,
                          C=rng.uniform(2.3, 4.0))
     mat = rng.choice(["Au", "Ag", "Al", "Cu"])
     wi = direction_from_angles(theta, rng.uniform(0, 360))
@@ -66,9 +68,9 @@ def test_albedo_never_exceeds_fresnel(seed):
 
 
 def test_energy_split_matches_tis_for_smooth_metal():
-    """α = 0, normal incidence: coherent ≈ F e^{−g}, diffraction ≈ F (1 − e^{−g}) (physics.md §2), 2 % here."""
+    """α = 0, normal incidence: coherent ≈ F e^{−g}, diffraction ≈ F (1 − e^{−g}) (docs/physics.md §2), 2 % here."""
     wi = direction_from_angles(0.0, 0.0)
-    model = psd.PSDModel("gaussian", sigma=15e-9, T=4e-6)
+    model = surfaces.PSDModel("gaussian", sigma=15e-9, T=4e-6)
     grid = DirectionGrid.hemisphere(256)
     L = twoscale.evaluate(wi, W, "Al", twoscale.Micro(alpha=0.0), twoscale.Nano(model=model), grid)
     F = materials.get_material("Al").F(1.0, W)
@@ -104,14 +106,14 @@ def test_micro_kernel_sums_to_micro_albedo_and_is_centred():
     wi = direction_from_angles(40.0, 0.0)
     micro = twoscale.Micro(alpha=0.15, ndf="beckmann")
     K = twoscale.micro_kernel(wi, micro, GRID)
-    assert K.sum() == pytest.approx(microfacet.albedo(wi, fresnel="one", alpha=0.15, ndf="beckmann"), rel=1e-12)
+    assert K.sum() == pytest.approx(brdf.albedo(wi, fresnel="one", alpha=0.15, ndf="beckmann"), rel=1e-12)
     n = GRID.n_u
     iy, ix = np.unravel_index(np.argmax(K), K.shape)
     assert abs(iy - (n - 1)) <= 1 and abs(ix - (n - 1)) <= 3  # peak at (near) zero shift from the mirror
 
 
 def test_height_field_coherent_fraction_is_its_characteristic_function():
-    """For a sinusoid h = a sin(2πx/Λ): A = J0²(2k a cos θ) (Jacobi-Anger; physics.md §5)."""
+    """For a sinusoid h = a sin(2πx/Λ): A = J0²(2k a cos θ) (Jacobi-Anger; docs/physics.md §5)."""
     from scipy import special
 
     from waveoptics import surfaces
@@ -130,7 +132,7 @@ def test_height_field_route_matches_psd_route_for_gaussian_surface():
     wi = direction_from_angles(20.0, 0.0)
     w = np.array([450.0, 650.0])
     grid = DirectionGrid.hemisphere(96)
-    model = psd.PSDModel("gaussian", sigma=15e-9, T=1e-6)
+    model = surfaces.PSDModel("gaussian", sigma=15e-9, T=1e-6)
     diff = []
     for seed in (1, 2):
         hf = surfaces.gaussian(sigma=15e-9, corr_length=1e-6, size=32e-6, samples=256, seed=seed)

@@ -3,7 +3,7 @@
 Measured (each a function returning plain data; :func:`run_all` runs them all, ``waveoptics bench`` prints them
 and ``scripts/docs_performance.py`` turns them into ``docs/performance.md``):
 
-* :func:`direct_kernels` — the direct Kirchhoff sum (physics.md §1) on one problem: the project's OpenCL kernel
+* :func:`direct_kernels` — the direct Kirchhoff sum (docs/physics.md §1) on one problem: the project's OpenCL kernel
   (float32, float64, fast-math), the kernel it replaced (``kirchhoff_U_sinpi``, run as it was: driver-chosen
   work-groups), the naive OpenCL kernel (``kirchhoff_U_naive``: float phase k s·x in radians,
   native_sin/native_cos, driver-chosen work-groups), a plain NumPy direct sum (``exp(1j k s·r) @ w``) and the
@@ -27,7 +27,7 @@ the machine and on its load; :func:`machine` records what it was.
 
 References
 ----------
-.. [1] physics.md §1 (direct sum and its cost O(samples × directions)); Rabiner, Schafer & Rader 1969 (chirp-z).
+.. [1] docs/physics.md §1 (direct sum and its cost O(samples × directions)); Rabiner, Schafer & Rader 1969 (chirp-z).
 .. [2] M. Frigo, S. G. Johnson, "The design and implementation of FFTW3", Proc. IEEE 93(2), 2005.
 """
 from __future__ import annotations
@@ -40,9 +40,12 @@ import warnings
 
 import numpy as np
 
-from . import diffraction as D
-from .surfaces import HeightField
+from . import scatter
+from .surfaces.heightfield import HeightField
 from .units import direction_from_angles
+from .runtime import build_options, build_program, get_runtime
+
+__all__ = ['WAVELENGTH_NM', 'MATH_FUNCTIONS', 'best_time', 'machine', 'numpy_direct_sum', 'NAIVE', 'large_patch_errors', 'direct_kernels', 'direct_scaling', 'fft_backends', 'numpy_fft_pipeline', 'fft_pipeline', 'math_errors', 'run_all', 'report']
 
 #: nm, the benchmark wavelength
 WAVELENGTH_NM = 500.0
@@ -88,14 +91,14 @@ def _problem(n: int, n_dir: int, seed: int = 1):
     """An n × n Gaussian patch (σ = 60 nm, dx = λ/4) and n_dir directions spread over the hemisphere."""
     rng = np.random.default_rng(seed)
     hf = HeightField(rng.normal(0.0, 60e-9, (n, n)), WAVELENGTH_NM * 1e-9 / 4)
-    smp = D.samples(hf)
-    wi = D._incident((30.0, 0.0))
+    smp = scatter.samples(hf)
+    wi = scatter.grid._incident((30.0, 0.0))
     wo = direction_from_angles(np.degrees(np.arcsin(np.sqrt(rng.uniform(0, 0.98, n_dir)))),
                                rng.uniform(0, 360, n_dir))
     return smp, wi, wo
 
 
-def numpy_direct_sum(smp: D.Samples, wi, wo, wavelength_nm: float, chunk_terms: int = 2**22) -> np.ndarray:
+def numpy_direct_sum(smp: scatter.Samples, wi, wo, wavelength_nm: float, chunk_terms: int = 2**22) -> np.ndarray:
     """The direct sum as a user would write it in NumPy: U = dx dy Σ w exp(i k (ω_i + ω_o)·(x, y, h)), complex128,
     coordinates from the patch centre (the reference of the benchmark's 'NumPy direct sum')."""
     k = 2 * np.pi / (wavelength_nm * 1e-9)
@@ -117,7 +120,7 @@ NAIVE = "opencl naive native_sin float32 fast-math"
 def _naive(smp, coef, rt):
     """The naive kernel as its author would run it: -cl-fast-relaxed-math (without it PoCL cannot vectorize the
     sum and it runs ~10x slower), driver-chosen work-groups."""
-    return D.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", kernel="kirchhoff_U_naive", local_size=0,
+    return scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", kernel="kirchhoff_U_naive", local_size=0,
                             fast_math=True)
 
 
@@ -127,18 +130,18 @@ def large_patch_errors(rt, n: int = 2**16, n_dir: int = 16) -> dict:
     fails."""
     rng = np.random.default_rng(7)
     hf = HeightField(rng.normal(0.0, 50e-9, (2, n)), WAVELENGTH_NM * 1e-9 / 4)
-    smp = D.samples(hf, "boxcar")
-    wi = D._incident((60.0, 0.0))
+    smp = scatter.samples(hf, "boxcar")
+    wi = scatter.grid._incident((60.0, 0.0))
     wo = direction_from_angles(rng.uniform(0, 80, n_dir), rng.uniform(0, 360, n_dir))
-    coef = D.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
-    ref = D.kirchhoff_U(smp, coef)
+    coef = scatter.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
+    ref = scatter.kirchhoff_U(smp, coef)
     scale = float(np.sqrt(np.mean(np.abs(ref) ** 2)))
     out = {"samples": smp.size, "length_wavelengths": n / 4}
-    runs = {"opencl kirchhoff_U float32": lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt),
-            "opencl kirchhoff_U float32 fast-math": lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt, fast_math=True),
+    runs = {"opencl kirchhoff_U float32": lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt),
+            "opencl kirchhoff_U float32 fast-math": lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, fast_math=True),
             NAIVE: lambda: _naive(smp, coef, rt)}
     if rt.fp64:
-        runs["opencl kirchhoff_U float64"] = lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float64")
+        runs["opencl kirchhoff_U float64"] = lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float64")
     for name, fn in runs.items():
         out[name] = float(np.max(np.abs(fn() - ref)) / scale)
     return out
@@ -151,9 +154,9 @@ def direct_kernels(rt, n: int = 256, n_dir: int = 4096, numpy_dirs: int = 64, re
     per term all the same.
     """
     smp, wi, wo = _problem(n, n_dir)
-    coef = D.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
+    coef = scatter.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
     sub = slice(0, numpy_dirs)
-    U_ref = D.kirchhoff_U(smp, coef.take(sub))
+    U_ref = scatter.kirchhoff_U(smp, coef.take(sub))
     scale = float(np.sum(smp.w) * smp.dx * smp.dy)
     terms = smp.size * coef.size
     rows = []
@@ -166,18 +169,18 @@ def direct_kernels(rt, n: int = 256, n_dir: int = 4096, numpy_dirs: int = 64, re
 
     precs = ["float32"] + (["float64"] if rt.fp64 else [])
     for p in precs:
-        add(f"opencl kirchhoff_U {p}", lambda p=p: D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p), terms, sub)
+        add(f"opencl kirchhoff_U {p}", lambda p=p: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p), terms, sub)
     for p in precs:
         add(f"opencl kirchhoff_U_sinpi {p} (before issue 6)",
-            lambda p=p: D.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p, kernel="kirchhoff_U_sinpi",
+            lambda p=p: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p, kernel="kirchhoff_U_sinpi",
                                          local_size=0), terms, sub)
     add("opencl kirchhoff_U float32 fast-math",
-        lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", fast_math=True), terms, sub)
+        lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", fast_math=True), terms, sub)
     add(NAIVE, lambda: _naive(smp, coef, rt), terms, sub)
     n_np = smp.size * numpy_dirs
     add("numpy direct sum (complex128)", lambda: numpy_direct_sum(smp, wi, wo[sub], WAVELENGTH_NM), n_np,
         slice(None))
-    add("numpy twin kirchhoff_U (float64)", lambda: D.kirchhoff_U(smp, coef.take(sub)), n_np, slice(None))
+    add("numpy twin kirchhoff_U (float64)", lambda: scatter.kirchhoff_U(smp, coef.take(sub)), n_np, slice(None))
     by = {r["name"]: r for r in rows}
     naive = by[NAIVE]["terms_per_s"]
     npy = by["numpy direct sum (complex128)"]["terms_per_s"]
@@ -196,10 +199,10 @@ def direct_scaling(rt, sizes=(32, 64, 128, 256), directions=(256, 1024, 4096, 16
 
     def one(n, nd):
         smp, wi, wo = _problem(n, nd)
-        coef = D.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
+        coef = scatter.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
         row = {"samples": smp.size, "directions": nd, "terms": smp.size * nd}
-        row["opencl_float32_s"] = best_time(lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt), repeat)
-        row["opencl_float64_s"] = (best_time(lambda: D.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float64"),
+        row["opencl_float32_s"] = best_time(lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt), repeat)
+        row["opencl_float64_s"] = (best_time(lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float64"),
                                              repeat) if rt.fp64 else None)
         row["naive_float32_s"] = best_time(lambda: _naive(smp, coef, rt), repeat)
         row["numpy_s"] = (best_time(lambda: numpy_direct_sum(smp, wi, wo, WAVELENGTH_NM), 1)
@@ -289,18 +292,18 @@ def _solver_backends(sizes, repeat: int) -> list[dict]:
     rng = np.random.default_rng(4)
     out = []
     for n in sizes:
-        smp = D.samples(HeightField(rng.normal(0.0, 30e-9, (n, n)), WAVELENGTH_NM * 1e-9 / 4))
-        wi = D._incident((30.0, 0.0))
-        grid = D.DirectionGrid.hemisphere(n)
-        row = {"n": n, "transforms": D.field_fft(smp, wi, grid, WAVELENGTH_NM)[1]["transforms"]}
+        smp = scatter.samples(HeightField(rng.normal(0.0, 30e-9, (n, n)), WAVELENGTH_NM * 1e-9 / 4))
+        wi = scatter.grid._incident((30.0, 0.0))
+        grid = scatter.DirectionGrid.hemisphere(n)
+        row = {"n": n, "transforms": scatter.field_fft(smp, wi, grid, WAVELENGTH_NM)[1]["transforms"]}
         for name, c in ctx.items():
             with c():
-                row[name] = best_time(lambda: D.field_fft(smp, wi, grid, WAVELENGTH_NM), repeat)
+                row[name] = best_time(lambda: scatter.field_fft(smp, wi, grid, WAVELENGTH_NM), repeat)
         out.append(row)
     return out
 
 
-def numpy_fft_pipeline(smp: D.Samples, wi, grid: D.DirectionGrid, wavelength_nm: float,
+def numpy_fft_pipeline(smp: scatter.Samples, wi, grid: scatter.DirectionGrid, wavelength_nm: float,
                        pad: int | None = None) -> np.ndarray:
     """The FFT pipeline a user would write: frozen v_z = 2k cos θ_i, zero-padded ``numpy.fft.fft2`` of
     w exp(i v_z h) (pad × pad, default the next power of two ≥ 2 max(nx, ny)), then bilinear interpolation of the
@@ -333,22 +336,22 @@ def fft_pipeline(sizes=(64, 128, 256, 512), repeat: int = 2, check_cells: int = 
     rng = np.random.default_rng(3)
     for n in sizes:
         hf = HeightField(rng.normal(0.0, 30e-9, (n, n)), WAVELENGTH_NM * 1e-9 / 4)
-        smp = D.samples(hf)
-        wi = D._incident((30.0, 0.0))
-        grid = D.DirectionGrid.hemisphere(n)
+        smp = scatter.samples(hf)
+        wi = scatter.grid._incident((30.0, 0.0))
+        grid = scatter.DirectionGrid.hemisphere(n)
         cells = np.flatnonzero(grid.inside)
         pick = np.sort(rng.choice(cells, size=min(check_cells, cells.size), replace=False))
         wo = grid.directions().reshape(-1, 3)[pick]
-        coef = D.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
+        coef = scatter.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
         if rt is not None and rt.fp64:
-            U_ref = D.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float64")
+            U_ref = scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float64")
         else:
-            U_ref = D.kirchhoff_U(smp, coef)
+            U_ref = scatter.kirchhoff_U(smp, coef)
         I_ref = np.abs(U_ref) ** 2
         top = float(np.sum(smp.w) * smp.dx * smp.dy) ** 2
         row = {"n": n, "samples": smp.size, "cells": grid.n_u * grid.n_v}
-        for name, fn in (("fft solver order 0", lambda: D.field_fft(smp, wi, grid, WAVELENGTH_NM, 0)[0]),
-                         ("fft solver order auto", lambda: D.field_fft(smp, wi, grid, WAVELENGTH_NM, "auto")[0]),
+        for name, fn in (("fft solver order 0", lambda: scatter.field_fft(smp, wi, grid, WAVELENGTH_NM, 0)[0]),
+                         ("fft solver order auto", lambda: scatter.field_fft(smp, wi, grid, WAVELENGTH_NM, "auto")[0]),
                          ("numpy fft2 + interpolation", lambda: numpy_fft_pipeline(smp, wi, grid, WAVELENGTH_NM))):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -370,7 +373,6 @@ def math_errors(rt, n: int = 200_001) -> dict:
     import pyopencl as cl
     import pyopencl.array as cla
 
-    from .runtime import build_options, build_program
 
     def cyc(x, period):   # x mod period, exact in float64, so that π x keeps all its digits
         return x - period * np.rint(x / period)
@@ -382,7 +384,7 @@ def math_errors(rt, n: int = 200_001) -> dict:
     out = {}
     for prec in ["float32"] + (["float64"] if rt.fp64 else []):
         dt = rt.real_dtype(prec)
-        prg = build_program(rt, "bench_math.cl", build_options(dt, D._sincos_options(prec)))
+        prg = build_program(rt, "bench_math.cl", build_options(dt, scatter.direct._sincos_options(prec)))
         knl = cl.Kernel(prg, "math_builtins")
         nf = len(MATH_FUNCTIONS) if prec == "float32" else 6
         res = {}
@@ -403,7 +405,6 @@ def math_errors(rt, n: int = 200_001) -> dict:
 
 def run_all(rt=None, quick: bool = False, progress=None) -> dict:
     """Every benchmark (smaller sizes with *quick*), with :func:`machine`."""
-    from .runtime import get_runtime
 
     rt = rt or get_runtime()
     step = progress or (lambda *_: None)

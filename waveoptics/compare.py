@@ -12,11 +12,16 @@ import math
 
 import numpy as np
 
-from . import spectral, twoscale
-from .diffraction import integrate
+from . import colour
+from .brdf import twoscale
+from .scatter.grid import integrate
 from .units import direction_from_angles
+from . import render
+from .io.figures import save_figure
+from .io import figures
 
-LUMA = np.array([0.2126, 0.7152, 0.0722])
+__all__ = ['lobe_fwhm_deg', 'compare', 'plot', 'table_text']
+
 
 
 def _angle_from_mirror(grid, wi):
@@ -48,7 +53,6 @@ def compare(sim, angles_deg, *, tail_deg=10.0, sphere_size=128):
         (share of the albedo farther than *tail_deg* from the mirror direction), ``delta_e2000_albedo``,
         ``delta_e2000_sphere_mean``, ``delta_e2000_sphere_max``.
     """
-    from . import render
 
     grid = sim.grid
     w = sim.wavelengths_nm
@@ -66,22 +70,22 @@ def compare(sim, angles_deg, *, tail_deg=10.0, sphere_size=128):
         ang = _angle_from_mirror(grid, wi)
         rgbs = {}
         for name, f in (("wave", tot), ("microfacet", mf)):
-            rgb_lobe = spectral.reflectance_to_rgb(np.moveaxis(f, 0, -1), w, sim.illuminant)
-            lum = rgb_lobe @ LUMA
-            alb = spectral.reflectance_to_rgb(integrate(f, grid), w, sim.illuminant)
+            rgb_lobe = colour.reflectance_to_rgb(np.moveaxis(f, 0, -1), w, sim.illuminant)
+            lum = colour.luminance(rgb_lobe)
+            alb = colour.reflectance_to_rgb(integrate(f, grid), w, sim.illuminant)
             rgbs[name] = alb
             total = float(np.sum(np.where(grid.inside, lum, 0))) * grid.du * grid.dv
             tail = float(np.sum(np.where(grid.inside & (ang > tail_deg), lum, 0))) * grid.du * grid.dv
-            out[f"albedo_Y_{name}"] = float(alb @ LUMA)
+            out[f"albedo_Y_{name}"] = float(colour.luminance(alb))
             out[f"fwhm_deg_{name}"] = lobe_fwhm_deg(lum, grid, wi)
             out[f"tail_fraction_{name}"] = tail / total if total > 0 else 0.0
-        out["delta_e2000_albedo"] = float(spectral.delta_e2000(rgbs["wave"], rgbs["microfacet"]))
+        out["delta_e2000_albedo"] = float(colour.delta_e2000(rgbs["wave"], rgbs["microfacet"]))
         light = direction_from_angles(th, 0.0)
         wave, m1 = render.render_sphere(sim.table_total, thetas, grid, w, light, size=sphere_size,
                                         illuminant=sim.illuminant)
         mfr, _ = render.render_sphere(sim.table_microfacet, thetas, grid, w, light, size=sphere_size,
                                       illuminant=sim.illuminant)
-        dE = spectral.delta_e2000(wave[m1], mfr[m1]) if m1.any() else np.zeros(1)
+        dE = colour.delta_e2000(wave[m1], mfr[m1]) if m1.any() else np.zeros(1)
         out["delta_e2000_sphere_mean"] = float(np.mean(dE))
         out["delta_e2000_sphere_max"] = float(np.max(dE))
         rows.append(out)
@@ -98,12 +102,8 @@ def _lobes_at(sim, wi):
 
 def plot(rows, path, *, title="", tail_deg=10.0):
     """Four panels against θ_i: albedo, FWHM, tail fraction and ΔE2000, both models."""
-    import matplotlib
+    plt = figures.pyplot()
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .render import save_figure
 
     th = [r["theta_i_deg"] for r in rows]
     fig, ax = plt.subplots(2, 2, figsize=(9, 6.5), constrained_layout=True)

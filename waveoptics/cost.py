@@ -38,7 +38,7 @@ References
    using Evolutionary Algorithms*, Wiley, 2001, ch. 2 (dominance, the Pareto-optimal front).
 .. [2] M. R. Luo, G. Cui, B. Rigg, "The development of the CIE 2000 colour-difference formula: CIEDE2000",
    Color Res. Appl. 26(5), 2001.
-.. [3] physics.md §1 (Kirchhoff BRDF, direction-cosine grid), §8 (colour).
+.. [3] docs/physics.md §1 (Kirchhoff BRDF, direction-cosine grid), §8 (colour).
 """
 from __future__ import annotations
 
@@ -52,9 +52,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import diffraction, spectral, surfaces
+from . import colour, scatter
+from . import surfaces
 from .errors import WaveopticsError, unknown
-from .surfaces import HeightField
+from .surfaces.heightfield import HeightField
+from .io.figures import save_figure
+from .io.files import atomic_path, prepare_outdir, write_json
+from .runtime import get_runtime
+from .io import figures
+
+__all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
 
 #: setting solver name -> keyword arguments of :func:`waveoptics.diffraction.scatter`
 SOLVERS = {
@@ -82,7 +89,7 @@ class Config:
     ----------
     surface : HeightField or callable seed -> HeightField
         A fixed patch (realizations > 1 split it into tiles) or a generator of independent realizations.
-    material : see :func:`waveoptics.diffraction.fresnel_function`
+    material : see :func:`waveoptics.materials.fresnel_function`
     incident : (θ, φ), degrees
     illuminant : str
         Light source (:func:`waveoptics.spectral.illuminant`).
@@ -198,7 +205,7 @@ class Run:
     """One scatter run: energy per cell E (n_λ, n_v, n_u), albedo (n_λ,), RGB of the albedo, wall time."""
 
     wavelengths_nm: np.ndarray
-    grid: diffraction.DirectionGrid
+    grid: scatter.DirectionGrid
     energy: np.ndarray
     albedo: np.ndarray
     rgb: np.ndarray
@@ -217,12 +224,12 @@ def _run(cfg: Config, setting: Setting, wavelengths_nm, seed: int, runtime=None,
         surf = [cfg.surface(seed + r) for r in range(n)]     # generated outside the timed call
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", diffraction.DiffractionWarning)
-        res = diffraction.scatter(surf, cfg.incident, wavelengths_nm, cfg.material, runtime=runtime, **kw)
+        warnings.simplefilter("always", scatter.DiffractionWarning)
+        res = scatter.scatter(surf, cfg.incident, wavelengths_nm, cfg.material, runtime=runtime, **kw)
     dt = time.perf_counter() - t0
     g = res.grid
     E = res.brdf * (g.du * g.dv)
-    rgb = spectral.reflectance_to_rgb(res.albedo, res.wavelengths_nm, cfg.illuminant)
+    rgb = colour.reflectance_to_rgb(res.albedo, res.wavelengths_nm, cfg.illuminant)
     msgs = sorted({str(w.message) for w in caught})
     return Run(res.wavelengths_nm, g, E, res.albedo, np.asarray(rgb, float), dt, msgs)
 
@@ -234,7 +241,7 @@ def _mean(runs: list[Run], illuminant) -> Run:
     A = np.mean([r.albedo for r in runs], axis=0)
     w = runs[0].wavelengths_nm
     return Run(w, runs[0].grid, np.mean([r.energy for r in runs], axis=0), A,
-               np.asarray(spectral.reflectance_to_rgb(A, w, illuminant), float), float(sum(r.time_s for r in runs)),
+               np.asarray(colour.reflectance_to_rgb(A, w, illuminant), float), float(sum(r.time_s for r in runs)),
                sorted({m for r in runs for m in r.warnings}))
 
 
@@ -244,10 +251,10 @@ def _warm_up(settings, runtime) -> None:
     if not precisions:
         return
     hf = HeightField(np.zeros((4, 4)), 1e-7)
-    smp = diffraction.samples(hf, "boxcar")
-    coef = diffraction.phase_coefficients(smp, np.array([0.0, 0.0, 1.0]), np.array([[0.0, 0.0, 1.0]]), [500.0])
+    smp = scatter.samples(hf, "boxcar")
+    coef = scatter.phase_coefficients(smp, np.array([0.0, 0.0, 1.0]), np.array([[0.0, 0.0, 1.0]]), [500.0])
     for p in precisions:
-        diffraction.kirchhoff_U_cl(smp, coef, runtime=runtime, precision=p)
+        scatter.kirchhoff_U_cl(smp, coef, runtime=runtime, precision=p)
 
 
 def _pool(E: np.ndarray, factor: int) -> np.ndarray:
@@ -277,7 +284,7 @@ def errors(run: Run, ref: Run) -> dict:
     l2 = float(np.sqrt(np.sum((Es - Er) ** 2)) / norm) if norm > 0 else float(np.sqrt(np.sum(Es**2)))
     A = _interp_wavelengths(run.albedo, run.wavelengths_nm, ref.wavelengths_nm)
     return {"error_rel_l2": l2, "error_albedo": float(np.max(np.abs(A - ref.albedo))),
-            "delta_e2000": float(spectral.delta_e2000(run.rgb, ref.rgb))}
+            "delta_e2000": float(colour.delta_e2000(run.rgb, ref.rgb))}
 
 
 def pareto_front(times, errs) -> list[int]:
@@ -371,7 +378,6 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
     if not settings:
         raise WaveopticsError("the ladder is empty; give at least one solver, resolution and colour accuracy")
     if runtime is None and any(s.solver == "direct" for s in settings + [reference] if s is not None):
-        from .runtime import get_runtime
 
         runtime = get_runtime()
     ref_s = reference or reference_setting(settings, cfg, runtime=runtime)
@@ -383,7 +389,7 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
 
     def wavelengths(de):
         if de not in wl_of:
-            wl_of[de] = spectral.simulation_wavelengths(cfg.illuminant, de)
+            wl_of[de] = colour.simulation_wavelengths(cfg.illuminant, de)
         return wl_of[de]
 
     _warm_up(settings + [ref_s], runtime)
@@ -483,12 +489,8 @@ def table(result: dict) -> str:
 
 def plot(result: dict, path, *, overwrite: bool = True, title: str | None = None) -> None:
     """PNG: error (the study's metric) vs wall time, log-log, one marker per solver, the Pareto front joined."""
-    import matplotlib
+    plt = figures.pyplot()
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .render import save_figure
 
     metric = result["metric"]
     rows = result["settings"]
@@ -531,7 +533,6 @@ FILES = ("cost.json", "cost.png", "cost.md")
 
 def write(result: dict, outdir, *, overwrite: bool = False) -> dict:
     """Write ``cost.json``, ``cost.png`` (error vs time) and ``cost.md`` (the table) into *outdir*."""
-    from .io import atomic_path, prepare_outdir, write_json
 
     out = prepare_outdir(outdir, overwrite=overwrite, expected=FILES)
     paths = {"cost.json": write_json(out / "cost.json", result, overwrite=overwrite)}

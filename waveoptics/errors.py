@@ -8,17 +8,67 @@ from __future__ import annotations
 
 import difflib
 
+__all__ = ['WaveopticsError', 'FieldError', 'NoOpenCLError', 'OutputExistsError', 'did_you_mean', 'unknown']
+
 
 class WaveopticsError(ValueError):
     """A bad value given by the user: the message names the value and what is allowed."""
+
+
+class FieldError(WaveopticsError):
+    """A bad value of a named field of a request (a keyword argument, a scene key, a command-line option).
+
+    The message is a template in which ``{name}`` stands for the field *name*. The library writes it as the
+    Python name (``str(error)``: "micro_alpha -1 is not allowed ..."); the command line writes the flag a user
+    typed (:meth:`render` with the CLI's field → flag map: "--micro-alpha -1 is not allowed ..."), so a Python
+    caller is never told about flags it did not use.
+
+    Parameters
+    ----------
+    template : str
+        The message, with ``{field}`` placeholders for the fields named in *fields*.
+    *fields : str
+        The fields the message is about, the first being the one whose value is wrong.
+    python : dict, optional
+        How the library writes a field where the plain name would read badly (``{"overwrite": "overwrite=True"}``).
+
+    Examples
+    --------
+    >>> e = FieldError("{micro_alpha} -1 is not allowed; α must be >= 0", "micro_alpha")
+    >>> str(e)
+    'micro_alpha -1 is not allowed; α must be >= 0'
+    >>> e.render({"micro_alpha": "--micro-alpha"})
+    '--micro-alpha -1 is not allowed; α must be >= 0'
+    """
+
+    def __init__(self, template: str, *fields: str, python: dict | None = None):
+        self.template = template
+        self.fields = fields
+        super().__init__(self.render(python or {}))
+
+    @property
+    def field(self) -> str:
+        """The field whose value is wrong."""
+        return self.fields[0]
+
+    def render(self, names: dict) -> str:
+        """The message with each field written as ``names.get(field, field)``."""
+        out = self.template
+        for f in self.fields:
+            out = out.replace("{" + f + "}", str(names.get(f, f)))
+        return out
 
 
 class NoOpenCLError(WaveopticsError):
     """No OpenCL platform or no device matching the request."""
 
 
-class OutputExistsError(WaveopticsError):
+class OutputExistsError(FieldError):
     """An output already exists and ``overwrite`` was not requested."""
+
+    def __init__(self, path, template: str = "output {path} already exists; pass {overwrite} to replace it"):
+        super().__init__(template.replace("{path}", repr(str(path))), "overwrite", "resume",
+                         python={"overwrite": "overwrite=True", "resume": "resume=True"})
 
 
 def did_you_mean(word: str, choices) -> str:
@@ -30,7 +80,11 @@ def did_you_mean(word: str, choices) -> str:
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
-def unknown(kind: str, value, choices) -> WaveopticsError:
-    """Build the standard 'unknown X' error with a did-you-mean suggestion."""
+def unknown(kind: str, value, choices, *, field: str | None = None) -> WaveopticsError:
+    """Build the standard 'unknown X' error with a did-you-mean suggestion (a :class:`FieldError` of *field*, whose
+    name the CLI writes as its flag, when given)."""
     shown = ", ".join(sorted(map(str, choices)))
-    return WaveopticsError(f"unknown {kind} {value!r}{did_you_mean(value, choices)}; allowed: {shown}")
+    tail = f" {value!r}{did_you_mean(value, choices)}; allowed: {shown}"
+    if field is not None:
+        return FieldError("{" + field + "}: unknown " + kind + tail, field)
+    return WaveopticsError(f"unknown {kind}" + tail)

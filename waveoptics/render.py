@@ -16,10 +16,13 @@ References
 from __future__ import annotations
 
 import numpy as np
+from colour import cctf_encoding  # colour-science (this package's own colour sub-package is imported below)
 
-from . import spectral
-from .diffraction import DirectionGrid
+from . import colour
+from .io import figures
+from .scatter.grid import DirectionGrid
 
+__all__ = ['sphere_geometry', 'local_directions', 'lookup', 'render_sphere', 'tonemap', 'plot_spheres']
 
 def sphere_geometry(size: int):
     """Normals (size, size, 3) of a unit sphere seen orthographically, and the mask of pixels on it."""
@@ -102,7 +105,7 @@ def render_sphere(table, thetas_rad, grid: DirectionGrid, wavelengths_nm, light_
     f = lookup(table, thetas_rad, grid, theta_i[lit], u[lit], v[lit])
     spec[lit] = np.pi * f * cos_i[lit][:, None]
     rgb = np.zeros((size, size, 3))
-    rgb[on] = spectral.reflectance_to_rgb(spec, wavelengths_nm, illuminant, space=space)
+    rgb[on] = colour.reflectance_to_rgb(spec, wavelengths_nm, illuminant, space=space)
     mask = np.zeros((size, size), bool)
     idx = np.argwhere(on)
     mask[idx[lit][:, 0], idx[lit][:, 1]] = True
@@ -114,10 +117,8 @@ def tonemap(rgb, exposure: float | None = None):
 
     *exposure* scales the input first (default: key 0.18 at the log-average luminance of the non-zero pixels).
     """
-    import colour
-
     rgb = np.maximum(np.asarray(rgb, dtype=float), 0.0)
-    Y = rgb @ np.array([0.2126, 0.7152, 0.0722])
+    Y = colour.luminance(rgb)
     if exposure is None:
         pos = Y[Y > 1e-8]
         exposure = 0.18 / np.exp(np.mean(np.log(pos))) if pos.size else 1.0
@@ -125,40 +126,12 @@ def tonemap(rgb, exposure: float | None = None):
     Ys = Y * exposure
     scale = np.where(Y > 0, (Ys / (1 + Ys)) / np.maximum(Y, 1e-30), 0.0)
     out = rgb * scale[..., None]
-    return np.clip(colour.cctf_encoding(np.clip(out, 0, 1), function="sRGB"), 0, 1)
-
-
-def save_png(path, image, *, overwrite=True):
-    """Write an (h, w, 3) display image in [0, 1] as PNG atomically."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .io import atomic_path
-
-    with atomic_path(path, overwrite=overwrite) as tmp:
-        plt.imsave(str(tmp), np.clip(image, 0, 1), format="png")
-
-
-def save_figure(fig, path, *, overwrite=True, dpi=110):
-    """Save a matplotlib figure as PNG atomically and close it."""
-    import matplotlib.pyplot as plt
-
-    from .io import atomic_path
-
-    with atomic_path(path, overwrite=overwrite) as tmp:
-        fig.savefig(str(tmp), format="png", dpi=dpi, bbox_inches="tight")
-    plt.close(fig)
+    return np.clip(cctf_encoding(np.clip(out, 0, 1), function="sRGB"), 0, 1)
 
 
 def plot_spheres(images, titles, path, *, overwrite=True, diff=None, diff_title="ΔE2000"):
     """A row of tone-mapped sphere renders (shared exposure), optionally with a ΔE2000 map."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = figures.pyplot()
     n = len(images) + (diff is not None)
     fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.4))
     axes = np.atleast_1d(axes)
@@ -171,4 +144,4 @@ def plot_spheres(images, titles, path, *, overwrite=True, diff=None, diff_title=
         axes[-1].set_title(diff_title, fontsize=9)
         axes[-1].axis("off")
         fig.colorbar(im, ax=axes[-1], fraction=0.046, pad=0.04)
-    save_figure(fig, path, overwrite=overwrite)
+    figures.save_figure(fig, path, overwrite=overwrite)

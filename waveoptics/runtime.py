@@ -12,7 +12,7 @@ With no spec the first GPU wins, else the PoCL CPU device, else any device.
 
 Programs
 --------
-Kernel sources live in ``kernels/*.cl`` (inside the installed package as ``waveoptics/kernels``).
+Kernel sources live inside the package, in ``waveoptics/kernels/*.cl`` and ``*.h``.
 :func:`build_program` builds each (context, file, options) once and keeps it; the kernel directory is on the
 include path so kernels can ``#include "wo_common.h"``, and pyopencl adds its own include directory so
 ``#include <pyopencl-complex.h>`` works. A failed build raises with the kernel file name and the build log.
@@ -29,24 +29,21 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import NoOpenCLError, WaveopticsError
+from .errors import FieldError, NoOpenCLError, WaveopticsError
+
+__all__ = ['INSTALL_HINT', 'kernel_dir', 'kernel_source', 'platforms', 'opencl_available', 'device_spec_from_env', 'select_device', 'has_fp64', 'Runtime', 'get_runtime', 'build_options', 'build_program', 'program_cache_size', 'pocl_version', 'describe']
 
 INSTALL_HINT = ("no OpenCL platform found; install a CPU runtime with 'apt-get install pocl-opencl-icd' "
                 "(or 'pip install pocl-binary-distribution'), or run 'make demo' which does it")
 
 
 def kernel_dir() -> Path:
-    """Directory holding the ``.cl`` sources: inside the installed package, else the source checkout."""
-    try:
-        packaged = Path(str(resources.files("waveoptics") / "kernels"))
-        if packaged.is_dir():
-            return packaged
-    except (ModuleNotFoundError, TypeError):  # pragma: no cover - exotic loaders
-        pass
-    checkout = Path(__file__).resolve().parent.parent / "kernels"
-    if checkout.is_dir():
-        return checkout
-    raise WaveopticsError("kernel sources not found: neither waveoptics/kernels nor ./kernels exists")
+    """Directory holding the ``.cl`` and ``.h`` sources: ``waveoptics/kernels`` inside the package (found with
+    :func:`importlib.resources.files`, as pyopencl and silx find theirs)."""
+    path = Path(str(resources.files("waveoptics") / "kernels"))
+    if not path.is_dir():
+        raise WaveopticsError(f"kernel sources not found: {path} is missing from the installed package")
+    return path
 
 
 def kernel_source(filename: str) -> str:
@@ -164,8 +161,8 @@ class Runtime:
     def require_fp64(self, what: str) -> None:
         """Raise a clear error when *what* needs float64 and the device lacks it."""
         if not self.fp64:
-            raise WaveopticsError(f"{what} needs float64, but device {self.name!r} has no fp64 support; "
-                                  "use precision='float32' or choose another device with --device")
+            raise FieldError(f"{what} needs float64, but device {self.name!r} has no fp64 support; use "
+                             "precision='float32' or choose another {device}", "device")
 
     def real_dtype(self, precision: str):
         """numpy dtype for 'float32'/'float64', checking fp64 support."""

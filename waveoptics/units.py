@@ -11,13 +11,22 @@ import re
 
 import numpy as np
 
-from .errors import WaveopticsError
+from .errors import FieldError, WaveopticsError
+
+__all__ = ['LENGTH_UNITS', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'parse_direction', 'check_theta', 'direction_from_angles', 'angles_from_direction']
 
 #: metres per unit
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "A": 1e-10}
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _QTY = re.compile(rf"^\s*({_NUMBER})\s*([a-zA-Zµμ]*)\s*$")
+
+
+def _error(name: str, text: str) -> FieldError:
+    """The error about the value of field *name*; a name "FIELD DETAIL" (``"vary sigma_nano"``) names the field
+    FIELD and keeps DETAIL after it."""
+    field, _, detail = str(name).partition(" ")
+    return FieldError("{" + field + "}" + (" " + detail if detail else "") + text, field)
 
 
 def parse_length(text, *, default_unit: str | None = None, name: str = "length",
@@ -31,34 +40,44 @@ def parse_length(text, *, default_unit: str | None = None, name: str = "length",
     default_unit : str, optional
         Unit of bare numbers (one of :data:`LENGTH_UNITS`).
     name : str
-        Name used in error messages (e.g. ``"--sigma"``).
+        The field this value belongs to, named in errors (:class:`~waveoptics.errors.FieldError`; the CLI writes
+        it as its flag).
 
     Returns
     -------
     float
         Length in metres.
+
+    Examples
+    --------
+    >>> parse_length("5nm"), parse_length("1.2um")
+    (5e-09, 1.2e-06)
+    >>> parse_length("5", name="sigma")
+    Traceback (most recent call last):
+    ...
+    waveoptics.errors.FieldError: sigma '5' needs a unit (e.g. 5nm, 1.2um, 0.5mm)
     """
     if isinstance(text, (int, float, np.floating, np.integer)):
         if default_unit is None:
-            raise WaveopticsError(f"{name} {text!r} needs a unit (e.g. 5nm, 1.2um, 0.5mm)")
+            raise _error(name, f" {text!r} needs a unit (e.g. 5nm, 1.2um, 0.5mm)")
         value, unit = float(text), default_unit
     else:
         m = _QTY.match(str(text))
         if not m:
-            raise WaveopticsError(f"{name} {text!r} is not a length; write a number and a unit, "
-                                  f"e.g. 5nm, 1.2um, 0.5mm (units: {', '.join(LENGTH_UNITS)})")
+            raise _error(name, f" {text!r} is not a length; write a number and a unit, "
+                             f"e.g. 5nm, 1.2um, 0.5mm (units: {', '.join(LENGTH_UNITS)})")
         value, unit = float(m.group(1)), m.group(2) or default_unit
         if unit is None:
-            raise WaveopticsError(f"{name} {text!r} needs a unit (e.g. 5nm, 1.2um, 0.5mm)")
+            raise _error(name, f" {text!r} needs a unit (e.g. 5nm, 1.2um, 0.5mm)")
         if unit not in LENGTH_UNITS:
-            raise WaveopticsError(f"{name} {text!r} has unknown unit {unit!r}; allowed: {', '.join(LENGTH_UNITS)}")
+            raise _error(name, f" {text!r} has unknown unit {unit!r}; allowed: {', '.join(LENGTH_UNITS)}")
     metres = value * LENGTH_UNITS[unit]
     if not math.isfinite(metres):
-        raise WaveopticsError(f"{name} {text!r} is not finite")
+        raise _error(name, f" {text!r} is not finite")
     if metres < 0 and not allow_negative:
-        raise WaveopticsError(f"{name} {text!r} is negative; it must be >= 0")
+        raise _error(name, f" {text!r} is negative; it must be >= 0")
     if metres == 0 and not allow_zero:
-        raise WaveopticsError(f"{name} {text!r} is zero; it must be > 0")
+        raise _error(name, f" {text!r} is zero; it must be > 0")
     return metres
 
 
@@ -72,20 +91,20 @@ def parse_number_list(text, *, name: str = "value") -> np.ndarray:
                 raise ValueError
             a, b, step = parts
             if step <= 0 or b < a:
-                raise WaveopticsError(f"{name} {text!r}: a range START:STOP:STEP needs STEP > 0 and STOP >= START")
+                raise _error(name, f" {text!r}: a range START:STOP:STEP needs STEP > 0 and STOP >= START")
             n = int(math.floor((b - a) / step + 1e-9)) + 1
             return a + step * np.arange(n)
         vals = np.array([float(p) for p in s.split(",") if p.strip() != ""], dtype=float)
         if vals.size == 0:
-            raise WaveopticsError(f"{name} {text!r} holds no number; write START:STOP:STEP or A,B,C")
+            raise _error(name, f" {text!r} holds no number; write START:STOP:STEP or A,B,C")
         return vals
     except WaveopticsError:
         raise
     except ValueError:
-        raise WaveopticsError(f"{name} {text!r} is not a number list; write START:STOP:STEP or A,B,C") from None
+        raise _error(name, f" {text!r} is not a number list; write START:STOP:STEP or A,B,C") from None
 
 
-def parse_wavelengths(text, *, name: str = "--wavelengths") -> np.ndarray:
+def parse_wavelengths(text, *, name: str = "wavelengths_nm") -> np.ndarray:
     """Parse wavelengths in nm (``"400:700:10"``, ``"450,550,650"``, ``"550"``, units ``nm``/``um`` allowed).
 
     Returns
@@ -106,14 +125,14 @@ def check_wavelengths(wavelength_nm, *, name: str = "wavelength") -> np.ndarray:
     """Validate wavelengths in nm: finite and > 0. Returns them as a float array."""
     w = np.atleast_1d(np.asarray(wavelength_nm, dtype=float))
     if w.size == 0:
-        raise WaveopticsError(f"{name}: no wavelengths given")
+        raise _error(name, ": no wavelengths given")
     bad = w[~np.isfinite(w) | (w <= 0)]
     if bad.size:
-        raise WaveopticsError(f"{name} {float(bad[0])!r} nm is not allowed; wavelengths must be finite and > 0 nm")
+        raise _error(name, f" {float(bad[0])!r} nm is not allowed; wavelengths must be finite and > 0 nm")
     return w
 
 
-def parse_direction(text, *, name: str = "--incident", need_phi: bool = False) -> tuple[float, float]:
+def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False) -> tuple[float, float]:
     """Parse ``"THETA[,PHI]"`` in degrees; θ from the normal in [0, 90], φ about the normal (any value).
 
     Returns
@@ -124,14 +143,14 @@ def parse_direction(text, *, name: str = "--incident", need_phi: bool = False) -
     try:
         vals = [float(p) for p in parts]
     except ValueError:
-        raise WaveopticsError(f"{name} {text!r} is not THETA[,PHI] in degrees") from None
+        raise _error(name, f" {text!r} is not THETA[,PHI] in degrees") from None
     if len(vals) not in ((2,) if need_phi else (1, 2)):
-        raise WaveopticsError(f"{name} {text!r}: give {'THETA,PHI' if need_phi else 'THETA[,PHI]'} in degrees")
+        raise _error(name, f" {text!r}: give {'THETA,PHI' if need_phi else 'THETA[,PHI]'} in degrees")
     theta = vals[0]
     phi = vals[1] if len(vals) == 2 else 0.0
     check_theta(theta, name=name)
     if not math.isfinite(phi):
-        raise WaveopticsError(f"{name} φ {phi!r} is not finite")
+        raise _error(name, f" φ {phi!r} is not finite")
     return theta, phi
 
 
@@ -140,7 +159,7 @@ def check_theta(theta_deg, *, name: str = "theta") -> None:
     t = np.atleast_1d(np.asarray(theta_deg, dtype=float))
     bad = t[~np.isfinite(t) | (t < 0) | (t > 90)]
     if bad.size:
-        raise WaveopticsError(f"{name} θ={float(bad[0])!r}° is outside the allowed range [0, 90] degrees")
+        raise _error(name, f" θ={float(bad[0])!r}° is outside the allowed range [0, 90] degrees")
 
 
 def direction_from_angles(theta_deg, phi_deg=0.0) -> np.ndarray:

@@ -13,6 +13,8 @@ import pkgutil
 import sys
 
 from .. import __version__
+from ..errors import FieldError
+from ._common import field_flags
 
 
 class _Parser(argparse.ArgumentParser):
@@ -37,6 +39,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def command_parser(parser, words) -> argparse.ArgumentParser:
+    """The parser of the (possibly nested) sub-command named by *words* (``"surface generate"`` or argv): the
+    parser whose options the user typed."""
+    words = words.split() if isinstance(words, str) else list(words)
+    for word in words:
+        sub = next((a for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)
+        if sub is None or word not in sub.choices:
+            break
+        parser = sub.choices[word]
+    return parser
+
+
 def main(argv=None) -> int:
     """Entry point of the ``waveoptics`` console script."""
     parser = build_parser()
@@ -50,7 +64,8 @@ def main(argv=None) -> int:
     except (ValueError, TypeError) as exc:
         if debug:
             raise
-        msg = str(exc).strip().splitlines()
+        text = exc.render(field_flags(command_parser(parser, args.command))) if isinstance(exc, FieldError) else str(exc)
+        msg = text.strip().splitlines()
         first = msg[0] if msg else type(exc).__name__
         print(f"waveoptics {args.command}: error: {first}", file=sys.stderr)
         if len(msg) > 1 and "build" in first:

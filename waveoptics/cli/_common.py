@@ -3,7 +3,37 @@ from __future__ import annotations
 
 import sys
 
-from ..io import to_json
+from ..io.files import to_json
+
+
+#: request fields whose option has another name (the dest of the option that carries the field); every other
+#: field is carried by the option of the same dest (``micro_alpha`` → ``--micro-alpha``)
+FIELD_DESTS = {
+    "incident_deg": ("incident",),
+    "wavelengths_nm": ("wavelengths", "wavelength"),
+    "accuracy_dE": ("accuracy",),
+    "thetas_deg": ("incident_angles",),
+    "phi_deg": ("phi",),
+    "angles_deg": ("angles",),
+    "vary": ("vary",),
+}
+
+
+def field_flags(parser) -> dict:
+    """Field name → the flag a user typed for it in *parser* (a sub-command's parser): how the CLI writes the
+    fields named by :class:`waveoptics.errors.FieldError`."""
+    by_dest = {}
+    for action in parser._actions:
+        longs = [o for o in action.option_strings if o.startswith("--")]
+        if longs:
+            by_dest[action.dest] = longs[0]
+    flags = dict(by_dest)
+    for field, dests in FIELD_DESTS.items():
+        for d in dests:
+            if d in by_dest:
+                flags[field] = by_dest[d]
+                break
+    return flags
 
 
 def add_common(parser, *, json: bool = True, device: bool = True) -> None:

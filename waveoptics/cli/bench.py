@@ -6,6 +6,9 @@ FFTs and a NumPy FFT pipeline, plus the measured error of the device's math buil
 from __future__ import annotations
 
 from ._common import add_common, emit, progress
+from .. import bench
+from ..io.files import atomic_path, prepare_outdir, write_json
+from ..runtime import get_runtime
 
 FILES = ("bench.json", "bench.md")
 
@@ -24,9 +27,6 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from .. import bench
-    from ..io import atomic_path, prepare_outdir, write_json
-    from ..runtime import get_runtime
 
     out = prepare_outdir(args.output, overwrite=args.overwrite, expected=FILES) if args.output else None
     rt = get_runtime(args.device)

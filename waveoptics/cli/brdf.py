@@ -17,8 +17,14 @@ from typing import Callable
 
 import numpy as np
 
+from .. import brdf, scatter
 from ..errors import WaveopticsError
 from ._common import add_common, emit, progress
+from .. import surfaces
+from ..materials.database import get_material
+from ..materials.fresnel import F_schlick
+from ..runtime import get_runtime
+from ..units import direction_from_angles, parse_direction, parse_wavelengths
 
 
 @dataclass(frozen=True)
@@ -50,23 +56,22 @@ class Model:
 
 
 def _microfacet_arguments(g) -> None:
-    from .. import microfacet as mf
 
-    g.add_argument("--ndf", choices=sorted(mf.NDFS), default="ggx", help="normal distribution (default ggx)")
-    g.add_argument("--shadowing", choices=sorted(mf.SHADOWINGS), default="smith-correlated",
+    g.add_argument("--ndf", choices=sorted(brdf.NDFS), default="ggx", help="normal distribution (default ggx)")
+    g.add_argument("--shadowing", choices=sorted(brdf.SHADOWINGS), default="smith-correlated",
                    help="masking-shadowing term (default smith-correlated)")
     g.add_argument("--alpha", type=float, metavar="A",
                    help="NDF slope scale α in [0, 2] (α_x if anisotropic); 0 = sharpest representable")
     g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
     g.add_argument("--alpha-y", type=float, metavar="A", help="α_y for anisotropic ggx/beckmann")
-    g.add_argument("--abc-c", type=float, default=mf.ABC_C_DEFAULT, metavar="C",
-                   help=f"tail exponent C of the abc NDF (default {mf.ABC_C_DEFAULT:g})")
+    g.add_argument("--abc-c", type=float, default=brdf.ABC_C_DEFAULT, metavar="C",
+                   help=f"tail exponent C of the abc NDF (default {brdf.ABC_C_DEFAULT:g})")
     g.add_argument("--material", metavar="NAME", help="material preset, shelf/book/page, or f0:VALUE "
                                                      "(see 'waveoptics materials')")
     g.add_argument("--ior", metavar="N+Kj", help="constant complex index, e.g. 1.5 or 0.2+3.1j")
-    g.add_argument("--fresnel", choices=sorted(mf.FRESNELS), default="exact",
+    g.add_argument("--fresnel", choices=sorted(brdf.FRESNELS), default="exact",
                    help="Fresnel factor: exact, schlick, or one (F = 1, white furnace)")
-    g.add_argument("--diffuse", choices=sorted(mf.DIFFUSES), default="lambert", help="diffuse term (default lambert)")
+    g.add_argument("--diffuse", choices=sorted(brdf.DIFFUSES), default="lambert", help="diffuse term (default lambert)")
     g.add_argument("--kd", type=float, default=0.0, metavar="C", help="diffuse albedo in [0, 1] (default 0)")
     g.add_argument("--sigma", type=float, default=0.0, metavar="DEG",
                    help="Oren-Nayar roughness σ in degrees (separate from the specular α)")
@@ -80,11 +85,10 @@ def _microfacet_arguments(g) -> None:
 
 def _microfacet_params(args, wavelength_nm) -> dict:
     """Keyword arguments of microfacet.brdf for these options; Fresnel inputs per wavelength (n_λ,)."""
-    from .. import microfacet as mf
 
     if (args.alpha is None) == (args.roughness is None):
         raise WaveopticsError("give exactly one of --alpha A or --roughness R for --model microfacet")
-    alpha = args.alpha if args.alpha is not None else float(mf.alpha_from_roughness(args.roughness))
+    alpha = args.alpha if args.alpha is not None else float(brdf.alpha_from_roughness(args.roughness))
     if args.material is not None and args.ior is not None:
         raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
     spec = args.material if args.material is not None else args.ior
@@ -94,7 +98,7 @@ def _microfacet_params(args, wavelength_nm) -> dict:
                                   "(or --fresnel one for a white furnace)")
         fi = {"fresnel": "one", "eta": None, "F0": None}
     else:
-        fi = mf.fresnel_inputs(spec, wavelength_nm, args.fresnel)
+        fi = brdf.fresnel_inputs(spec, wavelength_nm, args.fresnel)
         _report_clamped(spec, wavelength_nm, args)
     if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
         raise WaveopticsError(f"--sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
@@ -105,7 +109,6 @@ def _microfacet_params(args, wavelength_nm) -> dict:
 
 
 def _report_clamped(spec, wavelength_nm, args) -> None:
-    from ..materials import get_material
 
     mat = get_material(spec)
     if mat.schlick_only:
@@ -127,12 +130,10 @@ def _per_wavelength(kw: dict, n_axes: int) -> dict:
 
 
 def _microfacet_evaluate(args, wi, wo, wavelength_nm):
-    from .. import microfacet as mf
 
     kw = _microfacet_params(args, wavelength_nm)
     n_w = len(wavelength_nm)
     if args.backend == "opencl":
-        from ..runtime import get_runtime
 
         a = np.repeat(wi, len(wo), axis=0)
         b = np.tile(wo, (len(wi), 1))
@@ -140,17 +141,16 @@ def _microfacet_evaluate(args, wi, wo, wavelength_nm):
         for key in ("eta", "F0"):
             if fk.get(key) is None:
                 fk.pop(key)
-        f = mf.brdf_cl(a, b, runtime=get_runtime(args.device), precision=args.precision, **fk)
+        f = brdf.brdf_cl(a, b, runtime=get_runtime(args.device), precision=args.precision, **fk)
         return np.broadcast_to(f, (n_w, a.shape[0])).reshape(n_w, len(wi), len(wo))
-    f = mf.brdf(wi[None, :, None, :], wo[None, None, :, :], **_per_wavelength(kw, 2))
+    f = brdf.brdf(wi[None, :, None, :], wo[None, None, :, :], **_per_wavelength(kw, 2))
     return np.broadcast_to(f, (n_w, len(wi), len(wo)))
 
 
 def _microfacet_albedo(args, wi, wavelength_nm):
-    from .. import microfacet as mf
 
     kw = _per_wavelength(_microfacet_params(args, wavelength_nm), 1)
-    out = [mf.albedo(w, **kw) for w in progress(wi, desc="albedo", args=args)]
+    out = [brdf.albedo(w, **kw) for w in progress(wi, desc="albedo", args=args)]
     return np.broadcast_to(np.stack(out, axis=-1), (len(wavelength_nm), len(wi)))
 
 
@@ -182,8 +182,6 @@ def _kirchhoff_arguments(g) -> None:
 
 
 def _kirchhoff_setup(args, wavelength_nm):
-    from .. import surfaces
-    from ..errors import WaveopticsError
 
     if not args.surface:
         raise WaveopticsError("--model kirchhoff needs --surface FILE")
@@ -195,12 +193,10 @@ def _kirchhoff_setup(args, wavelength_nm):
             raise WaveopticsError("the kirchhoff model needs --material NAME or --ior N+Kj (or --fresnel one)")
         F = None
     else:
-        from ..materials import get_material
 
         mat = get_material(spec)
         _report_clamped(spec, wavelength_nm, args)
         if args.fresnel == "schlick":
-            from ..fresnel import F_schlick
 
             def F(c, w, _m=mat):
                 return F_schlick(c, _m.F0(w))
@@ -209,17 +205,15 @@ def _kirchhoff_setup(args, wavelength_nm):
     hf = surfaces.load(args.surface, spacing=args.spacing)
     rt = None
     if args.backend == "opencl" and args.solver == "direct":
-        from ..runtime import get_runtime
 
         rt = get_runtime(args.device)
     return hf, F, rt
 
 
 def _kirchhoff_evaluate(args, wi, wo, wavelength_nm):
-    from .. import diffraction
 
     hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
-    out = [diffraction.brdf(hf, w, wo, wavelength_nm, F, solver=args.solver, backend=args.backend,
+    out = [scatter.brdf(hf, w, wo, wavelength_nm, F, solver=args.solver, backend=args.backend,
                             precision=args.precision, window_name=args.window, resolution=args.resolution,
                             realizations=args.realizations, runtime=rt)
            for w in progress(wi, desc="kirchhoff", args=args)]
@@ -227,10 +221,9 @@ def _kirchhoff_evaluate(args, wi, wo, wavelength_nm):
 
 
 def _kirchhoff_albedo(args, wi, wavelength_nm):
-    from .. import diffraction
 
     hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
-    out = [diffraction.scatter(hf, w, wavelength_nm, F, solver=args.solver, backend=args.backend,
+    out = [scatter.scatter(hf, w, wavelength_nm, F, solver=args.solver, backend=args.backend,
                                precision=args.precision, window_name=args.window,
                                resolution=args.resolution or 256, realizations=args.realizations,
                                runtime=rt).albedo
@@ -278,7 +271,6 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from ..units import direction_from_angles, parse_direction, parse_wavelengths
 
     model = MODELS[args.model]
     wl = parse_wavelengths(args.wavelength, name="--wavelength")

@@ -2,6 +2,11 @@
 from __future__ import annotations
 
 from ._common import add_common, emit
+from .. import io
+from ..errors import WaveopticsError
+from ..units import check_theta, parse_number_list
+from .simulate import add_scene_options, simulation_from_args
+from .. import compare as cmp
 
 
 def register(sub):
@@ -10,7 +15,6 @@ def register(sub):
                                    "over a range of incident angles and reports albedo, lobe FWHM, the energy in the "
                                    "tail beyond --tail degrees from the mirror direction, and ΔE2000 of the albedo "
                                    "colour and of rendered spheres. Same surface options as 'simulate'.")
-    from .simulate import add_scene_options
 
     add_scene_options(p)
     p.add_argument("--angles", default="0:80:10", metavar="DEG", help="incident angles in degrees (default 0:80:10)")
@@ -26,13 +30,8 @@ def run(args):
     import csv
     import io as _io
 
-    from .. import compare as cmp
-    from .. import io
-    from ..errors import WaveopticsError
-    from ..units import check_theta, parse_number_list
-    from .simulate import simulation_from_args
 
-    angles = parse_number_list(args.angles, name="--angles")
+    angles = parse_number_list(args.angles, name="angles_deg")
     check_theta(angles, name="--angles")
     if (angles >= 90).any():
         raise WaveopticsError("--angles must stay below 90 degrees (the light must be above the horizon)")

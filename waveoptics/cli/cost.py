@@ -5,10 +5,15 @@ Pareto front and the cheapest setting meeting ``--target-error`` (logic in :mod:
 from __future__ import annotations
 
 from ._common import add_common, emit, progress
+from .. import cost, surfaces
+from ..errors import WaveopticsError
+from ..io.files import prepare_outdir
+from ..runtime import get_runtime
+from ..materials import fresnel_function
+from ..units import parse_direction
 
 
 def _list(text, conv, name):
-    from ..errors import WaveopticsError
 
     try:
         vals = [conv(t.strip()) for t in str(text).split(",") if t.strip()]
@@ -59,15 +64,9 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from .. import cost, surfaces
-    from ..io import prepare_outdir
-    from ..runtime import get_runtime
-    from ..units import parse_direction
-    from .scatter import material_spec
 
     theta, phi = parse_direction(args.incident, name="--incident")
-    mat = material_spec(args.material)
-    from ..diffraction import fresnel_function
+    mat = args.material
 
     fresnel_function(mat)                                   # refuse a bad material before computing
     if args.surface:

@@ -1,7 +1,9 @@
 """``waveoptics f0 MATERIAL...``: characteristic specular colour F0 = F(0°), computed spectrally."""
 from __future__ import annotations
 
+from .. import colour
 from ._common import add_colour, add_common, emit
+from ..materials.database import get_material
 
 
 def register(sub):
@@ -19,15 +21,13 @@ def register(sub):
 
 
 def run(args):
-    from .. import spectral
-    from ..materials import get_material
 
-    spd = spectral.illuminant(args.illuminant)
-    observer = spectral.observer_name(args.observer)
+    spd = colour.illuminant(args.illuminant)
+    observer = colour.observer_name(args.observer)
     keys = ("material", "f0_linear", "f0_srgb8", "category", "source")
     rows, lines = [], []
     for spec in args.materials:
-        d = spectral.f0_colour(get_material(spec), spd, observer)
+        d = colour.f0_colour(get_material(spec), spd, observer)
         rows.append({k: d[k] for k in keys})
         r, g, b = d["f0_linear"]
         flag = "  (forbidden zone 0.2-0.45)" if d["forbidden_zone"] else ""

@@ -4,6 +4,8 @@ from __future__ import annotations
 import platform as _platform
 
 from ._common import add_common, emit
+from .. import runtime
+from .. import __version__
 
 
 def register(sub):
@@ -20,7 +22,6 @@ def gather(device=None) -> dict:
     import numpy
     import pyopencl
 
-    from .. import __version__, runtime
 
     data = {
         "waveoptics": __version__,

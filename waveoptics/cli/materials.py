@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._common import add_common, emit
+from .. import materials
 
 
 def register(sub):
@@ -18,7 +19,6 @@ def register(sub):
 
 
 def run(args):
-    from .. import materials
 
     if args.query:
         hits = materials.search(args.query, limit=args.limit)

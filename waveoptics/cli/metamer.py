@@ -1,7 +1,9 @@
 """``waveoptics metamer``: three laser lines mixed to the same colour (XYZ) as a broadband light."""
 from __future__ import annotations
 
+from .. import colour
 from ._common import add_colour, add_common, emit
+from ..units import parse_wavelengths
 
 
 def register(sub):
@@ -21,15 +23,13 @@ def register(sub):
 
 
 def run(args):
-    from .. import spectral
-    from ..units import parse_wavelengths
 
-    target = spectral.illuminant(args.target)
-    observer = spectral.observer_name(args.observer)
+    target = colour.illuminant(args.target)
+    observer = colour.observer_name(args.observer)
     lines = parse_wavelengths(args.lines, name="--lines")
-    data = spectral.metamer_summary(target, lines, observer)
+    data = colour.metamer_summary(target, lines, observer)
     if args.output:
-        spectral.plot_metamers(target, lines, data["powers"], args.output, observer=observer,
+        colour.plot_metamers(target, lines, data["powers"], args.output, observer=observer,
                                overwrite=args.overwrite)
         data["plot"] = str(args.output)
     parts = [f"{lam:g} nm: {f:.4f}" for lam, f in zip(data["lines_nm"], data["power_fractions"])]

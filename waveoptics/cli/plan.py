@@ -2,6 +2,9 @@
 from __future__ import annotations
 
 from ._common import add_common, emit
+from .. import planning
+from ..errors import WaveopticsError
+from ..planning import scene
 
 
 def add_force(p) -> None:
@@ -28,8 +31,6 @@ def register(sub):
 
 def make_plan(args):
     """Load the scene and plan it from the parsed arguments (used by ``plan`` and ``run``)."""
-    from .. import planning, scene
-    from ..errors import WaveopticsError
 
     if args.max_resolution is not None and not (8 <= args.max_resolution <= 2048):
         raise WaveopticsError(f"--max-resolution {args.max_resolution} is not allowed; use 8..2048")

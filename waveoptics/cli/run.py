@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from ._common import add_common, add_output, emit, progress
 from .plan import add_force, make_plan
+from .. import io, planning
 
 
 def register(sub):
@@ -20,7 +21,6 @@ def register(sub):
 
 
 def run(args):
-    from .. import io, planning
 
     io.prepare_outdir(args.output, overwrite=args.overwrite, expected=["plan.json", "results.json"])  # before work
     plan = make_plan(args)

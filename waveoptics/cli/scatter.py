@@ -11,7 +11,14 @@ from __future__ import annotations
 import sys
 import warnings
 
+from .. import scatter
 from ._common import add_common, add_output, emit, progress
+from .. import surfaces
+from ..errors import WaveopticsError
+from ..io.files import prepare_outdir
+from ..runtime import get_runtime
+from ..units import parse_direction, parse_wavelengths
+from ..materials.database import fresnel_function
 
 
 def register(sub) -> None:
@@ -52,7 +59,6 @@ def register(sub) -> None:
 
 
 def _order(text):
-    from ..errors import WaveopticsError
 
     if str(text) == "auto":
         return "auto"
@@ -62,28 +68,19 @@ def _order(text):
         raise WaveopticsError(f"--order {text!r} is not allowed; use 'auto' or an integer >= 0") from None
 
 
-def material_spec(text):
-    """The --material value as :func:`waveoptics.diffraction.fresnel_function` takes it ('one' -> F = 1)."""
-    return None if str(text).strip().lower() in ("one", "1", "none") else text
-
-
 def run(args) -> int:
-    from .. import diffraction, surfaces
-    from ..io import prepare_outdir
-    from ..runtime import get_runtime
-    from ..units import parse_direction, parse_wavelengths
 
     wl = parse_wavelengths(args.wavelengths)
     theta, phi = parse_direction(args.incident, name="--incident")
     order = _order(args.order)
     hf = surfaces.load(args.surface, spacing=args.spacing)
-    diffraction.fresnel_function(material_spec(args.material))      # refuse a bad material before computing
-    prepare_outdir(args.output, overwrite=args.overwrite, expected=diffraction.SCATTER_FILES)
+    fresnel_function(args.material)      # refuse a bad material before computing
+    prepare_outdir(args.output, overwrite=args.overwrite, expected=scatter.SCATTER_FILES)
     rt = get_runtime(args.device) if args.solver == "direct" and args.backend == "opencl" else None
     bar = progress(total=len(wl) * max(1, args.realizations), desc="scatter", args=args)
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", diffraction.DiffractionWarning)
-        res = diffraction.scatter(hf, (theta, phi), wl, material_spec(args.material), solver=args.solver,
+        warnings.simplefilter("always", scatter.DiffractionWarning)
+        res = scatter.scatter(hf, (theta, phi), wl, args.material, solver=args.solver,
                                   resolution=args.resolution, realizations=args.realizations, order=order,
                                   window_name=args.window, detrend=args.detrend, precision=args.precision,
                                   backend=args.backend,
@@ -92,7 +89,7 @@ def run(args) -> int:
     extra = {"surface": str(args.surface), "material": str(args.material)}
     if rt is not None:
         extra["device"] = rt.name
-    paths = diffraction.write_scatter(res, args.output, overwrite=args.overwrite, header=extra)
+    paths = scatter.write_scatter(res, args.output, overwrite=args.overwrite, header=extra)
     if not args.json:
         for w in caught:
             print(f"waveoptics scatter: warning: {w.message}", file=sys.stderr)

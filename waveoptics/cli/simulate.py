@@ -1,6 +1,11 @@
 """``waveoptics simulate``: the main job (two-scale BRDF vs microfacet, spectral → RGB, pictures)."""
 from __future__ import annotations
 
+from .. import simulate as sim_mod
+from ..errors import FieldError
+from ..io.files import prepare_outdir
+from ..request import DEFAULT_NANO, PRECISIONS, SOLVERS, SimulationRequest
+from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, emit, progress
 
 
@@ -26,10 +31,10 @@ def add_scene_options(p) -> None:
     p.add_argument("--accuracy", type=float, default=1.0, metavar="DE",
                    help="colour accuracy (ΔE2000) that picks the wavelength step (default 1.0)")
     p.add_argument("--resolution", type=int, default=128, metavar="N", help="direction grid N×N (default 128)")
-    p.add_argument("--solver", default="auto", choices=["auto", "direct", "fft", "psd"],
+    p.add_argument("--solver", default="auto", choices=SOLVERS,
                    help="nano lobe: psd (statistics), fft or direct (height field); auto picks (default)")
     p.add_argument("--kd", type=float, default=0.5, help="diffuse albedo of a dielectric (metals: none)")
-    p.add_argument("--precision", default="float32", choices=["float32", "float64"],
+    p.add_argument("--precision", default="float32", choices=PRECISIONS,
                    help="OpenCL precision for height-field solvers (default float32)")
     p.add_argument("--seed", type=int, default=0, help="seed of generated nano surfaces (default 0)")
     p.add_argument("--split", action="store_true",
@@ -37,30 +42,20 @@ def add_scene_options(p) -> None:
                         "from the long-period slopes, the short-period part diffracts")
 
 
-def simulation_from_args(args, bar=None):
-    """Validate the scene options and run :func:`waveoptics.simulate.simulate`."""
-    from .. import simulate as sim_mod
-    from ..errors import WaveopticsError
-    from ..units import parse_direction, parse_wavelengths
+def request_from_args(args) -> SimulationRequest:
+    """The :class:`~waveoptics.request.SimulationRequest` the scene options describe (its fields validate them)."""
+    return SimulationRequest(
+        material=args.material, nano=args.nano or DEFAULT_NANO, surface=args.surface, micro_alpha=args.micro_alpha,
+        ndf=args.ndf, incident_deg=parse_direction(args.incident), illuminant=args.illuminant,
+        wavelengths_nm=None if args.wavelengths is None else tuple(parse_wavelengths(args.wavelengths)),
+        accuracy_dE=args.accuracy, resolution=args.resolution, solver=args.solver, kd=args.kd,
+        precision=args.precision, seed=args.seed, split=args.split)
 
-    theta, phi = parse_direction(args.incident, name="--incident")
-    if theta >= 90:
-        raise WaveopticsError(f"--incident θ={theta:g}° is not allowed; the light must be above the horizon (< 90)")
-    if not (args.micro_alpha >= 0):
-        raise WaveopticsError(f"--micro-alpha {args.micro_alpha!r} is not allowed; α must be >= 0")
-    if not (8 <= args.resolution <= 2048):
-        raise WaveopticsError(f"--resolution {args.resolution} is not allowed; use 8..2048")
-    if not (0 <= args.kd <= 1):
-        raise WaveopticsError(f"--kd {args.kd!r} is not allowed; the diffuse albedo must be in [0, 1]")
-    if not (0 < args.accuracy < 100):
-        raise WaveopticsError(f"--accuracy {args.accuracy!r} is not allowed; use a ΔE2000 in (0, 100)")
-    w = parse_wavelengths(args.wavelengths) if args.wavelengths is not None else None
-    return sim_mod.simulate(args.material, nano=args.nano or sim_mod.DEFAULT_NANO, surface=args.surface,
-                            micro_alpha=args.micro_alpha, ndf=args.ndf, incident=(theta, phi),
-                            illuminant=args.illuminant, wavelengths=w, accuracy_dE=args.accuracy,
-                            resolution=args.resolution, solver=args.solver, kd=args.kd, seed=args.seed,
-                            device=args.device, precision=args.precision, split=args.split,
-                            progress=None if bar is None else bar.update)
+
+def simulation_from_args(args, bar=None):
+    """Run :func:`waveoptics.simulate.run` on the request of the scene options."""
+    return sim_mod.run(request_from_args(args), device=args.device,
+                       progress=None if bar is None else bar.update)
 
 
 def register(sub):
@@ -80,12 +75,8 @@ def register(sub):
 
 
 def run(args):
-    from .. import simulate as sim_mod
-    from ..errors import WaveopticsError
-    from ..io import prepare_outdir
-
     if not (16 <= args.sphere_size <= 4096):
-        raise WaveopticsError(f"--sphere-size {args.sphere_size} is not allowed; use 16..4096 pixels")
+        raise FieldError(f"{{sphere_size}} {args.sphere_size} is not allowed; use 16..4096 pixels", "sphere_size")
     prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.OUTPUT_FILES)
     bar = progress(total=1 + len(sim_mod.SPHERE_THETAS_DEG), desc="simulate", args=args)
     try:

@@ -5,6 +5,7 @@ import inspect
 
 from ..errors import WaveopticsError
 from ._common import add_common, emit
+from .. import surfaces
 
 #: CLI option -> generator parameter (lengths stay strings with units; the generators parse them)
 _MODEL_OPTIONS = {
@@ -73,7 +74,6 @@ def register(sub):
 
 
 def _model_params(args) -> dict:
-    from .. import surfaces
 
     accepted = inspect.signature(surfaces.GENERATORS[args.model]).parameters
     params = {"size": args.size, "samples": args.samples}
@@ -105,7 +105,6 @@ def _model_params(args) -> dict:
 
 
 def run_generate(args):
-    from .. import surfaces
 
     params = _model_params(args)
     hf = surfaces.generate(args.model, **params)
@@ -120,7 +119,6 @@ def run_generate(args):
 
 
 def run_stats(args):
-    from .. import surfaces
 
     hf = surfaces.load(args.file, spacing=args.spacing, units=args.units, layout=args.layout,
                        nan_is_mask=args.nan_is_mask)

@@ -3,6 +3,9 @@ from __future__ import annotations
 
 from ._common import add_common, emit, progress
 from .table import add_case_options, add_cluster_options, case_from_args
+from .. import distributed
+from ..errors import WaveopticsError
+from ..units import parse_direction
 
 
 #: --vary names listed in the help (kept equal to waveoptics.distributed.VARY by tests/test_distributed.py; the
@@ -35,9 +38,6 @@ def register(sub):
 
 
 def run(args):
-    from .. import distributed
-    from ..errors import WaveopticsError
-    from ..units import parse_direction
 
     args.incident_deg = None
     if args.incident is not None:

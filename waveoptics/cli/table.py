@@ -7,6 +7,12 @@ from __future__ import annotations
 from pathlib import Path
 
 from ._common import add_common, emit, progress
+from ..request import DEFAULT_NANO
+from .. import distributed
+from ..errors import WaveopticsError
+from ..request import SimulationRequest
+from ..units import parse_number_list, parse_wavelengths
+from ..planning import scene
 
 SCENE_SUFFIXES = (".toml",)
 
@@ -62,20 +68,13 @@ def _is_scene(source) -> bool:
 
 
 def case_from_args(args, *, source=None):
-    """(:class:`waveoptics.distributed.Case`, HeightField or None) from the options, a SURFACE or a scene file."""
-    from .. import distributed, simulate
-    from ..errors import WaveopticsError
-    from ..units import parse_wavelengths
-
-    if args.accuracy is not None and not (0 < args.accuracy < 100):
-        raise WaveopticsError(f"--accuracy {args.accuracy!r} is not allowed; use a ΔE2000 in (0, 100)")
+    """(:class:`~waveoptics.request.SimulationRequest`, HeightField or None) from the options, a SURFACE or a scene
+    file. Options left unset take the request's defaults (or the scene's values)."""
     given = dict(wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)) if args.wavelengths else None,
                  micro_alpha=args.micro_alpha, ndf=args.ndf, illuminant=args.illuminant, accuracy_dE=args.accuracy,
                  resolution=args.resolution, solver=args.solver, kd=args.kd, precision=args.precision,
                  seed=args.seed, incident_deg=getattr(args, "incident_deg", None))
     if _is_scene(source):
-        from .. import scene
-
         if args.nano:
             raise WaveopticsError("--nano cannot be used with a scene file: the scene's material defines its nano "
                                   "roughness")
@@ -89,13 +88,14 @@ def case_from_args(args, *, source=None):
         raise WaveopticsError("give either a SURFACE file or --nano MODEL:params, not both")
     if source is not None and not Path(source).is_file():
         raise WaveopticsError(f"surface file {source!r} does not exist")
-    defaults = dict(micro_alpha=0.0 if source is not None else 0.05, ndf="beckmann", illuminant="D65",
-                    accuracy_dE=1.0, resolution=args.default_resolution, kd=0.5, seed=0, incident_deg=(30.0, 0.0))
-    kw = {k: (v if v is not None else defaults.get(k)) for k, v in given.items()}
-    kw = {k: v for k, v in kw.items() if v is not None}
-    case = distributed.Case(material=args.material or "Al",
-                            nano=None if source else (args.nano or simulate.DEFAULT_NANO),
-                            surface=str(source) if source else None, **kw)
+    kw = {k: v for k, v in given.items() if v is not None}
+    kw.setdefault("resolution", args.default_resolution)
+    if source is not None:
+        kw.setdefault("micro_alpha", 0.0)  # a height field carries its own slopes
+    if args.material:
+        kw["material"] = args.material
+    case = SimulationRequest(nano=None if source else (args.nano or DEFAULT_NANO),
+                             surface=str(source) if source else None, **kw)
     return case, None
 
 
@@ -128,8 +128,6 @@ def register(sub):
 def run(args):
     import numpy as np
 
-    from .. import distributed
-    from ..units import parse_number_list
 
     case, surface = case_from_args(args, source=args.source)
     thetas = parse_number_list(args.incident_angles, name="--incident-angles")

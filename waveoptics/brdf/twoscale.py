@@ -1,6 +1,6 @@
 """Two-scale BRDF: microfacets (geometric optics) carrying nano-roughness (diffraction).
 
-Structure (Holzschuch & Pacanowski 2017; physics.md §7). Micro-geometry, much larger than λ, is described by a
+Structure (Holzschuch & Pacanowski 2017; docs/physics.md §7). Micro-geometry, much larger than λ, is described by a
 microfacet NDF D with roughness α; each microfacet carries nano-roughness of rms height σ_nano about λ or smaller.
 Per microfacet the light splits into
 
@@ -39,12 +39,19 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import signal
 
-from . import microfacet, psd
-from .diffraction import DirectionGrid, integrate
-from .errors import WaveopticsError, unknown
-from .materials import Material, get_material
-from .surfaces import HeightField
-from .units import check_wavelengths
+from .. import scatter, surfaces
+from ..scatter.grid import DirectionGrid, integrate
+from ..errors import FieldError, WaveopticsError, unknown
+from ..materials import Material, get_material
+from ..surfaces.heightfield import HeightField
+from ..units import check_wavelengths
+from ..runtime import get_runtime
+from .diffuse import DIFFUSES, diffuse_tradeoff
+from .microfacet import specular
+from .ndf import ALPHA_MIN
+from .quadrature import albedo
+
+__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'nano_lobe', 'kirchhoff_scattered_lobe', 'evaluate', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
 
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
@@ -68,8 +75,8 @@ class Micro:
                 raise WaveopticsError(f"micro {name}={a!r} is not allowed; it must be >= 0")
 
     def kw(self) -> dict:
-        a = max(self.alpha, microfacet.ALPHA_MIN)
-        ay = None if self.alpha_y is None else max(self.alpha_y, microfacet.ALPHA_MIN)
+        a = max(self.alpha, ALPHA_MIN)
+        ay = None if self.alpha_y is None else max(self.alpha_y, ALPHA_MIN)
         return {"alpha": a, "alpha_y": ay, "ndf": self.ndf, "shadowing": self.shadowing}
 
 
@@ -81,7 +88,7 @@ class Nano:
     statistics it comes from the PSD series (:mod:`waveoptics.psd`).
     """
 
-    model: psd.PSDModel | None = None
+    model: surfaces.PSDModel | None = None
     surface: HeightField | None = None
 
     def __post_init__(self):
@@ -105,7 +112,7 @@ class Nano:
         """
         c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
         if self.model is not None:
-            return psd.coherent_fraction(c, wavelength_nm, self.model.sigma)
+            return scatter.coherent_fraction(c, wavelength_nm, self.model.sigma)
         h = self.surface.heights - self.surface.heights.mean()  # guard: phase must not depend on an offset
         hv = h[self.surface.mask] if self.surface.mask is not None else h.ravel()
         hist, edges = np.histogram(hv, bins=min(2048, max(64, hv.size // 16)))
@@ -186,7 +193,7 @@ def micro_kernel(wi, micro: Micro, grid: DirectionGrid) -> np.ndarray:
     n_v, n_u = grid.n_v, grid.n_u
     K = np.zeros((2 * n_v - 1, 2 * n_u - 1))
     wi = np.asarray(wi, dtype=float)
-    rho = float(microfacet.albedo(wi, fresnel="one", **micro.kw())) if wi[2] > 0 else 0.0
+    rho = float(albedo(wi, fresnel="one", **micro.kw())) if wi[2] > 0 else 0.0
     if _sharp(micro, grid):
         K[n_v - 1, n_u - 1] = rho
         return K
@@ -197,7 +204,7 @@ def micro_kernel(wi, micro: Micro, grid: DirectionGrid) -> np.ndarray:
     s2 = U * U + V * V
     inside = s2 < 1.0
     wo = np.stack([U, V, np.sqrt(np.clip(1 - s2, 0, 1))], axis=-1)
-    f = microfacet.specular(wi, wo, fresnel="one", **micro.kw())
+    f = specular(wi, wo, fresnel="one", **micro.kw())
     K = np.where(inside, f, 0.0) * grid.du * grid.dv
     # f du dv = f cosθ_o dω_o: K holds the energy per cell. Rescale to the accurate quadrature albedo so
     # that coarse grids neither add nor lose energy.
@@ -220,7 +227,7 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
     Parameters
     ----------
     F : callable (cos_theta_d, wavelength_nm) -> reflectance
-        Fresnel factor at the half-vector angle (physics.md §1).
+        Fresnel factor at the half-vector angle (docs/physics.md §1).
     solver : str
         ``"psd"`` (statistics), ``"fft"`` or ``"direct"`` (height field), ``"auto"`` picks by what is given.
     """
@@ -238,7 +245,7 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
         out = np.empty((w.size, grid.n_v, grid.n_u))
         for i, lam in enumerate(w):
             Fi = F(cos_d, lam)
-            out[i], cap = psd.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True)
+            out[i], cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True)
             # guard: the truncated series misses the light of its terms m > m_max once g = (kσ(cosθ_i + cosθ_o))²
             # ≳ 30 (σ ≳ λ/2): refuse rather than return a lobe that silently lacks that energy
             low = float(np.min(np.where(grid.inside, cap, 1.0)))
@@ -254,7 +261,7 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
         return out
     if solver in ("fft", "direct"):
         if nano.surface is None:
-            raise WaveopticsError(f"solver {solver!r} needs a nano height field (--surface or --nano MODEL:...)")
+            raise FieldError(f"solver {solver!r} needs a nano height field ({{surface}} or {{nano}} MODEL:...)", 'surface', 'nano')
         return kirchhoff_scattered_lobe(nano.surface, wi, grid, w, F, solver=solver, device=device,
                                         precision=precision)
     raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
@@ -266,7 +273,7 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
     guard: the lobe is ~λ/(π T) wide in direction cosines; sampled at cell centres, a narrower one is missed or
     over-counted (measured: Au, σ = 20 nm, T = 30 µm, 128² grid: 18 % of the light at 450 nm lost). Such a lobe
     hugs the mirror direction, where the series is paraxial and its F = 1 albedo is 1 − exp(−g_i), g_i =
-    (4πσ cosθ_i / λ)² (physics.md §3): the lobe is scaled to that energy, or, when no cell centre falls on it,
+    (4πσ cosθ_i / λ)² (docs/physics.md §3): the lobe is scaled to that energy, or, when no cell centre falls on it,
     deposited in the mirror cell (as a micro lobe narrower than a cell is, see :func:`evaluate`).
     """
     cell = _mirror_cell(grid, wi)
@@ -288,50 +295,48 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     δU = U − χ̂ U_flat, with χ̂ the patch estimate of ⟨exp(i v_z h)⟩ (:func:`waveoptics.diffraction.
     coherent_amplitude`) and U_flat the field of the same window without heights, removes the specular spike
     (which the two-scale model carries as the micro lobe × A) and keeps the diffracted light; the BRDF follows
-    physics.md §1 (:func:`waveoptics.diffraction.brdf_from_field`). ``fft`` evaluates the whole grid
+    docs/physics.md §1 (:func:`waveoptics.diffraction.brdf_from_field`). ``fft`` evaluates the whole grid
     (frozen-v_z expansion, see :mod:`waveoptics.diffraction`); ``direct`` sums the integral on the OpenCL device
     for every grid direction inside the disc.
 
     References
     ----------
-    .. [1] Beckmann & Spizzichino 1963, ch. 5 (coherent and incoherent fields); physics.md §1-§2.
+    .. [1] Beckmann & Spizzichino 1963, ch. 5 (coherent and incoherent fields); docs/physics.md §1-§2.
     """
     import dataclasses
 
-    from . import diffraction as dif
-    from .runtime import get_runtime
 
     w = check_wavelengths(wavelengths_nm)
-    smp = dif.samples(surface)
+    smp = scatter.samples(surface)
     flat = dataclasses.replace(smp, h=np.zeros_like(smp.h))
-    for msg in dif.sampling_warnings(smp, wi, w, wo=grid.directions()[grid.inside]):  # aliasing
-        dif._warn(msg, warnings)
+    for msg in scatter.sampling_warnings(smp, wi, w, wo=grid.directions()[grid.inside]):  # aliasing
+        scatter.solvers._warn(msg, warnings)
     # the specular spike is removed here (δU), but a periodic surface's orders and a patch's speckle are just as
     # narrow (≈ λ/L): a coarser grid samples them at arbitrary points and their energy comes out wrong
     Lx, Ly = smp.extent
     lmin = float(w.min()) * 1e-9
     if grid.du > lmin / Lx * (1 + 1e-9) or grid.dv > lmin / Ly * (1 + 1e-9):
         need = int(np.ceil(2 * max(Lx, Ly) / lmin))
-        dif._warn(f"direction grid cell {grid.du:.3g} is coarser than the patch's diffraction width lambda/L = "
+        scatter.solvers._warn(f"direction grid cell {grid.du:.3g} is coarser than the patch's diffraction width lambda/L = "
                   f"{lmin / max(Lx, Ly):.3g}: sharp features (grating orders, speckle) are under-sampled and their "
                   f"energy is inexact; use resolution >= {need} or a smaller patch", warnings)
     dirs = grid.directions()
     inside = grid.inside
     out = np.zeros((w.size, grid.n_v, grid.n_u))
-    chi = np.array([dif.coherent_amplitude(smp, wi, lam) for lam in w])
+    chi = np.array([scatter.coherent_amplitude(smp, wi, lam) for lam in w])
     if solver == "fft":
         for i, lam in enumerate(w):
-            U, _ = dif.field_fft(smp, wi, grid, lam)
-            U0, _ = dif.field_fft(flat, wi, grid, lam)
-            out[i] = dif.brdf_from_field((U - chi[i] * U0)[None], wi, dirs, [lam], smp.area, F)[0]
+            U, _ = scatter.field_fft(smp, wi, grid, lam)
+            U0, _ = scatter.field_fft(flat, wi, grid, lam)
+            out[i] = scatter.brdf_from_field((U - chi[i] * U0)[None], wi, dirs, [lam], smp.area, F)[0]
     else:
         rt = get_runtime(device)
         wo = dirs[inside]
-        U = dif.kirchhoff_U_cl(smp, dif.phase_coefficients(smp, wi, wo, w), runtime=rt,
+        U = scatter.kirchhoff_U_cl(smp, scatter.phase_coefficients(smp, wi, wo, w), runtime=rt,
                                precision=precision).reshape(w.size, -1)
-        U0 = dif.kirchhoff_U_cl(flat, dif.phase_coefficients(flat, wi, wo, w), runtime=rt,
+        U0 = scatter.kirchhoff_U_cl(flat, scatter.phase_coefficients(flat, wi, wo, w), runtime=rt,
                                 precision=precision).reshape(w.size, -1)
-        out[:, inside] = dif.brdf_from_field(U - chi[:, None] * U0, wi, wo, w, smp.area, F)
+        out[:, inside] = scatter.brdf_from_field(U - chi[:, None] * U0, wi, wo, w, smp.area, F)
     return np.where(inside, np.maximum(out, 0.0), 0.0)
 
 
@@ -341,9 +346,9 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
     guard: the tangent-plane obliquity |s|⁴ / (4 λ² cosθ_i cosθ_o (cosθ_i + cosθ_o)²) grows as 1/cos θ_i, so near
     grazing incidence the Kirchhoff lobe's albedo diverges (PSD route, Gaussian σ = 100 nm, T = 1 µm, λ = 500 nm,
     F = 1: 1.32 at θ_i = 89°, 11.9 at 89.9°, 1.2e3 at 89.999°), while the light left for scattering,
-    F (1 − exp(−g)) with g = (4πσ cosθ_d / λ)² per facet (Davies 1954; physics.md §2), goes to 0. The diffracted
+    F (1 − exp(−g)) with g = (4πσ cosθ_d / λ)² per facet (Davies 1954; docs/physics.md §2), goes to 0. The diffracted
     light is the light the coherent lobe lost, so its albedo is capped at that (energy conservation of the
-    two-scale sum, physics.md §7). Away from grazing incidence the cap does not act: there the paraxial
+    two-scale sum, docs/physics.md §7). Away from grazing incidence the cap does not act: there the paraxial
     convolution pushes some diffracted light beyond the horizon and the lobes hold less than their share.
 
     Parameters
@@ -415,7 +420,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     if _sharp(micro, grid):
         mf = np.zeros(shape)
         cell = _mirror_cell(grid, wi)
-        rho = float(microfacet.albedo(wi, fresnel="one", **micro.kw()))
+        rho = float(albedo(wi, fresnel="one", **micro.kw()))
         if cell is not None:
             Fi = np.array([float(F(wi[2], lam)) for lam in w])
             mf[:, cell[0], cell[1]] = Fi * rho / (grid.du * grid.dv)
@@ -424,15 +429,15 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     else:
         mf = np.empty(shape)
         coherent = np.empty(shape)
-        f1 = np.where(inside, microfacet.specular(wi, wo, fresnel="one", **micro.kw()), 0.0)
+        f1 = np.where(inside, specular(wi, wo, fresnel="one", **micro.kw()), 0.0)
         # energy-preserving sampling: near grazing a narrow lobe is squeezed against the rim of the (u, v) disc and
         # the cell quadrature over- or under-counts it; scale the F = 1 lobe to the accurate quadrature albedo
         grid_rho = float(f1.sum()) * grid.du * grid.dv
         if reference_grid is not None:  # a patch: the quadrature of the whole grid it belongs to
             ref = reference_grid
-            f_ref = microfacet.specular(wi, ref.directions(), fresnel="one", **micro.kw())
+            f_ref = specular(wi, ref.directions(), fresnel="one", **micro.kw())
             grid_rho = float(np.sum(np.where(ref.inside, f_ref, 0.0))) * ref.du * ref.dv
-        rho = float(microfacet.albedo(wi, fresnel="one", **micro.kw()))
+        rho = float(albedo(wi, fresnel="one", **micro.kw()))
         if grid_rho > 0:
             f1 = f1 * (rho / grid_rho)
         for i, lam in enumerate(w):
@@ -464,8 +469,8 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         kd_arr = np.broadcast_to(np.asarray(kd, dtype=float), (w.size,))
         diff = np.empty(shape)
         for i, lam in enumerate(w):
-            base = microfacet.DIFFUSES[diffuse][0](wi[None, None, :], wo, kd_arr[i], 0.0)
-            weight = microfacet.diffuse_tradeoff(wi[None, None, :], wo, lambda c, lam=lam: mat.F(c, lam))
+            base = DIFFUSES[diffuse][0](wi[None, None, :], wo, kd_arr[i], 0.0)
+            weight = diffuse_tradeoff(wi[None, None, :], wo, lambda c, lam=lam: mat.F(c, lam))
             diff[i] = np.where(inside, base * weight, 0.0)
     mf_total = mf + diff
     return Lobes(grid=grid, wi=wi, wavelengths_nm=w, coherent=coherent, diffraction=diffraction, diffuse=diff,
@@ -487,10 +492,10 @@ def split_scales(surface: HeightField, wavelengths_nm, *, cutoff_period_m: float
     longer period form the micro-geometry, the rest the nano-geometry. The split is a smooth (Gaussian-edged)
     partition of unity in frequency, so micro + nano = surface exactly. The micro part's per-axis rms slopes give
     the NDF roughness: for Gaussian slopes the Beckmann α along an axis is √2 times the rms slope along it
-    (physics.md §1: α = rms |∇h| = 2σ/T for an isotropic Gaussian surface).
+    (docs/physics.md §1: α = rms |∇h| = 2σ/T for an isotropic Gaussian surface).
 
     Why 10 λ_max: a component of period Λ deflects light by sin θ = λ/Λ; beyond 10 λ that is < 0.1 (6°), where
-    a slope distribution describes the deflection (stationary phase, physics.md §1), while shorter periods
+    a slope distribution describes the deflection (stationary phase, docs/physics.md §1), while shorter periods
     scatter into wide angles only diffraction describes. Pass *cutoff_period_m* to choose another scale.
 
     Returns
@@ -506,7 +511,6 @@ def split_scales(surface: HeightField, wavelengths_nm, *, cutoff_period_m: float
     ----------
     .. [1] Holzschuch & Pacanowski 2017, §3 (scale separation); Beckmann & Spizzichino 1963 (slope statistics).
     """
-    from . import surfaces
 
     w = check_wavelengths(wavelengths_nm)
     Lc = float(cutoff_period_m) if cutoff_period_m is not None else SPLIT_PERIODS_OF_LAMBDA * float(w.max()) * 1e-9

@@ -53,14 +53,19 @@ import inspect
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from ..colour.illuminants import illuminant
+from ..materials.database import get_material
+from ..request import parse_nano
 
 try:  # Python >= 3.11
     import tomllib
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from . import microfacet, psd, surfaces
-from .errors import WaveopticsError, did_you_mean
+from .. import brdf, surfaces
+from ..errors import WaveopticsError, did_you_mean
+
+__all__ = ['KEYS', 'CAMERAS', 'DEFAULT_DELTA_E', 'DEFAULT_LIGHT_DIRECTIONS', 'NanoSpec', 'MaterialSpec', 'LightSpec', 'ViewSpec', 'OutputSpec', 'Scene', 'parse', 'load']
 
 #: allowed keys per table (the schema); values are checked by the parsers below
 KEYS = {
@@ -263,7 +268,6 @@ def _directions(ctx, value, key, *, theta_max: float) -> tuple:
 # ----------------------------------------------------------------------------------------------------------------
 
 def _nano(ctx, value, key, base: Path) -> NanoSpec:
-    from .simulate import parse_nano
 
     t = _table(ctx, value, key)
     _check_keys(ctx, t, "nano", key)
@@ -276,15 +280,15 @@ def _nano(ctx, value, key, base: Path) -> NanoSpec:
     if kind == "statistics":
         if isinstance(v, dict):
             if "model" not in v:
-                raise ctx.err(k, "lacks model; allowed: " + ", ".join(psd.PSD_MODELS))
+                raise ctx.err(k, "lacks model; allowed: " + ", ".join(surfaces.PSD_MODELS))
             v = f"{v['model']}:" + ",".join(f"{p}={q}" for p, q in v.items() if p != "model")
         text = _string(ctx, v, k)
         try:
             model, _ = parse_nano(text)
         except WaveopticsError as exc:
             raise ctx.err(k, f"= {text!r}: {exc}") from None
-        if model not in psd.PSD_MODELS:
-            raise ctx.err(k, f"model {model!r} is not a statistics model; allowed: {', '.join(psd.PSD_MODELS)} "
+        if model not in surfaces.PSD_MODELS:
+            raise ctx.err(k, f"model {model!r} is not a statistics model; allowed: {', '.join(surfaces.PSD_MODELS)} "
                              f"(use generator for {model})")
         return NanoSpec("statistics", text=text)
     if kind == "generator":
@@ -315,7 +319,6 @@ def _nano(ctx, value, key, base: Path) -> NanoSpec:
 
 
 def _material(ctx, t, key, base) -> MaterialSpec:
-    from .materials import get_material
 
     _check_keys(ctx, t, "materials", key)
     name = _string(ctx, t.get("name"), key + ".name")
@@ -338,13 +341,12 @@ def _material(ctx, t, key, base) -> MaterialSpec:
         roughness=_number(ctx, t.get("roughness", 0.05), key + ".roughness", lo=0.0, hi=2.0),
         ndf=_choice(ctx, t.get("ndf", "ggx"), key + ".ndf", ("ggx", "beckmann")),
         shadowing=_choice(ctx, t.get("shadowing", "smith-correlated"), key + ".shadowing",
-                          tuple(microfacet.SHADOWINGS)),
+                          tuple(brdf.SHADOWINGS)),
         diffuse_albedo=_number(ctx, t.get("diffuse_albedo", 0.5), key + ".diffuse_albedo", lo=0.0, hi=1.0),
         nano=_nano(ctx, t["nano"], key + ".nano", base) if "nano" in t else None)
 
 
 def _light(ctx, t, key) -> LightSpec:
-    from .spectral import illuminant
 
     _check_keys(ctx, t, "lights", key)
     name = _string(ctx, t.get("name"), key + ".name")

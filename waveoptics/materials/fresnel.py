@@ -18,7 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import WaveopticsError
+from ..errors import WaveopticsError
+from ..runtime import build_options, build_program, get_runtime
+
+__all__ = ['F_sp', 'F', 'F0', 'F_schlick', 'brewster_angle', 'F_sp_cl', 'F_schlick_cl']
 
 
 def _as_eta(eta) -> np.ndarray:
@@ -140,7 +143,6 @@ def _cl_eval(kernel_name, inputs, n_out, runtime, precision):
     import pyopencl as cl
     import pyopencl.array as cla
 
-    from .runtime import build_options, build_program, get_runtime
 
     rt = runtime if runtime is not None else get_runtime()
     dt = rt.real_dtype(precision)

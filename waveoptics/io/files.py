@@ -11,11 +11,10 @@ import json
 import os
 import tempfile
 from pathlib import Path
-
 import numpy as np
+from ..errors import OutputExistsError, WaveopticsError
 
-from .errors import OutputExistsError, WaveopticsError
-
+__all__ = ['atomic_path', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
 
 @contextlib.contextmanager
 def atomic_path(final, *, overwrite: bool = True):
@@ -30,7 +29,7 @@ def atomic_path(final, *, overwrite: bool = True):
     """
     final = Path(final)
     if final.exists() and not overwrite:
-        raise OutputExistsError(f"output {str(final)!r} already exists; pass --overwrite to replace it")
+        raise OutputExistsError(final)
     parent = final.parent if str(final.parent) else Path(".")
     if not parent.is_dir():
         raise WaveopticsError(f"output directory {str(parent)!r} does not exist")
@@ -65,7 +64,7 @@ def prepare_outdir(path, *, overwrite: bool = False, expected=()) -> Path:
     if not overwrite:
         clash = [name for name in expected if (p / name).exists()]
         if clash:
-            raise OutputExistsError(f"output {str(p / clash[0])!r} already exists; pass --overwrite to replace it")
+            raise OutputExistsError(p / clash[0])
     return p
 
 
@@ -146,82 +145,3 @@ def read_exr(path) -> tuple[dict, dict]:
     except Exception as exc:  # noqa: BLE001 - the bindings raise plain RuntimeError/Exception
         raise WaveopticsError(f"{str(p)!r} is not a readable OpenEXR file ({exc})") from None
     return chans, header
-
-
-# ----------------------------------------------------------------------------------------------------------------
-# Spectral OpenEXR (Fichet, Pacanowski & Wilkie 2021)
-# ----------------------------------------------------------------------------------------------------------------
-
-#: value of the ``spectralLayoutVersion`` header attribute this writer follows
-SPECTRAL_LAYOUT_VERSION = "1.0"
-
-
-def spectral_channel_name(wavelength_nm: float, *, emissive: bool = False) -> str:
-    """Channel name of one wavelength in the spectral OpenEXR layout: ``T.550,000000nm`` (reflective) or
-    ``S0.550,000000nm`` (emissive, unpolarized Stokes component 0); the decimal separator is a comma.
-
-    References
-    ----------
-    .. [1] A. Fichet, R. Pacanowski, A. Wilkie, "An OpenEXR Layout for Spectral Images", JCGT 10(3), 2021, §3
-       (channel naming ``<component>.<value with comma decimal><unit>``, ``spectralLayoutVersion``).
-    """
-    w = float(wavelength_nm)
-    if not np.isfinite(w) or w <= 0:
-        raise WaveopticsError(f"wavelength {wavelength_nm!r} nm is not allowed in a spectral channel name; it must "
-                              "be finite and > 0")
-    return ("S0." if emissive else "T.") + f"{w:.6f}".replace(".", ",") + "nm"
-
-
-def write_spectral_exr(path, layers: dict, header: dict | None = None, *, emissive: bool = False,
-                       overwrite: bool = True) -> Path:
-    """Write per-wavelength images as one spectral OpenEXR file (atomically).
-
-    Parameters
-    ----------
-    layers : dict of float -> ndarray (H, W)
-        Wavelength in nm to image; all images the same shape. Stored as float32 channels named by
-        :func:`spectral_channel_name`.
-    header : dict, optional
-        Extra attributes (pass floats that need full precision as strings).
-    emissive : bool
-        ``S0.`` channels with ``emissiveUnits`` = W.m^-2.sr^-1 instead of reflective ``T.`` channels.
-
-    References
-    ----------
-    .. [1] Fichet, Pacanowski & Wilkie, JCGT 10(3), 2021.
-    """
-    if not layers:
-        raise WaveopticsError("a spectral image needs at least one wavelength layer")
-    chans = {}
-    for wl in sorted(layers, key=float):
-        name = spectral_channel_name(wl, emissive=emissive)
-        if name in chans:
-            raise WaveopticsError(f"wavelength {wl!r} nm appears twice in the spectral layers")
-        chans[name] = layers[wl]
-    hdr = {"spectralLayoutVersion": SPECTRAL_LAYOUT_VERSION}
-    if emissive:
-        hdr["emissiveUnits"] = "W.m^-2.sr^-1"
-    hdr.update(header or {})
-    return write_exr(path, chans, hdr, overwrite=overwrite)
-
-
-def read_spectral_exr(path) -> tuple[dict, dict]:
-    """Read the spectral channels of an OpenEXR file: ({wavelength_nm: image}, header).
-
-    Channel names are parsed with colour-science's pattern for the Fichet et al. 2021 layout; reflective
-    ``T.`` channels are returned, or emissive ``S0.`` channels when there are no reflective ones.
-    """
-    import re
-
-    from colour.io.fichet2021 import PATTERN_FICHET2021, match_groups_to_nm
-
-    chans, header = read_exr(path)
-    found = {"T": {}, "S0": {}}
-    for name, img in chans.items():
-        m = re.fullmatch(rf"(T|S0)\.{PATTERN_FICHET2021}", name)
-        if m:
-            found[m.group(1)][match_groups_to_nm(m.group(2), m.group(4) or "", m.group(5))] = img
-    layers = found["T"] or found["S0"]
-    if not layers:
-        raise WaveopticsError(f"{str(path)!r} has no spectral channels (T.<wavelength>nm or S0.<wavelength>nm)")
-    return dict(sorted(layers.items())), header

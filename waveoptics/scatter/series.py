@@ -1,23 +1,23 @@
 """Statistical scattering from a surface's height statistics (PSD), without a height field.
 
 For a surface with Gaussian height statistics, rms height σ and autocorrelation C(r), the Kirchhoff
-(tangent-plane) BRDF of physics.md §1 has the ensemble average (Beckmann & Spizzichino 1963, ch. 5)
+(tangent-plane) BRDF of docs/physics.md §1 has the ensemble average (Beckmann & Spizzichino 1963, ch. 5)
 
     ⟨|U|²⟩ / A_w = e^{−g} ∫ (e^{v_z² C(r)} − 1) e^{i v_xy·r} d²r  (diffuse part)
                  = Σ_{m≥1} p_m(g) · H_m(|v_xy|),   p_m(g) = e^{−g} g^m / m!,   g = v_z² σ²,
 
 with v = k(ω_i + ω_o) and H_m(q) = ∫ c(r)^m e^{i q·r} d²r = 2π ∫ c(r)^m J0(q r) r dr the Fourier transform of
 the m-th power of the normalized correlation c = C/σ². The m = 1 term is the Rayleigh-Rice first-order
-perturbation result (physics.md §4), since H_1(q) = S(q/2π)/σ². For a Gaussian correlation the H_m are closed
-form and the sum is the Beckmann-Spizzichino series of physics.md §3; this module evaluates the series for *any*
+perturbation result (docs/physics.md §4), since H_1(q) = S(q/2π)/σ². For a Gaussian correlation the H_m are closed
+form and the sum is the Beckmann-Spizzichino series of docs/physics.md §3; this module evaluates the series for *any*
 isotropic PSD (Gaussian, exponential, ABC/K-correlation) by Hankel transforms of c^m, once per surface (the
 tables do not depend on λ or direction), so lobes for many wavelengths and directions cost only table look-ups.
 
-The BRDF of the scattered (diffuse) part is then, with the obliquity factor of physics.md §1,
+The BRDF of the scattered (diffuse) part is then, with the obliquity factor of docs/physics.md §1,
 
     f_s(ω_i, ω_o) = F(θ_d) |ω_i + ω_o|⁴ / (4 λ² cosθ_i cosθ_o (cosθ_i + cosθ_o)²) · Σ_m p_m(g) H_m(|v_xy|),
 
-and the coherent (specular) part carries the fraction e^{−g} of F (Davies 1954; physics.md §2).
+and the coherent (specular) part carries the fraction e^{−g} of F (Davies 1954; docs/physics.md §2).
 
 Where it breaks
 ---------------
@@ -42,105 +42,14 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, replace
-
 import numpy as np
 from scipy import special, stats
+from ..surfaces.psd import PSDModel
 
-from .errors import WaveopticsError, unknown
+__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'poisson_weights', 'roughness_g', 'series_terms', 'g_factor', 'coherent_fraction', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
 
-
-# --- PSD models (two-sided, ∫ S d²f = σ²) and their correlation functions -------------------------------
-
-def S_gaussian(f, sigma, T):
-    """Gaussian-correlation PSD π σ² T² exp(−π² T² f²); f in 1/m, σ and T in m (physics.md §4)."""
-    return np.pi * sigma ** 2 * T ** 2 * np.exp(-(np.pi * T * np.asarray(f)) ** 2)
-
-
-def c_gaussian(r, T):
-    """Normalized Gaussian correlation exp(−r²/T²)."""
-    return np.exp(-(np.asarray(r) / T) ** 2)
-
-
-def S_exponential(f, sigma, T):
-    """Exponential-correlation PSD 2π σ² T² / (1 + (2π T f)²)^{3/2} (physics.md §4)."""
-    return 2 * np.pi * sigma ** 2 * T ** 2 / (1 + (2 * np.pi * T * np.asarray(f)) ** 2) ** 1.5
-
-
-def c_exponential(r, T):
-    """Normalized exponential correlation exp(−r/T)."""
-    return np.exp(-np.asarray(r) / T)
-
-
-def abc_A(sigma, B, C):
-    """A of the ABC PSD for rms height σ: A = σ² B² (C − 2) / (2π) (physics.md §4)."""
-    return sigma ** 2 * B ** 2 * (C - 2) / (2 * np.pi)
-
-
-def S_abc(f, sigma, B, C):
-    """ABC / K-correlation PSD A / (1 + (B f)²)^{C/2}, with A set by σ (Church et al. 1989)."""
-    return abc_A(sigma, B, C) / (1 + (B * np.asarray(f)) ** 2) ** (C / 2)
-
-
-def c_abc(r, B, C):
-    """Normalized K-correlation function: (a/2)^ν K_ν(a) · 2/Γ(ν), a = 2π r / B, ν = (C − 2)/2.
-
-    It is the 2-D Hankel transform of the ABC PSD (Gradshteyn & Ryzhik 6.565.4), equal to 1 at r = 0.
-    """
-    nu = (C - 2) / 2
-    a = 2 * np.pi * np.asarray(r, dtype=float) / B
-    with np.errstate(invalid="ignore", over="ignore"):
-        out = 2 / special.gamma(nu) * (a / 2) ** nu * special.kv(nu, a)
-    return np.where(a < 1e-12, 1.0, out)
-
-
-@dataclass(frozen=True)
-class PSDModel:
-    """An isotropic height PSD: ``kind`` in PSD_MODELS, σ (m) and shape parameters (m or unitless)."""
-
-    kind: str
-    sigma: float
-    T: float | None = None  # correlation length (gaussian, exponential), m
-    B: float | None = None  # ABC: m
-    C: float | None = None  # ABC: exponent > 2
-
-    def __post_init__(self):
-        if self.kind not in PSD_MODELS:
-            raise unknown("PSD model", self.kind, PSD_MODELS)
-        if not np.isfinite(self.sigma) or self.sigma < 0:
-            raise WaveopticsError(f"sigma={self.sigma!r} m is not allowed; rms height must be >= 0")
-        if self.kind in ("gaussian", "exponential"):
-            if self.T is None or not np.isfinite(self.T) or self.T <= 0:
-                raise WaveopticsError(f"correlation length T={self.T!r} m is not allowed; it must be > 0")
-        else:
-            if self.B is None or not np.isfinite(self.B) or self.B <= 0:
-                raise WaveopticsError(f"ABC parameter B={self.B!r} m is not allowed; it must be > 0")
-            if self.C is None or not np.isfinite(self.C) or self.C <= 2:
-                raise WaveopticsError(f"ABC parameter C={self.C!r} is not allowed; it must be > 2 (finite σ)")
-
-    def S(self, f):
-        """Two-sided PSD at spatial frequency |f| (1/m), m⁴·... units m⁴ (σ² per unit frequency area)."""
-        if self.kind == "gaussian":
-            return S_gaussian(f, self.sigma, self.T)
-        if self.kind == "exponential":
-            return S_exponential(f, self.sigma, self.T)
-        return S_abc(f, self.sigma, self.B, self.C)
-
-    def c(self, r):
-        """Normalized correlation C(r)/σ² at lag r (m)."""
-        if self.kind == "gaussian":
-            return c_gaussian(r, self.T)
-        if self.kind == "exponential":
-            return c_exponential(r, self.T)
-        return c_abc(r, self.B, self.C)
-
-    @property
-    def length_scale(self) -> float:
-        """A correlation length (m): T, or B/(2π) for ABC."""
-        return self.T if self.T is not None else self.B / (2 * np.pi)
-
-
-PSD_MODELS = ("gaussian", "exponential", "abc")
-
+#: most terms of the series (:func:`scattered_lobe`)
+M_MAX = 48
 
 # --- Kirchhoff-series tables -----------------------------------------------------------------------------
 
@@ -165,7 +74,7 @@ class SeriesTables:
 
 
 @functools.lru_cache(maxsize=32)
-def series_tables(model: PSDModel, q_max: float, m_max: int = 48, n_q: int = 1536) -> SeriesTables:
+def series_tables(model: PSDModel, q_max: float, m_max: int = M_MAX, n_q: int = 1536) -> SeriesTables:
     """Hankel transforms H_m(q) = 2π ∫ c(r)^m J0(q r) r dr, m = 1..m_max, for 0 ≤ q ≤ q_max (rad/m).
 
     The radial integral uses the trapezoid rule on a grid that resolves both the correlation length and the
@@ -193,7 +102,7 @@ def series_tables(model: PSDModel, q_max: float, m_max: int = 48, n_q: int = 153
     cm = np.ones_like(c)
     # Euler-Maclaurin end correction: the integrand 2π r c^m J0(q r) has slope 2π at r = 0 for every q and m,
     # so the plain trapezoid rule carries a q-independent bias of −2π dr²/12. Left in, that floor is amplified
-    # by the 1/cosθ_o obliquity near the horizon (physics.md §1 warns about exactly this).
+    # by the 1/cosθ_o obliquity near the horizon (docs/physics.md §1 warns about exactly this).
     end_fix = 2 * np.pi * (r[1] - r[0]) ** 2 / 12
     for m in range(1, m_max + 1):
         cm = cm * c
@@ -211,11 +120,31 @@ def poisson_weights(g, m_max):
     return stats.poisson.pmf(m, g)
 
 
-def g_factor(wi, wo, wavelength_nm, sigma):
-    """Roughness factor g = [kσ(cosθ_i + cosθ_o)]² (physics.md §3); λ in nm, σ in m."""
+def roughness_g(sigma_m, cos_sum, wavelength_nm):
+    """Roughness factor g = [k σ (cosθ_i + cosθ_o)]², k = 2π/λ (docs/physics.md §2, §3).
+
+    Parameters
+    ----------
+    sigma_m : float, m
+        rms height.
+    cos_sum : array_like
+        cosθ_i + cosθ_o (2 cosθ_i at the mirror direction, where g = (4πσ cosθ_i / λ)²).
+    wavelength_nm : array_like, nm
+    """
     k = 2 * np.pi / (np.asarray(wavelength_nm, dtype=float) * 1e-9)
-    vz = k * (np.asarray(wi)[..., 2] + np.asarray(wo)[..., 2])
-    return (vz * sigma) ** 2
+    return (k * sigma_m * np.asarray(cos_sum, dtype=float)) ** 2
+
+
+def series_terms(g, m_max: int = M_MAX) -> int:
+    """Terms of the Poisson series worth summing at roughness factor *g*: beyond g + 8√g + 10 the terms carry
+    < 1e-12 of the Poisson mass (at most *m_max*)."""
+    g = float(g)
+    return int(min(m_max, math.ceil(g + 8 * math.sqrt(g) + 10)))
+
+
+def g_factor(wi, wo, wavelength_nm, sigma):
+    """Roughness factor g = [kσ(cosθ_i + cosθ_o)]² of a direction pair (docs/physics.md §3); λ in nm, σ in m."""
+    return roughness_g(sigma, np.asarray(wi)[..., 2] + np.asarray(wo)[..., 2], wavelength_nm)
 
 
 def coherent_fraction(cos_theta_i, wavelength_nm, sigma):
@@ -225,12 +154,11 @@ def coherent_fraction(cos_theta_i, wavelength_nm, sigma):
     ----------
     .. [1] H. Davies, Proc. IEE 101, 209 (1954); H. E. Bennett, J. O. Porteus, JOSA 51, 123 (1961).
     """
-    lam = np.asarray(wavelength_nm, dtype=float) * 1e-9
-    return np.exp(-(4 * np.pi * sigma * np.asarray(cos_theta_i) / lam) ** 2)
+    return np.exp(-roughness_g(sigma, 2 * np.asarray(cos_theta_i, dtype=float), wavelength_nm))
 
 
 def obliquity(wi, wo, wavelength_nm):
-    """|ω_i + ω_o|⁴ / (4 λ² cosθ_i cosθ_o (cosθ_i + cosθ_o)²) in 1/m² (physics.md §1); 0 below the surface."""
+    """|ω_i + ω_o|⁴ / (4 λ² cosθ_i cosθ_o (cosθ_i + cosθ_o)²) in 1/m² (docs/physics.md §1); 0 below the surface."""
     wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
     ci, co = wi[..., 2], wo[..., 2]
     s = wi + wo
@@ -242,7 +170,7 @@ def obliquity(wi, wo, wavelength_nm):
     return np.where(ok, val, 0.0)
 
 
-def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int = 48, return_captured=False):
+def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int = M_MAX, return_captured=False):
     """BRDF (1/sr) of the diffusely scattered part for the PSD *model* (Kirchhoff series, see module doc).
 
     Parameters
@@ -279,9 +207,7 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
     q_max = 2.0 ** math.ceil(math.log2(float(np.max(q)) * 1.001 + 1.0))
     tab = series_tables(model, q_max, m_max)
     q_b, g_b = np.broadcast_arrays(q, g)
-    # terms beyond g + 8√g + 10 carry < 1e-12 of the Poisson mass: skip them
-    g_top = float(np.max(g_b)) if g_b.size else 0.0
-    m_use = int(min(m_max, np.ceil(g_top + 8 * np.sqrt(g_top) + 10)))
+    m_use = series_terms(float(np.max(g_b)) if g_b.size else 0.0, m_max)
     p = poisson_weights(g_b, m_use)
     Hm = tab.Hm(q_b)[:m_use]
     total = np.sum(p * Hm, axis=0)
@@ -298,7 +224,7 @@ def rayleigh_rice(wi, wo, wavelength_nm, model: PSDModel, Q=1.0):
 
     References
     ----------
-    .. [1] J. C. Stover, *Optical Scattering*, 3rd ed., eq. (4.1); physics.md §4.
+    .. [1] J. C. Stover, *Optical Scattering*, 3rd ed., eq. (4.1); docs/physics.md §4.
     """
     wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
     lam = np.asarray(wavelength_nm, dtype=float) * 1e-9

@@ -1,0 +1,126 @@
+"""The shape of the package (as prysm's tests/test_no_direct_numpy_scipy.py guards its own): sub-packages import
+only downward in the documented layer order, no library error names a command-line flag, functions stay short,
+every physics citation resolves inside the repository, kernels live inside the package, public modules declare
+``__all__``, and the layer table here is the one docs/architecture.md shows.
+"""
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+import waveoptics
+from waveoptics.architecture import LAYERS, layer_of, waveoptics_imports
+
+PKG = Path(waveoptics.__file__).resolve().parent
+ROOT = PKG.parent
+MODULES = sorted(p for p in PKG.rglob("*.py"))
+MAX_FUNCTION_LINES = 120
+
+
+def _rel(p: Path) -> str:
+    return str(p.relative_to(ROOT))
+
+
+def _module_name(p: Path) -> str:
+    parts = p.relative_to(PKG).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def test_every_module_has_a_layer():
+    missing = [_rel(p) for p in MODULES if layer_of(_module_name(p)) is None]
+    assert not missing, f"modules outside the layer table of waveoptics/architecture.py: {missing}"
+
+
+@pytest.mark.parametrize("path", MODULES, ids=_rel)
+def test_imports_go_downward(path):
+    """A module imports waveoptics modules of its own layer or below, never above (function-level imports too)."""
+    me = _module_name(path)
+    mine = layer_of(me)
+    upward = [(target, lineno) for target, lineno in waveoptics_imports(path)
+              if layer_of(target) is not None and layer_of(target) > mine]
+    assert not upward, f"{me} (layer {LAYERS[mine][0]}) imports upward: {upward}"
+
+
+def _error_calls(tree):
+    """Calls that build an error: ``XError(...)``, ``unknown(...)``, ``_error(...)``."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call):
+            f = node.func
+            name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else ""
+            if name.endswith("Error") or name in ("unknown", "_error"):
+                yield node
+
+
+FLAG = re.compile(r"(?<![\w-])--[a-z]")
+
+
+@pytest.mark.parametrize("path", [p for p in MODULES if "cli" not in p.relative_to(PKG).parts], ids=_rel)
+def test_library_errors_name_fields_not_flags(path):
+    """Only the CLI knows its flags: errors raised by the library name the field (issue 12)."""
+    bad = []
+    for call in _error_calls(ast.parse(path.read_text())):
+        for node in ast.walk(call):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str) and FLAG.search(node.value):
+                bad.append((call.lineno, node.value))
+    assert not bad, f"{_rel(path)}: library errors that name command-line flags: {bad}"
+
+
+def _body_lines(fn) -> int:
+    body = fn.body
+    first = body[0]
+    if isinstance(first, ast.Expr) and isinstance(first.value, ast.Constant) and isinstance(first.value.value, str):
+        start = first.end_lineno + 1   # the docstring does not count
+    else:
+        start = first.lineno
+    return fn.end_lineno - start + 1
+
+
+@pytest.mark.parametrize("path", MODULES, ids=_rel)
+def test_functions_are_short(path):
+    long = [(n.name, _body_lines(n)) for n in ast.walk(ast.parse(path.read_text()))
+            if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef)) and _body_lines(n) > MAX_FUNCTION_LINES]
+    assert not long, f"{_rel(path)}: functions longer than {MAX_FUNCTION_LINES} lines: {long}"
+
+
+def _cited_sections():
+    files = [*MODULES, *ROOT.glob("docs/*.md"), ROOT / "README.md", *ROOT.glob("scripts/*.py"),
+             *ROOT.glob("tests/*.py"), *ROOT.glob("examples/*.py")]
+    for f in files:
+        for m in re.finditer(r"physics\.md ?§ ?(\d+)", f.read_text()):
+            yield f, int(m.group(1))
+
+
+def test_physics_citations_resolve_inside_the_repository():
+    physics = (ROOT / "docs" / "physics.md").read_text()
+    sections = {int(m.group(1)) for m in re.finditer(r"^## (\d+)\. ", physics, re.M)}
+    cites = list(_cited_sections())
+    assert cites, "no physics citations found (pattern changed?)"
+    unresolved = sorted({(str(f.relative_to(ROOT)), n) for f, n in cites if n not in sections})
+    assert not unresolved, f"citations of docs/physics.md sections that do not exist: {unresolved}"
+    outside = [str(p.relative_to(ROOT)) for p in [*MODULES, *ROOT.glob("docs/*.md"), ROOT / "README.md"]
+               if "../shared" in p.read_text()]
+    assert not outside, f"files pointing outside the repository: {outside}"
+
+
+def test_kernels_live_inside_the_package():
+    assert sorted(p.name for p in (PKG / "kernels").glob("*.cl")), "no kernels in waveoptics/kernels"
+    assert not (ROOT / "kernels").exists(), "a second kernel directory at the repository root"
+
+
+@pytest.mark.parametrize("path", [p for p in MODULES if not p.name.startswith("_") and "cli" not in p.parts],
+                         ids=_rel)
+def test_public_modules_declare_all(path):
+    tree = ast.parse(path.read_text())
+    names = {t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets if isinstance(t, ast.Name)}
+    assert "__all__" in names, f"{_rel(path)} has no __all__"
+
+
+def test_architecture_doc_matches_the_layer_table():
+    doc = (ROOT / "docs" / "architecture.md").read_text()
+    for name, members in LAYERS:
+        assert f"| {name} |" in doc, f"docs/architecture.md lacks layer {name!r}: run scripts/docs_architecture.py"
+        for m in members:
+            assert f"`{m}`" in doc, f"docs/architecture.md lacks {m!r}: run scripts/docs_architecture.py"

@@ -1,0 +1,17 @@
+"""Geometric-optics and two-scale BRDFs.
+
+Files: ndf (normal distributions D and Smith Λ), shadowing (G terms), fresnel_terms (exact, Schlick or unit F; mean F), diffuse (Lambert, Oren-Nayar, trade-off),
+microfacet (the Cook-Torrance specular term and the full BRDF), quadrature (directional albedo), opencl (kernel
+twins), twoscale (micro facets carrying nano-roughness: coherent lobe plus diffracted lobe).
+"""
+from .ndf import *  # noqa: F401,F403
+from .shadowing import *  # noqa: F401,F403
+from .fresnel_terms import *  # noqa: F401,F403
+from .diffuse import *  # noqa: F401,F403
+from .microfacet import *  # noqa: F401,F403
+from .quadrature import *  # noqa: F401,F403
+from .opencl import *  # noqa: F401,F403
+from .twoscale import *  # noqa: F401,F403
+from . import ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, twoscale  # noqa: F401
+
+__all__ = ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + twoscale.__all__

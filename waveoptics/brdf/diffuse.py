@@ -1,0 +1,119 @@
+"""Diffuse terms: Lambert, Oren-Nayar, and the diffuse-specular energy trade-off.
+
+References
+----------
+.. [1] M. Oren, S. K. Nayar, "Generalization of Lambert's Reflectance Model", SIGGRAPH 1994.
+.. [2] P. Shirley, H. Hu, B. Smits, E. Lafortune, "A Practitioners' Assessment of Light Reflection Models",
+   Pacific Graphics 1997.
+.. [3] M. Ashikhmin, P. Shirley, "An Anisotropic Phong BRDF Model", JGT 5(2), 2000.
+"""
+from __future__ import annotations
+
+from typing import Callable
+import numpy as np
+from ..errors import WaveopticsError
+from .ndf import _as_dirs
+from .fresnel_terms import F_mean
+
+__all__ = ['lambert', 'oren_nayar', 'diffuse_tradeoff', 'DIFFUSES']
+
+# ----------------------------------------------------------------------------------------------------------
+# diffuse terms
+
+
+def lambert(wi, wo, kd=1.0):
+    """Lambertian BRDF kd/π (1/sr) for both directions above the surface, else 0.
+
+    Parameters
+    ----------
+    kd : array_like
+        Diffuse albedo c in [0, 1] (may vary with wavelength; broadcasts with the batch).
+
+    References
+    ----------
+    .. [1] J. H. Lambert, *Photometria*, 1760.
+    """
+    wi = _as_dirs(wi, "wi")
+    wo = _as_dirs(wo, "wo")
+    up = (wi[..., 2] > 0) & (wo[..., 2] > 0)
+    return np.where(up, np.asarray(kd, dtype=float) / np.pi, 0.0)
+
+
+def oren_nayar(wi, wo, kd=1.0, sigma=0.0):
+    """Oren-Nayar rough-diffuse BRDF (the qualitative model), in 1/sr.
+
+        f = (kd/π) [A + B max(0, cos(φ_i − φ_o)) sin α tan β],  α = max(θ_i, θ_o), β = min(θ_i, θ_o),
+        A = 1 − 0.5 σ²/(σ² + 0.33),  B = 0.45 σ²/(σ² + 0.09),
+
+    computed from the vectors as max(0, wi_xy·wo_xy)/max(cos θ_i, cos θ_o) for the cos Δφ sin α tan β product
+    (reciprocal, no division by zero).
+
+    Parameters
+    ----------
+    kd : array_like
+        Albedo ρ of the facets in [0, 1].
+    sigma : float
+        Standard deviation of the facet slope angle, radians (0 gives Lambert). This is the diffuse roughness,
+        independent of the specular α.
+
+    Notes
+    -----
+    The qualitative model is an approximation of the V-cavity model with interreflections dropped; it is not
+    exactly energy conserving: with kd = 1 its directional albedo is A ≤ 1 at normal incidence but rises to
+    about A + B/2 at grazing incidence, slightly above 1 for σ ≈ 0.2-0.4 (see ``docs/microfacet.md``).
+
+    References
+    ----------
+    .. [1] M. Oren, S. K. Nayar, "Generalization of Lambert's Reflectance Model", SIGGRAPH 1994, eq. (30).
+    """
+    sigma = float(sigma)
+    if not np.isfinite(sigma) or sigma < 0:
+        raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")
+    wi = _as_dirs(wi, "wi")
+    wo = _as_dirs(wo, "wo")
+    return _oren_nayar(wi, wo, kd, sigma)
+
+
+def _oren_nayar(wi, wo, kd, sigma):
+    s2 = sigma * sigma
+    A = 1.0 - 0.5 * s2 / (s2 + 0.33)
+    B = 0.45 * s2 / (s2 + 0.09)
+    up = (wi[..., 2] > 0) & (wo[..., 2] > 0)
+    cmax = np.where(up, np.maximum(wi[..., 2], wo[..., 2]), 1.0)
+    proj = np.maximum(0.0, wi[..., 0] * wo[..., 0] + wi[..., 1] * wo[..., 1])
+    return np.where(up, np.asarray(kd, dtype=float) / np.pi * (A + B * proj / cmax), 0.0)
+
+
+def diffuse_tradeoff(wi, wo, F_fn: Callable, batch_ndim: int = 0):
+    """Energy-conserving weight of the diffuse term: (1 − F(θ_i))(1 − F(θ_o)) / (1 − F̄).
+
+    The diffuse layer receives only the light the interface did not reflect, 1 − F(θ_i), and its light leaves
+    through the interface with weight 1 − F(θ_o) (reciprocity), renormalized so that the diffuse albedo is
+    exactly kd (1 − F(θ_i)) for a Lambertian layer: F̄ = 2∫ F(μ) μ dμ (:func:`F_mean`). With Schlick's F this is
+    Shirley et al.'s coupled model, f_d = 21/(20π) kd (1 − F0)(1 − (1 − cos θ_i)⁵)(1 − (1 − cos θ_o)⁵), and
+    Ashikhmin & Shirley (2000) use the same structure with a different constant; here F is the exact spectral
+    Fresnel factor. The weight goes to 0 at grazing incidence or exitance, where F → 1.
+
+    Returns
+    -------
+    ndarray
+        Weight ≥ 0 (dimensionless); 0 where F̄ = 1 (nothing enters the surface).
+
+    References
+    ----------
+    .. [1] P. Shirley, H. Hu, B. Smits, E. Lafortune, Pacific Graphics 1997, eq. (7).
+    .. [2] M. Ashikhmin, P. Shirley, JGT 5(2), 2000, eq. (5).
+    """
+    Fi = F_fn(np.clip(wi[..., 2], 0.0, 1.0))
+    Fo = F_fn(np.clip(wo[..., 2], 0.0, 1.0))
+    Fbar = F_mean(F_fn, batch_ndim)
+    t = 1.0 - Fbar
+    return np.where(t > 0, (1.0 - Fi) * (1.0 - Fo) / np.where(t > 0, t, 1.0), 0.0)
+
+
+#: diffuse terms by name: callables (wi, wo, kd, sigma) and kernel switch values
+DIFFUSES: dict[str, tuple[Callable, int]] = {
+    "none": (lambda wi, wo, kd, sigma: np.zeros(np.broadcast_shapes(wi.shape[:-1], wo.shape[:-1])), 0),
+    "lambert": (lambda wi, wo, kd, sigma: _oren_nayar(wi, wo, kd, 0.0), 1),
+    "oren-nayar": (_oren_nayar, 2),
+}

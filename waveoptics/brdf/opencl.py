@@ -1,0 +1,144 @@
+"""OpenCL twins of the microfacet functions (``kernels/microfacet.h``, ``kernels/microfacet.cl``).
+"""
+from __future__ import annotations
+
+import numpy as np
+from ..materials import fresnel as _fresnel
+from ..errors import WaveopticsError, unknown
+from .diffuse import DIFFUSES
+from .microfacet import FRESNELS, _fresnel_fn
+from .ndf import ABC_C_DEFAULT, _as_dirs, _check_alpha, _ndf
+from .shadowing import _shadowing
+from ..runtime import build_options, build_program, get_runtime
+from .fresnel_terms import F_mean
+
+__all__ = ['D_cl', 'Lambda_cl', 'brdf_cl']
+
+# ----------------------------------------------------------------------------------------------------------
+# OpenCL twins
+
+
+def _cl_setup(runtime, precision, defines=()):
+
+    rt = runtime if runtime is not None else get_runtime()
+    dt = rt.real_dtype(precision)
+    prg = build_program(rt, "microfacet.cl", build_options(dt, tuple(defines)))
+    return rt, dt, prg
+
+
+_kernels: dict = {}
+
+
+def _kernel(prg, name):
+    """The kernel object *name* of *prg*, retrieved once (pyopencl warns on repeated retrieval)."""
+    import pyopencl as cl
+
+    key = (id(prg), name)
+    k = _kernels.get(key)
+    if k is None:
+        k = _kernels[key] = (prg, cl.Kernel(prg, name))
+    return k[1]
+
+
+def _defines(ndf=None, shadowing=None, fresnel=None, diffuse=None, tradeoff=None):
+    d = []
+    if ndf is not None:
+        d.append(f"-DWO_NDF={_ndf(ndf).cl_id}")
+    if shadowing is not None:
+        d.append(f"-DWO_SHADOWING={_shadowing(shadowing)[1]}")
+    if fresnel is not None:
+        if fresnel not in FRESNELS:
+            raise unknown("Fresnel model", fresnel, FRESNELS)
+        d.append(f"-DWO_FRESNEL={FRESNELS[fresnel][1]}")
+    if diffuse is not None:
+        if diffuse not in DIFFUSES:
+            raise unknown("diffuse model", diffuse, DIFFUSES)
+        d.append(f"-DWO_DIFFUSE={DIFFUSES[diffuse][1]}")
+    if tradeoff is not None:
+        d.append(f"-DWO_TRADEOFF={int(bool(tradeoff))}")
+    return d
+
+
+def _vec_dev(queue, w, dt):
+    import pyopencl.array as cla
+
+    return cla.to_device(queue, np.ascontiguousarray(np.asarray(w, dtype=dt).reshape(-1, 3)).ravel())
+
+
+def _ndf_kernel(kname, w, alpha, alpha_y, ndf, abc_c, runtime, precision):
+    import pyopencl.array as cla
+
+    spec = _ndf(ndf)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    w = _as_dirs(w, "w")
+    rt, dt, prg = _cl_setup(runtime, precision, _defines(ndf=ndf))
+    n = w.size // 3
+    d_w = _vec_dev(rt.queue, w, dt)
+    d_out = cla.empty(rt.queue, max(n, 1), dt)
+    _kernel(prg, kname)(rt.queue, (max(n, 1),), None, d_w.data, d_out.data, dt(ax), dt(ay), dt(abc_c),
+                        np.int32(n))
+    return d_out.get()[:n].reshape(w.shape[:-1]).astype(np.float64)
+
+
+def D_cl(m, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT, runtime=None, precision="float32"):
+    """OpenCL twin of :func:`D` (kernel ``D_eval`` in ``kernels/microfacet.cl``)."""
+    return _ndf_kernel("D_eval", m, alpha, alpha_y, ndf, abc_c, runtime, precision)
+
+
+def Lambda_cl(w, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT, runtime=None, precision="float32"):
+    """OpenCL twin of :func:`Lambda` (kernel ``Lambda_eval``); +inf below the surface like the NumPy one."""
+    return _ndf_kernel("Lambda_eval", w, alpha, alpha_y, ndf, abc_c, runtime, precision)
+
+
+def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated", fresnel="exact", eta=None,
+            F0=None, abc_c=ABC_C_DEFAULT, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True, runtime=None,
+            precision="float32"):
+    """OpenCL twin of :func:`brdf` for N direction pairs at M wavelengths (kernel ``brdf_eval``).
+
+    Parameters
+    ----------
+    wi, wo : array_like (N, 3)
+        Pairs of unit directions (broadcast to a common N).
+    eta, F0, kd : array_like, shape (M,) or scalar
+        Per-wavelength complex index, Schlick F0 and diffuse albedo (M = 1 when all are scalars).
+    runtime : waveoptics.runtime.Runtime, optional
+        Defaults to :func:`waveoptics.runtime.get_runtime`.
+    precision : str
+        ``"float32"`` or ``"float64"`` (needs device fp64).
+    Other parameters
+        As in :func:`brdf`; the model switches become ``-D`` build options.
+
+    Returns
+    -------
+    ndarray (M, N)
+        f in 1/sr (float64 copy of the device result).
+    """
+    import pyopencl.array as cla
+
+    spec = _ndf(ndf)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    F_fn = _fresnel_fn(fresnel, eta, F0)
+    kd_a = np.atleast_1d(np.asarray(kd, dtype=float))
+    if np.any(~np.isfinite(kd_a) | (kd_a < 0) | (kd_a > 1)):
+        raise WaveopticsError(f"kd={np.asarray(kd).tolist()!r} is not allowed; the diffuse albedo must be in [0, 1]")
+    sigma = float(sigma)
+    if not np.isfinite(sigma) or sigma < 0:
+        raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")
+    wi = _as_dirs(wi, "wi").reshape(-1, 3)
+    wo = _as_dirs(wo, "wo").reshape(-1, 3)
+    wi, wo = np.broadcast_arrays(wi, wo)
+    n = wi.shape[0]
+    eta_a = np.atleast_1d(np.asarray(1.0 if eta is None else eta, dtype=np.complex128))
+    F0_a = np.atleast_1d(np.asarray(_fresnel.F0(eta_a) if F0 is None else F0, dtype=float))
+    m = max(eta_a.size, F0_a.size, kd_a.size)
+    eta_a, F0_a, kd_a = (np.broadcast_to(a.ravel(), (m,)) for a in (eta_a, F0_a, kd_a))
+    Fbar = F_mean(F_fn, 1).reshape(-1) if (tradeoff and diffuse != "none") else np.zeros(1)
+    Fbar = np.broadcast_to(Fbar, (m,))
+    rt, dt, prg = _cl_setup(runtime, precision, _defines(ndf, shadowing, fresnel, diffuse, tradeoff))
+    q = rt.queue
+    args = [_vec_dev(q, wi, dt), _vec_dev(q, wo, dt)]
+    args += [cla.to_device(q, np.ascontiguousarray(a, dtype=dt)) for a in (eta_a.real, eta_a.imag, F0_a, kd_a, Fbar)]
+    d_out = cla.empty(q, max(n * m, 1), dt)
+    _kernel(prg, "brdf_eval")(q, (max(n, 1), m), None, *[a.data for a in args], d_out.data, dt(ax), dt(ay), dt(abc_c),
+                  dt(sigma), np.int32(n))
+    return d_out.get()[: n * m].reshape(m, n).astype(np.float64)

@@ -1,0 +1,107 @@
+"""Masking-shadowing terms G: separable and height-correlated Smith, Cook-Torrance V-cavity, implicit.
+
+References
+----------
+.. [1] E. Heitz, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs", JCGT 3(2), 2014.
+.. [2] R. L. Cook, K. E. Torrance, "A Reflectance Model for Computer Graphics", ACM TOG 1(1), 1982.
+"""
+from __future__ import annotations
+
+from typing import Callable
+import numpy as np
+from ..errors import unknown
+from .ndf import ABC_C_DEFAULT, _G1, _as_dirs, _check_alpha, _dot, _ndf
+
+__all__ = ['G_smith', 'G_smith_correlated', 'G_cook_torrance', 'G_implicit', 'SHADOWINGS', 'G']
+
+# ----------------------------------------------------------------------------------------------------------
+# masking-shadowing G(l, v, h): each entry takes (wi, wo, m, lam) with lam a callable w -> Λ(w)
+
+
+def G_smith(wi, wo, m, lam):
+    """Separable (uncorrelated) Smith: G1(l, m) G1(v, m).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, eq. (23).
+    .. [2] E. Heitz, JCGT 3(2), 2014, eq. (98).
+    """
+    return _G1(wi, m, lam(wi)) * _G1(wo, m, lam(wo))
+
+
+def G_smith_correlated(wi, wo, m, lam):
+    """Height-correlated Smith: χ⁺(l·m) χ⁺(v·m) / (1 + Λ(l) + Λ(v)).
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, eq. (99).
+    """
+    li, lo = lam(wi), lam(wo)
+    with np.errstate(invalid="ignore"):
+        g = 1.0 / (1.0 + li + lo)
+    ok = (_dot(wi, m) > 0) & (_dot(wo, m) > 0) & (wi[..., 2] > 0) & (wo[..., 2] > 0)
+    return np.where(ok, g, 0.0)
+
+
+def G_cook_torrance(wi, wo, m, lam=None):
+    """V-cavity shadowing of Cook & Torrance: min(1, 2(n·m)(n·v)/(v·m), 2(n·m)(n·l)/(v·m)).
+
+    References
+    ----------
+    .. [1] R. L. Cook, K. E. Torrance, ACM TOG 1(1), 1982, eq. (5) (after Blinn 1977).
+    """
+    vm = _dot(wo, m)
+    ok = (vm > 0) & (_dot(wi, m) > 0) & (wi[..., 2] > 0) & (wo[..., 2] > 0)
+    safe = np.where(ok, vm, 1.0)
+    g = np.minimum(1.0, np.minimum(2 * m[..., 2] * wo[..., 2] / safe, 2 * m[..., 2] * wi[..., 2] / safe))
+    return np.where(ok, np.maximum(g, 0.0), 0.0)
+
+
+def G_implicit(wi, wo, m=None, lam=None):
+    """Implicit G = (n·l)(n·v), which cancels the BRDF denominator (f = F D / 4).
+
+    References
+    ----------
+    .. [1] N. Hoffman, "Background: Physics and Math of Shading", SIGGRAPH 2013 PBS course, p. 22.
+    """
+    return np.maximum(wi[..., 2], 0.0) * np.maximum(wo[..., 2], 0.0)
+
+
+#: masking-shadowing terms by name, with their kernel switch value
+SHADOWINGS: dict[str, tuple[Callable, int]] = {
+    "smith": (G_smith, 0),
+    "smith-correlated": (G_smith_correlated, 1),
+    "cook-torrance": (G_cook_torrance, 2),
+    "implicit": (G_implicit, 3),
+}
+
+
+def _shadowing(name):
+    if name not in SHADOWINGS:
+        raise unknown("shadowing model", name, SHADOWINGS)
+    return SHADOWINGS[name]
+
+
+def G(wi, wo, m, alpha, alpha_y=None, *, ndf="ggx", shadowing="smith-correlated", abc_c=ABC_C_DEFAULT):
+    """Masking-shadowing G(l, v, m) in [0, 1] (``shadowing`` one of :data:`SHADOWINGS`).
+
+    Parameters
+    ----------
+    wi, wo : array_like (..., 3)
+        Unit directions to the light and to the viewer.
+    m : array_like (..., 3)
+        Unit microfacet normal (the half-vector for reflection).
+    alpha, alpha_y, ndf, abc_c
+        As in :func:`D` (used by the Smith terms).
+    shadowing : str
+        ``"smith"``, ``"smith-correlated"``, ``"cook-torrance"`` or ``"implicit"``.
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, §6.
+    .. [2] R. L. Cook, K. E. Torrance, ACM TOG 1(1), 1982.
+    """
+    spec = _ndf(ndf)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    fn, _ = _shadowing(shadowing)
+    return fn(_as_dirs(wi, "wi"), _as_dirs(wo, "wo"), _as_dirs(m, "m"), lambda w: spec.Lambda(w, ax, ay, abc_c))

@@ -1,0 +1,448 @@
+"""BRDF tables (incident angles × wavelengths × directions) computed on Dask, stored as HDF5, resumable.
+"""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import socket
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, NamedTuple
+import numpy as np
+from .. import colour, io, surfaces
+from ..brdf import twoscale
+from ..scatter.grid import DirectionGrid
+from ..scatter.solvers import split_patch
+from ..errors import FieldError, WaveopticsError
+from ..materials import get_material
+from ..units import check_theta, direction_from_angles
+from ..request import SimulationRequest, make_nano
+from .cases import _nano, _token, surface_digest
+from .cluster import _Job, _check_cluster_args, _run_timed, _warm
+from .store import _Store, _refuse_or_prepare, partial_path
+from .cluster import DEFAULT_RETRIES
+
+__all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table']
+
+#: version of the table file layout written by :func:`run_table`
+TABLE_FORMAT = "waveoptics-brdf-table"
+TABLE_VERSION = 1
+
+#: wavelengths per table task unless told otherwise
+DEFAULT_BATCH = 8
+
+
+#: on-disk layout of a table (also documented in docs/scaling.md)
+TABLE_LAYOUT = {
+    "theta_i": "(n_theta,) float64, deg — incident zenith angles (dimension scale)",
+    "wavelength": "(n_lambda,) float64, nm (dimension scale)",
+    "v": "(n_v,) float64 — direction cosine sin(theta_o) sin(phi_o) of the cell centres, rows (dimension scale)",
+    "u": "(n_u,) float64 — direction cosine sin(theta_o) cos(phi_o) of the cell centres, columns (dimension scale)",
+    "realization": "(n_r,) int — surface realization index (dimension scale)",
+    "brdf": "(theta_i, wavelength, v, u) float32, 1/sr — two-scale BRDF f, mean over realizations; 0 outside "
+            "the unit disc",
+    "brdf_realizations": "(realization, theta_i, wavelength, v, u) float32, 1/sr — only when n_r > 1",
+    "microfacet": "(theta_i, wavelength, v, u) float32, 1/sr — plain microfacet BRDF of the same micro roughness",
+    "albedo": "(theta_i, wavelength) float64 — directional albedo of brdf (sum f du dv over the disc)",
+    "microfacet_albedo": "(theta_i, wavelength) float64",
+    "rgb": "(theta_i, v, u, channel) float32, 1/sr — linear sRGB of brdf under the illuminant (D65 white)",
+    "microfacet_rgb": "(theta_i, v, u, channel) float32",
+    "albedo_rgb": "(theta_i, channel) float64 — linear sRGB of the directional albedo spectrum",
+    "microfacet_albedo_rgb": "(theta_i, channel) float64",
+    "task_cost_s": "(realization, theta_i, batch) float64, s — wall time of each task on its worker",
+    "task_cpu_s": "(realization, theta_i, batch) float64, s — CPU time of each task's thread on its worker",
+}
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Tables
+# ----------------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class TableSpec:
+    """A BRDF table: *case* evaluated at every incident zenith angle (degrees, azimuth *phi_deg*) and wavelength.
+
+    *realizations* > 1 averages over surface realizations: tiles of a height-field file
+    (:func:`waveoptics.diffraction.split_patch`) or generated surfaces with seeds ``seed .. seed + n − 1``.
+    *batch* is the number of wavelengths per task.
+    """
+
+    case: SimulationRequest
+    thetas_deg: tuple
+    phi_deg: float = 0.0
+    realizations: int = 1
+    batch: int = DEFAULT_BATCH
+    surface_digest: str | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "case", self.case.resolved())
+        th = tuple(float(t) for t in np.atleast_1d(self.thetas_deg))
+        object.__setattr__(self, "thetas_deg", th)
+        if not th:
+            raise FieldError("{thetas_deg}: no angles given", 'thetas_deg')
+        check_theta(th, name="thetas_deg")
+        if max(th) >= 90:
+            raise FieldError(f"{{thetas_deg}} θ={max(th):g}° is not allowed; the light must be above the "
+                                  "horizon (θ < 90)", 'thetas_deg')
+        if len(set(th)) != len(th):
+            raise FieldError("{thetas_deg}: an angle appears twice", 'thetas_deg')
+        if not math.isfinite(self.phi_deg):
+            raise FieldError(f"{{phi_deg}} {self.phi_deg!r} is not finite", 'phi_deg')
+        if int(self.realizations) != self.realizations or self.realizations < 1:
+            raise FieldError(f"{{realizations}} {self.realizations!r} is not allowed; use an integer >= 1", 'realizations')
+        if int(self.batch) != self.batch or self.batch < 1:
+            raise FieldError(f"{{batch}} {self.batch!r} is not allowed; use an integer >= 1 (wavelengths per task)", 'batch')
+
+    @property
+    def n_batches(self) -> int:
+        return math.ceil(len(self.case.wavelengths()) / self.batch)
+
+    def params(self) -> dict:
+        return {**self.case.params(), "incident_theta_deg": list(self.thetas_deg), "incident_phi_deg": self.phi_deg,
+                "realizations": int(self.realizations), "batch": int(self.batch),
+                "surface_digest": self.surface_digest}
+
+    def token(self) -> str:
+        return _token({**self.params(), "format_version": TABLE_VERSION})
+
+
+class TableTask(NamedTuple):
+    """Indices of one table task: realization, incident angle, wavelength batch and its slice [lo, hi)."""
+
+    r: int
+    t: int
+    b: int
+    lo: int
+    hi: int
+
+    @property
+    def name(self) -> str:
+        return f"r{self.r:04d}_t{self.t:04d}_b{self.b:04d}"
+
+
+def table_tasks(spec: TableSpec) -> list[TableTask]:
+    """All tasks of a table: realizations × incident angles × wavelength batches (batch sizes balanced)."""
+    n = len(spec.case.wavelengths())
+    nb = spec.n_batches
+    edges = np.linspace(0, n, nb + 1).round().astype(int)
+    return [TableTask(r, t, b, int(edges[b]), int(edges[b + 1]))
+            for r in range(spec.realizations) for t in range(len(spec.thetas_deg)) for b in range(nb)]
+
+
+def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -> dict:
+    """Evaluate one table task on a worker: the two-scale and microfacet BRDFs of one wavelength batch.
+
+    Parameters
+    ----------
+    spec : TableSpec
+    task : TableTask
+    surface : HeightField, optional
+        The nano height-field tile of realization ``task.r`` (height-field route); None: from ``spec.case.nano``.
+    device : str, optional
+        OpenCL device spec (the worker's runtime is created once per process).
+
+    Returns
+    -------
+    dict
+        ``total`` and ``microfacet`` (n_batch, n_v, n_u) float32 in 1/sr, their albedos (n_batch,) float64,
+        ``cost_s`` (wall time, s), ``cpu_s`` (CPU time of the task's thread, s), ``solver`` and the worker's
+        ``host``/``pid``.
+    """
+    t0, c0 = time.perf_counter(), time.thread_time()
+    case = spec.case
+    w = case.wavelengths()
+    nano = _nano(case, task.r, w, surface)
+    wi = direction_from_angles(spec.thetas_deg[task.t], spec.phi_deg)
+    grid = DirectionGrid.hemisphere(case.resolution)
+    L = twoscale.evaluate(wi, w[task.lo:task.hi], get_material(case.material), case.micro(), nano, grid,
+                          solver=case.solver, kd=case.kd, device=device, precision=case.precision)
+    total, mf = L.total, L.microfacet
+    for name, a in (("two-scale", total), ("microfacet", mf)):
+        # the promise of the project: never NaN, Inf or negative
+        if not np.all(np.isfinite(a)) or np.any(a < 0):
+            raise WaveopticsError(f"table task {task.name} (θi={spec.thetas_deg[task.t]:g}°, "
+                                  f"{w[task.lo]:g}-{w[task.hi - 1]:g} nm): the {name} BRDF has NaN, Inf or "
+                                  "negative values")
+    return {"total": total.astype(np.float32), "microfacet": mf.astype(np.float32), "albedo": L.albedo("total"),
+            "microfacet_albedo": L.albedo("microfacet"), "solver": L.info["solver"],
+            "cost_s": time.perf_counter() - t0, "cpu_s": time.thread_time() - c0, "host": socket.gethostname(),
+            "pid": os.getpid()}
+
+
+def _table_surface(case: SimulationRequest, realizations: int):
+    """(tiles or None, digest): the height-field tiles a table needs, loaded in the client."""
+    if case.surface is None:
+        return None, None
+    hf = case.surface if isinstance(case.surface, surfaces.HeightField) else surfaces.load(case.surface)
+    tiles = split_patch(hf, realizations) if realizations > 1 else [hf]
+    return tiles, surface_digest(hf)
+
+
+def _check_realizations(case: SimulationRequest, realizations: int) -> None:
+    if realizations > 1 and case.surface is None:
+        nano = make_nano(case.nano, case.wavelengths(), solver=case.solver, seed=case.seed)
+        if nano is None or nano.model is not None:
+            raise FieldError(f"{{realizations}} {realizations} needs height fields (a SURFACE file, or {{nano}} "
+                                  "with {solver} fft/direct); the PSD route is already the ensemble mean", 'realizations', 'nano', 'solver')
+
+
+def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = None, scheduler: str | None = None,
+              client=None, resume: bool = False, overwrite: bool = False, device: str | None = None,
+              progress=None, retries: int = DEFAULT_RETRIES, task_fn: Callable = compute_block) -> dict:
+    """Compute a BRDF table on Dask and write it to *output* (HDF5, layout :data:`TABLE_LAYOUT`).
+
+    Parameters
+    ----------
+    spec : TableSpec
+    output : str or Path
+        Final ``.h5`` file; work in progress lives in ``OUT.partial/`` (see module docstring).
+    surface : HeightField, optional
+        Use this height field instead of loading ``spec.case.surface`` (which then only names it).
+    workers, scheduler : see :func:`dask_client`; *client* : an existing ``distributed.Client`` to use instead.
+    resume : bool
+        Continue ``OUT.partial`` (parameters must match); if *output* is already complete, do nothing.
+    overwrite : bool
+        Replace an existing output and discard an existing partial run.
+    progress : callable, optional
+        Called with 1 after each finished task (size a bar with :func:`table_plan`).
+    retries : int
+        Retries of a task that raises.
+    task_fn : callable
+        The task function (default :func:`compute_block`; tests inject faults through it).
+
+    Returns
+    -------
+    dict
+        ``output``, ``tasks`` (total), ``computed`` (this run), ``skipped`` (already done), ``written`` (task
+        names in the order they were stored), ``wall_s``, ``task_cost_s`` (sum of the tasks' wall times),
+        ``task_costs_s`` / ``task_cpu_s`` (per task computed now, in storage order: wall and CPU seconds on the
+        worker), ``timings_s`` (client side: ``start_s``, ``compute_s``, ``store_s``, ``stop_s``, ``assemble_s``)
+        and ``complete`` (True).
+    """
+    t0 = time.perf_counter()
+    final = Path(output)
+    partial = partial_path(final)
+    if resume and final.exists() and not partial.exists():
+        info = table_info(final)
+        if info.get("token") != _table_token(spec, surface):
+            raise FieldError(f"{{resume}}: {str(final)!r} is complete but was made with different parameters; "
+                                  "pass {overwrite} to recompute it", 'resume', 'overwrite',
+                             python={'resume': 'resume=True', 'overwrite': 'overwrite=True'})
+        n = len(table_tasks(spec))
+        return {"output": str(final), "tasks": n, "computed": 0, "skipped": n, "written": [],
+                "wall_s": time.perf_counter() - t0, "task_cost_s": 0.0, "task_costs_s": [], "task_cpu_s": [],
+                "timings_s": {}, "complete": True}
+    case = spec.case.validate()
+    _check_realizations(case, spec.realizations)
+    _check_cluster_args(workers, scheduler)
+    _refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
+    if surface is not None:
+        tiles = split_patch(surface, spec.realizations) if spec.realizations > 1 else [surface]
+        digest = surface_digest(surface)
+    else:
+        tiles, digest = _table_surface(case, spec.realizations)
+    spec = dataclasses.replace(spec, surface_digest=digest)
+    token = spec.token()
+    store = _Store(partial, {"kind": "table", "token": token, "parameters": spec.params()}, resume=resume)
+    tasks = table_tasks(spec)
+    todo = [t for t in tasks if not store.has(t.name, ".npz")]
+    written: list[str] = []
+    costs: list[float] = []
+    cpus: list[float] = []
+    timings = dict.fromkeys(("start_s", "compute_s", "store_s", "stop_s", "assemble_s"), 0.0)
+
+    def on_result(job, block):
+        t = time.perf_counter()
+        task = job.args[1]
+        with io.atomic_path(store.path(task.name, ".npz")) as tmp:
+            np.savez(tmp, **{k: v for k, v in block.items() if k not in ("solver", "host")},
+                     solver=np.array(block["solver"]), host=np.array(block["host"]))
+        written.append(task.name)
+        costs.append(float(block["cost_s"]))
+        cpus.append(float(block["cpu_s"]))
+        timings["store_s"] += time.perf_counter() - t
+
+    def submit(cl):
+        _warm(cl, [case], device)
+        tile_refs = cl.scatter(tiles, broadcast=False, hash=False) if tiles is not None else None
+        return [_Job(f"wo-table-{token}-{t.name}", task_fn,
+                     (spec, t, None if tile_refs is None else tile_refs[t.r], device)) for t in todo]
+
+    _run_timed(client, workers, scheduler, bool(todo), submit, on_result, timings, retries=retries,
+               progress=progress)
+    t = time.perf_counter()
+    _assemble_table(spec, token, store, final, overwrite=overwrite or resume)
+    store.remove()
+    timings["assemble_s"] = time.perf_counter() - t
+    return {"output": str(final), "tasks": len(tasks), "computed": len(written), "skipped": len(tasks) - len(todo),
+            "written": written, "wall_s": time.perf_counter() - t0, "task_cost_s": float(sum(costs)),
+            "task_costs_s": costs, "task_cpu_s": cpus, "timings_s": timings, "complete": True}
+
+
+def table_plan(spec: TableSpec, output, *, resume: bool = False) -> dict:
+    """How many tasks a run of *spec* into *output* has in all and still to do (for progress bars)."""
+    tasks = table_tasks(spec)
+    store = partial_path(output) / "items"
+    todo = [t for t in tasks if not (resume and (store / f"{t.name}.npz").is_file())]
+    if resume and Path(output).exists() and not partial_path(output).exists():
+        todo = []
+    return {"tasks": len(tasks), "todo": len(todo), "batches": spec.n_batches,
+            "wavelengths": len(spec.case.wavelengths())}
+
+
+def _table_token(spec: TableSpec, surface=None) -> str:
+    digest = spec.surface_digest
+    if surface is not None:
+        digest = surface_digest(surface)
+    elif spec.case.surface is not None and digest is None:
+        digest = _table_surface(spec.case, 1)[1]
+    return dataclasses.replace(spec, surface_digest=digest).token()
+
+
+def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, overwrite: bool) -> None:
+    """Write the HDF5 table from the block files (streaming one (θ, batch) at a time), atomically."""
+    import h5py
+
+    case = spec.case
+    w = case.wavelengths()
+    grid = DirectionGrid.hemisphere(case.resolution)
+    n_t, n_l, n_r, nb = len(spec.thetas_deg), w.size, spec.realizations, spec.n_batches
+    shape = (n_t, n_l, grid.n_v, grid.n_u)
+    chunks = (1, 1, grid.n_v, grid.n_u)
+    comp = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+    tasks = table_tasks(spec)
+    params = spec.params()
+    solvers = set()
+    with io.atomic_path(final, overwrite=overwrite) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs.update({"format": TABLE_FORMAT, "format_version": TABLE_VERSION, "token": token,
+                        "quantity": "BRDF f (1/sr) on the direction-cosine plane; not multiplied by cos(theta_o)",
+                        "parameters": io.to_json(params, sort_keys=True), "material": case.material,
+                        "illuminant": case.illuminant, "incident_phi_deg": spec.phi_deg,
+                        "realizations": n_r, "layout": io.to_json(TABLE_LAYOUT)})
+        f.attrs.update({f"grid_{k}": v for k, v in grid.header().items()})
+        scales = {"theta_i": (np.asarray(spec.thetas_deg), "deg"), "wavelength": (w, "nm"),
+                  "v": (grid.v, "1"), "u": (grid.u, "1"), "realization": (np.arange(n_r), "1"),
+                  "channel": (np.arange(3), "R, G, B")}
+        for name, (vals, unit) in scales.items():
+            d = f.create_dataset(name, data=vals)
+            d.attrs["units"] = unit
+            d.make_scale(name)
+        d_brdf = f.create_dataset("brdf", shape, np.float32, chunks=chunks, **comp)
+        d_mf = f.create_dataset("microfacet", shape, np.float32, chunks=chunks, **comp)
+        d_real = (f.create_dataset("brdf_realizations", (n_r,) + shape, np.float32, chunks=(1,) + chunks, **comp)
+                  if n_r > 1 else None)
+        alb = np.zeros((n_t, n_l))
+        alb_mf = np.zeros((n_t, n_l))
+        cost = np.zeros((n_r, n_t, nb))
+        cpu = np.zeros((n_r, n_t, nb))
+        by_tb = {}
+        for t in tasks:
+            by_tb.setdefault((t.t, t.b), []).append(t)
+        for (it, ib), group in sorted(by_tb.items()):
+            acc = None
+            for task in group:
+                with np.load(store.path(task.name, ".npz")) as z:
+                    tot = z["total"]
+                    acc = tot.astype(np.float64) if acc is None else acc + tot
+                    if d_real is not None:
+                        d_real[task.r, it, task.lo:task.hi] = tot
+                    alb[it, task.lo:task.hi] += z["albedo"] / n_r
+                    cost[task.r, it, ib] = float(z["cost_s"])
+                    cpu[task.r, it, ib] = float(z["cpu_s"])
+                    solvers.add(str(z["solver"]))
+                    if task.r == 0:  # the microfacet model does not depend on the nano realization
+                        d_mf[it, task.lo:task.hi] = z["microfacet"]
+                        alb_mf[it, task.lo:task.hi] = z["microfacet_albedo"]
+            d_brdf[it, group[0].lo:group[0].hi] = (acc / n_r).astype(np.float32)
+        rgb = f.create_dataset("rgb", (n_t, grid.n_v, grid.n_u, 3), np.float32, chunks=(1, grid.n_v, grid.n_u, 3),
+                               **comp)
+        rgb_mf = f.create_dataset("microfacet_rgb", rgb.shape, np.float32, chunks=rgb.chunks, **comp)
+        for it in range(n_t):  # RGB needs the whole spectrum: one incident angle at a time
+            rgb[it] = colour.reflectance_to_rgb(np.moveaxis(d_brdf[it], 0, -1), w, case.illuminant)
+            rgb_mf[it] = colour.reflectance_to_rgb(np.moveaxis(d_mf[it], 0, -1), w, case.illuminant)
+        f.create_dataset("albedo", data=alb)
+        f.create_dataset("microfacet_albedo", data=alb_mf)
+        f.create_dataset("albedo_rgb", data=colour.reflectance_to_rgb(alb, w, case.illuminant))
+        f.create_dataset("microfacet_albedo_rgb", data=colour.reflectance_to_rgb(alb_mf, w, case.illuminant))
+        f.create_dataset("task_cost_s", data=cost).attrs["units"] = "s"
+        f.create_dataset("task_cpu_s", data=cpu).attrs["units"] = "s"
+        f.attrs["solver"] = ",".join(sorted(solvers))
+        dims = {"brdf": ("theta_i", "wavelength", "v", "u"), "microfacet": ("theta_i", "wavelength", "v", "u"),
+                "brdf_realizations": ("realization", "theta_i", "wavelength", "v", "u"),
+                "albedo": ("theta_i", "wavelength"), "microfacet_albedo": ("theta_i", "wavelength"),
+                "rgb": ("theta_i", "v", "u", "channel"), "microfacet_rgb": ("theta_i", "v", "u", "channel"),
+                "albedo_rgb": ("theta_i", "channel"), "microfacet_albedo_rgb": ("theta_i", "channel"),
+                "task_cost_s": ("realization", "theta_i", None), "task_cpu_s": ("realization", "theta_i", None)}
+        for name, axes in dims.items():
+            if name not in f:
+                continue
+            d = f[name]
+            d.attrs["description"] = TABLE_LAYOUT[name]
+            for i, ax in enumerate(axes):
+                if ax is not None:
+                    d.dims[i].label = ax
+                    d.dims[i].attach_scale(f[ax])
+                else:
+                    d.dims[i].label = "batch"
+
+
+@dataclass
+class BRDFTable:
+    """A table read back by :func:`read_table` (arrays as in :data:`TABLE_LAYOUT`)."""
+
+    thetas_deg: np.ndarray
+    wavelengths_nm: np.ndarray
+    grid: DirectionGrid
+    brdf: np.ndarray
+    microfacet: np.ndarray
+    albedo: np.ndarray
+    microfacet_albedo: np.ndarray
+    rgb: np.ndarray
+    microfacet_rgb: np.ndarray
+    albedo_rgb: np.ndarray
+    microfacet_albedo_rgb: np.ndarray
+    task_cost_s: np.ndarray
+    params: dict
+    attrs: dict = field(default_factory=dict)
+    brdf_realizations: np.ndarray | None = None
+
+
+def table_info(path) -> dict:
+    """The attributes of a table file (``format``, ``token``, ``parameters`` as a dict, ...)."""
+    import h5py
+
+    p = Path(path)
+    if not p.is_file():
+        raise WaveopticsError(f"table {str(p)!r} does not exist")
+    try:
+        with h5py.File(p, "r") as f:
+            attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+    except OSError as exc:
+        raise WaveopticsError(f"{str(p)!r} is not a readable HDF5 file ({exc})") from None
+    if attrs.get("format") != TABLE_FORMAT:
+        raise WaveopticsError(f"{str(p)!r} is not a waveoptics BRDF table (format attribute {attrs.get('format')!r})")
+    attrs["parameters"] = json.loads(attrs["parameters"])
+    return attrs
+
+
+def read_table(path) -> BRDFTable:
+    """Load a table written by :func:`run_table` into memory."""
+    import h5py
+
+    info = table_info(path)
+    with h5py.File(path, "r") as f:
+        def get(name):
+            return f[name][()] if name in f else None
+
+        n_u, n_v = int(info["grid_n_u"]), int(info["grid_n_v"])
+        ur = tuple(float(x) for x in str(info["grid_u_range"]).split())
+        vr = tuple(float(x) for x in str(info["grid_v_range"]).split())
+        return BRDFTable(thetas_deg=get("theta_i"), wavelengths_nm=get("wavelength"),
+                         grid=DirectionGrid(n_u, n_v, ur, vr), brdf=get("brdf"), microfacet=get("microfacet"),
+                         albedo=get("albedo"), microfacet_albedo=get("microfacet_albedo"), rgb=get("rgb"),
+                         microfacet_rgb=get("microfacet_rgb"), albedo_rgb=get("albedo_rgb"),
+                         microfacet_albedo_rgb=get("microfacet_albedo_rgb"), task_cost_s=get("task_cost_s"),
+                         params=info["parameters"], attrs=info, brdf_realizations=get("brdf_realizations"))

@@ -1,0 +1,151 @@
+"""The planner's cost model, calibrated by timing on this machine once per process.
+"""
+from __future__ import annotations
+
+import functools
+import math
+import time
+from dataclasses import dataclass
+import numpy as np
+from .. import surfaces
+from ..brdf import twoscale
+from ..scatter.grid import DirectionGrid
+from ..errors import WaveopticsError
+from ..materials import get_material
+from ..units import direction_from_angles
+from ..scatter.series import roughness_g, series_terms
+from .. import runtime, scatter
+
+__all__ = ['CostModel', 'fft_units', 'psd_terms', 'calibrate', 'calibrate_direct']
+
+# ----------------------------------------------------------------------------------------------------------------
+# Cost model, calibrated on this machine once per process
+# ----------------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class CostModel:
+    """Seconds per unit of work, measured by :func:`calibrate` (``direct_term`` by :func:`calibrate_direct`)."""
+
+    call: float             # per two-scale evaluation on one grid (set-up, micro albedo quadrature)
+    cell: float             # per direction cell (micro geometry)
+    cell_wl: float          # per cell and wavelength (Fresnel, coherent part)
+    diffuse_cell_wl: float  # per cell and wavelength (diffuse term of dielectrics)
+    psd_wl: float           # per grid and wavelength (nano lobe set-up)
+    psd_cell_wl: float      # per cell and wavelength (nano lobe, micro convolution)
+    psd_term: float         # per cell, wavelength and PSD series term
+    fft_unit: float         # per chirp-z work unit (see fft_units)
+    calibration_s: float
+
+    def evaluation(self, cells, n_wl: int, *, diffuse: bool = False, psd_terms: int | None = None,
+                   nano_lobe: bool = False) -> float:
+        """Seconds of one two-scale evaluation over grids with *cells* cells each (a list), *n_wl* wavelengths.
+
+        *psd_terms*: the PSD series' number of terms (PSD route); *nano_lobe*: a height-field lobe is convolved
+        (its solver's own cost comes on top).
+        """
+        t = 0.0
+        for c in cells:
+            t += self.call + c * (self.cell + n_wl * (self.cell_wl + (self.diffuse_cell_wl if diffuse else 0.0)))
+            if psd_terms is not None:
+                t += n_wl * (self.psd_wl + c * (self.psd_cell_wl + psd_terms * self.psd_term))
+            elif nano_lobe:
+                t += n_wl * (self.psd_wl + c * self.psd_cell_wl)
+        return t
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def _best(fn, repeat=3) -> float:
+    best = math.inf
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def fft_units(n_samples_xy, n_cells_uv) -> float:
+    """Work of one 2-D chirp-z transform (rows then columns, Bluestein lengths n + m): Σ n log2 n."""
+    nx, ny = n_samples_xy
+    nu, nv = n_cells_uv
+    lx, ly = nx + nu, ny + nv
+    return ny * lx * math.log2(lx) + nu * ly * math.log2(ly)
+
+
+def psd_terms(sigma_m: float, wavelength_nm: float) -> int:
+    """Series terms :func:`waveoptics.scatter.scattered_lobe` sums at most: those of its largest g = (2kσ)²."""
+    return series_terms(roughness_g(sigma_m, 2.0, wavelength_nm))
+
+
+@functools.lru_cache(maxsize=1)
+def calibrate() -> CostModel:
+    """Time small runs of each code path (two-scale micro, diffuse, PSD lobe; a chirp-z transform) on this machine.
+
+    Each cost is a non-negative least-squares fit (scipy ``nnls``) of timed runs on grids of 16² to 64² cells with
+    1 to 6 wavelengths and 11 or 41 PSD series terms to the linear model of :meth:`CostModel.evaluation`; best of
+    a few repeats each, so that a busy machine inflates the fit as little as possible.
+    """
+    from scipy.optimize import nnls
+
+
+    t0 = time.perf_counter()
+    wi = direction_from_angles(30.0, 0.0)
+    metal, diel = get_material("f0:0.9"), get_material("1.5")
+    micro = twoscale.Micro(0.2, ndf="ggx")
+    grids = {n: DirectionGrid.hemisphere(n) for n in (16, 32, 64)}
+    wls = {k: np.linspace(420.0, 680.0, k) for k in (1, 3, 6)}
+
+    def t(n, k, mat=metal, nano=None, repeat=3):
+        f = lambda: twoscale.evaluate(wi, wls[k], mat, micro, nano, grids[n], kd=0.5)  # noqa: E731
+        return _best(f, repeat)
+
+    runs = [(16, 1), (64, 1), (64, 6), (32, 3)]
+    mf = {r: t(*r) for r in runs}
+    A = np.array([[1.0, n * n, n * n * k] for n, k in runs])
+    (call, cell, cell_wl), _ = nnls(A, np.array([mf[r] for r in runs]))
+    diffuse = max(t(64, 6, diel) - mf[(64, 6)], 0.0) / (6 * 64 * 64)
+    # PSD lobe on top of the micro model: series tables built first (not timed)
+    nanos = {sg: twoscale.Nano(model=surfaces.PSDModel("gaussian", sigma=sg, T=1e-6)) for sg in (0.2e-9, 100e-9)}
+    for nano in nanos.values():
+        t(16, 3, nano=nano, repeat=1)
+    runs = [(16, 0.2e-9), (64, 0.2e-9), (64, 100e-9), (32, 100e-9)]
+    rows, y = [], []
+    for n, sg in runs:
+        k = psd_terms(sg, 420.0)
+        rows.append([3.0, 3.0 * n * n, 3.0 * n * n * k])
+        y.append(max(t(n, 3, nano=nanos[sg], repeat=2) - t(n, 3, repeat=2), 0.0))
+    (psd_wl, psd_cell_wl, psd_term), _ = nnls(np.array(rows), np.array(y))
+    # fft: one chirp-z transform of a 128² patch onto a 32² grid
+    hf = surfaces.generate("flat", size=128 * 100e-9, samples=128)
+    smp = scatter.samples(hf)
+    t_fft = _best(lambda: scatter.field_fft(smp, wi, grids[32], 550.0, order=0), 2)
+    fft_unit = t_fft / fft_units((smp.nx, smp.ny), (32, 32))
+    return CostModel(float(call), float(cell), float(cell_wl), diffuse, float(psd_wl), float(psd_cell_wl),
+                     float(psd_term), fft_unit, time.perf_counter() - t0)
+
+
+@functools.lru_cache(maxsize=4)
+def calibrate_direct(device: str | None = None, precision: str = "float32") -> tuple[float | None, str]:
+    """(seconds per sample·direction·wavelength of the OpenCL direct sum, "") or (None, why it is unavailable)."""
+
+    if not runtime.opencl_available():
+        return None, "no OpenCL platform"
+    try:
+        return _time_direct(runtime.get_runtime(device), precision), ""
+    except WaveopticsError as exc:  # no device of that name, or the kernel does not build here
+        return None, str(exc).splitlines()[0]
+
+
+def _time_direct(rt, precision):
+
+    if precision == "float64" and not rt.fp64:
+        precision = "float32"
+    hf = surfaces.generate("sinusoid", amplitude=40e-9, period=1.6e-6, size=128 * 100e-9, samples=128)
+    smp = scatter.samples(hf)
+    g = DirectionGrid.hemisphere(24)
+    wo = g.directions()[g.inside]
+    coef = scatter.phase_coefficients(smp, direction_from_angles(30.0, 0.0), wo, [550.0])
+    scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision)      # build + warm-up
+    t = _best(lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision), 2)
+    return t / (coef.size * smp.size)

@@ -1,0 +1,337 @@
+"""One simulation request: its fields, their defaults and validation, the nano-roughness grammar and the
+wavelength choice.
+
+Every front end builds a :class:`SimulationRequest`: the CLI (``simulate``, ``compare``, ``table``, ``sweep``), the
+Python API (:func:`waveoptics.simulate.simulate`), scene files (:func:`waveoptics.distributed.case_from_scene`),
+the planner and the Dask tasks. The rules live here once. Errors are :class:`~waveoptics.errors.FieldError`
+naming the field (``micro_alpha``, ``nano``, ``incident_deg`` ...); only the CLI writes them as its flags.
+
+Nano roughness is written ``MODEL:key=value,...`` with lengths in units (docs/physics.md §4 for the PSDs):
+
+    abc:sigma=10nm,B=2um,C=2.6        gaussian:sigma=5nm,T=1um        exponential:sigma=5nm,T=1um
+    sinusoid:amplitude=40nm,period=2um[,orientation=DEG]
+    scratches:count=20,width=200nm,depth=30nm[,orientation=DEG,spread=DEG]
+
+Statistics models (gaussian, exponential, abc) run on the PSD series when the solver allows it; the others (and
+statistics with ``solver='fft'|'direct'``) are generated as height fields sized by :func:`nano_surface_size`.
+
+Examples
+--------
+>>> from waveoptics.request import SimulationRequest, parse_nano
+>>> parse_nano("gaussian:sigma=5nm,T=1um")
+('gaussian', {'sigma': 5e-09, 'T': 1e-06})
+>>> req = SimulationRequest(material="Au", micro_alpha=0.1, wavelengths_nm=(450, 550, 650))
+>>> req.wavelengths().tolist()
+[450.0, 550.0, 650.0]
+>>> SimulationRequest(micro_alpha=-1)
+Traceback (most recent call last):
+...
+waveoptics.errors.FieldError: micro_alpha -1 is not allowed; α must be finite and >= 0
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import colour, surfaces
+from .brdf import NDFS, SHADOWINGS, twoscale
+from .errors import FieldError, unknown
+from .materials import get_material
+from .surfaces import HeightField
+from .units import check_theta, check_wavelengths, parse_length
+
+__all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
+           "MAX_NANO_SAMPLES", "SimulationRequest", "parse_nano", "nano_surface_size", "make_nano", "crop"]
+
+#: the default nano roughness: aluminium-like polish, ABC PSD (Holzschuch & Pacanowski 2017 use this family)
+DEFAULT_NANO = "abc:sigma=10nm,B=2um,C=2.6"
+
+#: the documented way to say "no nano roughness" (σ = 0)
+NO_NANO = "gaussian:sigma=0nm,T=1um"
+
+#: parameter names accepted by ``MODEL:...`` nano text (lengths take units)
+NANO_PARAMS = {
+    "gaussian": {"sigma": "length", "T": "length"},
+    "exponential": {"sigma": "length", "T": "length"},
+    "abc": {"sigma": "length", "B": "length", "C": "number"},
+    "sinusoid": {"amplitude": "length", "period": "length", "orientation": "number"},
+    "scratches": {"count": "number", "width": "length", "depth": "length", "orientation": "number",
+                  "spread": "number"},
+}
+_NANO_ALIASES = {"corr": "T", "corr_length": "T", "corr-length": "T", "a": "amplitude", "amp": "amplitude",
+                 "b": "B", "c": "C", "rms": "sigma"}
+_NANO_OPTIONAL = ("orientation", "spread")
+_NANO_ZERO_OK = ("sigma", "depth", "amplitude")
+
+#: nano-lobe solvers a request may name ('auto' lets the model choose: the PSD series for statistics)
+SOLVERS = ("auto", "psd", "fft", "direct")
+
+#: OpenCL precisions of the height-field solvers
+PRECISIONS = ("float32", "float64")
+
+#: allowed direction-grid resolutions (cells per axis)
+RESOLUTION_RANGE = (8, 2048)
+
+#: nano height fields larger than this per side are cropped to a central tile for the solvers (the statistics of
+#: a stationary surface are the same on the tile; the cost is not)
+MAX_NANO_SAMPLES = 512
+
+
+def parse_nano(text: str) -> tuple[str, dict]:
+    """Parse ``MODEL:key=value,...`` nano-roughness text into (model, parameters in SI units).
+
+    Parameters
+    ----------
+    text : str
+        E.g. ``"abc:sigma=10nm,B=5um,C=3"``; lengths need units (``5nm``, ``1.2um``), angles are degrees.
+
+    Returns
+    -------
+    (str, dict)
+        The model name and its parameters (lengths in m).
+    """
+    s = str(text).strip()
+    model, _, rest = s.partition(":")
+    model = model.strip().lower()
+    if model not in NANO_PARAMS:
+        raise unknown("nano model", model, NANO_PARAMS, field="nano")
+    params = {}
+    for item in filter(None, (p.strip() for p in rest.split(","))):
+        key, eq, val = item.partition("=")
+        key = _NANO_ALIASES.get(key.strip(), key.strip())
+        if not eq or key not in NANO_PARAMS[model]:
+            raise FieldError(f"{{nano}} {text!r}: parameter {item!r} is not allowed for {model}; "
+                             f"use {', '.join(k + '=...' for k in NANO_PARAMS[model])}", "nano")
+        if key in params:
+            raise FieldError(f"{{nano}} {text!r}: parameter {key!r} is given twice", "nano")
+        if NANO_PARAMS[model][key] == "length":
+            params[key] = parse_length(val, name=f"nano {key}", allow_zero=key in _NANO_ZERO_OK)
+        else:
+            try:
+                params[key] = float(val)
+            except ValueError:
+                raise FieldError(f"{{nano}} {key}={val!r} is not a number", "nano") from None
+            if not math.isfinite(params[key]):
+                raise FieldError(f"{{nano}} {key}={val!r} is not finite", "nano")
+    missing = [k for k in NANO_PARAMS[model] if k not in params and k not in _NANO_OPTIONAL]
+    if missing:
+        raise FieldError(f"{{nano}} {text!r} lacks {', '.join(missing)} (units: 5nm, 1.2um)", "nano")
+    return model, params
+
+
+def nano_surface_size(wavelengths_nm, length_scale_m, *, max_samples=MAX_NANO_SAMPLES) -> tuple[float, int]:
+    """Patch size (m) and samples per side for a generated nano height field.
+
+    The spacing is ≤ λ_min/4 (no aliasing over the whole hemisphere, docs/physics.md §1) and the patch spans ≥ 16
+    correlation lengths (statistics) and ≥ 24 λ_max (the specular spike is about λ/L wide), within
+    *max_samples*.
+    """
+    lmin = float(np.min(wavelengths_nm)) * 1e-9
+    lmax = float(np.max(wavelengths_nm)) * 1e-9
+    dx = lmin / 4
+    L = max(16 * length_scale_m, 24 * lmax)
+    n = int(min(max_samples, 2 ** math.ceil(math.log2(max(L / dx, 64)))))
+    return n * dx, n
+
+
+def crop(hf: HeightField, n: int) -> HeightField:
+    """The central tile of at most n × n samples of *hf* (unchanged if already that small)."""
+    ny, nx = hf.shape
+    if ny <= n and nx <= n:
+        return hf
+    y0, x0 = max(0, (ny - n) // 2), max(0, (nx - n) // 2)
+    sl = (slice(y0, y0 + min(n, ny)), slice(x0, x0 + min(n, nx)))
+    meta = {k: v for k, v in hf.meta.items() if k != "periodic"}  # a tile of a periodic field is not periodic
+    meta["cropped_from"] = [ny, nx]
+    return HeightField(hf.heights[sl], hf.dx, hf.dy, None if hf.mask is None else hf.mask[sl], meta)
+
+
+def _generator_args(model: str, p: dict, seed: int) -> dict:
+    """Keyword arguments of :func:`waveoptics.surfaces.generate` for parsed nano text."""
+    args = {"gaussian": dict(sigma=p.get("sigma"), corr_length=p.get("T")),
+            "exponential": dict(sigma=p.get("sigma"), corr_length=p.get("T")),
+            "abc": dict(sigma=p.get("sigma"), B=p.get("B"), C=p.get("C")),
+            "sinusoid": dict(amplitude=p.get("amplitude"), period=p.get("period"),
+                             orientation_deg=p.get("orientation", 0.0)),
+            "scratches": dict(count=p.get("count", 10), width=p.get("width"), depth=p.get("depth"),
+                              orientation_deg=p.get("orientation", 0.0), spread_deg=p.get("spread", 0.0))}[model]
+    if model != "sinusoid":  # the only deterministic generator
+        args["seed"] = seed
+    return args
+
+
+def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None) -> twoscale.Nano | None:
+    """A :class:`~waveoptics.brdf.twoscale.Nano` from nano text or a height field; None for σ = 0.
+
+    Parameters
+    ----------
+    spec : str
+        ``MODEL:params`` (ignored when *surface* is given).
+    wavelengths_nm : array_like, nm
+        The request's wavelengths (they size a generated height field).
+    solver : {'auto', 'psd', 'fft', 'direct'}
+    seed : int
+        Seed of a generated height field.
+    surface : HeightField, str or Path, optional
+        A nano height field (object or file).
+    """
+    if surface is not None:
+        hf = surface if isinstance(surface, HeightField) else surfaces.load(surface)
+        if solver == "psd":
+            raise FieldError("{solver} 'psd' needs nano statistics (MODEL:...), not a height field", "solver")
+        return twoscale.Nano(surface=hf)
+    model, p = parse_nano(spec)
+    if p.get("sigma", p.get("amplitude", p.get("depth", 1.0))) == 0:
+        return None
+    if model in surfaces.PSD_MODELS and solver in ("auto", "psd"):
+        return twoscale.Nano(model=surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"),
+                                                     C=p.get("C")))
+    if solver == "psd":
+        raise FieldError(f"{{solver}} 'psd' has no formula for {model!r}; use fft or direct", "solver")
+    scale = p.get("T") or p.get("period") or (p.get("B", 0) / (2 * np.pi)) or p.get("width") or 1e-6
+    size, n = nano_surface_size(wavelengths_nm, scale)
+    return twoscale.Nano(surface=surfaces.generate(model, size=size, samples=n, **_generator_args(model, p, seed)))
+
+
+def _finite_number(value, field: str) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise FieldError(f"{{{field}}} {value!r} is not a number", field) from None
+    if not math.isfinite(x):
+        raise FieldError(f"{{{field}}} {value!r} is not finite", field)
+    return x
+
+
+@dataclass(frozen=True)
+class SimulationRequest:
+    """One two-scale simulation: surface, material, light and sampling, validated on construction.
+
+    Attributes
+    ----------
+    material : str
+        Material name, ``shelf/book/page``, ``n+kj`` or ``f0:...`` (:func:`waveoptics.materials.get_material`).
+    nano : str or None
+        Nano roughness ``MODEL:params`` (ignored when *surface* is given; σ = 0 means none).
+    surface : str or None
+        Path (or description) of a nano height field; the object itself is passed separately to the solvers.
+    micro_alpha : float
+        Micro NDF roughness α (≥ 0, unitless).
+    ndf, shadowing : str
+        Micro NDF and masking-shadowing term (:data:`waveoptics.brdf.NDFS`, :data:`waveoptics.brdf.SHADOWINGS`).
+    incident_deg : (float, float)
+        Light direction (θ, φ) in degrees, 0 ≤ θ < 90.
+    illuminant : str
+        Light source (:func:`waveoptics.colour.illuminant`).
+    wavelengths_nm : tuple of float or None
+        Wavelengths in nm; None: chosen from the illuminant for *accuracy_dE*.
+    accuracy_dE : float
+        Colour accuracy (ΔE2000) that picks the wavelength step, in (0, 100).
+    resolution : int
+        Direction-grid cells per axis, in :data:`RESOLUTION_RANGE`.
+    solver : str
+        Nano-lobe solver, one of :data:`SOLVERS`.
+    kd : float
+        Diffuse albedo of a dielectric substrate, in [0, 1] (metals have none).
+    precision : str
+        OpenCL precision of the height-field solvers, one of :data:`PRECISIONS`.
+    seed : int
+        Seed of generated nano surfaces.
+    split : bool
+        *surface* holds both scales: split it at a cut-off period of 10 λmax.
+    """
+
+    material: str = "Al"
+    nano: str | None = DEFAULT_NANO
+    surface: str | None = None
+    micro_alpha: float = 0.05
+    ndf: str = "beckmann"
+    shadowing: str = "smith-correlated"
+    incident_deg: tuple = (30.0, 0.0)
+    illuminant: str = "D65"
+    wavelengths_nm: tuple | None = None
+    accuracy_dE: float = 1.0
+    resolution: int = 128
+    solver: str = "auto"
+    kd: float = 0.5
+    precision: str = "float32"
+    seed: int = 0
+    split: bool = False
+
+    def __post_init__(self):
+        set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalization
+        if self.wavelengths_nm is not None:
+            w = check_wavelengths(self.wavelengths_nm, name="wavelengths_nm")
+            set_("wavelengths_nm", tuple(float(x) for x in w))
+        inc = tuple(self.incident_deg) if np.ndim(self.incident_deg) else (self.incident_deg, 0.0)
+        if len(inc) != 2:
+            raise FieldError(f"{{incident_deg}} {self.incident_deg!r} is not (θ, φ) in degrees", "incident_deg")
+        theta, phi = (_finite_number(x, "incident_deg") for x in inc)
+        check_theta(theta, name="incident_deg")
+        if theta >= 90:
+            raise FieldError(f"{{incident_deg}} θ={theta:g}° is not allowed; the light must be above the horizon "
+                             "(< 90)", "incident_deg")
+        set_("incident_deg", (theta, phi))
+        alpha = _finite_number(self.micro_alpha, "micro_alpha")
+        if alpha < 0:
+            raise FieldError(f"{{micro_alpha}} {self.micro_alpha!r} is not allowed; α must be finite and >= 0",
+                             "micro_alpha")
+        set_("micro_alpha", alpha)
+        if int(self.resolution) != self.resolution or not (RESOLUTION_RANGE[0] <= self.resolution
+                                                            <= RESOLUTION_RANGE[1]):
+            raise FieldError(f"{{resolution}} {self.resolution!r} is not allowed; use "
+                             f"{RESOLUTION_RANGE[0]}..{RESOLUTION_RANGE[1]}", "resolution")
+        set_("resolution", int(self.resolution))
+        kd = _finite_number(self.kd, "kd")
+        if not 0 <= kd <= 1:
+            raise FieldError(f"{{kd}} {self.kd!r} is not allowed; the diffuse albedo must be in [0, 1]", "kd")
+        acc = _finite_number(self.accuracy_dE, "accuracy_dE")
+        if not 0 < acc < 100:
+            raise FieldError(f"{{accuracy_dE}} {self.accuracy_dE!r} is not allowed; use a ΔE2000 in (0, 100)",
+                             "accuracy_dE")
+        for field, allowed in (("solver", SOLVERS), ("precision", PRECISIONS), ("ndf", NDFS),
+                               ("shadowing", SHADOWINGS)):
+            if getattr(self, field) not in allowed:
+                raise unknown(field, getattr(self, field), allowed, field=field)
+        if self.surface is None and self.nano is None:
+            raise FieldError("a request needs nano roughness: {nano} MODEL:params or a height-field {surface}",
+                             "nano", "surface")
+        if self.split and self.surface is None:
+            raise FieldError("{split} needs a height-field {surface} holding both scales", "split", "surface")
+        if self.surface is None:
+            parse_nano(self.nano)
+
+    def validate(self) -> "SimulationRequest":
+        """Resolve the names that need data (material, illuminant), so that a typo is one clear error before any
+        work starts (in the client, not on a worker)."""
+        get_material(self.material)
+        colour.illuminant(self.illuminant)
+        return self
+
+    def wavelengths(self) -> np.ndarray:
+        """Wavelengths in nm: the given ones, or the grid the illuminant needs for *accuracy_dE*."""
+        if self.wavelengths_nm is not None:
+            return np.asarray(self.wavelengths_nm, dtype=float)
+        return colour.simulation_wavelengths(colour.illuminant(self.illuminant), self.accuracy_dE)
+
+    def resolved(self) -> "SimulationRequest":
+        """This request with its wavelength list fixed (chosen once, not again in every task)."""
+        if self.wavelengths_nm is not None:
+            return self
+        return dataclasses.replace(self, wavelengths_nm=tuple(float(x) for x in self.wavelengths()))
+
+    def micro(self) -> twoscale.Micro:
+        """The micro-scale roughness of this request."""
+        return twoscale.Micro(alpha=self.micro_alpha, ndf=self.ndf, shadowing=self.shadowing)
+
+    def params(self) -> dict:
+        """Fields as plain data (JSON-able), with the resolved wavelength list."""
+        d = dataclasses.asdict(self)
+        d["wavelengths_nm"] = [float(x) for x in self.wavelengths()]
+        d["incident_deg"] = list(self.incident_deg)
+        if self.surface is not None:
+            d["nano"] = None
+        return d

@@ -1,0 +1,396 @@
+"""The solvers of the Kirchhoff lobe (registry :data:`SOLVERS`) and the public entry points :func:`brdf` and
+:func:`scatter`.
+"""
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from dataclasses import dataclass, field
+import numpy as np
+from ..errors import WaveopticsError, unknown
+from ..surfaces.heightfield import HeightField
+from ..units import check_wavelengths
+from .direct import kirchhoff_U, kirchhoff_U_cl, phase_coefficients
+from .fft import FFT_TOL, field_fft
+from .grid import DirectionGrid, HORIZON_SIN, _incident, _outgoing, integrate
+from ..materials import fresnel_function
+from .kirchhoff import brdf_from_field, coherent_amplitude, cos_theta_d
+from .patch import DEFAULT_WINDOW, Samples, samples
+
+__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'SOLVERS', 'BACKENDS', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'scatter']
+
+#: largest albedo of the F = 1 lobe that :func:`scatter` accepts without an "energy not conserved" warning
+ENERGY_TOL = 1.05
+
+
+class DiffractionWarning(UserWarning):
+    """A result is computed but an approximation or sampling condition is violated (aliasing, coarse grid...)."""
+
+
+def _warn(msg: str, sink: list | None = None) -> None:
+    if sink is not None:
+        sink.append(msg)
+    warnings.warn(msg, DiffractionWarning, stacklevel=3)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# High-level API
+# ----------------------------------------------------------------------------------------------------------------
+
+#: solver name -> description (the ``method=`` registry)
+SOLVERS = {
+    "direct": "direct Kirchhoff sum on the OpenCL device (exact tangent-plane model; O(samples x directions))",
+    "fft": "chirp-z transforms on the direction-cosine grid, banded Taylor series in v_z (order='auto') or "
+           "frozen v_z (order=0)",
+}
+BACKENDS = ("opencl", "numpy")
+
+
+def _check_solver(solver, backend):
+    if solver not in SOLVERS:
+        raise unknown("solver", solver, SOLVERS)
+    if backend not in BACKENDS:
+        raise unknown("backend", backend, BACKENDS)
+
+
+def _realizations(surface, realizations, seed=0) -> list[HeightField]:
+    """The list of height fields to average over (see :func:`scatter`)."""
+    n = 1 if realizations is None else realizations
+    try:
+        ok = not isinstance(n, bool) and float(n) == int(n) and int(n) >= 1
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise WaveopticsError(f"realizations={realizations!r} is not allowed; it must be an integer >= 1")
+    n = int(n)
+    if isinstance(surface, HeightField):
+        return split_patch(surface, n) if n > 1 else [surface]
+    if callable(surface):
+        return [surface(seed + r) for r in range(n)]
+    try:
+        hfs = list(surface)
+    except TypeError:
+        raise WaveopticsError(f"surface must be a HeightField, a list of them or a callable seed -> HeightField, "
+                              f"got {type(surface).__name__}") from None
+    if not hfs or not all(isinstance(h, HeightField) for h in hfs):
+        raise WaveopticsError("surface list must hold at least one HeightField and nothing else")
+    if realizations is not None and int(realizations) != len(hfs):
+        raise WaveopticsError(f"realizations={realizations} differs from the {len(hfs)} height fields given")
+    return hfs
+
+
+def split_patch(hf: HeightField, n: int) -> list[HeightField]:
+    """Split *hf* into *n* equal, non-overlapping tiles (as square a layout as possible) for ensemble averages.
+
+    Tiles of one large measured or generated patch stand in for independent realizations when the patch spans
+    many correlation lengths; each tile is smaller, so the angular resolution λ/L is coarser.
+    """
+    if int(n) != n or n < 1:
+        raise WaveopticsError(f"realizations={n!r} is not allowed; it must be an integer >= 1")
+    ny, nx = hf.shape
+    best = None
+    for a in range(1, n + 1):
+        if n % a:
+            continue
+        b = n // a                                   # a tiles along y, b along x
+        if ny // a < 2 or nx // b < 2:
+            continue
+        score = abs(math.log((nx / b) / (ny / a)))
+        if best is None or score < best[0]:
+            best = (score, a, b)
+    if best is None:
+        raise WaveopticsError(f"cannot split a {nx}x{ny} patch into {n} tiles of at least 2x2 samples")
+    _, a, b = best
+    ty, tx = ny // a, nx // b
+    out = []
+    for i in range(a):
+        for j in range(b):
+            sl = (slice(i * ty, (i + 1) * ty), slice(j * tx, (j + 1) * tx))
+            mask = None if hf.mask is None else hf.mask[sl]
+            out.append(HeightField(hf.heights[sl], hf.dx, hf.dy, mask, dict(hf.meta, tile=(i, j))))
+    return out
+
+
+def sampling_warnings(smp: Samples, wi, wavelengths_nm, grid: DirectionGrid | None = None,
+                      wo=None) -> list[str]:
+    """Messages for violated sampling conditions (docs/physics.md §1).
+
+    * Aliasing: the sum is periodic in s_x dx / λ with period 1, so directions with |u_i + u_o| > λ/(2 dx)
+      (or the same along y) receive light that belongs elsewhere. The whole disc is safe when dx, dy ≤ λ/4.
+    * Lobe sampling (grids only): the specular spike of a patch of length L has width ~λ/L in u; the grid
+      sums it exactly (Poisson summation of |Û|², whose transform — the window's autocorrelation — has
+      support |x| < L) only when du ≤ λ/Lx and dv ≤ λ/Ly.
+    """
+    msgs = []
+    lam = np.asarray(wavelengths_nm, dtype=float) * 1e-9
+    if grid is not None:
+        sx = np.abs(wi[0] + grid.u[grid.inside.any(axis=0)]).max()
+        sy = np.abs(wi[1] + grid.v[grid.inside.any(axis=1)]).max()
+    else:
+        wo = np.asarray(wo)
+        sx = float(np.max(np.abs(wo[:, 0] + wi[0])))
+        sy = float(np.max(np.abs(wo[:, 1] + wi[1])))
+    lmin = float(lam.min())
+    if sx * smp.dx / lmin > 0.5 + 1e-12 or sy * smp.dy / lmin > 0.5 + 1e-12:
+        msgs.append(f"aliasing: sample spacing {smp.dx * 1e9:.4g} x {smp.dy * 1e9:.4g} nm is too coarse for "
+                    f"{lmin * 1e9:.4g} nm at these directions (needs |u_i + u_o| <= lambda/(2 dx) = "
+                    f"{lmin / (2 * smp.dx):.3g}); use dx <= lambda/4 = {lmin / 4 * 1e9:.4g} nm for the whole "
+                    "hemisphere")
+    if grid is not None:
+        Lx, Ly = smp.extent
+        if grid.du > lmin / Lx * (1 + 1e-9) or grid.dv > lmin / Ly * (1 + 1e-9):
+            need = int(math.ceil((grid.u_range[1] - grid.u_range[0]) * Lx / lmin))
+            msgs.append(f"coarse direction grid: du = {grid.du:.3g} > lambda/L = {lmin / Lx:.3g}; the specular "
+                        f"spike is under-sampled and its albedo quadrature is inexact (use resolution >= {need})")
+    return msgs
+
+
+def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direct", backend: str = "opencl",
+         precision: str = "float32", window_name=DEFAULT_WINDOW, detrend: str = "mean", order="auto",
+         resolution: int | None = None, realizations=None, seed: int = 0, runtime=None,
+         progress=None) -> np.ndarray:
+    """Kirchhoff BRDF for arbitrary outgoing directions, averaged over realizations.
+
+    Parameters
+    ----------
+    surface : HeightField, list of HeightField, or callable seed -> HeightField
+        The patch (or the ensemble; see :func:`scatter`).
+    wi : (theta_deg, phi_deg) or ndarray (3,)
+        Direction towards the light.
+    wo : ndarray (n, 3)
+        Unit vectors towards the viewer.
+    wavelengths_nm : array_like, nm
+    material : see :func:`fresnel_function`
+    solver : {'direct', 'fft'}
+        ``fft`` evaluates on a hemisphere grid (*resolution*, default: fine enough to resolve the specular spike
+        at the shortest wavelength) and interpolates bilinearly in (u, v).
+    backend : {'opencl', 'numpy'}
+        For ``direct``: the kernel or its float64 NumPy twin.
+    window_name, detrend : see :func:`window` and :func:`samples`.
+
+    Returns
+    -------
+    ndarray (n_wl, n), sr⁻¹
+    """
+    _check_solver(solver, backend)
+    wi = _incident(wi)
+    wo = _outgoing(wo)
+    wl = check_wavelengths(wavelengths_nm)
+    F = fresnel_function(material)
+    hfs = _realizations(surface, realizations, seed)
+    acc = np.zeros((wl.size, wo.shape[0]))
+    for hf in hfs:
+        smp = samples(hf, window_name, detrend)
+        if solver == "direct":
+            for m in sampling_warnings(smp, wi, wl, wo=wo):
+                _warn(m)
+            coef = phase_coefficients(smp, wi, wo, wl)
+            if backend == "numpy":
+                U = kirchhoff_U(smp, coef)
+            else:
+                U = kirchhoff_U_cl(smp, coef, runtime=runtime, precision=precision, progress=progress)
+            acc += brdf_from_field(U.reshape(wl.size, -1), wi, wo, wl, smp.area, F)
+        else:
+            from scipy.interpolate import RegularGridInterpolator
+
+            res = resolution or min(2048, max(64, int(math.ceil(2 * max(smp.extent) / (wl.min() * 1e-9)))))
+            grid = DirectionGrid.hemisphere(res)
+            dirs = grid.directions()
+            for m in sampling_warnings(smp, wi, wl, grid=grid):
+                _warn(m)
+            for i, lam in enumerate(wl):
+                U, _ = field_fft(smp, wi, grid, lam, order)
+                f = brdf_from_field(U[None], wi, dirs, [lam], smp.area, F)[0]
+                interp = RegularGridInterpolator((grid.v, grid.u), f, bounds_error=False, fill_value=None)
+                acc[i] += np.where(wo[:, 2] > 0, interp(np.stack([wo[:, 1], wo[:, 0]], axis=1)), 0.0)
+                if progress is not None:
+                    progress(1)
+    return np.clip(acc / len(hfs), 0.0, None)
+
+
+@dataclass
+class ScatterResult:
+    """Per-wavelength Kirchhoff lobes over a direction-cosine grid and their integrals.
+
+    Attributes
+    ----------
+    wavelengths_nm : ndarray (n_wl,), nm
+    grid : DirectionGrid
+    brdf : ndarray (n_wl, n_v, n_u), sr⁻¹
+        Ensemble-mean BRDF; 0 outside the unit disc.
+    albedo : ndarray (n_wl,)
+        Directional albedo ∫ f cos θ_o dω_o over the whole disc.
+    albedo_inner : ndarray (n_wl,)
+        The same over sin θ_o ≤ :data:`HORIZON_SIN` (the rest is the near-horizon share, where 1/cos θ_o
+        amplifies any error and the tangent-plane model itself is least reliable).
+    coherent_specular_fraction : ndarray (n_wl,)
+        |⟨χ̂⟩|², the fraction of the specular reflectance that stays coherent (exp(−g) for Gaussian heights).
+    scattered_fraction : ndarray (n_wl,)
+        albedo − |⟨χ̂⟩|² · flat_albedo: the diffusely scattered reflectance (TIS = F (1 − exp(−g))).
+    flat_albedo : ndarray (n_wl,)
+        Albedo of the same window without heights on the same grid (≈ F(θ_i); the quadrature reference).
+    fresnel_specular : ndarray (n_wl,)
+        F(θ_i).
+    """
+
+    wavelengths_nm: np.ndarray
+    grid: DirectionGrid
+    brdf: np.ndarray
+    albedo: np.ndarray
+    albedo_inner: np.ndarray
+    coherent_specular_fraction: np.ndarray
+    scattered_fraction: np.ndarray
+    flat_albedo: np.ndarray
+    fresnel_specular: np.ndarray
+    incident: np.ndarray
+    solver: str
+    realizations: int
+    timings_s: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
+    info: dict = field(default_factory=dict)
+
+    def summary(self) -> dict:
+        """Plain data for ``summary.json`` (lists, one entry per wavelength)."""
+        th = math.degrees(math.acos(min(1.0, float(self.incident[2]))))
+        ph = math.degrees(math.atan2(self.incident[1], self.incident[0]))
+        return {
+            "wavelengths_nm": self.wavelengths_nm, "albedo": self.albedo,
+            "coherent_specular_fraction": self.coherent_specular_fraction,
+            "scattered_fraction": self.scattered_fraction, "albedo_inner": self.albedo_inner,
+            "horizon_sin": HORIZON_SIN, "flat_albedo": self.flat_albedo, "fresnel_specular": self.fresnel_specular,
+            "incident_deg": [th, ph], "solver": self.solver, "realizations": self.realizations,
+            "grid": {"n_u": self.grid.n_u, "n_v": self.grid.n_v, "u_range": self.grid.u_range,
+                     "v_range": self.grid.v_range},
+            "timings_s": self.timings_s, "warnings": self.warnings, "info": self.info,
+        }
+
+
+def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", resolution: int = 256,
+            grid: DirectionGrid | None = None, realizations=None, seed: int = 0, backend: str = "opencl",
+            precision: str = "float32", window_name=DEFAULT_WINDOW, detrend: str = "mean", order="auto",
+            tol: float = FFT_TOL, runtime=None, progress=None) -> ScatterResult:
+    """Kirchhoff lobes over the projected hemisphere, per wavelength, with albedo and coherent/scattered split.
+
+    Parameters
+    ----------
+    surface : HeightField, list of HeightField, or callable seed -> HeightField
+        One patch, an explicit ensemble, or a generator called with seeds ``seed .. seed + realizations − 1``.
+        A single HeightField with ``realizations = n > 1`` is split into n tiles (:func:`split_patch`).
+    wi : (theta_deg, phi_deg) or ndarray (3,)
+        Direction towards the light.
+    wavelengths_nm : array_like, nm
+    material : see :func:`fresnel_function` (None: F = 1)
+    solver : {'fft', 'direct'}
+    resolution : int
+        Cells per side of the hemisphere grid (ignored when *grid* is given).
+    grid : DirectionGrid, optional
+        A custom (sub-)grid of the direction-cosine plane.
+    realizations : int, optional
+    backend, precision : for the ``direct`` solver (OpenCL float32/float64, or the NumPy twin).
+    window_name, detrend : see :func:`window` and :func:`samples`.
+    order, tol : for the ``fft`` solver (see :func:`fft_plan`).
+    progress : callable, optional
+        Called with the number of finished work units (wavelengths × realizations); total is
+        ``len(wavelengths) * realizations``.
+
+    Returns
+    -------
+    ScatterResult
+    """
+    t0 = time.perf_counter()
+    _check_solver(solver, backend)
+    wi = _incident(wi)
+    wl = check_wavelengths(wavelengths_nm)
+    F = fresnel_function(material)
+    grid = grid if grid is not None else DirectionGrid.hemisphere(resolution)
+    if not grid.inside.any():
+        raise WaveopticsError(f"direction grid u_range={grid.u_range}, v_range={grid.v_range} has no cell centre "
+                              "inside the unit disc (above the horizon)")
+    hfs = _realizations(surface, realizations, seed)
+    dirs = grid.directions()
+    inside = grid.inside
+    horizon = grid.sin_theta <= HORIZON_SIN
+    n_wl, R = wl.size, len(hfs)
+    f_sum = np.zeros((n_wl, grid.n_v, grid.n_u))
+    alb = np.zeros(n_wl)
+    alb_in = np.zeros(n_wl)
+    flat = np.zeros(n_wl)
+    chi = np.zeros(n_wl, np.complex128)
+    msgs: list[str] = []
+    info = {"window": str(window_name)}
+    t_solve = t_flat = 0.0
+    d_in = dirs[inside]
+    for r, hf in enumerate(hfs):
+        smp = samples(hf, window_name, detrend)
+        for m in sampling_warnings(smp, wi, wl, grid=grid):
+            if m not in msgs:
+                _warn(m, msgs)
+        t1 = time.perf_counter()
+        if solver == "direct":
+            coef = phase_coefficients(smp, wi, d_in, wl)
+            step = (lambda n, _k=d_in.shape[0]: progress(n / _k)) if progress is not None else None
+            if backend == "numpy":
+                Uin = kirchhoff_U(smp, coef)
+                if progress is not None:
+                    progress(n_wl)
+            else:
+                Uin = kirchhoff_U_cl(smp, coef, runtime=runtime, precision=precision, progress=step)
+            U = np.zeros((n_wl, grid.n_v, grid.n_u), np.complex128)
+            U[:, inside] = Uin.reshape(n_wl, -1)
+            info.update(precision=precision if backend == "opencl" else "float64", backend=backend)
+        else:
+            U = np.empty((n_wl, grid.n_v, grid.n_u), np.complex128)
+            for i, lam in enumerate(wl):
+                U[i], inf = field_fft(smp, wi, grid, lam, order, tol)
+                if r == 0:
+                    info.setdefault("fft", []).append({"wavelength_nm": float(lam), **inf})
+                if progress is not None:
+                    progress(1)
+        t_solve += time.perf_counter() - t1
+        f = brdf_from_field(U, wi, dirs, wl, smp.area, F)
+        f = np.where(inside, np.clip(f, 0.0, None), 0.0)
+        f_sum += f
+        alb += integrate(f, grid)
+        alb_in += integrate(f, grid, region=horizon)
+        t1 = time.perf_counter()
+        for i, lam in enumerate(wl):
+            chi[i] += coherent_amplitude(smp, wi, lam)
+            U0, _ = field_fft(Samples(smp.ix, smp.iy, np.zeros_like(smp.h), smp.w, smp.dx, smp.dy, smp.nx,
+                                      smp.ny, smp.area), wi, grid, lam, 0)
+            flat[i] += integrate(brdf_from_field(U0[None], wi, dirs, [lam], smp.area, F)[0], grid)
+        t_flat += time.perf_counter() - t1
+    f_mean, alb, alb_in, flat, chi = f_sum / R, alb / R, alb_in / R, flat / R, chi / R
+    coh = np.abs(chi) ** 2
+    # guard: quadrature round-off can make the difference a hair negative for a flat patch
+    scat = np.clip(alb - coh * flat, 0.0, None)
+    spec_share = alb - alb_in
+    bad = (spec_share > 0.05 * np.maximum(alb, 1e-300)) & (alb > 0)
+    if np.any(bad):
+        i = int(np.argmax(np.where(bad, spec_share / np.maximum(alb, 1e-300), 0)))
+        _warn(f"{100 * spec_share[i] / alb[i]:.0f}% of the albedo at {wl[i]:g} nm lies near the horizon "
+              f"(sin theta_o > {HORIZON_SIN}), where 1/cos theta_o amplifies errors and the tangent-plane model "
+              "(no shadowing) is least reliable" + (" and the frozen-v_z fft approximation fails; use "
+                                                    "order='auto' or solver='direct'"
+                                                    if solver == "fft" and order != "auto" else ""), msgs)
+    Fspec = np.asarray(F(np.full(n_wl, wi[2]), wl), dtype=float)
+    # energy check: the lobe with F = 1 must not reflect more than the light that arrives (the flat patch's
+    # albedo on this grid is 1 to quadrature accuracy); near grazing incidence the tangent-plane obliquity
+    # factor grows as 1/cos θ_i and the model, which has no shadowing, breaks this (albedo 260 at 90°)
+    Fg = np.asarray(F(cos_theta_d(wi, dirs)[None], wl[:, None, None]), dtype=float)
+    alb1 = integrate(np.where(Fg > 0, f_mean / np.where(Fg > 0, Fg, 1.0), 0.0), grid)
+    if np.any(alb1 > ENERGY_TOL):
+        i = int(np.argmax(alb1))
+        _warn(f"energy not conserved: the Kirchhoff albedo with F = 1 is {alb1[i]:.3g} > 1 at {wl[i]:g} nm for "
+              f"theta_i = {math.degrees(math.acos(min(1.0, wi[2]))):.4g} deg; the tangent-plane model fails this "
+              "close to grazing incidence (obliquity ~ 1/cos theta_i, no shadowing) and these lobes are not "
+              "physical", msgs)
+    timings = {"solve": t_solve, "flat_and_coherent": t_flat, "total": time.perf_counter() - t0}
+    return ScatterResult(wl, grid, f_mean, alb, alb_in, coh, scat, flat, Fspec, wi, solver, R, timings, msgs, info)
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Output
+# ----------------------------------------------------------------------------------------------------------------
+
+

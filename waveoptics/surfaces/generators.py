@@ -1,0 +1,434 @@
+"""Random and deterministic height-field generators: flat, Gaussian, exponential and ABC (spectral synthesis),
+sinusoid, scratches and sums.
+
+References
+----------
+.. [1] J. A. Ogilvy, *Theory of Wave Scattering from Random Rough Surfaces*, IOP 1991, §2 (spectral synthesis).
+.. [2] E. L. Church, P. Z. Takacs, Proc. SPIE 1530, 1991 (ABC PSD).
+"""
+from __future__ import annotations
+
+import inspect
+import math
+import numpy as np
+from ..errors import WaveopticsError, unknown
+from ..units import parse_length
+from .heightfield import HeightField
+from .psd import PSD_MODELS, S1_abc, S_abc, abc_A, abc_sigma
+
+__all__ = ['flat', 'gaussian', 'exponential', 'abc', 'sinusoid', 'MAX_SCRATCHES', 'scratches', 'GENERATORS', 'generate']
+
+# ----------------------------------------------------------------------------------------------------------------
+# Generators
+# ----------------------------------------------------------------------------------------------------------------
+
+def _length(value, name: str, *, allow_zero: bool = False) -> float:
+    """A length in metres from a number (m) or a string with a unit ('5nm')."""
+    if isinstance(value, str):
+        return parse_length(value, name=name, allow_zero=allow_zero)
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise WaveopticsError(f"{name} {value!r} is not a length in metres") from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise WaveopticsError(f"{name}={value!r} m is not allowed; it must be finite and "
+                              f"{'>= 0' if allow_zero else '> 0'}")
+    return v
+
+
+def _number(value, name: str, *, lo=None, lo_open=False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise WaveopticsError(f"{name} {value!r} is not a number") from None
+    if not math.isfinite(v) or (lo is not None and (v <= lo if lo_open else v < lo)):
+        bound = "" if lo is None else f" and {'>' if lo_open else '>='} {lo:g}"
+        raise WaveopticsError(f"{name}={value!r} is not allowed; it must be finite{bound}")
+    return v
+
+
+def _grid(size, samples) -> tuple[int, int, float, float]:
+    """(nx, ny, dx, dy) from *size* (L or (Lx, Ly), m) and *samples* (n or (nx, ny)).
+
+    A scalar size is the longer side with square pixels: dx = dy = size / max(nx, ny).
+    """
+    if isinstance(samples, str):
+        parts = samples.lower().replace("x", ",").split(",")
+        samples = parts[0] if len(parts) == 1 else parts
+    ns = np.atleast_1d(samples)
+    if ns.ndim != 1 or len(ns) not in (1, 2):
+        raise WaveopticsError(f"samples {samples!r} is not allowed; give N or (NX, NY)")
+    try:
+        nsf = [float(n) for n in ns]
+    except (TypeError, ValueError):
+        raise WaveopticsError(f"samples {samples!r} is not an integer count") from None
+    if any(not math.isfinite(n) or n != int(n) or n < 1 for n in nsf):
+        raise WaveopticsError(f"samples {samples!r} is not allowed; counts must be integers >= 1")
+    nx, ny = (int(nsf[0]), int(nsf[0])) if len(nsf) == 1 else (int(nsf[0]), int(nsf[1]))
+    if nx * ny > 2**27:
+        raise WaveopticsError(f"samples {nx}x{ny} is too many; at most 2^27 samples per field")
+    if isinstance(size, str) and "," in size:
+        size = size.split(",")
+    if isinstance(size, (list, tuple, np.ndarray)):
+        if len(size) != 2:
+            raise WaveopticsError(f"size {size!r} is not allowed; give L or (Lx, Ly)")
+        dx = _length(size[0], "size Lx") / nx
+        dy = _length(size[1], "size Ly") / ny
+    else:
+        dx = dy = _length(size, "size") / max(nx, ny)
+    return nx, ny, dx, dy
+
+
+def _rng_seed(seed):
+    """(Generator, seed actually used): a fresh seed is drawn and recorded when *seed* is None."""
+    if seed is None:
+        seed = int(np.random.SeedSequence().entropy % (2**63))
+    try:
+        seed = int(seed)
+    except (TypeError, ValueError):
+        raise WaveopticsError(f"seed {seed!r} is not an integer") from None
+    if seed < 0:
+        raise WaveopticsError(f"seed {seed!r} is not allowed; it must be >= 0")
+    return np.random.default_rng(seed), seed
+
+
+def _spectral(psd2d, psd1d, nx, ny, dx, dy, rng, sigma, *, renormalize: bool, exact_rms: bool):
+    """Gaussian random field with PSD *psd2d* (or *psd1d* for a single row/column) on a periodic grid.
+
+    Real white noise w (unit variance) is filtered in Fourier space by a_k = √(S(f_k) / (dx dy)), which makes
+    E[h²] = Σ_k S(f_k) Δfx Δfy, the grid's share of σ² (the mean, k = 0, is set to zero). A 1×N or N×1 grid is
+    a straight profile of the 2-D surface and uses the profile PSD ∫ S dfy instead.
+
+    Returns
+    -------
+    h : ndarray (ny, nx), m
+    fraction : float
+        Σ_k S Δf² / σ²: the part of the variance the grid resolves (below 1 when L is not ≫ T or dx not ≪ T).
+    """
+    if nx * ny < 2:
+        raise WaveopticsError("a random surface needs at least 2 samples")
+    if ny == 1 or nx == 1:
+        n, d = (nx, dx) if ny == 1 else (ny, dy)
+        S = psd1d(np.abs(np.fft.fftfreq(n, d)))
+        S[0] = 0.0
+        var = S.sum() / (n * d)
+        amp = np.sqrt(psd1d(np.fft.rfftfreq(n, d)) / d)
+        amp[0] = 0.0
+        h = np.fft.irfft(np.fft.rfft(rng.standard_normal(n)) * amp, n)
+        h = h.reshape(ny, nx)
+    else:
+        fy = np.fft.fftfreq(ny, dy)[:, None]
+        S = psd2d(np.hypot(fy, np.fft.fftfreq(nx, dx)[None, :]))
+        S[0, 0] = 0.0
+        var = S.sum() / (nx * dx * ny * dy)
+        del S
+        amp = np.sqrt(psd2d(np.hypot(fy, np.fft.rfftfreq(nx, dx)[None, :])) / (dx * dy))
+        amp[0, 0] = 0.0
+        h = np.fft.irfft2(np.fft.rfft2(rng.standard_normal((ny, nx))) * amp, s=(ny, nx))
+    fraction = var / sigma**2
+    if not fraction > 1e-12:
+        raise WaveopticsError(f"the grid (spacing {dx:g} x {dy:g} m, {nx}x{ny} samples) resolves none of the "
+                              "surface's spectrum; make the patch larger than, and the spacing finer than, "
+                              "the correlation length")
+    if exact_rms:
+        rms = float(np.sqrt(np.mean(h**2)))
+        if rms > 0:
+            h *= sigma / rms
+    elif renormalize:
+        h *= 1.0 / math.sqrt(fraction)
+    return h, fraction
+
+
+def _random_meta(model, params, seed, fraction, renormalize, exact_rms):
+    return {"model": model, **params, "seed": seed, "periodic": True, "psd_variance_fraction": fraction,
+            "renormalize": renormalize, "exact_rms": exact_rms, "units": "m"}
+
+
+def _correlated(model, sigma, corr_length, size, samples, seed, renormalize, exact_rms) -> HeightField:
+    """A random surface of a PSD family with rms height σ and correlation length T (:data:`PSD_MODELS`)."""
+    sigma = _length(sigma, "sigma")
+    T = _length(corr_length, "corr_length")
+    nx, ny, dx, dy = _grid(size, samples)
+    rng, seed = _rng_seed(seed)
+    family = PSD_MODELS[model]
+    h, frac = _spectral(lambda f: family.S(f, sigma, T), lambda f: family.S1(f, sigma, T),
+                        nx, ny, dx, dy, rng, sigma, renormalize=renormalize, exact_rms=exact_rms)
+    meta = _random_meta(model, {"sigma": sigma, "corr_length": T}, seed, frac, renormalize, exact_rms)
+    return HeightField(h, dx, dy, meta=meta)
+
+
+def flat(size, samples) -> HeightField:
+    """A flat surface h = 0.
+
+    Parameters
+    ----------
+    size : float or str or (Lx, Ly), m
+        Patch size; a scalar is the longer side with square pixels.
+    samples : int or (nx, ny)
+        Grid samples.
+    """
+    nx, ny, dx, dy = _grid(size, samples)
+    return HeightField(np.zeros((ny, nx)), dx, dy, meta={"model": "flat", "periodic": True, "units": "m"})
+
+
+def gaussian(sigma, corr_length, size, samples, seed=None, *, renormalize=True, exact_rms=False) -> HeightField:
+    """Gaussian random surface with Gaussian correlation C(r) = σ² exp(−r²/T²).
+
+    Parameters
+    ----------
+    sigma : float or str, m
+        rms height σ.
+    corr_length : float or str, m
+        Correlation length T (C(T) = σ²/e). The rms of |∇h| is α = 2σ/T; per axis √2 σ/T.
+    size : float or str or (Lx, Ly), m
+        Patch size; a scalar is the longer side with square pixels.
+    samples : int or (nx, ny)
+        Grid samples; a 1×N grid is a straight profile of the 2-D surface.
+    seed : int, optional
+        Seed for ``numpy.random.default_rng``; drawn and recorded in ``meta["seed"]`` when None.
+    renormalize : bool
+        Scale the spectrum so that the *ensemble* mean square on this grid is σ² (default). The fraction of σ²
+        the grid resolves before that scaling is ``meta["psd_variance_fraction"]``; when it is well below 1
+        (patch not ≫ T or spacing not ≪ T) the surface is a band-limited version of the one asked for.
+        False keeps S(f) exactly as specified (ensemble rms σ·√fraction).
+    exact_rms : bool
+        Rescale this realization so its own rms is exactly σ (not physical for an ensemble; off by default).
+
+    Returns
+    -------
+    HeightField
+        One period of a periodic surface (``meta["periodic"] = True``); each realization has zero mean.
+
+    References
+    ----------
+    .. [1] Ogilvy 1991, §2.2, §4.2; Beckmann & Spizzichino 1963, ch. 5.
+    """
+    return _correlated("gaussian", sigma, corr_length, size, samples, seed, renormalize, exact_rms)
+
+
+def exponential(sigma, corr_length, size, samples, seed=None, *, renormalize=True,
+                exact_rms=False) -> HeightField:
+    """Gaussian random surface with exponential correlation C(r) = σ² exp(−r/T).
+
+    Parameters are those of :func:`gaussian`. The slope variance of this surface diverges logarithmically
+    with the highest resolved frequency, so its rms slope depends on the spacing (there is no finite α).
+
+    References
+    ----------
+    .. [1] Ogilvy 1991, §2.2; Church & Takacs 1991.
+    """
+    return _correlated("exponential", sigma, corr_length, size, samples, seed, renormalize, exact_rms)
+
+
+def abc(B, C, size, samples, seed=None, *, A=None, sigma=None, renormalize=True, exact_rms=False) -> HeightField:
+    """Gaussian random surface with the ABC (K-correlation, fractal-like) PSD A / (1 + (B f)²)^{C/2}.
+
+    Parameters
+    ----------
+    B : float or str, m
+        Knee length (the PSD bends at f ≈ 1/B).
+    C : float
+        Fall-off exponent, > 2.
+    size, samples, seed, renormalize, exact_rms
+        As in :func:`gaussian`.
+    A : float, m⁴, optional
+        Plateau. Give exactly one of *A* and *sigma*.
+    sigma : float or str, m, optional
+        rms height; A = σ² B² (C − 2) / (2π).
+
+    References
+    ----------
+    .. [1] Church & Takacs, Proc. SPIE 1530, 1991; Holzschuch & Pacanowski, ACM TOG 36(4), 2017 (use in rendering).
+    """
+    B = _length(B, "B")
+    C = _number(C, "C", lo=2, lo_open=True)
+    if (A is None) == (sigma is None):
+        raise WaveopticsError("ABC surface: give exactly one of A (m^4) and sigma (m)")
+    if sigma is not None:
+        sigma = _length(sigma, "sigma")
+        A = abc_A(sigma, B, C)
+    else:
+        A = _number(A, "A", lo=0, lo_open=True)
+        sigma = abc_sigma(A, B, C)
+    nx, ny, dx, dy = _grid(size, samples)
+    rng, seed = _rng_seed(seed)
+    h, frac = _spectral(lambda f: S_abc(f, sigma, B, C), lambda f: S1_abc(f, sigma, B, C),
+                        nx, ny, dx, dy, rng, sigma, renormalize=renormalize, exact_rms=exact_rms)
+    meta = _random_meta("abc", {"A": A, "B": B, "C": C, "sigma": sigma}, seed, frac, renormalize, exact_rms)
+    return HeightField(h, dx, dy, meta=meta)
+
+
+def sinusoid(amplitude, period, size, samples, orientation_deg=0.0, phase_deg=0.0) -> HeightField:
+    """Sinusoidal grating h = a sin(2π (x cos φ + y sin φ) / Λ + φ₀).
+
+    Parameters
+    ----------
+    amplitude : float or str, m
+        Amplitude a (rms height a/√2 over whole periods; rms of |∇h| = √2 π a / Λ).
+    period : float or str, m
+        Period Λ.
+    size, samples
+        As in :func:`gaussian`.
+    orientation_deg : float, degrees
+        Direction φ of the grating vector from the x axis (grooves run perpendicular to it).
+    phase_deg : float, degrees
+        Phase φ₀ at the patch centre.
+
+    Notes
+    -----
+    ``meta["periodic"]`` is True only when the patch holds a whole number of periods along both axes; the
+    diffraction orders are at sin θ_m = sin θ_i + m λ/Λ (docs/physics.md §5).
+    """
+    a = _length(amplitude, "amplitude", allow_zero=True)
+    P = _length(period, "period")
+    phi = math.radians(_number(orientation_deg, "orientation_deg"))
+    ph0 = math.radians(_number(phase_deg, "phase_deg"))
+    nx, ny, dx, dy = _grid(size, samples)
+    hf0 = HeightField(np.zeros((ny, nx)), dx, dy)
+    x, y = hf0.coords()
+    u = x[None, :] * math.cos(phi) + y[:, None] * math.sin(phi)
+    h = a * np.sin(2 * np.pi * u / P + ph0)
+    kx, ky = nx * dx * math.cos(phi) / P, ny * dy * math.sin(phi) / P
+    periodic = bool(abs(kx - round(kx)) < 1e-9 and abs(ky - round(ky)) < 1e-9)
+    meta = {"model": "sinusoid", "amplitude": a, "period": P, "orientation_deg": math.degrees(phi),
+            "phase_deg": math.degrees(ph0), "periodic": periodic, "units": "m"}
+    return HeightField(h, dx, dy, meta=meta)
+
+
+#: most scratches :func:`scratches` draws (a billion would run for days, one grid pass each)
+MAX_SCRATCHES = 10000
+
+
+def scratches(count, width, depth, size, samples, orientation_deg=0.0, spread_deg=0.0, length=None,
+              variation=0.0, seed=None) -> HeightField:
+    """Random straight scratches (grooves) on a flat surface at h = 0.
+
+    Each scratch is a groove of Gaussian cross-section, −d exp(−4 ln2 s² / w²) at distance s from its axis
+    (w is the full width at half depth), through a uniformly random point of the patch. Where grooves overlap
+    the deeper one wins (material removed once).
+
+    Parameters
+    ----------
+    count : int
+        Number of scratches, >= 0.
+    width : float or str, m
+        Full width at half depth w.
+    depth : float or str, m
+        Depth d (the groove bottom is at −d).
+    size, samples
+        As in :func:`gaussian`.
+    orientation_deg : float, degrees
+        Mean direction of the scratches from the x axis.
+    spread_deg : float, degrees
+        Directions are uniform in [orientation − spread, orientation + spread].
+    length : float or str, m, optional
+        Scratch length (rounded ends); None: they cross the whole patch.
+    variation : float
+        Relative spread of each scratch's width and depth: uniform in [1 − v, 1 + v], 0 <= v < 1.
+    seed : int, optional
+        RNG seed (recorded in ``meta["seed"]``).
+
+    Notes
+    -----
+    The result is not periodic; scattering solvers see the patch edges as edges of the grooves.
+    """
+    n = _number(count, "count", lo=0)
+    if n != int(n) or n > MAX_SCRATCHES:
+        raise WaveopticsError(f"count={count!r} is not allowed; it must be a whole number in 0..{MAX_SCRATCHES} "
+                              "(each scratch costs a pass over the grid)")
+    n = int(n)
+    w = _length(width, "width")
+    d = _length(depth, "depth", allow_zero=True)
+    th0 = _number(orientation_deg, "orientation_deg")
+    spread = _number(spread_deg, "spread_deg", lo=0)
+    ln = None if length is None else _length(length, "length")
+    v = _number(variation, "variation", lo=0)
+    if v >= 1:
+        raise WaveopticsError(f"variation={variation!r} is not allowed; it must be in [0, 1)")
+    nx, ny, dx, dy = _grid(size, samples)
+    rng, seed = _rng_seed(seed)
+    hf0 = HeightField(np.zeros((ny, nx)), dx, dy)
+    x, y = hf0.coords()
+    Lx, Ly = hf0.extent
+    X, Y = x[None, :], y[:, None]
+    h = np.zeros((ny, nx))
+    for _ in range(n):
+        px, py = rng.uniform(-Lx / 2, Lx / 2), rng.uniform(-Ly / 2, Ly / 2)
+        th = math.radians(th0 + rng.uniform(-spread, spread))
+        wi = w * rng.uniform(1 - v, 1 + v)
+        di = d * rng.uniform(1 - v, 1 + v)
+        s = -(X - px) * math.sin(th) + (Y - py) * math.cos(th)   # across the groove
+        if ln is not None:
+            t = (X - px) * math.cos(th) + (Y - py) * math.sin(th)  # along the groove
+            s = np.hypot(s, np.maximum(np.abs(t) - ln / 2, 0.0))
+        np.minimum(h, -di * np.exp(-4 * math.log(2) * s**2 / wi**2), out=h)
+    meta = {"model": "scratches", "count": n, "width": w, "depth": d, "orientation_deg": th0,
+            "spread_deg": spread, "length": ln, "variation": v, "seed": seed, "periodic": False, "units": "m"}
+    return HeightField(h, dx, dy, meta=meta)
+
+
+def _sum(components, size, samples, seed=None) -> HeightField:
+    """Sum of several models on one grid (e.g. a micro-scale band plus a nano-scale band).
+
+    Parameters
+    ----------
+    components : list of dict
+        Each ``{"model": name, **params}`` without size/samples; random components get independent seeds
+        spawned from *seed* unless they give their own.
+    """
+    if not isinstance(components, (list, tuple)) or not components:
+        raise WaveopticsError("sum: components must be a non-empty list of {'model': ..., params} dicts")
+    _, seed = _rng_seed(seed)
+    children = np.random.SeedSequence(seed).spawn(len(components))
+    total = None
+    for comp, child in zip(components, children):
+        if not isinstance(comp, dict) or "model" not in comp:
+            raise WaveopticsError(f"sum: component {comp!r} is not a dict with a 'model' key")
+        params = {k: v for k, v in comp.items() if k != "model"}
+        if "seed" in inspect.signature(GENERATORS.get(comp["model"], flat)).parameters:
+            params.setdefault("seed", int(child.generate_state(1, np.uint64)[0] >> np.uint64(1)))
+        hf = generate(comp["model"], size=size, samples=samples, **params)
+        total = hf if total is None else total + hf
+    meta = dict(total.meta, model="sum", seed=seed)
+    return HeightField(total.heights, total.dx, total.dy, total.mask, meta)
+
+
+#: model name -> generator; every generator takes ``size`` and ``samples``
+GENERATORS = {
+    "flat": flat,
+    "gaussian": gaussian,
+    "exponential": exponential,
+    "abc": abc,
+    "sinusoid": sinusoid,
+    "scratches": scratches,
+    "sum": _sum,
+}
+
+
+def generate(model: str, **params) -> HeightField:
+    """Generate a height field by model name (the registry :data:`GENERATORS`), as the CLI and scene files do.
+
+    Parameters
+    ----------
+    model : str
+        One of :data:`GENERATORS`.
+    **params
+        The generator's parameters; lengths may be strings with units ('5nm', '1.2um').
+
+    Raises
+    ------
+    WaveopticsError
+        Unknown model, unknown or missing parameter, or a bad value.
+    """
+    if model not in GENERATORS:
+        raise unknown("surface model", model, GENERATORS)
+    fn = GENERATORS[model]
+    sig = inspect.signature(fn)
+    bad = [k for k in params if k not in sig.parameters]
+    if bad:
+        raise WaveopticsError(f"surface model {model!r} has no parameter {bad[0]!r}; allowed: "
+                              f"{', '.join(sig.parameters)}")
+    missing = [k for k, p in sig.parameters.items() if p.default is inspect.Parameter.empty and k not in params]
+    if missing:
+        raise WaveopticsError(f"surface model {model!r} needs parameter {missing[0]!r}")
+    return fn(**params)
