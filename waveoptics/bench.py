@@ -32,6 +32,7 @@ References
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import platform
@@ -39,11 +40,15 @@ import time
 import warnings
 
 import numpy as np
+import pyopencl as cl
+import pyopencl.array as cla
+import scipy.fft as sfft
+from scipy.interpolate import RegularGridInterpolator
 
 from . import scatter
+from .runtime import build_options, build_program, get_runtime
 from .surfaces.heightfield import HeightField
 from .units import direction_from_angles
-from .runtime import build_options, build_program, get_runtime
 
 __all__ = ['WAVELENGTH_NM', 'MATH_FUNCTIONS', 'best_time', 'machine', 'numpy_direct_sum', 'NAIVE', 'large_patch_errors', 'direct_kernels', 'direct_scaling', 'fft_backends', 'numpy_fft_pipeline', 'fft_pipeline', 'math_errors', 'run_all', 'report']
 
@@ -216,7 +221,6 @@ def direct_scaling(rt, sizes=(32, 64, 128, 256), directions=(256, 1024, 4096, 16
 def fft_backends(sizes=(256, 512, 1024), repeat: int = 3, rt=None, solver_sizes=(128, 256, 512)) -> dict:
     """2-D complex FFT throughput (points/s) per implementation and size; unavailable ones are listed with the
     reason."""
-    import scipy.fft as sfft
 
     rng = np.random.default_rng(0)
     rows, missing = [], {}
@@ -255,7 +259,6 @@ def fft_backends(sizes=(256, 512, 1024), repeat: int = 3, rt=None, solver_sizes=
         for name, fn in impls.items():
             row[name] = n * n / best_time(lambda fn=fn: fn(a), repeat)
         if vk is not None:
-            import pyopencl.array as cla
 
             try:
                 d = cla.to_device(rt.queue, a.astype(np.complex64))
@@ -276,9 +279,7 @@ def _solver_backends(sizes, repeat: int) -> list[dict]:
     """Time (s) of the fft solver (:func:`waveoptics.diffraction.field_fft`, order auto, n × n patch onto an n × n
     grid) with scipy.fft's default, with ``scipy.fft.set_workers(2)`` and with pyFFTW as scipy.fft's backend —
     the choice that matters for the solver, whose chirp-z transforms are batches of 1-D FFTs."""
-    import contextlib
 
-    import scipy.fft as sfft
 
     ctx = {"scipy.fft": contextlib.nullcontext, "scipy.fft workers=2": lambda: sfft.set_workers(2)}
     try:
@@ -308,7 +309,6 @@ def numpy_fft_pipeline(smp: scatter.Samples, wi, grid: scatter.DirectionGrid, wa
     """The FFT pipeline a user would write: frozen v_z = 2k cos θ_i, zero-padded ``numpy.fft.fft2`` of
     w exp(i v_z h) (pad × pad, default the next power of two ≥ 2 max(nx, ny)), then bilinear interpolation of the
     field at s_xy dx/λ cycles per sample onto the grid's cells (m², zero outside the disc)."""
-    from scipy.interpolate import RegularGridInterpolator
 
     lam = wavelength_nm * 1e-9
     h, w = smp.grid_arrays()
@@ -370,8 +370,6 @@ def math_errors(rt, n: int = 200_001) -> dict:
     |x| ≤ 10⁴ (large phases; the error there is the function's on its float32 argument — the argument's own
     rounding, which dominates a naive k·x phase, is measured by :func:`large_patch_errors`).
     """
-    import pyopencl as cl
-    import pyopencl.array as cla
 
 
     def cyc(x, period):   # x mod period, exact in float64, so that π x keeps all its digits

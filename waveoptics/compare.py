@@ -12,13 +12,12 @@ import math
 
 import numpy as np
 
-from . import colour
+from . import colour, render
 from .brdf import twoscale
+from .io import figures
+from .io.figures import save_figure
 from .scatter.grid import integrate
 from .units import direction_from_angles
-from . import render
-from .io.figures import save_figure
-from .io import figures
 
 __all__ = ['lobe_fwhm_deg', 'compare', 'plot', 'table_text']
 

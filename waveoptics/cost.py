@@ -52,14 +52,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import colour, scatter
-from . import surfaces
+from . import colour, scatter, surfaces
 from .errors import WaveopticsError, unknown
-from .surfaces.heightfield import HeightField
+from .io import figures
 from .io.figures import save_figure
 from .io.files import atomic_path, prepare_outdir, write_json
 from .runtime import get_runtime
-from .io import figures
+from .surfaces.heightfield import HeightField
 
 __all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
 

@@ -11,16 +11,17 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from matplotlib import colors
+from scipy.ndimage import map_coordinates
 
-from . import colour, surfaces
+from . import colour, io, render, surfaces
 from .brdf import twoscale
-from .scatter.grid import DirectionGrid
-from .materials import get_material
-from .units import direction_from_angles
-from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano
-from . import io, render
-from .io.figures import save_figure
 from .io import figures
+from .io.figures import save_figure
+from .materials import get_material
+from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano
+from .scatter.grid import DirectionGrid
+from .units import direction_from_angles
 
 __all__ = ['SPHERE_THETAS_DEG', 'Simulation', 'simulate', 'run', 'OUTPUT_FILES', 'render_spheres',
            'plane_of_incidence', 'write_outputs']
@@ -222,7 +223,6 @@ def plane_of_incidence(sim: Simulation, which, n=721):
     g = sim.grid
     fu = np.clip((u - g.u_range[0]) / g.du - 0.5, 0, g.n_u - 1)
     fv = np.clip((v - g.v_range[0]) / g.dv - 0.5, 0, g.n_v - 1)
-    from scipy.ndimage import map_coordinates
 
     out = np.stack([map_coordinates(fl, [fv, fu], order=1, mode="nearest") for fl in f])
     return np.degrees(np.arcsin(s)), out
@@ -293,7 +293,6 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
 
 def _plot_hemispheres(rgb, rgb_mf, grid, path, sim):
     plt = figures.pyplot()
-    from matplotlib import colors
 
     Y = colour.luminance(rgb)
     Ymf = colour.luminance(rgb_mf)

@@ -10,10 +10,12 @@ References
 from __future__ import annotations
 
 from typing import Callable
+
 import numpy as np
+
 from ..errors import WaveopticsError
-from .ndf import _as_dirs
 from .fresnel_terms import F_mean
+from .ndf import _as_dirs
 
 __all__ = ['lambert', 'oren_nayar', 'diffuse_tradeoff', 'DIFFUSES']
 

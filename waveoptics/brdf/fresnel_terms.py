@@ -7,12 +7,14 @@ References
 .. [2] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5 and §14.2 (Fresnel equations, conductors).
 """
 from __future__ import annotations
-from ..errors import WaveopticsError, unknown
-from .ndf import _gl01
+
 from typing import Callable
+
 import numpy as np
 
+from ..errors import WaveopticsError, unknown
 from ..materials import fresnel as _fresnel
+from .ndf import _gl01
 
 __all__ = ['FRESNELS', 'F_mean']
 

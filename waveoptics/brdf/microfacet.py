@@ -48,13 +48,14 @@ References
 from __future__ import annotations
 
 import numpy as np
+
 from ..errors import WaveopticsError, unknown
-from .diffuse import DIFFUSES, diffuse_tradeoff
-from .ndf import ABC_C_DEFAULT, COS_MIN, _as_dirs, _check_alpha, _dot, _ndf, half_vector
-from .shadowing import _shadowing
-from .fresnel_terms import FRESNELS, _fresnel_fn
 from ..materials.database import get_material
 from ..units import check_wavelengths
+from .diffuse import DIFFUSES, diffuse_tradeoff
+from .fresnel_terms import FRESNELS, _fresnel_fn
+from .ndf import ABC_C_DEFAULT, COS_MIN, _as_dirs, _check_alpha, _dot, _ndf, half_vector
+from .shadowing import _shadowing
 
 __all__ = ['specular', 'brdf', 'fresnel_inputs', 'spectral_brdf']
 

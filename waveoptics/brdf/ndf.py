@@ -15,8 +15,10 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 from typing import Callable
+
 import numpy as np
 from scipy import special
+
 from ..errors import WaveopticsError, unknown
 
 __all__ = ['ALPHA_MIN', 'ALPHA_MAX', 'COS_MIN', 'ABC_C_DEFAULT', 'LAMBDA_GL_ORDER', 'alpha_from_roughness', 'roughness_from_alpha', 'blinn_phong_exponent', 'alpha_from_blinn_phong', 'half_vector', 'reflect', 'D_ggx', 'Lambda_ggx', 'D_beckmann', 'Lambda_beckmann', 'D_blinn_phong', 'Lambda_blinn_phong', 'abc_normalization', 'D_abc', 'Lambda_radial', 'Lambda_abc', 'NDF', 'NDFS', 'D', 'Lambda', 'G1']

@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import numpy as np
-from ..materials import fresnel as _fresnel
+import pyopencl as cl
+import pyopencl.array as cla
+
 from ..errors import WaveopticsError, unknown
+from ..materials import fresnel as _fresnel
+from ..runtime import build_options, build_program, get_runtime
 from .diffuse import DIFFUSES
+from .fresnel_terms import F_mean
 from .microfacet import FRESNELS, _fresnel_fn
 from .ndf import ABC_C_DEFAULT, _as_dirs, _check_alpha, _ndf
 from .shadowing import _shadowing
-from ..runtime import build_options, build_program, get_runtime
-from .fresnel_terms import F_mean
 
 __all__ = ['D_cl', 'Lambda_cl', 'brdf_cl']
 
@@ -31,7 +34,6 @@ _kernels: dict = {}
 
 def _kernel(prg, name):
     """The kernel object *name* of *prg*, retrieved once (pyopencl warns on repeated retrieval)."""
-    import pyopencl as cl
 
     key = (id(prg), name)
     k = _kernels.get(key)
@@ -60,13 +62,11 @@ def _defines(ndf=None, shadowing=None, fresnel=None, diffuse=None, tradeoff=None
 
 
 def _vec_dev(queue, w, dt):
-    import pyopencl.array as cla
 
     return cla.to_device(queue, np.ascontiguousarray(np.asarray(w, dtype=dt).reshape(-1, 3)).ravel())
 
 
 def _ndf_kernel(kname, w, alpha, alpha_y, ndf, abc_c, runtime, precision):
-    import pyopencl.array as cla
 
     spec = _ndf(ndf)
     ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
@@ -113,7 +113,6 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlat
     ndarray (M, N)
         f in 1/sr (float64 copy of the device result).
     """
-    import pyopencl.array as cla
 
     spec = _ndf(ndf)
     ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import functools
 from typing import Callable
+
 import numpy as np
+
 from .microfacet import brdf
 from .ndf import ALPHA_MIN, _as_dirs, _gl01, reflect
 

@@ -8,9 +8,11 @@ References
 from __future__ import annotations
 
 from typing import Callable
+
 import numpy as np
+
 from ..errors import unknown
-from .ndf import ABC_C_DEFAULT, _G1, _as_dirs, _check_alpha, _dot, _ndf
+from .ndf import _G1, ABC_C_DEFAULT, _as_dirs, _check_alpha, _dot, _ndf
 
 __all__ = ['G_smith', 'G_smith_correlated', 'G_cook_torrance', 'G_implicit', 'SHADOWINGS', 'G']
 

@@ -34,18 +34,19 @@ References
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import signal
 
 from .. import scatter, surfaces
-from ..scatter.grid import DirectionGrid, integrate
 from ..errors import FieldError, WaveopticsError, unknown
 from ..materials import Material, get_material
+from ..runtime import get_runtime
+from ..scatter.grid import DirectionGrid, integrate
 from ..surfaces.heightfield import HeightField
 from ..units import check_wavelengths
-from ..runtime import get_runtime
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .microfacet import specular
 from .ndf import ALPHA_MIN
@@ -303,7 +304,6 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     ----------
     .. [1] Beckmann & Spizzichino 1963, ch. 5 (coherent and incoherent fields); docs/physics.md §1-§2.
     """
-    import dataclasses
 
 
     w = check_wavelengths(wavelengths_nm)

@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import sys
 
-from ..io.files import to_json
+from tqdm.auto import tqdm
 
+from ..io.files import to_json
 
 #: request fields whose option has another name (the dest of the option that carries the field); every other
 #: field is carried by the option of the same dest (``micro_alpha`` → ``--micro-alpha``)
@@ -63,7 +64,6 @@ def emit(args, data, text: str | None = None) -> None:
 
 def progress(iterable=None, *, total=None, desc=None, args=None):
     """A tqdm progress bar on stderr, silent under ``--json`` or when stderr is not a terminal."""
-    from tqdm.auto import tqdm
 
     quiet = (args is not None and getattr(args, "json", False)) or not sys.stderr.isatty()
     return tqdm(iterable, total=total, desc=desc, disable=quiet, file=sys.stderr, leave=False)

@@ -5,10 +5,10 @@ FFTs and a NumPy FFT pipeline, plus the measured error of the device's math buil
 """
 from __future__ import annotations
 
-from ._common import add_common, emit, progress
 from .. import bench
 from ..io.files import atomic_path, prepare_outdir, write_json
 from ..runtime import get_runtime
+from ._common import add_common, emit, progress
 
 FILES = ("bench.json", "bench.md")
 

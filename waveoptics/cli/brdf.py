@@ -17,14 +17,13 @@ from typing import Callable
 
 import numpy as np
 
-from .. import brdf, scatter
+from .. import brdf, scatter, surfaces
 from ..errors import WaveopticsError
-from ._common import add_common, emit, progress
-from .. import surfaces
 from ..materials.database import get_material
 from ..materials.fresnel import F_schlick
 from ..runtime import get_runtime
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
+from ._common import add_common, emit, progress
 
 
 @dataclass(frozen=True)

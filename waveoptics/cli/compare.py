@@ -1,12 +1,16 @@
 """``waveoptics compare``: both models over a range of incident angles (table + plot)."""
 from __future__ import annotations
 
-from ._common import add_common, emit
+import csv
+import io as _io
+from pathlib import Path
+
+from .. import compare as cmp
 from .. import io
 from ..errors import WaveopticsError
 from ..units import check_theta, parse_number_list
+from ._common import add_common, emit
 from .simulate import add_scene_options, simulation_from_args
-from .. import compare as cmp
 
 
 def register(sub):
@@ -27,8 +31,6 @@ def register(sub):
 
 
 def run(args):
-    import csv
-    import io as _io
 
 
     angles = parse_number_list(args.angles, name="angles_deg")
@@ -44,7 +46,6 @@ def run(args):
     rows = cmp.compare(sim, angles, tail_deg=args.tail)
     data = {"parameters": sim.params, "tail_deg": args.tail, "rows": rows}
     if args.output:
-        from pathlib import Path
 
         out = Path(args.output)
         io.write_json(out / "compare.json", data)

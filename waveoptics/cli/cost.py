@@ -4,13 +4,13 @@ Pareto front and the cheapest setting meeting ``--target-error`` (logic in :mod:
 """
 from __future__ import annotations
 
-from ._common import add_common, emit, progress
 from .. import cost, surfaces
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
-from ..runtime import get_runtime
 from ..materials import fresnel_function
+from ..runtime import get_runtime
 from ..units import parse_direction
+from ._common import add_common, emit, progress
 
 
 def _list(text, conv, name):

@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 from .. import colour
-from ._common import add_colour, add_common, emit
 from ..materials.database import get_material
+from ._common import add_colour, add_common, emit
 
 
 def register(sub):

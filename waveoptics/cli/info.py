@@ -3,9 +3,12 @@ from __future__ import annotations
 
 import platform as _platform
 
+import colour
+import numpy
+import pyopencl
+
+from .. import __version__, runtime
 from ._common import add_common, emit
-from .. import runtime
-from .. import __version__
 
 
 def register(sub):
@@ -18,9 +21,6 @@ def register(sub):
 
 def gather(device=None) -> dict:
     """Everything ``info`` reports, as plain data."""
-    import colour
-    import numpy
-    import pyopencl
 
 
     data = {

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._common import add_common, emit
 from .. import materials
+from ._common import add_common, emit
 
 
 def register(sub):

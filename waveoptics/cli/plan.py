@@ -1,10 +1,10 @@
 """``waveoptics plan SCENE``: which effects a scene needs, with the reason for every decision and the cost."""
 from __future__ import annotations
 
-from ._common import add_common, emit
 from .. import planning
 from ..errors import WaveopticsError
 from ..planning import scene
+from ._common import add_common, emit
 
 
 def add_force(p) -> None:

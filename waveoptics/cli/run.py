@@ -1,9 +1,9 @@
 """``waveoptics run SCENE -o OUTDIR``: execute a scene's plan and write the outputs it asks for."""
 from __future__ import annotations
 
+from .. import io, planning
 from ._common import add_common, add_output, emit, progress
 from .plan import add_force, make_plan
-from .. import io, planning
 
 
 def register(sub):

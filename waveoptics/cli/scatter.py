@@ -11,14 +11,13 @@ from __future__ import annotations
 import sys
 import warnings
 
-from .. import scatter
-from ._common import add_common, add_output, emit, progress
-from .. import surfaces
+from .. import scatter, surfaces
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
+from ..materials.database import fresnel_function
 from ..runtime import get_runtime
 from ..units import parse_direction, parse_wavelengths
-from ..materials.database import fresnel_function
+from ._common import add_common, add_output, emit, progress
 
 
 def register(sub) -> None:

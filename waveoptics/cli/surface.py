@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import inspect
 
+from .. import surfaces
 from ..errors import WaveopticsError
 from ._common import add_common, emit
-from .. import surfaces
 
 #: CLI option -> generator parameter (lengths stay strings with units; the generators parse them)
 _MODEL_OPTIONS = {

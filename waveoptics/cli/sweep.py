@@ -1,12 +1,11 @@
 """``waveoptics sweep``: a parameter sweep of the two-scale model on Dask, summarized in a CSV/JSON table."""
 from __future__ import annotations
 
-from ._common import add_common, emit, progress
-from .table import add_case_options, add_cluster_options, case_from_args
 from .. import distributed
 from ..errors import WaveopticsError
 from ..units import parse_direction
-
+from ._common import add_common, emit, progress
+from .table import add_case_options, add_cluster_options, case_from_args
 
 #: --vary names listed in the help (kept equal to waveoptics.distributed.VARY by tests/test_distributed.py; the
 #: module is not imported here because importing Dask would slow down every command's start)

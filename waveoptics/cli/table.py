@@ -6,13 +6,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ._common import add_common, emit, progress
-from ..request import DEFAULT_NANO
+import numpy as np
+
 from .. import distributed
 from ..errors import WaveopticsError
-from ..request import SimulationRequest
-from ..units import parse_number_list, parse_wavelengths
 from ..planning import scene
+from ..request import DEFAULT_NANO, SimulationRequest
+from ..units import parse_number_list, parse_wavelengths
+from ._common import add_common, emit, progress
 
 SCENE_SUFFIXES = (".toml",)
 
@@ -126,7 +127,6 @@ def register(sub):
 
 
 def run(args):
-    import numpy as np
 
 
     case, surface = case_from_args(args, source=args.source)

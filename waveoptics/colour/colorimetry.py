@@ -65,7 +65,11 @@ References
 from __future__ import annotations
 
 import functools
+
+import colour
 import numpy as np
+from scipy.interpolate import CubicSpline
+
 from ..errors import WaveopticsError, unknown
 from ..units import check_wavelengths
 from .illuminants import SPD, _as_spd
@@ -142,7 +146,6 @@ def _weights_linear(grid: np.ndarray, spd: SPD, observer) -> np.ndarray:
 def _weights_spline(grid: np.ndarray, spd: SPD, observer) -> np.ndarray:
     """Weights Σ_k m_k x̄ȳz̄_k φ_j(λ_k) with φ_j the cardinal functions of a not-a-knot cubic spline on *grid*
     (scipy ``CubicSpline`` through the unit vectors), R held constant beyond the ends."""
-    from scipy.interpolate import CubicSpline
 
     lam, m, c = _measure(spd, observer)
     mc = m[:, None] * c
@@ -154,9 +157,10 @@ def _weights_spline(grid: np.ndarray, spd: SPD, observer) -> np.ndarray:
 
 def _weights_astm_e2022(grid: np.ndarray, spd: SPD, observer) -> np.ndarray:
     """colour-science's ASTM E2022 weights for a uniform integer-step grid aligned with the CMF start."""
-    import colour
-    from colour.colorimetry import (adjust_tristimulus_weighting_factors_ASTME308,
-                                    tristimulus_weighting_factors_ASTME2022)
+    from colour.colorimetry import (
+        adjust_tristimulus_weighting_factors_ASTME308,
+        tristimulus_weighting_factors_ASTME2022,
+    )
 
     if spd.lines:
         raise WaveopticsError("method 'ASTM E2022' needs a continuous illuminant; use method='linear' for lasers")
@@ -293,7 +297,6 @@ def XYZ_to_rgb(XYZ, space="sRGB", white=None, *, cat: str = CAT) -> np.ndarray:
     numpy.ndarray (..., 3)
         Linear RGB; values outside [0, 1] are kept (out-of-gamut colours such as gold's red F0).
     """
-    import colour
 
     cs = colour.RGB_COLOURSPACES[space_name(space)]
     XYZ = np.asarray(XYZ, dtype=float)
@@ -317,7 +320,6 @@ def reflectance_to_rgb(R, wavelengths_nm, illuminant="D65", observer=DEFAULT_OBS
 def luminance(rgb, space="sRGB") -> np.ndarray:
     """Relative luminance Y of linear RGB (..., 3) in *space*: the Y row of the space's RGB → XYZ matrix
     (colour-science's; for sRGB the Rec. 709 weights 0.2126, 0.7152, 0.0722, IEC 61966-2-1)."""
-    import colour
 
     weights = np.asarray(colour.RGB_COLOURSPACES[space_name(space)].matrix_RGB_to_XYZ)[1]
     return np.asarray(rgb, dtype=float) @ weights
@@ -325,7 +327,6 @@ def luminance(rgb, space="sRGB") -> np.ndarray:
 
 def rgb_to_srgb8(rgb) -> np.ndarray:
     """8-bit sRGB-encoded integers from linear sRGB: clipped to [0, 1], IEC 61966-2-1 curve, rounded."""
-    import colour
 
     rgb = np.asarray(rgb, dtype=float)
     if not np.all(np.isfinite(rgb)):
@@ -335,7 +336,6 @@ def rgb_to_srgb8(rgb) -> np.ndarray:
 
 
 def _delta_e2000_XYZ(XYZ1, XYZ2, white) -> np.ndarray:
-    import colour
 
     xy = colour.XYZ_to_xy(np.asarray(white, dtype=float))
     return colour.delta_E(colour.XYZ_to_Lab(XYZ1, xy), colour.XYZ_to_Lab(XYZ2, xy), method="CIE 2000")
@@ -348,7 +348,6 @@ def delta_e2000(rgb1, rgb2, colourspace="sRGB") -> np.ndarray:
     ----------
     .. [1] Luo, Cui, Rigg, Color Res. Appl. 26(5), 2001; colour-science ``delta_E(method='CIE 2000')``.
     """
-    import colour
 
     cs = colour.RGB_COLOURSPACES[space_name(colourspace)]
     to_XYZ = functools.partial(colour.RGB_to_XYZ, colourspace=cs, illuminant=cs.whitepoint,

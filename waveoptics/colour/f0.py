@@ -7,12 +7,14 @@ References
 from __future__ import annotations
 
 import math
+
 import numpy as np
+
 from ..errors import WaveopticsError
+from ..materials.database import category_from_f0
 from .colorimetry import DEFAULT_OBSERVER, XYZ_to_rgb, reflectance_to_XYZ, rgb_to_srgb8, white_XYZ
 from .illuminants import _as_spd
 from .sampling import spectral_grid
-from ..materials.database import category_from_f0
 
 __all__ = ['classify_f0', 'f0_colour']
 

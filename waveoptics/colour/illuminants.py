@@ -12,7 +12,10 @@ import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
+
+import colour
 import numpy as np
+
 from ..errors import WaveopticsError, unknown
 from ..units import check_wavelengths
 
@@ -89,7 +92,6 @@ def blackbody(temperature_K: float) -> SPD:
     ----------
     .. [1] CIE 015:2018, §B.1 (Planck's law with c2 = 1.4388e-2 m·K); colour-science ``sd_blackbody``.
     """
-    import colour
 
     T = float(temperature_K)
     if not (math.isfinite(T) and 100.0 <= T <= 1e7):
@@ -100,7 +102,6 @@ def blackbody(temperature_K: float) -> SPD:
 
 def standard_illuminant(name: str) -> SPD:
     """A CIE (or other colour-science) illuminant by name: ``"D65"``, ``"A"``, ``"F2"`` (= ``"FL2"``), ``"E"``."""
-    import colour
 
     key = _STANDARD_ALIASES.get(name.upper(), name)
     table = {k.lower(): k for k in colour.SDS_ILLUMINANTS}
@@ -121,7 +122,6 @@ def spd_from_csv(path, column: str | None = None) -> SPD:
     column : str, optional
         Column to use; required when the file has more than one spectrum.
     """
-    import colour
 
     p = Path(path)
     if not p.is_file():

@@ -4,13 +4,17 @@ projection of the spectrum; CIE 015:2018 §7).
 from __future__ import annotations
 
 from pathlib import Path
+
+import colour
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
 from ..errors import WaveopticsError
+from ..io.files import atomic_path
 from ..units import check_wavelengths
 from .colorimetry import DEFAULT_OBSERVER, XYZ_to_rgb, cmf_at, cmfs, observer_name, spd_to_XYZ
-from .illuminants import _as_spd, laser
-from .illuminants import SPD
-from ..io.files import atomic_path
+from .illuminants import SPD, _as_spd, laser
 
 __all__ = ['metamer_laser_weights', 'metamer_summary', 'plot_metamers', 'RGB_LASER_NM', 'rgb_laser_projector']
 
@@ -66,7 +70,6 @@ def metamer_summary(target_spd, lines_nm, observer=DEFAULT_OBSERVER) -> dict:
         :func:`metamer_laser_weights`), ``power_fractions`` (sum 1), ``XYZ_target`` and ``XYZ_mix`` (scaled so the
         target's Y = 1) and ``xy`` (chromaticity of the target).
     """
-    import colour
 
     target = _as_spd(target_spd)
     lines = check_wavelengths(lines_nm, name="laser line")
@@ -91,9 +94,6 @@ def plot_metamers(target_spd, lines_nm, powers, path, *, observer=DEFAULT_OBSERV
     path : str or Path
         PNG file (written atomically; refused if it exists unless *overwrite*).
     """
-    import colour
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
 
 
     target = _as_spd(target_spd)

@@ -5,9 +5,13 @@ References
 .. [1] CIE 015:2018, *Colorimetry*, 4th ed. (1931 2° and 1964 10° standard observers).
 """
 from __future__ import annotations
-from ..errors import unknown
+
 import functools
+
+import colour
 import numpy as np
+
+from ..errors import unknown
 
 __all__ = ['DEFAULT_OBSERVER', 'OBSERVERS', 'observer_name', 'cmfs', 'cmf_at']
 
@@ -36,7 +40,6 @@ def observer_name(observer) -> str:
 
 @functools.lru_cache(maxsize=8)
 def _cmfs(name: str):
-    import colour
 
     c = colour.MSDS_CMFS[name]
     w, v = np.array(c.wavelengths, dtype=float), np.array(c.values, dtype=float)

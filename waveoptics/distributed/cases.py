@@ -5,11 +5,13 @@ from __future__ import annotations
 import functools
 import hashlib
 import inspect
+
 import numpy as np
+
 from .. import io, surfaces
-from ..request import NO_NANO, SimulationRequest, make_nano
 from ..brdf import twoscale
 from ..errors import WaveopticsError
+from ..request import NO_NANO, SimulationRequest, make_nano
 
 __all__ = ['case_from_scene', 'surface_digest']
 

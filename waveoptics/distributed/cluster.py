@@ -48,10 +48,14 @@ from __future__ import annotations
 import contextlib
 import time
 from typing import Callable, NamedTuple
+
+import dask
+from distributed import Client, LocalCluster, as_completed
 from distributed.diagnostics.plugin import WorkerPlugin
+
+from .. import runtime
 from ..errors import FieldError, WaveopticsError
 from ..materials import get_material
-from .. import runtime
 
 #: retries of a task that raises (a task lost with its worker is recomputed by the scheduler anyway)
 DEFAULT_RETRIES = 2
@@ -89,7 +93,6 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
     scheduler : str, optional
         Address of an existing scheduler, ``tcp://HOST:PORT``.
     """
-    from distributed import Client
 
     _check_cluster_args(workers, scheduler)
     if scheduler is not None:
@@ -107,14 +110,12 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
 def local_cluster(workers: int | None = None):
     """The ``LocalCluster`` behind :func:`dask_client`: *workers* single-threaded processes on 127.0.0.1, or (None)
     one in-process worker thread; no dashboard, every socket on loopback (:data:`LOOPBACK`)."""
-    from distributed import LocalCluster
 
     if workers is None:  # in-process transport (inproc://), no host to bind
         return LocalCluster(n_workers=1, threads_per_worker=1, processes=False, **LOOPBACK)
     # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in new workers by default (to return memory to the OS); that
     # also fixes glibc's mmap threshold at 128 KiB, so every array of a lobe is a fresh mmap with page faults, and
     # a table task takes about twice the CPU time (measured in docs/scaling.md). Not set here.
-    import dask
 
     with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
         return LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True, host="127.0.0.1",
@@ -163,7 +164,6 @@ def _run_jobs(client, jobs: list, on_result: Callable, *, retries: int = DEFAULT
     fails after *retries*, the remaining futures are cancelled and its exception is raised; everything handed to
     *on_result* before that is kept.
     """
-    from distributed import as_completed
 
     if not jobs:
         return

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
+
 from .. import io
 from ..errors import FieldError, OutputExistsError, WaveopticsError
 

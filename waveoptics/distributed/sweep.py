@@ -2,22 +2,23 @@
 """
 from __future__ import annotations
 
+import csv
 import dataclasses
 import itertools
 import json
 import time
 from pathlib import Path
 from typing import Callable
+
 import numpy as np
-from .. import colour, io, surfaces
-from .. import simulate
+
+from .. import colour, io, simulate, surfaces
 from ..errors import FieldError, WaveopticsError, unknown
+from ..request import _NANO_ALIASES, NANO_PARAMS, SimulationRequest, parse_nano
 from ..units import LENGTH_UNITS, parse_length, parse_number_list
-from ..request import NANO_PARAMS, SimulationRequest, _NANO_ALIASES, parse_nano
 from .cases import _token, surface_digest
-from .cluster import _Job, _check_cluster_args, _run_timed, _warm
-from .store import _Store, _refuse_or_prepare, partial_path
-from .cluster import DEFAULT_RETRIES
+from .cluster import DEFAULT_RETRIES, _check_cluster_args, _Job, _run_timed, _warm
+from .store import _refuse_or_prepare, _Store, partial_path
 
 __all__ = ['parse_length_list', 'VARY', 'parse_vary', 'apply_vary', 'sweep_points', 'sweep_point', 'SWEEP_COLUMNS', 'value_text', 'run_sweep', 'read_sweep']
 
@@ -269,7 +270,6 @@ def _write_rows(rows, final: Path, varied: list[str], *, overwrite: bool) -> Non
     if final.suffix.lower() == ".json":
         io.write_json(final, rows, overwrite=overwrite)
         return
-    import csv
 
     cols = ["point", *varied, *SWEEP_COLUMNS]
     with io.atomic_path(final, overwrite=overwrite) as tmp, open(tmp, "w", newline="") as fh:
@@ -284,7 +284,6 @@ def read_sweep(path) -> list[dict]:
     p = Path(path)
     if p.suffix.lower() == ".json":
         return json.loads(p.read_text())
-    import csv
 
     with open(p, newline="") as fh:
         return list(csv.DictReader(fh))

@@ -11,19 +11,21 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, NamedTuple
+
+import h5py
 import numpy as np
+
 from .. import colour, io, surfaces
 from ..brdf import twoscale
-from ..scatter.grid import DirectionGrid
-from ..scatter.solvers import split_patch
 from ..errors import FieldError, WaveopticsError
 from ..materials import get_material
-from ..units import check_theta, direction_from_angles
 from ..request import SimulationRequest, make_nano
+from ..scatter.grid import DirectionGrid
+from ..scatter.solvers import split_patch
+from ..units import check_theta, direction_from_angles
 from .cases import _nano, _token, surface_digest
-from .cluster import _Job, _check_cluster_args, _run_timed, _warm
-from .store import _Store, _refuse_or_prepare, partial_path
-from .cluster import DEFAULT_RETRIES
+from .cluster import DEFAULT_RETRIES, _check_cluster_args, _Job, _run_timed, _warm
+from .store import _refuse_or_prepare, _Store, partial_path
 
 __all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table']
 
@@ -304,7 +306,6 @@ def _table_token(spec: TableSpec, surface=None) -> str:
 
 def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, overwrite: bool) -> None:
     """Write the HDF5 table from the block files (streaming one (θ, batch) at a time), atomically."""
-    import h5py
 
     case = spec.case
     w = case.wavelengths()
@@ -412,7 +413,6 @@ class BRDFTable:
 
 def table_info(path) -> dict:
     """The attributes of a table file (``format``, ``token``, ``parameters`` as a dict, ...)."""
-    import h5py
 
     p = Path(path)
     if not p.is_file():
@@ -430,7 +430,6 @@ def table_info(path) -> dict:
 
 def read_table(path) -> BRDFTable:
     """Load a table written by :func:`run_table` into memory."""
-    import h5py
 
     info = table_info(path)
     with h5py.File(path, "r") as f:

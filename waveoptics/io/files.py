@@ -11,7 +11,10 @@ import json
 import os
 import tempfile
 from pathlib import Path
+
 import numpy as np
+import OpenEXR
+
 from ..errors import OutputExistsError, WaveopticsError
 
 __all__ = ['atomic_path', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
@@ -111,7 +114,6 @@ def write_exr(path, channels: dict, header: dict | None = None, *, overwrite: bo
         Extra header attributes. Floats that need full precision should be passed as strings,
         because OpenEXR stores Python floats as 32-bit.
     """
-    import OpenEXR
 
     dtype = np.float16 if half else np.float32
     chans = {}
@@ -133,7 +135,6 @@ def write_exr(path, channels: dict, header: dict | None = None, *, overwrite: bo
 
 def read_exr(path) -> tuple[dict, dict]:
     """Read an OpenEXR file: returns (channels as float arrays, header dict)."""
-    import OpenEXR
 
     p = Path(path)
     if not p.is_file():

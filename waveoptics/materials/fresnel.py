@@ -17,6 +17,7 @@ References
 from __future__ import annotations
 
 import numpy as np
+import pyopencl.array as cla
 
 from ..errors import WaveopticsError
 from ..runtime import build_options, build_program, get_runtime
@@ -140,8 +141,6 @@ def brewster_angle(n) -> np.ndarray:
 
 
 def _cl_eval(kernel_name, inputs, n_out, runtime, precision):
-    import pyopencl as cl
-    import pyopencl.array as cla
 
 
     rt = runtime if runtime is not None else get_runtime()
@@ -152,7 +151,6 @@ def _cl_eval(kernel_name, inputs, n_out, runtime, precision):
     d_out = [cla.empty(rt.queue, n, dt) for _ in range(n_out)]
     getattr(prg, kernel_name)(rt.queue, (max(n, 1),), None, *[a.data for a in d_in + d_out], np.int32(n))
     rt.queue.finish()
-    del cl
     return [o.get().reshape(inputs[0].shape) for o in d_out]
 
 

@@ -6,15 +6,17 @@ import functools
 import math
 import time
 from dataclasses import dataclass
+
 import numpy as np
-from .. import surfaces
+from scipy.optimize import nnls
+
+from .. import runtime, scatter, surfaces
 from ..brdf import twoscale
-from ..scatter.grid import DirectionGrid
 from ..errors import WaveopticsError
 from ..materials import get_material
-from ..units import direction_from_angles
+from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g, series_terms
-from .. import runtime, scatter
+from ..units import direction_from_angles
 
 __all__ = ['CostModel', 'fft_units', 'psd_terms', 'calibrate', 'calibrate_direct']
 
@@ -86,7 +88,6 @@ def calibrate() -> CostModel:
     1 to 6 wavelengths and 11 or 41 PSD series terms to the linear model of :meth:`CostModel.evaluation`; best of
     a few repeats each, so that a busy machine inflates the fit as little as possible.
     """
-    from scipy.optimize import nnls
 
 
     t0 = time.perf_counter()

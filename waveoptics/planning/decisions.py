@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import math
+
 import numpy as np
+from scipy.special import jv
+
 from .. import surfaces
 from ..brdf import twoscale
 
@@ -77,7 +80,6 @@ def grating_orders(amplitude_m: float, period_m: float, wavelength_nm: float) ->
     ----------
     .. [1] docs/physics.md §5 (η_m = J_m²(4π a/λ) at normal incidence); Harvey & Pfisterer 2020.
     """
-    from scipy.special import jv
 
     lam = wavelength_nm * 1e-9
     m_geo = int(math.floor(2 * period_m / lam))        # |sinθ_m − sinθ_i| ≤ 2

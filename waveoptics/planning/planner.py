@@ -65,22 +65,32 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+
 import numpy as np
-from .. import colour, surfaces
+
+from .. import colour, render, scatter, surfaces
 from ..brdf import twoscale
-from ..scatter.grid import DirectionGrid
 from ..errors import FieldError, unknown
 from ..materials import Material, get_material
 from ..planning.scene import MaterialSpec, Scene
-from ..units import direction_from_angles, parse_length
-from .costmodel import CostModel, _best, calibrate, calibrate_direct, fft_units, psd_terms
-from .decisions import LAMBDA_REF_NM, diffraction_lobe_width, float32_floor, grating_orders, grid_step, lobe_width, scattered_fraction, weakest_level
-from .decisions import ORDER_EFFICIENCY_MIN
-from .. import render, scatter
-from ..runtime import get_runtime
 from ..request import make_nano, parse_nano
+from ..runtime import get_runtime
+from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g
 from ..simulate import SPHERE_THETAS_DEG
+from ..units import direction_from_angles, parse_length
+from .costmodel import CostModel, _best, calibrate, calibrate_direct, fft_units, psd_terms
+from .decisions import (
+    LAMBDA_REF_NM,
+    ORDER_EFFICIENCY_MIN,
+    diffraction_lobe_width,
+    float32_floor,
+    grating_orders,
+    grid_step,
+    lobe_width,
+    scattered_fraction,
+    weakest_level,
+)
 
 __all__ = ['ESTIMATE_RESOLUTION', 'ESTIMATE_STEP_NM', 'ESTIMATE_SPHERE_THETAS', 'ESTIMATE_SHARE', 'PSD_G_MAX', 'FLAT_SCATTER', 'RESOLUTION_RANGE', 'PATCH_SIGMAS', 'F_FLAT_TOL', 'FLOOR_MARGIN', 'FORCEABLE', 'parse_force', 'EntryPlan', 'Plan', 'colour_shift', 'plan_scene']
 

@@ -7,16 +7,17 @@ import math
 import re
 import time
 from dataclasses import dataclass
+
 import numpy as np
-from .. import colour
+
+from .. import colour, io, render
 from ..brdf import twoscale
+from ..io import figures
 from ..scatter.grid import DirectionGrid
+from ..simulate import SPHERE_THETAS_DEG, Simulation, render_spheres
 from ..units import direction_from_angles
 from .decisions import LAMBDA_REF_NM
 from .planner import EntryPlan, Plan
-from .. import io, render
-from ..simulate import SPHERE_THETAS_DEG, Simulation, render_spheres
-from ..io import figures
 
 __all__ = ['entry_prefix', 'output_files', 'EntryResult', 'run_entry', 'view_values', 'execute']
 

@@ -53,7 +53,10 @@ import inspect
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from .. import brdf, surfaces
 from ..colour.illuminants import illuminant
+from ..errors import WaveopticsError, did_you_mean
 from ..materials.database import get_material
 from ..request import parse_nano
 
@@ -62,8 +65,6 @@ try:  # Python >= 3.11
 except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from .. import brdf, surfaces
-from ..errors import WaveopticsError, did_you_mean
 
 __all__ = ['KEYS', 'CAMERAS', 'DEFAULT_DELTA_E', 'DEFAULT_LIGHT_DIRECTIONS', 'NanoSpec', 'MaterialSpec', 'LightSpec', 'ViewSpec', 'OutputSpec', 'Scene', 'parse', 'load']
 

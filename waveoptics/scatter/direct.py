@@ -5,10 +5,14 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+
 import numpy as np
+import pyopencl as cl
+import pyopencl.array as cla
+
 from ..errors import WaveopticsError, unknown
-from .patch import Samples
 from ..runtime import build_options, build_program, get_runtime
+from .patch import Samples
 
 __all__ = ['VECTOR_WIDTH', 'TERMS_PER_LAUNCH', 'PhaseCoefficients', 'phase_coefficients', 'kirchhoff_phase', 'kirchhoff_U', 'PAIRS_PER_ITEM', 'SINCOS_TERMS', 'sincos_poly', 'sincos_2pi', 'kirchhoff_phase_cl', 'sincos_2pi_cl', 'DIRECT_KERNELS', 'kirchhoff_U_cl']
 
@@ -183,7 +187,6 @@ def sincos_2pi(t, precision: str = "float32") -> tuple[np.ndarray, np.ndarray]:
 
 def _cl_setup(runtime, precision, vector_width, smp: Samples, fast_math: bool = False):
     """(runtime, real dtype, program, queue, padded device sample arrays (ix, iy, h, w), padded count)."""
-    import pyopencl.array as cla
 
 
     rt = runtime if runtime is not None else get_runtime()
@@ -209,7 +212,6 @@ def _cl_setup(runtime, precision, vector_width, smp: Samples, fast_math: bool = 
 def _default_local_size(rt):
     """1 on CPU devices (PoCL then runs the kernels' explicit vectors as written: measured 2x), else the
     driver's choice."""
-    import pyopencl as cl
 
     return 1 if rt.device.type & cl.device_type.CPU else None
 
@@ -218,8 +220,6 @@ def kirchhoff_phase_cl(smp: Samples, coef: PhaseCoefficients, pair: int = 0, *, 
                        precision: str = "float32", vector_width: int | None = None) -> np.ndarray:
     """OpenCL ``kirchhoff_phase``: per-sample phase (cycles) of one pair, in *precision* (twin:
     :func:`kirchhoff_phase`)."""
-    import pyopencl as cl
-    import pyopencl.array as cla
 
     rt, dt, prg, q, (d_ix, d_iy, d_h, _), ns = _cl_setup(runtime, precision, vector_width, smp)
     d_out = cla.empty(q, ns, dt)
@@ -233,8 +233,6 @@ def kirchhoff_phase_cl(smp: Samples, coef: PhaseCoefficients, pair: int = 0, *, 
 
 def sincos_2pi_cl(t, *, runtime=None, precision: str = "float32") -> tuple[np.ndarray, np.ndarray]:
     """OpenCL ``sincos_2pi`` (the kernels' sin/cos of 2πt; twin: :func:`sincos_2pi`)."""
-    import pyopencl as cl
-    import pyopencl.array as cla
 
     t = np.asarray(t, dtype=float).ravel()
     empty = Samples(*(np.zeros(0, np.int32),) * 2, np.zeros(0), np.zeros(0), 1.0, 1.0, 1, 1, 0.0)
@@ -283,8 +281,6 @@ def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, preci
     -------
     ndarray of complex128 (n_pairs,), m²
     """
-    import pyopencl as cl
-    import pyopencl.array as cla
 
     if kernel not in DIRECT_KERNELS:
         raise unknown("kernel", kernel, DIRECT_KERNELS)

@@ -9,7 +9,10 @@ References
 from __future__ import annotations
 
 import math
+
 import numpy as np
+from scipy.signal import ZoomFFT
+
 from ..errors import WaveopticsError
 from .grid import DirectionGrid
 from .patch import Samples
@@ -30,7 +33,6 @@ class _DTFT2:
     """DTFT of (ny, nx) arrays at the (u, v) grid of one wavelength: dx dy Σ g e^{2πi (ix a_x + iy a_y + c0)}."""
 
     def __init__(self, smp: Samples, wi, grid: DirectionGrid, wavelength_nm: float):
-        from scipy.signal import ZoomFFT
 
         lam = wavelength_nm * 1e-9
         ax = (wi[0] + grid.u) * smp.dx / lam          # cycles per sample, (n_u,)

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
 import numpy as np
+
 from ..errors import WaveopticsError
 from ..units import check_theta, direction_from_angles
 

@@ -47,8 +47,9 @@ References
 from __future__ import annotations
 
 import numpy as np
-from .patch import Samples
+
 from .grid import COS_I_MIN
+from .patch import Samples
 
 __all__ = ['kirchhoff_factor', 'cos_theta_d', 'brdf_from_field', 'coherent_amplitude']
 

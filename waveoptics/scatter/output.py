@@ -2,13 +2,14 @@
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from ..io.files import atomic_path
-from ..io.files import prepare_outdir, write_json
+
+from ..io import figures
+from ..io.files import atomic_path, prepare_outdir, write_json
 from ..io.spectral_exr import write_spectral_exr
 from .solvers import ScatterResult
-import math
-from ..io import figures
 
 __all__ = ['plot_scatter', 'SCATTER_FILES', 'write_scatter']
 

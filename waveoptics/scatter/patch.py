@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
+from scipy.signal.windows import get_window
+
 from ..errors import WaveopticsError, unknown
 from ..surfaces.heightfield import HeightField
 from ..surfaces.statistics import DETRENDS
@@ -44,7 +47,6 @@ def window(hf: HeightField, name: str = DEFAULT_WINDOW) -> np.ndarray:
     .. [1] F. J. Harris, "On the use of windows for harmonic analysis with the discrete Fourier transform",
        Proc. IEEE 66(1), 1978.
     """
-    from scipy.signal.windows import get_window
 
     ny, nx = hf.shape
     try:

@@ -42,8 +42,10 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, replace
+
 import numpy as np
 from scipy import special, stats
+
 from ..surfaces.psd import PSDModel
 
 __all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'poisson_weights', 'roughness_g', 'series_terms', 'g_factor', 'coherent_fraction', 'obliquity', 'scattered_lobe', 'rayleigh_rice']

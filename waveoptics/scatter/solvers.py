@@ -7,14 +7,17 @@ import math
 import time
 import warnings
 from dataclasses import dataclass, field
+
 import numpy as np
+from scipy.interpolate import RegularGridInterpolator
+
 from ..errors import WaveopticsError, unknown
+from ..materials import fresnel_function
 from ..surfaces.heightfield import HeightField
 from ..units import check_wavelengths
 from .direct import kirchhoff_U, kirchhoff_U_cl, phase_coefficients
 from .fft import FFT_TOL, field_fft
-from .grid import DirectionGrid, HORIZON_SIN, _incident, _outgoing, integrate
-from ..materials import fresnel_function
+from .grid import HORIZON_SIN, DirectionGrid, _incident, _outgoing, integrate
 from .kirchhoff import brdf_from_field, coherent_amplitude, cos_theta_d
 from .patch import DEFAULT_WINDOW, Samples, samples
 
@@ -192,7 +195,6 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
                 U = kirchhoff_U_cl(smp, coef, runtime=runtime, precision=precision, progress=progress)
             acc += brdf_from_field(U.reshape(wl.size, -1), wi, wo, wl, smp.area, F)
         else:
-            from scipy.interpolate import RegularGridInterpolator
 
             res = resolution or min(2048, max(64, int(math.ceil(2 * max(smp.extent) / (wl.min() * 1e-9)))))
             grid = DirectionGrid.hemisphere(res)

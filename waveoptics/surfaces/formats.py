@@ -2,12 +2,18 @@
 """
 from __future__ import annotations
 
+import io as _io
+import json
+import zipfile
+from pathlib import Path
+
 import numpy as np
+
 from ..errors import FieldError, OutputExistsError, WaveopticsError, unknown
-from .generators import _length
-from .heightfield import HeightField
 from ..io.files import atomic_path, read_exr, to_json, write_exr, write_json
 from ..units import LENGTH_UNITS
+from .generators import _length
+from .heightfield import HeightField
 
 __all__ = ['TEXT_EXTS', 'FORMATS', 'load', 'save']
 
@@ -41,7 +47,6 @@ def _sniff(head: bytes) -> str:
 
 
 def _ext(path) -> str:
-    from pathlib import Path
 
     ext = Path(path).suffix.lower()
     if ext not in FORMATS:
@@ -99,7 +104,6 @@ def _nan_mask(h, allow: bool, what: str):
 
 
 def _json_meta(text, what):
-    import json
 
     try:
         meta = json.loads(text)
@@ -138,7 +142,6 @@ def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False) -> H
         One line naming the file and the problem: missing, empty, truncated, not what its extension says,
         wrong dtype or shape, NaN/Inf heights, missing/zero/negative spacing, unknown units.
     """
-    from pathlib import Path
 
     p = Path(path)
     ext = _ext(p)
@@ -182,7 +185,6 @@ def _finish(h, sp, mask, meta, what):
 
 
 def _load_npz(p, sp, units, nan_is_mask):
-    import zipfile
 
     try:
         # an open handle of our own: np.load leaks the one it opens when the zip is broken
@@ -429,8 +431,6 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
     -------
     Path
     """
-    import json
-    from pathlib import Path
 
 
     p = Path(path)
@@ -478,7 +478,6 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
             lines.insert(1, "# layout = matrix")
             body = h_nan
             delim = "," if ext == ".csv" else " "
-        import io as _io
 
         buf = _io.StringIO()
         np.savetxt(buf, body, fmt="%.17g", delimiter=delim)

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import inspect
 import math
+
 import numpy as np
+
 from ..errors import WaveopticsError, unknown
 from ..units import parse_length
 from .heightfield import HeightField

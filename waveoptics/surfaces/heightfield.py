@@ -32,7 +32,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+
 import numpy as np
+
 from ..errors import WaveopticsError
 
 __all__ = ['HeightField']

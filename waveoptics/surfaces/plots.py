@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+
+from ..io import figures
+from ..io.files import atomic_path
 from .heightfield import HeightField
 from .psd import PSD_MODELS
 from .statistics import psd_radial
-from ..io.files import atomic_path
-from ..io import figures
 
 __all__ = ['plot']
 

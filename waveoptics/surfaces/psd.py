@@ -12,13 +12,14 @@ References
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Callable, NamedTuple
+
 import numpy as np
 from scipy import special
+
 from ..errors import WaveopticsError, unknown
-from typing import Callable
-from typing import NamedTuple
-import math
 
 __all__ = ['S_gaussian', 'S1_gaussian', 'c_gaussian', 'S_exponential', 'S1_exponential', 'c_exponential', 'abc_A',
            'abc_sigma', 'S_abc', 'S1_abc', 'c_abc', 'PSDModel', 'PSDFamily', 'PSD_MODELS']

@@ -10,7 +10,14 @@ References
 from __future__ import annotations
 
 import math
+
 import numpy as np
+from scipy.fft import next_fast_len
+from scipy.ndimage import uniform_filter1d
+from scipy.optimize import least_squares
+from scipy.signal.windows import hann
+from scipy.special import digamma, polygamma
+
 from ..errors import WaveopticsError, unknown
 from .heightfield import HeightField
 from .psd import PSD_MODELS, abc_A
@@ -151,7 +158,6 @@ def autocorrelation_radial(hf: HeightField, detrend: str = "mean") -> tuple[np.n
         cnt = np.full((ny, nx), float(nx * ny))
         sy, sx = ny, nx
     else:
-        from scipy.fft import next_fast_len
         sy, sx = (1 if ny == 1 else next_fast_len(2 * ny)), (1 if nx == 1 else next_fast_len(2 * nx))
         m = hf.valid.astype(float)
         num = np.fft.irfft2(np.abs(np.fft.rfft2(h, s=(sy, sx))) ** 2, s=(sy, sx))
@@ -197,7 +203,6 @@ def _psd(hf: HeightField, window="auto", detrend: str = "mean"):
     ny, nx = hf.shape
     w = hf.valid.astype(float)
     if window == "hann":
-        from scipy.signal.windows import hann
         w = w * np.outer(hann(ny, sym=False) if ny > 1 else [1.0], hann(nx, sym=False) if nx > 1 else [1.0])
     wsum2 = float(np.sum(w**2))
     if wsum2 <= 0:
@@ -281,8 +286,6 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
     .. [2] M. Vaughan, "A simple test for periodic signals in red noise", A&A 431, 391–403, 2005, §3
        (bias ψ(m) − ln m and variance ψ′(m) of the log of an averaged periodogram).
     """
-    from scipy.optimize import least_squares
-    from scipy.special import digamma, polygamma
 
     if model not in PSD_MODELS:
         raise unknown("PSD model", model, PSD_MODELS)
@@ -293,7 +296,6 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
     fn = family.S1 if profile else family.S
     # the band ends where a running mean of S (over ~11 bins) first falls below floor·max: choosing bins by
     # their own noisy values would keep only the upward fluctuations in the tail and bias the fit
-    from scipy.ndimage import uniform_filter1d
 
     smooth = uniform_filter1d(S, size=min(11, max(1, S.size)), mode="nearest") if S.size else S
     below = np.nonzero(smooth < floor * smooth.max())[0] if S.size else []
