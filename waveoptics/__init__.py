@@ -9,6 +9,9 @@ Sub-packages (bottom to top): ``materials`` (optical constants, Fresnel), ``colo
 and two-scale BRDFs), then ``request`` (one simulation request), the jobs ``simulate``, ``compare``, ``cost``,
 ``bench``, ``planning`` (scene files, the effect planner) and ``distributed`` (tables and sweeps on Dask).
 
+The main entry points are attributes of the package, loaded on first use (PEP 562), so that ``import waveoptics``
+and the command line's parsers stay quick.
+
 Examples
 --------
 >>> import waveoptics as wo
@@ -16,17 +19,33 @@ Examples
 >>> req.params()["wavelengths_nm"]
 [450.0, 550.0, 650.0]
 """
+import importlib
 from importlib.metadata import PackageNotFoundError, version as _version
-
-from . import brdf, colour, materials, scatter, simulate, surfaces
-from .materials import get_material
-from .request import SimulationRequest
-from .surfaces import HeightField
 
 try:
     __version__ = _version("waveoptics")
 except PackageNotFoundError:  # running from a checkout without install
     __version__ = "0.0.0+checkout"
 
-__all__ = ["__version__", "SimulationRequest", "HeightField", "get_material", "simulate", "materials", "colour",
-           "surfaces", "scatter", "brdf"]
+#: entry point -> (module, attribute or None for the module itself)
+_ENTRY_POINTS = {
+    "SimulationRequest": ("waveoptics.request", "SimulationRequest"),
+    "HeightField": ("waveoptics.surfaces", "HeightField"),
+    "get_material": ("waveoptics.materials", "get_material"),
+    **{name: (f"waveoptics.{name}", None) for name in
+       ("simulate", "materials", "colour", "surfaces", "scatter", "brdf", "request", "planning", "distributed")},
+}
+
+__all__ = ["__version__", *_ENTRY_POINTS]
+
+
+def __getattr__(name):
+    if name not in _ENTRY_POINTS:
+        raise AttributeError(f"module 'waveoptics' has no attribute {name!r}")
+    module, attr = _ENTRY_POINTS[name]
+    value = importlib.import_module(module)
+    return value if attr is None else getattr(value, attr)
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_ENTRY_POINTS))

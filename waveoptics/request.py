@@ -42,6 +42,7 @@ from .errors import FieldError, unknown
 from .materials import get_material
 from .surfaces import HeightField
 from .units import check_theta, check_wavelengths, parse_length
+from .vocabulary import NANO_SOLVERS, PRECISIONS
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "parse_nano", "nano_surface_size", "make_nano", "crop"]
@@ -66,11 +67,8 @@ _NANO_ALIASES = {"corr": "T", "corr_length": "T", "corr-length": "T", "a": "ampl
 _NANO_OPTIONAL = ("orientation", "spread")
 _NANO_ZERO_OK = ("sigma", "depth", "amplitude")
 
-#: nano-lobe solvers a request may name ('auto' lets the model choose: the PSD series for statistics)
-SOLVERS = ("auto", "psd", "fft", "direct")
-
-#: OpenCL precisions of the height-field solvers
-PRECISIONS = ("float32", "float64")
+#: nano-lobe solvers a request may name, and OpenCL precisions (:mod:`waveoptics.vocabulary`)
+SOLVERS, PRECISIONS = NANO_SOLVERS, PRECISIONS
 
 #: allowed direction-grid resolutions (cells per axis)
 RESOLUTION_RANGE = (8, 2048)

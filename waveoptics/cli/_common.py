@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import sys
 
-from tqdm.auto import tqdm
 
 from ..io.files import to_json
 
@@ -64,6 +63,8 @@ def emit(args, data, text: str | None = None) -> None:
 
 def progress(iterable=None, *, total=None, desc=None, args=None):
     """A tqdm progress bar on stderr, silent under ``--json`` or when stderr is not a terminal."""
+    from tqdm.auto import tqdm
+
 
     quiet = (args is not None and getattr(args, "json", False)) or not sys.stderr.isatty()
     return tqdm(iterable, total=total, desc=desc, disable=quiet, file=sys.stderr, leave=False)

@@ -5,9 +5,7 @@ FFTs and a NumPy FFT pipeline, plus the measured error of the device's math buil
 """
 from __future__ import annotations
 
-from .. import bench
 from ..io.files import atomic_path, prepare_outdir, write_json
-from ..runtime import get_runtime
 from ._common import add_common, emit, progress
 
 FILES = ("bench.json", "bench.md")
@@ -27,6 +25,9 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+
+    from .. import bench
+    from ..runtime import get_runtime
 
     out = prepare_outdir(args.output, overwrite=args.overwrite, expected=FILES) if args.output else None
     rt = get_runtime(args.device)

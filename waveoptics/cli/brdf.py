@@ -15,13 +15,8 @@ import sys
 from dataclasses import dataclass
 from typing import Callable
 
-import numpy as np
 
-from .. import brdf, scatter, surfaces
 from ..errors import WaveopticsError
-from ..materials.database import get_material
-from ..materials.fresnel import F_schlick
-from ..runtime import get_runtime
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
 from ._common import add_common, emit, progress
 
@@ -56,6 +51,8 @@ class Model:
 
 def _microfacet_arguments(g) -> None:
 
+    from .. import brdf
+
     g.add_argument("--ndf", choices=sorted(brdf.NDFS), default="ggx", help="normal distribution (default ggx)")
     g.add_argument("--shadowing", choices=sorted(brdf.SHADOWINGS), default="smith-correlated",
                    help="masking-shadowing term (default smith-correlated)")
@@ -84,6 +81,9 @@ def _microfacet_arguments(g) -> None:
 
 def _microfacet_params(args, wavelength_nm) -> dict:
     """Keyword arguments of microfacet.brdf for these options; Fresnel inputs per wavelength (n_λ,)."""
+    from .. import brdf
+    import numpy as np
+
 
     if (args.alpha is None) == (args.roughness is None):
         raise WaveopticsError("give exactly one of --alpha A or --roughness R for --model microfacet")
@@ -109,6 +109,9 @@ def _microfacet_params(args, wavelength_nm) -> dict:
 
 def _report_clamped(spec, wavelength_nm, args) -> None:
 
+    from ..materials.database import get_material
+    import numpy as np
+
     mat = get_material(spec)
     if mat.schlick_only:
         return
@@ -121,6 +124,8 @@ def _report_clamped(spec, wavelength_nm, args) -> None:
 
 def _per_wavelength(kw: dict, n_axes: int) -> dict:
     """Reshape the per-wavelength arrays of *kw* to (n_λ, 1, ..., 1) for NumPy broadcasting."""
+    import numpy as np
+
     out = dict(kw)
     for key in ("eta", "F0"):
         if out.get(key) is not None:
@@ -129,6 +134,10 @@ def _per_wavelength(kw: dict, n_axes: int) -> dict:
 
 
 def _microfacet_evaluate(args, wi, wo, wavelength_nm):
+
+    from .. import brdf
+    from ..runtime import get_runtime
+    import numpy as np
 
     kw = _microfacet_params(args, wavelength_nm)
     n_w = len(wavelength_nm)
@@ -147,6 +156,9 @@ def _microfacet_evaluate(args, wi, wo, wavelength_nm):
 
 
 def _microfacet_albedo(args, wi, wavelength_nm):
+
+    from .. import brdf
+    import numpy as np
 
     kw = _per_wavelength(_microfacet_params(args, wavelength_nm), 1)
     out = [brdf.albedo(w, **kw) for w in progress(wi, desc="albedo", args=args)]
@@ -182,6 +194,11 @@ def _kirchhoff_arguments(g) -> None:
 
 def _kirchhoff_setup(args, wavelength_nm):
 
+    from .. import surfaces
+    from ..materials.database import get_material
+    from ..materials.fresnel import F_schlick
+    from ..runtime import get_runtime
+
     if not args.surface:
         raise WaveopticsError("--model kirchhoff needs --surface FILE")
     if args.material is not None and args.ior is not None:
@@ -211,6 +228,9 @@ def _kirchhoff_setup(args, wavelength_nm):
 
 def _kirchhoff_evaluate(args, wi, wo, wavelength_nm):
 
+    from .. import scatter
+    import numpy as np
+
     hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
     out = [scatter.brdf(hf, w, wo, wavelength_nm, F, solver=args.solver, backend=args.backend,
                             precision=args.precision, window_name=args.window, resolution=args.resolution,
@@ -220,6 +240,9 @@ def _kirchhoff_evaluate(args, wi, wo, wavelength_nm):
 
 
 def _kirchhoff_albedo(args, wi, wavelength_nm):
+
+    from .. import scatter
+    import numpy as np
 
     hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
     out = [scatter.scatter(hf, w, wavelength_nm, F, solver=args.solver, backend=args.backend,
@@ -270,6 +293,8 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+
+    import numpy as np
 
     model = MODELS[args.model]
     wl = parse_wavelengths(args.wavelength, name="--wavelength")

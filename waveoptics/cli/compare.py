@@ -5,15 +5,14 @@ import csv
 import io as _io
 from pathlib import Path
 
-from .. import compare as cmp
-from .. import io
 from ..errors import WaveopticsError
 from ..units import check_theta, parse_number_list
 from ._common import add_common, emit
-from .simulate import add_scene_options, simulation_from_args
 
 
 def register(sub):
+    from .simulate import add_scene_options
+
     p = sub.add_parser("compare", help="two-scale vs microfacet over incident angles: energy, lobe width, tail, ΔE",
                        description="Runs the two-scale model and the plain microfacet model on one configuration "
                                    "over a range of incident angles and reports albedo, lobe FWHM, the energy in the "
@@ -32,6 +31,10 @@ def register(sub):
 
 def run(args):
 
+
+    from .. import compare as cmp
+    from .. import io
+    from .simulate import simulation_from_args
 
     angles = parse_number_list(args.angles, name="angles_deg")
     check_theta(angles, name="--angles")

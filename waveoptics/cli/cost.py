@@ -4,11 +4,8 @@ Pareto front and the cheapest setting meeting ``--target-error`` (logic in :mod:
 """
 from __future__ import annotations
 
-from .. import cost, surfaces
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
-from ..materials import fresnel_function
-from ..runtime import get_runtime
 from ..units import parse_direction
 from ._common import add_common, emit, progress
 
@@ -64,6 +61,11 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+
+    from .. import cost
+    from .. import surfaces
+    from ..materials import fresnel_function
+    from ..runtime import get_runtime
 
     theta, phi = parse_direction(args.incident, name="--incident")
     mat = args.material

@@ -1,8 +1,6 @@
 """``waveoptics f0 MATERIAL...``: characteristic specular colour F0 = F(0°), computed spectrally."""
 from __future__ import annotations
 
-from .. import colour
-from ..materials.database import get_material
 from ._common import add_colour, add_common, emit
 
 
@@ -21,6 +19,9 @@ def register(sub):
 
 
 def run(args):
+
+    from .. import colour
+    from ..materials.database import get_material
 
     spd = colour.illuminant(args.illuminant)
     observer = colour.observer_name(args.observer)

@@ -3,11 +3,7 @@ from __future__ import annotations
 
 import platform as _platform
 
-import colour
-import numpy
-import pyopencl
 
-from .. import __version__, runtime
 from ._common import add_common, emit
 
 
@@ -21,6 +17,12 @@ def register(sub):
 
 def gather(device=None) -> dict:
     """Everything ``info`` reports, as plain data."""
+    from .. import __version__
+    from .. import runtime
+    import colour
+    import numpy
+    import pyopencl
+
 
 
     data = {

@@ -1,9 +1,7 @@
 """``waveoptics materials [QUERY]``: list presets or search the refractiveindex.info catalogue."""
 from __future__ import annotations
 
-import numpy as np
 
-from .. import materials
 from ._common import add_common, emit
 
 
@@ -19,6 +17,9 @@ def register(sub):
 
 
 def run(args):
+
+    from .. import materials
+    import numpy as np
 
     if args.query:
         hits = materials.search(args.query, limit=args.limit)

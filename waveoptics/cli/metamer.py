@@ -1,7 +1,6 @@
 """``waveoptics metamer``: three laser lines mixed to the same colour (XYZ) as a broadband light."""
 from __future__ import annotations
 
-from .. import colour
 from ..units import parse_wavelengths
 from ._common import add_colour, add_common, emit
 
@@ -23,6 +22,8 @@ def register(sub):
 
 
 def run(args):
+
+    from .. import colour
 
     target = colour.illuminant(args.target)
     observer = colour.observer_name(args.observer)

@@ -1,9 +1,7 @@
 """``waveoptics plan SCENE``: which effects a scene needs, with the reason for every decision and the cost."""
 from __future__ import annotations
 
-from .. import planning
 from ..errors import WaveopticsError
-from ..planning import scene
 from ._common import add_common, emit
 
 
@@ -31,6 +29,9 @@ def register(sub):
 
 def make_plan(args):
     """Load the scene and plan it from the parsed arguments (used by ``plan`` and ``run``)."""
+    from .. import planning
+    from ..planning import scene
+
 
     if args.max_resolution is not None and not (8 <= args.max_resolution <= 2048):
         raise WaveopticsError(f"--max-resolution {args.max_resolution} is not allowed; use 8..2048")

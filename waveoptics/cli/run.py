@@ -1,7 +1,6 @@
 """``waveoptics run SCENE -o OUTDIR``: execute a scene's plan and write the outputs it asks for."""
 from __future__ import annotations
 
-from .. import io, planning
 from ._common import add_common, add_output, emit, progress
 from .plan import add_force, make_plan
 
@@ -21,6 +20,9 @@ def register(sub):
 
 
 def run(args):
+
+    from .. import io
+    from .. import planning
 
     io.prepare_outdir(args.output, overwrite=args.overwrite, expected=["plan.json", "results.json"])  # before work
     plan = make_plan(args)

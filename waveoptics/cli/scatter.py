@@ -11,11 +11,8 @@ from __future__ import annotations
 import sys
 import warnings
 
-from .. import scatter, surfaces
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
-from ..materials.database import fresnel_function
-from ..runtime import get_runtime
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, emit, progress
 
@@ -68,6 +65,11 @@ def _order(text):
 
 
 def run(args) -> int:
+
+    from .. import scatter
+    from .. import surfaces
+    from ..materials.database import fresnel_function
+    from ..runtime import get_runtime
 
     wl = parse_wavelengths(args.wavelengths)
     theta, phi = parse_direction(args.incident, name="--incident")

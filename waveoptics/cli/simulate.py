@@ -1,10 +1,9 @@
 """``waveoptics simulate``: the main job (two-scale BRDF vs microfacet, spectral → RGB, pictures)."""
 from __future__ import annotations
 
-from .. import simulate as sim_mod
 from ..errors import FieldError
 from ..io.files import prepare_outdir
-from ..request import DEFAULT_NANO, PRECISIONS, SOLVERS, SimulationRequest
+from ..vocabulary import NANO_SOLVERS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, emit, progress
 
@@ -31,7 +30,7 @@ def add_scene_options(p) -> None:
     p.add_argument("--accuracy", type=float, default=1.0, metavar="DE",
                    help="colour accuracy (ΔE2000) that picks the wavelength step (default 1.0)")
     p.add_argument("--resolution", type=int, default=128, metavar="N", help="direction grid N×N (default 128)")
-    p.add_argument("--solver", default="auto", choices=SOLVERS,
+    p.add_argument("--solver", default="auto", choices=NANO_SOLVERS,
                    help="nano lobe: psd (statistics), fft or direct (height field); auto picks (default)")
     p.add_argument("--kd", type=float, default=0.5, help="diffuse albedo of a dielectric (metals: none)")
     p.add_argument("--precision", default="float32", choices=PRECISIONS,
@@ -42,8 +41,11 @@ def add_scene_options(p) -> None:
                         "from the long-period slopes, the short-period part diffracts")
 
 
-def request_from_args(args) -> SimulationRequest:
+def request_from_args(args):
     """The :class:`~waveoptics.request.SimulationRequest` the scene options describe (its fields validate them)."""
+    from ..request import DEFAULT_NANO
+    from ..request import SimulationRequest
+
     return SimulationRequest(
         material=args.material, nano=args.nano or DEFAULT_NANO, surface=args.surface, micro_alpha=args.micro_alpha,
         ndf=args.ndf, incident_deg=parse_direction(args.incident), illuminant=args.illuminant,
@@ -54,6 +56,8 @@ def request_from_args(args) -> SimulationRequest:
 
 def simulation_from_args(args, bar=None):
     """Run :func:`waveoptics.simulate.run` on the request of the scene options."""
+    from .. import simulate as sim_mod
+
     return sim_mod.run(request_from_args(args), device=args.device,
                        progress=None if bar is None else bar.update)
 
@@ -75,6 +79,8 @@ def register(sub):
 
 
 def run(args):
+    from .. import simulate as sim_mod
+
     if not (16 <= args.sphere_size <= 4096):
         raise FieldError(f"{{sphere_size}} {args.sphere_size} is not allowed; use 16..4096 pixels", "sphere_size")
     prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.OUTPUT_FILES)

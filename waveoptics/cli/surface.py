@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import inspect
 
-from .. import surfaces
 from ..errors import WaveopticsError
 from ._common import add_common, emit
 
@@ -75,6 +74,8 @@ def register(sub):
 
 def _model_params(args) -> dict:
 
+    from .. import surfaces
+
     accepted = inspect.signature(surfaces.GENERATORS[args.model]).parameters
     params = {"size": args.size, "samples": args.samples}
     for name, (flag, _) in _MODEL_OPTIONS.items():
@@ -106,6 +107,8 @@ def _model_params(args) -> dict:
 
 def run_generate(args):
 
+    from .. import surfaces
+
     params = _model_params(args)
     hf = surfaces.generate(args.model, **params)
     path = surfaces.save(hf, args.output, overwrite=args.overwrite)
@@ -119,6 +122,8 @@ def run_generate(args):
 
 
 def run_stats(args):
+
+    from .. import surfaces
 
     hf = surfaces.load(args.file, spacing=args.spacing, units=args.units, layout=args.layout,
                        nan_is_mask=args.nan_is_mask)

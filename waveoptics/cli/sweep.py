@@ -1,7 +1,6 @@
 """``waveoptics sweep``: a parameter sweep of the two-scale model on Dask, summarized in a CSV/JSON table."""
 from __future__ import annotations
 
-from .. import distributed
 from ..errors import WaveopticsError
 from ..units import parse_direction
 from ._common import add_common, emit, progress
@@ -37,6 +36,8 @@ def register(sub):
 
 
 def run(args):
+
+    from .. import distributed
 
     args.incident_deg = None
     if args.incident is not None:

@@ -6,12 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 
-from .. import distributed
 from ..errors import WaveopticsError
-from ..planning import scene
-from ..request import DEFAULT_NANO, SimulationRequest
 from ..units import parse_number_list, parse_wavelengths
 from ._common import add_common, emit, progress
 
@@ -71,6 +67,11 @@ def _is_scene(source) -> bool:
 def case_from_args(args, *, source=None):
     """(:class:`~waveoptics.request.SimulationRequest`, HeightField or None) from the options, a SURFACE or a scene
     file. Options left unset take the request's defaults (or the scene's values)."""
+    from .. import distributed
+    from ..planning import scene
+    from ..request import DEFAULT_NANO
+    from ..request import SimulationRequest
+
     given = dict(wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)) if args.wavelengths else None,
                  micro_alpha=args.micro_alpha, ndf=args.ndf, illuminant=args.illuminant, accuracy_dE=args.accuracy,
                  resolution=args.resolution, solver=args.solver, kd=args.kd, precision=args.precision,
@@ -128,6 +129,9 @@ def register(sub):
 
 def run(args):
 
+
+    from .. import distributed
+    import numpy as np
 
     case, surface = case_from_args(args, source=args.source)
     thetas = parse_number_list(args.incident_angles, name="--incident-angles")

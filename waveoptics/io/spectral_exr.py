@@ -10,7 +10,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-from colour.io.fichet2021 import PATTERN_FICHET2021, match_groups_to_nm
 
 from ..errors import WaveopticsError
 from .files import read_exr, write_exr
@@ -80,7 +79,9 @@ def read_spectral_exr(path) -> tuple[dict, dict]:
     Channel names are parsed with colour-science's pattern for the Fichet et al. 2021 layout; reflective
     ``T.`` channels are returned, or emissive ``S0.`` channels when there are no reflective ones.
     """
-
+    # deferred: colour-science takes most of a second to import and only this reader needs it (the core layer,
+    # and so the command line's parsers, stay quick to load)
+    from colour.io.fichet2021 import PATTERN_FICHET2021, match_groups_to_nm
 
     chans, header = read_exr(path)
     found = {"T": {}, "S0": {}}

@@ -1,0 +1,13 @@
+"""Names shared by the library and every front end (CLI choices, scene keys, request fields), kept free of heavy
+imports so that the command line can build its parsers without loading the numerical library.
+"""
+from __future__ import annotations
+
+__all__ = ["NANO_SOLVERS", "PRECISIONS"]
+
+#: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
+#: else the fft solver on a height field)
+NANO_SOLVERS = ("auto", "psd", "fft", "direct")
+
+#: OpenCL precisions of the height-field solvers
+PRECISIONS = ("float32", "float64")
