@@ -40,7 +40,7 @@ THRESHOLDS = {
 
 
 def _schema() -> str:
-    """The schema block of waveoptics.scene's docstring (single source)."""
+    """The schema block of waveoptics.planning.scene's docstring (single source)."""
     doc = scene.__doc__
     block = doc.split("Schema (", 1)[1].split("References", 1)[0]
     lines = block.split("\n")[1:]
@@ -93,14 +93,14 @@ def build(tmp: Path) -> str:
          "plan as `{\"materials\": [{\"name\", \"light\", \"effects\": {\"diffraction\", \"diffuse\", \"spectral\", "
          "...}, \"solver\", \"wavelengths_nm\", \"precision\", \"estimated_time_s\", \"reasons\": [...]}]}`.", "",
          "## Scene files", "",
-         "TOML (read with the standard library's `tomllib`), validated by `waveoptics.scene.load`: an unknown key, a "
+         "TOML (read with the standard library's `tomllib`), validated by `waveoptics.planning.scene.load`: an unknown key, a "
          "missing table or a bad value stops with one line naming the key and what is allowed, e.g. "
          "`scene.toml: materials[0].roughnes is not a known key (did you mean 'roughness'?); allowed: ...`. "
          "Worked examples are in `examples/scenes/`.", "", "```toml", _schema(), "```", "",
          "## Decisions", "",
          "For every (material, light) pair, in this order:", ""]
     # the decision rules: the planning module's own description (single source)
-    doc = planning.planner.__doc__.split("For every (material, light) pair of a :class:`waveoptics.scene.Scene` the planner "
+    doc = planning.planner.__doc__.split("For every (material, light) pair of a :class:`waveoptics.planning.scene.Scene` the planner "
                                  "takes, in order:", 1)[1].split("References", 1)[0]
     doc = re.sub(r":(?:data|func|mod|class):`~?([^`]+)`", r"`\1`", doc)
     doc = re.sub(r"``([^`]+)``", r"`\1`", doc)

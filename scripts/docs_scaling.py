@@ -205,7 +205,7 @@ local worker processes, or on a cluster. The library side is `waveoptics.distrib
 # in-process (the embedded default): one worker thread inside this process, no network
 waveoptics table surface.npz --material Au --incident-angles 0:85:5 --wavelengths 400:700:10 -o gold.h5
 waveoptics table --nano abc:sigma=10nm,B=2um,C=2.6 --material Au --micro-alpha 0.1 -o gold.h5
-waveoptics table scene.toml --material gold -o gold.h5          # a scene file (waveoptics.scene) instead
+waveoptics table scene.toml --material gold -o gold.h5          # a scene file (waveoptics.planning.scene) instead
 
 # a local cluster of N single-threaded worker processes (loopback only, 127.0.0.1)
 waveoptics table --nano abc:sigma=10nm,B=2um,C=2.6 --material Au --workers 2 -o gold.h5

@@ -87,7 +87,7 @@ light a facet reflects splits into
   characteristic function |⟨exp(2ik cos θ_d h)⟩|² (J0² for a sinusoid, exp(−g) for Gaussian heights);
 * a **diffracted** part: the nano lobe f_n carried by every facet, i.e. tilted with the facet normal and therefore
   convolved with the micro NDF (with masking-shadowing). f_n comes from the PSD (`--solver psd`, the
-  Beckmann-Spizzichino series generalized to any isotropic PSD, `waveoptics/psd.py`) or from a Kirchhoff solver on a
+  Beckmann-Spizzichino series generalized to any isotropic PSD, `waveoptics/scatter/series.py`) or from a Kirchhoff solver on a
   nano height field (`fft` or `direct`), keeping only the incoherent field δU = U − ⟨χ⟩ U_flat;
 * for dielectrics, a **diffuse** term with the diffuse-specular trade-off (metals have none).
 

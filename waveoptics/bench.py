@@ -7,14 +7,14 @@ and ``scripts/docs_performance.py`` turns them into ``docs/performance.md``):
   (float32, float64, fast-math), the kernel it replaced (``kirchhoff_U_sinpi``, run as it was: driver-chosen
   work-groups), the naive OpenCL kernel (``kirchhoff_U_naive``: float phase k s·x in radians,
   native_sin/native_cos, driver-chosen work-groups), a plain NumPy direct sum (``exp(1j k s·r) @ w``) and the
-  project's float64 NumPy twin :func:`waveoptics.diffraction.kirchhoff_U`: throughput in terms/s (sample ×
+  project's float64 NumPy twin :func:`waveoptics.scatter.kirchhoff_U`: throughput in terms/s (sample ×
   direction × wavelength), the ratio to the naive kernel and to NumPy, and the error against the twin relative to
   Σ w dx dy.
 * :func:`direct_scaling` — time of the same against the number of samples and of directions (four sizes each).
 * :func:`fft_backends` — 2-D complex FFT throughput (points/s) of numpy.fft, scipy.fft (pocketfft, 1 and 2
   workers), pyFFTW (planned FFTW objects, if installed) and pyvkfft on the OpenCL device (if installed;
   device-resident data, transfers excluded).
-* :func:`fft_pipeline` — the ``fft`` solver (:func:`waveoptics.diffraction.field_fft`, chirp-z onto the direction
+* :func:`fft_pipeline` — the ``fft`` solver (:func:`waveoptics.scatter.field_fft`, chirp-z onto the direction
   grid, frozen v_z and banded Taylor series) against the NumPy FFT pipeline a user would write (zero-padded
   ``numpy.fft.fft2`` of w·exp(i v_z h), bilinear interpolation of the field onto the grid), over four patch sizes,
   with errors against the direct sum on a subset of cells.
@@ -46,6 +46,7 @@ import scipy.fft as sfft
 from scipy.interpolate import RegularGridInterpolator
 
 from . import scatter
+from .scatter.direct import exact_phase_args, launch_pairs
 from .runtime import build_options, build_program, get_runtime
 from .surfaces.heightfield import HeightField
 from .units import direction_from_angles
@@ -122,11 +123,37 @@ def numpy_direct_sum(smp: scatter.Samples, wi, wo, wavelength_nm: float, chunk_t
 NAIVE = "opencl naive native_sin float32 fast-math"
 
 
+def kirchhoff_U_sinpi_cl(smp, coef, *, runtime=None, precision="float32", local_size=0, **kw):
+    """The direct-sum kernel before the speed work (``kernels/bench_kirchhoff.cl``): exact phase, SLEEF
+    sinpi/cospi per term, one pair per work-item; run as it was, with driver-chosen work-groups."""
+    return launch_pairs(smp, coef, kernel="kirchhoff_U_sinpi", program="bench_kirchhoff.cl", pairs_per_item=1,
+                        chunk_args=exact_phase_args, runtime=runtime, precision=precision, local_size=local_size,
+                        **kw)
+
+
+def _naive_args(smp):
+    """Per-launch arguments of the naive kernel: v = 2π s / λ in rad/m from the cycles-per-sample coefficients
+    (reduced mod one cycle: the same exponential), and the patch geometry."""
+    def args(q, dt, c, start, count):
+        lat = [np.asarray(A, np.float64) * 2.0**-32 + lo for A, lo in ((c.Ax, c.lox), (c.Ay, c.loy))]
+        lat = [np.where(x >= 0.5, x - 1.0, x) for x in lat]
+        k = (2 * np.pi * lat[0] / smp.dx, 2 * np.pi * lat[1] / smp.dy, 2 * np.pi * c.cz)
+        dev = [cla.to_device(q, np.ascontiguousarray(x.astype(dt))) for x in k]
+        return (*[d.data for d in dev], dt(smp.dx), dt(smp.dy), dt((smp.nx - 1) / 2), dt((smp.ny - 1) / 2))
+    return args
+
+
+def kirchhoff_U_naive_cl(smp, coef, *, runtime=None, precision="float32", **kw):
+    """The naive direct sum a user would write first (``kernels/bench_kirchhoff.cl``): float phase k s·x in
+    radians, native_sin/native_cos, one pair per work-item, scalar loop: the benchmark's baseline."""
+    return launch_pairs(smp, coef, kernel="kirchhoff_U_naive", program="bench_kirchhoff.cl", pairs_per_item=1,
+                        chunk_args=_naive_args(smp), runtime=runtime, precision=precision, **kw)
+
+
 def _naive(smp, coef, rt):
     """The naive kernel as its author would run it: -cl-fast-relaxed-math (without it PoCL cannot vectorize the
     sum and it runs ~10x slower), driver-chosen work-groups."""
-    return scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", kernel="kirchhoff_U_naive", local_size=0,
-                            fast_math=True)
+    return kirchhoff_U_naive_cl(smp, coef, runtime=rt, precision="float32", local_size=0, fast_math=True)
 
 
 def large_patch_errors(rt, n: int = 2**16, n_dir: int = 16) -> dict:
@@ -177,8 +204,7 @@ def direct_kernels(rt, n: int = 256, n_dir: int = 4096, numpy_dirs: int = 64, re
         add(f"opencl kirchhoff_U {p}", lambda p=p: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p), terms, sub)
     for p in precs:
         add(f"opencl kirchhoff_U_sinpi {p} (before issue 6)",
-            lambda p=p: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p, kernel="kirchhoff_U_sinpi",
-                                         local_size=0), terms, sub)
+            lambda p=p: kirchhoff_U_sinpi_cl(smp, coef, runtime=rt, precision=p), terms, sub)
     add("opencl kirchhoff_U float32 fast-math",
         lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", fast_math=True), terms, sub)
     add(NAIVE, lambda: _naive(smp, coef, rt), terms, sub)
@@ -276,7 +302,7 @@ def fft_backends(sizes=(256, 512, 1024), repeat: int = 3, rt=None, solver_sizes=
 
 
 def _solver_backends(sizes, repeat: int) -> list[dict]:
-    """Time (s) of the fft solver (:func:`waveoptics.diffraction.field_fft`, order auto, n × n patch onto an n × n
+    """Time (s) of the fft solver (:func:`waveoptics.scatter.field_fft`, order auto, n × n patch onto an n × n
     grid) with scipy.fft's default, with ``scipy.fft.set_workers(2)`` and with pyFFTW as scipy.fft's backend —
     the choice that matters for the solver, whose chirp-z transforms are batches of 1-D FFTs."""
 

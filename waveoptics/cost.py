@@ -3,9 +3,9 @@
 A *configuration* is a surface (a height-field file, or a generator model with a seed per realization), a
 material, an incident direction and an illuminant. A *setting* is what a user chooses: the solver (``fft`` with
 the banded Taylor series in v_z, ``fft0`` with v_z frozen at the specular value, ``direct`` on the OpenCL device),
-the direction-grid resolution, the wavelengths (the grid :func:`waveoptics.spectral.simulation_wavelengths`
+the direction-grid resolution, the wavelengths (the grid :func:`waveoptics.colour.simulation_wavelengths`
 chooses for a colour accuracy ΔE), the number of realizations and, for ``direct``, the precision. Each setting runs
-:func:`waveoptics.diffraction.scatter` once and is compared with a reference computed once at the finest
+:func:`waveoptics.scatter.scatter` once and is compared with a reference computed once at the finest
 resolution, a denser wavelength grid and (for random surfaces) more realizations, by default with the direct
 solver in float64:
 
@@ -18,7 +18,7 @@ solver in float64:
     max over λ of |ρ − ρ_ref| of the directional albedo ρ = Σ f du dv (linear in λ as above).
 ``delta_e2000``
     CIEDE2000 between the linear-sRGB colours of the albedo spectra, each integrated over its own wavelengths
-    under the illuminant (:func:`waveoptics.spectral.reflectance_to_rgb`, :func:`waveoptics.spectral.delta_e2000`).
+    under the illuminant (:func:`waveoptics.colour.reflectance_to_rgb`, :func:`waveoptics.colour.delta_e2000`).
 
 The wall time of each setting is measured around the whole ``scatter`` call (lobes, albedo, coherent part).
 The Pareto front holds the settings that no other setting beats in both time and the chosen error metric, and the
@@ -62,7 +62,7 @@ from .surfaces.heightfield import HeightField
 
 __all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
 
-#: setting solver name -> keyword arguments of :func:`waveoptics.diffraction.scatter`
+#: setting solver name -> keyword arguments of :func:`waveoptics.scatter.scatter`
 SOLVERS = {
     "fft0": {"solver": "fft", "order": 0},
     "fft": {"solver": "fft", "order": "auto"},
@@ -91,7 +91,7 @@ class Config:
     material : see :func:`waveoptics.materials.fresnel_function`
     incident : (θ, φ), degrees
     illuminant : str
-        Light source (:func:`waveoptics.spectral.illuminant`).
+        Light source (:func:`waveoptics.colour.illuminant`).
     random : bool
         Whether realizations are independent draws (a generator); only then do the ladder and the reference
         use more than one realization.

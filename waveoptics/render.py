@@ -5,7 +5,7 @@ directional light of irradiance π (a white Lambertian sphere facing the light i
 looked up in a table of lobes on the direction-cosine grid, tabulated over incidence angles θ_i with the light's
 azimuth rotated to φ = 0, i.e. the surface is treated as azimuthally isotropic (state this for anisotropic nano
 surfaces such as gratings, whose lobes then follow the local plane of incidence). Radiance spectra are integrated
-to linear sRGB with :mod:`waveoptics.spectral` (colour-science underneath).
+to linear sRGB with :mod:`waveoptics.colour` (colour-science underneath).
 
 References
 ----------

@@ -1,6 +1,6 @@
 """The main job: a two-scale surface simulated per wavelength, integrated to colour, compared with microfacets.
 
-:func:`simulate` evaluates the two-scale BRDF (:mod:`waveoptics.twoscale`) and the plain microfacet BRDF of the
+:func:`simulate` evaluates the two-scale BRDF (:mod:`waveoptics.brdf.twoscale`) and the plain microfacet BRDF of the
 same micro roughness and material on a hemisphere grid at the scene's incident direction, and on a table of
 incidence angles for sphere renders; :func:`write_outputs` writes the files of ``waveoptics simulate``.
 """

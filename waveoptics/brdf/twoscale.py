@@ -12,7 +12,7 @@ Per microfacet the light splits into
 
 Evaluation on the direction-cosine plane
 ----------------------------------------
-Lobes live on a :class:`waveoptics.diffraction.DirectionGrid` over (u, v) = (sinθ cosφ, sinθ sinφ), where
+Lobes live on a :class:`waveoptics.scatter.DirectionGrid` over (u, v) = (sinθ cosφ, sinθ sinφ), where
 cosθ_o dω_o = du dv. A facet tilted by a small slope moves the mirror direction by a shift in (u, v), so the
 per-facet tilt of the nano lobe is a 2-D convolution of f_n (an energy density on the (u, v) plane) with the
 *micro kernel* K: the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the mirror direction, whose sum is the F = 1 micro albedo
@@ -63,7 +63,7 @@ NARROW_CELLS = 2.0
 
 @dataclass(frozen=True)
 class Micro:
-    """Micro-scale roughness: an NDF name in :data:`waveoptics.microfacet.NDFS`, α (and α_y), shadowing."""
+    """Micro-scale roughness: an NDF name in :data:`waveoptics.brdf.NDFS`, α (and α_y), shadowing."""
 
     alpha: float = 0.05
     alpha_y: float | None = None
@@ -83,10 +83,10 @@ class Micro:
 
 @dataclass(frozen=True)
 class Nano:
-    """Nano-scale roughness: height statistics (:class:`waveoptics.psd.PSDModel`) or a height field.
+    """Nano-scale roughness: height statistics (:class:`waveoptics.surfaces.PSDModel`) or a height field.
 
     With a height field the diffracted lobe comes from a Kirchhoff solver (``solver`` "fft" or "direct"); with
-    statistics it comes from the PSD series (:mod:`waveoptics.psd`).
+    statistics it comes from the PSD series (:mod:`waveoptics.scatter.series`).
     """
 
     model: surfaces.PSDModel | None = None
@@ -293,11 +293,11 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
                              solver: str = "fft", device=None, precision: str = "float32", warnings=None):
     """Incoherent Kirchhoff lobe of a height field: the field minus its coherent (mean) part, as a BRDF (1/sr).
 
-    δU = U − χ̂ U_flat, with χ̂ the patch estimate of ⟨exp(i v_z h)⟩ (:func:`waveoptics.diffraction.
+    δU = U − χ̂ U_flat, with χ̂ the patch estimate of ⟨exp(i v_z h)⟩ (:func:`waveoptics.scatter.
     coherent_amplitude`) and U_flat the field of the same window without heights, removes the specular spike
     (which the two-scale model carries as the micro lobe × A) and keeps the diffracted light; the BRDF follows
-    docs/physics.md §1 (:func:`waveoptics.diffraction.brdf_from_field`). ``fft`` evaluates the whole grid
-    (frozen-v_z expansion, see :mod:`waveoptics.diffraction`); ``direct`` sums the integral on the OpenCL device
+    docs/physics.md §1 (:func:`waveoptics.scatter.brdf_from_field`). ``fft`` evaluates the whole grid
+    (frozen-v_z expansion, see :mod:`waveoptics.scatter`); ``direct`` sums the integral on the OpenCL device
     for every grid direction inside the disc.
 
     References

@@ -71,7 +71,7 @@ def progress(iterable=None, *, total=None, desc=None, args=None):
 
 
 def add_colour(parser, *, illuminant: bool = True) -> None:
-    """Add ``--illuminant`` (unless *illuminant* is False) and ``--observer`` (see :mod:`waveoptics.spectral`)."""
+    """Add ``--illuminant`` (unless *illuminant* is False) and ``--observer`` (see :mod:`waveoptics.colour`)."""
     if illuminant:
         parser.add_argument("--illuminant", default="D65", metavar="SPD",
                             help="light: D65 (default), D50, A, F1..F12, E, blackbody:5500K, laser:465,532,638, "

@@ -177,7 +177,7 @@ def _microfacet_describe(args) -> dict:
 
 
 # ----------------------------------------------------------------------------------------------------------
-# kirchhoff (wave optics of a height-field file; logic in waveoptics.diffraction)
+# kirchhoff (wave optics of a height-field file; logic in waveoptics.scatter)
 
 
 def _kirchhoff_arguments(g) -> None:
@@ -263,7 +263,7 @@ MODELS: dict[str, Model] = {
     "microfacet": Model(_microfacet_arguments, _microfacet_evaluate, _microfacet_albedo, _microfacet_describe,
                         "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term"),
     "kirchhoff": Model(_kirchhoff_arguments, _kirchhoff_evaluate, _kirchhoff_albedo, _kirchhoff_describe,
-                       "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.diffraction)"),
+                       "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.scatter)"),
 }
 
 

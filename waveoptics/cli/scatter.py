@@ -1,5 +1,5 @@
 """``waveoptics scatter``: per-wavelength Kirchhoff lobes of a height-field file (logic in
-:mod:`waveoptics.diffraction`).
+:mod:`waveoptics.scatter`).
 
 Writes ``OUTDIR/lobes.exr`` (spectral OpenEXR, one ``T.<λ>nm`` layer per wavelength: the BRDF in 1/sr over the
 direction-cosine plane u = sinθ cosφ, v = sinθ sinφ), ``OUTDIR/summary.json`` (``wavelengths_nm``, ``albedo``,

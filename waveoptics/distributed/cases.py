@@ -16,11 +16,11 @@ from ..request import NO_NANO, SimulationRequest, make_nano
 __all__ = ['case_from_scene', 'surface_digest']
 
 def case_from_scene(sc, *, material: str | None = None, light: str | None = None, **overrides):
-    """A :class:`~waveoptics.request.SimulationRequest` (and its nano height field, if any) from a scene of :mod:`waveoptics.scene`.
+    """A :class:`~waveoptics.request.SimulationRequest` (and its nano height field, if any) from a scene of :mod:`waveoptics.planning.scene`.
 
     Parameters
     ----------
-    sc : waveoptics.scene.Scene
+    sc : waveoptics.planning.scene.Scene
         A validated scene (``scene.load(path)``).
     material, light : str, optional
         Names of the scene material and light to use; default the first of each. The light gives the

@@ -4,7 +4,7 @@ A measured-style BRDF table (incident directions × wavelengths × surface reali
 and roughnesses is split into independent, deterministic tasks and run on a Dask cluster:
 
 * **table** — one task per (realization r, incident angle θ_i, wavelength batch): :func:`compute_block`
-  evaluates the two-scale BRDF (:func:`waveoptics.twoscale.evaluate`) of that batch on the hemisphere grid.
+  evaluates the two-scale BRDF (:func:`waveoptics.brdf.twoscale.evaluate`) of that batch on the hemisphere grid.
   The result is one HDF5 file with coordinates (see :data:`TABLE_LAYOUT` and ``docs/scaling.md``).
 * **sweep** — one task per point of the Cartesian product of ``--vary`` lists: :func:`sweep_point` runs
   :func:`waveoptics.simulate.simulate` and reduces it to a row of summaries (albedo, ΔE2000 vs microfacet, cost).

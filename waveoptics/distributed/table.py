@@ -68,7 +68,7 @@ class TableSpec:
     """A BRDF table: *case* evaluated at every incident zenith angle (degrees, azimuth *phi_deg*) and wavelength.
 
     *realizations* > 1 averages over surface realizations: tiles of a height-field file
-    (:func:`waveoptics.diffraction.split_patch`) or generated surfaces with seeds ``seed .. seed + n − 1``.
+    (:func:`waveoptics.scatter.split_patch`) or generated surfaces with seeds ``seed .. seed + n − 1``.
     *batch* is the number of wavelengths per task.
     """
 

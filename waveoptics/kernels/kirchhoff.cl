@@ -1,9 +1,9 @@
-/* Kirchhoff / Huygens-Fresnel field of a height-field patch, summed directly (twin: waveoptics/diffraction.py,
+/* Kirchhoff / Huygens-Fresnel field of a height-field patch, summed directly (twin: waveoptics/scatter/direct.py,
  * functions kirchhoff_phase and kirchhoff_U).
  *
  *     U_p = sum_j w_j exp(2 pi i phi_pj),   phi_pj = (s_p . (x_j, y_j, h_j)) / lambda_p   [cycles]
  *
- * for pairs p = (outgoing direction, wavelength) with s = omega_i + omega_o (physics.md sec. 1; Beckmann &
+ * for pairs p = (outgoing direction, wavelength) with s = omega_i + omega_o (docs/physics.md sec. 1; Beckmann &
  * Spizzichino 1963). The host multiplies by dx dy and applies the obliquity / Fresnel factors.
  *
  * Phase accuracy (float32). x_j = ix_j dx, y_j = iy_j dy with integer grid indices, so the lateral phase is
@@ -25,57 +25,9 @@
  * Partial sums over blocks of 256 samples are added to the running total (two-level summation keeps float32
  * round-off near sqrt(n_blocks) rather than n_samples ulps).
  *
- * kirchhoff_U_sinpi is the kernel before these changes (benchmark's before/after).
- * kirchhoff_U_naive is the straightforward kernel a user would write first (one pair per work-item, scalar loop,
- * float phase k s.x, native_sin/native_cos); it is kept only as the benchmark's baseline (waveoptics bench), and its
- * error is measured there and in tests/test_diffraction.py against the same twin.
+ * The benchmark's variants (the kernel before these changes, the naive kernel) live in bench_kirchhoff.cl.
  */
-#include "wo_common.h"
-
-#define WO_2POW_M32 R(2.3283064365386962890625e-10)
-
-/* Vector width of the inner loop over samples (the host pads the sample arrays to a multiple of it with w = 0).
- * On CPU devices (PoCL) explicit vectors put the arithmetic on SIMD lanes; on GPUs they are simply unrolled. */
-#ifndef WO_VW
-#define WO_VW 16
-#endif
-/* Pairs per work-item (register blocking). */
-#ifndef WO_ND
-#define WO_ND 8
-#endif
-#define WO_CAT_(a, b) a##b
-#define WO_CAT(a, b) WO_CAT_(a, b)
-#ifdef WO_DOUBLE
-#define WO_RV(n) WO_CAT(double, n)
-#define WO_RIV(n) WO_CAT(long, n)
-#else
-#define WO_RV(n) WO_CAT(float, n)
-#define WO_RIV(n) WO_CAT(int, n)
-#endif
-typedef WO_RV(WO_VW) realv_t;
-typedef WO_RIV(WO_VW) rintv_t;
-typedef WO_CAT(int, WO_VW) intv_t;
-typedef WO_CAT(uint, WO_VW) uintv_t;
-#define WO_VLOAD WO_CAT(vload, WO_VW)
-#define WO_VSTORE WO_CAT(vstore, WO_VW)
-#define WO_TO_REALV WO_CAT(convert_, WO_RV(WO_VW))
-#define WO_AS_REALV WO_CAT(as_, WO_RV(WO_VW))
-#define WO_CONV_RINTV WO_CAT(convert_, WO_RIV(WO_VW))
-#define WO_AS_RINTV WO_CAT(as_, WO_RIV(WO_VW))
-#define WO_AS_INTV WO_CAT(as_int, WO_VW)
-#define WO_AS_UINTV WO_CAT(as_uint, WO_VW)
-
-#include "wo_sincos.h"
-
-/* Phase of WO_VW samples (ix, iy, h) for one pair, in cycles, reduced to [-1/2, 1/2]. */
-inline realv_t kirchhoff_phase_v(intv_t vix, intv_t viy, realv_t vh, uint ax, uint ay, real_t lx, real_t ly,
-                                 real_t z, real_t c)
-{
-    intv_t fixed = WO_AS_INTV(WO_AS_UINTV(vix) * ax + WO_AS_UINTV(viy) * ay);   /* exact modulo 2^32 = 1 cycle */
-    realv_t ph = WO_TO_REALV(fixed) * WO_2POW_M32 + (WO_TO_REALV(vix) * lx + WO_TO_REALV(viy) * ly)
-                 + (vh * z + c);
-    return ph - rint(ph);
-}
+#include "kirchhoff.h"
 
 /* Per-sample phase of one pair (for accuracy checks against the float64 NumPy twin); WO_VW samples per item,
  * n_samples a multiple of WO_VW. */
@@ -143,42 +95,6 @@ __kernel void kirchhoff_U(__global const int *ix, __global const int *iy, __glob
     }
 }
 
-/* The previous kernel (before issue 6), kept for the benchmark's before/after: one pair per work-item, the same exact
- * phase, SLEEF sinpi/cospi per term. Same arguments and results as kirchhoff_U (global size n_pairs). */
-__kernel void kirchhoff_U_sinpi(__global const int *ix, __global const int *iy, __global const real_t *h,
-                                __global const real_t *w, const int n_samples,
-                                __global const uint *Ax, __global const uint *Ay, __global const real_t *lox,
-                                __global const real_t *loy, __global const real_t *cz, __global const real_t *c0,
-                                const int n_pairs, __global real_t *U_re, __global real_t *U_im)
-{
-    const int p = get_global_id(0);
-    if (p >= n_pairs) return;
-    const uint ax = Ax[p], ay = Ay[p];
-    const real_t lx = lox[p], ly = loy[p], z = cz[p], c = c0[p];
-    real_t sre = R(0.0), sim = R(0.0);
-    const int nv = n_samples / WO_VW;
-    const int block = 256 / WO_VW;
-    for (int b0 = 0; b0 < nv; b0 += block) {
-        realv_t tre = (realv_t)(R(0.0)), tim = (realv_t)(R(0.0));
-        const int b1 = min(b0 + block, nv);
-        for (int b = b0; b < b1; ++b) {
-            realv_t ph = kirchhoff_phase_v(WO_VLOAD(b, ix), WO_VLOAD(b, iy), WO_VLOAD(b, h), ax, ay, lx, ly, z, c);
-            realv_t vw = WO_VLOAD(b, w);
-            tre += vw * cospi(R(2.0) * ph);
-            tim += vw * sinpi(R(2.0) * ph);
-        }
-        real_t lre[WO_VW], lim[WO_VW];
-        WO_VSTORE(tre, 0, lre);
-        WO_VSTORE(tim, 0, lim);
-        real_t pre = R(0.0), pim = R(0.0);
-        for (int k = 0; k < WO_VW; ++k) { pre += lre[k]; pim += lim[k]; }
-        sre += pre;
-        sim += pim;
-    }
-    U_re[p] = sre;
-    U_im[p] = sim;
-}
-
 /* cos/sin(2 pi t) of n values by wo_sincos_2pi (n a multiple of WO_VW), for checking it against its twin. */
 __kernel void sincos_2pi(__global const real_t *t, const int n, __global real_t *s, __global real_t *c)
 {
@@ -188,25 +104,4 @@ __kernel void sincos_2pi(__global const real_t *t, const int n, __global real_t 
     wo_sincos_2pi(WO_VLOAD(b, t), &sn, &cs);
     WO_VSTORE(sn, b, s);
     WO_VSTORE(cs, b, c);
-}
-
-/* Baseline for the benchmark: the naive direct sum (float phase v . (x, y, h) in radians from the patch centre,
- * native_sin/native_cos, one pair per work-item, scalar loop). vx, vy, vz in rad/m; x = (ix - cx) dx. */
-__kernel void kirchhoff_U_naive(__global const int *ix, __global const int *iy, __global const real_t *h,
-                                __global const real_t *w, const int n_samples, __global const real_t *vx,
-                                __global const real_t *vy, __global const real_t *vz, const real_t dx,
-                                const real_t dy, const real_t cx, const real_t cy, const int n_pairs,
-                                __global real_t *U_re, __global real_t *U_im)
-{
-    const int p = get_global_id(0);
-    if (p >= n_pairs) return;
-    const real_t kx = vx[p], ky = vy[p], kz = vz[p];
-    real_t sre = R(0.0), sim = R(0.0);
-    for (int j = 0; j < n_samples; ++j) {
-        const real_t ph = kx * (((real_t)ix[j] - cx) * dx) + ky * (((real_t)iy[j] - cy) * dy) + kz * h[j];
-        sre += w[j] * native_cos(ph);
-        sim += w[j] * native_sin(ph);
-    }
-    U_re[p] = sre;
-    U_im[p] = sim;
 }

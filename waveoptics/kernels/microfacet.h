@@ -1,4 +1,4 @@
-/* Microfacet BRDF, device functions (twin of waveoptics/microfacet.py; same names, same behaviour).
+/* Microfacet BRDF, device functions (twin of waveoptics/brdf/microfacet.py; same names, same behaviour).
  *
  * f_s = F(v.h) G(l, v, h) D(h) / (4 (n.l)(n.v)) with a choice of NDF, masking-shadowing and Fresnel factor,
  * plus a Lambert / Oren-Nayar diffuse term weighted by (1 - F(l))(1 - F(v)) / (1 - Fbar).

@@ -1,5 +1,5 @@
 /* cos(2 pi t) and sin(2 pi t) of a vector of phases t (cycles), with one shared argument reduction and two short
- * polynomials (twin: waveoptics/diffraction.py, sincos_2pi).
+ * polynomials (twin: waveoptics/scatter/direct.py, sincos_2pi).
  *
  *     4 t = q + f,  q = rint(4 t),  |f| <= 1/2,   2 pi t = q pi/2 + f pi/2
  *     sin(f pi/2) = f S(f^2),  cos(f pi/2) = C(f^2)                  (|f pi/2| <= pi/4)
@@ -8,7 +8,7 @@
  * reduction is exact in floating point (4 t is exact; t - rint(t) is exact by Sterbenz' lemma), so the only error
  * is the polynomials' and their rounding: S and C are least-squares fits on Chebyshev nodes (Cody & Waite 1980,
  * ch. 8; J.-M. Muller, "Elementary Functions", 3rd ed., 2016, ch. 3) whose coefficients the host passes as
- * -DWO_SIN_C<n> / -DWO_COS_C<n> (waveoptics.diffraction.sincos_poly): degree 7 / 6 in float32 (truncation
+ * -DWO_SIN_C<n> / -DWO_COS_C<n> (waveoptics.scatter.sincos_poly): degree 7 / 6 in float32 (truncation
  * 2.6e-9 / 3.4e-8, below half an ulp of 1), degree 13 / 14 in float64 (7.8e-16 / 3.3e-16). Unlike sinpi/cospi
  * (PoCL: SLEEF) there is no special-case handling: t must be finite and |4 t| < 2^31 (float32: |t| < 2^22 keeps
  * the reduction exact), which the callers guarantee by reducing the large lateral phase exactly beforehand.

@@ -1,10 +1,10 @@
 """The effect planner: decide from physics which effects a scene needs, simulate only those, say why.
 
-For every (material, light) pair of a :class:`waveoptics.scene.Scene` the planner takes, in order:
+For every (material, light) pair of a :class:`waveoptics.planning.scene.Scene` the planner takes, in order:
 
 ``diffuse``
     Metals absorb the refracted light: no diffuse term. Dielectrics get the substrate's diffuse term (with the
-    diffuse-specular trade-off of :mod:`waveoptics.microfacet`) unless their diffuse albedo is 0.
+    diffuse-specular trade-off of :mod:`waveoptics.brdf`) unless their diffuse albedo is 0.
 ``diffraction``
     The nano surface reflects the fraction exp(−g), g = (4π σ cos θ_i / λ)², coherently and scatters the rest,
     TIS = F (1 − exp(−g)) (Davies 1954; Bennett & Porteus 1961; docs/physics.md §2). Whether that scattered light
@@ -20,11 +20,11 @@ For every (material, light) pair of a :class:`waveoptics.scene.Scene` the planne
     Line sources (lasers): their lines only. No diffraction and a Fresnel factor that is the same at every
     wavelength (constant index, grey F0): the BRDF does not depend on λ, so it is evaluated once and used for the
     whole spectrum. Otherwise the coarsest uniform grid that keeps smooth reflectance spectra within the target
-    (:func:`waveoptics.spectral.simulation_wavelengths`), refined for a periodic nano surface of period Λ so that
+    (:func:`waveoptics.colour.simulation_wavelengths`), refined for a periodic nano surface of period Λ so that
     neighbouring wavelengths of diffraction order m land no further apart than one grid cell, Δλ ≤ Λ du / m
     (grating equation, docs/physics.md §5).
 ``solver``
-    Statistics with g ≤ :data:`PSD_G_MAX`: the PSD series (:mod:`waveoptics.psd`; exact ensemble average for
+    Statistics with g ≤ :data:`PSD_G_MAX`: the PSD series (:mod:`waveoptics.scatter.series`; exact ensemble average for
     Gaussian heights, cheapest). Height fields (and statistics beyond the PSD range, for which a height field is
     generated): the cheaper of ``fft`` and ``direct`` by the calibrated cost model (both are exact Kirchhoff to
     their tolerance; ``direct`` only computes the directions it is asked for).
@@ -104,7 +104,7 @@ ESTIMATE_STEP_NM = 40.0
 ESTIMATE_SPHERE_THETAS = (0.0, 45.0, 75.0)
 #: diffraction runs when the estimated ΔE2000 exceeds this share of the target
 ESTIMATE_SHARE = 0.5
-#: largest g = (4πσ cosθ/λ)² for which the PSD series is trusted (psd.py: truncation loses energy beyond)
+#: largest g = (4πσ cosθ/λ)² for which the PSD series is trusted (scatter/series.py: truncation loses energy beyond)
 PSD_G_MAX = 30.0
 #: scattered fractions below this are "flat" (no estimate is run)
 FLAT_SCATTER = 1e-9

@@ -20,7 +20,7 @@ Schema (``examples/scenes/*.toml`` are worked examples)::
     material = "Au"                      # preset, shelf/book/page or f0:...   (or: ior = 1.5 / "0.2+3.1j")
     roughness = 0.1                      # micro NDF alpha >= 0
     ndf = "ggx"                          # ggx | beckmann
-    shadowing = "smith-correlated"       # see waveoptics.microfacet.SHADOWINGS
+    shadowing = "smith-correlated"       # see waveoptics.brdf.SHADOWINGS
     diffuse_albedo = 0.5                 # dielectric substrate's diffuse albedo in [0, 1] (metals: none)
     [materials.nano]                     # optional nano surface, exactly one of:
     statistics = "abc:sigma=2nm,B=2um,C=2.6"      #   height statistics (gaussian | exponential | abc)

@@ -10,11 +10,11 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
-from ..errors import WaveopticsError, unknown
+from ..errors import WaveopticsError
 from ..runtime import build_options, build_program, get_runtime
 from .patch import Samples
 
-__all__ = ['VECTOR_WIDTH', 'TERMS_PER_LAUNCH', 'PhaseCoefficients', 'phase_coefficients', 'kirchhoff_phase', 'kirchhoff_U', 'PAIRS_PER_ITEM', 'SINCOS_TERMS', 'sincos_poly', 'sincos_2pi', 'kirchhoff_phase_cl', 'sincos_2pi_cl', 'DIRECT_KERNELS', 'kirchhoff_U_cl']
+__all__ = ['VECTOR_WIDTH', 'TERMS_PER_LAUNCH', 'PhaseCoefficients', 'phase_coefficients', 'kirchhoff_phase', 'kirchhoff_U', 'PAIRS_PER_ITEM', 'SINCOS_TERMS', 'sincos_poly', 'sincos_2pi', 'kirchhoff_phase_cl', 'sincos_2pi_cl', 'launch_pairs', 'exact_phase_args', 'kirchhoff_U_cl']
 
 #: samples per SIMD step in kernels/kirchhoff.cl (16 measured fastest under PoCL on AVX-512; GPUs unroll it)
 VECTOR_WIDTH = 16
@@ -185,7 +185,8 @@ def sincos_2pi(t, precision: str = "float32") -> tuple[np.ndarray, np.ndarray]:
     return s.astype(dt), c.astype(dt)
 
 
-def _cl_setup(runtime, precision, vector_width, smp: Samples, fast_math: bool = False):
+def _cl_setup(runtime, precision, vector_width, smp: Samples, fast_math: bool = False,
+              program: str = "kirchhoff.cl"):
     """(runtime, real dtype, program, queue, padded device sample arrays (ix, iy, h, w), padded count)."""
 
 
@@ -198,7 +199,7 @@ def _cl_setup(runtime, precision, vector_width, smp: Samples, fast_math: bool = 
     extra = (f"-DWO_VW={vw}", f"-DWO_ND={PAIRS_PER_ITEM[pname]}") + _sincos_options(pname)
     if fast_math:
         extra += ("-cl-fast-relaxed-math",)
-    prg = build_program(rt, "kirchhoff.cl", build_options(dt, extra))
+    prg = build_program(rt, program, build_options(dt, extra))
     q = rt.queue
     pad = (-smp.size) % vw                       # padding samples carry w = 0
 
@@ -244,20 +245,52 @@ def sincos_2pi_cl(t, *, runtime=None, precision: str = "float32") -> tuple[np.nd
     return s.get()[: t.size], c.get()[: t.size]
 
 
-#: direct-sum kernels of kernels/kirchhoff.cl (the ``kernel=`` registry of :func:`kirchhoff_U_cl`)
-DIRECT_KERNELS = {
-    "kirchhoff_U": "exact fixed-point phase, shared-reduction sin/cos polynomials, register-blocked pairs (default)",
-    "kirchhoff_U_sinpi": "the kernel before issue 6 (benchmark's before/after): exact phase, SLEEF sinpi/cospi, one "
-                         "pair per work-item",
-    "kirchhoff_U_naive": "baseline for the benchmark: float phase in radians, native_sin/native_cos, one pair per "
-                         "work-item (inaccurate for large phases in float32)",
-}
+def launch_pairs(smp: Samples, coef: PhaseCoefficients, *, kernel: str, chunk_args, pairs_per_item: int | None = None,
+                 program: str = "kirchhoff.cl", runtime=None, precision: str = "float32",
+                 local_size: int | None = None, vector_width: int | None = None, progress=None,
+                 fast_math: bool = False) -> np.ndarray:
+    """Run a direct-sum kernel with the arguments ``(ix, iy, h, w, n_samples, *chunk_args(...), n_pairs, U_re,
+    U_im)`` over every pair, in launches of about :data:`TERMS_PER_LAUNCH` sample-pair terms.
+
+    *chunk_args(queue, dtype, coef_chunk, start, count)* returns the per-pair device arguments of one launch;
+    *pairs_per_item* is the pairs each work-item sums (default: :data:`PAIRS_PER_ITEM` of the precision). Used by
+    :func:`kirchhoff_U_cl` and by the benchmark's kernel variants (:mod:`waveoptics.bench`).
+    """
+    rt, dt, prg, q, (d_ix, d_iy, d_h, d_w), ns = _cl_setup(runtime, precision, vector_width, smp, fast_math,
+                                                            program)
+    knl = cl.Kernel(prg, kernel)
+    nd = PAIRS_PER_ITEM[_precision_name(dt)] if pairs_per_item is None else int(pairs_per_item)
+    n = coef.size
+    out = np.empty(n, np.complex128)
+    lsz = _default_local_size(rt) if local_size is None else (int(local_size) or None)   # 0: driver's choice
+    chunk = max(256, TERMS_PER_LAUNCH // max(ns, 1))
+    chunk -= chunk % nd
+    for a in range(0, n, chunk):
+        c = coef.take(slice(a, a + chunk))
+        m = c.size
+        args = chunk_args(q, dt, c, a, m)
+        re, im = cla.empty(q, m, dt), cla.empty(q, m, dt)
+        items = -(-m // nd)
+        gsz = items if lsz is None else -(-items // lsz) * lsz
+        knl(q, (gsz,), None if lsz is None else (lsz,), d_ix.data, d_iy.data, d_h.data, d_w.data,
+            np.int32(ns), *args, np.int32(m), re.data, im.data)
+        out[a:a + m] = re.get() + 1j * im.get()
+        if progress is not None:
+            progress(m)
+    return out * (smp.dx * smp.dy)
+
+
+def exact_phase_args(q, dt, c: PhaseCoefficients, start: int, count: int) -> tuple:
+    """Device arguments of the exact-phase kernels for one launch: (Ax, Ay, lox, loy, cz, c0)."""
+    dev = [cla.to_device(q, np.ascontiguousarray(x)) for x in
+           (c.Ax, c.Ay, c.lox.astype(dt), c.loy.astype(dt), c.cz.astype(dt), c.c0.astype(dt))]
+    return tuple(d.data for d in dev)
 
 
 def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, precision: str = "float32",
                    local_size: int | None = None, vector_width: int | None = None, progress=None,
-                   kernel: str = "kirchhoff_U", fast_math: bool = False) -> np.ndarray:
-    """OpenCL direct sum (``kernels/kirchhoff.cl``), twin of :func:`kirchhoff_U`.
+                   fast_math: bool = False) -> np.ndarray:
+    """OpenCL direct sum (``kernels/kirchhoff.cl``, kernel ``kirchhoff_U``), twin of :func:`kirchhoff_U`.
 
     All pairs (every direction × wavelength) go through one program; launches are split into chunks of about
     :data:`TERMS_PER_LAUNCH` sample-pair terms so that *progress* (a callable taking a number of finished
@@ -271,8 +304,6 @@ def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, preci
         Work-group size (default: 1 on CPU devices, else the driver's choice; 0: the driver's choice).
     vector_width : int, optional
         Samples per SIMD step of the inner loop (``-DWO_VW``; default :data:`VECTOR_WIDTH`).
-    kernel : str
-        A name in :data:`DIRECT_KERNELS`; ``kirchhoff_U_naive`` is the benchmark's baseline.
     fast_math : bool
         Build with ``-cl-fast-relaxed-math`` (lets the compiler reassociate sums and use faster, less accurate
         math; its effect on speed and error is measured by ``waveoptics bench``). Default off.
@@ -281,39 +312,6 @@ def kirchhoff_U_cl(smp: Samples, coef: PhaseCoefficients, *, runtime=None, preci
     -------
     ndarray of complex128 (n_pairs,), m²
     """
-
-    if kernel not in DIRECT_KERNELS:
-        raise unknown("kernel", kernel, DIRECT_KERNELS)
-    rt, dt, prg, q, (d_ix, d_iy, d_h, d_w), ns = _cl_setup(runtime, precision, vector_width, smp, fast_math)
-    knl = cl.Kernel(prg, kernel)
-    naive = kernel == "kirchhoff_U_naive"
-    nd = PAIRS_PER_ITEM[_precision_name(dt)] if kernel == "kirchhoff_U" else 1
-    n = coef.size
-    out = np.empty(n, np.complex128)
-    lsz = _default_local_size(rt) if local_size is None else (int(local_size) or None)   # 0: driver's choice
-    chunk = max(256, TERMS_PER_LAUNCH // max(ns, 1))
-    chunk -= chunk % nd
-    if naive:
-        # radians per metre from the cycles-per-sample coefficients (reduced mod 1 cycle: same exp)
-        lat = [(np.asarray(A, np.float64) * 2.0**-32 + lo) for A, lo in ((coef.Ax, coef.lox), (coef.Ay, coef.loy))]
-        lat = [np.where(a >= 0.5, a - 1.0, a) for a in lat]
-        kx, ky, kz = 2 * np.pi * lat[0] / smp.dx, 2 * np.pi * lat[1] / smp.dy, 2 * np.pi * coef.cz
-    for a in range(0, n, chunk):
-        c = coef.take(slice(a, a + chunk))
-        m = c.size
-        if naive:
-            dev = [cla.to_device(q, np.ascontiguousarray(x[a:a + m].astype(dt))) for x in (kx, ky, kz)]
-            args = (*[d.data for d in dev], dt(smp.dx), dt(smp.dy), dt((smp.nx - 1) / 2), dt((smp.ny - 1) / 2))
-        else:
-            dev = [cla.to_device(q, np.ascontiguousarray(x)) for x in
-                   (c.Ax, c.Ay, c.lox.astype(dt), c.loy.astype(dt), c.cz.astype(dt), c.c0.astype(dt))]
-            args = tuple(d.data for d in dev)
-        re, im = cla.empty(q, m, dt), cla.empty(q, m, dt)
-        items = -(-m // nd)
-        gsz = items if lsz is None else -(-items // lsz) * lsz
-        knl(q, (gsz,), None if lsz is None else (lsz,), d_ix.data, d_iy.data, d_h.data, d_w.data,
-            np.int32(ns), *args, np.int32(m), re.data, im.data)
-        out[a:a + m] = re.get() + 1j * im.get()
-        if progress is not None:
-            progress(m)
-    return out * (smp.dx * smp.dy)
+    return launch_pairs(smp, coef, kernel="kirchhoff_U", chunk_args=exact_phase_args, runtime=runtime,
+                        precision=precision, local_size=local_size, vector_width=vector_width, progress=progress,
+                        fast_math=fast_math)

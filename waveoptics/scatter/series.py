@@ -23,7 +23,7 @@ Where it breaks
 ---------------
 * Gaussian height statistics are assumed; real polished surfaces are often close, scratched ones are not.
 * The series is truncated at ``m_max`` terms; for g ≳ 30 (σ cosθ ≳ 0.45 λ) the truncation loses energy and
-  :func:`scattered_lobe` reports the captured fraction — use a height-field solver (waveoptics.diffraction)
+  :func:`scattered_lobe` reports the captured fraction — use a height-field solver (waveoptics.scatter)
   or the geometric (microfacet) limit there.
 * Tangent-plane approximation: correlation lengths below ~λ and grazing angles are outside its validity.
 
