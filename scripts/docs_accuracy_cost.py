@@ -46,7 +46,7 @@ waveoptics cost --surface patch.npz --solvers fft,direct --resolutions 64,128 --
 **Settings.** `fft0`: chirp-z transforms with v_z frozen at the specular value (the paraxial approximation);
 `fft`: the same with the banded Taylor series in v_z (exact Kirchhoff to 1e-8 Σw); `direct`: the direct sum on the
 OpenCL device in float32 or float64 (`waveoptics.scatter`). Wavelengths: the grid
-`spectral.simulation_wavelengths` picks for a colour accuracy ΔE under the illuminant (@wl_ladder@ under D65).
+`colour.simulation_wavelengths` picks for a colour accuracy ΔE under the illuminant (@wl_ladder@ under D65).
 
 **Reference.** The direct sum in float64 at the finest resolution of the ladder and a denser spectrum (@wl_ref@);
 for random surfaces one run per realization, @n_ref@ realizations.

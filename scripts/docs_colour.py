@@ -26,7 +26,7 @@ All colorimetry (CIE colour-matching functions, CIE illuminants, Planck's law, R
 CIEDE2000, the sRGB curve, ASTM E2022 weights, CSV spectra) comes from colour-science {colour_version}.
 
 ## Light sources
-`--illuminant` (and `wcolour.illuminant(spec)`) understands:
+`--illuminant` (and `waveoptics.colour.illuminant(spec)`) understands:
 
 | spec | light |
 |---|---|
@@ -38,7 +38,7 @@ CIEDE2000, the sRGB curve, ASTM E2022 weights, CSV spectra) comes from colour-sc
 
 Continuous SPDs are linearly interpolated to the 1 nm CMF grid (360–830 nm) and held constant beyond their table
 (CIE 015 practice). Line spectra stay lines: a simulation under lasers computes only the laser wavelengths
-(`wcolour.simulation_wavelengths`).
+(`waveoptics.colour.simulation_wavelengths`).
 
 ## From a spectrum to XYZ
 For a reflectance R(λ) (or any spectral factor: BRDF, F0) under a light S(λ), CIE 015:
@@ -109,7 +109,7 @@ gold data sets alone span {gold_spread} in blue and its silver sets {silver_spre
 give {ag_hagemann}, within 0.02 of the table.
 
 ### Classification by F0
-`wcolour.classify_f0(Y)` sorts by the luminance Y of F0 (Hoffman, SIGGRAPH 2015 "Physics and Math of Shading"):
+`waveoptics.colour.classify_f0(Y)` sorts by the luminance Y of F0 (Hoffman, SIGGRAPH 2015 "Physics and Math of Shading"):
 dielectrics ~0.02–0.05 (gems up to ~0.17), metals ≥ ~0.5 (threshold 0.45 here), and the **forbidden zone**
 0.2–0.45, which real production surfaces avoid and only semiconductors occupy. All presets:
 

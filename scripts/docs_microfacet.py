@@ -32,7 +32,7 @@ are BRDFs in 1/sr (not multiplied by cos θ). Each model has an OpenCL twin of t
 evaluated by `kernels/microfacet.cl` through `D_cl`, `Lambda_cl` and `brdf_cl`.
 
 ```python
-from waveoptics import microfacet as mf
+from waveoptics import brdf
 f = brdf.brdf(wi, wo, alpha=0.2, ndf="ggx", shadowing="smith-correlated", eta=0.2 + 3.1j)
 f = brdf.spectral_brdf(wi, wo, [450, 550, 650], "Au", alpha=0.2)          # (3, n)
 E = brdf.albedo(wi, alpha=0.2, fresnel="one")                             # ∫ f cos θo dωo

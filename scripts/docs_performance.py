@@ -24,7 +24,7 @@ HEAD = """# Performance: the kernels against the obvious alternatives
 tables) — do not edit by hand. The raw numbers are in `docs/data/performance.json`.*
 
 No GPU was available for these measurements: every number is PoCL on the CPU below. On a GPU the kernels use
-the driver's work-group size (`diffraction._default_local_size`), untested here.
+the driver's work-group size (`scatter.direct._default_local_size`), untested here.
 
 All rows of one table were measured in one run on one machine, so their ratios are meaningful; absolute numbers
 move with the machine and with its load (the load average is printed: on a shared 2-core machine a load near 2
@@ -38,7 +38,7 @@ The direct Kirchhoff sum U = Σ_j w_j exp(2πi φ_j) (docs/physics.md §1) costs
 direction × wavelength ("term"). `kernels/kirchhoff.cl` `kirchhoff_U` now
 
 * evaluates cos/sin(2πφ) with one exact argument reduction shared by both and two short polynomials
-  (`kernels/wo_sincos.h`, NumPy twin `diffraction.sincos_2pi`; coefficients fitted by `diffraction.sincos_poly`),
+  (`kernels/wo_sincos.h`, NumPy twin `scatter.sincos_2pi`; coefficients fitted by `scatter.sincos_poly`),
   accurate to float32 (float64) rounding — instead of two SLEEF calls `sinpi` and `cospi`;
 * sums 8 (float32) or 4 (float64) directions per work-item, so the 16 samples it loads per step and their
   conversions serve several phases (register blocking);

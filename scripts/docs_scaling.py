@@ -235,7 +235,7 @@ waveoptics table ... -o gold.h5 --resume
   127.0.0.1 (`waveoptics.distributed.LOOPBACK`; `dashboard_address=None` alone would still leave the scheduler's
   and workers' HTTP servers on 0.0.0.0). No dashboard is started.
 * **Tasks.** A table task is one (realization, incident angle, batch of `--batch` wavelengths, default 8)
-  evaluated by `compute_block` → `twoscale.evaluate` on the hemisphere grid: big enough to amortize Dask's
+  evaluated by `compute_block` → `brdf.twoscale.evaluate` on the hemisphere grid: big enough to amortize Dask's
   per-task overhead (measured below), small enough that a lost task costs little and that a few dozen tasks
   keep dozens of workers busy. A sweep task is one point of the `--vary` product (`simulate.simulate` plus
   sphere renders for the per-pixel ΔE2000).

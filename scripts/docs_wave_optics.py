@@ -308,7 +308,7 @@ with `boxcar` and {ring_hann:.1e} with `hann`. Lobes are given on the direction-
 (u, v) = (sin θ_o cos φ_o, sin θ_o sin φ_o), where cos θ_o dω_o = du dv, so the directional albedo is Σ f du dv over
 the cells inside the unit disc (`DirectionGrid`, cell centres, row = v, column = u).
 
-Per wavelength `diffraction.scatter` returns the ensemble-mean BRDF over the grid, the albedo (whole disc and
+Per wavelength `scatter.scatter` returns the ensemble-mean BRDF over the grid, the albedo (whole disc and
 inside sin θ_o ≤ {hs}), the **coherent specular fraction** |⟨χ̂⟩|² with χ̂ = Σ w² exp(2i k cos θ_i h) / Σ w² (the
 patch estimate of ⟨exp(i v_z h)⟩, docs/physics.md §2) and the **scattered fraction** = albedo − |⟨χ̂⟩|² · E_flat, where
 E_flat is the albedo of the same window without heights on the same grid (so that a flat patch scatters exactly
@@ -422,7 +422,7 @@ ens = diffraction.scatter(lambda s: surfaces.gaussian(500e-9, 3.3e-6, 32e-6, 256
 Low level: `samples(hf, window, detrend)`, `phase_coefficients`, `kirchhoff_U` (NumPy twin) /
 `kirchhoff_U_cl` (OpenCL), `kirchhoff_phase` / `kirchhoff_phase_cl`, `field_fft(smp, wi, grid, λ, order)`,
 `fft_plan`, `coherent_amplitude`, `kirchhoff_factor`, `brdf_from_field`, `integrate`, `split_patch`,
-`write_scatter`. Solvers are chosen by name from `diffraction.SOLVERS`.
+`write_scatter`. Solvers are chosen by name from `scatter.SOLVERS`.
 
 ### Command line
 ```
