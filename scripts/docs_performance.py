@@ -34,7 +34,7 @@ here.
 
 ## How the direct kernel got faster
 
-The direct Kirchhoff sum U = Σ_j w_j exp(2πi φ_j) (docs/physics.md §1) costs one complex exponential per sample ×
+The direct Kirchhoff sum U = Σ_j w_j exp(2πi φ_j) (physics.md §1) costs one complex exponential per sample ×
 direction × wavelength ("term"). `kernels/kirchhoff.cl` `kirchhoff_U` now
 
 * evaluates cos/sin(2πφ) with one exact argument reduction shared by both and two short polynomials

@@ -153,7 +153,7 @@ def render(cases, props, bads, lost, device) -> str:
           "* **Grazing angles.** Directions at or below the horizon give exactly 0. The Kirchhoff (tangent-plane) "
           "obliquity factor grows as 1/cos θ_i, so near grazing incidence the Kirchhoff lobe alone does not conserve "
           "energy: `scatter.scatter` says so in a warning (`energy not conserved`), and the two-scale model caps "
-          "the diffracted light at the light its coherent lobe lost, which keeps the sum within F (docs/physics.md §7).",
+          "the diffracted light at the light its coherent lobe lost, which keeps the sum within F (physics.md §7).",
           "* **Roughness.** α ∈ [0, 2] (0 means the sharpest representable lobe, α = 1e-4); larger α is refused. "
           "The PSD (Kirchhoff-series) route refuses nano-roughness whose series would hold less than 99 % of the "
           "scattered light in any direction (σ ≳ λ/2); use a height field (fft/direct solvers) or the micro NDF.",

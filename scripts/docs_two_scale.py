@@ -79,7 +79,7 @@ def main():
 
 ## Model
 Micro-geometry (≫ λ, below a pixel) is a microfacet NDF D with roughness α; each microfacet carries
-nano-roughness (≈ λ or smaller) of rms height σ. Following Holzschuch & Pacanowski (2017) and docs/physics.md §7, the
+nano-roughness (≈ λ or smaller) of rms height σ. Following Holzschuch & Pacanowski (2017) and physics.md §7, the
 light a facet reflects splits into
 
 * a **coherent** part, the fraction A(λ, θ_d) = exp(−(4πσ cos θ_d / λ)²) (Davies 1954) that stays in the

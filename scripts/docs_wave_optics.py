@@ -295,7 +295,7 @@ kirchhoff`.
 
 ### Model
 For a height-field patch h(x, y), a direction to the light ω_i and to the viewer ω_o, s = ω_i + ω_o, k = 2π/λ
-and a smooth window w over the patch (docs/physics.md §1; Beckmann & Spizzichino 1963):
+and a smooth window w over the patch (physics.md §1; Beckmann & Spizzichino 1963):
 
     U(ω_i, ω_o) = ∫ w exp(i k s · (x, y, h)) dx dy        A_w = ∫ w² dx dy
     f(ω_i, ω_o) = F(θ_d) |s|⁴ / (4 λ² A_w cos θ_i cos θ_o (cos θ_i + cos θ_o)²) · |U|²        [1/sr]
@@ -310,7 +310,7 @@ the cells inside the unit disc (`DirectionGrid`, cell centres, row = v, column =
 
 Per wavelength `scatter.scatter` returns the ensemble-mean BRDF over the grid, the albedo (whole disc and
 inside sin θ_o ≤ {hs}), the **coherent specular fraction** |⟨χ̂⟩|² with χ̂ = Σ w² exp(2i k cos θ_i h) / Σ w² (the
-patch estimate of ⟨exp(i v_z h)⟩, docs/physics.md §2) and the **scattered fraction** = albedo − |⟨χ̂⟩|² · E_flat, where
+patch estimate of ⟨exp(i v_z h)⟩, physics.md §2) and the **scattered fraction** = albedo − |⟨χ̂⟩|² · E_flat, where
 E_flat is the albedo of the same window without heights on the same grid (so that a flat patch scatters exactly
 0, whatever the quadrature error). The w² weights make exp(i v_z h) − χ̂ orthogonal to w, so the coherent and the
 scattered lobes add without a cross term. Ensembles: a list of height fields, a generator `seed -> HeightField`
@@ -322,7 +322,7 @@ with `realizations=N`, or one field split into N tiles (`split_patch`).
   masking**: at grazing angles rough surfaces reflect too much (the Beckmann limit below is the microfacet model
   *without* G). The σ ≫ λ test shows the remaining difference.
 - **Fresnel at θ_d**: exact for a flat surface and in the σ ≫ λ limit; for smooth surfaces the scattered part
-  carries F(θ_d) instead of the Rayleigh-Rice polarization factor Q (docs/physics.md §4).
+  carries F(θ_d) instead of the Rayleigh-Rice polarization factor Q (physics.md §4).
 - **Near the horizon** the 1/cos θ_o of the BRDF amplifies any error, and the model is least trustworthy there.
   `ScatterResult.albedo_inner` excludes sin θ_o > {hs}; a warning names the share of the albedo beyond it when it
   exceeds 5 %. The frozen-v_z fft approximation (below) is what fails worst there: see the Beckmann table.
@@ -397,14 +397,14 @@ def main():
                  "**Sinusoidal grating** h = a sin(2πx/Λ), Λ = 8λ, θ_i = 20°: power in each order (the BRDF "
                  "summed over a strip of width λ/Λ around sin θ_m = sin θ_i + mλ/Λ) against the Kirchhoff "
                  "prediction O_m J_m²(k a (cos θ_i + cos θ_m)) with O_m = |s|⁴/(4 cos θ_i cos θ_m (cos θ_i + "
-                 "cos θ_m)²) (docs/physics.md §5), and against the paraxial J_m²(2 k a cos θ_i).\n\n"
+                 "cos θ_m)²) (physics.md §5), and against the paraxial J_m²(2 k a cos θ_i).\n\n"
                  + _grating_table(gr) + "\n\n"
                  f"![grating and Beckmann](img/{img_curves})\n\n"
                  "**Gaussian surface, σ ≫ λ** (σ = λ, T = 2σ/0.3 so α = 2σ/T = 0.3, 128² at λ/2, 64 realizations, "
                  "normal incidence): ring means in θ_h of the averaged lobe over Beckmann D / (4 cos θ_i cos θ_o) "
                  "(F = 1, no shadowing). Within θ_h < 24° the exact Kirchhoff lobe is within a few percent; the "
                  "far tail is heavier — at finite g = (4πσ/λ)² ≈ 158 the Kirchhoff lobe is a Poisson mixture of "
-                 "Gaussians of different widths (docs/physics.md §3), and the patch's diffraction blurs the lobe by "
+                 "Gaussians of different widths (physics.md §3), and the patch's diffraction blurs the lobe by "
                  "~λ/L. The frozen v_z (order 0) maps slopes with the wrong v_z and puts far too much light near "
                  "the horizon.\n\n" + _beckmann_table(*beck[:4], beck[4]) + "\n")
     parts.append("""

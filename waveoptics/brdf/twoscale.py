@@ -324,19 +324,12 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     inside = grid.inside
     out = np.zeros((w.size, grid.n_v, grid.n_u))
     chi = np.array([scatter.coherent_amplitude(smp, wi, lam) for lam in w])
-    if solver == "fft":
-        for i, lam in enumerate(w):
-            U, _ = scatter.field_fft(smp, wi, grid, lam)
-            U0, _ = scatter.field_fft(flat, wi, grid, lam)
-            out[i] = scatter.brdf_from_field((U - chi[i] * U0)[None], wi, dirs, [lam], smp.area, F)[0]
-    else:
-        rt = get_runtime(device)
-        wo = dirs[inside]
-        U = scatter.kirchhoff_U_cl(smp, scatter.phase_coefficients(smp, wi, wo, w), runtime=rt,
-                               precision=precision).reshape(w.size, -1)
-        U0 = scatter.kirchhoff_U_cl(flat, scatter.phase_coefficients(flat, wi, wo, w), runtime=rt,
-                                precision=precision).reshape(w.size, -1)
-        out[:, inside] = scatter.brdf_from_field(U - chi[:, None] * U0, wi, wo, w, smp.area, F)
+    sol = scatter.get_solver(solver)
+    opts = dict(runtime=get_runtime(device) if solver == "direct" else None, precision=precision)
+    U, _ = sol.grid_field(smp, wi, grid, w, **opts)
+    U0, _ = sol.grid_field(flat, wi, grid, w, **opts)
+    out[:, inside] = scatter.brdf_from_field((U - chi[:, None, None] * U0)[:, inside], wi, dirs[inside], w,
+                                             smp.area, F)
     return np.where(inside, np.maximum(out, 0.0), 0.0)
 
 

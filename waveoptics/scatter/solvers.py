@@ -7,6 +7,7 @@ import math
 import time
 import warnings
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 from scipy.interpolate import RegularGridInterpolator
@@ -21,7 +22,7 @@ from .grid import HORIZON_SIN, DirectionGrid, _incident, _outgoing, integrate
 from .kirchhoff import brdf_from_field, coherent_amplitude, cos_theta_d
 from .patch import DEFAULT_WINDOW, Samples, samples
 
-__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'SOLVERS', 'BACKENDS', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'scatter']
+__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'Solver', 'SOLVERS', 'BACKENDS', 'get_solver', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'scatter']
 
 #: largest albedo of the F = 1 lobe that :func:`scatter` accepts without an "energy not conserved" warning
 ENERGY_TOL = 1.05
@@ -41,20 +42,102 @@ def _warn(msg: str, sink: list | None = None) -> None:
 # High-level API
 # ----------------------------------------------------------------------------------------------------------------
 
-#: solver name -> description (the ``method=`` registry)
+def _grid_field_direct(smp: Samples, wi, grid: DirectionGrid, wl, *, backend="opencl", runtime=None,
+                       precision="float32", progress=None, **_) -> tuple[np.ndarray, dict]:
+    """U on the grid by the direct sum at every cell centre inside the disc (0 outside)."""
+    d_in = grid.directions()[grid.inside]
+    coef = phase_coefficients(smp, wi, d_in, wl)
+    if backend == "numpy":
+        Uin = kirchhoff_U(smp, coef)
+        if progress is not None:
+            progress(len(wl))
+    else:
+        step = (lambda n, _k=d_in.shape[0]: progress(n / _k)) if progress is not None else None
+        Uin = kirchhoff_U_cl(smp, coef, runtime=runtime, precision=precision, progress=step)
+    U = np.zeros((len(wl), grid.n_v, grid.n_u), np.complex128)
+    U[:, grid.inside] = Uin.reshape(len(wl), -1)
+    return U, {"precision": precision if backend == "opencl" else "float64", "backend": backend}
+
+
+def _grid_field_fft(smp: Samples, wi, grid: DirectionGrid, wl, *, order="auto", tol=FFT_TOL, progress=None,
+                    **_) -> tuple[np.ndarray, dict]:
+    """U on the grid by chirp-z transforms (:func:`field_fft`), wavelength by wavelength."""
+    U = np.empty((len(wl), grid.n_v, grid.n_u), np.complex128)
+    plans = []
+    for i, lam in enumerate(wl):
+        U[i], inf = field_fft(smp, wi, grid, lam, order, tol)
+        plans.append({"wavelength_nm": float(lam), **inf})
+        if progress is not None:
+            progress(1)
+    return U, {"fft": plans}
+
+
+def _lobe_at_direct(smp: Samples, wi, wo, wl, F, *, backend="opencl", runtime=None, precision="float32",
+                    progress=None, **_) -> np.ndarray:
+    """f at the given directions by the direct sum there."""
+    for m in sampling_warnings(smp, wi, wl, wo=wo):
+        _warn(m)
+    coef = phase_coefficients(smp, wi, wo, wl)
+    U = kirchhoff_U(smp, coef) if backend == "numpy" else kirchhoff_U_cl(smp, coef, runtime=runtime,
+                                                                          precision=precision, progress=progress)
+    return brdf_from_field(U.reshape(len(wl), -1), wi, wo, wl, smp.area, F)
+
+
+def _lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, progress=None, **_) -> np.ndarray:
+    """f at the given directions, interpolated bilinearly in (u, v) from the lobe on a hemisphere grid fine enough
+    to resolve the specular spike at the shortest wavelength (or *resolution*)."""
+    res = resolution or min(2048, max(64, int(math.ceil(2 * max(smp.extent) / (wl.min() * 1e-9)))))
+    grid = DirectionGrid.hemisphere(res)
+    dirs = grid.directions()
+    for m in sampling_warnings(smp, wi, wl, grid=grid):
+        _warn(m)
+    out = np.zeros((len(wl), wo.shape[0]))
+    for i, lam in enumerate(wl):
+        U, _ = field_fft(smp, wi, grid, lam, order)
+        f = brdf_from_field(U[None], wi, dirs, [lam], smp.area, F)[0]
+        interp = RegularGridInterpolator((grid.v, grid.u), f, bounds_error=False, fill_value=None)
+        out[i] = np.where(wo[:, 2] > 0, interp(np.stack([wo[:, 1], wo[:, 0]], axis=1)), 0.0)
+        if progress is not None:
+            progress(1)
+    return out
+
+
+@dataclass(frozen=True)
+class Solver:
+    """A solver of the Kirchhoff field of a prepared patch (:class:`Samples`).
+
+    Attributes
+    ----------
+    name, description : str
+    grid_field : callable (smp, wi, grid, wavelengths_nm, **options) -> (U (n_λ, n_v, n_u) complex, info dict)
+        The field U (m²) at the grid's cell centres (0 outside the disc).
+    lobe_at : callable (smp, wi, wo, wavelengths_nm, F, **options) -> f (n_λ, n) in 1/sr
+        The BRDF at arbitrary outgoing directions.
+    """
+
+    name: str
+    description: str
+    grid_field: Callable
+    lobe_at: Callable
+
+
+#: solver name -> :class:`Solver` (the ``method=`` registry; every caller dispatches through it)
 SOLVERS = {
-    "direct": "direct Kirchhoff sum on the OpenCL device (exact tangent-plane model; O(samples x directions))",
-    "fft": "chirp-z transforms on the direction-cosine grid, banded Taylor series in v_z (order='auto') or "
-           "frozen v_z (order=0)",
+    "direct": Solver("direct", "direct Kirchhoff sum on the OpenCL device or its NumPy twin (exact tangent-plane "
+                               "model; O(samples x directions))", _grid_field_direct, _lobe_at_direct),
+    "fft": Solver("fft", "chirp-z transforms on the direction-cosine grid, banded Taylor series in v_z "
+                         "(order='auto') or frozen v_z (order=0)", _grid_field_fft, _lobe_at_fft),
 }
 BACKENDS = ("opencl", "numpy")
 
 
-def _check_solver(solver, backend):
+def get_solver(solver: str, backend: str = "opencl") -> Solver:
+    """The :class:`Solver` named *solver* (and a check of the direct solver's *backend*)."""
     if solver not in SOLVERS:
-        raise unknown("solver", solver, SOLVERS)
+        raise unknown("solver", solver, SOLVERS, field="solver")
     if backend not in BACKENDS:
-        raise unknown("backend", backend, BACKENDS)
+        raise unknown("backend", backend, BACKENDS, field="backend")
+    return SOLVERS[solver]
 
 
 def _realizations(surface, realizations, seed=0) -> list[HeightField]:
@@ -176,7 +259,7 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
     -------
     ndarray (n_wl, n), sr⁻¹
     """
-    _check_solver(solver, backend)
+    sol = get_solver(solver, backend)
     wi = _incident(wi)
     wo = _outgoing(wo)
     wl = check_wavelengths(wavelengths_nm)
@@ -184,30 +267,8 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
     hfs = _realizations(surface, realizations, seed)
     acc = np.zeros((wl.size, wo.shape[0]))
     for hf in hfs:
-        smp = samples(hf, window_name, detrend)
-        if solver == "direct":
-            for m in sampling_warnings(smp, wi, wl, wo=wo):
-                _warn(m)
-            coef = phase_coefficients(smp, wi, wo, wl)
-            if backend == "numpy":
-                U = kirchhoff_U(smp, coef)
-            else:
-                U = kirchhoff_U_cl(smp, coef, runtime=runtime, precision=precision, progress=progress)
-            acc += brdf_from_field(U.reshape(wl.size, -1), wi, wo, wl, smp.area, F)
-        else:
-
-            res = resolution or min(2048, max(64, int(math.ceil(2 * max(smp.extent) / (wl.min() * 1e-9)))))
-            grid = DirectionGrid.hemisphere(res)
-            dirs = grid.directions()
-            for m in sampling_warnings(smp, wi, wl, grid=grid):
-                _warn(m)
-            for i, lam in enumerate(wl):
-                U, _ = field_fft(smp, wi, grid, lam, order)
-                f = brdf_from_field(U[None], wi, dirs, [lam], smp.area, F)[0]
-                interp = RegularGridInterpolator((grid.v, grid.u), f, bounds_error=False, fill_value=None)
-                acc[i] += np.where(wo[:, 2] > 0, interp(np.stack([wo[:, 1], wo[:, 0]], axis=1)), 0.0)
-                if progress is not None:
-                    progress(1)
+        acc += sol.lobe_at(samples(hf, window_name, detrend), wi, wo, wl, F, backend=backend, runtime=runtime,
+                           precision=precision, order=order, resolution=resolution, progress=progress)
     return np.clip(acc / len(hfs), 0.0, None)
 
 
@@ -301,7 +362,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     ScatterResult
     """
     t0 = time.perf_counter()
-    _check_solver(solver, backend)
+    sol = get_solver(solver, backend)
     wi = _incident(wi)
     wl = check_wavelengths(wavelengths_nm)
     F = fresnel_function(material)
@@ -322,33 +383,16 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     msgs: list[str] = []
     info = {"window": str(window_name)}
     t_solve = t_flat = 0.0
-    d_in = dirs[inside]
     for r, hf in enumerate(hfs):
         smp = samples(hf, window_name, detrend)
         for m in sampling_warnings(smp, wi, wl, grid=grid):
             if m not in msgs:
                 _warn(m, msgs)
         t1 = time.perf_counter()
-        if solver == "direct":
-            coef = phase_coefficients(smp, wi, d_in, wl)
-            step = (lambda n, _k=d_in.shape[0]: progress(n / _k)) if progress is not None else None
-            if backend == "numpy":
-                Uin = kirchhoff_U(smp, coef)
-                if progress is not None:
-                    progress(n_wl)
-            else:
-                Uin = kirchhoff_U_cl(smp, coef, runtime=runtime, precision=precision, progress=step)
-            U = np.zeros((n_wl, grid.n_v, grid.n_u), np.complex128)
-            U[:, inside] = Uin.reshape(n_wl, -1)
-            info.update(precision=precision if backend == "opencl" else "float64", backend=backend)
-        else:
-            U = np.empty((n_wl, grid.n_v, grid.n_u), np.complex128)
-            for i, lam in enumerate(wl):
-                U[i], inf = field_fft(smp, wi, grid, lam, order, tol)
-                if r == 0:
-                    info.setdefault("fft", []).append({"wavelength_nm": float(lam), **inf})
-                if progress is not None:
-                    progress(1)
+        U, inf = sol.grid_field(smp, wi, grid, wl, backend=backend, runtime=runtime, precision=precision,
+                                order=order, tol=tol, progress=progress)
+        if r == 0:
+            info.update(inf)
         t_solve += time.perf_counter() - t1
         f = brdf_from_field(U, wi, dirs, wl, smp.area, F)
         f = np.where(inside, np.clip(f, 0.0, None), 0.0)
