@@ -381,7 +381,13 @@ def Lambda_abc(w, ax, ay=None, c=ABC_C_DEFAULT):
 
 @dataclass(frozen=True)
 class NDF:
-    """A registry entry: the NDF and its Smith Λ, whether it has an anisotropic form, its kernel switch."""
+    """One microfacet distribution (as pbrt-v4's ``TrowbridgeReitzDistribution``): D, Smith Λ and G1, whether it has
+    an anisotropic form, its kernel switch (``cl_id``) and its source.
+
+    ``D(m, ax, ay, c)`` and ``Lambda(w, ax, ay, c)`` take unit vectors (..., 3) and the roughness (α_x, α_y and, for
+    ABC, the exponent c); :meth:`G1` is Smith's masking 1 / (1 + Λ(w)) on the side where w · m > 0 (Heitz 2014,
+    eq. 43).
+    """
 
     name: str
     D: Callable
@@ -389,6 +395,10 @@ class NDF:
     anisotropic: bool
     cl_id: int
     reference: str
+
+    def G1(self, w, m, ax, ay=None, c=None):
+        """Smith masking G1(w, m) = χ⁺(w · m) / (1 + Λ(w)) (unitless)."""
+        return _G1(w, m, self.Lambda(w, ax, ay, c))
 
 
 #: Normal distribution functions by name (``method=`` style registry)
