@@ -86,5 +86,7 @@ def unknown(kind: str, value, choices, *, field: str | None = None) -> Waveoptic
     shown = ", ".join(sorted(map(str, choices)))
     tail = f" {value!r}{did_you_mean(value, choices)}; allowed: {shown}"
     if field is not None:
+        if kind == field:   # "unknown solver 'x'" in Python, "unknown --solver 'x'" on the command line
+            return FieldError("unknown {" + field + "}" + tail, field)
         return FieldError("{" + field + "}: unknown " + kind + tail, field)
     return WaveopticsError(f"unknown {kind}" + tail)
