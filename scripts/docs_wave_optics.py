@@ -16,6 +16,7 @@ from scipy.special import jv
 from waveoptics import brdf, scatter
 from waveoptics import surfaces
 from waveoptics.io.files import atomic_path
+from waveoptics.units import direction_from_angles
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "wave-optics.md"
@@ -360,6 +361,26 @@ Bands are as wide as |Δv_z h| ≤ 2·{bx:g} rad, which keeps every term ≤ e^{
 """
 
 
+def _rayleigh_rice_table(theta_i=30.0, lam=550.0, n="1+6j"):
+    """Kirchhoff (series, F(θ_d)) over Rayleigh-Rice (unpolarized Q) in the plane of incidence, and Q_s / Q_p."""
+    from waveoptics.materials import get_material
+
+    m = surfaces.PSDModel("abc", sigma=3e-9, B=5e-6, C=3.0)
+    mat = get_material(n)
+    eps = mat.eta(np.array([lam]))[0] ** 2
+    wi = direction_from_angles(theta_i, 0.0)
+    rows = ["| θ_o | side | Kirchhoff / Rayleigh-Rice | Q_s | Q_p | Q unpolarized |", "|---|---|---|---|---|---|"]
+    for phi, side in ((180.0, "specular"), (0.0, "backscatter")):
+        for th in (0.0, 20.0, 40.0, 60.0, 65.0, 70.0, 80.0, 85.0):
+            wo = direction_from_angles(th, phi)
+            h = (wi + wo) / np.linalg.norm(wi + wo)
+            k = float(scatter.scattered_lobe(wi, wo[None], lam, m, F=mat.F(np.array([h @ wi]), lam))[0])
+            r = float(scatter.rayleigh_rice_brdf(wi, wo, lam, m, eps))
+            q = [float(scatter.Q(wi, wo, eps, p)) for p in ("s", "p", "unpolarized")]
+            rows.append(f"| {th:g}° | {side} | {k / r:.3f} | {q[0]:.3f} | {q[1]:.3f} | {q[2]:.3f} |")
+    return "\n".join(rows)
+
+
 def main():
     IMG.mkdir(parents=True, exist_ok=True)
     rt = _runtime()
@@ -407,17 +428,29 @@ def main():
                  "Gaussians of different widths (physics.md §3), and the patch's diffraction blurs the lobe by "
                  "~λ/L. The frozen v_z (order 0) maps slopes with the wrong v_z and puts far too much light near "
                  "the horizon.\n\n" + _beckmann_table(*beck[:4], beck[4]) + "\n")
+    parts.append("\n### Rayleigh-Rice and the polarization factor Q\n"
+                 "First-order vector perturbation theory (`scatter.rayleigh_rice_brdf`, physics.md §4, §10; Elson & "
+                 "Bennett 1979, Church, Jenkinson & Zavada 1979, Germer 1997) gives f = (16π²/λ⁴) cos θ_i cos θ_o Q "
+                 "S(f) with the full polarization factor Q for s and p incident and scattered light "
+                 "(`scatter.q_factors`: ss, sp, ps, pp; `scatter.Q(..., polarization)` without an analyzer). It "
+                 "holds for smooth surfaces, (4πσ cos θ/λ)² ≪ 1. The Kirchhoff lobe carries the Fresnel factor "
+                 "F(θ_d) instead of Q: the two agree to first order near the specular direction and part away from "
+                 "it. ABC surface σ = 3 nm, B = 5 µm, C = 3, n = 1 + 6i, 550 nm, θ_i = 30°, in the plane of "
+                 "incidence:\n\n" + _rayleigh_rice_table() + "\n\n"
+                 "`waveoptics brdf --model rayleigh-rice --nano abc:sigma=3nm,B=5um,C=3 --ior 1+6j --wavelength 550 "
+                 "--incident 30 --outgoing 60,180 [--polarization s|p|unpolarized] --json` prints `values` (1/sr) "
+                 "with the four polarized BRDFs under `components`.\n")
     parts.append("""
 ### Python API
 ```python
-from waveoptics import diffraction, surfaces
+from waveoptics import scatter, surfaces
 hf = surfaces.gaussian("20nm", "1um", "64um", 512, seed=1)
-res = diffraction.scatter(hf, (30, 0), [450, 550, 650], "Au", solver="fft", resolution=256)
+res = scatter.scatter(hf, (30, 0), [450, 550, 650], "Au", solver="fft", resolution=256)
 res.brdf                       # (n_wl, 256, 256) 1/sr on res.grid (u along columns, v along rows)
 res.albedo, res.coherent_specular_fraction, res.scattered_fraction
-f = diffraction.brdf(hf, (30, 0), wo, [550], "Au", solver="direct", backend="opencl", precision="float32")
-ens = diffraction.scatter(lambda s: surfaces.gaussian(500e-9, 3.3e-6, 32e-6, 256, seed=s), (0, 0), [550],
-                          realizations=16)
+f = scatter.brdf(hf, (30, 0), wo, [550], "Au", solver="direct", backend="opencl", precision="float32")
+ens = scatter.scatter(lambda s: surfaces.gaussian(500e-9, 3.3e-6, 32e-6, 256, seed=s), (0, 0), [550],
+                      realizations=16)
 ```
 Low level: `samples(hf, window, detrend)`, `phase_coefficients`, `kirchhoff_U` (NumPy twin) /
 `kirchhoff_U_cl` (OpenCL), `kirchhoff_phase` / `kirchhoff_phase_cl`, `field_fft(smp, wi, grid, λ, order)`,

@@ -3,7 +3,7 @@ imports so that the command line can build its parsers without loading the numer
 """
 from __future__ import annotations
 
-__all__ = ["NANO_SOLVERS", "PRECISIONS"]
+__all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -11,3 +11,6 @@ NANO_SOLVERS = ("auto", "psd", "fft", "direct")
 
 #: OpenCL precisions of the height-field solvers
 PRECISIONS = ("float32", "float64")
+
+#: polarizations of the incident light (the scattered light is not analyzed)
+POLARIZATIONS = ("unpolarized", "s", "p")

@@ -36,6 +36,8 @@ class Model:
     describe : callable(args) -> dict
         Model parameters echoed in the JSON output.
     help : str
+    components : callable(args, wi, wo, wavelength_nm) -> dict, optional
+        Named parts of the BRDF (e.g. the polarized ss, sp, ps, pp BRDFs), listed per value in the JSON output.
     """
 
     add_arguments: Callable
@@ -43,6 +45,7 @@ class Model:
     albedo: Callable
     describe: Callable
     help: str
+    components: Callable | None = None   # (args, wi, wo, wavelength_nm) -> {name: ndarray (n_λ, n_in, n_out)}
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -258,12 +261,94 @@ def _kirchhoff_describe(args) -> dict:
                                           "precision", "window", "realizations", "resolution")}
 
 
+# ----------------------------------------------------------------------------------------------------------
+# rayleigh-rice (first-order perturbation from PSD statistics; logic in waveoptics.scatter.perturbation)
+
+
+def _rayleigh_rice_arguments(g) -> None:
+    from ..vocabulary import POLARIZATIONS
+
+    g.add_argument("--nano", metavar="MODEL:PARAMS",
+                   help="surface statistics, e.g. abc:sigma=3nm,B=5um,C=3 or gaussian:sigma=2nm,T=1um "
+                        "(rayleigh-rice; uses --material or --ior for the substrate)")
+    g.add_argument("--polarization", choices=POLARIZATIONS, default="unpolarized",
+                   help="polarization of the incident light; the scattered light is not analyzed "
+                        "(rayleigh-rice; default unpolarized)")
+
+
+def _rayleigh_rice_setup(args, wavelength_nm):
+    """(PSD model, permittivity ε (n_λ,)) of the options."""
+    from .. import surfaces
+    from ..materials.database import get_material
+    from ..request import parse_nano
+
+    if not args.nano:
+        raise WaveopticsError("--model rayleigh-rice needs --nano MODEL:params (height statistics)")
+    model, p = parse_nano(args.nano)
+    if model not in surfaces.PSD_MODELS:
+        raise WaveopticsError(f"--nano {args.nano!r}: rayleigh-rice needs height statistics "
+                              f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
+    psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"), C=p.get("C"))
+    if args.material is not None and args.ior is not None:
+        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
+    spec = args.material if args.material is not None else args.ior
+    if spec is None:
+        raise WaveopticsError("--model rayleigh-rice needs --material NAME or --ior N+Kj (the substrate's index)")
+    mat = get_material(spec)
+    if mat.schlick_only:
+        raise WaveopticsError(f"--material {spec!r} gives only F0; rayleigh-rice needs a complex index "
+                              "(a preset, shelf/book/page or --ior)")
+    _report_clamped(spec, wavelength_nm, args)
+    return psd, mat.eta(wavelength_nm) ** 2
+
+
+def _rayleigh_rice_evaluate(args, wi, wo, wavelength_nm):
+    from .. import scatter
+
+    psd, eps = _rayleigh_rice_setup(args, wavelength_nm)
+    return scatter.rayleigh_rice_brdf(wi[None, :, None, :], wo[None, None, :, :],
+                                      wavelength_nm[:, None, None], psd, eps[:, None, None], args.polarization)
+
+
+def _rayleigh_rice_components(args, wi, wo, wavelength_nm) -> dict:
+    from .. import scatter
+
+    psd, eps = _rayleigh_rice_setup(args, wavelength_nm)
+    return scatter.rayleigh_rice_components(wi[None, :, None, :], wo[None, None, :, :],
+                                            wavelength_nm[:, None, None], psd, eps[:, None, None])
+
+
+def _rayleigh_rice_albedo(args, wi, wavelength_nm):
+    import numpy as np
+
+    from .. import scatter
+
+    psd, eps = _rayleigh_rice_setup(args, wavelength_nm)
+    grid = scatter.DirectionGrid.hemisphere(args.resolution or 512)
+    wo = grid.directions()
+    out = np.empty((len(wavelength_nm), len(wi)))
+    for i, w in enumerate(wi):
+        f = scatter.rayleigh_rice_brdf(w, wo[None], wavelength_nm[:, None, None], psd, eps[:, None, None],
+                                       args.polarization)
+        out[:, i] = scatter.integrate(np.where(grid.inside, f, 0.0), grid)
+    return out
+
+
+def _rayleigh_rice_describe(args) -> dict:
+    return {k: getattr(args, k) for k in ("nano", "material", "ior", "polarization")}
+
+
 #: BRDF models offered by ``waveoptics brdf --model``
 MODELS: dict[str, Model] = {
     "microfacet": Model(_microfacet_arguments, _microfacet_evaluate, _microfacet_albedo, _microfacet_describe,
                         "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term"),
     "kirchhoff": Model(_kirchhoff_arguments, _kirchhoff_evaluate, _kirchhoff_albedo, _kirchhoff_describe,
                        "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.scatter)"),
+    "rayleigh-rice": Model(_rayleigh_rice_arguments, _rayleigh_rice_evaluate, _rayleigh_rice_albedo,
+                           _rayleigh_rice_describe,
+                           "first-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the "
+                           "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)",
+                           components=_rayleigh_rice_components),
 }
 
 
@@ -300,7 +385,8 @@ def run(args) -> int:
     wl = parse_wavelengths(args.wavelength, name="--wavelength")
     inc = [parse_direction(t, name="--incident") for t in args.incident]
     wi = direction_from_angles([t for t, _ in inc], [p for _, p in inc])
-    head = {"model": args.model, "parameters": model.describe(args)}
+    head = {"model": args.model, "parameters": model.describe(args),
+            "units": {"brdf": "1/sr", "albedo": "1", "wavelength_nm": "nm", "incident": "deg", "outgoing": "deg"}}
     if args.albedo:
         E = np.asarray(model.albedo(args, wi, wl))
         rows = [{"incident": list(inc[i]), "wavelength_nm": float(wl[j]), "albedo": float(E[j, i])}
@@ -314,8 +400,10 @@ def run(args) -> int:
     out = [parse_direction(t, name="--outgoing", need_phi=True) for t in args.outgoing]
     wo = direction_from_angles([t for t, _ in out], [p for _, p in out])
     f = np.asarray(model.evaluate(args, wi, wo, wl))
+    parts = model.components(args, wi, wo, wl) if model.components is not None else {}
     rows = [{"incident": list(inc[i]), "outgoing": list(out[k]), "wavelength_nm": float(wl[j]),
-             "brdf": float(f[j, i, k])}
+             "brdf": float(f[j, i, k]),
+             **({"components": {c: float(v[j, i, k]) for c, v in parts.items()}} if parts else {})}
             for i in range(len(inc)) for k in range(len(out)) for j in range(len(wl))]
     text = "\n".join(f"incident θ={r['incident'][0]:g}° φ={r['incident'][1]:g}°  "
                      f"outgoing θ={r['outgoing'][0]:g}° φ={r['outgoing'][1]:g}°  λ={r['wavelength_nm']:g} nm  "

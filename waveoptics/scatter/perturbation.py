@@ -1,0 +1,123 @@
+"""Rayleigh-Rice: first-order vector perturbation theory of scattering by a smooth rough surface, with the full
+polarization factor Q for s and p incident and scattered light (docs/physics.md §4, §10).
+
+    f_ab(ω_i, ω_o) = (16 π² / λ⁴) cosθ_i cosθ_o |q_ab|² S(f_x, f_y),      a, b ∈ {s, p}
+
+with S the two-sided surface PSD at the Bragg frequency f = −(ω_i + ω_o)_xy / λ (only |f| matters for an isotropic
+PSD) and, for a substrate of relative permittivity ε = (n + iκ)² (s and p relative to the planes of incidence and
+scattering; φ_s the scattering azimuth measured from the specular side of the plane of incidence):
+
+    q_ss =  (ε − 1) cosφ_s / [(cosθ_i + √(ε − sin²θ_i)) (cosθ_o + √(ε − sin²θ_o))]
+    q_sp = −(ε − 1) √(ε − sin²θ_o) sinφ_s / [(cosθ_i + √(ε − sin²θ_i)) (ε cosθ_o + √(ε − sin²θ_o))]
+    q_ps = −(ε − 1) √(ε − sin²θ_i) sinφ_s / [(ε cosθ_i + √(ε − sin²θ_i)) (cosθ_o + √(ε − sin²θ_o))]
+    q_pp =  (ε − 1) (ε sinθ_i sinθ_o − √(ε − sin²θ_i) √(ε − sin²θ_o) cosφ_s)
+            / [(ε cosθ_i + √(ε − sin²θ_i)) (ε cosθ_o + √(ε − sin²θ_o))]
+
+(first index: incident polarization, second: scattered). Q_ab = |q_ab|². A detector that does not analyze
+polarization sees f_s = f_ss + f_sp for s-polarized light, f_p = f_pp + f_ps for p, and their mean for
+unpolarized light. At normal incidence and backscatter every Q tends to the normal-incidence reflectance
+|(√ε − 1)/(√ε + 1)|²; for a perfect conductor (|ε| → ∞) q_ss → cosφ_s, q_pp → (sinθ_i sinθ_o − cosφ_s) /
+(cosθ_i cosθ_o), q_sp → −sinφ_s / cosθ_o, q_ps → −sinφ_s / cosθ_i (Rice 1951).
+
+Where it holds: the smooth-surface limit, (4π σ cosθ / λ)² ≪ 1 and slopes ≪ 1 (first order in σ/λ): a few nm of
+rms height at visible wavelengths. It takes no shadowing and no multiple scattering; the coherent (specular)
+reduction is not part of it.
+
+References
+----------
+.. [1] S. O. Rice, "Reflection of electromagnetic waves from slightly rough surfaces", Commun. Pure Appl. Math.
+   4, 351–378, 1951.
+.. [2] J. M. Elson, J. M. Bennett, "Vector scattering theory", Opt. Eng. 18(2), 116–124, 1979.
+.. [3] E. L. Church, H. A. Jenkinson, J. M. Zavada, "Relationship between surface scattering and
+   microtopographic features", Opt. Eng. 18(2), 125–136, 1979.
+.. [4] T. A. Germer, "Angular dependence and polarization of out-of-plane optical scattering from particulate
+   contamination, subsurface defects, and surface microroughness", Appl. Opt. 36(33), 8798–8805, 1997.
+.. [5] J. C. Stover, *Optical Scattering: Measurement and Analysis*, 3rd ed., SPIE 2012, ch. 4–5.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import unknown
+from ..surfaces.psd import PSDModel
+from ..vocabulary import POLARIZATIONS
+from .series import rayleigh_rice
+
+__all__ = ["POLARIZATIONS", "COMPONENTS", "scattering_angles", "q_factors", "Q", "rayleigh_rice_components",
+           "rayleigh_rice_brdf"]
+
+
+#: incident → scattered polarization pairs of the Jones-matrix elements
+COMPONENTS = ("ss", "sp", "ps", "pp")
+
+
+def scattering_angles(wi, wo):
+    """(cosθ_i, sinθ_i, cosθ_o, sinθ_o, cosφ_s, sinφ_s) of unit directions (..., 3), φ_s measured from the specular
+    side of the plane of incidence (φ_s = 0 at the mirror direction). At normal incidence the plane of incidence
+    is taken as the x–z plane; for an outgoing direction along the normal, φ_s = 0 (the unpolarized sums do not
+    depend on it there)."""
+    wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
+    ci, co = wi[..., 2], wo[..., 2]
+    si = np.hypot(wi[..., 0], wi[..., 1])
+    so = np.hypot(wo[..., 0], wo[..., 1])
+    # guard: an undefined azimuth (normal incidence / normal outgoing) gets the x axis / φ_s = 0
+    ex = np.where(si > 0, wi[..., 0] / np.where(si > 0, si, 1.0), 1.0)
+    ey = np.where(si > 0, wi[..., 1] / np.where(si > 0, si, 1.0), 0.0)
+    ox = np.where(so > 0, wo[..., 0] / np.where(so > 0, so, 1.0), -ex)
+    oy = np.where(so > 0, wo[..., 1] / np.where(so > 0, so, 1.0), -ey)
+    # the specular side is −(e_x, e_y): cosφ_s = −e·o, sinφ_s = (−e) × o
+    cos_phi = -(ex * ox + ey * oy)
+    sin_phi = -(ex * oy - ey * ox)
+    return ci, si, co, so, cos_phi, sin_phi
+
+
+def q_factors(wi, wo, eps) -> dict:
+    """Complex amplitude factors q_ss, q_sp, q_ps, q_pp (unitless) for permittivity *eps* (broadcasts).
+
+    References
+    ----------
+    .. [1] Germer 1997, eqs. (17)–(20); Elson & Bennett 1979 (see the module references).
+    """
+    ci, si, co, so, cphi, sphi = scattering_angles(wi, wo)
+    e = np.asarray(eps, dtype=np.complex128)
+    ri = np.sqrt(e - si ** 2)      # principal branch: Re ≥ 0, Im ≥ 0 for an absorbing substrate
+    ro = np.sqrt(e - so ** 2)
+    ds_i, dp_i = ci + ri, e * ci + ri
+    ds_o, dp_o = co + ro, e * co + ro
+    return {"ss": (e - 1) * cphi / (ds_i * ds_o),
+            "sp": -(e - 1) * ro * sphi / (ds_i * dp_o),
+            "ps": -(e - 1) * ri * sphi / (dp_i * ds_o),
+            "pp": (e - 1) * (e * si * so - ri * ro * cphi) / (dp_i * dp_o)}
+
+
+def Q(wi, wo, eps, polarization: str = "unpolarized"):
+    """Polarization factor Q (unitless) seen without an analyzer: Q_ss + Q_sp (s), Q_pp + Q_ps (p) or their mean
+    (unpolarized)."""
+    if polarization not in POLARIZATIONS:
+        raise unknown("polarization", polarization, POLARIZATIONS, field="polarization")
+    q = {k: np.abs(v) ** 2 for k, v in q_factors(wi, wo, eps).items()}
+    s, p = q["ss"] + q["sp"], q["pp"] + q["ps"]
+    return {"s": s, "p": p, "unpolarized": 0.5 * (s + p)}[polarization]
+
+
+def rayleigh_rice_components(wi, wo, wavelength_nm, model: PSDModel, eps) -> dict:
+    """The four polarized BRDFs f_ss, f_sp, f_ps, f_pp (1/sr) of the rough surface."""
+    pre = rayleigh_rice(wi, wo, wavelength_nm, model)   # Q = 1: (16π²/λ⁴) cosθ_i cosθ_o S
+    return {k: pre * np.abs(v) ** 2 for k, v in q_factors(wi, wo, eps).items()}
+
+
+def rayleigh_rice_brdf(wi, wo, wavelength_nm, model: PSDModel, eps, polarization: str = "unpolarized"):
+    """Rayleigh-Rice BRDF (1/sr) for *polarization* of the incident light (scattered light not analyzed).
+
+    Parameters
+    ----------
+    wi, wo : array_like (..., 3)
+        Unit vectors towards the light and the viewer.
+    wavelength_nm : array_like, nm
+    model : PSDModel
+        The surface's height statistics.
+    eps : complex or array
+        Relative permittivity of the substrate, (n + iκ)².
+    polarization : {'unpolarized', 's', 'p'}
+    """
+    return rayleigh_rice(wi, wo, wavelength_nm, model, Q=Q(wi, wo, eps, polarization))
