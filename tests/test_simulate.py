@@ -31,6 +31,20 @@ def test_simulate_writes_every_output_with_documented_keys(tmp_path, capsys):
     inside = np.hypot(u[None, :], u[:, None]) < 1
     assert np.sum(f[inside]) * (2 / 32) ** 2 == pytest.approx(summary["albedo"][1], rel=1e-5)
     assert list(io.read_exr(out / "brdf_rgb.exr")[0]) in (["RGB"], ["B", "G", "R"])  # bindings may group RGB
+    # the share of the nano σ² that cannot scatter (docs/physics.md §9), per wavelength, against a direct
+    # brute-force sum of the default ABC PSD over the propagating band at θ_i = 30°
+    band = summary["nano_band"]
+    assert band["sigma_m"] == pytest.approx(10e-9)
+    from waveoptics.surfaces import PSDModel
+
+    m = PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)
+    for lam, frac in zip(summary["wavelengths_nm"], band["beyond_band_fraction"]):
+        R, c = 1 / (lam * 1e-9), 0.5 / (lam * 1e-9)
+        x = np.linspace(-R, R, 1201)
+        fx, fy = np.meshgrid(x - c, x)
+        inside = np.hypot(fx + c, fy) <= R
+        rel = float(np.sum(m.S(np.hypot(fx, fy))[inside])) * (x[1] - x[0]) ** 2
+        assert frac == pytest.approx(1 - rel / m.sigma ** 2, abs=5e-3)
 
 
 def test_acescg_on_request(tmp_path, capsys):

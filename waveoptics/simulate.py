@@ -14,7 +14,7 @@ import numpy as np
 from matplotlib import colors
 from scipy.ndimage import map_coordinates
 
-from . import colour, io, render, surfaces
+from . import colour, io, render, scatter, surfaces
 from .brdf import twoscale
 from .io import figures
 from .io.figures import save_figure
@@ -23,7 +23,7 @@ from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, ma
 from .scatter.grid import DirectionGrid
 from .units import direction_from_angles
 
-__all__ = ['SPHERE_THETAS_DEG', 'Simulation', 'simulate', 'run', 'OUTPUT_FILES', 'render_spheres',
+__all__ = ['SPHERE_THETAS_DEG', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'render_spheres',
            'plane_of_incidence', 'write_outputs']
 
 #: incidence angles (degrees) of the lobe table used for sphere renders
@@ -41,6 +41,7 @@ class Simulation:
     params: dict
     nano: twoscale.Nano | None = None
     timings_s: dict = field(default_factory=dict)
+    band: dict = field(default_factory=dict)
 
     @property
     def wavelengths_nm(self):
@@ -190,7 +191,30 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
               # materials clamp their index outside the measured data (materials/database.py policy): say where
               "clamped_wavelengths_nm": [float(x) for x in w[mat.out_of_range(w)]]}
     return Simulation(lobes=lobes, table_thetas_deg=thetas, table_total=tab_total, table_microfacet=tab_mf,
-                      illuminant=req.illuminant, params=params, timings_s=timings, nano=nano_obj)
+                      illuminant=req.illuminant, params=params, timings_s=timings, nano=nano_obj,
+                      band=nano_band(nano_obj, w, theta, phi))
+
+
+def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_deg: float = 0.0) -> dict:
+    """How much of the nano roughness can scatter at the incident direction, per wavelength (docs/physics.md §9).
+
+    Returns ``sigma_m`` (rms height), ``sigma_relevant_m`` (the rms height inside the propagating band) and
+    ``beyond_band_fraction`` ((σ² − σ_rel²)/σ²: the share of the variance in evanescent orders, which does not
+    scatter). The two-scale model still uses the full σ for the coherent reduction: this fraction says how much
+    of the light that reduction withholds can never reach the diffracted lobe.
+    """
+    if nano is None:
+        return {}
+    s = math.sin(math.radians(theta_deg))
+    if nano.model is not None:
+        var = nano.model.sigma ** 2
+        rel = [scatter.relevant_variance(nano.model, lam, s) for lam in wavelengths_nm]
+    else:
+        var = float(np.var(nano.surface.heights[nano.surface.valid]))
+        rel = [scatter.relevant_variance_of_field(nano.surface, lam, s, phi_deg) for lam in wavelengths_nm]
+    return {"incident_deg": [theta_deg, phi_deg], "sigma_m": math.sqrt(var),
+            "sigma_relevant_m": [math.sqrt(max(r, 0.0)) for r in rel],
+            "beyond_band_fraction": [scatter.beyond_band_fraction(var, r) for r in rel]}
 
 
 OUTPUT_FILES = ("brdf_spectral.exr", "brdf_rgb.exr", "brdf.png", "sphere_wave.png", "sphere_microfacet.png",
@@ -283,6 +307,7 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
         "delta_e2000": {"mean": float(dE[mask].mean()) if mask.any() else 0.0,
                         "max": float(dE[mask].max()) if mask.any() else 0.0},
         "solver": sim.params["solver"],
+        "nano_band": sim.band,
         "timings_s": timings,
         "parameters": sim.params,
         "files": list(OUTPUT_FILES),

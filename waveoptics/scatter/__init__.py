@@ -2,7 +2,8 @@
 
 Files: grid (the direction-cosine grid), patch (window and detrend of a height-field patch), kirchhoff (the Kirchhoff
 factor and BRDF of a field), direct (the direct sum, NumPy and OpenCL), fft (the chirp-z solver), series (the
-Beckmann-Spizzichino series from a PSD), perturbation (Rayleigh-Rice
+Beckmann-Spizzichino series from a PSD), band (the propagating band and the relevant roughness),
+perturbation (Rayleigh-Rice
 with the polarization factor Q), solvers (the :data:`SOLVERS` registry, :func:`brdf`,
 :func:`scatter`), output (the files of a scatter run).
 """
@@ -12,9 +13,10 @@ from .kirchhoff import *  # noqa: F401,F403
 from .direct import *  # noqa: F401,F403
 from .fft import *  # noqa: F401,F403
 from .series import *  # noqa: F401,F403
+from .band import *  # noqa: F401,F403
 from .perturbation import *  # noqa: F401,F403
 from .solvers import *  # noqa: F401,F403
 from .output import *  # noqa: F401,F403
-from . import grid, patch, kirchhoff, direct, fft, series, perturbation, solvers, output  # noqa: F401
+from . import grid, patch, kirchhoff, direct, fft, series, band, perturbation, solvers, output  # noqa: F401
 
-__all__ = grid.__all__ + patch.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + perturbation.__all__ + solvers.__all__ + output.__all__
+__all__ = grid.__all__ + patch.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + band.__all__ + perturbation.__all__ + solvers.__all__ + output.__all__
