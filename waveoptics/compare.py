@@ -96,7 +96,7 @@ def _lobes_at(sim, wi):
     micro = twoscale.Micro(alpha=p["micro_alpha"], ndf=p["ndf"], shadowing=p["shadowing"])
     solver = p["solver"] if p["solver"] != "none" else "auto"
     return twoscale.evaluate(wi, sim.wavelengths_nm, p["material"], micro, sim.nano, sim.grid, solver=solver,
-                             kd=p["kd"], precision=p["precision"])
+                             kd=p["kd"], precision=p["precision"], diffraction=p.get("diffraction", "kirchhoff"))
 
 
 def plot(rows, path, *, title="", tail_deg=10.0):

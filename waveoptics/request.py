@@ -42,7 +42,7 @@ from .errors import FieldError, unknown
 from .materials import get_material
 from .surfaces import HeightField
 from .units import check_theta, check_wavelengths, parse_length
-from .vocabulary import NANO_SOLVERS, PRECISIONS
+from .vocabulary import DIFFRACTION, NANO_SOLVERS, PRECISIONS
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "parse_nano", "nano_surface_size", "make_nano", "crop"]
@@ -240,6 +240,8 @@ class SimulationRequest:
         Seed of generated nano surfaces.
     split : bool
         *surface* holds both scales: split it at a cut-off period of 10 λmax.
+    diffraction : str
+        Diffraction model of the nano lobe, one of :data:`waveoptics.vocabulary.DIFFRACTION` (default kirchhoff).
     """
 
     material: str = "Al"
@@ -258,6 +260,7 @@ class SimulationRequest:
     precision: str = "float32"
     seed: int = 0
     split: bool = False
+    diffraction: str = "kirchhoff"
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalization
@@ -291,7 +294,7 @@ class SimulationRequest:
             raise FieldError(f"{{accuracy_dE}} {self.accuracy_dE!r} is not allowed; use a ΔE2000 in (0, 100)",
                              "accuracy_dE")
         for field, allowed in (("solver", SOLVERS), ("precision", PRECISIONS), ("ndf", NDFS),
-                               ("shadowing", SHADOWINGS)):
+                               ("shadowing", SHADOWINGS), ("diffraction", DIFFRACTION)):
             if getattr(self, field) not in allowed:
                 raise unknown(field, getattr(self, field), allowed, field=field)
         if self.surface is None and self.nano is None:

@@ -3,7 +3,7 @@ imports so that the command line can build its parsers without loading the numer
 """
 from __future__ import annotations
 
-__all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS"]
+__all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -14,3 +14,6 @@ PRECISIONS = ("float32", "float64")
 
 #: polarizations of the incident light (the scattered light is not analyzed)
 POLARIZATIONS = ("unpolarized", "s", "p")
+
+#: diffraction models of the nano lobe (:data:`waveoptics.scatter.DIFFRACTION_MODELS`)
+DIFFRACTION = ("kirchhoff", "ghs", "rghs", "ohs", "rohs")

@@ -104,7 +104,7 @@ class Nano:
         h = self.surface.heights
         return float(np.std(h[self.surface.mask] if self.surface.mask is not None else h))
 
-    def coherent_amplitude2(self, cos_theta_d, wavelength_nm):
+    def coherent_amplitude2(self, cos_theta_d, wavelength_nm, diffraction="kirchhoff"):
         """A(λ, θ_d): fraction of the light a facet reflects coherently.
 
         exp(−(4πσ cosθ_d/λ)²) for Gaussian statistics (Davies 1954); for a height field, |χ̂|² with χ̂ the
@@ -114,8 +114,9 @@ class Nano:
         0 over six Gaussian patches without any rescaling). It equals exp(−g) for Gaussian heights on average.
         """
         c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
-        if self.model is not None:
-            return scatter.coherent_fraction(c, wavelength_nm, self.model.sigma)
+        dm = scatter.get_model(diffraction)
+        if self.model is not None:   # exp(−g), g = (k σ · cos_sum)²: (4πσ cosθ_d/λ)² for the true v_z
+            return np.exp(-scatter.roughness_g(self.model.sigma, dm.specular_cos_sum(c), wavelength_nm))
         h, w2 = self._height_weights()
         # A(cos θ_d) is smooth: evaluate the characteristic function on 513 cosines and interpolate
         c_tab = np.linspace(0.0, 1.0, 513)
@@ -123,7 +124,7 @@ class Nano:
         out = np.empty(np.broadcast(c, lam).shape)
         c_b, lam_b = np.broadcast_arrays(c, lam)
         for l_val in np.unique(lam_b):
-            vz = 2 * (2 * np.pi / (l_val * 1e-9)) * c_tab
+            vz = (2 * np.pi / (l_val * 1e-9)) * dm.specular_cos_sum(c_tab)
             tab = np.abs(np.exp(1j * vz[:, None] * h[None, :]) @ w2) ** 2
             sel = lam_b == l_val
             out[sel] = np.interp(c_b[sel], c_tab, tab)
@@ -232,7 +233,7 @@ def _convolve(lobe, K, grid):
 
 
 def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver: str = "auto",
-              device=None, precision="float32"):
+              device=None, precision="float32", diffraction="kirchhoff"):
     """The diffracted (incoherent) nano lobe f_n (n_λ, n_v, n_u) in 1/sr for incidence *wi* on *grid*.
 
     Parameters
@@ -256,7 +257,8 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
         out = np.empty((w.size, grid.n_v, grid.n_u))
         for i, lam in enumerate(w):
             Fi = F(cos_d, lam)
-            out[i], cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True)
+            out[i], cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True,
+                                                 diffraction=diffraction)
             # guard: the truncated series misses the light of its terms m > m_max once g = (kσ(cosθ_i + cosθ_o))²
             # ≳ 30 (σ ≳ λ/2): refuse rather than return a lobe that silently lacks that energy
             low = float(np.min(np.where(grid.inside, cap, 1.0)))
@@ -268,17 +270,18 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
                     "NDF (alpha)")
         out = np.where(grid.inside, out, 0.0)
         if np.min(w) * 1e-9 / (np.pi * nano.model.length_scale) < NARROW_CELLS * max(grid.du, grid.dv):
-            out = _resample_narrow_lobe(out, wi, w, nano, grid, F)
+            out = _resample_narrow_lobe(out, wi, w, nano, grid, F, diffraction)
         return out
     if solver in ("fft", "direct"):
         if nano.surface is None:
             raise FieldError(f"solver {solver!r} needs a nano height field ({{surface}} or {{nano}} MODEL:...)", 'surface', 'nano')
         return kirchhoff_scattered_lobe(nano.surface, wi, grid, w, F, solver=solver, device=device,
+                                        diffraction=diffraction,
                                         precision=precision)
     raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
 
 
-def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F):
+def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, diffraction="kirchhoff"):
     """Energy-preserving sampling of a nano lobe narrower than the grid cells (PSD route).
 
     guard: the lobe is ~λ/(π T) wide in direction cosines; sampled at cell centres, a narrower one is missed or
@@ -289,7 +292,7 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
     """
     cell = _mirror_cell(grid, wi)
     for i, lam in enumerate(wavelengths_nm):
-        share = 1.0 - float(nano.coherent_amplitude2(wi[2], lam))
+        share = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction))
         Fi = float(F(wi[2], lam))
         got = float(integrate(out[i], grid))
         if got > 0:
@@ -300,7 +303,8 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
 
 
 def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wavelengths_nm, F, *,
-                             solver: str = "fft", device=None, precision: str = "float32", warnings=None):
+                             solver: str = "fft", device=None, precision: str = "float32", warnings=None,
+                             diffraction="kirchhoff"):
     """Incoherent Kirchhoff lobe of a height field: the field minus its coherent (mean) part, as a BRDF (1/sr).
 
     δU = U − χ̂ U_flat, with χ̂ the patch estimate of ⟨exp(i v_z h)⟩ (:func:`waveoptics.scatter.
@@ -333,13 +337,14 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     dirs = grid.directions()
     inside = grid.inside
     out = np.zeros((w.size, grid.n_v, grid.n_u))
-    chi = np.array([scatter.coherent_amplitude(smp, wi, lam) for lam in w])
+    chi = np.array([scatter.coherent_amplitude(smp, wi, lam, diffraction) for lam in w])
     sol = scatter.get_solver(solver)
-    opts = dict(runtime=get_runtime(device) if solver == "direct" else None, precision=precision)
+    opts = dict(runtime=get_runtime(device) if solver == "direct" else None, precision=precision,
+                diffraction=diffraction)
     U, _ = sol.grid_field(smp, wi, grid, w, **opts)
     U0, _ = sol.grid_field(flat, wi, grid, w, **opts)
     out[:, inside] = scatter.brdf_from_field((U - chi[:, None, None] * U0)[:, inside], wi, dirs[inside], w,
-                                             smp.area, F)
+                                             smp.area, F, diffraction)
     return np.where(inside, np.maximum(out, 0.0), 0.0)
 
 
@@ -379,7 +384,7 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
 
 def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid: DirectionGrid, *,
              solver: str = "auto", kd=0.5, diffuse: str = "lambert", device=None, precision="float32",
-             reference_grid: DirectionGrid | None = None) -> Lobes:
+             reference_grid: DirectionGrid | None = None, diffraction: str = "kirchhoff") -> Lobes:
     """Two-scale BRDF for one incident direction on *grid* at each wavelength, plus the plain microfacet BRDF.
 
     Parameters
@@ -402,11 +407,15 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         When *grid* is a patch of a larger grid (same cells, e.g. around a view direction), that grid: the micro
         lobe is normalized on it, so the patch holds the same values as the larger grid at its cells. The
         coherent-loss cap needs the whole lobe and is not applied on a patch (it only acts near grazing incidence).
+    diffraction : str
+        Diffraction model of the nano lobe and of the coherent fraction, a name in
+        :data:`waveoptics.scatter.DIFFRACTION_MODELS` (default ``kirchhoff``).
 
     Returns
     -------
     Lobes
     """
+    dm = scatter.get_model(diffraction)
     mat: Material = get_material(material)
     w = check_wavelengths(wavelengths_nm)
     wi = np.asarray(wi, dtype=float)
@@ -433,7 +442,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         if cell is not None:
             Fi = np.array([float(F(wi[2], lam)) for lam in w])
             mf[:, cell[0], cell[1]] = Fi * rho / (grid.du * grid.dv)
-        A = np.array([float(nano.coherent_amplitude2(wi[2], lam)) if sigma_nano > 0 else 1.0 for lam in w])
+        A = np.array([float(nano.coherent_amplitude2(wi[2], lam, dm)) if sigma_nano > 0 else 1.0 for lam in w])
         coherent = mf * A[:, None, None]
     else:
         mf = np.empty(shape)
@@ -451,14 +460,14 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
             f1 = f1 * (rho / grid_rho)
         for i, lam in enumerate(w):
             mf[i] = f1 * F(cos_d, lam)
-            A = nano.coherent_amplitude2(cos_d, lam) if sigma_nano > 0 else 1.0
+            A = nano.coherent_amplitude2(cos_d, lam, dm) if sigma_nano > 0 else 1.0
             coherent[i] = mf[i] * A
         mf = np.where(inside, mf, 0.0)
         coherent = np.where(inside, coherent, 0.0)
 
     # --- diffraction: nano lobe carried by the facets --------------------------------------------------------
     if sigma_nano > 0:
-        fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision)
+        fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision, diffraction=dm)
         K = micro_kernel(wi, micro, grid)
         diffraction = np.where(inside, _convolve(fn, K, grid), 0.0)
         if reference_grid is None:
@@ -486,7 +495,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
                  microfacet=mf_total,
                  info={"solver": used, "sigma_nano_m": sigma_nano, "micro": micro.__dict__,
                        "material": mat.name, "sharp_micro_lobe": _sharp(micro, grid),
-                       "diffraction_energy_scale": energy_scale.tolist()})
+                       "diffraction_energy_scale": energy_scale.tolist(), "diffraction_model": dm.name})
 
 
 #: default split: spatial periods longer than this many λ_max are micro-geometry (geometric optics)

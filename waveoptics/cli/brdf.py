@@ -17,6 +17,7 @@ from typing import Callable
 
 
 from ..errors import WaveopticsError
+from ..vocabulary import DIFFRACTION
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
 from ._common import add_common, emit, progress
 
@@ -193,6 +194,8 @@ def _kirchhoff_arguments(g) -> None:
                    help="fft grid / --albedo grid cells per side (default: resolves the specular spike, albedo 256)")
     g.add_argument("--realizations", type=int, default=1, metavar="N", help="average over N tiles of the surface")
     g.add_argument("--window", default="hann", metavar="NAME", help="taper over the patch (default hann)")
+    g.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
+                   help="diffraction model (kirchhoff; default kirchhoff, else ghs, rghs, ohs, rohs)")
 
 
 def _kirchhoff_setup(args, wavelength_nm):
@@ -237,7 +240,7 @@ def _kirchhoff_evaluate(args, wi, wo, wavelength_nm):
     hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
     out = [scatter.brdf(hf, w, wo, wavelength_nm, F, solver=args.solver, backend=args.backend,
                             precision=args.precision, window_name=args.window, resolution=args.resolution,
-                            realizations=args.realizations, runtime=rt)
+                            realizations=args.realizations, runtime=rt, diffraction=args.diffraction)
            for w in progress(wi, desc="kirchhoff", args=args)]
     return np.stack(out, axis=1)
 
@@ -251,14 +254,14 @@ def _kirchhoff_albedo(args, wi, wavelength_nm):
     out = [scatter.scatter(hf, w, wavelength_nm, F, solver=args.solver, backend=args.backend,
                                precision=args.precision, window_name=args.window,
                                resolution=args.resolution or 256, realizations=args.realizations,
-                               runtime=rt).albedo
+                               runtime=rt, diffraction=args.diffraction).albedo
            for w in progress(wi, desc="albedo", args=args)]
     return np.stack(out, axis=1)
 
 
 def _kirchhoff_describe(args) -> dict:
     return {k: getattr(args, k) for k in ("surface", "solver", "material", "ior", "fresnel", "backend",
-                                          "precision", "window", "realizations", "resolution")}
+                                          "precision", "window", "realizations", "resolution", "diffraction")}
 
 
 # ----------------------------------------------------------------------------------------------------------

@@ -13,6 +13,7 @@ import warnings
 
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
+from ..vocabulary import DIFFRACTION
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, emit, progress
 
@@ -31,6 +32,8 @@ def register(sub) -> None:
     p.add_argument("--incident", required=True, metavar="THETA[,PHI]", help="direction to the light, degrees")
     p.add_argument("--wavelengths", default="400:700:10", metavar="NM",
                    help="wavelengths in nm: 550, 450,550,650 or 400:700:10 (default 400:700:10)")
+    p.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
+                   help="diffraction model: kirchhoff (default), ghs, rghs, ohs, rohs (docs/physics.md §10)")
     p.add_argument("--solver", choices=("fft", "direct"), default="fft",
                    help="fft: chirp-z transforms with a banded Taylor series in v_z (default); direct: the "
                         "Kirchhoff sum on the OpenCL device")
@@ -84,7 +87,7 @@ def run(args) -> int:
         res = scatter.scatter(hf, (theta, phi), wl, args.material, solver=args.solver,
                                   resolution=args.resolution, realizations=args.realizations, order=order,
                                   window_name=args.window, detrend=args.detrend, precision=args.precision,
-                                  backend=args.backend,
+                                  backend=args.backend, diffraction=args.diffraction,
                                   runtime=rt, progress=bar.update)
     bar.close()
     extra = {"surface": str(args.surface), "material": str(args.material)}

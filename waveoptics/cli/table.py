@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ..errors import WaveopticsError
 from ..units import parse_number_list, parse_wavelengths
+from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PRECISIONS
 from ._common import add_common, emit, progress
 
 SCENE_SUFFIXES = (".toml",)
@@ -40,10 +41,12 @@ def add_case_options(p, *, resolution: int) -> None:
     p.add_argument("--resolution", type=int, default=None, metavar="N",
                    help=f"direction grid N×N over the projected hemisphere (default {resolution})")
     p.set_defaults(default_resolution=resolution)
-    p.add_argument("--solver", default="auto", choices=["auto", "direct", "fft", "psd"],
+    p.add_argument("--solver", default="auto", choices=NANO_SOLVERS,
                    help="nano lobe: psd (statistics), fft or direct (height field); auto picks (default)")
+    p.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
+                   help="diffraction model of the nano lobe (default kirchhoff; docs/physics.md §10)")
     p.add_argument("--kd", type=float, default=None, help="diffuse albedo of a dielectric (default 0.5; metals: none)")
-    p.add_argument("--precision", default="float32", choices=["float32", "float64"],
+    p.add_argument("--precision", default="float32", choices=PRECISIONS,
                    help="OpenCL precision of the height-field solvers (default float32)")
     p.add_argument("--seed", type=int, default=None, help="seed of generated nano surfaces (default 0)")
 
@@ -75,6 +78,7 @@ def case_from_args(args, *, source=None):
     given = dict(wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)) if args.wavelengths else None,
                  micro_alpha=args.micro_alpha, ndf=args.ndf, illuminant=args.illuminant, accuracy_dE=args.accuracy,
                  resolution=args.resolution, solver=args.solver, kd=args.kd, precision=args.precision,
+                 diffraction=args.diffraction,
                  seed=args.seed, incident_deg=getattr(args, "incident_deg", None))
     if _is_scene(source):
         if args.nano:

@@ -92,6 +92,8 @@ VARY = {
     "ndf": ("micro NDF name (ggx, beckmann)", lambda s: _split_values(s), lambda c, v: dataclasses.replace(c, ndf=v)),
     "illuminant": ("light source (';' separates values that contain commas)", lambda s: _split_values(s),
                    lambda c, v: dataclasses.replace(c, illuminant=v)),
+    "diffraction": ("diffraction model of the nano lobe (kirchhoff, ghs, rghs, ohs, rohs)", lambda s: _split_values(s),
+                    lambda c, v: dataclasses.replace(c, diffraction=v)),
 }
 
 
@@ -151,12 +153,7 @@ def sweep_point(case: SimulationRequest, *, surface=None, sphere_size: int = 64,
         (mean over wavelengths), ``sigma_nano_m``, ``solver``, ``n_wavelengths``, ``cost_s`` (wall time, s).
     """
     t0 = time.perf_counter()
-    sim = simulate.simulate(case.material, nano=case.nano,
-                            surface=surface if surface is not None else case.surface, micro_alpha=case.micro_alpha,
-                            ndf=case.ndf, shadowing=case.shadowing, incident=case.incident_deg,
-                            illuminant=case.illuminant, wavelengths=case.wavelengths(),
-                            resolution=case.resolution, solver=case.solver, kd=case.kd, sphere=sphere_size > 0,
-                            seed=case.seed, device=device, precision=case.precision)
+    sim = simulate.run(case.resolved(), surface=surface, sphere=sphere_size > 0, device=device)
     rgb, rgb_mf = sim.rgb_albedo("total"), sim.rgb_albedo("microfacet")
     row = {f"albedo_{c}": float(rgb[i]) for i, c in enumerate("RGB")}
     row.update({f"microfacet_albedo_{c}": float(rgb_mf[i]) for i, c in enumerate("RGB")})

@@ -160,7 +160,8 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
     wi = direction_from_angles(spec.thetas_deg[task.t], spec.phi_deg)
     grid = DirectionGrid.hemisphere(case.resolution)
     L = twoscale.evaluate(wi, w[task.lo:task.hi], get_material(case.material), case.micro(), nano, grid,
-                          solver=case.solver, kd=case.kd, device=device, precision=case.precision)
+                          solver=case.solver, kd=case.kd, device=device, precision=case.precision,
+                          diffraction=case.diffraction)
     total, mf = L.total, L.microfacet
     for name, a in (("two-scale", total), ("microfacet", mf)):
         # the promise of the project: never NaN, Inf or negative

@@ -1,6 +1,7 @@
 """Wave-optics scattering from a surface's nanogeometry.
 
-Files: grid (the direction-cosine grid), patch (window and detrend of a height-field patch), kirchhoff (the Kirchhoff
+Files: grid (the direction-cosine grid), patch (window and detrend of a height-field patch), models (the
+diffraction models: Kirchhoff, GHS, RGHS, OHS, ROHS), kirchhoff (the Kirchhoff
 factor and BRDF of a field), direct (the direct sum, NumPy and OpenCL), fft (the chirp-z solver), series (the
 Beckmann-Spizzichino series from a PSD), band (the propagating band and the relevant roughness),
 perturbation (Rayleigh-Rice
@@ -9,6 +10,7 @@ with the polarization factor Q), solvers (the :data:`SOLVERS` registry, :func:`b
 """
 from .grid import *  # noqa: F401,F403
 from .patch import *  # noqa: F401,F403
+from .models import *  # noqa: F401,F403
 from .kirchhoff import *  # noqa: F401,F403
 from .direct import *  # noqa: F401,F403
 from .fft import *  # noqa: F401,F403
@@ -17,6 +19,6 @@ from .band import *  # noqa: F401,F403
 from .perturbation import *  # noqa: F401,F403
 from .solvers import *  # noqa: F401,F403
 from .output import *  # noqa: F401,F403
-from . import grid, patch, kirchhoff, direct, fft, series, band, perturbation, solvers, output  # noqa: F401
+from . import grid, patch, models, kirchhoff, direct, fft, series, band, perturbation, solvers, output  # noqa: F401
 
-__all__ = grid.__all__ + patch.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + band.__all__ + perturbation.__all__ + solvers.__all__ + output.__all__
+__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + band.__all__ + perturbation.__all__ + solvers.__all__ + output.__all__

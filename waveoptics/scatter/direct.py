@@ -57,7 +57,8 @@ def _fixed_point(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.mod(Ai.astype(np.int64), 2**32).astype(np.uint32), lo
 
 
-def phase_coefficients(smp: Samples, wi, wo, wavelengths_nm, *, frozen_vz: bool = False) -> PhaseCoefficients:
+def phase_coefficients(smp: Samples, wi, wo, wavelengths_nm, *,
+                       frozen_cos_sum: float | None = None) -> PhaseCoefficients:
     """Phase coefficients for every (wavelength, direction) pair, wavelength-major (pair = l · n_dir + d).
 
     Parameters
@@ -66,15 +67,15 @@ def phase_coefficients(smp: Samples, wi, wo, wavelengths_nm, *, frozen_vz: bool 
     wi : ndarray (3,)
     wo : ndarray (n_dir, 3)
     wavelengths_nm : ndarray (n_wl,), nm
-    frozen_vz : bool
-        Use cz = 2 cos θ_i / λ for every direction (the ``fft`` solver's order-0 approximation) instead of
-        (cos θ_i + cos θ_o) / λ.
+    frozen_cos_sum : float, optional
+        Use cz = frozen_cos_sum / λ for every direction instead of (cos θ_i + cos θ_o) / λ: 2 cos θ_i is the ``fft``
+        solver's order-0 approximation, 2 the original Harvey-Shack phase (:mod:`waveoptics.scatter.models`).
     """
     lam = np.asarray(wavelengths_nm, dtype=float)[:, None] * 1e-9
     s = np.asarray(wo)[None, :, :] + np.asarray(wi)[None, None, :]
     ax = s[..., 0] * smp.dx / lam
     ay = s[..., 1] * smp.dy / lam
-    cz = (np.broadcast_to(2 * wi[2], s[..., 2].shape) if frozen_vz else s[..., 2]) / lam
+    cz = (s[..., 2] if frozen_cos_sum is None else np.broadcast_to(float(frozen_cos_sum), s[..., 2].shape)) / lam
     cx, cy = (smp.nx - 1) / 2.0, (smp.ny - 1) / 2.0
     c0 = -(cx * (ax - np.round(ax)) + cy * (ay - np.round(ay)))   # origin at the patch centre
     c0 = c0 - np.round(c0)

@@ -62,16 +62,19 @@ def _taylor_terms(x: float, tol: float) -> int:
 
 
 def fft_plan(smp: Samples, wi, grid: DirectionGrid, wavelength_nm: float, order="auto",
-             tol: float = FFT_TOL) -> list[tuple[float, int, np.ndarray]]:
+             tol: float = FFT_TOL, frozen_cos_sum: float | None = None) -> list[tuple[float, int, np.ndarray]]:
     """Bands of the ``fft`` solver: a list of (cz_b in cycles/m, Taylor order K_b, boolean cell mask).
 
     ``order=0`` (or any int) gives one band expanded about the specular cz0 = 2 cos θ_i / λ to that order.
     ``order="auto"`` splits the range of cz = (cos θ_i + cos θ_o)/λ over the disc into bands no wider than
     |Δv_z h| ≤ 2 :data:`FFT_BAND_X` and picks K_b from the Lagrange bound so that the field is within
-    *tol* · Σ w of the exact Kirchhoff sum.
+    *tol* · Σ w of the exact Kirchhoff sum. A model whose phase is frozen (*frozen_cos_sum*, v_z = k · that) needs
+    one band and no expansion: its field is exactly one transform.
     """
     lam = wavelength_nm * 1e-9
     inside = grid.inside
+    if frozen_cos_sum is not None:
+        return [(float(frozen_cos_sum) / lam, 0, inside)]
     cz = (wi[2] + grid.cos_theta) / lam
     if order != "auto":
         if int(order) != order or order < 0:
@@ -94,7 +97,7 @@ def fft_plan(smp: Samples, wi, grid: DirectionGrid, wavelength_nm: float, order=
 
 
 def field_fft(smp: Samples, wi, grid: DirectionGrid, wavelength_nm: float, order="auto",
-              tol: float = FFT_TOL) -> tuple[np.ndarray, dict]:
+              tol: float = FFT_TOL, frozen_cos_sum: float | None = None) -> tuple[np.ndarray, dict]:
     """Field U on *grid* at one wavelength by the ``fft`` solver (see the module docstring).
 
     Returns
@@ -107,9 +110,10 @@ def field_fft(smp: Samples, wi, grid: DirectionGrid, wavelength_nm: float, order
     lam = wavelength_nm * 1e-9
     T = _DTFT2(smp, wi, grid, wavelength_nm)
     h, w = smp.grid_arrays()
-    cz_o = (wi[2] + grid.cos_theta) / lam
+    cz_o = (wi[2] + grid.cos_theta if frozen_cos_sum is None else np.full(grid.cos_theta.shape,
+                                                                           float(frozen_cos_sum))) / lam
     U = np.zeros((grid.n_v, grid.n_u), np.complex128)
-    plan = fft_plan(smp, wi, grid, wavelength_nm, order, tol)
+    plan = fft_plan(smp, wi, grid, wavelength_nm, order, tol, frozen_cos_sum)
     n_tr = 0
     for c, K, m in plan:
         g = w * np.exp(2j * np.pi * c * h)

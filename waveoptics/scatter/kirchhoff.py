@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .grid import COS_I_MIN
+from .models import K_kirchhoff, get_model
 from .patch import Samples
 
 __all__ = ['kirchhoff_factor', 'cos_theta_d', 'brdf_from_field', 'coherent_amplitude']
@@ -59,37 +59,15 @@ __all__ = ['kirchhoff_factor', 'cos_theta_d', 'brdf_from_field', 'coherent_ampli
 # ----------------------------------------------------------------------------------------------------------------
 
 def kirchhoff_factor(wi, wo, wavelength_nm) -> np.ndarray:
-    """Obliquity and normalization |s|⁴ / (4 λ² cos θ_i cos θ_o (cos θ_i + cos θ_o)²), m⁻².
-
-    Parameters
-    ----------
-    wi : ndarray (3,)
-        Unit vector towards the light.
-    wo : ndarray (..., 3)
-        Unit vectors towards the viewer.
-    wavelength_nm : array_like, nm
-        Broadcast against ``wo[..., 0]``.
-
-    Returns
-    -------
-    ndarray
-        The factor (m⁻²); f = F(θ_d) · factor · |U|² / A_w. Zero for directions at or below the horizon.
+    """Obliquity and normalization |s|⁴ / (4 λ² cos θ_i cos θ_o (cos θ_i + cos θ_o)²), m⁻²: the ``kirchhoff``
+    entry of :data:`waveoptics.scatter.DIFFRACTION_MODELS` (f = F(θ_d) · factor · |U|² / A_w; zero at and below
+    the horizon).
 
     References
     ----------
     .. [1] Beckmann & Spizzichino 1963; docs/physics.md §1 (checked there against the flat and σ ≫ λ limits).
     """
-    wi = np.asarray(wi, dtype=float)
-    wo = np.asarray(wo, dtype=float)
-    lam = np.asarray(wavelength_nm, dtype=float) * 1e-9
-    ci = max(float(wi[2]), COS_I_MIN)
-    co = wo[..., 2]
-    s2 = np.sum((wo + wi) ** 2, axis=-1)
-    # guard: directions at or below the horizon do not reflect (and would divide by zero)
-    up = co > 0
-    co_safe = np.where(up, co, 1.0)
-    val = s2**2 / (4.0 * lam**2 * ci * co_safe * (ci + co_safe) ** 2)
-    return np.where(up, val, 0.0)
+    return K_kirchhoff(np.asarray(wi, dtype=float), wo, wavelength_nm)
 
 
 def cos_theta_d(wi, wo) -> np.ndarray:
@@ -97,8 +75,9 @@ def cos_theta_d(wi, wo) -> np.ndarray:
     return np.clip(0.5 * np.linalg.norm(np.asarray(wo) + np.asarray(wi), axis=-1), 0.0, 1.0)
 
 
-def brdf_from_field(U, wi, wo, wavelengths_nm, area: float, F=None) -> np.ndarray:
-    """BRDF f = F(θ_d) |s|⁴ |U|² / (4 λ² A_w cos θ_i cos θ_o (cos θ_i + cos θ_o)²), sr⁻¹.
+def brdf_from_field(U, wi, wo, wavelengths_nm, area: float, F=None, diffraction="kirchhoff") -> np.ndarray:
+    """BRDF f = F(θ_d) K |U|² / A_w, sr⁻¹, with the factor K of the *diffraction* model (Kirchhoff:
+    |s|⁴ / (4 λ² cos θ_i cos θ_o (cos θ_i + cos θ_o)²); :mod:`waveoptics.scatter.models`).
 
     Parameters
     ----------
@@ -110,10 +89,12 @@ def brdf_from_field(U, wi, wo, wavelengths_nm, area: float, F=None) -> np.ndarra
         A_w.
     F : callable, optional
         F(cos θ_d, wavelength_nm); None → 1.
+    diffraction : str or DiffractionModel
+        A name in :data:`waveoptics.scatter.DIFFRACTION_MODELS`.
     """
     wl = np.asarray(wavelengths_nm, dtype=float)
     shape = (wl.size,) + (1,) * (np.ndim(wo) - 1)
-    K = kirchhoff_factor(wi, wo[None], wl.reshape(shape))
+    K = get_model(diffraction).K(np.asarray(wi, dtype=float), wo[None], wl.reshape(shape))
     out = K * np.abs(U) ** 2 / area
     if F is not None:
         out = out * np.asarray(F(cos_theta_d(wi, wo)[None], wl.reshape(shape)), dtype=float)
@@ -124,8 +105,9 @@ def brdf_from_field(U, wi, wo, wavelengths_nm, area: float, F=None) -> np.ndarra
 # Coherent part
 # ----------------------------------------------------------------------------------------------------------------
 
-def coherent_amplitude(smp: Samples, wi, wavelength_nm) -> complex:
-    """χ̂ = Σ w² exp(i v_z h) / Σ w², v_z = 2 k cos θ_i: the patch estimate of ⟨exp(i v_z h)⟩ (docs/physics.md §2)
+def coherent_amplitude(smp: Samples, wi, wavelength_nm, diffraction="kirchhoff") -> complex:
+    """χ̂ = Σ w² exp(i v_z h) / Σ w², v_z = 2 k cos θ_i (2k for the OHS phase): the patch estimate of
+    ⟨exp(i v_z h)⟩ at the mirror direction (docs/physics.md §2)
 
     The ensemble-mean field is ⟨U⟩ = χ · U_flat, so the coherent (specular) fraction is |χ|² = exp(−g) for
     Gaussian heights. The spatial average over the patch replaces the ensemble average (ergodicity); the w²
@@ -137,6 +119,6 @@ def coherent_amplitude(smp: Samples, wi, wavelength_nm) -> complex:
     ----------
     .. [1] H. Davies, Proc. IEE 101, 1954; Beckmann & Spizzichino 1963, ch. 5 (coherent field ⟨exp(i v_z h)⟩).
     """
-    cz = 2 * wi[2] / (wavelength_nm * 1e-9)
+    cz = float(get_model(diffraction).specular_cos_sum(wi[2])) / (wavelength_nm * 1e-9)
     w2 = smp.w**2
     return complex(np.sum(w2 * np.exp(2j * np.pi * cz * smp.h)) / np.sum(w2))

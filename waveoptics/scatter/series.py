@@ -47,6 +47,7 @@ import numpy as np
 from scipy import special, stats
 
 from ..surfaces.psd import PSDModel
+from .models import K_kirchhoff, get_model
 
 __all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'poisson_weights', 'roughness_g', 'series_terms', 'g_factor', 'coherent_fraction', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
 
@@ -160,20 +161,15 @@ def coherent_fraction(cos_theta_i, wavelength_nm, sigma):
 
 
 def obliquity(wi, wo, wavelength_nm):
-    """|ω_i + ω_o|⁴ / (4 λ² cosθ_i cosθ_o (cosθ_i + cosθ_o)²) in 1/m² (docs/physics.md §1); 0 below the surface."""
-    wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
-    ci, co = wi[..., 2], wo[..., 2]
-    s = wi + wo
-    lam = np.asarray(wavelength_nm, dtype=float) * 1e-9
-    ok = (ci > 0) & (co > 0)
-    # guard: below-surface or exactly grazing directions get 0 instead of a division by zero
-    ci_s, co_s = np.where(ok, ci, 1.0), np.where(ok, co, 1.0)
-    val = np.sum(s * s, axis=-1) ** 2 / (4 * lam ** 2 * ci_s * co_s * (ci_s + co_s) ** 2)
-    return np.where(ok, val, 0.0)
+    """|ω_i + ω_o|⁴ / (4 λ² cosθ_i cosθ_o (cosθ_i + cosθ_o)²) in 1/m² (docs/physics.md §1); 0 below the surface: the
+    Kirchhoff factor of :data:`waveoptics.scatter.DIFFRACTION_MODELS`."""
+    return K_kirchhoff(wi, wo, wavelength_nm)
 
 
-def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int = M_MAX, return_captured=False):
-    """BRDF (1/sr) of the diffusely scattered part for the PSD *model* (Kirchhoff series, see module doc).
+def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int = M_MAX, return_captured=False,
+                   diffraction="kirchhoff"):
+    """BRDF (1/sr) of the diffusely scattered part for the PSD *model* (the series of the module doc, with the
+    factor K and the vertical phase of the *diffraction* model, :mod:`waveoptics.scatter.models`).
 
     Parameters
     ----------
@@ -190,6 +186,8 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
     return_captured : bool
         Also return Σ_{m≤m_max} p_m(g) / (1 − e^{−g}), the fraction of the scattered energy the truncated
         series holds (1 when converged).
+    diffraction : str or DiffractionModel
+        ``kirchhoff`` (default), ``ghs``, ``rghs``, ``ohs`` or ``rohs``.
 
     Returns
     -------
@@ -201,7 +199,8 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
     k = 2 * np.pi / (lam * 1e-9)
     s = wi + wo
     q = k * np.hypot(s[..., 0], s[..., 1])
-    g = g_factor(wi, wo, lam, model.sigma)
+    dm = get_model(diffraction)
+    g = roughness_g(model.sigma, dm.cos_sum(wi, wo), lam)
     if model.sigma == 0:
         out = np.zeros(np.broadcast(q, g).shape)
         return (out, np.ones_like(out)) if return_captured else out
@@ -213,7 +212,7 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
     p = poisson_weights(g_b, m_use)
     Hm = tab.Hm(q_b)[:m_use]
     total = np.sum(p * Hm, axis=0)
-    val = np.asarray(F) * obliquity(wi, wo, lam) * total
+    val = np.asarray(F) * dm.K(wi, wo, lam) * total
     if return_captured:
         with np.errstate(invalid="ignore", divide="ignore"):
             captured = np.where(g_b > 0, p.sum(axis=0) / -np.expm1(-g_b), 1.0)

@@ -20,6 +20,7 @@ from .direct import kirchhoff_U, kirchhoff_U_cl, phase_coefficients
 from .fft import FFT_TOL, field_fft
 from .grid import HORIZON_SIN, DirectionGrid, _incident, _outgoing, integrate
 from .kirchhoff import brdf_from_field, coherent_amplitude, cos_theta_d
+from .models import get_model
 from .patch import DEFAULT_WINDOW, Samples, samples
 
 __all__ = ['ENERGY_TOL', 'DiffractionWarning', 'Solver', 'SOLVERS', 'BACKENDS', 'get_solver', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'scatter']
@@ -43,10 +44,11 @@ def _warn(msg: str, sink: list | None = None) -> None:
 # ----------------------------------------------------------------------------------------------------------------
 
 def _grid_field_direct(smp: Samples, wi, grid: DirectionGrid, wl, *, backend="opencl", runtime=None,
-                       precision="float32", progress=None, **_) -> tuple[np.ndarray, dict]:
-    """U on the grid by the direct sum at every cell centre inside the disc (0 outside)."""
+                       precision="float32", progress=None, diffraction="kirchhoff", **_) -> tuple[np.ndarray, dict]:
+    """U on the grid by the direct sum at every cell centre inside the disc (0 outside), with the vertical phase
+    of the *diffraction* model."""
     d_in = grid.directions()[grid.inside]
-    coef = phase_coefficients(smp, wi, d_in, wl)
+    coef = phase_coefficients(smp, wi, d_in, wl, frozen_cos_sum=get_model(diffraction).frozen_cos_sum)
     if backend == "numpy":
         Uin = kirchhoff_U(smp, coef)
         if progress is not None:
@@ -60,12 +62,13 @@ def _grid_field_direct(smp: Samples, wi, grid: DirectionGrid, wl, *, backend="op
 
 
 def _grid_field_fft(smp: Samples, wi, grid: DirectionGrid, wl, *, order="auto", tol=FFT_TOL, progress=None,
-                    **_) -> tuple[np.ndarray, dict]:
+                    diffraction="kirchhoff", **_) -> tuple[np.ndarray, dict]:
     """U on the grid by chirp-z transforms (:func:`field_fft`), wavelength by wavelength."""
     U = np.empty((len(wl), grid.n_v, grid.n_u), np.complex128)
     plans = []
+    frozen = get_model(diffraction).frozen_cos_sum
     for i, lam in enumerate(wl):
-        U[i], inf = field_fft(smp, wi, grid, lam, order, tol)
+        U[i], inf = field_fft(smp, wi, grid, lam, order, tol, frozen)
         plans.append({"wavelength_nm": float(lam), **inf})
         if progress is not None:
             progress(1)
@@ -73,17 +76,18 @@ def _grid_field_fft(smp: Samples, wi, grid: DirectionGrid, wl, *, order="auto", 
 
 
 def _lobe_at_direct(smp: Samples, wi, wo, wl, F, *, backend="opencl", runtime=None, precision="float32",
-                    progress=None, **_) -> np.ndarray:
+                    progress=None, diffraction="kirchhoff", **_) -> np.ndarray:
     """f at the given directions by the direct sum there."""
     for m in sampling_warnings(smp, wi, wl, wo=wo):
         _warn(m)
-    coef = phase_coefficients(smp, wi, wo, wl)
+    coef = phase_coefficients(smp, wi, wo, wl, frozen_cos_sum=get_model(diffraction).frozen_cos_sum)
     U = kirchhoff_U(smp, coef) if backend == "numpy" else kirchhoff_U_cl(smp, coef, runtime=runtime,
                                                                           precision=precision, progress=progress)
-    return brdf_from_field(U.reshape(len(wl), -1), wi, wo, wl, smp.area, F)
+    return brdf_from_field(U.reshape(len(wl), -1), wi, wo, wl, smp.area, F, diffraction)
 
 
-def _lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, progress=None, **_) -> np.ndarray:
+def _lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, progress=None,
+                 diffraction="kirchhoff", **_) -> np.ndarray:
     """f at the given directions, interpolated bilinearly in (u, v) from the lobe on a hemisphere grid fine enough
     to resolve the specular spike at the shortest wavelength (or *resolution*)."""
     res = resolution or min(2048, max(64, int(math.ceil(2 * max(smp.extent) / (wl.min() * 1e-9)))))
@@ -93,8 +97,8 @@ def _lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, 
         _warn(m)
     out = np.zeros((len(wl), wo.shape[0]))
     for i, lam in enumerate(wl):
-        U, _ = field_fft(smp, wi, grid, lam, order)
-        f = brdf_from_field(U[None], wi, dirs, [lam], smp.area, F)[0]
+        U, _ = field_fft(smp, wi, grid, lam, order, frozen_cos_sum=get_model(diffraction).frozen_cos_sum)
+        f = brdf_from_field(U[None], wi, dirs, [lam], smp.area, F, diffraction)[0]
         interp = RegularGridInterpolator((grid.v, grid.u), f, bounds_error=False, fill_value=None)
         out[i] = np.where(wo[:, 2] > 0, interp(np.stack([wo[:, 1], wo[:, 0]], axis=1)), 0.0)
         if progress is not None:
@@ -235,7 +239,7 @@ def sampling_warnings(smp: Samples, wi, wavelengths_nm, grid: DirectionGrid | No
 def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direct", backend: str = "opencl",
          precision: str = "float32", window_name=DEFAULT_WINDOW, detrend: str = "mean", order="auto",
          resolution: int | None = None, realizations=None, seed: int = 0, runtime=None,
-         progress=None) -> np.ndarray:
+         progress=None, diffraction: str = "kirchhoff") -> np.ndarray:
     """Kirchhoff BRDF for arbitrary outgoing directions, averaged over realizations.
 
     Parameters
@@ -254,12 +258,15 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
     backend : {'opencl', 'numpy'}
         For ``direct``: the kernel or its float64 NumPy twin.
     window_name, detrend : see :func:`window` and :func:`samples`.
+    diffraction : str
+        Diffraction model, a name in :data:`DIFFRACTION_MODELS` (default ``kirchhoff``).
 
     Returns
     -------
     ndarray (n_wl, n), sr⁻¹
     """
     sol = get_solver(solver, backend)
+    get_model(diffraction)
     wi = _incident(wi)
     wo = _outgoing(wo)
     wl = check_wavelengths(wavelengths_nm)
@@ -268,7 +275,8 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
     acc = np.zeros((wl.size, wo.shape[0]))
     for hf in hfs:
         acc += sol.lobe_at(samples(hf, window_name, detrend), wi, wo, wl, F, backend=backend, runtime=runtime,
-                           precision=precision, order=order, resolution=resolution, progress=progress)
+                           precision=precision, order=order, resolution=resolution, progress=progress,
+                           diffraction=diffraction)
     return np.clip(acc / len(hfs), 0.0, None)
 
 
@@ -332,7 +340,7 @@ class ScatterResult:
 def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", resolution: int = 256,
             grid: DirectionGrid | None = None, realizations=None, seed: int = 0, backend: str = "opencl",
             precision: str = "float32", window_name=DEFAULT_WINDOW, detrend: str = "mean", order="auto",
-            tol: float = FFT_TOL, runtime=None, progress=None) -> ScatterResult:
+            tol: float = FFT_TOL, runtime=None, progress=None, diffraction: str = "kirchhoff") -> ScatterResult:
     """Kirchhoff lobes over the projected hemisphere, per wavelength, with albedo and coherent/scattered split.
 
     Parameters
@@ -353,6 +361,9 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     backend, precision : for the ``direct`` solver (OpenCL float32/float64, or the NumPy twin).
     window_name, detrend : see :func:`window` and :func:`samples`.
     order, tol : for the ``fft`` solver (see :func:`fft_plan`).
+    diffraction : str
+        Diffraction model, a name in :data:`DIFFRACTION_MODELS` (default ``kirchhoff``): its factor K and vertical
+        phase shape the lobe and its coherent part (:mod:`waveoptics.scatter.models`).
     progress : callable, optional
         Called with the number of finished work units (wavelengths × realizations); total is
         ``len(wavelengths) * realizations``.
@@ -363,6 +374,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     """
     t0 = time.perf_counter()
     sol = get_solver(solver, backend)
+    model = get_model(diffraction)
     wi = _incident(wi)
     wl = check_wavelengths(wavelengths_nm)
     F = fresnel_function(material)
@@ -381,7 +393,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     flat = np.zeros(n_wl)
     chi = np.zeros(n_wl, np.complex128)
     msgs: list[str] = []
-    info = {"window": str(window_name)}
+    info = {"window": str(window_name), "diffraction": model.name}
     t_solve = t_flat = 0.0
     for r, hf in enumerate(hfs):
         smp = samples(hf, window_name, detrend)
@@ -390,21 +402,21 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
                 _warn(m, msgs)
         t1 = time.perf_counter()
         U, inf = sol.grid_field(smp, wi, grid, wl, backend=backend, runtime=runtime, precision=precision,
-                                order=order, tol=tol, progress=progress)
+                                order=order, tol=tol, progress=progress, diffraction=model)
         if r == 0:
             info.update(inf)
         t_solve += time.perf_counter() - t1
-        f = brdf_from_field(U, wi, dirs, wl, smp.area, F)
+        f = brdf_from_field(U, wi, dirs, wl, smp.area, F, model)
         f = np.where(inside, np.clip(f, 0.0, None), 0.0)
         f_sum += f
         alb += integrate(f, grid)
         alb_in += integrate(f, grid, region=horizon)
         t1 = time.perf_counter()
         for i, lam in enumerate(wl):
-            chi[i] += coherent_amplitude(smp, wi, lam)
+            chi[i] += coherent_amplitude(smp, wi, lam, model)
             U0, _ = field_fft(Samples(smp.ix, smp.iy, np.zeros_like(smp.h), smp.w, smp.dx, smp.dy, smp.nx,
                                       smp.ny, smp.area), wi, grid, lam, 0)
-            flat[i] += integrate(brdf_from_field(U0[None], wi, dirs, [lam], smp.area, F)[0], grid)
+            flat[i] += integrate(brdf_from_field(U0[None], wi, dirs, [lam], smp.area, F, model)[0], grid)
         t_flat += time.perf_counter() - t1
     f_mean, alb, alb_in, flat, chi = f_sum / R, alb / R, alb_in / R, flat / R, chi / R
     coh = np.abs(chi) ** 2
