@@ -124,3 +124,28 @@ def test_architecture_doc_matches_the_layer_table():
         assert f"| {name} |" in doc, f"docs/architecture.md lacks layer {name!r}: run scripts/docs_architecture.py"
         for m in members:
             assert f"`{m}`" in doc, f"docs/architecture.md lacks {m!r}: run scripts/docs_architecture.py"
+
+
+def test_vocabulary_names_are_the_registries_keys():
+    """The CLI builds its choices from waveoptics.vocabulary (so that parsing never loads the numerical library):
+    those names are exactly the registries' keys."""
+    from waveoptics import brdf, scatter, vocabulary
+    from waveoptics.request import SOLVERS
+
+    assert tuple(brdf.NDFS) == vocabulary.NDF_NAMES
+    assert tuple(brdf.SHADOWINGS) == vocabulary.SHADOWING_NAMES
+    assert tuple(brdf.FRESNELS) == vocabulary.FRESNEL_NAMES
+    assert tuple(brdf.DIFFUSES) == vocabulary.DIFFUSE_NAMES
+    assert tuple(scatter.DIFFRACTION_MODELS) == vocabulary.DIFFRACTION
+    assert tuple(scatter.POLARIZATIONS) == vocabulary.POLARIZATIONS
+    assert SOLVERS == vocabulary.NANO_SOLVERS
+
+
+def test_parsing_the_command_line_does_not_load_the_numerical_library():
+    import subprocess
+    import sys
+
+    code = ("import sys; from waveoptics.cli import build_parser; build_parser(); "
+            "print(sorted(m for m in ('colour', 'scipy', 'pyopencl', 'dask', 'matplotlib') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

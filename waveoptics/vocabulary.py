@@ -3,7 +3,8 @@ imports so that the command line can build its parsers without loading the numer
 """
 from __future__ import annotations
 
-__all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION"]
+__all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
+           "FRESNEL_NAMES", "DIFFUSE_NAMES"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -17,3 +18,9 @@ POLARIZATIONS = ("unpolarized", "s", "p")
 
 #: diffraction models of the nano lobe (:data:`waveoptics.scatter.DIFFRACTION_MODELS`)
 DIFFRACTION = ("kirchhoff", "ghs", "rghs", "ohs", "rohs")
+
+#: microfacet terms by name (the keys of :data:`waveoptics.brdf.NDFS`, ``SHADOWINGS``, ``FRESNELS``, ``DIFFUSES``)
+NDF_NAMES = ("ggx", "beckmann", "blinn-phong", "abc")
+SHADOWING_NAMES = ("smith", "smith-correlated", "cook-torrance", "implicit")
+FRESNEL_NAMES = ("exact", "schlick", "one")
+DIFFUSE_NAMES = ("none", "lambert", "oren-nayar")

@@ -17,7 +17,7 @@ from typing import Callable
 
 
 from ..errors import WaveopticsError
-from ..vocabulary import DIFFRACTION
+from ..vocabulary import DIFFRACTION, DIFFUSE_NAMES, FRESNEL_NAMES, NDF_NAMES, SHADOWING_NAMES
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
 from ._common import add_common, emit, progress
 
@@ -55,23 +55,22 @@ class Model:
 
 def _microfacet_arguments(g) -> None:
 
-    from .. import brdf
 
-    g.add_argument("--ndf", choices=sorted(brdf.NDFS), default="ggx", help="normal distribution (default ggx)")
-    g.add_argument("--shadowing", choices=sorted(brdf.SHADOWINGS), default="smith-correlated",
+    g.add_argument("--ndf", choices=sorted(NDF_NAMES), default="ggx", help="normal distribution (default ggx)")
+    g.add_argument("--shadowing", choices=sorted(SHADOWING_NAMES), default="smith-correlated",
                    help="masking-shadowing term (default smith-correlated)")
     g.add_argument("--alpha", type=float, metavar="A",
                    help="NDF slope scale α in [0, 2] (α_x if anisotropic); 0 = sharpest representable")
     g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
     g.add_argument("--alpha-y", type=float, metavar="A", help="α_y for anisotropic ggx/beckmann")
-    g.add_argument("--abc-c", type=float, default=brdf.ABC_C_DEFAULT, metavar="C",
-                   help=f"tail exponent C of the abc NDF (default {brdf.ABC_C_DEFAULT:g})")
+    g.add_argument("--abc-c", type=float, default=None, metavar="C",
+                   help="tail exponent C of the abc NDF (default: waveoptics.brdf.ABC_C_DEFAULT, 2)")
     g.add_argument("--material", metavar="NAME", help="material preset, shelf/book/page, or f0:VALUE "
                                                      "(see 'waveoptics materials')")
     g.add_argument("--ior", metavar="N+Kj", help="constant complex index, e.g. 1.5 or 0.2+3.1j")
-    g.add_argument("--fresnel", choices=sorted(brdf.FRESNELS), default="exact",
+    g.add_argument("--fresnel", choices=sorted(FRESNEL_NAMES), default="exact",
                    help="Fresnel factor: exact, schlick, or one (F = 1, white furnace)")
-    g.add_argument("--diffuse", choices=sorted(brdf.DIFFUSES), default="lambert", help="diffuse term (default lambert)")
+    g.add_argument("--diffuse", choices=sorted(DIFFUSE_NAMES), default="lambert", help="diffuse term (default lambert)")
     g.add_argument("--kd", type=float, default=0.0, metavar="C", help="diffuse albedo in [0, 1] (default 0)")
     g.add_argument("--sigma", type=float, default=0.0, metavar="DEG",
                    help="Oren-Nayar roughness σ in degrees (separate from the specular α)")
@@ -106,7 +105,8 @@ def _microfacet_params(args, wavelength_nm) -> dict:
     if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
         raise WaveopticsError(f"--sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
                               "[0, 90] degrees")
-    return dict(alpha=alpha, alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing, abc_c=args.abc_c,
+    abc_c = brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c
+    return dict(alpha=alpha, alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing, abc_c=abc_c,
                 diffuse=args.diffuse, kd=args.kd, sigma=float(np.radians(args.sigma)),
                 tradeoff=not args.no_tradeoff, **fi)
 
@@ -173,7 +173,7 @@ def _microfacet_describe(args) -> dict:
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
                                        "fresnel", "diffuse", "kd", "backend")}
     if args.ndf == "abc":
-        d["abc_c"] = args.abc_c
+        d["abc_c"] = 2.0 if args.abc_c is None else args.abc_c   # the library's ABC_C_DEFAULT
     if args.diffuse == "oren-nayar":
         d["sigma_deg"] = args.sigma
     d["tradeoff"] = not args.no_tradeoff

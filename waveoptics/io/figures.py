@@ -3,7 +3,6 @@ and figures written atomically (a failed or interrupted write leaves no partial 
 """
 from __future__ import annotations
 
-import matplotlib
 import numpy as np
 
 from .files import atomic_path
@@ -13,6 +12,9 @@ __all__ = ["pyplot", "save_png", "save_figure"]
 
 def pyplot():
     """``matplotlib.pyplot`` on the Agg backend (files only, no display needed): the one place that chooses it."""
+    # deferred: matplotlib takes a fifth of a second to import and only figure writers need it
+    import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # after the backend is chosen
 
