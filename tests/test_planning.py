@@ -61,6 +61,24 @@ def test_example_scenes_load_and_plan(path):
     assert sc.name in text and "estimated" in text
 
 
+def test_diffraction_model_is_the_scenes_or_kirchhoff_with_its_reason(tmp_path):
+    """A scene may name the diffraction model of a material; otherwise the planner picks Kirchhoff and says why,
+    and the run uses the model the plan names."""
+    mat = {"name": "plastic", "ior": 1.5, "roughness": 0.05, "diffuse_albedo": 0.5,
+           "nano": {"statistics": "gaussian:sigma=20nm,T=1um"}}
+    auto = planning.plan_scene(plastic(materials=[mat]))
+    e = auto.entries[0]
+    assert e.diffraction == "kirchhoff" and e.effects["diffraction"]
+    assert any(d == "diffraction model" and "Kirchhoff" in r for d, _, r in e.decisions)
+    plan = planning.plan_scene(plastic(materials=[dict(mat, diffraction="rghs")]))
+    e = plan.entries[0]
+    assert e.diffraction == "rghs" and ("diffraction model", "rghs", "set by the scene") in e.decisions
+    res = planning.run_entry(e)
+    L = next(iter(res.lobes.values()))
+    L = L[0] if isinstance(L, list) else L
+    assert L.info["diffraction_model"] == "rghs"
+
+
 @pytest.mark.parametrize("data, key, allowed", [
     ({"bogus": 1}, "bogus", "allowed: name"),
     ({"materials": [{"name": "a", "material": "Au", "roughnes": 0.1}]}, "materials[0].roughnes",
@@ -82,6 +100,8 @@ def test_example_scenes_load_and_plan(path):
     ({"view": {"camera": "fisheye"}}, "view.camera", "allowed: sphere"),
     ({"output": {"tables": True, "rgb_images": False}}, "output.tables", "needs view.directions_deg"),
     ({"accuracy": {"delta_e": 0}}, "accuracy.delta_e", "> 0"),
+    ({"materials": [{"name": "a", "material": "Au", "diffraction": "hs"}]}, "materials[0].diffraction",
+     "ghs"),
 ])
 def test_scene_errors_are_one_line_naming_the_key(data, key, allowed):
     base = {"materials": [{"name": "a", "material": "Au"}], "lights": [{"name": "l", "spd": "D65"}]}

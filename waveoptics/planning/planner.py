@@ -171,6 +171,7 @@ class EntryPlan:
     decisions: list = field(default_factory=list)  # (decision, value, reason)
     metrics: dict = field(default_factory=dict)
     forced: dict = field(default_factory=dict)
+    diffraction: str = "kirchhoff"           # diffraction model of the nano lobe
 
     @property
     def name(self) -> str:
@@ -194,7 +195,7 @@ class EntryPlan:
             "light_directions_deg": [list(d) for d in self.light_directions_deg],
             "view_directions_deg": [list(d) for d in self.view_directions_deg],
             "wavelengths_nm": self.wavelengths_nm, "colour_wavelengths_nm": self.colour_wavelengths_nm,
-            "evaluations": self.evaluations, "precision": self.precision,
+            "evaluations": self.evaluations, "precision": self.precision, "diffraction": self.diffraction,
             "estimated_time_s": self.estimated_time_s, "reasons": self.reasons,
             "decisions": [{"decision": d, "value": v, "reason": r} for d, v, r in self.decisions],
             "metrics": self.metrics, "forced": self.forced,
@@ -393,6 +394,7 @@ class _Entry:
     patches: list = field(default_factory=list)
     time_s: float = 0.0
     precision: str = "float64"
+    diffraction_model: str = "kirchhoff"
 
     @property
     def dE(self) -> float:
@@ -484,6 +486,32 @@ def _decide_diffraction(e: _Entry) -> None:
         e.decide("diffraction", "on" if e.diffraction else "off",
                  f"{why}; coarse estimate{proxy_note}: ΔE2000 {est:.2g} {cmp} {ESTIMATE_SHARE:g} × target {e.dE:g}"
                  + ("" if e.diffraction else ", so only the microfacet model runs"))
+
+
+#: incidence beyond which the tangent-plane factor's excess over the light the coherent lobe gives up is large
+#: (measured with the height-field route: the coherent-loss guard trims < 0.2 % below 60°, 40 % at 80°;
+#: waveoptics.brdf.twoscale._cap_to_coherent_loss)
+KIRCHHOFF_GRAZING_DEG = 75.0
+
+
+def _decide_diffraction_model(e: _Entry) -> None:
+    """The scene's model when it names one; else Kirchhoff, the model whose limits are measured (flat patch = F,
+    exp(−g), grating orders, the Beckmann limit), with a note when the light comes near grazing incidence, where
+    its factor K grows as 1/cosθ_i (docs/physics.md §10; docs/wave-optics.md compares the models)."""
+    if not e.diffraction:
+        return
+    if e.spec.diffraction != "auto":
+        e.diffraction_model = e.spec.diffraction
+        e.decide("diffraction model", e.spec.diffraction, "set by the scene")
+        return
+    e.diffraction_model = "kirchhoff"
+    theta_max = max(t for t, _ in e.light.directions_deg) if not e.sphere else 88.0
+    why = ("tangent-plane Kirchhoff: the model held against the flat-patch, exp(−g), grating and Beckmann limits; "
+           "RGHS differs from it by ~1 % on a rough surface, OHS/ROHS by 36 % at θ_i = 30°")
+    if theta_max > KIRCHHOFF_GRAZING_DEG:
+        why += (f"; light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}°, where its factor exceeds the "
+                "light the coherent lobe gives up and the two-scale guard trims the diffracted lobe")
+    e.decide("diffraction model", "kirchhoff", why)
 
 
 def _decide_wavelengths(e: _Entry) -> None:
@@ -721,8 +749,9 @@ def _decide_precision(e: _Entry) -> None:
 
 
 #: the decisions, in the order they are taken (each reads the outcomes of those before it)
-DECISIONS = (_decide_diffuse, _decide_diffraction, _decide_wavelengths, _decide_nano_route, _decide_resolution,
-             _refine_wavelengths_for_grating, _decide_directions, _decide_precision)
+DECISIONS = (_decide_diffuse, _decide_diffraction, _decide_diffraction_model, _decide_wavelengths,
+             _decide_nano_route, _decide_resolution, _refine_wavelengths_for_grating, _decide_directions,
+             _decide_precision)
 
 
 def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostModel, device,
@@ -745,7 +774,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
                      solver=e.solver, resolution=e.resolution, directions=e.directions, view_directions_deg=e.views,
                      wavelengths_nm=e.w_sim, colour_wavelengths_nm=e.w_colour, precision=e.precision, kd=e.kd,
                      sphere=e.sphere, estimated_time_s=float(e.time_s), patches=e.patches, decisions=e.decisions,
-                     metrics=e.metrics, forced=dict(force))
+                     metrics=e.metrics, forced=dict(force), diffraction=e.diffraction_model)
 
 
 def plan_scene(scene: Scene, *, force: dict | None = None, device=None, max_resolution: int | None = None) -> Plan:

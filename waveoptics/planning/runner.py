@@ -81,7 +81,7 @@ def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
     t0 = time.perf_counter()
     w = e.wavelengths_nm if e.wavelengths_nm.size else np.array([LAMBDA_REF_NM])
     kw = dict(solver=e.solver if e.nano is not None else "auto", kd=e.kd, diffuse="lambert" if e.kd > 0 else "none",
-              device=device, precision=e.precision)
+              device=device, precision=e.precision, diffraction=e.diffraction)
     nano = e.nano if e.effects["diffraction"] else None
     hemi = DirectionGrid.hemisphere(e.resolution)
 

@@ -22,6 +22,7 @@ Schema (``examples/scenes/*.toml`` are worked examples)::
     ndf = "ggx"                          # ggx | beckmann
     shadowing = "smith-correlated"       # see waveoptics.brdf.SHADOWINGS
     diffuse_albedo = 0.5                 # dielectric substrate's diffuse albedo in [0, 1] (metals: none)
+    diffraction = "auto"                 # nano-lobe model: auto (the planner picks) | kirchhoff | ghs | rghs | ohs | rohs
     [materials.nano]                     # optional nano surface, exactly one of:
     statistics = "abc:sigma=2nm,B=2um,C=2.6"      #   height statistics (gaussian | exponential | abc)
     # generator = {model = "sinusoid", amplitude = "40nm", period = "1.6um", size = "24um", samples = 256}
@@ -56,6 +57,7 @@ from pathlib import Path
 
 from .. import brdf, surfaces
 from ..colour.illuminants import illuminant
+from ..vocabulary import DIFFRACTION
 from ..errors import WaveopticsError, did_you_mean
 from ..materials.database import get_material
 from ..request import parse_nano
@@ -72,7 +74,8 @@ __all__ = ['KEYS', 'CAMERAS', 'DEFAULT_DELTA_E', 'DEFAULT_LIGHT_DIRECTIONS', 'Na
 KEYS = {
     "": ("name", "description", "seed", "accuracy", "materials", "lights", "view", "output"),
     "accuracy": ("delta_e",),
-    "materials": ("name", "material", "ior", "roughness", "ndf", "shadowing", "diffuse_albedo", "nano"),
+    "materials": ("name", "material", "ior", "roughness", "ndf", "shadowing", "diffuse_albedo", "nano",
+                  "diffraction"),
     "nano": ("statistics", "generator", "file"),
     "file": ("path", "spacing", "units"),
     "lights": ("name", "spd", "directions_deg"),
@@ -125,6 +128,7 @@ class MaterialSpec:
     shadowing: str = "smith-correlated"
     diffuse_albedo: float = 0.5
     nano: NanoSpec | None = None
+    diffraction: str = "auto"        # a model of waveoptics.vocabulary.DIFFRACTION, or auto (the planner picks)
 
 
 @dataclass(frozen=True)
@@ -344,7 +348,8 @@ def _material(ctx, t, key, base) -> MaterialSpec:
         shadowing=_choice(ctx, t.get("shadowing", "smith-correlated"), key + ".shadowing",
                           tuple(brdf.SHADOWINGS)),
         diffuse_albedo=_number(ctx, t.get("diffuse_albedo", 0.5), key + ".diffuse_albedo", lo=0.0, hi=1.0),
-        nano=_nano(ctx, t["nano"], key + ".nano", base) if "nano" in t else None)
+        nano=_nano(ctx, t["nano"], key + ".nano", base) if "nano" in t else None,
+        diffraction=_choice(ctx, t.get("diffraction", "auto"), key + ".diffraction", ("auto",) + DIFFRACTION))
 
 
 def _light(ctx, t, key) -> LightSpec:
