@@ -17,7 +17,7 @@ from typing import Callable
 
 
 from ..errors import WaveopticsError
-from ..vocabulary import DIFFRACTION, DIFFUSE_NAMES, FRESNEL_NAMES, NDF_NAMES, SHADOWING_NAMES
+from ..vocabulary import DIFFRACTION, DIFFUSE_NAMES, FRESNEL_NAMES, NDF_NAMES, POLARIZATIONS, SHADOWING_NAMES
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
 from ._common import add_common, emit, progress
 
@@ -269,8 +269,6 @@ def _kirchhoff_describe(args) -> dict:
 
 
 def _rayleigh_rice_arguments(g) -> None:
-    from ..vocabulary import POLARIZATIONS
-
     g.add_argument("--nano", metavar="MODEL:PARAMS",
                    help="surface statistics, e.g. abc:sigma=3nm,B=5um,C=3 or gaussian:sigma=2nm,T=1um "
                         "(rayleigh-rice; uses --material or --ior for the substrate)")
