@@ -271,25 +271,30 @@ def _kirchhoff_describe(args) -> dict:
 def _rayleigh_rice_arguments(g) -> None:
     g.add_argument("--nano", metavar="MODEL:PARAMS",
                    help="surface statistics, e.g. abc:sigma=3nm,B=5um,C=3 or gaussian:sigma=2nm,T=1um "
-                        "(rayleigh-rice; uses --material or --ior for the substrate)")
+                        "(rayleigh-rice; or --surface FILE, whose periodogram is the PSD; --material or --ior give "
+                        "the substrate)")
     g.add_argument("--polarization", choices=POLARIZATIONS, default="unpolarized",
                    help="polarization of the incident light; the scattered light is not analyzed "
                         "(rayleigh-rice; default unpolarized)")
 
 
 def _rayleigh_rice_setup(args, wavelength_nm):
-    """(PSD model, permittivity ε (n_λ,)) of the options."""
+    """(PSD: a model from --nano statistics or a height field's periodogram from --surface, permittivity ε (n_λ,))."""
     from .. import surfaces
     from ..materials.database import get_material
     from ..request import parse_nano
 
-    if not args.nano:
-        raise WaveopticsError("--model rayleigh-rice needs --nano MODEL:params (height statistics)")
-    model, p = parse_nano(args.nano)
-    if model not in surfaces.PSD_MODELS:
-        raise WaveopticsError(f"--nano {args.nano!r}: rayleigh-rice needs height statistics "
-                              f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
-    psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"), C=p.get("C"))
+    if bool(args.nano) == bool(args.surface):
+        raise WaveopticsError("--model rayleigh-rice needs exactly one of --nano MODEL:params (height statistics) "
+                              "and --surface FILE (its periodogram is the PSD)")
+    if args.surface:
+        psd = surfaces.PeriodogramPSD(surfaces.load(args.surface, spacing=args.spacing))
+    else:
+        model, p = parse_nano(args.nano)
+        if model not in surfaces.PSD_MODELS:
+            raise WaveopticsError(f"--nano {args.nano!r}: rayleigh-rice needs height statistics "
+                                  f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
+        psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"), C=p.get("C"))
     if args.material is not None and args.ior is not None:
         raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
     spec = args.material if args.material is not None else args.ior
@@ -336,7 +341,7 @@ def _rayleigh_rice_albedo(args, wi, wavelength_nm):
 
 
 def _rayleigh_rice_describe(args) -> dict:
-    return {k: getattr(args, k) for k in ("nano", "material", "ior", "polarization")}
+    return {k: getattr(args, k) for k in ("nano", "surface", "material", "ior", "polarization")}
 
 
 #: BRDF models offered by ``waveoptics brdf --model``

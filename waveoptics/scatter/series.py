@@ -223,6 +223,9 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
 def rayleigh_rice(wi, wo, wavelength_nm, model: PSDModel, Q=1.0):
     """First-order (Rayleigh-Rice) BRDF (16π²/λ⁴) cosθ_i cosθ_o Q S(f_x, f_y), f = (ω_i + ω_o)_xy / λ.
 
+    *model* is a :class:`~waveoptics.surfaces.PSDModel` (isotropic, S(|f|)) or a PSD with ``S_xy(f_x, f_y)``
+    such as a height field's :class:`~waveoptics.surfaces.PeriodogramPSD` (anisotropy kept; S is even in f).
+
     References
     ----------
     .. [1] J. C. Stover, *Optical Scattering*, 3rd ed., eq. (4.1); docs/physics.md §4.
@@ -230,6 +233,9 @@ def rayleigh_rice(wi, wo, wavelength_nm, model: PSDModel, Q=1.0):
     wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
     lam = np.asarray(wavelength_nm, dtype=float) * 1e-9
     s = wi + wo
-    f = np.hypot(s[..., 0], s[..., 1]) / lam
+    if hasattr(model, "S_xy"):
+        S = model.S_xy(s[..., 0] / lam, s[..., 1] / lam)
+    else:
+        S = model.S(np.hypot(s[..., 0], s[..., 1]) / lam)
     ok = (wi[..., 2] > 0) & (wo[..., 2] > 0)
-    return np.where(ok, 16 * np.pi ** 2 / lam ** 4 * wi[..., 2] * wo[..., 2] * np.asarray(Q) * model.S(f), 0.0)
+    return np.where(ok, 16 * np.pi ** 2 / lam ** 4 * wi[..., 2] * wo[..., 2] * np.asarray(Q) * S, 0.0)

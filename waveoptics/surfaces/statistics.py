@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.interpolate import RegularGridInterpolator
 from scipy.fft import next_fast_len
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import least_squares
@@ -22,7 +23,7 @@ from ..errors import WaveopticsError, unknown
 from .heightfield import HeightField
 from .psd import PSD_MODELS, abc_A
 
-__all__ = ['DETRENDS', 'detrended', 'rms_height', 'rms_slopes', 'rms_slope', 'autocorrelation_radial', 'correlation_length', 'psd_radial', 'fit_psd', 'stats']
+__all__ = ['PeriodogramPSD', 'DETRENDS', 'detrended', 'rms_height', 'rms_slopes', 'rms_slope', 'autocorrelation_radial', 'correlation_length', 'psd_radial', 'fit_psd', 'stats']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Statistics
@@ -218,6 +219,44 @@ def _psd(hf: HeightField, window="auto", detrend: str = "mean"):
     df = max(1.0 / (nx * hf.dx), 1.0 / (ny * hf.dy))
     fr, S, n = _radial_bins(f, P, np.ones_like(f), df, 0.5 / max(hf.dx, hf.dy))
     return fr[1:], S[1:], n[1:]
+
+
+class PeriodogramPSD:
+    """The two-sided PSD of a height field from its windowed periodogram, S(f_x, f_y) in m⁴, normalized so that
+    Σ S Δf_x Δf_y equals the window-weighted height variance (Jacobs, Junge & Pastewka 2017).
+
+    It stands where a :class:`~waveoptics.surfaces.PSDModel` does for first-order scattering
+    (:func:`waveoptics.scatter.rayleigh_rice_brdf`): ``S_xy`` interpolates the 2-D periodogram bilinearly (so an
+    anisotropic surface keeps its orientation), ``S`` is its radial average. A single periodogram scatters by
+    100 % per bin (χ²₂ statistics); average realizations or smooth before reading fine structure into it.
+    """
+
+    def __init__(self, hf: HeightField, window="hann", detrend: str = "mean"):
+        h = detrended(hf, detrend)
+        ny, nx = hf.shape
+        w = hf.valid.astype(float)
+        if window == "hann":
+            w = w * np.outer(hann(ny, sym=False) if ny > 1 else [1.0], hann(nx, sym=False) if nx > 1 else [1.0])
+        elif window not in (None, "none"):
+            raise unknown("PSD window", window, ("hann", "none"))
+        P = np.abs(np.fft.fft2(w * h)) ** 2 * hf.dx * hf.dy / float(np.sum(w ** 2))
+        self.fx = np.fft.fftshift(np.fft.fftfreq(nx, hf.dx))
+        self.fy = np.fft.fftshift(np.fft.fftfreq(ny, hf.dy))
+        self.P = np.fft.fftshift(P)
+        self._radial = _psd(hf, window or None, detrend)[:2] if min(nx, ny) > 1 else None
+        self.sigma = float(np.sqrt(np.sum(P) / (nx * hf.dx * ny * hf.dy)))
+        self.length_scale = max(hf.extent) / 8   # no correlation model: a scale for quadrature hints only
+
+    def S_xy(self, fx, fy):
+        """S at (f_x, f_y) (1/m), bilinear in the periodogram grid; 0 beyond its Nyquist range."""
+        fx, fy = np.broadcast_arrays(np.asarray(fx, dtype=float), np.asarray(fy, dtype=float))
+        interp = RegularGridInterpolator((self.fy, self.fx), self.P, bounds_error=False, fill_value=0.0)
+        return interp(np.stack([fy.ravel(), fx.ravel()], axis=-1)).reshape(fx.shape)
+
+    def S(self, f):
+        """Radially averaged S at |f| (1/m)."""
+        fr, Sr = self._radial
+        return np.interp(np.asarray(f, dtype=float), fr, Sr, left=Sr[0], right=0.0)
 
 
 def psd_radial(hf: HeightField, window="auto", detrend: str = "mean") -> tuple[np.ndarray, np.ndarray]:
