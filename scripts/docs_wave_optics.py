@@ -462,7 +462,11 @@ def main():
                  "incidence:\n\n" + _rayleigh_rice_table() + "\n\n"
                  "`waveoptics brdf --model rayleigh-rice --nano abc:sigma=3nm,B=5um,C=3 --ior 1+6j --wavelength 550 "
                  "--incident 30 --outgoing 60,180 [--polarization s|p|unpolarized] --json` prints `values` (1/sr) "
-                 "with the four polarized BRDFs under `components`.\n")
+                 "with the four polarized BRDFs under `components`; `--surface FILE` takes the PSD from a height field's "
+                 "periodogram. The Kirchhoff and two-scale routes take `--polarization s|p` too (`scatter`, "
+                 "`simulate`, `brdf --model kirchhoff`): each facet then reflects its own s/p split of the incident "
+                 "polarization, R_s(θ_d) cos²η + R_p(θ_d) sin²η with η the angle between the macro and the facet "
+                 "s directions (Priest & Germer 2000), so a flat patch reflects R_s(θ_i) or R_p(θ_i).\n")
     parts.append("""
 ### Python API
 ```python

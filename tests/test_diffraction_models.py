@@ -109,3 +109,28 @@ def test_one_vocabulary_and_every_front_end(tmp_path, capsys):
     assert main(["scatter", "--surface", str(hf), "--material", "Al", "--incident", "20", "--wavelengths", "550",
                  "--resolution", "32", "--diffraction", "rghs", "-o", str(tmp_path / "sc"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["info"]["diffraction"] == "rghs"
+
+
+def test_polarized_flat_patch_reflects_rs_and_rp():
+    """Polarized incident light (issue 13): a flat patch reflects R_s(θ_i) or R_p(θ_i) of the Fresnel equations,
+    written here from Born & Wolf, and their mean unpolarized; rough lobes average to the unpolarized one."""
+    import cmath
+    import math
+
+    n = 1.5 + 0.0j
+    theta = math.radians(50.0)
+    ct = cmath.sqrt(1 - (math.sin(theta) / n) ** 2)
+    rs = abs((math.cos(theta) - n * ct) / (math.cos(theta) + n * ct)) ** 2
+    rp = abs((n * math.cos(theta) - ct) / (n * math.cos(theta) + ct)) ** 2
+    hf = surfaces.flat(28.8e-6, 128)
+    got = {p: scatter.scatter(hf, (50.0, 0.0), [LAM], "1.5", resolution=128, polarization=p).albedo[0]
+           for p in ("s", "p", "unpolarized")}
+    assert got["s"] == pytest.approx(rs, rel=5e-3)
+    assert got["p"] == pytest.approx(rp, rel=2e-2)          # R_p is small here: the spike's F(θ_d) spread matters
+    assert got["unpolarized"] == pytest.approx(0.5 * (rs + rp), rel=5e-3)
+    rough = surfaces.gaussian(40e-9, 1e-6, 32e-6, 128, seed=1)
+    lobes = {p: scatter.scatter(rough, (30.0, 20.0), [LAM], "Au", resolution=64, polarization=p).brdf[0]
+             for p in ("s", "p", "unpolarized")}
+    np.testing.assert_allclose(0.5 * (lobes["s"] + lobes["p"]), lobes["unpolarized"], rtol=1e-9, atol=1e-12)
+    with pytest.raises(ValueError, match="complex index"):
+        scatter.scatter(hf, (50.0, 0.0), [LAM], 0.9, resolution=16, polarization="s")

@@ -224,3 +224,24 @@ def test_heavy_tailed_psd_keeps_the_reflected_light():
     nano = twoscale.Nano(model=surfaces.PSDModel("abc", sigma=40e-9, B=3.7e-6, C=2.2))
     L = twoscale.evaluate(wi, [550.0], mat, twoscale.Micro(alpha=0.0), nano, grid, kd=0)
     assert L.albedo()[0] / float(mat.F(wi[2], 550.0)) == pytest.approx(1.0, abs=1e-2)
+
+
+def test_polarized_two_scale_mirror_reflects_rs_and_rp():
+    """A mirror-like micro surface without nano roughness reflects R_s(θ_i) / R_p(θ_i) for s / p light and their
+    mean unpolarized (Fresnel equations, Born & Wolf; issue 13); with nano roughness the s and p lobes average to
+    the unpolarized one."""
+    from waveoptics.materials import fresnel
+
+    mat = materials.get_material("1.5")
+    grid = DirectionGrid.hemisphere(64)
+    wi = direction_from_angles(55.0, 0.0)
+    Rs, Rp = fresnel.F_sp(wi[2], 1.5)
+    got = {p: twoscale.evaluate(wi, [550.0], mat, twoscale.Micro(alpha=0.0), None, grid, kd=0,
+                                polarization=p).albedo()[0] for p in ("s", "p", "unpolarized")}
+    assert got["s"] == pytest.approx(float(Rs), rel=1e-6)
+    assert got["p"] == pytest.approx(float(Rp), rel=1e-6)
+    assert got["unpolarized"] == pytest.approx(0.5 * float(Rs + Rp), rel=1e-6)
+    nano = twoscale.Nano(model=surfaces.PSDModel("gaussian", sigma=20e-9, T=1e-6))
+    L = {p: twoscale.evaluate(wi, [550.0], "Au", twoscale.Micro(alpha=0.1), nano, grid, kd=0, polarization=p)
+         for p in ("s", "p", "unpolarized")}
+    np.testing.assert_allclose(0.5 * (L["s"].total + L["p"].total), L["unpolarized"].total, rtol=1e-9, atol=1e-12)

@@ -96,7 +96,8 @@ def _lobes_at(sim, wi):
     micro = twoscale.Micro(alpha=p["micro_alpha"], ndf=p["ndf"], shadowing=p["shadowing"])
     solver = p["solver"] if p["solver"] != "none" else "auto"
     return twoscale.evaluate(wi, sim.wavelengths_nm, p["material"], micro, sim.nano, sim.grid, solver=solver,
-                             kd=p["kd"], precision=p["precision"], diffraction=p.get("diffraction", "kirchhoff"))
+                             kd=p["kd"], precision=p["precision"], diffraction=p.get("diffraction", "kirchhoff"),
+                             polarization=p.get("polarization", "unpolarized"))
 
 
 def plot(rows, path, *, title="", tail_deg=10.0):

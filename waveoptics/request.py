@@ -42,7 +42,7 @@ from .errors import FieldError, unknown
 from .materials import get_material
 from .surfaces import HeightField
 from .units import check_theta, check_wavelengths, parse_length
-from .vocabulary import DIFFRACTION, NANO_SOLVERS, PRECISIONS
+from .vocabulary import DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "parse_nano", "nano_surface_size", "make_nano", "crop"]
@@ -242,6 +242,8 @@ class SimulationRequest:
         *surface* holds both scales: split it at a cut-off period of 10 λmax.
     diffraction : str
         Diffraction model of the nano lobe, one of :data:`waveoptics.vocabulary.DIFFRACTION` (default kirchhoff).
+    polarization : str
+        Of the incident light, one of :data:`waveoptics.vocabulary.POLARIZATIONS` (default unpolarized).
     """
 
     material: str = "Al"
@@ -261,6 +263,7 @@ class SimulationRequest:
     seed: int = 0
     split: bool = False
     diffraction: str = "kirchhoff"
+    polarization: str = "unpolarized"
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalization
@@ -294,7 +297,8 @@ class SimulationRequest:
             raise FieldError(f"{{accuracy_dE}} {self.accuracy_dE!r} is not allowed; use a ΔE2000 in (0, 100)",
                              "accuracy_dE")
         for field, allowed in (("solver", SOLVERS), ("precision", PRECISIONS), ("ndf", NDFS),
-                               ("shadowing", SHADOWINGS), ("diffraction", DIFFRACTION)):
+                               ("shadowing", SHADOWINGS), ("diffraction", DIFFRACTION),
+                               ("polarization", POLARIZATIONS)):
             if getattr(self, field) not in allowed:
                 raise unknown(field, getattr(self, field), allowed, field=field)
         if self.surface is None and self.nano is None:

@@ -65,7 +65,8 @@ class Simulation:
 def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05, ndf="beckmann",
              shadowing="smith-correlated", incident=(30.0, 0.0), illuminant="D65", wavelengths=None,
              accuracy_dE=1.0, resolution=128, solver="auto", kd=0.5, sphere=True, seed=0, device=None,
-             precision="float32", progress=None, split=False, diffraction="kirchhoff") -> Simulation:
+             precision="float32", progress=None, split=False, diffraction="kirchhoff",
+             polarization="unpolarized") -> Simulation:
     """Simulate a two-scale surface and the plain microfacet model (keyword form of :func:`run`).
 
     Parameters
@@ -107,6 +108,9 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
         comes from the long-period part's slopes (*micro_alpha* is ignored) and the short-period part diffracts.
     diffraction : str
         Diffraction model of the nano lobe (:data:`waveoptics.scatter.DIFFRACTION_MODELS`; default kirchhoff).
+    polarization : {"unpolarized", "s", "p"}
+        Of the incident light, relative to the plane of incidence (sphere renders take it in each pixel's local
+        plane of incidence).
 
     Returns
     -------
@@ -119,7 +123,7 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
         micro_alpha=micro_alpha, ndf=ndf, shadowing=shadowing, incident_deg=tuple(incident), illuminant=illuminant,
         wavelengths_nm=None if wavelengths is None else tuple(np.atleast_1d(np.asarray(wavelengths, float))),
         accuracy_dE=accuracy_dE, resolution=resolution, solver=solver, kd=kd, precision=precision, seed=seed,
-        split=split, diffraction=diffraction)
+        split=split, diffraction=diffraction, polarization=polarization)
     return run(req, surface=hf, material=None if isinstance(material, str) else material, sphere=sphere,
                device=device, progress=progress)
 
@@ -165,7 +169,8 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
 
     def lobes_at(th, ph):
         return twoscale.evaluate(direction_from_angles(th, ph), w, mat, micro, nano_obj, grid, solver=req.solver,
-                                 kd=req.kd, device=device, precision=req.precision, diffraction=req.diffraction)
+                                 kd=req.kd, device=device, precision=req.precision, diffraction=req.diffraction,
+                                 polarization=req.polarization)
 
     t = time.perf_counter()
     lobes = lobes_at(theta, phi)
@@ -190,6 +195,7 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
               "resolution": req.resolution, "solver": lobes.info["solver"], "kd": 0.0 if mat.is_metal else req.kd,
               "precision": req.precision, "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": req.seed,
               "split": split_info, "micro_alpha_used": [micro.alpha, micro.alpha_y], "diffraction": req.diffraction,
+              "polarization": req.polarization,
               # materials clamp their index outside the measured data (materials/database.py policy): say where
               "clamped_wavelengths_nm": [float(x) for x in w[mat.out_of_range(w)]]}
     return Simulation(lobes=lobes, table_thetas_deg=thetas, table_total=tab_total, table_microfacet=tab_mf,

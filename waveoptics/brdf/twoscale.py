@@ -42,7 +42,7 @@ from scipy import signal
 
 from .. import scatter, surfaces
 from ..errors import FieldError, WaveopticsError, unknown
-from ..materials import Material, get_material
+from ..materials import Material, fresnel_function, get_material
 from ..runtime import get_runtime
 from ..scatter.grid import DirectionGrid, integrate
 from ..surfaces.heightfield import HeightField
@@ -180,6 +180,13 @@ def _mirror(wi):
     return np.array([-wi[0], -wi[1], wi[2]])
 
 
+def _F_mirror(F, wi, lam):
+    """The Fresnel factor at the mirror direction (R(θ_i), or R_s / R_p for polarized light)."""
+    if hasattr(F, "at"):
+        return F.at(wi, _mirror(wi), lam)
+    return F(wi[2], lam)
+
+
 def _mirror_cell(grid: DirectionGrid, wi):
     """(row, col) of the cell containing the mirror direction, or None if outside the grid."""
     u, v = -wi[0], -wi[1]
@@ -292,7 +299,7 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
             raise WaveopticsError("solver 'psd' needs nano statistics, not a height field; use fft or direct")
         out = np.empty((w.size, grid.n_v, grid.n_u))
         for i, lam in enumerate(w):
-            Fi = F(cos_d, lam)
+            Fi = F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam)
             out[i], cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True,
                                                  diffraction=diffraction)
             # guard: the truncated series misses the light of its terms m > m_max once g = (kσ(cosθ_i + cosθ_o))²
@@ -329,7 +336,7 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
     cell = _mirror_cell(grid, wi)
     for i, lam in enumerate(wavelengths_nm):
         share = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction))
-        Fi = float(F(wi[2], lam))
+        Fi = float(np.ravel(_F_mirror(F, wi, lam))[0])
         got = float(integrate(out[i], grid))
         if got > 0:
             out[i] *= Fi * share / got
@@ -421,7 +428,8 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
 
 def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid: DirectionGrid, *,
              solver: str = "auto", kd=0.5, diffuse: str = "lambert", device=None, precision="float32",
-             reference_grid: DirectionGrid | None = None, diffraction: str = "kirchhoff") -> Lobes:
+             reference_grid: DirectionGrid | None = None, diffraction: str = "kirchhoff",
+             polarization: str = "unpolarized") -> Lobes:
     """Two-scale BRDF for one incident direction on *grid* at each wavelength, plus the plain microfacet BRDF.
 
     Parameters
@@ -447,6 +455,10 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     diffraction : str
         Diffraction model of the nano lobe and of the coherent fraction, a name in
         :data:`waveoptics.scatter.DIFFRACTION_MODELS` (default ``kirchhoff``).
+    polarization : {'unpolarized', 's', 'p'}
+        Of the incident light relative to the macro plane of incidence: every facet (micro and nano) reflects its
+        own s/p split (:func:`waveoptics.materials.fresnel.F_facet_polarized`); the diffuse substrate is
+        unpolarized.
 
     Returns
     -------
@@ -463,8 +475,11 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     inside = grid.inside
     shape = (w.size, grid.n_v, grid.n_u)
 
-    def F(cos_d, lam):
-        return mat.F(cos_d, lam)
+    if polarization == "unpolarized":
+        def F(cos_d, lam):
+            return mat.F(cos_d, lam)
+    else:   # each facet reflects its own s/p split of the macro polarization (needs both directions)
+        F = fresnel_function(mat, polarization)
 
     h = wi[None, None, :] + wo
     h = h / np.linalg.norm(h, axis=-1, keepdims=True)
@@ -477,7 +492,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         cell = _mirror_cell(grid, wi)
         rho = float(albedo(wi, fresnel="one", **micro.kw()))
         if cell is not None:
-            Fi = np.array([float(F(wi[2], lam)) for lam in w])
+            Fi = np.array([float(np.ravel(_F_mirror(F, wi, lam))[0]) for lam in w])
             mf[:, cell[0], cell[1]] = Fi * rho / (grid.du * grid.dv)
         A = np.array([float(nano.coherent_amplitude2(wi[2], lam, dm)) if sigma_nano > 0 else 1.0 for lam in w])
         coherent = mf * A[:, None, None]
@@ -496,7 +511,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         if grid_rho > 0:
             f1 = f1 * (rho / grid_rho)
         for i, lam in enumerate(w):
-            mf[i] = f1 * F(cos_d, lam)
+            mf[i] = f1 * (F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam))
             A = nano.coherent_amplitude2(cos_d, lam, dm) if sigma_nano > 0 else 1.0
             coherent[i] = mf[i] * A
         mf = np.where(inside, mf, 0.0)
@@ -532,7 +547,8 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
                  microfacet=mf_total,
                  info={"solver": used, "sigma_nano_m": sigma_nano, "micro": micro.__dict__,
                        "material": mat.name, "sharp_micro_lobe": _sharp(micro, grid),
-                       "diffraction_energy_scale": energy_scale.tolist(), "diffraction_model": dm.name})
+                       "diffraction_energy_scale": energy_scale.tolist(), "diffraction_model": dm.name,
+                       "polarization": polarization})
 
 
 #: default split: spatial periods longer than this many λ_max are micro-geometry (geometric optics)

@@ -240,7 +240,8 @@ def _kirchhoff_evaluate(args, wi, wo, wavelength_nm):
     hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
     out = [scatter.brdf(hf, w, wo, wavelength_nm, F, solver=args.solver, backend=args.backend,
                             precision=args.precision, window_name=args.window, resolution=args.resolution,
-                            realizations=args.realizations, runtime=rt, diffraction=args.diffraction)
+                            realizations=args.realizations, runtime=rt, diffraction=args.diffraction,
+                            polarization=args.polarization)
            for w in progress(wi, desc="kirchhoff", args=args)]
     return np.stack(out, axis=1)
 
@@ -254,7 +255,8 @@ def _kirchhoff_albedo(args, wi, wavelength_nm):
     out = [scatter.scatter(hf, w, wavelength_nm, F, solver=args.solver, backend=args.backend,
                                precision=args.precision, window_name=args.window,
                                resolution=args.resolution or 256, realizations=args.realizations,
-                               runtime=rt, diffraction=args.diffraction).albedo
+                               runtime=rt, diffraction=args.diffraction,
+                               polarization=args.polarization).albedo
            for w in progress(wi, desc="albedo", args=args)]
     return np.stack(out, axis=1)
 
@@ -274,8 +276,8 @@ def _rayleigh_rice_arguments(g) -> None:
                         "(rayleigh-rice; or --surface FILE, whose periodogram is the PSD; --material or --ior give "
                         "the substrate)")
     g.add_argument("--polarization", choices=POLARIZATIONS, default="unpolarized",
-                   help="polarization of the incident light; the scattered light is not analyzed "
-                        "(rayleigh-rice; default unpolarized)")
+                   help="polarization of the incident light relative to the plane of incidence; the scattered light "
+                        "is not analyzed (rayleigh-rice and kirchhoff; default unpolarized)")
 
 
 def _rayleigh_rice_setup(args, wavelength_nm):

@@ -13,7 +13,7 @@ import warnings
 
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
-from ..vocabulary import DIFFRACTION
+from ..vocabulary import DIFFRACTION, POLARIZATIONS
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, emit, progress
 
@@ -34,6 +34,9 @@ def register(sub) -> None:
                    help="wavelengths in nm: 550, 450,550,650 or 400:700:10 (default 400:700:10)")
     p.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
                    help="diffraction model: kirchhoff (default), ghs, rghs, ohs, rohs (docs/physics.md §10)")
+    p.add_argument("--polarization", default="unpolarized", choices=POLARIZATIONS,
+                   help="polarization of the incident light relative to the plane of incidence; each facet "
+                        "reflects its own s/p split (default unpolarized; needs a material with a complex index)")
     p.add_argument("--solver", choices=("fft", "direct"), default="fft",
                    help="fft: chirp-z transforms with a banded Taylor series in v_z (default); direct: the "
                         "Kirchhoff sum on the OpenCL device")
@@ -88,6 +91,7 @@ def run(args) -> int:
                                   resolution=args.resolution, realizations=args.realizations, order=order,
                                   window_name=args.window, detrend=args.detrend, precision=args.precision,
                                   backend=args.backend, diffraction=args.diffraction,
+                                  polarization=args.polarization,
                                   runtime=rt, progress=bar.update)
     bar.close()
     extra = {"surface": str(args.surface), "material": str(args.material)}

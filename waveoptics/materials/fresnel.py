@@ -22,7 +22,7 @@ import pyopencl.array as cla
 from ..errors import WaveopticsError
 from ..runtime import build_options, build_program, get_runtime
 
-__all__ = ['F_sp', 'F', 'F0', 'F_schlick', 'brewster_angle', 'F_sp_cl', 'F_schlick_cl']
+__all__ = ['F_sp', 'F_facet_polarized', 'F', 'F0', 'F_schlick', 'brewster_angle', 'F_sp_cl', 'F_schlick_cl']
 
 
 def _as_eta(eta) -> np.ndarray:
@@ -79,6 +79,53 @@ def F_sp(cos_theta_i, eta):
     Rs = np.where(grazing, 1.0, np.clip(Rs, 0.0, 1.0))
     Rp = np.where(grazing, 1.0, np.clip(Rp, 0.0, 1.0))
     return Rs, Rp
+
+
+def F_facet_polarized(wi, wo, eta, polarization: str = "unpolarized"):
+    """Reflectance of the facet that mirrors ω_i into ω_o (normal h ∝ ω_i + ω_o) for light polarized s or p with
+    respect to the macro plane of incidence (the plane of z and ω_i), the reflected light not analyzed.
+
+    The facet sees the macro s field split into its own s and p parts, cos η and sin η, where η is the angle between
+    the macro and the facet s directions (z × ω_i and h × ω_i): F_s = R_s(θ_d) cos²η + R_p(θ_d) sin²η, F_p the
+    other way round, and their mean is the unpolarized R(θ_d) (the rotation of the Fresnel Mueller matrix into the
+    facet frame, Priest & Germer 2000). At the mirror direction h lies in the macro plane: F_s = R_s(θ_i). At
+    normal incidence the macro plane is taken as the x–z plane (s along y).
+
+    Parameters
+    ----------
+    wi, wo : array_like (..., 3)
+        Unit vectors towards the light and the viewer.
+    eta : complex or array
+        Relative index n + ik (broadcast against the directions' leading shape).
+    polarization : {'unpolarized', 's', 'p'}
+
+    References
+    ----------
+    .. [1] R. G. Priest, T. A. Germer, "Polarimetric BRDF in the microfacet model: theory and measurements",
+       Proc. 2000 Meeting of the Military Sensing Symposia Specialty Group on Passive Sensors, 2000.
+    .. [2] Born & Wolf, *Principles of Optics*, §1.5.2 (R_s, R_p).
+    """
+    wi = np.asarray(wi, dtype=float)
+    wo = np.asarray(wo, dtype=float)
+    h = wi + wo
+    h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
+    cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
+    Rs, Rp = F_sp(cos_d, eta)
+    if polarization == "unpolarized":
+        return 0.5 * (Rs + Rp)
+    if polarization not in ("s", "p"):
+        raise WaveopticsError(f"polarization {polarization!r} is not allowed; use unpolarized, s or p")
+    z = np.array([0.0, 0.0, 1.0])
+    s_mac = np.cross(np.broadcast_to(z, wi.shape), wi)
+    n_mac = np.linalg.norm(s_mac, axis=-1, keepdims=True)
+    # guard: at normal incidence the plane of incidence is undefined: take x–z (s along y)
+    s_mac = np.where(n_mac > 1e-12, s_mac / np.maximum(n_mac, 1e-300), np.array([0.0, 1.0, 0.0]))
+    s_loc = np.cross(h, np.broadcast_to(wi, h.shape))
+    n_loc = np.linalg.norm(s_loc, axis=-1, keepdims=True)
+    # guard: h parallel to ω_i (back-reflection) leaves the facet plane undefined: it is the macro plane there
+    s_loc = np.where(n_loc > 1e-12, s_loc / np.maximum(n_loc, 1e-300), s_mac)
+    c2 = np.sum(s_mac * s_loc, axis=-1) ** 2
+    return Rs * c2 + Rp * (1 - c2) if polarization == "s" else Rs * (1 - c2) + Rp * c2
 
 
 def F(cos_theta_i, eta):

@@ -88,7 +88,8 @@ def brdf_from_field(U, wi, wo, wavelengths_nm, area: float, F=None, diffraction=
     area : float, m²
         A_w.
     F : callable, optional
-        F(cos θ_d, wavelength_nm); None → 1.
+        F(cos θ_d, wavelength_nm); None → 1; an object with ``at(wi, wo, wavelength_nm)`` (polarized light,
+        :class:`waveoptics.materials.PolarizedFresnel`) is evaluated per direction.
     diffraction : str or DiffractionModel
         A name in :data:`waveoptics.scatter.DIFFRACTION_MODELS`.
     """
@@ -96,7 +97,9 @@ def brdf_from_field(U, wi, wo, wavelengths_nm, area: float, F=None, diffraction=
     shape = (wl.size,) + (1,) * (np.ndim(wo) - 1)
     K = get_model(diffraction).K(np.asarray(wi, dtype=float), wo[None], wl.reshape(shape))
     out = K * np.abs(U) ** 2 / area
-    if F is not None:
+    if hasattr(F, "at"):   # polarized light: the facet's own s/p split needs both directions
+        out = out * np.asarray(F.at(np.asarray(wi, dtype=float), wo[None], wl.reshape(shape)), dtype=float)
+    elif F is not None:
         out = out * np.asarray(F(cos_theta_d(wi, wo)[None], wl.reshape(shape)), dtype=float)
     return out
 

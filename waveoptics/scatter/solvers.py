@@ -135,6 +135,13 @@ SOLVERS = {
 BACKENDS = ("opencl", "numpy")
 
 
+def _F_at(F, wi, wo, wavelengths_nm):
+    """The Fresnel factor for directions wo (..., 3): per direction for polarized light, else from cos θ_d."""
+    if hasattr(F, "at"):
+        return F.at(wi, wo, wavelengths_nm)
+    return F(cos_theta_d(wi, wo), wavelengths_nm)
+
+
 def get_solver(solver: str, backend: str = "opencl") -> Solver:
     """The :class:`Solver` named *solver* (and a check of the direct solver's *backend*)."""
     if solver not in SOLVERS:
@@ -239,7 +246,7 @@ def sampling_warnings(smp: Samples, wi, wavelengths_nm, grid: DirectionGrid | No
 def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direct", backend: str = "opencl",
          precision: str = "float32", window_name=DEFAULT_WINDOW, detrend: str = "mean", order="auto",
          resolution: int | None = None, realizations=None, seed: int = 0, runtime=None,
-         progress=None, diffraction: str = "kirchhoff") -> np.ndarray:
+         progress=None, diffraction: str = "kirchhoff", polarization: str = "unpolarized") -> np.ndarray:
     """Kirchhoff BRDF for arbitrary outgoing directions, averaged over realizations.
 
     Parameters
@@ -260,6 +267,9 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
     window_name, detrend : see :func:`window` and :func:`samples`.
     diffraction : str
         Diffraction model, a name in :data:`DIFFRACTION_MODELS` (default ``kirchhoff``).
+    polarization : {'unpolarized', 's', 'p'}
+        Of the incident light, relative to the macro plane of incidence; each facet reflects its own s/p split
+        (:func:`waveoptics.materials.fresnel.F_facet_polarized`). s and p need a material with a complex index.
 
     Returns
     -------
@@ -270,7 +280,7 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
     wi = _incident(wi)
     wo = _outgoing(wo)
     wl = check_wavelengths(wavelengths_nm)
-    F = fresnel_function(material)
+    F = fresnel_function(material, polarization)
     hfs = _realizations(surface, realizations, seed)
     acc = np.zeros((wl.size, wo.shape[0]))
     for hf in hfs:
@@ -340,7 +350,8 @@ class ScatterResult:
 def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", resolution: int = 256,
             grid: DirectionGrid | None = None, realizations=None, seed: int = 0, backend: str = "opencl",
             precision: str = "float32", window_name=DEFAULT_WINDOW, detrend: str = "mean", order="auto",
-            tol: float = FFT_TOL, runtime=None, progress=None, diffraction: str = "kirchhoff") -> ScatterResult:
+            tol: float = FFT_TOL, runtime=None, progress=None, diffraction: str = "kirchhoff",
+            polarization: str = "unpolarized") -> ScatterResult:
     """Kirchhoff lobes over the projected hemisphere, per wavelength, with albedo and coherent/scattered split.
 
     Parameters
@@ -364,6 +375,8 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     diffraction : str
         Diffraction model, a name in :data:`DIFFRACTION_MODELS` (default ``kirchhoff``): its factor K and vertical
         phase shape the lobe and its coherent part (:mod:`waveoptics.scatter.models`).
+    polarization : {'unpolarized', 's', 'p'}
+        Of the incident light (see :func:`brdf`); the flat-patch reference then reflects R_s(θ_i) or R_p(θ_i).
     progress : callable, optional
         Called with the number of finished work units (wavelengths × realizations); total is
         ``len(wavelengths) * realizations``.
@@ -377,7 +390,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     model = get_model(diffraction)
     wi = _incident(wi)
     wl = check_wavelengths(wavelengths_nm)
-    F = fresnel_function(material)
+    F = fresnel_function(material, polarization)
     grid = grid if grid is not None else DirectionGrid.hemisphere(resolution)
     if not grid.inside.any():
         raise WaveopticsError(f"direction grid u_range={grid.u_range}, v_range={grid.v_range} has no cell centre "
@@ -393,7 +406,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     flat = np.zeros(n_wl)
     chi = np.zeros(n_wl, np.complex128)
     msgs: list[str] = []
-    info = {"window": str(window_name), "diffraction": model.name}
+    info = {"window": str(window_name), "diffraction": model.name, "polarization": polarization}
     t_solve = t_flat = 0.0
     for r, hf in enumerate(hfs):
         smp = samples(hf, window_name, detrend)
@@ -431,11 +444,12 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
               "(no shadowing) is least reliable" + (" and the frozen-v_z fft approximation fails; use "
                                                     "order='auto' or solver='direct'"
                                                     if solver == "fft" and order != "auto" else ""), msgs)
-    Fspec = np.asarray(F(np.full(n_wl, wi[2]), wl), dtype=float)
+    mirror = np.array([-wi[0], -wi[1], wi[2]])
+    Fspec = np.asarray(_F_at(F, wi, np.broadcast_to(mirror, (n_wl, 3)), wl), dtype=float)
     # energy check: the lobe with F = 1 must not reflect more than the light that arrives (the flat patch's
     # albedo on this grid is 1 to quadrature accuracy); near grazing incidence the tangent-plane obliquity
     # factor grows as 1/cos θ_i and the model, which has no shadowing, breaks this (albedo 260 at 90°)
-    Fg = np.asarray(F(cos_theta_d(wi, dirs)[None], wl[:, None, None]), dtype=float)
+    Fg = np.asarray(_F_at(F, wi, dirs[None], wl[:, None, None]), dtype=float)
     alb1 = integrate(np.where(Fg > 0, f_mean / np.where(Fg > 0, Fg, 1.0), 0.0), grid)
     if np.any(alb1 > ENERGY_TOL):
         i = int(np.argmax(alb1))
