@@ -360,7 +360,8 @@ def fresnel_function(material, polarization: str = "unpolarized"):
     if polarization != "unpolarized":
         if polarization not in POLARIZATIONS:
             raise unknown("polarization", polarization, POLARIZATIONS, field="polarization")
-        mat = get_material(material) if isinstance(material, str) else material
+        unit = isinstance(material, str) and material.strip().lower() in ("one", "1", "none")
+        mat = get_material(material) if isinstance(material, str) and not unit else material
         if not isinstance(mat, Material) or mat.schlick_only:
             raise FieldError(f"{{polarization}} {polarization!r} needs a material with a complex index (a preset, "
                              f"shelf/book/page or n+kj), not {material!r}", "polarization")
