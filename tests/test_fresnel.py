@@ -96,3 +96,26 @@ def test_opencl_twin_matches_numpy(rt, precision, rng):
     f0 = rng.uniform(0, 1, cos.size)
     np.testing.assert_allclose(fresnel.F_schlick_cl(cos, f0, runtime=rt, precision=precision),
                                fresnel.F_schlick(cos, f0), atol=KERNEL_ATOL[precision])
+
+
+def test_facet_polarized_reflectance_by_projecting_the_field():
+    """Out of the plane of incidence, the s field of the macro frame projected on the facet's own s and p
+    directions (a Jones-vector construction written here) gives the library's F_s and F_p (Priest & Germer 2000)."""
+    from waveoptics.units import direction_from_angles
+
+    eta = 0.2 + 3.1j
+    wi = direction_from_angles(40.0, 25.0)
+    for wo in direction_from_angles(np.array([10.0, 35.0, 70.0]), np.array([120.0, 260.0, 200.0])):
+        h = (wi + wo) / np.linalg.norm(wi + wo)
+        cos_d = float(h @ wi)
+        rs, rp = fresnel.F_sp(cos_d, eta)
+        e_s = np.cross([0.0, 0.0, 1.0], wi)
+        e_s /= np.linalg.norm(e_s)                       # macro s field, in the incident wavefront
+        e_p = np.cross(wi, e_s)                          # macro p field, in the incident wavefront
+        t_s = np.cross(h, wi)
+        t_s /= np.linalg.norm(t_s)                       # facet s direction
+        t_p = np.cross(wi, t_s)                          # facet p direction (also in the wavefront)
+        for field, pol in ((e_s, "s"), (e_p, "p")):
+            ref = float(rs) * float(field @ t_s) ** 2 + float(rp) * float(field @ t_p) ** 2
+            got = float(fresnel.F_facet_polarized(wi, wo, eta, pol))
+            assert got == pytest.approx(ref, rel=1e-12)

@@ -170,10 +170,12 @@ def _microfacet_albedo(args, wi, wavelength_nm):
 
 
 def _microfacet_describe(args) -> dict:
+    from .. import brdf
+
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
                                        "fresnel", "diffuse", "kd", "backend")}
     if args.ndf == "abc":
-        d["abc_c"] = 2.0 if args.abc_c is None else args.abc_c   # the library's ABC_C_DEFAULT
+        d["abc_c"] = brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c
     if args.diffuse == "oren-nayar":
         d["sigma_deg"] = args.sigma
     d["tradeoff"] = not args.no_tradeoff

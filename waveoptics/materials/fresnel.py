@@ -88,7 +88,7 @@ def F_facet_polarized(wi, wo, eta, polarization: str = "unpolarized"):
     The facet sees the macro s field split into its own s and p parts, cos η and sin η, where η is the angle between
     the macro and the facet s directions (z × ω_i and h × ω_i): F_s = R_s(θ_d) cos²η + R_p(θ_d) sin²η, F_p the
     other way round, and their mean is the unpolarized R(θ_d) (the rotation of the Fresnel Mueller matrix into the
-    facet frame, Priest & Germer 2000). At the mirror direction h lies in the macro plane: F_s = R_s(θ_i). At
+    facet frame, Priest & Germer 2000; docs/physics.md §10). At the mirror direction h lies in the macro plane: F_s = R_s(θ_i). At
     normal incidence the macro plane is taken as the x–z plane (s along y).
 
     Parameters
