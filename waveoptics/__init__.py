@@ -32,6 +32,8 @@ _ENTRY_POINTS = {
     "SimulationRequest": ("waveoptics.request", "SimulationRequest"),
     "HeightField": ("waveoptics.surfaces", "HeightField"),
     "get_material": ("waveoptics.materials", "get_material"),
+    "MicrofacetBRDF": ("waveoptics.brdf", "MicrofacetBRDF"),
+    "TwoScaleBRDF": ("waveoptics.brdf", "TwoScaleBRDF"),
     **{name: (f"waveoptics.{name}", None) for name in
        ("simulate", "materials", "colour", "surfaces", "scatter", "brdf", "request", "planning", "distributed")},
 }

@@ -42,13 +42,12 @@ from .errors import FieldError, unknown
 from .materials import get_material
 from .surfaces import HeightField
 from .units import check_theta, check_wavelengths, parse_length
-from .vocabulary import DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
+from .vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "parse_nano", "nano_surface_size", "make_nano", "crop"]
 
 #: the default nano roughness: aluminium-like polish, ABC PSD (Holzschuch & Pacanowski 2017 use this family)
-DEFAULT_NANO = "abc:sigma=10nm,B=2um,C=2.6"
 
 #: the documented way to say "no nano roughness" (σ = 0)
 NO_NANO = "gaussian:sigma=0nm,T=1um"

@@ -2,7 +2,9 @@
 
 Files: ndf (normal distributions D and Smith Λ), shadowing (G terms), fresnel_terms (exact, Schlick or unit F; mean F), diffuse (Lambert, Oren-Nayar, trade-off),
 microfacet (the Cook-Torrance specular term and the full BRDF), quadrature (directional albedo), opencl (kernel
-twins), twoscale (micro facets carrying nano-roughness: coherent lobe plus diffracted lobe).
+twins), twoscale (micro facets carrying nano-roughness: coherent lobe plus diffracted lobe on a direction grid),
+sampling (microfacet normal samplers), protocol (the BRDF as a function: eval / pdf / sample / albedo; the
+microfacet model), pointwise (the two-scale model as a function), chi2 (goodness-of-fit test of samplers).
 """
 from .ndf import *  # noqa: F401,F403
 from .shadowing import *  # noqa: F401,F403
@@ -12,6 +14,10 @@ from .microfacet import *  # noqa: F401,F403
 from .quadrature import *  # noqa: F401,F403
 from .opencl import *  # noqa: F401,F403
 from .twoscale import *  # noqa: F401,F403
-from . import ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, twoscale  # noqa: F401
+from .sampling import *  # noqa: F401,F403
+from .protocol import *  # noqa: F401,F403
+from .pointwise import *  # noqa: F401,F403
+from .chi2 import *  # noqa: F401,F403
+from . import ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, twoscale, sampling, protocol, pointwise, chi2  # noqa: F401
 
-__all__ = ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + twoscale.__all__
+__all__ = ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + chi2.__all__

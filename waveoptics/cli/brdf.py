@@ -59,8 +59,9 @@ def _microfacet_arguments(g) -> None:
     g.add_argument("--ndf", choices=sorted(NDF_NAMES), default="ggx", help="normal distribution (default ggx)")
     g.add_argument("--shadowing", choices=sorted(SHADOWING_NAMES), default="smith-correlated",
                    help="masking-shadowing term (default smith-correlated)")
-    g.add_argument("--alpha", type=float, metavar="A",
-                   help="NDF slope scale α in [0, 2] (α_x if anisotropic); 0 = sharpest representable")
+    g.add_argument("--alpha", "--micro-alpha", dest="alpha", type=float, metavar="A",
+                   help="NDF slope scale α in [0, 2] (α_x if anisotropic); 0 = sharpest representable "
+                        "(microfacet, twoscale: the micro roughness)")
     g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
     g.add_argument("--alpha-y", type=float, metavar="A", help="α_y for anisotropic ggx/beckmann")
     g.add_argument("--abc-c", type=float, default=None, metavar="C",
@@ -88,9 +89,7 @@ def _microfacet_params(args, wavelength_nm) -> dict:
     import numpy as np
 
 
-    if (args.alpha is None) == (args.roughness is None):
-        raise WaveopticsError("give exactly one of --alpha A or --roughness R for --model microfacet")
-    alpha = args.alpha if args.alpha is not None else float(brdf.alpha_from_roughness(args.roughness))
+    alpha = _alpha(args)
     if args.material is not None and args.ior is not None:
         raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
     spec = args.material if args.material is not None else args.ior
@@ -109,6 +108,15 @@ def _microfacet_params(args, wavelength_nm) -> dict:
     return dict(alpha=alpha, alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing, abc_c=abc_c,
                 diffuse=args.diffuse, kd=args.kd, sigma=float(np.radians(args.sigma)),
                 tradeoff=not args.no_tradeoff, **fi)
+
+
+def _alpha(args) -> float:
+    """α from --alpha or --roughness (exactly one)."""
+    from .. import brdf
+
+    if (args.alpha is None) == (args.roughness is None):
+        raise WaveopticsError(f"give exactly one of --alpha A or --roughness R for --model {args.model}")
+    return args.alpha if args.alpha is not None else float(brdf.alpha_from_roughness(args.roughness))
 
 
 def _report_clamped(spec, wavelength_nm, args) -> None:
@@ -275,8 +283,8 @@ def _kirchhoff_describe(args) -> dict:
 def _rayleigh_rice_arguments(g) -> None:
     g.add_argument("--nano", metavar="MODEL:PARAMS",
                    help="surface statistics, e.g. abc:sigma=3nm,B=5um,C=3 or gaussian:sigma=2nm,T=1um "
-                        "(rayleigh-rice; or --surface FILE, whose periodogram is the PSD; --material or --ior give "
-                        "the substrate)")
+                        "(rayleigh-rice: or --surface FILE, whose periodogram is the PSD; --material or --ior give "
+                        "the substrate; twoscale: the nano-roughness, default " + _default_nano() + ")")
     g.add_argument("--polarization", choices=POLARIZATIONS, default="unpolarized",
                    help="polarization of the incident light relative to the plane of incidence; the scattered light "
                         "is not analyzed (rayleigh-rice and kirchhoff; default unpolarized)")
@@ -348,6 +356,75 @@ def _rayleigh_rice_describe(args) -> dict:
     return {k: getattr(args, k) for k in ("nano", "surface", "material", "ior", "polarization")}
 
 
+# ----------------------------------------------------------------------------------------------------------
+# twoscale (micro NDF carrying PSD nano-roughness, as a function; logic in waveoptics.brdf.pointwise)
+
+
+def _default_nano() -> str:
+    from ..vocabulary import DEFAULT_NANO
+
+    return DEFAULT_NANO
+
+
+def _twoscale_arguments(g) -> None:
+    """The two-scale model takes the microfacet options (micro roughness, material, diffuse), --nano and
+    --diffraction; nothing of its own."""
+
+
+def _twoscale_setup(args, wavelength_nm):
+    import numpy as np
+
+    from .. import brdf
+    from ..request import make_nano
+
+    if args.surface:
+        raise WaveopticsError("--model twoscale takes nano statistics (--nano MODEL:params); a nano height field "
+                              "(--surface) is evaluated on a direction grid by 'waveoptics simulate --surface'")
+    if args.polarization != "unpolarized":
+        raise WaveopticsError(f"--polarization {args.polarization} is not available for --model twoscale "
+                              "(unpolarized only; polarized two-scale lobes: 'waveoptics simulate --polarization')")
+    if args.material is not None and args.ior is not None:
+        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
+    spec = args.material if args.material is not None else args.ior
+    if spec is None and args.fresnel != "one":
+        raise WaveopticsError("the twoscale model needs --material NAME or --ior N+Kj (or --fresnel one)")
+    if args.fresnel == "schlick":
+        raise WaveopticsError("--fresnel schlick is not available for --model twoscale; use exact or one")
+    if spec is not None:
+        _report_clamped(spec, wavelength_nm, args)
+    if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
+        raise WaveopticsError(f"--sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
+                              "[0, 90] degrees")
+    micro = brdf.Micro(alpha=_alpha(args), alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing)
+    nano = make_nano(args.nano or _default_nano(), wavelength_nm)
+    return brdf.TwoScaleBRDF(material=spec if spec is not None else "aluminium", micro=micro, nano=nano,
+                             kd=args.kd, diffuse=args.diffuse, fresnel=args.fresnel,
+                             abc_c=brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c,
+                             diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction)
+
+
+def _twoscale_evaluate(args, wi, wo, wavelength_nm):
+    f = _twoscale_setup(args, wavelength_nm)
+    return f.eval(wi[None, :, None, :], wo[None, None, :, :], wavelength_nm[:, None, None])
+
+
+def _twoscale_components(args, wi, wo, wavelength_nm) -> dict:
+    f = _twoscale_setup(args, wavelength_nm)
+    return f.eval_parts(wi[None, :, None, :], wo[None, None, :, :], wavelength_nm[:, None, None])
+
+
+def _twoscale_albedo(args, wi, wavelength_nm):
+    f = _twoscale_setup(args, wavelength_nm)
+    return f.albedo(wi[None, :, :], wavelength_nm[:, None])
+
+
+def _twoscale_describe(args) -> dict:
+    d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
+                                       "fresnel", "diffuse", "kd", "diffraction")}
+    d["nano"] = args.nano or _default_nano()
+    return d
+
+
 #: BRDF models offered by ``waveoptics brdf --model``
 MODELS: dict[str, Model] = {
     "microfacet": Model(_microfacet_arguments, _microfacet_evaluate, _microfacet_albedo, _microfacet_describe,
@@ -359,6 +436,10 @@ MODELS: dict[str, Model] = {
                            "first-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the "
                            "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)",
                            components=_rayleigh_rice_components),
+    "twoscale": Model(_twoscale_arguments, _twoscale_evaluate, _twoscale_albedo, _twoscale_describe,
+                      "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski 2017), "
+                      "evaluated at the given directions; JSON also gives its coherent, diffraction and diffuse "
+                      "parts", components=_twoscale_components),
 }
 
 

@@ -49,7 +49,7 @@ from scipy import special, stats
 from ..surfaces.psd import PSDModel
 from .models import K_kirchhoff, get_model
 
-__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'poisson_weights', 'roughness_g', 'series_terms', 'g_factor', 'coherent_fraction', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
+__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'SeriesSum', 'series_sum', 'poisson_weights', 'roughness_g', 'series_terms', 'g_factor', 'coherent_fraction', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
 
 #: most terms of the series (:func:`scattered_lobe`)
 M_MAX = 48
@@ -114,6 +114,61 @@ def series_tables(model: PSDModel, q_max: float, m_max: int = M_MAX, n_q: int = 
     # values below 1e-12 of the peak are quadrature noise and are set to 0.
     H = np.where(H > 1e-12 * H[:, :1], H, 0.0)
     return SeriesTables(q=q, H=H, model=model)
+
+
+@dataclass(frozen=True)
+class SeriesSum:
+    """The summed series Σ_m p_m(g) H_m(q) (m²) of one PSD model at one wavelength, for look-ups at any (q, c).
+
+    c = cosθ_i + cosθ_o (g = (kσc)²). The terms m ≥ 2 are tabulated on a uniform (c, q) grid and interpolated
+    bilinearly; the m = 1 term g e^{−g} S(q/2π)/σ² is exact (it holds the far tail). Built once per model and λ,
+    a look-up costs the same for any number of terms, which is what lets the two-scale BRDF be evaluated at
+    many direction pairs (:class:`waveoptics.brdf.TwoScaleBRDF`).
+    """
+
+    model: PSDModel
+    wavelength_nm: float
+    q: np.ndarray
+    c: np.ndarray
+    S: np.ndarray
+
+    def __call__(self, q, cos_sum):
+        q = np.asarray(q, dtype=float)
+        c = np.clip(np.asarray(cos_sum, dtype=float), self.c[0], self.c[-1])
+        g = roughness_g(self.model.sigma, c, self.wavelength_nm)
+        fq = q / (self.q[1] - self.q[0])
+        iq = np.minimum(fq.astype(np.int64), self.q.size - 2)
+        tq = fq - iq
+        fc = (c - self.c[0]) / (self.c[1] - self.c[0])
+        ic = np.minimum(fc.astype(np.int64), self.c.size - 2)
+        tc = fc - ic
+        S = self.S
+        rest = ((1 - tc) * ((1 - tq) * S[ic, iq] + tq * S[ic, iq + 1])
+                + tc * ((1 - tq) * S[ic + 1, iq] + tq * S[ic + 1, iq + 1]))
+        rest = np.where(fq <= self.q.size - 1, rest, 0.0)
+        first = g * np.exp(-g) * replace(self.model, sigma=1.0).S(q / (2 * np.pi))
+        return first + rest
+
+
+@functools.lru_cache(maxsize=64)
+def series_sum(model: PSDModel, wavelength_nm: float, n_c: int = 513, m_max: int = M_MAX) -> SeriesSum:
+    """:class:`SeriesSum` of *model* at *wavelength_nm* (nm) for c = cosθ_i + cosθ_o in [0, 2] (every model's
+    vertical phase lies there) and q up to the table's q_max ≥ 2k (every reflected direction).
+
+    The c grid of *n_c* points resolves the Poisson weights: at the largest g the series allows (≈ 30) one step
+    moves g by < 0.25; measured against the term-by-term sum, the bilinear error is < 2e-3 wherever the lobe
+    exceeds 1e-4 of its peak (``tests/test_brdf_function.py``).
+    """
+    lam = float(wavelength_nm)
+    k = 2 * np.pi / (lam * 1e-9)
+    q_max = 2.0 ** math.ceil(math.log2(2 * k * 1.001 + 1.0))
+    tab = series_tables(model, q_max, m_max)
+    c = np.linspace(0.0, 2.0, int(n_c))
+    g = roughness_g(model.sigma, c, lam)
+    m_use = series_terms(float(g.max()), m_max)
+    p = poisson_weights(g, m_use)                   # (M, n_c)
+    S = p[1:].T @ tab.H[1:m_use]                    # m >= 2
+    return SeriesSum(model=model, wavelength_nm=lam, q=tab.q, c=c, S=S)
 
 
 def poisson_weights(g, m_max):

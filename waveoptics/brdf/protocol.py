@@ -1,0 +1,273 @@
+"""The BRDF as a function: ``eval``, ``pdf``, ``sample`` and ``albedo`` at any (ω_i, ω_o, λ).
+
+Every BRDF model of waveoptics implements :class:`BRDF` (as Mitsuba 3's ``BSDF`` and pbrt-v4's ``BxDF`` do):
+
+* ``eval(wi, wo, wavelength_nm)`` → f in 1/sr (not multiplied by cos θ_o);
+* ``pdf(wi, wo, wavelength_nm)`` → density in 1/sr (over solid angle of ω_o) with which ``sample`` draws ω_o;
+* ``sample(wi, wavelength_nm, u)`` → :class:`BRDFSample` (ω_o, weight f cos θ_o / pdf, pdf), u uniform in
+  [0, 1)² (the first number also picks the lobe of a mixture, pbrt's remapping);
+* ``albedo(wi, wavelength_nm)`` → ∫ f cos θ_o dω_o by quadrature of ``eval`` (dimensionless).
+
+Conventions: directions are unit vectors (..., 3) in the local frame of the macro surface (z the normal), ω_i
+towards the light, ω_o towards the viewer; wavelengths in nm. Arguments broadcast with NumPy rules (direction
+arrays over their leading axes, wavelengths as a plain array), so one call evaluates many pairs at many
+wavelengths. Below the surface f = pdf = 0 and samples have weight 0. Models evaluate one wavelength at a time
+(grouping equal wavelengths), which keeps spectral inputs exact.
+
+:class:`MicrofacetBRDF` is the geometric-optics model (specular microfacet lobe plus the energy-coupled diffuse
+term); the two-scale model is :class:`waveoptics.brdf.TwoScaleBRDF`.
+
+References
+----------
+.. [1] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., 2023, §9.1 (the BxDF interface)
+   and §2.4 (remapping one uniform sample to choose a lobe).
+.. [2] E. Veach, *Robust Monte Carlo Methods for Light Transport Simulation*, PhD thesis, Stanford, 1997, §9.2
+   (mixture densities of several sampling techniques).
+.. [3] B. Walter et al., "Microfacet Models for Refraction through Rough Surfaces", EGSR 2007.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import FieldError, unknown
+from ..materials import Material, get_material
+from ..units import check_wavelengths
+from .diffuse import DIFFUSES, diffuse_tradeoff
+from .fresnel_terms import FRESNELS
+from .microfacet import _specular
+from .ndf import ABC_C_DEFAULT, _as_dirs, _ndf
+from .quadrature import directional_albedo
+from .sampling import pdf_reflected, sample_reflected
+from .shadowing import _shadowing
+from .twoscale import Micro
+
+__all__ = ['BRDFSample', 'BRDF', 'MicrofacetBRDF', 'sample_cosine', 'pdf_cosine', 'lobe_choice']
+
+
+@dataclass(frozen=True)
+class BRDFSample:
+    """One importance sample per input: outgoing unit directions ``wo`` (..., 3), ``weight`` = f cos θ_o / pdf
+    (dimensionless; 0 for an invalid sample) and ``pdf`` (1/sr, 0 for an invalid sample)."""
+
+    wo: np.ndarray
+    weight: np.ndarray
+    pdf: np.ndarray
+
+
+def sample_cosine(u):
+    """Cosine-weighted hemisphere direction from u (..., 2): a uniform disc point lifted (Malley's method)."""
+    r = np.sqrt(u[..., 0])
+    phi = 2.0 * np.pi * u[..., 1]
+    return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(1.0 - u[..., 0], 0.0))], axis=-1)
+
+
+def pdf_cosine(wo):
+    """Density cos θ_o / π of :func:`sample_cosine` (1/sr), 0 below the surface."""
+    return np.maximum(wo[..., 2], 0.0) / np.pi
+
+
+def lobe_choice(u0, probs):
+    """Pick lobe j with probability probs[j] (each (n,)) from u0 (n,), and remap u0 to a fresh uniform number
+    (pbrt-v4 §2.4). Returns (index (n,), remapped u0)."""
+    cdf = np.cumsum(np.stack(probs, axis=0), axis=0)
+    cdf = cdf / np.where(cdf[-1] > 0, cdf[-1], 1.0)
+    idx = np.sum(u0[None, :] >= cdf[:-1], axis=0)
+    lo = np.where(idx > 0, np.take_along_axis(np.vstack([np.zeros_like(u0), cdf]), idx[None], 0)[0], 0.0)
+    hi = np.take_along_axis(cdf, idx[None], 0)[0]
+    width = hi - lo
+    remapped = np.where(width > 0, (u0 - lo) / np.where(width > 0, width, 1.0), 0.5)
+    return idx, np.clip(remapped, 0.0, np.nextafter(1.0, 0.0))
+
+
+def _broadcast(wi, wo, wavelength_nm):
+    """Flatten broadcast (wi, wo, λ) to (n, 3), (n, 3), (n,); returns them and the batch shape."""
+    wi = _as_dirs(wi, "wi")
+    wo = _as_dirs(wo, "wo")
+    lam = np.asarray(wavelength_nm, dtype=float)
+    check_wavelengths(lam.ravel() if lam.size else lam)
+    shape = np.broadcast_shapes(wi.shape[:-1], wo.shape[:-1], lam.shape)
+    wi = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
+    wo = np.broadcast_to(wo, shape + (3,)).reshape(-1, 3)
+    return wi, wo, np.broadcast_to(lam, shape).reshape(-1), shape
+
+
+class BRDF:
+    """Base of every BRDF model (see the module doc). Subclasses implement the one-wavelength methods
+    ``_eval1(wi, wo, lam)``, ``_pdf1(wi, wo, lam)``, ``_sample1(wi, u, lam)`` → (wo, pdf) on flat arrays and
+    ``_albedo_parts(lam)`` → [(f(wi, wo), α)], the terms to integrate and the slope width that places their
+    quadrature nodes."""
+
+    def eval(self, wi, wo, wavelength_nm):
+        """f(ω_i, ω_o, λ) in 1/sr (broadcast shape of the inputs)."""
+        wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
+        return self._by_wavelength(self._eval1, wi, wo, lam).reshape(shape)
+
+    def pdf(self, wi, wo, wavelength_nm):
+        """Density (1/sr over ω_o) of :meth:`sample`."""
+        wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
+        return self._by_wavelength(self._pdf1, wi, wo, lam).reshape(shape)
+
+    def sample(self, wi, wavelength_nm, u) -> BRDFSample:
+        """Importance-sample ω_o for ω_i at λ from u (..., 2) uniform in [0, 1)²."""
+        u = np.asarray(u, dtype=float)
+        if u.shape[-1:] != (2,) or np.any(~np.isfinite(u)) or np.any((u < 0) | (u >= 1)):
+            raise FieldError(f"u must be uniform numbers in [0, 1) of shape (..., 2), got shape {u.shape}", "u")
+        wi_b, u2, lam, shape = _broadcast(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
+        u_flat = np.broadcast_to(u, shape + (2,)).reshape(-1, 2)
+        wo = np.zeros_like(wi_b)
+        for val in np.unique(lam):
+            sel = lam == val
+            wo[sel] = self._sample1(wi_b[sel], u_flat[sel].copy(), float(val))
+        up = (wi_b[:, 2] > 0) & (wo[:, 2] > 0)
+        wo_ok = np.where(up[:, None], wo, np.array([0.0, 0.0, 1.0]))
+        f = self._by_wavelength(self._eval1, wi_b, wo_ok, lam)
+        p = self._by_wavelength(self._pdf1, wi_b, wo_ok, lam)
+        ok = up & (p > 0)
+        weight = np.where(ok, f * np.maximum(wo_ok[:, 2], 0.0) / np.where(ok, p, 1.0), 0.0)
+        return BRDFSample(wo=wo.reshape(shape + (3,)), weight=weight.reshape(shape),
+                          pdf=np.where(ok, p, 0.0).reshape(shape))
+
+    def albedo(self, wi, wavelength_nm):
+        """Directional albedo ∫ f cos θ_o dω_o (dimensionless) by quadrature of :meth:`eval` over half-vectors
+        (:func:`waveoptics.brdf.directional_albedo`, nodes placed by each term's width)."""
+        wi = _as_dirs(wi, "wi")
+        lam = np.asarray(wavelength_nm, dtype=float)
+        check_wavelengths(lam.ravel() if lam.size else lam)
+        shape = np.broadcast_shapes(wi.shape[:-1], lam.shape)
+        wi_f = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
+        lam_f = np.broadcast_to(lam, shape).reshape(-1)
+        out = np.zeros(lam_f.size)
+        for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
+            if w1[2] <= 0:
+                continue
+            for f, alpha in self._albedo_parts(float(l1)):
+                out[j] += float(directional_albedo(
+                    lambda a, b, f=f: f(np.broadcast_to(a, b.shape), b), w1, alpha=alpha))
+        return out.reshape(shape)
+
+    @staticmethod
+    def _by_wavelength(fn, wi, wo, lam):
+        out = np.zeros(lam.size)
+        for val in np.unique(lam):
+            sel = lam == val
+            out[sel] = fn(wi[sel], wo[sel], float(val))
+        return out
+
+    def _albedo_parts(self, lam):
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class MicrofacetBRDF(BRDF):
+    """Geometric-optics microfacet BRDF of a material: the specular term F G D / (4 cos θ_i cos θ_o) plus, for
+    dielectrics, a diffuse substrate with the diffuse-specular trade-off (as :func:`waveoptics.brdf.brdf`).
+
+    Parameters
+    ----------
+    material : str or Material
+        Spectral complex index (metals get no diffuse term).
+    micro : Micro
+        NDF, α (α_y) and shadowing.
+    kd : float
+        Diffuse albedo of a dielectric's substrate, in [0, 1].
+    diffuse : str
+        A name in :data:`waveoptics.brdf.DIFFUSES`.
+    fresnel : str
+        ``exact`` (the material's F) or ``one`` (F = 1, white furnace).
+    abc_c : float
+        Tail exponent of the ABC NDF.
+    diffuse_sigma : float
+        Oren-Nayar roughness σ in radians (separate from the specular α).
+
+    Sampling: visible normals for GGX, D cos θ_m for the other NDFs (:mod:`waveoptics.brdf.sampling`), cosine
+    sampling for the diffuse term, mixed in proportion F(θ_i) : kd (1 − F(θ_i)).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, eq. (20) (specular term) and §5.3 (sampling).
+    .. [2] E. Heitz, JCGT 7(4), 2018 (visible normals).
+    .. [3] P. Shirley et al., Pacific Graphics 1997 (the diffuse-specular coupling).
+    """
+
+    material: Material | str = "aluminium"
+    micro: Micro = Micro()
+    kd: float = 0.0
+    diffuse: str = "lambert"
+    fresnel: str = "exact"
+    abc_c: float = ABC_C_DEFAULT
+    diffuse_sigma: float = 0.0
+
+    def __post_init__(self):
+        if not (np.isfinite(self.diffuse_sigma) and 0 <= self.diffuse_sigma <= np.pi / 2):
+            raise FieldError(f"diffuse_sigma={self.diffuse_sigma!r} rad is not allowed; it must be in [0, π/2]",
+                             "diffuse_sigma")
+        object.__setattr__(self, "material", get_material(self.material))
+        if self.diffuse not in DIFFUSES:
+            raise unknown("diffuse model", self.diffuse, DIFFUSES)
+        if self.fresnel not in ("exact", "one"):
+            raise unknown("Fresnel model", self.fresnel, [k for k in FRESNELS if k != "schlick"])
+        if not (np.isfinite(self.kd) and 0 <= self.kd <= 1):
+            raise FieldError(f"kd={self.kd!r} is not allowed; the diffuse albedo must be in [0, 1]", "kd")
+        _ndf(self.micro.ndf)
+
+    # -- pieces shared with the two-scale model ---------------------------------------------------------
+    def _F(self, lam):
+        if self.fresnel == "one":
+            return lambda c: np.ones_like(np.asarray(c, dtype=float))
+        return lambda c: self.material.F(c, lam)
+
+    def _micro_args(self):
+        kw = self.micro.kw()
+        return kw["ndf"], kw["alpha"], (kw["alpha_y"] if kw["alpha_y"] is not None else kw["alpha"])
+
+    def _f_specular(self, wi, wo, F_fn):
+        ndf, ax, ay = self._micro_args()
+        gfn, _ = _shadowing(self.micro.shadowing)
+        return _specular(wi, wo, _ndf(ndf), ax, ay, self.abc_c, gfn, F_fn)
+
+    def _has_diffuse(self):
+        return (not self.material.is_metal) and self.kd > 0 and self.diffuse != "none"
+
+    def _f_diffuse(self, wi, wo, F_fn):
+        if not self._has_diffuse():
+            return np.zeros(wi.shape[0])
+        return DIFFUSES[self.diffuse][0](wi, wo, self.kd, self.diffuse_sigma) * diffuse_tradeoff(wi, wo, F_fn)
+
+    def _p_diffuse(self, wi, lam):
+        """Probability of sampling the diffuse lobe: kd (1 − F(θ_i)) / (F(θ_i) + kd (1 − F(θ_i)))."""
+        if not self._has_diffuse():
+            return np.zeros(wi.shape[0])
+        Fi = self._F(lam)(np.clip(wi[:, 2], 0.0, 1.0))
+        d = self.kd * (1.0 - Fi)
+        return d / np.maximum(Fi + d, 1e-300)
+
+    def _sample_specular(self, wi, u):
+        ndf, ax, ay = self._micro_args()
+        wo, _ = sample_reflected(wi, u, ndf=ndf, ax=ax, ay=ay, c=self.abc_c)
+        return wo
+
+    def _pdf_specular(self, wi, wo):
+        ndf, ax, ay = self._micro_args()
+        return pdf_reflected(wi, wo, ndf=ndf, ax=ax, ay=ay, c=self.abc_c)
+
+    # -- protocol ------------------------------------------------------------------------------------------
+    def _eval1(self, wi, wo, lam):
+        F_fn = self._F(lam)
+        return self._f_specular(wi, wo, F_fn) + self._f_diffuse(wi, wo, F_fn)
+
+    def _pdf1(self, wi, wo, lam):
+        pd = self._p_diffuse(wi, lam)
+        return (1.0 - pd) * self._pdf_specular(wi, wo) + pd * pdf_cosine(wo)
+
+    def _sample1(self, wi, u, lam):
+        pd = self._p_diffuse(wi, lam)
+        idx, u[:, 0] = lobe_choice(u[:, 0], [1.0 - pd, pd])
+        return np.where((idx == 1)[:, None], sample_cosine(u), self._sample_specular(wi, u))
+
+    def _albedo_parts(self, lam):
+        _, ax, ay = self._micro_args()
+        return [(lambda a, b: self._eval1(a.reshape(-1, 3), b.reshape(-1, 3), lam).reshape(b.shape[:-1]),
+                 np.sqrt(ax * ay))]
+
