@@ -427,6 +427,60 @@ def math_errors(rt, n: int = 200_001) -> dict:
     return out
 
 
+def brdf_eval_rates(n: int = 100_000, loop: int = 300) -> dict:
+    """Evaluations per second of ``eval()`` (:mod:`waveoptics.brdf.protocol`) for the microfacet model and the
+    two-scale PSD model (gold, micro GGX α = 0.1, the default nano statistics, 550 nm), batched against a plain
+    Python loop calling it one (ω_i, ω_o, λ) at a time; for the two-scale model with one shared ω_i and with every
+    pair its own ω_i (as a renderer asks)."""
+    from . import brdf
+    from .request import DEFAULT_NANO, make_nano
+
+    rng = np.random.default_rng(7)
+
+    def dirs(k):
+        d = rng.normal(size=(k, 3))
+        d[:, 2] = np.abs(d[:, 2])
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+    micro = brdf.Micro(alpha=0.1)
+    models = {"microfacet": brdf.MicrofacetBRDF("gold", micro),
+              "twoscale (PSD)": brdf.TwoScaleBRDF("gold", micro, nano=make_nano(DEFAULT_NANO, [550.0]))}
+    wo = dirs(n)
+    wi_one = np.array([0.5, 0.0, np.sqrt(0.75)])
+    wi_many = dirs(n)
+    rows = []
+    for name, b in models.items():
+        m = n if name == "microfacet" else n // 10
+        b.eval(wi_one, wo[:16], 550.0)  # build tables once
+        t_one = best_time(lambda: b.eval(wi_one, wo[:m], 550.0), repeat=2)
+        t_many = best_time(lambda: b.eval(wi_many[:m], wo[:m], 550.0), repeat=2)
+        t_loop = best_time(lambda: [b.eval(wi_many[j], wo[j], 550.0) for j in range(loop)], repeat=1)
+        rows.append({"model": name, "pairs": m, "shared_wi_per_s": m / t_one, "own_wi_per_s": m / t_many,
+                     "loop_per_s": loop / t_loop, "batch_vs_loop": (m / t_many) / (loop / t_loop)})
+    return {"rows": rows}
+
+
+def fft_threads(n: int = 256, n_wavelengths: int = 8, repeat: int = 2) -> dict:
+    """The fft solver's wall and CPU time on one core and on all of them (wavelengths in parallel threads,
+    :func:`waveoptics.runtime.cpu_workers`): an n × n Gaussian patch onto an n × n grid at *n_wavelengths*."""
+    from .runtime import cpu_workers
+
+    smp, wi, _ = _problem(n, 4)
+    grid = scatter.DirectionGrid.hemisphere(n)
+    wl = np.linspace(450.0, 650.0, n_wavelengths)
+    sol = scatter.get_solver("fft")
+    out = {"n": n, "wavelengths": n_wavelengths, "cores": cpu_workers(), "rows": []}
+    for workers in sorted({1, cpu_workers()}):
+        c0 = time.process_time()
+        wall = best_time(lambda: sol.grid_field(smp, wi, grid, wl, workers=workers), repeat=repeat)
+        cpu = (time.process_time() - c0) / (repeat + 1)
+        out["rows"].append({"threads": workers, "wall_s": wall, "cpu_s": cpu})
+    base = out["rows"][0]["wall_s"]
+    for r in out["rows"]:
+        r["speedup"] = base / r["wall_s"]
+    return out
+
+
 def run_all(rt=None, quick: bool = False, progress=None) -> dict:
     """Every benchmark (smaller sizes with *quick*), with :func:`machine`."""
 
@@ -445,6 +499,10 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         out["fft_backends"] = fft_backends(sizes=(64, 128), repeat=1, rt=rt, solver_sizes=(32, 64))
         step(1)
         out["fft_pipeline"] = fft_pipeline(sizes=(32, 48, 64, 96), repeat=1, check_cells=50, rt=rt)
+        step(1)
+        out["brdf_eval"] = brdf_eval_rates(n=5_000, loop=50)
+        step(1)
+        out["fft_threads"] = fft_threads(n=64, n_wavelengths=4, repeat=1)
     else:
         out["math_errors"] = math_errors(rt)
         step(1)
@@ -455,6 +513,10 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         out["fft_backends"] = fft_backends(rt=rt)
         step(1)
         out["fft_pipeline"] = fft_pipeline(rt=rt)
+        step(1)
+        out["brdf_eval"] = brdf_eval_rates()
+        step(1)
+        out["fft_threads"] = fft_threads()
     step(1)
     out["machine"]["load_average_1min_after"] = machine()["load_average_1min"] if hasattr(os, "getloadavg") else None
     out["time_s"] = time.perf_counter() - t0
@@ -510,6 +572,20 @@ def report(res: dict) -> str:
     for r in p["rows"]:
         lines.append(f"| {r['n']} | " + " | ".join(f"{r[k]['time_s']:.3g} | {r[k]['error']:.1e}" for k in keys)
                      + " |")
+    if "brdf_eval" in res:
+        lines += ["", "### BRDF eval(): (ω_i, ω_o, λ) evaluations per second (NumPy, one process)", "",
+                  "| model | pairs | batch, one ω_i | batch, own ω_i per pair | Python loop | batch ÷ loop |",
+                  "|---|---|---|---|---|---|"]
+        for r in res["brdf_eval"]["rows"]:
+            lines.append(f"| {r['model']} | {r['pairs']} | {r['shared_wi_per_s']:.3g} | {r['own_wi_per_s']:.3g} "
+                         f"| {r['loop_per_s']:.3g} | {r['batch_vs_loop']:.3g} |")
+    if "fft_threads" in res:
+        ft = res["fft_threads"]
+        lines += ["", f"### fft solver on 1 and {ft['cores']} cores ({ft['n']}² patch and grid, "
+                  f"{ft['wavelengths']} wavelengths in parallel threads)", "",
+                  "| threads | wall (s) | CPU (s) | speed-up |", "|---|---|---|---|"]
+        for r in ft["rows"]:
+            lines.append(f"| {r['threads']} | {r['wall_s']:.3g} | {r['cpu_s']:.3g} | {r['speedup']:.3g} |")
     me = res["math_errors"]
     lines += ["", "### Math built-ins: largest absolute error against float64 NumPy", "",
               "| function | " + " | ".join(f"{p} {lab}" for p in me for lab in next(iter(me[p].values()))) + " |",

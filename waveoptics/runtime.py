@@ -31,7 +31,7 @@ import numpy as np
 
 from .errors import FieldError, NoOpenCLError, WaveopticsError
 
-__all__ = ['INSTALL_HINT', 'kernel_dir', 'kernel_source', 'platforms', 'opencl_available', 'device_spec_from_env', 'select_device', 'has_fp64', 'Runtime', 'get_runtime', 'build_options', 'build_program', 'program_cache_size', 'pocl_version', 'describe']
+__all__ = ['INSTALL_HINT', 'kernel_dir', 'kernel_source', 'platforms', 'opencl_available', 'device_spec_from_env', 'select_device', 'has_fp64', 'Runtime', 'get_runtime', 'build_options', 'build_program', 'program_cache_size', 'pocl_version', 'describe', 'cpu_workers']
 
 INSTALL_HINT = ("no OpenCL platform found; install a CPU runtime with 'apt-get install pocl-opencl-icd' "
                 "(or 'pip install pocl-binary-distribution'), or run 'make demo' which does it")
@@ -265,3 +265,25 @@ def describe() -> dict:
         out.append({"name": p.name.strip(), "vendor": p.vendor.strip(), "version": p.version.strip(),
                     "devices": devs})
     return {"platforms": out}
+
+
+def cpu_workers(workers: int | None = None) -> int:
+    """Threads for CPU solvers: *workers* if given (>= 1), else ``WAVEOPTICS_WORKERS``, else the cores this process
+    may run on (``os.sched_getaffinity``; a CI container's quota, not the host's core count)."""
+    if workers is None:
+        env = os.environ.get("WAVEOPTICS_WORKERS")
+        if env:
+            try:
+                workers = int(env)
+            except ValueError:
+                raise FieldError(f"WAVEOPTICS_WORKERS={env!r} is not allowed; give a whole number >= 1",
+                                 "workers") from None
+    if workers is None:
+        try:
+            return max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:  # not on Linux
+            return max(1, os.cpu_count() or 1)
+    if int(workers) != workers or workers < 1:
+        raise FieldError(f"workers={workers!r} is not allowed; give a whole number >= 1", "workers")
+    return int(workers)
+

@@ -62,17 +62,29 @@ def _grid_field_direct(smp: Samples, wi, grid: DirectionGrid, wl, *, backend="op
 
 
 def _grid_field_fft(smp: Samples, wi, grid: DirectionGrid, wl, *, order="auto", tol=FFT_TOL, progress=None,
-                    diffraction="kirchhoff", **_) -> tuple[np.ndarray, dict]:
-    """U on the grid by chirp-z transforms (:func:`field_fft`), wavelength by wavelength."""
+                    diffraction="kirchhoff", workers=None, **_) -> tuple[np.ndarray, dict]:
+    """U on the grid by chirp-z transforms (:func:`field_fft`), the wavelengths in parallel threads (NumPy and
+    scipy.fft release the GIL; *workers* as :func:`waveoptics.runtime.cpu_workers`)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from ..runtime import cpu_workers
+
     U = np.empty((len(wl), grid.n_v, grid.n_u), np.complex128)
-    plans = []
     frozen = get_model(diffraction).frozen_cos_sum
-    for i, lam in enumerate(wl):
-        U[i], inf = field_fft(smp, wi, grid, lam, order, tol, frozen)
-        plans.append({"wavelength_nm": float(lam), **inf})
+    n_threads = min(cpu_workers(workers), len(wl))
+
+    def one(i):
+        U[i], inf = field_fft(smp, wi, grid, wl[i], order, tol, frozen)
         if progress is not None:
             progress(1)
-    return U, {"fft": plans}
+        return {"wavelength_nm": float(wl[i]), **inf}
+
+    if n_threads <= 1:
+        plans = [one(i) for i in range(len(wl))]
+    else:
+        with ThreadPoolExecutor(max_workers=n_threads) as pool:
+            plans = list(pool.map(one, range(len(wl))))
+    return U, {"fft": plans, "threads": n_threads}
 
 
 def _lobe_at_direct(smp: Samples, wi, wo, wl, F, *, backend="opencl", runtime=None, precision="float32",
