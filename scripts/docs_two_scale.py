@@ -108,7 +108,8 @@ def main():
     exposure = min(0.18 / float(np.exp(np.mean(np.log(pos[pos > 1e-8])))), 4.0)
     render.plot_spheres([render.tonemap(wave, exposure), render.tonemap(mf, exposure)],
                         ["two-scale (diffraction)", "microfacet only"], IMG / "two_scale_spheres.png",
-                        diff=np.where(mask, dE, np.nan), diff_title="ΔE2000")
+                        diff=np.where(mask, dE, np.nan), diff_title="ΔE2000",
+                        light_deg=sim.params["incident_deg"], exposure=exposure)
     rows = compare.compare(sim, [0, 20, 40, 60, 80])
     compare.plot(rows, IMG / "two_scale_compare.png", title="Al, nano ABC σ=10 nm: two-scale vs microfacet")
     p = sim.params
@@ -164,10 +165,15 @@ K: the F = 1 microfacet lobe re-centred on the mirror direction, whose sum is th
 
 {band_table()}
 
-* Sphere renders tabulate lobes over θ_i and rotate them in azimuth: they treat the surface as isotropic, so a
-  grating's orders follow the local plane of incidence.
+* Sphere renders evaluate the BRDF per pixel (`waveoptics.brdf.TabulatedTwoScaleBRDF`): coherent and diffuse
+  parts in closed form; the diffracted part from lobes tabulated over θ_i (5° steps; height fields and other
+  azimuth-dependent surfaces: 10° steps × 12 azimuths) and interpolated relative to the specular direction, so a
+  highlight stays round and a grating keeps its orientation. Between nodes 10° apart the diffracted lobe's peak
+  is within 1.4 % and its energy within 1.8 % of a direct evaluation (ABC and Gaussian PSDs, θ_i ≤ 55°,
+  `tests/test_brdf_tabulated.py`); where the grid model's grazing-incidence guard acts (below), the table
+  carries its kink.
 * A micro lobe narrower than a grid cell (α ≲ 2/resolution) is stored as a spike in the mirror cell with the
-  right energy; raise `--resolution` to see its shape.
+  right energy in the grid lobes; sphere renders and `eval()` evaluate the coherent lobe exactly.
 
 ## The default case (`waveoptics simulate -o out`)
 {p['material']} ({p['material_source']}), nano `{p['nano']}`, micro {p['ndf']} α = {p['micro_alpha']},

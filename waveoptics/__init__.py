@@ -34,6 +34,8 @@ _ENTRY_POINTS = {
     "get_material": ("waveoptics.materials", "get_material"),
     "MicrofacetBRDF": ("waveoptics.brdf", "MicrofacetBRDF"),
     "TwoScaleBRDF": ("waveoptics.brdf", "TwoScaleBRDF"),
+    "TabulatedTwoScaleBRDF": ("waveoptics.brdf", "TabulatedTwoScaleBRDF"),
+    "open_table": ("waveoptics.distributed.table", "open_table"),
     **{name: (f"waveoptics.{name}", None) for name in
        ("simulate", "materials", "colour", "surfaces", "scatter", "brdf", "request", "planning", "distributed")},
 }

@@ -3,17 +3,18 @@
 For each incidence angle :func:`compare` reports, for both models: the directional albedo (luminance Y under the
 illuminant), the angular width (FWHM) of the lobe in the plane of incidence, the energy in the tail beyond a given
 angle from the mirror direction, the ΔE2000 between the albedo colours, and the mean/max ΔE2000 between sphere
-renders lit from that angle. Sphere renders reuse one lobe table over θ_i, so the sweep costs one
-:func:`waveoptics.simulate.simulate` plus one lobe evaluation per angle.
+renders lit from that angle. Widths are measured on the continuous lobe (the BRDF functions of the simulation
+evaluated along the plane of incidence, half-maximum crossings interpolated), not on grid cells, so they do not
+step with the grid. Sphere renders evaluate the BRDF functions per pixel; the sweep costs one
+:func:`waveoptics.simulate.simulate` plus one grid lobe (albedo, tail) per angle.
 """
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
 from . import colour, render
 from .brdf import twoscale
+from .errors import FieldError
 from .io import figures
 from .io.figures import save_figure
 from .scatter.grid import integrate
@@ -30,15 +31,43 @@ def _angle_from_mirror(grid, wi):
     return np.degrees(np.arccos(np.clip(d @ m, -1.0, 1.0)))
 
 
-def lobe_fwhm_deg(f_lum, grid, wi) -> float:
-    """Full width at half maximum (deg) of a luminance lobe, measured as the angular extent of the cells above half
-    the peak around the mirror direction (2 × the largest angle from the mirror among them), ≥ the cell size."""
-    if not np.any(f_lum > 0):
+def _in_plane_luminance(brdf_fn, wi, t_deg, wavelengths_nm, illuminant):
+    """Luminance Y (1/sr) of the BRDF spectrum along ω_o = (−sin t, 0, cos t), t in degrees: the plane of incidence
+    of a light at azimuth 0."""
+    t = np.radians(np.asarray(t_deg, dtype=float))
+    wo = np.stack([-np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
+    w = np.asarray(wavelengths_nm, dtype=float)
+    f = brdf_fn.eval(wi, wo[:, None, :], w[None, :])
+    return colour.luminance(colour.reflectance_to_rgb(f, w, illuminant))
+
+
+def _half_crossing(t, y, i_peak, half, step):
+    """Angle where y falls to *half* walking from the peak index by *step* (±1), interpolated; the end if never."""
+    i = i_peak
+    while 0 <= i + step < t.size and y[i + step] >= half:
+        i += step
+    j = i + step
+    if not 0 <= j < t.size:
+        return float(t[i])
+    return float(t[i] + (t[j] - t[i]) * (y[i] - half) / (y[i] - y[j]))
+
+
+def lobe_fwhm_deg(brdf_fn, wi, wavelengths_nm, illuminant, *, n=2001) -> float:
+    """Full width at half maximum (deg) of the BRDF's luminance lobe in the plane of incidence of *wi* (azimuth 0),
+    measured on the continuous function: a coarse pass over θ_o ∈ (−89.9°, 89.9°), then *n* points on the peak's
+    neighbourhood, half-maximum crossings interpolated linearly."""
+    t = np.linspace(-89.9, 89.9, n)
+    y = _in_plane_luminance(brdf_fn, wi, t, wavelengths_nm, illuminant)
+    if not np.any(y > 0):
         return 0.0
-    ang = _angle_from_mirror(grid, wi)
-    half = f_lum >= 0.5 * f_lum.max()
-    cell = math.degrees(grid.du)
-    return float(max(2 * ang[half & grid.inside].max(), cell)) if np.any(half & grid.inside) else cell
+    k = int(np.argmax(y))
+    lo = _half_crossing(t, y, k, 0.5 * y[k], -1)
+    hi = _half_crossing(t, y, k, 0.5 * y[k], +1)
+    pad = 2 * (t[1] - t[0])
+    t2 = np.linspace(max(lo - pad, -89.9), min(hi + pad, 89.9), n)   # refine: lobes narrower than the coarse step
+    y2 = _in_plane_luminance(brdf_fn, wi, t2, wavelengths_nm, illuminant)
+    k2 = int(np.argmax(y2))
+    return _half_crossing(t2, y2, k2, 0.5 * y2[k2], +1) - _half_crossing(t2, y2, k2, 0.5 * y2[k2], -1)
 
 
 def compare(sim, angles_deg, *, tail_deg=10.0, sphere_size=128):
@@ -56,19 +85,16 @@ def compare(sim, angles_deg, *, tail_deg=10.0, sphere_size=128):
     grid = sim.grid
     w = sim.wavelengths_nm
     rows = []
-    thetas = np.radians(sim.table_thetas_deg)
+    if sim.brdf_wave is None:
+        raise FieldError("compare needs a simulation run with its BRDF functions (sphere=True)", "sphere")
     for th in angles_deg:
         wi = direction_from_angles(th, 0.0)
-        i = int(np.argmin(np.abs(sim.table_thetas_deg - th)))
-        if abs(sim.table_thetas_deg[i] - th) < 1e-9:
-            tot, mf = sim.table_total[i], sim.table_microfacet[i]
-        else:
-            L = _lobes_at(sim, wi)
-            tot, mf = L.total, L.microfacet
+        L = _lobes_at(sim, wi)
+        tot, mf = L.total, L.microfacet
         out = {"theta_i_deg": float(th)}
         ang = _angle_from_mirror(grid, wi)
         rgbs = {}
-        for name, f in (("wave", tot), ("microfacet", mf)):
+        for name, f, fn in (("wave", tot, sim.brdf_wave), ("microfacet", mf, sim.brdf_microfacet)):
             rgb_lobe = colour.reflectance_to_rgb(np.moveaxis(f, 0, -1), w, sim.illuminant)
             lum = colour.luminance(rgb_lobe)
             alb = colour.reflectance_to_rgb(integrate(f, grid), w, sim.illuminant)
@@ -76,14 +102,12 @@ def compare(sim, angles_deg, *, tail_deg=10.0, sphere_size=128):
             total = float(np.sum(np.where(grid.inside, lum, 0))) * grid.du * grid.dv
             tail = float(np.sum(np.where(grid.inside & (ang > tail_deg), lum, 0))) * grid.du * grid.dv
             out[f"albedo_Y_{name}"] = float(colour.luminance(alb))
-            out[f"fwhm_deg_{name}"] = lobe_fwhm_deg(lum, grid, wi)
+            out[f"fwhm_deg_{name}"] = lobe_fwhm_deg(fn, wi, w, sim.illuminant)
             out[f"tail_fraction_{name}"] = tail / total if total > 0 else 0.0
         out["delta_e2000_albedo"] = float(colour.delta_e2000(rgbs["wave"], rgbs["microfacet"]))
         light = direction_from_angles(th, 0.0)
-        wave, m1 = render.render_sphere(sim.table_total, thetas, grid, w, light, size=sphere_size,
-                                        illuminant=sim.illuminant)
-        mfr, _ = render.render_sphere(sim.table_microfacet, thetas, grid, w, light, size=sphere_size,
-                                      illuminant=sim.illuminant)
+        wave, m1 = render.render_sphere(sim.brdf_wave, w, light, size=sphere_size, illuminant=sim.illuminant)
+        mfr, _ = render.render_sphere(sim.brdf_microfacet, w, light, size=sphere_size, illuminant=sim.illuminant)
         dE = colour.delta_e2000(wave[m1], mfr[m1]) if m1.any() else np.zeros(1)
         out["delta_e2000_sphere_mean"] = float(np.mean(dE))
         out["delta_e2000_sphere_max"] = float(np.max(dE))

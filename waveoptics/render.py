@@ -1,11 +1,12 @@
 """Pictures of BRDFs: spheres lit by a directional light, hemisphere previews, lobe cross-sections.
 
 Sphere renders use an orthographic camera looking down −z (towards the sphere, so ω_o = +z in world space) and a
-directional light of irradiance π (a white Lambertian sphere facing the light is 1.0). Each pixel's BRDF is
-looked up in a table of lobes on the direction-cosine grid, tabulated over incidence angles θ_i with the light's
-azimuth rotated to φ = 0, i.e. the surface is treated as azimuthally isotropic (state this for anisotropic nano
-surfaces such as gratings, whose lobes then follow the local plane of incidence). Radiance spectra are integrated
-to linear sRGB with :mod:`waveoptics.colour` (colour-science underneath).
+directional light of irradiance π (a white Lambertian sphere facing the light is 1.0). Every pixel evaluates the
+BRDF function (:class:`waveoptics.brdf.BRDF`) at its own local (ω_i, ω_o): no table over incidence is
+interpolated in absolute directions. The surface's tangent frame is fixed on the sphere (its x axis is the
+projection of the world x axis onto the tangent plane), so anisotropic surfaces keep their orientation and the
+light's azimuth in each pixel. Radiance spectra are integrated to linear sRGB with :mod:`waveoptics.colour`
+(colour-science underneath).
 
 References
 ----------
@@ -20,9 +21,9 @@ from colour import cctf_encoding  # colour-science (this package's own colour su
 
 from . import colour
 from .io import figures
-from .scatter.grid import DirectionGrid
 
-__all__ = ['sphere_geometry', 'local_directions', 'lookup', 'render_sphere', 'tonemap', 'plot_spheres']
+__all__ = ['sphere_geometry', 'tangent_frames', 'local_directions', 'PIXEL_CHUNK', 'render_sphere', 'tonemap',
+           'plot_spheres']
 
 def sphere_geometry(size: int):
     """Normals (size, size, 3) of a unit sphere seen orthographically, and the mask of pixels on it."""
@@ -34,60 +35,42 @@ def sphere_geometry(size: int):
     return n, mask
 
 
-def _frames(n):
-    """Tangent t and bitangent b for normals n (..., 3), continuous away from the poles of the y axis."""
-    up = np.broadcast_to(np.array([0.0, 1.0, 0.0]), n.shape)
-    t = np.cross(up, n)
-    norm = np.linalg.norm(t, axis=-1, keepdims=True)
-    alt = np.cross(np.broadcast_to(np.array([1.0, 0.0, 0.0]), n.shape), n)
-    t = np.where(norm > 1e-6, t / np.maximum(norm, 1e-12), alt / np.maximum(np.linalg.norm(alt, axis=-1,
-                                                                                          keepdims=True), 1e-12))
-    b = np.cross(n, t)
-    return t, b
+def tangent_frames(n):
+    """Tangent t (the world x axis projected onto the tangent plane) and bitangent b = n × t of normals (..., 3).
+
+    Defined wherever n ≠ ±x, i.e. everywhere on the visible disc of a sphere seen along −z except its silhouette.
+    """
+    x = np.array([1.0, 0.0, 0.0])
+    t = x - n[..., :1] * n
+    t = t / np.maximum(np.linalg.norm(t, axis=-1, keepdims=True), 1e-12)
+    return t, np.cross(n, t)
 
 
 def local_directions(normals, light_world, view_world=(0.0, 0.0, 1.0)):
-    """θ_i (rad) and the outgoing direction's (u, v) with the light's azimuth rotated to φ = 0, per pixel."""
-    t, b = _frames(normals)
+    """Light and view directions in each pixel's tangent frame (:func:`tangent_frames`): (ω_i, ω_o), (..., 3)."""
+    t, b = tangent_frames(normals)
     L = np.asarray(light_world, dtype=float)
     V = np.asarray(view_world, dtype=float)
-    li = np.stack([t @ L, b @ L, normals @ L], axis=-1)
-    lo = np.stack([t @ V, b @ V, normals @ V], axis=-1)
-    phi_i = np.arctan2(li[..., 1], li[..., 0])
-    c, s = np.cos(-phi_i), np.sin(-phi_i)
-    u = c * lo[..., 0] - s * lo[..., 1]
-    v = s * lo[..., 0] + c * lo[..., 1]
-    theta_i = np.arccos(np.clip(li[..., 2], -1, 1))
-    return theta_i, u, v, li[..., 2], lo[..., 2]
+    wi = np.stack([t @ L, b @ L, normals @ L], axis=-1)
+    wo = np.stack([t @ V, b @ V, normals @ V], axis=-1)
+    return wi, wo
 
 
-def lookup(table, thetas_rad, grid: DirectionGrid, theta_i, u, v):
-    """Bilinear in (u, v) and linear in θ_i lookup of ``table[iθ, λ, v, u]`` → (..., n_λ)."""
-    thetas_rad = np.asarray(thetas_rad)
-    ti = np.interp(theta_i, thetas_rad, np.arange(thetas_rad.size))
-    i0 = np.clip(np.floor(ti).astype(int), 0, thetas_rad.size - 1)
-    i1 = np.clip(i0 + 1, 0, thetas_rad.size - 1)
-    wt = ti - i0
-    fu = (u - grid.u_range[0]) / grid.du - 0.5
-    fv = (v - grid.v_range[0]) / grid.dv - 0.5
-    j0 = np.clip(np.floor(fu).astype(int), 0, grid.n_u - 2)
-    k0 = np.clip(np.floor(fv).astype(int), 0, grid.n_v - 2)
-    au = np.clip(fu - j0, 0, 1)
-    av = np.clip(fv - k0, 0, 1)
-
-    out = 0.0
-    for it, w_t in ((i0, 1 - wt), (i1, wt)):
-        for dk, w_v in ((0, 1 - av), (1, av)):
-            for dj, w_u in ((0, 1 - au), (1, au)):
-                # advanced indices separated by a slice: the pixel axis comes first -> (n_pix, n_λ)
-                vals = table[it, :, k0 + dk, j0 + dj]
-                out = out + vals * (w_t * w_v * w_u)[..., None]
-    return out
+#: pixels evaluated per call of the BRDF (bounds the memory of per-pixel spectra)
+PIXEL_CHUNK = 8192
 
 
-def render_sphere(table, thetas_rad, grid: DirectionGrid, wavelengths_nm, light_world, *, size=256,
-                  illuminant="D65", space="sRGB"):
-    """Linear RGB image (size, size, 3) of a sphere with BRDF ``table[iθ, λ, v, u]`` under a directional light.
+def render_sphere(brdf_fn, wavelengths_nm, light_world, *, size=256, illuminant="D65", space="sRGB"):
+    """Linear RGB image (size, size, 3) of a sphere with the BRDF function *brdf_fn* under a directional light.
+
+    Parameters
+    ----------
+    brdf_fn : waveoptics.brdf.BRDF
+        Evaluated per pixel at every wavelength (``eval(wi, wo, wavelength_nm)``).
+    wavelengths_nm : array_like
+        Wavelengths (nm) of the radiance spectra.
+    light_world : array_like (3,)
+        Direction to the light in world space (the camera looks down −z).
 
     Returns
     -------
@@ -99,13 +82,17 @@ def render_sphere(table, thetas_rad, grid: DirectionGrid, wavelengths_nm, light_
     n, on = sphere_geometry(size)
     L = np.asarray(light_world, dtype=float)
     L = L / np.linalg.norm(L)
-    theta_i, u, v, cos_i, cos_o = local_directions(n[on], L)
-    lit = (cos_i > 0) & (cos_o > 0)
-    spec = np.zeros((on.sum(), len(wavelengths_nm)))
-    f = lookup(table, thetas_rad, grid, theta_i[lit], u[lit], v[lit])
-    spec[lit] = np.pi * f * cos_i[lit][:, None]
+    w = np.asarray(wavelengths_nm, dtype=float)
+    wi, wo = local_directions(n[on], L)
+    lit = (wi[:, 2] > 0) & (wo[:, 2] > 0)
+    spec = np.zeros((on.sum(), w.size))
+    idx_lit = np.flatnonzero(lit)
+    for a in range(0, idx_lit.size, PIXEL_CHUNK):
+        sel = idx_lit[a:a + PIXEL_CHUNK]
+        f = brdf_fn.eval(wi[sel, None, :], wo[sel, None, :], w[None, :])
+        spec[sel] = np.pi * f * wi[sel, 2:3]
     rgb = np.zeros((size, size, 3))
-    rgb[on] = colour.reflectance_to_rgb(spec, wavelengths_nm, illuminant, space=space)
+    rgb[on] = colour.reflectance_to_rgb(spec, w, illuminant, space=space)
     mask = np.zeros((size, size), bool)
     idx = np.argwhere(on)
     mask[idx[lit][:, 0], idx[lit][:, 1]] = True
@@ -129,19 +116,37 @@ def tonemap(rgb, exposure: float | None = None):
     return np.clip(cctf_encoding(np.clip(out, 0, 1), function="sRGB"), 0, 1)
 
 
-def plot_spheres(images, titles, path, *, overwrite=True, diff=None, diff_title="ΔE2000"):
-    """A row of tone-mapped sphere renders (shared exposure), optionally with a ΔE2000 map."""
+def plot_spheres(images, titles, path, *, overwrite=True, diff=None, diff_title="ΔE2000", light_deg=None,
+                 exposure=None):
+    """A row of tone-mapped sphere renders (shared exposure), optionally with a ΔE2000 map.
+
+    Every panel keeps a square aspect (the colour bar is attached beside its panel, not carved out of it); the
+    light direction *light_deg* (θ, φ) and the *exposure* are written under the row.
+    """
+    from mpl_toolkits.axes_grid1 import make_axes_locatable
+
     plt = figures.pyplot()
     n = len(images) + (diff is not None)
-    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.4))
+    fig, axes = plt.subplots(1, n, figsize=(3.2 * n, 3.7))
     axes = np.atleast_1d(axes)
     for ax, img, title in zip(axes, images, titles):
         ax.imshow(img)
         ax.set_title(title, fontsize=9)
+        ax.set_aspect("equal")
         ax.axis("off")
     if diff is not None:
         im = axes[-1].imshow(diff, cmap="magma", vmin=0)
         axes[-1].set_title(diff_title, fontsize=9)
+        axes[-1].set_aspect("equal")
         axes[-1].axis("off")
-        fig.colorbar(im, ax=axes[-1], fraction=0.046, pad=0.04)
+        cax = make_axes_locatable(axes[-1]).append_axes("right", size="5%", pad=0.05)
+        fig.colorbar(im, cax=cax)
+    notes = []
+    if light_deg is not None:
+        notes.append(f"directional light at θ = {light_deg[0]:g}°, φ = {light_deg[1]:g}° (camera looks down −z, "
+                     "x right, y up)")
+    if exposure is not None:
+        notes.append(f"exposure × {exposure:.3g}, Reinhard tone map, sRGB")
+    if notes:
+        fig.text(0.5, 0.02, "; ".join(notes), ha="center", fontsize=8)
     figures.save_figure(fig, path, overwrite=overwrite)

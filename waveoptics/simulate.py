@@ -1,8 +1,9 @@
 """The main job: a two-scale surface simulated per wavelength, integrated to colour, compared with microfacets.
 
 :func:`simulate` evaluates the two-scale BRDF (:mod:`waveoptics.brdf.twoscale`) and the plain microfacet BRDF of the
-same micro roughness and material on a hemisphere grid at the scene's incident direction, and on a table of
-incidence angles for sphere renders; :func:`write_outputs` writes the files of ``waveoptics simulate``.
+same micro roughness and material on a hemisphere grid at the scene's incident direction, and builds both as
+functions of (ω_i, ω_o, λ) for sphere renders evaluated per pixel (:class:`waveoptics.brdf.TabulatedTwoScaleBRDF`,
+:class:`waveoptics.brdf.MicrofacetBRDF`); :func:`write_outputs` writes the files of ``waveoptics simulate``.
 """
 from __future__ import annotations
 
@@ -15,28 +16,54 @@ from matplotlib import colors
 from scipy.ndimage import map_coordinates
 
 from . import colour, io, render, scatter, surfaces
-from .brdf import twoscale
+from .brdf import MicrofacetBRDF, TabulatedTwoScaleBRDF, twoscale
+from .brdf.tabulated import PHI_NODES_ANISOTROPIC, THETA_NODES_DEG
 from .io import figures
 from .io.figures import save_figure
+from .errors import FieldError
 from .materials import get_material
 from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano
 from .scatter.grid import DirectionGrid
 from .units import direction_from_angles
 
-__all__ = ['SPHERE_THETAS_DEG', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'render_spheres',
+__all__ = ['SPHERE_THETAS_DEG', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'render_spheres',
            'plane_of_incidence', 'write_outputs']
 
-#: incidence angles (degrees) of the lobe table used for sphere renders
+#: incidence nodes (degrees) of the diffracted-lobe table of a surface whose lobe depends on the light's azimuth
+#: (tabulated over :data:`waveoptics.brdf.tabulated.PHI_NODES_ANISOTROPIC` azimuths as well, hence coarser in θ)
 SPHERE_THETAS_DEG = (0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 78.0, 84.0, 88.0)
+
+
+def sphere_nodes(isotropic: bool) -> tuple[tuple, int]:
+    """(θ nodes in degrees, number of φ nodes) of the diffracted-lobe table behind sphere renders: 5° steps and
+    the light's own azimuth for isotropic surfaces, 10° steps × 12 azimuths for the others."""
+    return (THETA_NODES_DEG, 1) if isotropic else (SPHERE_THETAS_DEG, PHI_NODES_ANISOTROPIC)
+
+
+def _isotropic(micro, nano) -> bool:
+    return micro.alpha_y is None and (nano is None or nano.model is not None)
+
+
+def sphere_evaluations(micro, nano) -> int:
+    """Lobe evaluations of the diffracted-lobe table behind sphere renders (:func:`sphere_nodes`)."""
+    thetas, n_phi = sphere_nodes(_isotropic(micro, nano))
+    return len(thetas) * n_phi
+
+
+def sphere_steps(req: SimulationRequest) -> int:
+    """Lobe evaluations :func:`run` makes for *req* with sphere renders (for progress bars)."""
+    psd = req.surface is None and not req.split and (req.nano is None or req.nano.split(":")[0].strip().lower()
+                                                     in surfaces.PSD_MODELS)
+    thetas, n_phi = sphere_nodes(psd)
+    return 1 + len(thetas) * n_phi
 
 @dataclass
 class Simulation:
     """Everything :func:`simulate` computed (arrays in 1/sr, wavelengths in nm)."""
 
     lobes: twoscale.Lobes
-    table_thetas_deg: np.ndarray
-    table_total: np.ndarray  # (n_θ, n_λ, n_v, n_u)
-    table_microfacet: np.ndarray
+    brdf_wave: TabulatedTwoScaleBRDF | None
+    brdf_microfacet: MicrofacetBRDF
     illuminant: str
     params: dict
     nano: twoscale.Nano | None = None
@@ -179,14 +206,14 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
         progress(1)
 
     t = time.perf_counter()
-    thetas = np.array(SPHERE_THETAS_DEG if sphere else (theta,))
-    tab_total = np.empty((thetas.size, w.size, grid.n_v, grid.n_u))
-    tab_mf = np.empty_like(tab_total)
-    for i, th in enumerate(thetas):
-        L = lobes_at(th, 0.0)
-        tab_total[i], tab_mf[i] = L.total, L.microfacet
-        if progress:
-            progress(1)
+    brdf_wave = None
+    if sphere:   # the two-scale BRDF as a function of (ω_i, ω_o, λ): diffracted lobes tabulated over incidence
+        thetas, n_phi = sphere_nodes(_isotropic(micro, nano_obj))
+        brdf_wave = TabulatedTwoScaleBRDF(
+            material=mat, micro=micro, nano=nano_obj, kd=req.kd, wavelengths_nm=tuple(w), resolution=req.resolution,
+            thetas_deg=thetas, n_phi=n_phi, solver=req.solver, diffraction=req.diffraction, device=device,
+            precision=req.precision, progress=progress)
+    brdf_mf = MicrofacetBRDF(mat, micro, kd=req.kd)
     timings["sphere_table"] = time.perf_counter() - t
     params = {"material": mat.name, "material_source": mat.source,
               "nano": None if req.surface is not None else req.nano,
@@ -196,10 +223,11 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
               "precision": req.precision, "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": req.seed,
               "split": split_info, "micro_alpha_used": [micro.alpha, micro.alpha_y], "diffraction": req.diffraction,
               "polarization": req.polarization,
+              "sphere_render": {"light": "unpolarized", "diffraction_table": None if brdf_wave is None else {
+                  "thetas_deg": list(brdf_wave.thetas_deg), "azimuths": int(brdf_wave.table.shape[0])}},
               # materials clamp their index outside the measured data (materials/database.py policy): say where
               "clamped_wavelengths_nm": [float(x) for x in w[mat.out_of_range(w)]]}
-    return Simulation(lobes=lobes, table_thetas_deg=thetas, table_total=tab_total, table_microfacet=tab_mf,
-                      illuminant=req.illuminant, params=params, timings_s=timings, nano=nano_obj,
+    return Simulation(lobes=lobes, brdf_wave=brdf_wave, brdf_microfacet=brdf_mf, illuminant=req.illuminant, params=params, timings_s=timings, nano=nano_obj,
                       band=nano_band(nano_obj, w, theta, phi))
 
 
@@ -226,19 +254,19 @@ def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_
 
 
 OUTPUT_FILES = ("brdf_spectral.exr", "brdf_rgb.exr", "brdf.png", "sphere_wave.png", "sphere_microfacet.png",
-                "sphere_diff.png", "lobes.png", "summary.json")
+                "sphere_wave.exr", "sphere_microfacet.exr", "sphere_diff.png", "lobes.png", "summary.json")
 
 
 def render_spheres(sim: Simulation, size=256):
-    """Linear sRGB sphere renders of both models and the per-pixel ΔE2000 (off-sphere pixels 0)."""
-    thetas = np.radians(sim.table_thetas_deg)
+    """Linear sRGB sphere renders of both models (each pixel evaluates its BRDF function) and the per-pixel
+    ΔE2000 (off-sphere pixels 0)."""
     theta, phi = sim.params["incident_deg"]
     # light direction in world space: θ from the viewing axis, in the plane given by φ
     light = direction_from_angles(theta, phi)
-
-    wave, mask = render.render_sphere(sim.table_total, thetas, sim.grid, sim.wavelengths_nm, light, size=size,
-                                      illuminant=sim.illuminant)
-    mf, _ = render.render_sphere(sim.table_microfacet, thetas, sim.grid, sim.wavelengths_nm, light, size=size,
+    if sim.brdf_wave is None:
+        raise FieldError("this simulation was run without sphere renders (sphere=False)", "sphere")
+    wave, mask = render.render_sphere(sim.brdf_wave, sim.wavelengths_nm, light, size=size, illuminant=sim.illuminant)
+    mf, _ = render.render_sphere(sim.brdf_microfacet, sim.wavelengths_nm, light, size=size,
                                  illuminant=sim.illuminant)
     dE = np.zeros(mask.shape)
     dE[mask] = colour.delta_e2000(wave[mask], mf[mask])
@@ -294,6 +322,16 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
         exposure = min(0.18 / float(np.exp(np.mean(np.log(pos)))), 4.0)
     figures.save_png(out / "sphere_wave.png", render.tonemap(wave, exposure))
     figures.save_png(out / "sphere_microfacet.png", render.tonemap(mf, exposure))
+    theta, phi = sim.params["incident_deg"]
+    sphere_hdr = {"waveoptics_quantity": "radiance, linear sRGB (D65 white), of a sphere under a directional light "
+                                         "of irradiance pi: a white Lambertian sphere facing the light is 1",
+                  "waveoptics_camera": "orthographic, looking down -z; x right, y up; row 0 = top",
+                  "waveoptics_light_deg": f"theta {theta:g} phi {phi:g} (from +z, azimuth from +x)",
+                  "waveoptics_illuminant": str(sim.params["illuminant"]), "waveoptics_material": sim.params["material"]}
+    for name, img, model in (("sphere_wave.exr", wave, "two-scale (wave optics)"),
+                             ("sphere_microfacet.exr", mf, "microfacet (geometric optics)")):
+        io.write_exr(out / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
+                     header={**sphere_hdr, "waveoptics_model": model}, overwrite=True)
     fig, ax = plt.subplots(figsize=(4.2, 3.6))
     im = ax.imshow(np.where(mask, dE, np.nan), cmap="magma", vmin=0)
     ax.set_title("ΔE2000: two-scale vs microfacet", fontsize=9)

@@ -46,10 +46,10 @@ from scipy.stats import qmc
 
 from .. import scatter
 from ..errors import FieldError, WaveopticsError
-from .protocol import MicrofacetBRDF, lobe_choice, pdf_cosine, sample_cosine
+from .protocol import TwoScaleParts
 from .sampling import sample_normal
 from .ndf import reflect
-from .twoscale import SERIES_MIN_CAPTURED, Nano
+from .twoscale import SERIES_MIN_CAPTURED
 
 __all__ = ['QUADRATURE_NODES', 'RADIAL_BINS', 'COS_LEVELS', 'TwoScaleBRDF', 'unit_nodes', 'NanoRadial']
 
@@ -145,7 +145,7 @@ def _lift(uv):
 
 
 @dataclass(frozen=True)
-class TwoScaleBRDF(MicrofacetBRDF):
+class TwoScaleBRDF(TwoScaleParts):
     """Two-scale BRDF (micro NDF carrying PSD nano-roughness) as a function (see the module doc).
 
     Parameters
@@ -162,8 +162,6 @@ class TwoScaleBRDF(MicrofacetBRDF):
         Quadrature points of the facet convolution (power of two).
     """
 
-    nano: Nano | None = None
-    diffraction: str = "kirchhoff"
     nodes: int = QUADRATURE_NODES
 
     def __post_init__(self):
@@ -177,15 +175,6 @@ class TwoScaleBRDF(MicrofacetBRDF):
             raise FieldError(f"nodes={self.nodes!r} is not allowed; use a power of two >= 16", "nodes")
 
     # -- nano pieces ---------------------------------------------------------------------------------------
-    @property
-    def _rough(self) -> bool:
-        return self.nano is not None and self.nano.sigma > 0
-
-    def _A(self, cos_d, lam):
-        if not self._rough:
-            return np.ones_like(np.asarray(cos_d, dtype=float))
-        return self.nano.coherent_amplitude2(cos_d, lam, self.diffraction)
-
     @functools.cached_property
     def _radial(self):
         return functools.lru_cache(maxsize=64)(lambda lam: NanoRadial(self.nano.model, lam, self.diffraction,
@@ -297,38 +286,6 @@ class TwoScaleBRDF(MicrofacetBRDF):
             out[sel] = np.sum(np.where(good, val, 0.0), axis=1) / u.shape[0]
         return out
 
-    # -- protocol ------------------------------------------------------------------------------------------
-    def _parts(self, wi, wo, lam):
-        """(coherent, diffraction, diffuse) in 1/sr for flat arrays at one wavelength."""
-        F_fn = self._F(lam)
-        h = wi + wo
-        h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
-        cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
-        coherent = self._f_specular(wi, wo, F_fn) * self._A(cos_d, lam)
-        return coherent, self._f_diffraction(wi, wo, lam), self._f_diffuse(wi, wo, F_fn)
-
-    def eval_parts(self, wi, wo, wavelength_nm) -> dict:
-        """The three parts of :meth:`eval` separately: ``coherent``, ``diffraction``, ``diffuse`` (1/sr)."""
-        from .protocol import _broadcast
-        wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
-        out = {k: np.zeros(lam.size) for k in ("coherent", "diffraction", "diffuse")}
-        for val in np.unique(lam):
-            sel = lam == val
-            for k, v in zip(out, self._parts(wi[sel], wo[sel], float(val))):
-                out[k][sel] = v
-        return {k: v.reshape(shape) for k, v in out.items()}
-
-    def _eval1(self, wi, wo, lam):
-        return sum(self._parts(wi, wo, lam))
-
-    def _probs(self, wi, lam):
-        """Lobe probabilities (coherent, diffracted, diffuse) for each ω_i."""
-        Fi = self._F(lam)(np.clip(wi[:, 2], 0.0, 1.0))
-        A = self._A(np.clip(wi[:, 2], 0.0, 1.0), lam) * np.ones(wi.shape[0])
-        d = self.kd * (1.0 - Fi) if self._has_diffuse() else np.zeros(wi.shape[0])
-        total = np.maximum(Fi + d, 1e-300)
-        return Fi * A / total, Fi * (1.0 - A) / total, d / total
-
     def _pdf_diffraction(self, wi, wo, lam):
         out = np.zeros(wi.shape[0])
         rad = self._radial(lam)
@@ -340,49 +297,19 @@ class TwoScaleBRDF(MicrofacetBRDF):
             out[sl] = np.mean(np.where(ok, pt, 0.0), axis=1) * np.maximum(wo[sl, 2], 0.0)
         return out
 
-    def _pdf1(self, wi, wo, lam):
-        pc, pn, pd = self._probs(wi, lam)
-        out = pc * self._pdf_specular(wi, wo) + pd * pdf_cosine(wo)
-        if self._rough:
-            out = out + pn * self._pdf_diffraction(wi, wo, lam)
-        return out
+    def _sample_diffraction(self, wi, u, lam):
+        n = self.nodes
+        k = np.minimum((u[:, 0] * n).astype(int), n - 1)
+        u0 = np.clip(u[:, 0] * n - k, 0.0, np.nextafter(1.0, 0.0))
+        s, _, ok = self._micro_nodes(wi, lam)
+        rows = np.arange(k.size)
+        rad = self._radial(lam)
+        r = rad.radius(rad.level(wi[:, 2]), u0)
+        phi = 2 * np.pi * u[:, 1]
+        uv = -wi[:, :2] + s[rows, k] + r[:, None] * np.stack([np.cos(phi), np.sin(phi)], axis=-1)
+        d, inside = _lift(uv)
+        return np.where((inside & ok[rows, k])[:, None], d, [0.0, 0.0, -1.0])
 
-    def _sample1(self, wi, u, lam):
-        pc, pn, pd = self._probs(wi, lam)
-        idx, u[:, 0] = lobe_choice(u[:, 0], [pc, pn, pd])
-        wo = np.where((idx == 2)[:, None], sample_cosine(u), self._sample_specular(wi, u))
-        sel = idx == 1
-        if self._rough and np.any(sel):
-            n = self.nodes
-            k = np.minimum((u[sel, 0] * n).astype(int), n - 1)
-            u0 = np.clip(u[sel, 0] * n - k, 0.0, np.nextafter(1.0, 0.0))
-            s, _, ok = self._micro_nodes(wi[sel], lam)
-            rows = np.arange(k.size)
-            rad = self._radial(lam)
-            r = rad.radius(rad.level(wi[sel, 2]), u0)
-            phi = 2 * np.pi * u[sel, 1]
-            uv = -wi[sel, :2] + s[rows, k] + r[:, None] * np.stack([np.cos(phi), np.sin(phi)], axis=-1)
-            d, inside = _lift(uv)
-            good = inside & ok[rows, k]
-            wo[sel] = np.where(good[:, None], d, [0.0, 0.0, -1.0])
-        return wo
-
-    def _albedo_parts(self, lam):
-        _, ax, ay = self._micro_args()
-        a = float(np.sqrt(ax * ay))
-
-        def smooth(x, y):   # coherent + diffuse: closed forms placed by the micro width
-            x, y = x.reshape(-1, 3), y.reshape(-1, 3)
-            F_fn = self._F(lam)
-            h = x + y
-            h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
-            c = self._f_specular(x, y, F_fn) * self._A(np.clip(np.sum(h * x, axis=-1), 0.0, 1.0), lam)
-            return c + self._f_diffuse(x, y, F_fn)
-
-        parts = [(lambda x, y: smooth(x, y).reshape(y.shape[:-1]), a)]
-        if self._rough:
-            # the diffracted lobe is the micro lobe widened by the nano lobe (width ~ λ/(π ℓ) in direction cosines)
-            w_n = lam * 1e-9 / (np.pi * self.nano.model.length_scale)
-            parts.append((lambda x, y: self._f_diffraction(x.reshape(-1, 3), y.reshape(-1, 3), lam)
-                          .reshape(y.shape[:-1]), float(np.hypot(a, w_n))))
-        return parts
+    def _diffraction_width(self, lam):
+        """The nano lobe's width ~ λ/(π ℓ) in direction cosines (ℓ the PSD's length scale)."""
+        return lam * 1e-9 / (np.pi * self.nano.model.length_scale)

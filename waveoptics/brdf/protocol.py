@@ -43,7 +43,7 @@ from .sampling import pdf_reflected, sample_reflected
 from .shadowing import _shadowing
 from .twoscale import Micro
 
-__all__ = ['BRDFSample', 'BRDF', 'MicrofacetBRDF', 'sample_cosine', 'pdf_cosine', 'lobe_choice']
+__all__ = ['BRDFSample', 'BRDF', 'MicrofacetBRDF', 'TwoScaleParts', 'sample_cosine', 'pdf_cosine', 'lobe_choice']
 
 
 @dataclass(frozen=True)
@@ -270,4 +270,93 @@ class MicrofacetBRDF(BRDF):
         _, ax, ay = self._micro_args()
         return [(lambda a, b: self._eval1(a.reshape(-1, 3), b.reshape(-1, 3), lam).reshape(b.shape[:-1]),
                  np.sqrt(ax * ay))]
+
+
+@dataclass(frozen=True)
+class TwoScaleParts(MicrofacetBRDF):
+    """What every two-scale BRDF function shares (docs/physics.md §7): the coherent part A(θ_d) f_mf and the
+    diffuse substrate in closed form, the split of :meth:`eval_parts`, and sampling as a mixture of the
+    coherent, diffracted and diffuse lobes in proportion F(θ_i)A(θ_i) : F(θ_i)(1 − A(θ_i)) : kd(1 − F(θ_i)).
+
+    Subclasses supply the diffracted part: ``_f_diffraction(wi, wo, lam)``, ``_pdf_diffraction``,
+    ``_sample_diffraction(wi, u, lam)`` (invalid samples below the surface) and ``_diffraction_width(lam)``
+    (slope-like width placing the albedo quadrature's nodes).
+    """
+
+    nano: object = None          # waveoptics.brdf.Nano or None
+    diffraction: str = "kirchhoff"
+
+    @property
+    def _rough(self) -> bool:
+        return self.nano is not None and self.nano.sigma > 0
+
+    def _A(self, cos_d, lam):
+        """Coherent fraction A(θ_d) of each facet (1 without nano-roughness)."""
+        if not self._rough:
+            return np.ones_like(np.asarray(cos_d, dtype=float))
+        return self.nano.coherent_amplitude2(cos_d, lam, self.diffraction)
+
+    def _smooth_parts(self, wi, wo, lam):
+        """(coherent, diffuse) in 1/sr for flat arrays at one wavelength."""
+        F_fn = self._F(lam)
+        h = wi + wo
+        h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
+        cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
+        return self._f_specular(wi, wo, F_fn) * self._A(cos_d, lam), self._f_diffuse(wi, wo, F_fn)
+
+    def _parts(self, wi, wo, lam):
+        coherent, diffuse = self._smooth_parts(wi, wo, lam)
+        diffraction = self._f_diffraction(wi, wo, lam) if self._rough else np.zeros(wi.shape[0])
+        return coherent, diffraction, diffuse
+
+    def eval_parts(self, wi, wo, wavelength_nm) -> dict:
+        """The three parts of :meth:`eval` separately: ``coherent``, ``diffraction``, ``diffuse`` (1/sr)."""
+        wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
+        out = {k: np.zeros(lam.size) for k in ("coherent", "diffraction", "diffuse")}
+        for val in np.unique(lam):
+            sel = lam == val
+            for key, v in zip(out, self._parts(wi[sel], wo[sel], float(val))):
+                out[key][sel] = v
+        return {key: v.reshape(shape) for key, v in out.items()}
+
+    def _eval1(self, wi, wo, lam):
+        return sum(self._parts(wi, wo, lam))
+
+    def _probs(self, wi, lam):
+        """Lobe probabilities (coherent, diffracted, diffuse) for each ω_i."""
+        Fi = self._F(lam)(np.clip(wi[:, 2], 0.0, 1.0))
+        A = self._A(np.clip(wi[:, 2], 0.0, 1.0), lam) * np.ones(wi.shape[0])
+        d = self.kd * (1.0 - Fi) if self._has_diffuse() else np.zeros(wi.shape[0])
+        total = np.maximum(Fi + d, 1e-300)
+        return Fi * A / total, Fi * (1.0 - A) / total, d / total
+
+    def _pdf1(self, wi, wo, lam):
+        pc, pn, pd = self._probs(wi, lam)
+        out = pc * self._pdf_specular(wi, wo) + pd * pdf_cosine(wo)
+        if self._rough:
+            out = out + pn * self._pdf_diffraction(wi, wo, lam)
+        return out
+
+    def _sample1(self, wi, u, lam):
+        pc, pn, pd = self._probs(wi, lam)
+        idx, u[:, 0] = lobe_choice(u[:, 0], [pc, pn, pd])
+        wo = np.where((idx == 2)[:, None], sample_cosine(u), self._sample_specular(wi, u))
+        sel = idx == 1
+        if self._rough and np.any(sel):
+            wo[sel] = self._sample_diffraction(wi[sel], u[sel], lam)
+        return wo
+
+    def _albedo_parts(self, lam):
+        _, ax, ay = self._micro_args()
+        a = float(np.sqrt(ax * ay))
+
+        def smooth(x, y):
+            c, d = self._smooth_parts(x.reshape(-1, 3), y.reshape(-1, 3), lam)
+            return (c + d).reshape(y.shape[:-1])
+
+        parts = [(smooth, a)]
+        if self._rough:
+            parts.append((lambda x, y: self._f_diffraction(x.reshape(-1, 3), y.reshape(-1, 3), lam)
+                          .reshape(y.shape[:-1]), float(np.hypot(a, self._diffraction_width(lam)))))
+        return parts
 

@@ -425,6 +425,41 @@ def _twoscale_describe(args) -> dict:
     return d
 
 
+# ----------------------------------------------------------------------------------------------------------
+# table (a BRDF table file as a function; logic in waveoptics.distributed.table.open_table)
+
+
+def _table_arguments(g) -> None:
+    g.add_argument("--table", metavar="FILE", help="BRDF table written by 'waveoptics table' (.h5)")
+
+
+def _table_setup(args, wavelength_nm):
+    from ..distributed.table import open_table
+
+    if not args.table:
+        raise WaveopticsError("--model table needs --table FILE (a table written by 'waveoptics table')")
+    return open_table(args.table)
+
+
+def _table_evaluate(args, wi, wo, wavelength_nm):
+    f = _table_setup(args, wavelength_nm)
+    return f.eval(wi[None, :, None, :], wo[None, None, :, :], wavelength_nm[:, None, None])
+
+
+def _table_components(args, wi, wo, wavelength_nm) -> dict:
+    f = _table_setup(args, wavelength_nm)
+    return f.eval_parts(wi[None, :, None, :], wo[None, None, :, :], wavelength_nm[:, None, None])
+
+
+def _table_albedo(args, wi, wavelength_nm):
+    f = _table_setup(args, wavelength_nm)
+    return f.albedo(wi[None, :, :], wavelength_nm[:, None])
+
+
+def _table_describe(args) -> dict:
+    return {"table": args.table}
+
+
 #: BRDF models offered by ``waveoptics brdf --model``
 MODELS: dict[str, Model] = {
     "microfacet": Model(_microfacet_arguments, _microfacet_evaluate, _microfacet_albedo, _microfacet_describe,
@@ -440,6 +475,10 @@ MODELS: dict[str, Model] = {
                       "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski 2017), "
                       "evaluated at the given directions; JSON also gives its coherent, diffraction and diffuse "
                       "parts", components=_twoscale_components),
+    "table": Model(_table_arguments, _table_evaluate, _table_albedo, _table_describe,
+                   "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated between "
+                   "incidences relative to the specular direction, coherent and diffuse parts exact; at the "
+                   "table's wavelengths", components=_table_components),
 }
 
 

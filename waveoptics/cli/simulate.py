@@ -91,9 +91,10 @@ def run(args):
     if not (16 <= args.sphere_size <= 4096):
         raise FieldError(f"{{sphere_size}} {args.sphere_size} is not allowed; use 16..4096 pixels", "sphere_size")
     prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.OUTPUT_FILES)
-    bar = progress(total=1 + len(sim_mod.SPHERE_THETAS_DEG), desc="simulate", args=args)
+    req = request_from_args(args)
+    bar = progress(total=sim_mod.sphere_steps(req), desc="simulate", args=args)
     try:
-        sim = simulation_from_args(args, bar)
+        sim = sim_mod.run(req, device=args.device, progress=bar.update)
     finally:
         bar.close()
     summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size,

@@ -27,11 +27,11 @@ from .cases import _nano, _token, surface_digest
 from .cluster import DEFAULT_RETRIES, _check_cluster_args, _Job, _run_timed, _warm
 from .store import _refuse_or_prepare, _Store, partial_path
 
-__all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table']
+__all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table', 'open_table']
 
 #: version of the table file layout written by :func:`run_table`
 TABLE_FORMAT = "waveoptics-brdf-table"
-TABLE_VERSION = 1
+TABLE_VERSION = 2
 
 #: wavelengths per table task unless told otherwise
 DEFAULT_BATCH = 8
@@ -48,6 +48,9 @@ TABLE_LAYOUT = {
             "the unit disc",
     "brdf_realizations": "(realization, theta_i, wavelength, v, u) float32, 1/sr — only when n_r > 1",
     "microfacet": "(theta_i, wavelength, v, u) float32, 1/sr — plain microfacet BRDF of the same micro roughness",
+    "diffraction": "(theta_i, wavelength, v, u) float32, 1/sr — the diffracted part of brdf alone (mean over "
+                   "realizations): what waveoptics.open_table interpolates between incidences relative to the "
+                   "specular direction (the coherent and diffuse parts are closed forms of the parameters)",
     "albedo": "(theta_i, wavelength) float64 — directional albedo of brdf (sum f du dv over the disc)",
     "microfacet_albedo": "(theta_i, wavelength) float64",
     "rgb": "(theta_i, v, u, channel) float32, 1/sr — linear sRGB of brdf under the illuminant (D65 white)",
@@ -169,7 +172,8 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
             raise WaveopticsError(f"table task {task.name} (θi={spec.thetas_deg[task.t]:g}°, "
                                   f"{w[task.lo]:g}-{w[task.hi - 1]:g} nm): the {name} BRDF has NaN, Inf or "
                                   "negative values")
-    return {"total": total.astype(np.float32), "microfacet": mf.astype(np.float32), "albedo": L.albedo("total"),
+    return {"total": total.astype(np.float32), "microfacet": mf.astype(np.float32),
+            "diffraction": L.diffraction.astype(np.float32), "albedo": L.albedo("total"),
             "microfacet_albedo": L.albedo("microfacet"), "solver": L.info["solver"],
             "cost_s": time.perf_counter() - t0, "cpu_s": time.thread_time() - c0, "host": socket.gethostname(),
             "pid": os.getpid()}
@@ -334,6 +338,7 @@ def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, 
             d.make_scale(name)
         d_brdf = f.create_dataset("brdf", shape, np.float32, chunks=chunks, **comp)
         d_mf = f.create_dataset("microfacet", shape, np.float32, chunks=chunks, **comp)
+        d_diff = f.create_dataset("diffraction", shape, np.float32, chunks=chunks, **comp)
         d_real = (f.create_dataset("brdf_realizations", (n_r,) + shape, np.float32, chunks=(1,) + chunks, **comp)
                   if n_r > 1 else None)
         alb = np.zeros((n_t, n_l))
@@ -344,11 +349,12 @@ def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, 
         for t in tasks:
             by_tb.setdefault((t.t, t.b), []).append(t)
         for (it, ib), group in sorted(by_tb.items()):
-            acc = None
+            acc = acc_d = None
             for task in group:
                 with np.load(store.path(task.name, ".npz")) as z:
                     tot = z["total"]
                     acc = tot.astype(np.float64) if acc is None else acc + tot
+                    acc_d = z["diffraction"].astype(np.float64) if acc_d is None else acc_d + z["diffraction"]
                     if d_real is not None:
                         d_real[task.r, it, task.lo:task.hi] = tot
                     alb[it, task.lo:task.hi] += z["albedo"] / n_r
@@ -359,6 +365,7 @@ def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, 
                         d_mf[it, task.lo:task.hi] = z["microfacet"]
                         alb_mf[it, task.lo:task.hi] = z["microfacet_albedo"]
             d_brdf[it, group[0].lo:group[0].hi] = (acc / n_r).astype(np.float32)
+            d_diff[it, group[0].lo:group[0].hi] = (acc_d / n_r).astype(np.float32)
         rgb = f.create_dataset("rgb", (n_t, grid.n_v, grid.n_u, 3), np.float32, chunks=(1, grid.n_v, grid.n_u, 3),
                                **comp)
         rgb_mf = f.create_dataset("microfacet_rgb", rgb.shape, np.float32, chunks=rgb.chunks, **comp)
@@ -373,6 +380,7 @@ def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, 
         f.create_dataset("task_cpu_s", data=cpu).attrs["units"] = "s"
         f.attrs["solver"] = ",".join(sorted(solvers))
         dims = {"brdf": ("theta_i", "wavelength", "v", "u"), "microfacet": ("theta_i", "wavelength", "v", "u"),
+                "diffraction": ("theta_i", "wavelength", "v", "u"),
                 "brdf_realizations": ("realization", "theta_i", "wavelength", "v", "u"),
                 "albedo": ("theta_i", "wavelength"), "microfacet_albedo": ("theta_i", "wavelength"),
                 "rgb": ("theta_i", "v", "u", "channel"), "microfacet_rgb": ("theta_i", "v", "u", "channel"),
@@ -410,6 +418,7 @@ class BRDFTable:
     params: dict
     attrs: dict = field(default_factory=dict)
     brdf_realizations: np.ndarray | None = None
+    diffraction: np.ndarray | None = None
 
 
 def table_info(path) -> dict:
@@ -445,4 +454,40 @@ def read_table(path) -> BRDFTable:
                          albedo=get("albedo"), microfacet_albedo=get("microfacet_albedo"), rgb=get("rgb"),
                          microfacet_rgb=get("microfacet_rgb"), albedo_rgb=get("albedo_rgb"),
                          microfacet_albedo_rgb=get("microfacet_albedo_rgb"), task_cost_s=get("task_cost_s"),
-                         params=info["parameters"], attrs=info, brdf_realizations=get("brdf_realizations"))
+                         params=info["parameters"], attrs=info, brdf_realizations=get("brdf_realizations"),
+                         diffraction=get("diffraction"))
+
+
+def open_table(path, *, surface=None):
+    """A table file as a BRDF function (:class:`waveoptics.brdf.TabulatedTwoScaleBRDF`): ``eval``, ``pdf``,
+    ``sample`` and ``albedo`` at any (ω_i, ω_o) and at the table's wavelengths.
+
+    The coherent and diffuse parts are rebuilt in closed form from the table's parameters (material, micro
+    roughness, nano statistics or height field); the stored diffracted lobes are interpolated between incidences
+    relative to the specular direction. A table holds one light azimuth: its lobes are rotated with the light's
+    azimuth, which is exact for isotropic surfaces only (a height field's lobes then turn with the light).
+
+    Parameters
+    ----------
+    path : str or Path
+        A table written by ``waveoptics table`` (format version 2 or later).
+    surface : HeightField, optional
+        The nano height field, when the table was made from one given in memory (not from a file or generator).
+    """
+    from ..brdf import TabulatedTwoScaleBRDF
+
+    t = read_table(path)
+    if t.diffraction is None:
+        raise FieldError(f"table {str(path)!r} was written by an older waveoptics (format version "
+                         f"{t.attrs.get('format_version')}) without its diffracted part; compute it again", "table")
+    p = dict(t.params)
+    case = SimulationRequest(**{k: p[k] for k in SimulationRequest.__dataclass_fields__ if k in p})
+    w = np.asarray(t.wavelengths_nm, dtype=float)
+    nano = make_nano(case.nano, w, solver=case.solver, seed=case.seed,
+                     surface=surface if surface is not None else case.surface)
+    order = np.argsort(t.thetas_deg)
+    lobes = np.asarray(t.diffraction, dtype=float)[order][None]
+    return TabulatedTwoScaleBRDF(material=get_material(case.material), micro=case.micro(), nano=nano, kd=case.kd,
+                                 wavelengths_nm=tuple(w), thetas_deg=tuple(np.asarray(t.thetas_deg)[order]),
+                                 diffraction=case.diffraction, table_lobes=lobes, table_grid=t.grid,
+                                 table_phis_deg=(float(p.get("incident_phi_deg", 0.0)),))

@@ -68,7 +68,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import colour, render, scatter, surfaces
+from .. import colour, scatter, surfaces
 from ..brdf import twoscale
 from ..errors import FieldError, unknown
 from ..materials import Material, get_material
@@ -77,7 +77,7 @@ from ..request import make_nano, parse_nano
 from ..runtime import get_runtime
 from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g
-from ..simulate import SPHERE_THETAS_DEG
+from ..simulate import sphere_evaluations
 from ..units import direction_from_angles, parse_length
 from .costmodel import CostModel, _best, calibrate, calibrate_direct, fft_units, psd_terms
 from .decisions import (
@@ -184,7 +184,7 @@ class EntryPlan:
     @property
     def evaluations(self) -> int:
 
-        return len(self.light_directions_deg) + (len(SPHERE_THETAS_DEG) if self.sphere else 0)
+        return len(self.light_directions_deg) + (sphere_evaluations(self.micro, self.nano) if self.sphere else 0)
 
     def as_dict(self) -> dict:
         return {
@@ -316,7 +316,7 @@ def colour_shift(material, micro, model: surfaces.PSDModel, spd, light_dirs_deg,
                 vals.append(np.moveaxis(f, 0, -1)[grid.inside])
             if len(views_deg):
                 vd = np.array([direction_from_angles(t, p) for t, p in views_deg])
-                vals.append(render.lookup(f[None], np.array([0.0]), grid, np.zeros(len(vd)), vd[:, 0], vd[:, 1]))
+                vals.append(np.moveaxis(grid.interpolate(f, vd[:, 0], vd[:, 1]), 0, -1))
             q.append(np.pi * wi[2] * np.concatenate(vals))
         rgb = [colour.reflectance_to_rgb(x, w, spd) for x in q]
         dE = colour.delta_e2000(rgb[0], rgb[1])
@@ -640,7 +640,7 @@ def _direction_options(e: _Entry) -> tuple[dict, float]:
 
 def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
     """Estimated seconds of every (directions, solver) option, and facts about the height-field solvers."""
-    n_eval = len(e.light.directions_deg) + (len(SPHERE_THETAS_DEG) if e.sphere else 0)
+    n_eval = len(e.light.directions_deg) + (sphere_evaluations(e.micro, e.nano) if e.sphere else 0)
     n_w = max(e.w_sim.size, 1)
     w_eval = e.w_sim if e.w_sim.size else np.array([LAMBDA_REF_NM])
     terms = psd_terms(e.nano.model.sigma, e.lam_min) if e.solver == "psd" else None

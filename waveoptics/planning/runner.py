@@ -14,7 +14,8 @@ from .. import colour, io, render
 from ..brdf import twoscale
 from ..io import figures
 from ..scatter.grid import DirectionGrid
-from ..simulate import SPHERE_THETAS_DEG, Simulation, render_spheres
+from ..brdf import MicrofacetBRDF, TabulatedTwoScaleBRDF
+from ..simulate import Simulation, render_spheres, sphere_nodes
 from ..units import direction_from_angles
 from .decisions import LAMBDA_REF_NM
 from .planner import EntryPlan, Plan
@@ -71,7 +72,7 @@ class EntryResult:
 
     entry: EntryPlan
     lobes: dict                      # (θ, φ) -> Lobes (hemisphere) or list of Lobes (one per view)
-    sphere_table: tuple | None       # (thetas_deg, total, microfacet)
+    sphere_brdfs: tuple | None       # (two-scale BRDF function, microfacet BRDF function)
     time_s: float
 
 
@@ -96,18 +97,16 @@ def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
         lobes[(th, ph)] = ev(wi, hemi) if e.directions == "hemisphere" else [ev(wi, g) for g in e.patches]
         if progress:
             progress(1)
-    table = None
-    if e.sphere:
-        thetas = np.array(SPHERE_THETAS_DEG)
-        tot, mf = [], []
-        for th in thetas:
-            L = ev(direction_from_angles(th, 0.0), hemi)
-            tot.append(L.total)
-            mf.append(L.microfacet)
-            if progress:
-                progress(1)
-        table = (thetas, np.stack(tot), np.stack(mf))
-    return EntryResult(e, lobes, table, time.perf_counter() - t0)
+    brdfs = None
+    if e.sphere:   # BRDF functions for per-pixel renders: diffracted lobes tabulated over incidence by ev
+        thetas, n_phi = sphere_nodes(e.micro.alpha_y is None and (nano is None or nano.model is not None))
+        wave = TabulatedTwoScaleBRDF(material=e.material, micro=e.micro, nano=nano, kd=e.kd,
+                                     diffuse="lambert" if e.kd > 0 else "none",
+                                     wavelengths_nm=tuple(e.colour_wavelengths_nm), thetas_deg=thetas, n_phi=n_phi,
+                                     diffraction=e.diffraction, lobes_at=lambda wi: ev(wi, hemi),
+                                     progress=progress)
+        brdfs = (wave, MicrofacetBRDF(e.material, e.micro, kd=e.kd, diffuse="lambert" if e.kd > 0 else "none"))
+    return EntryResult(e, lobes, brdfs, time.perf_counter() - t0)
 
 
 def view_values(res: EntryResult, which: str = "total") -> list[dict]:
@@ -119,8 +118,7 @@ def view_values(res: EntryResult, which: str = "total") -> list[dict]:
         for k, (vt, vp) in enumerate(e.view_directions_deg):
             lob = L if e.directions == "hemisphere" else L[k]
             d = direction_from_angles(vt, vp)
-            f = render.lookup(getattr(lob, which)[None], np.array([0.0]), lob.grid, np.zeros(1), d[None, 0],
-                              d[None, 1])[0]
+            f = lob.grid.interpolate(getattr(lob, which), d[0], d[1])
             rows.append({"light_deg": [th, ph], "view_deg": [vt, vp], "brdf": np.maximum(f, 0.0),
                          "cos_i": math.cos(math.radians(th))})
     return rows
@@ -178,10 +176,9 @@ def execute(plan: Plan, outdir, *, overwrite: bool = False, device=None, progres
                     figures.save_png(out / f"{p}_{t}_brdf.png", img)
                     written += [f"{p}_{t}_brdf_rgb.exr", f"{p}_{t}_brdf.png"]
         sphere = None
-        if res.sphere_table is not None and sc.output.rgb_images:
-            thetas, tot, mf = res.sphere_table
+        if res.sphere_brdfs is not None and sc.output.rgb_images:
             first = res.lobes[e.light_directions_deg[0]]
-            sim = Simulation(lobes=first, table_thetas_deg=thetas, table_total=tot, table_microfacet=mf,
+            sim = Simulation(lobes=first, brdf_wave=res.sphere_brdfs[0], brdf_microfacet=res.sphere_brdfs[1],
                              illuminant=e.spd, params={"incident_deg": list(e.light_directions_deg[0])})
             wave, mfimg, dEmap, mask = render_spheres(sim, sc.output.sphere_size)
             io.write_exr(out / f"{p}_sphere.exr", {"R": wave[..., 0], "G": wave[..., 1], "B": wave[..., 2]},

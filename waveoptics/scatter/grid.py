@@ -100,6 +100,23 @@ class DirectionGrid:
         U, V = np.meshgrid(self.u, self.v)
         return np.stack([U, V, self.cos_theta], axis=-1)
 
+    def interpolate(self, lobes, u, v):
+        """Bilinear interpolation of cell-centred values *lobes* (..., n_v, n_u) at points (u, v) of any shape:
+        result (..., *u.shape); 0 outside the grid (clamped to the edge cells within half a cell of it)."""
+        u = np.asarray(u, dtype=float)
+        v = np.asarray(v, dtype=float)
+        fu = (u - self.u_range[0]) / self.du - 0.5
+        fv = (v - self.v_range[0]) / self.dv - 0.5
+        ok = (fu > -0.5) & (fu < self.n_u - 0.5) & (fv > -0.5) & (fv < self.n_v - 0.5)
+        j0 = np.clip(np.floor(fu).astype(int), 0, self.n_u - 2)
+        k0 = np.clip(np.floor(fv).astype(int), 0, self.n_v - 2)
+        au = np.clip(fu - j0, 0.0, 1.0)
+        av = np.clip(fv - k0, 0.0, 1.0)
+        lobes = np.asarray(lobes)
+        val = ((1 - av) * ((1 - au) * lobes[..., k0, j0] + au * lobes[..., k0, j0 + 1])
+               + av * ((1 - au) * lobes[..., k0 + 1, j0] + au * lobes[..., k0 + 1, j0 + 1]))
+        return np.where(ok, val, 0.0)
+
     def header(self) -> dict:
         """The parametrization as string attributes (for image headers)."""
         return {
