@@ -429,9 +429,9 @@ def math_errors(rt, n: int = 200_001) -> dict:
 
 def brdf_eval_rates(n: int = 100_000, loop: int = 300) -> dict:
     """Evaluations per second of ``eval()`` (:mod:`waveoptics.brdf.protocol`) for the microfacet model and the
-    two-scale PSD model (gold, micro GGX α = 0.1, the default nano statistics, 550 nm), batched against a plain
-    Python loop calling it one (ω_i, ω_o, λ) at a time; for the two-scale model with one shared ω_i and with every
-    pair its own ω_i (as a renderer asks)."""
+    two-scale PSD model (gold, micro GGX α = 0.1, the default nano statistics, 550 nm) by quadrature and from its
+    tabulated diffracted lobes, batched against a plain Python loop calling it one (ω_i, ω_o, λ) at a time; with one
+    shared ω_i and with every pair its own ω_i (as a renderer asks)."""
     from . import brdf
     from .request import DEFAULT_NANO, make_nano
 
@@ -443,14 +443,17 @@ def brdf_eval_rates(n: int = 100_000, loop: int = 300) -> dict:
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
     micro = brdf.Micro(alpha=0.1)
+    nano = make_nano(DEFAULT_NANO, [550.0])
     models = {"microfacet": brdf.MicrofacetBRDF("gold", micro),
-              "twoscale (PSD)": brdf.TwoScaleBRDF("gold", micro, nano=make_nano(DEFAULT_NANO, [550.0]))}
+              "twoscale (PSD, quadrature)": brdf.TwoScaleBRDF("gold", micro, nano=nano),
+              "twoscale (PSD, tabulated 128²)": brdf.TabulatedTwoScaleBRDF("gold", micro, nano=nano,
+                                                                          wavelengths_nm=(550.0,))}
     wo = dirs(n)
     wi_one = np.array([0.5, 0.0, np.sqrt(0.75)])
     wi_many = dirs(n)
     rows = []
     for name, b in models.items():
-        m = n if name == "microfacet" else n // 10
+        m = n // 10 if "quadrature" in name else n
         b.eval(wi_one, wo[:16], 550.0)  # build tables once
         t_one = best_time(lambda: b.eval(wi_one, wo[:m], 550.0), repeat=2)
         t_many = best_time(lambda: b.eval(wi_many[:m], wo[:m], 550.0), repeat=2)

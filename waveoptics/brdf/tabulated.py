@@ -231,12 +231,13 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
 
     def _lookup(self, p, k, j, u, v):
         """Bilinear value at (u, v) (n,) of the lobes of φ nodes p and θ nodes k (per point), wavelength j."""
-        out = np.zeros(u.shape)
-        pk = np.stack(np.broadcast_arrays(p, k), axis=-1)
-        for pp, kk in np.unique(pk.reshape(-1, 2), axis=0):
-            sel = (pk[..., 0] == pp) & (pk[..., 1] == kk)
-            out[sel] = self._table["grid"].interpolate(self._table["diffraction"][pp, kk, j], u[sel], v[sel])
-        return out
+        lob = self._table["diffraction"]
+        k0, j0, av, au, ok = self._table["grid"].bilinear(u, v)
+        p = np.broadcast_to(p, u.shape)
+        k = np.broadcast_to(k, u.shape)
+        val = ((1 - av) * ((1 - au) * lob[p, k, j, k0, j0] + au * lob[p, k, j, k0, j0 + 1])
+               + av * ((1 - au) * lob[p, k, j, k0 + 1, j0] + au * lob[p, k, j, k0 + 1, j0 + 1]))
+        return np.where(ok, val, 0.0)
 
     # -- sampling of the diffracted part: the nearest node's lobe as a piecewise-constant density ----------
     def _nearest(self, wi):

@@ -100,9 +100,9 @@ class DirectionGrid:
         U, V = np.meshgrid(self.u, self.v)
         return np.stack([U, V, self.cos_theta], axis=-1)
 
-    def interpolate(self, lobes, u, v):
-        """Bilinear interpolation of cell-centred values *lobes* (..., n_v, n_u) at points (u, v) of any shape:
-        result (..., *u.shape); 0 outside the grid (clamped to the edge cells within half a cell of it)."""
+    def bilinear(self, u, v):
+        """Cell-centred bilinear stencil of points (u, v): lower corner (row k0, column j0), weights (av, au) of
+        the upper neighbours, and whether the point lies on the grid (within half a cell of its edge cells)."""
         u = np.asarray(u, dtype=float)
         v = np.asarray(v, dtype=float)
         fu = (u - self.u_range[0]) / self.du - 0.5
@@ -110,8 +110,12 @@ class DirectionGrid:
         ok = (fu > -0.5) & (fu < self.n_u - 0.5) & (fv > -0.5) & (fv < self.n_v - 0.5)
         j0 = np.clip(np.floor(fu).astype(int), 0, self.n_u - 2)
         k0 = np.clip(np.floor(fv).astype(int), 0, self.n_v - 2)
-        au = np.clip(fu - j0, 0.0, 1.0)
-        av = np.clip(fv - k0, 0.0, 1.0)
+        return k0, j0, np.clip(fv - k0, 0.0, 1.0), np.clip(fu - j0, 0.0, 1.0), ok
+
+    def interpolate(self, lobes, u, v):
+        """Bilinear interpolation of cell-centred values *lobes* (..., n_v, n_u) at points (u, v) of any shape:
+        result (..., *u.shape); 0 outside the grid (clamped to the edge cells within half a cell of it)."""
+        k0, j0, av, au, ok = self.bilinear(u, v)
         lobes = np.asarray(lobes)
         val = ((1 - av) * ((1 - au) * lobes[..., k0, j0] + au * lobes[..., k0, j0 + 1])
                + av * ((1 - au) * lobes[..., k0 + 1, j0] + au * lobes[..., k0 + 1, j0 + 1]))
