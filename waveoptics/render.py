@@ -22,7 +22,8 @@ from colour import cctf_encoding  # colour-science (this package's own colour su
 from . import colour
 from .io import figures
 
-__all__ = ['sphere_geometry', 'tangent_frames', 'local_directions', 'PIXEL_CHUNK', 'render_sphere', 'tonemap',
+__all__ = ['sphere_geometry', 'tangent_frames', 'local_directions', 'PIXEL_CHUNK', 'render_sphere',
+           'spectral_to_rgb_matrix', 'render_sphere_environment', 'tonemap',
            'plot_spheres']
 
 def sphere_geometry(size: int):
@@ -97,6 +98,68 @@ def render_sphere(brdf_fn, wavelengths_nm, light_world, *, size=256, illuminant=
     idx = np.argwhere(on)
     mask[idx[lit][:, 0], idx[lit][:, 1]] = True
     return rgb, mask
+
+
+def spectral_to_rgb_matrix(wavelengths_nm, illuminant="D65", space="sRGB"):
+    """The linear map (n_λ, 3) from a reflectance spectrum on *wavelengths_nm* to linear RGB under *illuminant*
+    (white-balanced to the space white): :func:`waveoptics.colour.reflectance_to_rgb` is linear in the spectrum,
+    so its rows are the RGB of unit reflectance at one wavelength."""
+    w = np.asarray(wavelengths_nm, dtype=float)
+    return colour.reflectance_to_rgb(np.eye(w.size), w, illuminant, space=space)
+
+
+def render_sphere_environment(brdf_fn, wavelengths_nm, env, *, size=128, spp=16, seed=0, illuminant="D65",
+                              sample_wavelength_nm=None, progress=None):
+    """Linear RGB image (size, size, 3) of a sphere with the BRDF *brdf_fn* under an environment map.
+
+    Reflected radiance ∫ f(ω_i, ω_o) L(ω_i) cos θ_i dω_i per pixel by multiple importance sampling (balance
+    heuristic, Veach & Guibas 1995): *spp* directions from the BRDF's own sampler (``sample`` with the view as its
+    first direction, at *sample_wavelength_nm*, default the wavelength nearest 555 nm) and *spp* from the map's
+    luminance (:class:`waveoptics.lighting.Environment`). The BRDF spectrum of every sample becomes RGB through
+    :func:`spectral_to_rgb_matrix` and multiplies the map's RGB radiance (the usual RGB product: exact for a
+    spectrally flat map). A white Lambertian sphere in a constant map of radiance 1 is 1.
+
+    Returns
+    -------
+    rgb : ndarray (size, size, 3)
+    mask : ndarray of bool (size, size)
+        Pixels on the sphere.
+    """
+    w = np.asarray(wavelengths_nm, dtype=float)
+    lam_s = float(w[np.argmin(np.abs(w - 555.0))]) if sample_wavelength_nm is None else float(sample_wavelength_nm)
+    M = spectral_to_rgb_matrix(w, illuminant)
+    n, on = sphere_geometry(size)
+    n = n[on]
+    t, b = tangent_frames(n)
+    view = np.array([0.0, 0.0, 1.0])
+    wo = np.stack([t @ view, b @ view, n @ view], axis=-1)
+    rng = np.random.default_rng(seed)
+    acc = np.zeros((n.shape[0], 3))
+
+    def to_world(d):
+        return d[:, :1] * t + d[:, 1:2] * b + d[:, 2:3] * n
+
+    def contribution(light_local, p_self, p_other):
+        up = (light_local[:, 2] > 0) & (p_self > 0)
+        li = np.where(up[:, None], light_local, [0.0, 0.0, 1.0])
+        f = brdf_fn.eval(li[:, None, :], wo[:, None, :], w[None, :])             # (n, n_λ)
+        weight = np.where(up, li[:, 2] / np.where(up, p_self + p_other, 1.0), 0.0)  # balance heuristic / pdf
+        return (f @ M) * weight[:, None] * env.eval(to_world(li))
+
+    for _ in range(int(spp)):
+        s = brdf_fn.sample(wo, lam_s, rng.random((n.shape[0], 2)))
+        ok = s.pdf > 0
+        lw = to_world(np.where(ok[:, None], s.wo, [0.0, 0.0, 1.0]))
+        acc += contribution(np.where(ok[:, None], s.wo, [0.0, 0.0, -1.0]), s.pdf, np.where(ok, env.pdf(lw), 0.0))
+        lw = env.sample(rng.random((n.shape[0], 2)))
+        ll = np.stack([np.sum(lw * t, -1), np.sum(lw * b, -1), np.sum(lw * n, -1)], axis=-1)
+        p_b = brdf_fn.pdf(wo, np.where((ll[:, 2] > 0)[:, None], ll, [0.0, 0.0, 1.0]), lam_s)
+        acc += contribution(ll, env.pdf(lw), np.where(ll[:, 2] > 0, p_b, 0.0))
+        if progress is not None:
+            progress(1)
+    rgb = np.zeros((size, size, 3))
+    rgb[on] = acc / int(spp)
+    return rgb, on
 
 
 def tonemap(rgb, exposure: float | None = None):

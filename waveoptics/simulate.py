@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib import colors
 from scipy.ndimage import map_coordinates
 
-from . import colour, io, render, scatter, surfaces
+from . import colour, io, lighting, render, scatter, surfaces
 from .brdf import MicrofacetBRDF, TabulatedTwoScaleBRDF, twoscale
 from .brdf.tabulated import PHI_NODES_ANISOTROPIC, THETA_NODES_DEG
 from .io import figures
@@ -26,7 +26,8 @@ from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, ma
 from .scatter.grid import DirectionGrid
 from .units import direction_from_angles
 
-__all__ = ['SPHERE_THETAS_DEG', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'render_spheres',
+__all__ = ['SPHERE_THETAS_DEG', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'output_files',
+           'render_spheres',
            'plane_of_incidence', 'write_outputs']
 
 #: incidence nodes (degrees) of the diffracted-lobe table of a surface whose lobe depends on the light's azimuth
@@ -255,6 +256,13 @@ def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_
 
 OUTPUT_FILES = ("brdf_spectral.exr", "brdf_rgb.exr", "brdf.png", "sphere_wave.png", "sphere_microfacet.png",
                 "sphere_wave.exr", "sphere_microfacet.exr", "sphere_diff.png", "lobes.png", "summary.json")
+#: the extra files of an environment-lit render (:func:`write_outputs` with *environment*)
+ENVIRONMENT_FILES = ("sphere_env_wave.exr", "sphere_env_microfacet.exr", "sphere_env.png")
+
+
+def output_files(environment: bool = False) -> tuple:
+    """Every file :func:`write_outputs` writes (with or without an environment-lit render)."""
+    return OUTPUT_FILES + (ENVIRONMENT_FILES if environment else ())
 
 
 def render_spheres(sim: Simulation, size=256):
@@ -288,16 +296,22 @@ def plane_of_incidence(sim: Simulation, which, n=721):
     return np.degrees(np.arcsin(s)), out
 
 
-def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, space="sRGB") -> dict:
-    """Write the files of ``waveoptics simulate`` (see :data:`OUTPUT_FILES`) and return the summary.
+def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, space="sRGB", environment=None,
+                  spp=16, env_size=128, progress=None) -> dict:
+    """Write the files of ``waveoptics simulate`` (see :func:`output_files`) and return the summary.
 
     *space* (``"sRGB"``, ``"ACEScg"``, ``"Display P3"``) is the linear RGB space of ``brdf_rgb.exr`` and of the
-    summary's RGB albedos; PNG previews and sphere renders are always sRGB.
+    summary's RGB albedos; PNG previews and sphere renders are always sRGB. *environment* (a name in
+    :data:`waveoptics.lighting.PROCEDURAL`, an .exr map or a :class:`waveoptics.lighting.Environment`) adds both
+    models' spheres lit by that map (*env_size* pixels, *spp* samples per technique and pixel, multiple importance
+    sampling; :func:`waveoptics.render.render_sphere_environment`).
     """
     plt = figures.pyplot()
 
 
-    out = io.prepare_outdir(outdir, overwrite=overwrite, expected=OUTPUT_FILES)
+    files = output_files(environment is not None)
+    out = io.prepare_outdir(outdir, overwrite=overwrite, expected=files)
+    env = None if environment is None else lighting.environment(environment)
     t0 = time.perf_counter()
     L = sim.lobes
     g = sim.grid
@@ -339,8 +353,33 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
     fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label="ΔE2000")
     figures.save_figure(fig, out / "sphere_diff.png")
     _plot_lobes(sim, out / "lobes.png")
+    if env is not None:
+        t_env = time.perf_counter()
+        imgs = []
+        for name, fn in (("sphere_env_wave.exr", sim.brdf_wave), ("sphere_env_microfacet.exr", sim.brdf_microfacet)):
+            img, on = render.render_sphere_environment(fn, sim.wavelengths_nm, env, size=env_size, spp=spp,
+                                                       illuminant=sim.illuminant, progress=progress)
+            io.write_exr(out / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
+                         header={**sphere_hdr, "waveoptics_light_deg": f"environment {env.name}",
+                                 "waveoptics_quantity": "radiance, linear sRGB (D65 white), of a sphere lit by the "
+                                                        "environment map (white Lambertian in a constant map of 1: 1)",
+                                 "waveoptics_environment": f"{env.name}, equirectangular, +y up, column 0 = -z",
+                                 "waveoptics_samples": f"{spp} BRDF + {spp} environment samples per pixel (MIS)"},
+                         overwrite=True)
+            imgs.append(img)
+        pos = colour.luminance(imgs[0])[on]
+        pos = pos[pos > 1e-8]
+        exp_env = min(0.18 / float(np.exp(np.mean(np.log(pos)))), 4.0) if pos.size else 1.0
+        render.plot_spheres([render.tonemap(i, exp_env) for i in imgs],
+                            ["two-scale (diffraction)", "microfacet only"], out / "sphere_env.png",
+                            exposure=exp_env, light_deg=None)
+        env_time = time.perf_counter() - t_env
+    else:
+        env_time = None
     timings = dict(sim.timings_s)
     timings["outputs"] = time.perf_counter() - t0
+    if env_time is not None:
+        timings["environment_render"] = env_time
     summary = {
         "wavelengths_nm": sim.wavelengths_nm,
         "albedo": L.albedo("total"),
@@ -356,7 +395,7 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
         "nano_band": sim.band,
         "timings_s": timings,
         "parameters": sim.params,
-        "files": list(OUTPUT_FILES),
+        "files": list(files),
     }
     io.write_json(out / "summary.json", summary)
     return summary

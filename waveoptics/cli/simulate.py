@@ -78,6 +78,12 @@ def register(sub):
                     "summary.json. With no options it runs a nano-rough aluminium under D65.")
     add_scene_options(p)
     p.add_argument("--sphere-size", type=int, default=256, metavar="PX", help="sphere render size (default 256)")
+    p.add_argument("--environment", metavar="MAP",
+                   help="also render both spheres lit by an environment: sky, studio, constant or an equirectangular "
+                        ".exr (+y up; multiple importance sampling at --sphere-size; sphere_env_*.exr and "
+                        "sphere_env.png)")
+    p.add_argument("--spp", type=int, default=16, metavar="N",
+                   help="samples per pixel and technique of the environment render (default 16)")
     p.add_argument("--colourspace", default="sRGB", choices=["sRGB", "ACEScg", "Display P3"],
                    help="linear RGB space of brdf_rgb.exr and the RGB albedos (default sRGB; PNGs are sRGB)")
     add_output(p)
@@ -90,7 +96,13 @@ def run(args):
 
     if not (16 <= args.sphere_size <= 4096):
         raise FieldError(f"{{sphere_size}} {args.sphere_size} is not allowed; use 16..4096 pixels", "sphere_size")
-    prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.OUTPUT_FILES)
+    if not (1 <= args.spp <= 4096):
+        raise FieldError(f"{{spp}} {args.spp} is not allowed; use 1..4096 samples", "spp")
+    env = None
+    if args.environment is not None:
+        from .. import lighting
+        env = lighting.environment(args.environment)   # a bad map fails here, before any computing
+    prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.output_files(env is not None))
     req = request_from_args(args)
     bar = progress(total=sim_mod.sphere_steps(req), desc="simulate", args=args)
     try:
@@ -98,7 +110,8 @@ def run(args):
     finally:
         bar.close()
     summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size,
-                                    space=args.colourspace)
+                                    space=args.colourspace, environment=env, spp=args.spp,
+                                    env_size=args.sphere_size)
     d = summary["delta_e2000"]
     theta = sim.params["incident_deg"][0]
     text = (f"{sim.params['material']} θi={theta:g}°: albedo {summary['rgb_albedo'].round(3).tolist()} (two-scale) vs "
