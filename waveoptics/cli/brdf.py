@@ -403,21 +403,6 @@ def _twoscale_setup(args, wavelength_nm):
                              diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction)
 
 
-def _twoscale_evaluate(args, wi, wo, wavelength_nm):
-    f = _twoscale_setup(args, wavelength_nm)
-    return f.eval(wi[None, :, None, :], wo[None, None, :, :], wavelength_nm[:, None, None])
-
-
-def _twoscale_components(args, wi, wo, wavelength_nm) -> dict:
-    f = _twoscale_setup(args, wavelength_nm)
-    return f.eval_parts(wi[None, :, None, :], wo[None, None, :, :], wavelength_nm[:, None, None])
-
-
-def _twoscale_albedo(args, wi, wavelength_nm):
-    f = _twoscale_setup(args, wavelength_nm)
-    return f.albedo(wi[None, :, :], wavelength_nm[:, None])
-
-
 def _twoscale_describe(args) -> dict:
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
                                        "fresnel", "diffuse", "kd", "diffraction")}
@@ -441,23 +426,30 @@ def _table_setup(args, wavelength_nm):
     return open_table(args.table)
 
 
-def _table_evaluate(args, wi, wo, wavelength_nm):
-    f = _table_setup(args, wavelength_nm)
-    return f.eval(wi[None, :, None, :], wo[None, None, :, :], wavelength_nm[:, None, None])
-
-
-def _table_components(args, wi, wo, wavelength_nm) -> dict:
-    f = _table_setup(args, wavelength_nm)
-    return f.eval_parts(wi[None, :, None, :], wo[None, None, :, :], wavelength_nm[:, None, None])
-
-
-def _table_albedo(args, wi, wavelength_nm):
-    f = _table_setup(args, wavelength_nm)
-    return f.albedo(wi[None, :, :], wavelength_nm[:, None])
-
-
 def _table_describe(args) -> dict:
     return {"table": args.table}
+
+
+# ----------------------------------------------------------------------------------------------------------
+# models that are BRDF functions (waveoptics.brdf.protocol): evaluation, parts and albedo come from the object
+
+
+def _function_model(add_arguments, setup, describe, help_text) -> Model:
+    """A :class:`Model` whose *setup(args, wavelength_nm)* returns a BRDF function with ``eval``, ``eval_parts``
+    and ``albedo`` (directions (n, 3), wavelengths (n_λ,); results (n_λ, n_in, n_out) and (n_λ, n_in))."""
+
+    def evaluate(args, wi, wo, wavelength_nm):
+        return setup(args, wavelength_nm).eval(wi[None, :, None, :], wo[None, None, :, :],
+                                               wavelength_nm[:, None, None])
+
+    def components(args, wi, wo, wavelength_nm):
+        return setup(args, wavelength_nm).eval_parts(wi[None, :, None, :], wo[None, None, :, :],
+                                                     wavelength_nm[:, None, None])
+
+    def albedo(args, wi, wavelength_nm):
+        return setup(args, wavelength_nm).albedo(wi[None, :, :], wavelength_nm[:, None])
+
+    return Model(add_arguments, evaluate, albedo, describe, help_text, components=components)
 
 
 #: BRDF models offered by ``waveoptics brdf --model``
@@ -471,14 +463,14 @@ MODELS: dict[str, Model] = {
                            "first-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the "
                            "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)",
                            components=_rayleigh_rice_components),
-    "twoscale": Model(_twoscale_arguments, _twoscale_evaluate, _twoscale_albedo, _twoscale_describe,
-                      "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski 2017), "
-                      "evaluated at the given directions; JSON also gives its coherent, diffraction and diffuse "
-                      "parts", components=_twoscale_components),
-    "table": Model(_table_arguments, _table_evaluate, _table_albedo, _table_describe,
-                   "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated between "
-                   "incidences relative to the specular direction, coherent and diffuse parts exact; at the "
-                   "table's wavelengths", components=_table_components),
+    "twoscale": _function_model(_twoscale_arguments, _twoscale_setup, _twoscale_describe,
+                                "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski "
+                                "2017), evaluated at the given directions; JSON also gives its coherent, diffraction "
+                                "and diffuse parts"),
+    "table": _function_model(_table_arguments, _table_setup, _table_describe,
+                             "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated "
+                             "between incidences relative to the specular direction, coherent and diffuse parts "
+                             "exact; at the table's wavelengths"),
 }
 
 
