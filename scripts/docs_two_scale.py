@@ -167,7 +167,7 @@ K: the F = 1 microfacet lobe re-centred on the mirror direction, whose sum is th
 
 * Sphere renders evaluate the BRDF per pixel (`waveoptics.brdf.TabulatedTwoScaleBRDF`): coherent and diffuse
   parts in closed form; the diffracted part from lobes tabulated over θ_i (5° steps; height fields and other
-  azimuth-dependent surfaces: 10° steps × 12 azimuths) and interpolated relative to the specular direction, so a
+  azimuth-dependent surfaces: 10° steps × 4 azimuths) and interpolated relative to the specular direction, so a
   highlight stays round and a grating keeps its orientation. Between nodes 10° apart the diffracted lobe's peak
   is within 1.4 % and its energy within 1.8 % of a direct evaluation (ABC and Gaussian PSDs, θ_i ≤ 55°,
   `tests/test_brdf_tabulated.py`); where the grid model's grazing-incidence guard acts (below), the table

@@ -37,7 +37,8 @@ SPHERE_THETAS_DEG = (0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 78.0, 84.0, 
 
 def sphere_nodes(isotropic: bool) -> tuple[tuple, int]:
     """(θ nodes in degrees, number of φ nodes) of the diffracted-lobe table behind sphere renders: 5° steps and
-    the light's own azimuth for isotropic surfaces, 10° steps × 12 azimuths for the others."""
+    the light's own azimuth for isotropic surfaces, 10° steps × :data:`~waveoptics.brdf.tabulated.
+    PHI_NODES_ANISOTROPIC` azimuths for the others."""
     return (THETA_NODES_DEG, 1) if isotropic else (SPHERE_THETAS_DEG, PHI_NODES_ANISOTROPIC)
 
 

@@ -13,8 +13,9 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   Harvey-Shack picture; docs/physics.md §11), so the blend moves the lobe with the incidence instead of
   cross-fading two lobes at different places (the seam of the old sphere renders).
 * Surfaces whose nano lobe depends on the light's azimuth (height fields, gratings, anisotropic micro NDFs) are
-  tabulated over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`), with the same specular-relative blend in φ_i;
-  isotropic ones are rotated to φ = 0 and need θ nodes only.
+  tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`), with the same
+  specular-relative blend in φ_i (never rotated: a grating's orders stay where the grating puts them); isotropic
+  ones are rotated to the table's azimuth and need θ nodes only.
 
 Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes; between 10° nodes the
 diffracted part's peak is within 1 % and its energy within 2 % of a direct evaluation at that incidence.
@@ -40,8 +41,10 @@ __all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'TabulatedTwoScaleBRDF']
 
 #: default incidence nodes (degrees): 5° steps, denser towards grazing where lobes change fastest
 THETA_NODES_DEG = tuple(float(t) for t in (*range(0, 75, 5), 75, 78, 81, 84, 86, 88))
-#: azimuth nodes over [0°, 360°) for surfaces whose lobe depends on the light's azimuth
-PHI_NODES_ANISOTROPIC = 12
+#: azimuth nodes over [0°, 360°) for surfaces whose lobe depends on the light's azimuth. Measured on a grating and
+#: on scratches at light azimuths between nodes (θ_i 25-30°): 1 node (shift only): energy within 2 %, L1 5-26 %;
+#: 4 nodes: energy within 0.6 %, L1 2-5 %; 12 nodes: energy within 0.7 %, L1 1-2.4 %
+PHI_NODES_ANISOTROPIC = 4
 
 
 def _rotate(w, phi):
@@ -198,9 +201,11 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         return phi_i, [(a, 1 - t), ((a + 1) % phis.size, t)]
 
     def _table_rotation(self, wi):
-        """Azimuth by which directions are rotated into the table's frame: from the light's own azimuth to the one
-        azimuth of an isotropic table, none for a table over azimuths (tabulated in the surface's frame)."""
-        if self._table["phis"].size == 1:
+        """Azimuth by which directions are rotated into the table's frame: for an isotropic surface from the light's
+        own azimuth to the table's one azimuth; none for other surfaces, whose lobes are tabulated in the surface's
+        frame and only shifted with the specular direction (their diffraction pattern, e.g. a grating's orders,
+        keeps its orientation on the surface whatever the light's azimuth)."""
+        if self._table["phis"].size == 1 and self.isotropic:
             return np.arctan2(wi[:, 1], wi[:, 0]) - self._table["phis"][0]
         return np.zeros(wi.shape[0])
 
