@@ -117,14 +117,16 @@ def test_failed_exr_write_keeps_the_earlier_file(tmp_path, monkeypatch):
     final = tmp_path / "lobes.exr"
     wio.write_exr(final, {"Y": np.ones((4, 4))})
     before = final.read_bytes()
-    _patch_exr_write(monkeypatch, _raise(OSError(28, "No space left on device")))
-    with pytest.raises(OSError):
-        wio.write_exr(final, {"Y": np.zeros((4, 4))})
-    assert final.read_bytes() == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["lobes.exr"]   # the partial file is gone too
-    with pytest.raises(OSError):
-        wio.write_exr(tmp_path / "new.exr", {"Y": np.zeros((4, 4))})
-    assert not (tmp_path / "new.exr").exists()
+    # a full disk as the OS reports it, and as the OpenEXR bindings report it: one line naming the output
+    for failure in (OSError(28, "No space left on device"), RuntimeError("Failed to write pixel data")):
+        _patch_exr_write(monkeypatch, _raise(failure))
+        with pytest.raises(WaveopticsError, match=r"cannot write .*lobes\.exr"):
+            wio.write_exr(final, {"Y": np.zeros((4, 4))})
+        assert final.read_bytes() == before
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["lobes.exr"]   # the partial file is gone too
+        with pytest.raises(WaveopticsError, match="new.exr"):
+            wio.write_exr(tmp_path / "new.exr", {"Y": np.zeros((4, 4))})
+        assert not (tmp_path / "new.exr").exists()
 
 
 @pytest.mark.parametrize("failure, rc", [(OSError(28, "No space left on device"), 2), (KeyboardInterrupt(), 130)])

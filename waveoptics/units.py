@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import FieldError, WaveopticsError
 
-__all__ = ['LENGTH_UNITS', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'parse_direction', 'check_theta', 'direction_from_angles', 'angles_from_direction']
+__all__ = ['LENGTH_UNITS', 'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'parse_direction', 'check_theta', 'direction_from_angles', 'angles_from_direction']
 
 #: metres per unit
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "A": 1e-10}
@@ -81,42 +81,64 @@ def parse_length(text, *, default_unit: str | None = None, name: str = "length",
     return metres
 
 
-def parse_number_list(text, *, name: str = "value") -> np.ndarray:
-    """Parse ``"a:b:step"`` (inclusive of *b* when it falls on the grid) or ``"a,b,c"`` or ``"a"``."""
+#: most values a number list or range may hold (a guard against ranges that would run for hours, e.g. a step of
+#: 1e-5 over 80 degrees)
+MAX_LIST_VALUES = 100_000
+
+_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?inf|nan"
+
+
+def _number(token, name, text, units=None) -> float:
+    """One finite number, optionally with a unit suffix from *units* ({suffix: factor}); anything else is refused."""
+    suffixes = "|".join(sorted((re.escape(u) for u in (units or {})), key=len, reverse=True))
+    m = re.fullmatch(rf"\s*({_NUM})\s*({suffixes})?\s*" if suffixes else rf"\s*({_NUM})\s*", str(token),
+                     flags=re.IGNORECASE)
+    if not m:
+        raise _error(name, f" {text!r} is not a number list; write START:STOP:STEP or A,B,C"
+                           + (f" (units: {', '.join(units)})" if units else ""))
+    value = float(m.group(1)) * ((units or {}).get(m.group(2), 1.0) if suffixes and m.group(2) else 1.0)
+    if not math.isfinite(value):
+        raise _error(name, f" {text!r}: {token.strip()!r} is not a finite number")
+    return value
+
+
+def parse_number_list(text, *, name: str = "value", units=None, max_values: int = MAX_LIST_VALUES) -> np.ndarray:
+    """Parse ``"a:b:step"`` (inclusive of *b* when it falls on the grid) or ``"a,b,c"`` or ``"a"``.
+
+    Every value must be finite; *units* ({suffix: factor}) allows a unit suffix on each value; at most *max_values*
+    values (a range that would hold more is refused in one line, before any work).
+    """
     s = str(text).strip()
-    try:
-        if ":" in s:
-            parts = [float(p) for p in s.split(":")]
-            if len(parts) != 3:
-                raise ValueError
-            a, b, step = parts
-            if step <= 0 or b < a:
-                raise _error(name, f" {text!r}: a range START:STOP:STEP needs STEP > 0 and STOP >= START")
-            n = int(math.floor((b - a) / step + 1e-9)) + 1
-            return a + step * np.arange(n)
-        vals = np.array([float(p) for p in s.split(",") if p.strip() != ""], dtype=float)
-        if vals.size == 0:
-            raise _error(name, f" {text!r} holds no number; write START:STOP:STEP or A,B,C")
-        return vals
-    except WaveopticsError:
-        raise
-    except ValueError:
-        raise _error(name, f" {text!r} is not a number list; write START:STOP:STEP or A,B,C") from None
+    if ":" in s:
+        parts = [_number(p, name, text, units) for p in s.split(":")] if s.count(":") == 2 else None
+        if parts is None:
+            raise _error(name, f" {text!r} is not a number list; write START:STOP:STEP or A,B,C")
+        a, b, step = parts
+        if step <= 0 or b < a:
+            raise _error(name, f" {text!r}: a range START:STOP:STEP needs STEP > 0 and STOP >= START")
+        n = math.floor((b - a) / step + 1e-9) + 1
+        if n > max_values:
+            raise _error(name, f" {text!r} holds {n:.3g} values; at most {max_values} are allowed (use a larger "
+                               "STEP)")
+        return a + step * np.arange(n)
+    tokens = [p for p in s.split(",") if p.strip() != ""]
+    if not tokens:
+        raise _error(name, f" {text!r} holds no number; write START:STOP:STEP or A,B,C")
+    if len(tokens) > max_values:
+        raise _error(name, f" {text!r} holds {len(tokens)} values; at most {max_values} are allowed")
+    return np.array([_number(p, name, text, units) for p in tokens], dtype=float)
 
 
 def parse_wavelengths(text, *, name: str = "wavelengths_nm") -> np.ndarray:
-    """Parse wavelengths in nm (``"400:700:10"``, ``"450,550,650"``, ``"550"``, units ``nm``/``um`` allowed).
+    """Parse wavelengths in nm (``"400:700:10"``, ``"450,550,650"``, ``"550"``); each value may carry the unit
+    ``nm`` or ``um``/``µm`` (``"0.45um,550nm"``).
 
     Returns
     -------
     numpy.ndarray
         Wavelengths in nanometres, each > 0 and finite.
     """
-    s = str(text).strip().replace("nm", "")
-    if "um" in s or "µm" in s:
-        vals = np.array([parse_length(p, name=name) * 1e9 for p in s.split(",")])
-    else:
-        vals = parse_number_list(s, name=name)
+    vals = parse_number_list(text, name=name, units={"nm": 1.0, "um": 1e3, "µm": 1e3})
     check_wavelengths(vals, name=name)
     return vals
 

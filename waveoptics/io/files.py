@@ -17,7 +17,7 @@ import OpenEXR
 
 from ..errors import OutputExistsError, WaveopticsError
 
-__all__ = ['atomic_path', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
+__all__ = ['NonFiniteOutputError', 'atomic_path', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
 
 @contextlib.contextmanager
 def atomic_path(final, *, overwrite: bool = True):
@@ -36,15 +36,30 @@ def atomic_path(final, *, overwrite: bool = True):
     parent = final.parent if str(final.parent) else Path(".")
     if not parent.is_dir():
         raise WaveopticsError(f"output directory {str(parent)!r} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=f".partial{final.suffix}", dir=parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=f".partial{final.suffix}", dir=parent)
+    except OSError as exc:
+        raise WaveopticsError(f"cannot write {str(final)!r}: {exc.strerror or exc}") from None
     os.close(fd)
     try:
         yield Path(tmp)
+        os.chmod(tmp, 0o666 & ~_umask())   # mkstemp makes 0600; the result honours the umask like open() would
         os.replace(tmp, final)
+    except OSError as exc:   # a full disk, a vanished directory, a permission: one line naming the output
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise WaveopticsError(f"cannot write {str(final)!r}: {exc.strerror or exc}") from None
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+
+
+def _umask() -> int:
+    """The process umask (read by setting and restoring it)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def prepare_outdir(path, *, overwrite: bool = False, expected=()) -> Path:
@@ -55,6 +70,8 @@ def prepare_outdir(path, *, overwrite: bool = False, expected=()) -> Path:
     expected : iterable of str
         File names the run will write; if any exists and *overwrite* is False, refuse before computing.
     """
+    if not str(path).strip():
+        raise WaveopticsError("output directory '' is empty; give a directory name (e.g. -o out/)")
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise WaveopticsError(f"output directory {str(p)!r} is a file, not a directory")
@@ -71,16 +88,25 @@ def prepare_outdir(path, *, overwrite: bool = False, expected=()) -> Path:
     return p
 
 
-def _jsonable(obj):
+class NonFiniteOutputError(WaveopticsError):
+    """A number about to leave a command is NaN or infinite: an error naming where, never an output."""
+
+
+def _jsonable(obj, where="", strict=True):
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): _jsonable(v, f"{where}.{k}" if where else str(k), strict) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [_jsonable(v, f"{where}[{i}]", strict) for i, v in enumerate(obj)]
     if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
+        return _jsonable(obj.tolist(), where, strict)
     if isinstance(obj, (np.floating, float)):
         v = float(obj)
-        return v if np.isfinite(v) else None
+        if np.isfinite(v):
+            return v
+        if strict:
+            raise NonFiniteOutputError(f"the result {where or 'value'} is {v} (a computation left the range of "
+                                       "double precision or divided 0 by 0)")
+        return None
     if isinstance(obj, np.integer):
         return int(obj)
     if isinstance(obj, np.bool_):
@@ -90,9 +116,11 @@ def _jsonable(obj):
     return obj
 
 
-def to_json(data, **kw) -> str:
-    """JSON text of *data*, converting numpy types; non-finite floats become ``null``."""
-    return json.dumps(_jsonable(data), **kw)
+def to_json(data, *, strict: bool = True, **kw) -> str:
+    """JSON text of *data*, converting numpy types. A NaN or infinite number raises
+    :class:`NonFiniteOutputError` naming its place (*strict*, the default: every number leaving a command is
+    finite), or becomes ``null`` with ``strict=False``."""
+    return json.dumps(_jsonable(data, strict=strict), **kw)
 
 
 def write_json(path, data, *, overwrite: bool = True) -> Path:
@@ -129,7 +157,10 @@ def write_exr(path, channels: dict, header: dict | None = None, *, overwrite: bo
     hdr = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     hdr.update(header or {})
     with atomic_path(path, overwrite=overwrite) as tmp:
-        OpenEXR.File(hdr, chans).write(str(tmp))
+        try:
+            OpenEXR.File(hdr, chans).write(str(tmp))
+        except RuntimeError as exc:   # the bindings report a full disk or an I/O error as RuntimeError
+            raise WaveopticsError(f"cannot write {str(path)!r}: {exc}") from None
     return Path(path)
 
 

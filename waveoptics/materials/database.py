@@ -38,7 +38,7 @@ from ..errors import FieldError, WaveopticsError, unknown
 from ..materials import fresnel
 from ..units import check_wavelengths
 
-__all__ = ['PolarizedFresnel', 'MAX_CLAMP_NM', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'search', 'fresnel_function']
+__all__ = ['PolarizedFresnel', 'MAX_CLAMP_NM', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'search', 'fresnel_function']
 
 #: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
 MAX_CLAMP_NM = 100.0
@@ -228,7 +228,16 @@ def parse_ior(text: str) -> complex:
         raise WaveopticsError(f"IOR {text!r} is not a number like 1.5 or 0.2+3.1j") from None
     if not np.isfinite(value) or value.real <= 0 or value.imag < 0:
         raise WaveopticsError(f"IOR {text!r} is not allowed; need n > 0 and k >= 0 (written n+kj)")
+    if not IOR_MODULUS[0] <= abs(value) <= IOR_MODULUS[1]:
+        raise WaveopticsError(f"IOR {text!r} is not allowed; |n+ik| must be in [{IOR_MODULUS[0]:g}, "
+                              f"{IOR_MODULUS[1]:g}] (measured optical constants of real materials lie well inside)")
     return value
+
+
+#: range of |n + ik| accepted for a constant index: beyond it the Fresnel equations lose every digit in double
+#: precision (|η| = 1e-300 or 1e308 gave NaN albedos); tabulated materials span about 0.03 (Ag) to 100 (metals
+#: in the far infrared)
+IOR_MODULUS = (1e-3, 1e4)
 
 
 def _f0_material(text: str) -> Material:

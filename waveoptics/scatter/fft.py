@@ -17,7 +17,11 @@ from ..errors import WaveopticsError
 from .grid import DirectionGrid
 from .patch import Samples
 
-__all__ = ['FFT_TOL', 'FFT_BAND_X', 'fft_plan', 'field_fft']
+__all__ = ['FFT_TOL', 'FFT_BAND_X', 'FFT_MAX_ORDER', 'fft_plan', 'field_fft']
+
+#: highest Taylor order a user may ask of the fft solver (the heights' powers h^K underflow and the coefficients
+#: overflow well before K = 150 for nanometre heights; 'auto' never needs more than a few tens per band)
+FFT_MAX_ORDER = 60
 
 #: relative tolerance (of Σ w) of the fft solver's Taylor series in "auto" order
 FFT_TOL = 1e-8
@@ -77,8 +81,10 @@ def fft_plan(smp: Samples, wi, grid: DirectionGrid, wavelength_nm: float, order=
         return [(float(frozen_cos_sum) / lam, 0, inside)]
     cz = (wi[2] + grid.cos_theta) / lam
     if order != "auto":
-        if int(order) != order or order < 0:
-            raise WaveopticsError(f"fft order {order!r} is not allowed; use 'auto' or an integer >= 0")
+        if int(order) != order or order < 0 or order > FFT_MAX_ORDER:
+            raise WaveopticsError(f"fft order {order!r} is not allowed; use 'auto' or an integer in [0, "
+                                  f"{FFT_MAX_ORDER}] (higher orders overflow: (v_z h)^K / K! and h^K leave double "
+                                  "range; 'auto' splits v_z into bands instead)")
         return [(2 * wi[2] / lam, int(order), inside)]
     hmax = float(np.max(np.abs(smp.h))) if smp.size else 0.0
     lo, hi = float(cz[inside].min()), float(cz[inside].max())
@@ -115,14 +121,18 @@ def field_fft(smp: Samples, wi, grid: DirectionGrid, wavelength_nm: float, order
     U = np.zeros((grid.n_v, grid.n_u), np.complex128)
     plan = fft_plan(smp, wi, grid, wavelength_nm, order, tol, frozen_cos_sum)
     n_tr = 0
+    # the Taylor terms (i Δv_z h)^n / n! are formed as (h/s)^n and (i Δv_z s)^n / n! with s = max |h|: both stay
+    # in double range at any order (h^n alone underflows and (Δv_z)^n overflows: NaN beyond n ≈ 40)
+    s = float(np.max(np.abs(h))) if np.any(h) else 1.0
+    hs = h / s
     for c, K, m in plan:
         g = w * np.exp(2j * np.pi * c * h)
-        d = np.where(m, 2j * np.pi * (cz_o - c), 0.0)
+        d = np.where(m, 2j * np.pi * (cz_o - c) * s, 0.0)
         acc = T(g)
         n_tr += 1
         coef = np.ones_like(d)
         for n in range(1, K + 1):
-            g = g * h
+            g = g * hs
             coef = coef * d / n
             acc = acc + coef * T(g)
             n_tr += 1

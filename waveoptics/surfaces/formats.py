@@ -203,9 +203,14 @@ def _load_npz(p, sp, units, nan_is_mask):
     scale = _unit_scale(u)
     meta = _json_meta(str(data["meta"]), ".npz") if "meta" in data else {}
     if sp is None and "dx" in data:
-        dx = float(np.asarray(data["dx"], dtype=float).ravel()[0])
-        dy = float(np.asarray(data.get("dy", dx), dtype=float).ravel()[0])
-        sp = (dx * scale, dy * scale)
+        def one(key, default):
+            v = np.asarray(data.get(key, default), dtype=float).ravel()
+            if v.size != 1:
+                raise WaveopticsError(f"{key} in {p.name!r} holds {v.size} values; it must be one spacing in "
+                                      "metres")
+            return float(v[0])
+        dx = one("dx", None)
+        sp = (dx * scale, one("dy", dx) * scale)
     mask = None
     if "mask" in data:
         mask = np.asarray(data["mask"])

@@ -38,13 +38,15 @@ def _length(value, name: str, *, allow_zero: bool = False) -> float:
     return v
 
 
-def _number(value, name: str, *, lo=None, lo_open=False) -> float:
+def _number(value, name: str, *, lo=None, lo_open=False, hi=None) -> float:
     try:
         v = float(value)
     except (TypeError, ValueError):
         raise WaveopticsError(f"{name} {value!r} is not a number") from None
-    if not math.isfinite(v) or (lo is not None and (v <= lo if lo_open else v < lo)):
+    if (not math.isfinite(v) or (lo is not None and (v <= lo if lo_open else v < lo))
+            or (hi is not None and v > hi)):
         bound = "" if lo is None else f" and {'>' if lo_open else '>='} {lo:g}"
+        bound += "" if hi is None else f" and <= {hi:g}"
         raise WaveopticsError(f"{name}={value!r} is not allowed; it must be finite{bound}")
     return v
 
@@ -342,7 +344,7 @@ def scratches(count, width, depth, size, samples, orientation_deg=0.0, spread_de
     w = _length(width, "width")
     d = _length(depth, "depth", allow_zero=True)
     th0 = _number(orientation_deg, "orientation_deg")
-    spread = _number(spread_deg, "spread_deg", lo=0)
+    spread = _number(spread_deg, "spread_deg", lo=0, hi=180)
     ln = None if length is None else _length(length, "length")
     v = _number(variation, "variation", lo=0)
     if v >= 1:

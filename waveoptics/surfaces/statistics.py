@@ -417,7 +417,8 @@ def stats(hf: HeightField, detrend: str = "mean") -> dict:
         "rms_slope": rms_slope(hf) if (sx is not None or sy is not None) else None,
         "rms_slope_x": sx,
         "rms_slope_y": sy,
-        "corr_length_m": T,
+        # undefined (None) for a flat field: its autocovariance is 0 everywhere and has no 1/e point
+        "corr_length_m": T if np.isfinite(T) else None,
         "beckmann_alpha": 2 * sigma / T if np.isfinite(T) and T > 0 else None,
         "profile": bool(ny == 1 or nx == 1),
         "detrend": detrend,
