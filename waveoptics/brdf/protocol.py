@@ -96,8 +96,8 @@ def _broadcast(wi, wo, wavelength_nm):
 class BRDF:
     """Base of every BRDF model (see the module doc). Subclasses implement the one-wavelength methods
     ``_eval1(wi, wo, lam)``, ``_pdf1(wi, wo, lam)``, ``_sample1(wi, u, lam)`` → (wo, pdf) on flat arrays and
-    ``_albedo_parts(lam)`` → [(f(wi, wo), α)], the terms to integrate and the slope width that places their
-    quadrature nodes."""
+    ``_albedo_parts(lam)`` → [(f(wi, wo), α_x, α_y)], the terms to integrate and the slope widths that place
+    their quadrature nodes."""
 
     def eval(self, wi, wo, wavelength_nm):
         """f(ω_i, ω_o, λ) in 1/sr (broadcast shape of the inputs)."""
@@ -142,9 +142,9 @@ class BRDF:
         for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
             if w1[2] <= 0:
                 continue
-            for f, alpha in self._albedo_parts(float(l1)):
+            for f, alpha, alpha_y in self._albedo_parts(float(l1)):
                 out[j] += float(directional_albedo(
-                    lambda a, b, f=f: f(np.broadcast_to(a, b.shape), b), w1, alpha=alpha))
+                    lambda a, b, f=f: f(np.broadcast_to(a, b.shape), b), w1, alpha=alpha, alpha_y=alpha_y))
         return out.reshape(shape)
 
     @staticmethod
@@ -268,8 +268,7 @@ class MicrofacetBRDF(BRDF):
 
     def _albedo_parts(self, lam):
         _, ax, ay = self._micro_args()
-        return [(lambda a, b: self._eval1(a.reshape(-1, 3), b.reshape(-1, 3), lam).reshape(b.shape[:-1]),
-                 np.sqrt(ax * ay))]
+        return [(lambda a, b: self._eval1(a.reshape(-1, 3), b.reshape(-1, 3), lam).reshape(b.shape[:-1]), ax, ay)]
 
 
 @dataclass(frozen=True)
@@ -348,15 +347,15 @@ class TwoScaleParts(MicrofacetBRDF):
 
     def _albedo_parts(self, lam):
         _, ax, ay = self._micro_args()
-        a = float(np.sqrt(ax * ay))
 
         def smooth(x, y):
             c, d = self._smooth_parts(x.reshape(-1, 3), y.reshape(-1, 3), lam)
             return (c + d).reshape(y.shape[:-1])
 
-        parts = [(smooth, a)]
+        parts = [(smooth, ax, ay)]
         if self._rough:
+            wn = self._diffraction_width(lam)   # the nano lobe widens the micro lobe in every direction
             parts.append((lambda x, y: self._f_diffraction(x.reshape(-1, 3), y.reshape(-1, 3), lam)
-                          .reshape(y.shape[:-1]), float(np.hypot(a, self._diffraction_width(lam)))))
+                          .reshape(y.shape[:-1]), float(np.hypot(ax, wn)), float(np.hypot(ay, wn))))
         return parts
 

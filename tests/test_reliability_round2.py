@@ -1,0 +1,135 @@
+"""Issue 17 (reliability, round two): one regression test per class of failure that was found.
+
+Each test names the class: tracebacks, runaway memory, NaN with exit 0, silent nonsense, non-atomic output.
+"""
+import json
+import os
+import resource
+
+import numpy as np
+import pytest
+
+from waveoptics import io as wio
+from waveoptics import units
+from waveoptics.brdf import Micro, MicrofacetBRDF, normal_quadrature
+from waveoptics.cli import main as cli_main
+from waveoptics.errors import WaveopticsError
+
+
+def _one_line_error(capsys, argv, *needles):
+    rc = cli_main(argv)
+    err = capsys.readouterr().err
+    assert rc == 2, err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    for n in needles:
+        assert n in err, err
+    return err
+
+
+# --- tracebacks --------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("text, needle", [("550:inf:1", "not a finite number"), ("0:1e400:1", "not a finite"),
+                                          ("4nm00", "not a number list"), ("400:700:0.00001", "at most 100000")])
+def test_number_lists_refuse_non_finite_stray_and_huge(text, needle):
+    with pytest.raises(WaveopticsError, match=needle):
+        units.parse_wavelengths(text)
+
+
+def test_wavelength_units_per_value():
+    np.testing.assert_allclose(units.parse_wavelengths("0.45um,550nm,650"), [450.0, 550.0, 650.0])
+
+
+def test_cli_ranges_and_generators(capsys, tmp_path):
+    _one_line_error(capsys, ["compare", "--angles", "0:inf:1"], "--angles", "finite")
+    _one_line_error(capsys, ["surface", "generate", "--model", "scratches", "--count", "5", "--width", "1um",
+                             "--depth", "10nm", "--spread", "1e308", "--size", "20um", "--samples", "32", "-o",
+                             str(tmp_path / "s.npz")], "spread")
+    np.savez(tmp_path / "e.npz", heights=np.zeros((8, 8)), dx=np.array([]))
+    _one_line_error(capsys, ["surface", "stats", str(tmp_path / "e.npz")], "dx", "0 values")
+
+
+# --- NaN with exit 0 ---------------------------------------------------------------------------------------
+
+def test_absurd_indices_and_orders_are_refused(capsys, tmp_path):
+    np.savez(tmp_path / "h.npz", heights=np.random.default_rng(0).normal(0, 5e-9, (32, 32)), dx=1e-7, dy=1e-7)
+    base = ["scatter", "--surface", str(tmp_path / "h.npz"), "--incident", "30", "--wavelengths", "550",
+            "--resolution", "16", "-o", str(tmp_path / "o"), "--overwrite"]
+    for m in ("1e-300", "1.5+1e308j"):
+        _one_line_error(capsys, base + ["--material", m], "|n+ik|")
+    _one_line_error(capsys, base + ["--material", "Au", "--order", "1000"], "order 1000")
+
+
+def test_every_fft_order_stays_finite(capsys, tmp_path):
+    """The Taylor terms are scaled by max |h|: order 60 used to print 'albedo nan' with exit 0."""
+    np.savez(tmp_path / "h.npz", heights=np.random.default_rng(0).normal(0, 20e-9, (32, 32)), dx=1e-7, dy=1e-7)
+    vals = []
+    for order in ("0", "8", "60"):
+        assert cli_main(["scatter", "--surface", str(tmp_path / "h.npz"), "--incident", "30", "--wavelengths",
+                         "550", "--resolution", "16", "--material", "Au", "--order", order, "--json", "-o",
+                         str(tmp_path / f"o{order}")]) == 0
+        doc = json.loads(capsys.readouterr().out)
+        vals.append(doc["albedo"][0] if isinstance(doc["albedo"], list) else doc["albedo"])
+    assert np.all(np.isfinite(vals)) and vals[2] == pytest.approx(vals[1], rel=1e-6)
+
+
+def test_json_output_refuses_nan_naming_the_result():
+    with pytest.raises(WaveopticsError, match=r"rows\[1\]\.albedo is nan"):
+        wio.to_json({"rows": [{"albedo": 0.5}, {"albedo": float("nan")}]})
+    assert wio.to_json({"x": float("nan")}, strict=False) == '{"x": null}'
+
+
+# --- runaway memory ----------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("ax, ay", [(2.0, 0.001), (0.001, 2.0)])
+def test_albedo_of_extreme_anisotropy_against_visible_normal_sampling(ax, ay):
+    """Ratio 2000: the quadrature (12 million nodes, used in blocks of NODE_BLOCK) against a Monte Carlo estimate
+    from the GGX visible-normal sampler (an independent route: weights G2/G1 · F)."""
+    b = MicrofacetBRDF("Au", Micro(alpha=ax, alpha_y=ay))
+    wi = np.array([0.5, 0.0, np.sqrt(0.75)])
+    s = b.sample(wi, 550.0, np.random.default_rng(4).random((400_000, 2)))
+    assert float(b.albedo(wi, 550.0)) == pytest.approx(s.weight.mean(),
+                                                       abs=4 * s.weight.std() / np.sqrt(s.weight.size))
+
+
+def test_moderate_anisotropy_nodes_still_cover_the_hemisphere():
+    m, w = normal_quadrature(0.5, 0.005)
+    assert w.sum() == pytest.approx(2 * np.pi, abs=1e-8)
+
+
+def test_cli_albedo_of_an_extreme_anisotropy_in_bounded_memory(capsys):
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    assert cli_main(["brdf", "--albedo", "--alpha", "2", "--alpha-y", "0.001", "--material", "Au",
+                     "--incident", "30", "--json"]) == 0
+    E = json.loads(capsys.readouterr().out)["albedo"][0]["albedo"]
+    assert 0 < E < 1
+    grown_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
+    assert grown_kb < 1_000_000   # < 1 GB (was 3.1 GB)
+
+
+# --- silent nonsense and outputs ---------------------------------------------------------------------------
+
+def test_empty_output_path_is_refused(capsys):
+    _one_line_error(capsys, ["simulate", "-o", "", "--resolution", "16"], "output directory ''")
+
+
+def test_outputs_honour_the_umask(tmp_path):
+    old = os.umask(0o027)
+    try:
+        wio.write_exr(tmp_path / "a.exr", {"Y": np.zeros((2, 2))})
+        wio.write_json(tmp_path / "b.json", {"x": 1})
+    finally:
+        os.umask(old)
+    for name in ("a.exr", "b.json"):
+        assert oct(os.stat(tmp_path / name).st_mode & 0o777) == oct(0o640)
+
+
+def test_a_failed_json_write_names_the_output(tmp_path, monkeypatch):
+    real_replace = os.replace
+
+    def full_disk(src, dst):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(os, "replace", full_disk)
+    with pytest.raises(WaveopticsError, match=r"cannot write .*summary\.json.*No space left"):
+        wio.write_json(tmp_path / "summary.json", {"x": 1})
+    monkeypatch.setattr(os, "replace", real_replace)
+    assert list(tmp_path.iterdir()) == []
