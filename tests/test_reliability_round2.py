@@ -133,3 +133,18 @@ def test_a_failed_json_write_names_the_output(tmp_path, monkeypatch):
         wio.write_json(tmp_path / "summary.json", {"x": 1})
     monkeypatch.setattr(os, "replace", real_replace)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_lambert_albedo_is_exact_on_any_grid():
+    """The diffuse term's albedo is its closed form's quadrature, not the grid sum over the projected disc (which
+    gave 1.035 for a kd = 1 dielectric at 8² cells): kd (1 − F(θ_i)) for Lambert with the trade-off."""
+    from waveoptics.brdf import twoscale
+    from waveoptics.materials import get_material
+    from waveoptics.scatter.grid import DirectionGrid
+
+    F0 = float(get_material("PMMA").F(1.0, 550.0))
+    for res in (8, 16, 64):
+        L = twoscale.evaluate(np.array([0.0, 0.0, 1.0]), [550.0], "PMMA", Micro(alpha=0.3), None,
+                              DirectionGrid.hemisphere(res), kd=1.0)
+        assert float(L.albedo("diffuse")[0]) == pytest.approx(1.0 - F0, rel=1e-6)
+        assert float(L.albedo("total")[0]) <= 1.0

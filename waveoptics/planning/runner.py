@@ -63,7 +63,9 @@ def _broadcast(L: twoscale.Lobes, w) -> twoscale.Lobes:
     """A λ-independent evaluation (one wavelength) copied onto the colour wavelengths *w*."""
     shape = (len(w),) + L.total.shape[1:]
     b = {k: np.broadcast_to(getattr(L, k), shape).copy() for k in ("coherent", "diffraction", "diffuse", "microfacet")}
-    return twoscale.Lobes(grid=L.grid, wi=L.wi, wavelengths_nm=np.asarray(w, float), info=dict(L.info), **b)
+    da = None if L.diffuse_albedo is None else np.broadcast_to(L.diffuse_albedo, (len(w),)).copy()
+    return twoscale.Lobes(grid=L.grid, wi=L.wi, wavelengths_nm=np.asarray(w, float), info=dict(L.info),
+                          diffuse_albedo=da, **b)
 
 
 @dataclass
