@@ -148,3 +148,22 @@ def test_lambert_albedo_is_exact_on_any_grid():
                               DirectionGrid.hemisphere(res), kd=1.0)
         assert float(L.albedo("diffuse")[0]) == pytest.approx(1.0 - F0, rel=1e-6)
         assert float(L.albedo("total")[0]) <= 1.0
+
+
+@pytest.mark.parametrize("spec", ["nvidia", "99:99"])
+def test_a_device_that_does_not_exist_is_refused_by_every_command(capsys, spec):
+    pytest.importorskip("pyopencl")
+    from waveoptics.runtime import opencl_available
+    if not opencl_available():
+        pytest.skip("no OpenCL platform")
+    _one_line_error(capsys, ["brdf", "--alpha", "0.1", "--material", "Au", "--incident", "30", "--outgoing",
+                             "30,180", "--device", spec], "no OpenCL device matches", "available")
+
+
+def test_a_garbage_device_variable_is_refused(capsys, monkeypatch):
+    from waveoptics.runtime import opencl_available
+    if not opencl_available():
+        pytest.skip("no OpenCL platform")
+    monkeypatch.setenv("WAVEOPTICS_DEVICE", "garbage")
+    _one_line_error(capsys, ["brdf", "--alpha", "0.1", "--material", "Au", "--incident", "30", "--outgoing",
+                             "30,180"], "garbage")

@@ -51,12 +51,25 @@ def command_parser(parser, words) -> argparse.ArgumentParser:
     return parser
 
 
+def _check_device(args) -> None:
+    """A device named by ``--device`` or ``WAVEOPTICS_DEVICE`` must exist, for every command (it was ignored by
+    all but the direct solver): resolved once, before any work, with a one-line error listing the devices."""
+    import os
+
+    spec = getattr(args, "device", None) or os.environ.get("WAVEOPTICS_DEVICE")
+    if spec:
+        from ..runtime import select_device
+
+        select_device(spec)
+
+
 def main(argv=None) -> int:
     """Entry point of the ``waveoptics`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
     debug = getattr(args, "debug", False)
     try:
+        _check_device(args)
         rc = args.func(args)
     except KeyboardInterrupt:
         print("waveoptics: interrupted", file=sys.stderr)
