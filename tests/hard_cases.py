@@ -1035,6 +1035,52 @@ def _bad_inputs() -> list[BadInput]:
     add(BadInput("device-unknown", "name", "unknown OpenCL device", r"no OpenCL (device matches 'nosuchdevice'|platform found)",
                  argv=lambda tmp: ["info", "--device", "nosuchdevice"]))
 
+    # issue 17 (reliability, round two) ----------------------------------------------------------------------
+    add(BadInput("range-end-infinite", "parameter", "--wavelengths 550:inf:1", r"'inf' is not a finite number",
+                 api=lambda tmp: units.parse_wavelengths("550:inf:1"),
+                 argv=lambda tmp: ["simulate", "--wavelengths", "550:inf:1", "-o", str(tmp / "o")],
+                 fixed="units.py: OverflowError traceback"))
+    add(BadInput("range-too-long", "parameter", "compare --angles 0:80:0.00001", r"holds 8e\+06 values; at most",
+                 api=lambda tmp: units.parse_number_list("0:80:0.00001", name="angles_deg"),
+                 argv=lambda tmp: ["compare", "--angles", "0:80:0.00001"], same=True,
+                 fixed="units.py: 8 million angles accepted; compare ran for hours without output"))
+    add(BadInput("wavelength-stray-text", "parameter", "--wavelengths 4nm00", r"'4nm00' is not a number list",
+                 api=lambda tmp: units.parse_wavelengths("4nm00"),
+                 argv=lambda tmp: ["simulate", "--wavelengths", "4nm00", "-o", str(tmp / "o")],
+                 fixed="units.py: 'nm' was stripped anywhere, so 4nm00 meant 400 nm"))
+    add(BadInput("ior-tiny", "parameter", "constant index 1e-300", r"\|n\+ik\| must be in \[0\.001, 10000\]",
+                 api=lambda tmp: materials.get_material("1e-300"),
+                 argv=lambda tmp: _scatter_argv(tmp, "--material", "1e-300"), setup=setup_ok,
+                 fixed="materials: Fresnel of |η| = 1e-300 gave 'albedo nan' with exit 0"))
+    add(BadInput("ior-huge", "parameter", "constant index 1.5+1e308j", r"\|n\+ik\| must be in",
+                 api=lambda tmp: materials.get_material("1.5+1e308j"),
+                 argv=lambda tmp: _scatter_argv(tmp, "--material", "1.5+1e308j"), setup=setup_ok))
+    add(BadInput("fft-order-huge", "parameter", "scatter --order 1000", r"fft order 1000 is not allowed",
+                 argv=lambda tmp: _scatter_argv(tmp, "--order", "1000"), setup=setup_ok,
+                 fixed="fft.py: (v_z h)^K overflowed: 'albedo nan' with exit 0"))
+    add(BadInput("spread-huge", "parameter", "scratches --spread 1e308", r"spread_deg=1e\+308 is not allowed",
+                 api=lambda tmp: surfaces.scratches(5, "1um", "5nm", "8um", 8, spread_deg=1e308),
+                 argv=lambda tmp: ["surface", "generate", "--model", "scratches", "--count", "5", "--width", "1um",
+                                   "--depth", "5nm", "--size", "8um", "--samples", "8", "--spread", "1e308", "-o",
+                                   str(tmp / "g.npz")],
+                 fixed="generators.py: OverflowError traceback from the random generator"))
+    add(BadInput("npz-empty-dx", "file", ".npz whose dx is an empty array", r"dx in 'e\.npz' holds 0 values",
+                 setup=lambda tmp: np.savez(tmp / "e.npz", heights=np.zeros((8, 8)), dx=np.array([])),
+                 api=lambda tmp: surfaces.load(tmp / "e.npz"),
+                 argv=lambda tmp: ["surface", "stats", str(tmp / "e.npz")], same=True,
+                 fixed="formats.py: IndexError traceback"))
+    add(BadInput("outdir-empty", "output", "-o ''", r"output directory '' is empty",
+                 api=lambda tmp: wio.prepare_outdir(""),
+                 argv=lambda tmp: ["simulate", "-o", ""], same=True,
+                 fixed="io: '' meant the current directory"))
+    add(BadInput("memory-budget", "parameter", "simulate --resolution 2048 (about 67 GB)",
+                 r"needs about .* GB, above the --max-memory budget",
+                 argv=lambda tmp: ["simulate", "--resolution", "2048", "-o", str(tmp / "o")],
+                 fixed="simulate: nothing estimated a request's size before allocating"))
+    add(BadInput("device-variable-garbage", "name", "--device 99:99", r"no OpenCL (device matches '99:99'|platform)",
+                 argv=lambda tmp: _brdf_argv("--device", "99:99"),
+                 fixed="cli: --device was ignored by every command but the direct solver"))
+
     # outputs ----------------------------------------------------------------------------------------------
     def blocker(tmp):
         _write(tmp, "afile", "not a directory\n")

@@ -167,3 +167,23 @@ def test_a_garbage_device_variable_is_refused(capsys, monkeypatch):
     monkeypatch.setenv("WAVEOPTICS_DEVICE", "garbage")
     _one_line_error(capsys, ["brdf", "--alpha", "0.1", "--material", "Au", "--incident", "30", "--outgoing",
                              "30,180"], "garbage")
+
+
+def test_a_request_beyond_the_memory_budget_is_refused_before_any_work(capsys, tmp_path):
+    import time
+
+    t = time.perf_counter()
+    _one_line_error(capsys, ["simulate", "--resolution", "2048", "-o", str(tmp_path / "o")], "GB", "--max-memory",
+                    "--resolution")
+    assert time.perf_counter() - t < 5 and not (tmp_path / "o").exists()
+    _one_line_error(capsys, ["simulate", "--max-memory", "10XB", "-o", str(tmp_path / "o")], "not a size")
+    from waveoptics import simulate
+    from waveoptics.request import SimulationRequest
+    with pytest.raises(WaveopticsError, match="max_memory budget of 0.001 GB"):
+        simulate.run(SimulationRequest(resolution=64), max_memory="1MB")
+
+
+def test_a_sweep_that_would_run_for_days_is_refused(capsys, tmp_path):
+    _one_line_error(capsys, ["sweep", "--vary", "sigma_nano=1nm:1000nm:1nm", "--vary",
+                             "material=Au,Ag,Cu,Al,Si,Ti,Zn,Ni,Fe,Cr,Pt", "-o", str(tmp_path / "s.csv")],
+                    "points", "at most 10000")

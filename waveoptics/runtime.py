@@ -31,7 +31,8 @@ import numpy as np
 
 from .errors import FieldError, NoOpenCLError, WaveopticsError
 
-__all__ = ['INSTALL_HINT', 'kernel_dir', 'kernel_source', 'platforms', 'opencl_available', 'device_spec_from_env', 'select_device', 'has_fp64', 'Runtime', 'get_runtime', 'build_options', 'build_program', 'program_cache_size', 'pocl_version', 'describe', 'cpu_workers']
+__all__ = ['INSTALL_HINT', 'kernel_dir', 'kernel_source', 'platforms', 'opencl_available', 'device_spec_from_env', 'select_device', 'has_fp64', 'Runtime', 'get_runtime', 'build_options', 'build_program', 'program_cache_size', 'pocl_version', 'describe', 'cpu_workers', 'MEMORY_FRACTION', 'parse_size',
+           'memory_limit', 'check_memory']
 
 INSTALL_HINT = ("no OpenCL platform found; install a CPU runtime with 'apt-get install pocl-opencl-icd' "
                 "(or 'pip install pocl-binary-distribution'), or run 'make demo' which does it")
@@ -286,4 +287,58 @@ def cpu_workers(workers: int | None = None) -> int:
     if int(workers) != workers or workers < 1:
         raise FieldError(f"workers={workers!r} is not allowed; give a whole number >= 1", "workers")
     return int(workers)
+
+
+#: share of the machine's (or the container's) memory a request may plan to use unless told otherwise
+MEMORY_FRACTION = 0.5
+
+_SIZE_UNITS = {"b": 1, "kb": 1e3, "mb": 1e6, "gb": 1e9, "tb": 1e12, "kib": 2 ** 10, "mib": 2 ** 20, "gib": 2 ** 30,
+               "tib": 2 ** 40}
+
+
+def parse_size(text, *, name: str = "max_memory") -> int:
+    """Bytes from ``"4GB"``, ``"500MiB"``, ``"2e9"`` (a bare number is bytes); finite and > 0."""
+    import re
+
+    m = re.fullmatch(r"\s*([0-9.]+(?:[eE][-+]?[0-9]+)?)\s*([A-Za-z]*)\s*", str(text))
+    unit = (m.group(2) or "b").lower() if m else None
+    if not m or unit not in _SIZE_UNITS:
+        raise FieldError(f"{{{name}}} {text!r} is not a size; write e.g. 4GB, 500MiB", name)
+    value = float(m.group(1)) * _SIZE_UNITS[unit]
+    if not value > 0 or value == float("inf"):
+        raise FieldError(f"{{{name}}} {text!r} is not allowed; it must be > 0", name)
+    return int(value)
+
+
+def _physical_memory() -> int:
+    """Bytes of memory this process may use: the cgroup limit when a container sets one, else the RAM."""
+    try:
+        txt = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        if txt.isdigit():
+            return int(txt)
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 8 * 2 ** 30
+
+
+def memory_limit(max_memory=None) -> int:
+    """The memory budget of one request in bytes: *max_memory* (bytes or a size text), else
+    ``WAVEOPTICS_MAX_MEMORY``, else :data:`MEMORY_FRACTION` of the machine's memory."""
+    if max_memory is None:
+        max_memory = os.environ.get("WAVEOPTICS_MAX_MEMORY")
+    if max_memory is None:
+        return int(MEMORY_FRACTION * _physical_memory())
+    return parse_size(max_memory) if isinstance(max_memory, str) else int(max_memory)
+
+
+def check_memory(estimate_bytes: float, what: str, advice: str, max_memory=None, fields=()) -> None:
+    """Refuse, before any work, a request whose estimated memory exceeds the budget (:func:`memory_limit`): one
+    line with the estimate, the budget and what to reduce (*advice* may name *fields* as ``{field}``)."""
+    limit = memory_limit(max_memory)
+    if estimate_bytes > limit:
+        raise FieldError(f"{what} needs about {estimate_bytes / 1e9:.3g} GB, above the {{max_memory}} budget of "
+                         f"{limit / 1e9:.3g} GB; {advice}", "max_memory", *fields)
 

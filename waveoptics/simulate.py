@@ -26,7 +26,7 @@ from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, ma
 from .scatter.grid import DirectionGrid
 from .units import direction_from_angles
 
-__all__ = ['SPHERE_THETAS_DEG', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'output_files',
+__all__ = ['SPHERE_THETAS_DEG', 'memory_estimate', 'check_request_memory', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'output_files',
            'render_spheres',
            'plane_of_incidence', 'write_outputs']
 
@@ -173,8 +173,31 @@ def _nano_of(req: SimulationRequest, w, surface, micro: twoscale.Micro):
     return micro, nano_obj, None
 
 
+def memory_estimate(req: SimulationRequest, *, sphere=True, n_lambda=None) -> float:
+    """Bytes :func:`run` holds at its peak, estimated before any work: about a dozen (n_λ, n, n) float64 arrays
+    for the lobes and their temporaries, plus the sphere renders' diffracted-lobe table and its sampling CDF
+    (two float64 arrays per tabulated incidence; the larger, anisotropic table is assumed)."""
+    n = int(req.resolution)
+    nl = len(req.wavelengths()) if n_lambda is None else int(n_lambda)
+    lobes = 12 * 8 * nl * n * n
+    table = 16 * nl * n * n * max(len(THETA_NODES_DEG), len(SPHERE_THETAS_DEG) * PHI_NODES_ANISOTROPIC) if sphere \
+        else 0
+    return float(lobes + table)
+
+
+def check_request_memory(req: SimulationRequest, *, sphere=True, max_memory=None) -> None:
+    """Refuse *req* in one line when its :func:`memory_estimate` exceeds the budget
+    (:func:`waveoptics.runtime.check_memory`)."""
+    from .runtime import check_memory
+
+    check_memory(memory_estimate(req, sphere=sphere), "this simulation",
+                 "lower {resolution} or the number of {wavelengths_nm}" + (", or drop the sphere renders" if sphere
+                                                                           else ""), max_memory,
+                 fields=("resolution", "wavelengths_nm"))
+
+
 def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, device=None,
-        progress=None) -> Simulation:
+        progress=None, max_memory=None) -> Simulation:
     """Run one :class:`~waveoptics.request.SimulationRequest`.
 
     Parameters
@@ -186,7 +209,11 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
         A material object standing for *req.material* (else it is looked up by name).
     sphere, device, progress
         As in :func:`simulate`.
+    max_memory : int or str, optional
+        Memory budget (bytes or ``"4GB"``); default :func:`waveoptics.runtime.memory_limit`. A request whose
+        :func:`memory_estimate` exceeds it is refused before any work.
     """
+    check_request_memory(req, sphere=sphere, max_memory=max_memory)
     t0 = time.perf_counter()
     mat = get_material(req.material if material is None else material)
     spd = colour.illuminant(req.illuminant)

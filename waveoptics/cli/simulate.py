@@ -82,6 +82,9 @@ def register(sub):
                    help="also render both spheres lit by an environment: sky, studio, constant or an equirectangular "
                         ".exr (+y up; multiple importance sampling at --sphere-size; sphere_env_*.exr and "
                         "sphere_env.png)")
+    p.add_argument("--max-memory", metavar="SIZE",
+                   help="memory budget of the run, e.g. 4GB (default: half the machine's memory, or "
+                        "$WAVEOPTICS_MAX_MEMORY); a larger estimate is refused before any work")
     p.add_argument("--spp", type=int, default=16, metavar="N",
                    help="samples per pixel and technique of the environment render (default 16)")
     p.add_argument("--colourspace", default="sRGB", choices=["sRGB", "ACEScg", "Display P3"],
@@ -102,11 +105,12 @@ def run(args):
     if args.environment is not None:
         from .. import lighting
         env = lighting.environment(args.environment)   # a bad map fails here, before any computing
-    prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.output_files(env is not None))
     req = request_from_args(args)
+    sim_mod.check_request_memory(req, max_memory=args.max_memory)   # before anything is created
+    prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.output_files(env is not None))
     bar = progress(total=sim_mod.sphere_steps(req), desc="simulate", args=args)
     try:
-        sim = sim_mod.run(req, device=args.device, progress=bar.update)
+        sim = sim_mod.run(req, device=args.device, progress=bar.update, max_memory=args.max_memory)
     finally:
         bar.close()
     summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size,

@@ -6,6 +6,7 @@ import csv
 import dataclasses
 import itertools
 import json
+import math
 import time
 from pathlib import Path
 from typing import Callable
@@ -20,7 +21,7 @@ from .cases import _token, surface_digest
 from .cluster import DEFAULT_RETRIES, _check_cluster_args, _Job, _run_timed, _warm
 from .store import _refuse_or_prepare, _Store, partial_path
 
-__all__ = ['parse_length_list', 'VARY', 'parse_vary', 'apply_vary', 'sweep_points', 'sweep_point', 'SWEEP_COLUMNS', 'value_text', 'run_sweep', 'read_sweep']
+__all__ = ['MAX_SWEEP_POINTS', 'parse_length_list', 'VARY', 'parse_vary', 'apply_vary', 'sweep_points', 'sweep_point', 'SWEEP_COLUMNS', 'value_text', 'run_sweep', 'read_sweep']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Sweeps
@@ -97,6 +98,10 @@ VARY = {
 }
 
 
+#: most points of one sweep (a guard against products of fine ranges that would run for days)
+MAX_SWEEP_POINTS = 10_000
+
+
 def parse_vary(text: str, base: SimulationRequest | None = None) -> tuple[str, list]:
     """Parse one ``--vary NAME=VALUES`` into (name, values); names: :data:`VARY` or ``nano.KEY``."""
     name, eq, values = str(text).partition("=")
@@ -129,6 +134,10 @@ def sweep_points(base: SimulationRequest, varies: list[tuple[str, list]]) -> lis
     names = [n for n, _ in varies]
     if len(set(names)) != len(names):
         raise FieldError("{vary}: a parameter is given twice; list all its values in one {vary}", 'vary')
+    n_points = math.prod(len(v) for _, v in varies)
+    if n_points > MAX_SWEEP_POINTS:
+        raise FieldError(f"{{vary}} gives {n_points:.3g} points; at most {MAX_SWEEP_POINTS} are allowed in one sweep "
+                         "(use coarser steps, or split it)", 'vary')
     out = []
     for combo in itertools.product(*(vals for _, vals in varies)):
         case = base
