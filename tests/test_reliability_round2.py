@@ -187,3 +187,42 @@ def test_a_sweep_that_would_run_for_days_is_refused(capsys, tmp_path):
     _one_line_error(capsys, ["sweep", "--vary", "sigma_nano=1nm:1000nm:1nm", "--vary",
                              "material=Au,Ag,Cu,Al,Si,Ti,Zn,Ni,Fe,Cr,Pt", "-o", str(tmp_path / "s.csv")],
                     "points", "at most 10000")
+
+
+def test_warnings_are_one_line_each_and_quiet_silences_them(capsys, tmp_path):
+    argv = ["simulate", "--nano", "sinusoid:amplitude=20nm,period=2um", "-o", str(tmp_path / "o"), "--overwrite",
+            "--resolution", "32", "--sphere-size", "32", "--wavelengths", "550"]
+    assert cli_main(argv) == 0
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert lines and all(ln.startswith("waveoptics simulate: warning: ") for ln in lines), err
+    assert len(lines) == len(set(lines)) and "return " not in err   # no repeats, no source lines
+    assert cli_main(argv + ["--quiet"]) == 0
+    assert capsys.readouterr().err.strip() == ""
+
+
+def test_an_aliased_grating_and_a_non_hdf5_table_are_refused(capsys, tmp_path):
+    _one_line_error(capsys, ["surface", "generate", "--model", "sinusoid", "--amplitude", "10nm", "--period", "100nm",
+                             "--size", "10um", "--samples", "64", "-o", str(tmp_path / "s.npz")], "Nyquist")
+    _one_line_error(capsys, ["table", "--incident-angles", "0,30", "-o", str(tmp_path / "t.txt")], "HDF5")
+    assert not (tmp_path / "t.txt").exists()
+
+
+def test_a_run_that_fails_while_writing_leaves_the_earlier_set_whole(capsys, tmp_path, monkeypatch):
+    """Outputs are staged and moved into place only when all are whole: a failure half-way through the writing
+    (after the EXRs, before the figures) leaves the earlier set byte for byte, and no staging litter."""
+    from waveoptics import simulate
+
+    out = tmp_path / "o"
+    argv = ["simulate", "-o", str(out), "--resolution", "16", "--sphere-size", "16", "--wavelengths", "550",
+            "--overwrite"]
+    assert cli_main(argv) == 0
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def broken(*a, **k):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(simulate, "_plot_lobes", broken)
+    assert cli_main(argv + ["--wavelengths", "450,650"]) == 2
+    assert "No space left" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before

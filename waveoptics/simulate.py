@@ -334,12 +334,17 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
     models' spheres lit by that map (*env_size* pixels, *spp* samples per technique and pixel, multiple importance
     sampling; :func:`waveoptics.render.render_sphere_environment`).
     """
-    plt = figures.pyplot()
-
-
     files = output_files(environment is not None)
-    out = io.prepare_outdir(outdir, overwrite=overwrite, expected=files)
+    final = io.prepare_outdir(outdir, overwrite=overwrite, expected=files)
     env = None if environment is None else lighting.environment(environment)
+    # the set is written into a hidden staging directory beside the outputs and moved into place only when every
+    # file is whole (summary.json last): a run that fails or is interrupted leaves the earlier set untouched
+    with io.staged_outputs(final, files, last="summary.json") as out:
+        return _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, progress)
+
+
+def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, progress) -> dict:
+    plt = figures.pyplot()
     t0 = time.perf_counter()
     L = sim.lobes
     g = sim.grid

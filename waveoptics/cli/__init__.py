@@ -11,6 +11,7 @@ import argparse
 import importlib
 import pkgutil
 import sys
+import warnings
 
 from .. import __version__
 from ..errors import FieldError
@@ -68,6 +69,32 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     debug = getattr(args, "debug", False)
+    with warnings.catch_warnings():
+        _warning_channel(args)
+        return _run(args, parser, debug)
+
+
+def _warning_channel(args) -> None:
+    """Every warning of a command as one stderr line ``waveoptics CMD: warning: ...`` (each distinct text once,
+    no source lines), or none with ``--quiet``."""
+    if getattr(args, "quiet", False):
+        warnings.simplefilter("ignore")
+        return
+    warnings.simplefilter("always")   # repeats are dropped below by text, not by code location
+    for category in (DeprecationWarning, PendingDeprecationWarning, FutureWarning, ImportWarning, ResourceWarning):
+        warnings.simplefilter("ignore", category)   # other libraries' notices to developers, not to users
+    seen = set()
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = " ".join(str(message).split())
+        if text not in seen:
+            seen.add(text)
+            print(f"waveoptics {args.command}: warning: {text}", file=sys.stderr)
+
+    warnings.showwarning = show
+
+
+def _run(args, parser, debug) -> int:
     try:
         _check_device(args)
         rc = args.func(args)

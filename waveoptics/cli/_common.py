@@ -45,6 +45,7 @@ def add_common(parser, *, json: bool = True, device: bool = True) -> None:
     if json:
         parser.add_argument("--json", action="store_true", help="print machine-readable JSON on stdout")
     parser.add_argument("--debug", action="store_true", help="show the Python traceback on errors")
+    parser.add_argument("--quiet", action="store_true", help="do not print warnings")
 
 
 def add_output(parser, *, required: bool = True, help: str = "output directory") -> None:

@@ -196,6 +196,16 @@ def _check_realizations(case: SimulationRequest, realizations: int) -> None:
                                   "with {solver} fft/direct); the PSD route is already the ensemble mean", 'realizations', 'nano', 'solver')
 
 
+#: file name endings of an HDF5 table
+TABLE_SUFFIXES = (".h5", ".hdf5", ".he5")
+
+
+def _check_table_path(output) -> None:
+    if Path(output).suffix.lower() not in TABLE_SUFFIXES:
+        raise FieldError(f"{{output}} {str(output)!r} is not allowed; a table is an HDF5 file: name it "
+                         f"{', '.join('*' + x for x in TABLE_SUFFIXES)}", "output")
+
+
 def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = None, scheduler: str | None = None,
               client=None, resume: bool = False, overwrite: bool = False, device: str | None = None,
               progress=None, retries: int = DEFAULT_RETRIES, task_fn: Callable = compute_block) -> dict:
@@ -229,6 +239,7 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
         worker), ``timings_s`` (client side: ``start_s``, ``compute_s``, ``store_s``, ``stop_s``, ``assemble_s``)
         and ``complete`` (True).
     """
+    _check_table_path(output)
     t0 = time.perf_counter()
     final = Path(output)
     partial = partial_path(final)
@@ -291,6 +302,7 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
 
 def table_plan(spec: TableSpec, output, *, resume: bool = False) -> dict:
     """How many tasks a run of *spec* into *output* has in all and still to do (for progress bars)."""
+    _check_table_path(output)
     tasks = table_tasks(spec)
     store = partial_path(output) / "items"
     todo = [t for t in tasks if not (resume and (store / f"{t.name}.npz").is_file())]

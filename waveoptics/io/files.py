@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -17,7 +18,7 @@ import OpenEXR
 
 from ..errors import OutputExistsError, WaveopticsError
 
-__all__ = ['NonFiniteOutputError', 'atomic_path', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
+__all__ = ['NonFiniteOutputError', 'atomic_path', 'staged_outputs', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
 
 @contextlib.contextmanager
 def atomic_path(final, *, overwrite: bool = True):
@@ -53,6 +54,36 @@ def atomic_path(final, *, overwrite: bool = True):
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+
+
+@contextlib.contextmanager
+def staged_outputs(directory, names, *, last=None):
+    """Write a set of output files as a whole: yield a hidden staging directory inside *directory*; when the block
+    succeeds, every file in *names* is moved from it into *directory* (*last* after the others, e.g. the summary
+    that says the set is complete) and the staging directory is removed; when it fails or is interrupted, the
+    staging directory is removed and *directory* is as it was.
+
+    The moves are renames within one file system: a kill can only fall between two of them (a window of
+    microseconds, against the minutes of computing and writing that no longer touch the earlier set).
+    """
+    directory = Path(directory)
+    try:
+        stage = Path(tempfile.mkdtemp(prefix=".staging.", suffix=".partial", dir=directory))
+    except OSError as exc:
+        raise WaveopticsError(f"cannot write into {str(directory)!r}: {exc.strerror or exc}") from None
+    try:
+        yield stage
+        order = [n for n in names if n != last] + ([last] if last in names else [])
+        missing = [n for n in order if not (stage / n).is_file()]
+        if missing:
+            raise WaveopticsError(f"output set in {str(directory)!r} is incomplete: {', '.join(missing)} missing")
+        for n in order:
+            try:
+                os.replace(stage / n, directory / n)
+            except OSError as exc:
+                raise WaveopticsError(f"cannot write {str(directory / n)!r}: {exc.strerror or exc}") from None
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
 
 
 def _umask() -> int:

@@ -288,6 +288,14 @@ def sinusoid(amplitude, period, size, samples, orientation_deg=0.0, phase_deg=0.
     phi = math.radians(_number(orientation_deg, "orientation_deg"))
     ph0 = math.radians(_number(phase_deg, "phase_deg"))
     nx, ny, dx, dy = _grid(size, samples)
+    # Nyquist: the grating's period along each axis must span more than two samples, else the sampled field is
+    # another (aliased) grating
+    px = abs(P / math.cos(phi)) if abs(math.cos(phi)) > 1e-12 else math.inf
+    py = abs(P / math.sin(phi)) if abs(math.sin(phi)) > 1e-12 else math.inf
+    if px <= 2 * dx or py <= 2 * dy:
+        raise WaveopticsError(f"period {P * 1e9:.4g} nm is not allowed with samples {dx * 1e9:.4g} x {dy * 1e9:.4g} nm "
+                              "apart: a grating needs more than two samples per period along each axis (Nyquist), "
+                              "else it is generated aliased; use more samples or a smaller size")
     hf0 = HeightField(np.zeros((ny, nx)), dx, dy)
     x, y = hf0.coords()
     u = x[None, :] * math.cos(phi) + y[:, None] * math.sin(phi)
