@@ -226,3 +226,12 @@ def test_a_run_that_fails_while_writing_leaves_the_earlier_set_whole(capsys, tmp
     assert cli_main(argv + ["--wavelengths", "450,650"]) == 2
     assert "No space left" in capsys.readouterr().err
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_an_illuminant_file_in_micrometres_is_refused(tmp_path):
+    from waveoptics import colour
+
+    p = tmp_path / "um.csv"
+    p.write_text("wavelength,lamp\n0.38,1\n0.5,1\n0.78,1\n")
+    with pytest.raises(WaveopticsError, match="look like µm"):
+        colour.illuminant(str(p))

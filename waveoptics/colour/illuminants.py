@@ -141,6 +141,12 @@ def spd_from_csv(path, column: str | None = None) -> SPD:
         raise unknown(f"column of {p.name}", column, list(sds))
     sd = sds[column]
     values = np.asarray(sd.values, dtype=float)
+    wl = np.asarray(sd.wavelengths, dtype=float)
+    # the first column is in nm: a spectrum entirely below 100 nm is a file in µm (0.38-0.78), whose light would
+    # otherwise fall outside the colour-matching functions and still "give colour" from their extrapolation
+    if wl.size and np.max(wl) < 100.0:
+        raise WaveopticsError(f"SPD file {str(p)!r}: wavelengths {wl.min():g}-{wl.max():g} are not nm (they look "
+                              "like µm); write the first column in nm")
     if not np.all(np.isfinite(values)):
         raise WaveopticsError(f"SPD file {str(p)!r} column {column!r} has missing or non-numeric values")
     return SPD(f"{p.name}:{column}" if len(sds) > 1 else p.name, sd.wavelengths, values)
