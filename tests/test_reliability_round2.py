@@ -235,3 +235,29 @@ def test_an_illuminant_file_in_micrometres_is_refused(tmp_path):
     p.write_text("wavelength,lamp\n0.38,1\n0.5,1\n0.78,1\n")
     with pytest.raises(WaveopticsError, match="look like µm"):
         colour.illuminant(str(p))
+
+
+def test_scatter_and_npy_sidecar_outputs_appear_whole(capsys, tmp_path, monkeypatch):
+    from waveoptics import surfaces
+    from waveoptics.scatter import output as scatter_output
+
+    np.savez(tmp_path / "h.npz", heights=np.random.default_rng(1).normal(0, 5e-9, (32, 32)), dx=1e-7, dy=1e-7)
+    out = tmp_path / "o"
+    argv = ["scatter", "--surface", str(tmp_path / "h.npz"), "--incident", "30", "--wavelengths", "550",
+            "--resolution", "16", "--material", "Au", "-o", str(out), "--overwrite"]
+    assert cli_main(argv) == 0
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    monkeypatch.setattr(scatter_output, "plot_scatter", lambda *a, **k: (_ for _ in ()).throw(OSError(28, "full")))
+    argv2 = [a if a != "30" else "40" for a in argv]
+    assert cli_main(argv2) == 2
+    capsys.readouterr()
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    # .npy with its sidecar: a failure writing the sidecar leaves the earlier pair
+    hf = surfaces.gaussian("5nm", "1um", "8um", 16, seed=1)
+    surfaces.save(hf, tmp_path / "s.npy")
+    pair = {p.name: p.read_bytes() for p in tmp_path.glob("s.npy*")}
+    monkeypatch.setattr(wio.files.Path, "write_text", lambda *a, **k: (_ for _ in ()).throw(OSError(28, "full")))
+    with pytest.raises(WaveopticsError):
+        surfaces.save(surfaces.gaussian("9nm", "1um", "8um", 16, seed=2), tmp_path / "s.npy", overwrite=True)
+    assert {p.name: p.read_bytes() for p in tmp_path.glob("s.npy*")} == pair

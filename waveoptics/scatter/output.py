@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from ..io import figures
-from ..io.files import atomic_path, prepare_outdir, write_json
+from ..io.files import atomic_path, prepare_outdir, staged_outputs, write_json
 from ..io.spectral_exr import write_spectral_exr
 from .solvers import ScatterResult
 
@@ -54,16 +54,20 @@ def write_scatter(result: ScatterResult, outdir, *, overwrite: bool = False, hea
     """Write ``lobes.exr`` (spectral OpenEXR, one ``T.<λ>nm`` layer per wavelength, BRDF in 1/sr on the
     direction-cosine grid), ``summary.json`` and ``lobes.png`` into *outdir*. Returns {name: path}."""
 
-    out = prepare_outdir(outdir, overwrite=overwrite, expected=SCATTER_FILES)
+    final = prepare_outdir(outdir, overwrite=overwrite, expected=SCATTER_FILES)
+    # the set is staged and moved into place whole (summary.json last): a failure leaves an earlier set intact
+    with staged_outputs(final, SCATTER_FILES, last="summary.json") as out:
+        _write_scatter(result, out, header)
+    return {name: final / name for name in SCATTER_FILES}
+
+
+def _write_scatter(result: ScatterResult, out, header) -> None:
     th = math.degrees(math.acos(min(1.0, float(result.incident[2]))))
     ph = math.degrees(math.atan2(result.incident[1], result.incident[0]))
     hdr = {**result.grid.header(), "quantity": "BRDF f (1/sr), Kirchhoff model, ensemble mean",
            "incident_theta_deg": f"{th:.17g}", "incident_phi_deg": f"{ph:.17g}", "solver": result.solver,
            "realizations": str(result.realizations), **(header or {})}
     layers = {float(w): result.brdf[i] for i, w in enumerate(result.wavelengths_nm)}
-    paths = {"lobes.exr": write_spectral_exr(out / "lobes.exr", layers, hdr, overwrite=overwrite)}
-    plot_scatter(result, out / "lobes.png", overwrite=overwrite)
-    paths["lobes.png"] = out / "lobes.png"
-    paths["summary.json"] = write_json(out / "summary.json", {**result.summary(), **(header or {})},
-                                       overwrite=overwrite)
-    return paths
+    write_spectral_exr(out / "lobes.exr", layers, hdr)
+    plot_scatter(result, out / "lobes.png")
+    write_json(out / "summary.json", {**result.summary(), **(header or {})})

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import FieldError, OutputExistsError, WaveopticsError, unknown
-from ..io.files import atomic_path, read_exr, to_json, write_exr, write_json
+from ..io.files import atomic_path, read_exr, to_json, write_exr
 from ..units import LENGTH_UNITS
 from .generators import _length
 from .heightfield import HeightField
@@ -454,13 +454,16 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
         side = p.with_name(p.name + ".json")
         if side.exists() and not overwrite:
             raise OutputExistsError(side)
-        with atomic_path(p, overwrite=overwrite) as tmp, open(tmp, "wb") as fh:
-            np.save(fh, h_nan)
         info = {"format": "waveoptics height field", "units": "m", "dx": hf.dx, "dy": hf.dy,
                 "meta": json.loads(meta_json)}
         if masked:
             info["mask"] = "nan"
-        write_json(side, info, overwrite=True)
+        # both files are written to temporary names first and renamed together (sidecar, then heights): a
+        # failure in either leaves the earlier pair, never a new .npy beside an old or missing sidecar
+        with atomic_path(p, overwrite=overwrite) as tmp, atomic_path(side, overwrite=True) as tmp_side:
+            with open(tmp, "wb") as fh:
+                np.save(fh, h_nan)
+            tmp_side.write_text(to_json(info, indent=2))
     elif ext == ".exr":
         header = {"spacing_x": repr(hf.dx), "spacing_y": repr(hf.dy), "units": "m", "waveoptics_meta": meta_json}
         if masked:
