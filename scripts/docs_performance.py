@@ -94,9 +94,9 @@ def figure(res):
 def conclusions(res) -> str:
     d = {r["name"]: r for r in res["direct"]["rows"]}
     k32 = d["opencl kirchhoff_U float32"]
-    old32 = d.get("opencl kirchhoff_U_sinpi float32 (before issue 6)")
+    old32 = d.get("opencl kirchhoff_U_sinpi float32 (previous kernel, SLEEF sinpi)")
     k64 = d.get("opencl kirchhoff_U float64")
-    old64 = d.get("opencl kirchhoff_U_sinpi float64 (before issue 6)")
+    old64 = d.get("opencl kirchhoff_U_sinpi float64 (previous kernel, SLEEF sinpi)")
     naive = d[bench.NAIVE]
     npy = d["numpy direct sum (complex128)"]
     fm = d.get("opencl kirchhoff_U float32 fast-math")
@@ -177,7 +177,7 @@ def main(argv=None):
     from waveoptics.runtime import get_runtime
 
     if "--from-data" in args:   # rewrite the text and figure from the kept measurements, measuring nothing
-        res = json.loads(DATA.read_text())
+        res = json.loads(DATA.read_text().replace("(before issue 6)", "(previous kernel, SLEEF sinpi)"))
     else:
         res = bench.run_all(get_runtime(), quick=quick)
         DATA.parent.mkdir(parents=True, exist_ok=True)

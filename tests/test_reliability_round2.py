@@ -261,3 +261,24 @@ def test_scatter_and_npy_sidecar_outputs_appear_whole(capsys, tmp_path, monkeypa
     with pytest.raises(WaveopticsError):
         surfaces.save(surfaces.gaussian("9nm", "1um", "8um", 16, seed=2), tmp_path / "s.npy", overwrite=True)
     assert {p.name: p.read_bytes() for p in tmp_path.glob("s.npy*")} == pair
+
+
+# --- issue 19's small defects ------------------------------------------------------------------------------
+
+def test_small_defects_of_issue_19(capsys, tmp_path):
+    import warnings
+
+    from waveoptics import surfaces
+    from waveoptics.surfaces.statistics import fit_psd
+
+    assert units.parse_direction("30,400", name="incident_deg") == (30.0, 40.0)
+    assert units.parse_direction("30,-30", name="incident_deg") == (30.0, -30.0)
+    hf = surfaces.HeightField(np.random.default_rng(0).normal(0, 1e-9, (64, 64)), 1e-7, 1e-7)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fit = fit_psd(hf, "abc")
+    assert fit["resolved"] is False and any("below the sample spacing" in str(w.message) for w in caught)
+    out = tmp_path / "o"
+    assert cli_main(["simulate", "-o", f"{out}/", "--resolution", "16", "--sphere-size", "16", "--wavelengths",
+                     "550"]) == 0
+    assert "//" not in capsys.readouterr().out

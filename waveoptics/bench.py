@@ -203,7 +203,7 @@ def direct_kernels(rt, n: int = 256, n_dir: int = 4096, numpy_dirs: int = 64, re
     for p in precs:
         add(f"opencl kirchhoff_U {p}", lambda p=p: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=p), terms, sub)
     for p in precs:
-        add(f"opencl kirchhoff_U_sinpi {p} (before issue 6)",
+        add(f"opencl kirchhoff_U_sinpi {p} (previous kernel, SLEEF sinpi)",
             lambda p=p: kirchhoff_U_sinpi_cl(smp, coef, runtime=rt, precision=p), terms, sub)
     add("opencl kirchhoff_U float32 fast-math",
         lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", fast_math=True), terms, sub)

@@ -184,6 +184,15 @@ class Setting:
         r = f" x{self.realizations}" if self.realizations > 1 else ""
         return f"{self.solver}{p} {self.resolution}² ΔE{self.colour_de:g}{r}"
 
+    def sentence(self) -> str:
+        """The setting in words (for the recommendation a user acts on)."""
+        solver = {"fft0": "the fft solver at Taylor order 0 (frozen v_z)",
+                  "fft": "the fft solver (banded Taylor series)"}.get(self.solver, f"the {self.solver} solver")
+        p = f" in {self.precision}" if self.solver == "direct" else ""
+        r = f", averaged over {self.realizations} surface realizations" if self.realizations > 1 else ""
+        return (f"{solver}{p}, resolution {self.resolution} ({self.resolution}² directions), wavelengths spaced "
+                f"for a colour error below ΔE2000 {self.colour_de:g}{r}")
+
 
 def ladder(solvers=DEFAULT_SOLVERS, resolutions=DEFAULT_RESOLUTIONS, colour_de=DEFAULT_COLOUR_DE,
            realizations=(1,), precisions=DEFAULT_PRECISIONS) -> list[Setting]:
@@ -459,7 +468,8 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
                    + (f"; the most accurate is #{best} ({settings[best].label()}, {errs[best]:.3g})"
                       if best is not None else "")}
         else:
-            rec = {"index": k, "setting": settings[k].label(), metric: rows[k][metric], "time_s": rows[k]["time_s"],
+            rec = {"index": k, "setting": settings[k].label(), "in_words": settings[k].sentence(),
+                   metric: rows[k][metric], "time_s": rows[k]["time_s"],
                    "reason": f"fastest setting with {metric} <= {target_error:g}"}
     return {"config": cfg.describe(), "reference": ref_row, "settings": rows, "pareto": front, "metric": metric,
             "target_error": target_error, "recommendation": rec, "skipped": skipped, "budget_s": budget_s,

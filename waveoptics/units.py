@@ -155,7 +155,8 @@ def check_wavelengths(wavelength_nm, *, name: str = "wavelength") -> np.ndarray:
 
 
 def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False) -> tuple[float, float]:
-    """Parse ``"THETA[,PHI]"`` in degrees; θ from the normal in [0, 90], φ about the normal (any value).
+    """Parse ``"THETA[,PHI]"`` in degrees; θ from the normal in [0, 90], φ about the normal (any finite value;
+    outside [−180, 360) it is brought into [0, 360)).
 
     Returns
     -------
@@ -173,6 +174,8 @@ def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False)
     check_theta(theta, name=name)
     if not math.isfinite(phi):
         raise _error(name, f" φ {phi!r} is not finite")
+    if not -180.0 <= phi < 360.0:   # one turn of azimuth: 400° is 40°, said once in its canonical form
+        phi = math.fmod(phi, 360.0) % 360.0
     return theta, phi
 
 

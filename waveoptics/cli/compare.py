@@ -1,6 +1,8 @@
 """``waveoptics compare``: both models over a range of incident angles (table + plot)."""
 from __future__ import annotations
 
+import os
+
 import csv
 import io as _io
 from pathlib import Path
@@ -60,6 +62,6 @@ def run(args):
             tmp.write_text(buf.getvalue())
         cmp.plot(rows, out / "compare.png", tail_deg=args.tail,
                  title=f"{sim.params['material']}: two-scale vs microfacet ({sim.params['illuminant']})")
-    emit(args, data, cmp.table_text(rows, args.tail) + (f"\nwrote {args.output}/compare.{{json,csv,png}}"
+    emit(args, data, cmp.table_text(rows, args.tail) + (f"\nwrote {os.path.join(os.path.normpath(args.output), 'compare')}.{{json,csv,png}}"
                                                          if args.output else ""))
     return 0

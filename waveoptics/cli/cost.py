@@ -96,6 +96,7 @@ def run(args) -> int:
     text = (f"reference: {ref['solver']} {ref['precision']} {ref['resolution']}² {ref['wavelengths']} wavelengths "
             f"x{ref['realizations']} ({ref['time_s']:.3g} s)\n{cost.table(res)}\n"
             f"Pareto front ({res['metric']}): {res['pareto']}"
-            + (f"\nrecommended: {rec.get('setting', '-')} — {rec['reason']}" if rec else ""))
+            + (f"\nrecommended ({rec['reason']}): {rec.get('in_words', rec.get('setting', '-'))}"
+               + (f", {rec['time_s']:.3g} s" if "time_s" in rec else "") if rec else ""))
     emit(args, res, text)
     return 0

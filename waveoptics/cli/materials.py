@@ -21,12 +21,16 @@ def run(args):
     from .. import materials
     import numpy as np
 
+    if args.limit < 1:
+        raise ValueError(f"--limit {args.limit} is not allowed; give a number of results >= 1")
     if args.query:
-        hits = materials.search(args.query, limit=args.limit)
+        hits, total = materials.search(args.query, limit=args.limit, with_total=True)
         if not hits:
             raise ValueError(f"no material matches {args.query!r}; try a chemical formula such as Au or SiO2")
         text = "\n".join(f"{h['spec']:<45} {h['name']}" for h in hits)
-        emit(args, {"query": args.query, "matches": hits}, text)
+        if total > len(hits):
+            text += f"\n(showing {len(hits)} of {total} matches; --limit {total} shows all)"
+        emit(args, {"query": args.query, "matches": hits, "total_matches": total}, text)
         return 0
     rows = []
     for name, p in materials.PRESETS.items():

@@ -1,6 +1,8 @@
 """``waveoptics run SCENE -o OUTDIR``: execute a scene's plan and write the outputs it asks for."""
 from __future__ import annotations
 
+import os
+
 from ._common import add_common, add_output, emit, progress
 from .plan import add_force, make_plan
 
@@ -37,6 +39,6 @@ def run(args):
     for m in data["materials"]:
         lines.append(f"{m['name']} under {m['light']}: estimated {m['estimated_time_s']:.3g} s, measured "
                      f"{m['measured_time_s']:.3g} s (+ {m['outputs_time_s']:.3g} s writing)")
-    lines.append(f"outputs in {args.output}/: " + ", ".join(data["files"]))
+    lines.append(f"outputs in {os.path.join(os.path.normpath(args.output), '')}: " + ", ".join(data["files"]))
     emit(args, data, "\n".join(lines))
     return 0

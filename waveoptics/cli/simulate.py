@@ -1,6 +1,8 @@
 """``waveoptics simulate``: the main job (two-scale BRDF vs microfacet, spectral → RGB, pictures)."""
 from __future__ import annotations
 
+import os
+
 from ..errors import FieldError
 from ..io.files import prepare_outdir
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
@@ -121,6 +123,6 @@ def run(args):
     text = (f"{sim.params['material']} θi={theta:g}°: albedo {summary['rgb_albedo'].round(3).tolist()} (two-scale) vs "
             f"{summary['microfacet_rgb_albedo'].round(3).tolist()} (microfacet), sphere ΔE2000 mean {d['mean']:.2f} "
             f"max {d['max']:.2f}, solver {summary['solver']}, {sum(summary['timings_s'].values()):.1f} s\n"
-            f"outputs in {args.output}/: " + ", ".join(summary["files"]))
+            f"outputs in {os.path.join(os.path.normpath(args.output), '')}: " + ", ".join(summary["files"]))
     emit(args, summary, text)
     return 0

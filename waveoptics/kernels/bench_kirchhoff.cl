@@ -7,7 +7,7 @@
  */
 #include "kirchhoff.h"
 
-/* The previous kernel (before issue 6), kept for the benchmark's before/after: one pair per work-item, the same exact
+/* The previous direct-sum kernel, kept for the benchmark's before/after: one pair per work-item, the same exact
  * phase, SLEEF sinpi/cospi per term. Same arguments and results as kirchhoff_U (global size n_pairs). */
 __kernel void kirchhoff_U_sinpi(__global const int *ix, __global const int *iy, __global const real_t *h,
                                 __global const real_t *w, const int n_samples,

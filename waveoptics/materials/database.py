@@ -317,17 +317,17 @@ def get_material(spec) -> Material:
     raise unknown("material", s, list(PRESETS) + [a for p in PRESETS.values() for a in p.aliases])
 
 
-def search(query: str, limit: int = 30) -> list[dict]:
+def search(query: str, limit: int | None = 30, *, with_total: bool = False):
     """Search the refractiveindex.info catalogue (book ids and names) for *query*.
 
-    Returns a list of ``{"spec": "shelf/book/page", "name": ..., "book": ...}``.
+    Returns a list of ``{"spec": "shelf/book/page", "name": ..., "book": ...}`` (the first *limit*, all when
+    None); with *with_total*, the pair (list, number of matches in all).
     """
-
-
     with contextlib.redirect_stdout(io.StringIO()):
         matches = list(refractiveindex.search(query))
-    return [{"spec": f"{m.shelf}/{m.book}/{m.page}", "name": m.name, "book": m.book_name}
-            for m in matches[:limit]]
+    hits = [{"spec": f"{m.shelf}/{m.book}/{m.page}", "name": m.name, "book": m.book_name}
+            for m in (matches if limit is None else matches[:limit])]
+    return (hits, len(matches)) if with_total else hits
 
 
 class PolarizedFresnel:

@@ -10,6 +10,7 @@ References
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 from scipy.interpolate import RegularGridInterpolator
@@ -376,10 +377,22 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
     if model == "abc":
         sigma, B, C = pars
         out.update(A_m4=float(abc_A(sigma, B, C)), B_m=float(B), C=float(C), sigma_m=float(sigma))
+        length = float(B)
     else:
         out.update(sigma_m=float(pars[0]), corr_length_m=float(pars[1]))
         if model == "gaussian":
             out["beckmann_alpha"] = 2 * pars[0] / pars[1]
+        length = float(pars[1])
+    # a fitted length below the sample spacing is not resolved by the data (e.g. white noise): say so
+    ny, nx = hf.shape
+    spacing = hf.dx if ny == 1 else hf.dy if nx == 1 else min(hf.dx, hf.dy)
+    if length < spacing:
+        out["resolved"] = False
+        warnings.warn(f"the fitted {model} length {length * 1e9:.3g} nm is below the sample spacing "
+                      f"{spacing * 1e9:.3g} nm: this height field does not resolve it (noise-like heights), so the "
+                      "fit's length and exponent are not measured", stacklevel=2)
+    else:
+        out["resolved"] = True
     return out
 
 
