@@ -408,7 +408,7 @@ def test_spectral_exr_layout(tmp_path):
     paths = scatter.write_scatter(res, tmp_path / "out")
     layers, header = io.read_spectral_exr(paths["lobes.exr"])
     assert list(layers) == [450.0, 550.0]
-    assert np.allclose(layers[550.0], res.brdf[1].astype(np.float32))
+    assert np.allclose(layers[550.0], res.grid.to_image(res.brdf[1]).astype(np.float32))   # top row = highest v
     assert header["spectralLayoutVersion"] == "1.0" and "direction cosines" in header["parametrization"]
     with pytest.raises(WaveopticsError, match="already exists"):
         scatter.write_scatter(res, tmp_path / "out")

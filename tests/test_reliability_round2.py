@@ -282,3 +282,18 @@ def test_small_defects_of_issue_19(capsys, tmp_path):
     assert cli_main(["simulate", "-o", f"{out}/", "--resolution", "16", "--sphere-size", "16", "--wavelengths",
                      "550"]) == 0
     assert "//" not in capsys.readouterr().out
+
+
+def test_exr_images_put_the_highest_v_on_top(tmp_path):
+    """Issue 19: a known asymmetric lobe lands in the expected pixel. Light at φ = 90° (from +y): the mirror
+    direction has v = −sin θ_i < 0, so its peak is in the lower half of the image as a viewer shows it."""
+    from waveoptics import scatter, surfaces
+
+    hf = surfaces.gaussian("5nm", "2um", "32um", 128, seed=3)
+    res = scatter.scatter(hf, (40.0, 90.0), [550.0], "Au", resolution=32)
+    paths = scatter.write_scatter(res, tmp_path / "o")
+    layers, header = wio.read_spectral_exr(paths["lobes.exr"])
+    img = layers[550.0]
+    row, col = np.unravel_index(np.argmax(img), img.shape)
+    assert row > img.shape[0] / 2 and abs(col - img.shape[1] / 2) <= 1
+    assert "row 0 = highest v" in header["parametrization"] and "1/sr" in header["waveoptics_unit"]

@@ -351,13 +351,14 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
     hdr = {k: str(v) for k, v in g.header().items()}
     hdr.update({"waveoptics_incident_deg": " ".join(map(str, sim.params["incident_deg"])),
                 "waveoptics_material": sim.params["material"], "waveoptics_quantity": "BRDF f (1/sr), not x cos"})
-    io.write_spectral_exr(out / "brdf_spectral.exr", {float(lam): L.total[i] for i, lam in
+    hdr["waveoptics_unit"] = "1/sr (a BRDF, not multiplied by cos theta_o: values exceed 1 near sharp lobes)"
+    io.write_spectral_exr(out / "brdf_spectral.exr", {float(lam): g.to_image(L.total[i]) for i, lam in
                                                       enumerate(sim.wavelengths_nm)}, header=hdr, overwrite=True)
     space = colour.space_name(space)
     rgb_out = sim.rgb_lobe("total", space)
     rgb = sim.rgb_lobe("total") if space != "sRGB" else rgb_out
     rgb_mf = sim.rgb_lobe("microfacet")
-    io.write_exr(out / "brdf_rgb.exr", {"R": rgb_out[..., 0], "G": rgb_out[..., 1], "B": rgb_out[..., 2]},
+    io.write_exr(out / "brdf_rgb.exr", {c: g.to_image(rgb_out[..., k]) for k, c in enumerate("RGB")},
                  header={**hdr, "waveoptics_colourspace": f"linear {space}, white-balanced (CAT02) from "
                                                           f"{sim.params['illuminant']}"}, overwrite=True)
     _plot_hemispheres(rgb, rgb_mf, g, out / "brdf.png", sim)

@@ -162,16 +162,19 @@ def execute(plan: Plan, outdir, *, overwrite: bool = False, device=None, progres
                              "rgb": colour.reflectance_to_rgb(L.albedo("total"), w, e.spd)}
                 hdr = {k: str(v) for k, v in L.grid.header().items()}
                 hdr.update(waveoptics_incident_deg=f"{th:g} {ph:g}", waveoptics_material=e.material.name,
+                           waveoptics_unit="1/sr (a BRDF, not multiplied by cos theta_o)",
                            waveoptics_quantity="BRDF f (1/sr), not x cos", waveoptics_scene=sc.name)
                 if sc.output.spectral_brdf:
                     name = f"{p}_{t}_brdf_spectral.exr"
-                    io.write_spectral_exr(out / name, {float(lam): L.total[i] for i, lam in enumerate(w)},
+                    io.write_spectral_exr(out / name, {float(lam): L.grid.to_image(L.total[i])
+                                                       for i, lam in enumerate(w)},
                                           header=hdr, overwrite=True)
                     written.append(name)
                 if sc.output.rgb_images:
                     rgb = colour.reflectance_to_rgb(np.moveaxis(L.total, 0, -1), w, e.spd)
-                    io.write_exr(out / f"{p}_{t}_brdf_rgb.exr", {"R": rgb[..., 0], "G": rgb[..., 1],
-                                                                 "B": rgb[..., 2]}, header=hdr, overwrite=True)
+                    io.write_exr(out / f"{p}_{t}_brdf_rgb.exr",
+                                 {c: L.grid.to_image(rgb[..., k]) for k, c in enumerate("RGB")}, header=hdr,
+                                 overwrite=True)
                     img = np.where(L.grid.inside[..., None], render.tonemap(rgb), 0.0)[::-1]  # row 0 = top = +v
                     k = max(1, 256 // max(img.shape[:2]))                   # nearest-neighbour zoom for viewing
                     img = np.repeat(np.repeat(img, k, axis=0), k, axis=1)

@@ -121,11 +121,20 @@ class DirectionGrid:
                + av * ((1 - au) * lobes[..., k0 + 1, j0] + au * lobes[..., k0 + 1, j0 + 1]))
         return np.where(ok, val, 0.0)
 
+    @staticmethod
+    def to_image(values):
+        """Rows of cell values (..., n_v, n_u) in image order, top row first (the highest v): how EXR files and
+        pictures store a lobe, so that viewers show +v up. :meth:`from_image` undoes it."""
+        return np.asarray(values)[..., ::-1, :]
+
+    from_image = to_image
+
     def header(self) -> dict:
         """The parametrization as string attributes (for image headers)."""
         return {
             "parametrization": "direction cosines: u = sin(theta_o) cos(phi_o) along columns (x), "
-                               "v = sin(theta_o) sin(phi_o) along rows (y); cell centres; row 0 = lowest v",
+                               "v = sin(theta_o) sin(phi_o) along rows (y); cell centres; row 0 = highest v "
+                               "(the top row, as image viewers show it; arrays in memory run from the lowest v)",
             "u_range": f"{self.u_range[0]:.17g} {self.u_range[1]:.17g}",
             "v_range": f"{self.v_range[0]:.17g} {self.v_range[1]:.17g}",
             "n_u": str(self.n_u), "n_v": str(self.n_v),

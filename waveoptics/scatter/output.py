@@ -67,7 +67,8 @@ def _write_scatter(result: ScatterResult, out, header) -> None:
     hdr = {**result.grid.header(), "quantity": "BRDF f (1/sr), Kirchhoff model, ensemble mean",
            "incident_theta_deg": f"{th:.17g}", "incident_phi_deg": f"{ph:.17g}", "solver": result.solver,
            "realizations": str(result.realizations), **(header or {})}
-    layers = {float(w): result.brdf[i] for i, w in enumerate(result.wavelengths_nm)}
+    hdr["waveoptics_unit"] = "1/sr (a BRDF, not multiplied by cos theta_o)"
+    layers = {float(w): result.grid.to_image(result.brdf[i]) for i, w in enumerate(result.wavelengths_nm)}
     write_spectral_exr(out / "lobes.exr", layers, hdr)
     plot_scatter(result, out / "lobes.png")
     write_json(out / "summary.json", {**result.summary(), **(header or {})})
