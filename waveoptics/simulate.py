@@ -26,7 +26,7 @@ from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, ma
 from .scatter.grid import DirectionGrid
 from .units import direction_from_angles
 
-__all__ = ['SPHERE_THETAS_DEG', 'memory_estimate', 'check_request_memory', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'output_files',
+__all__ = ['SPHERE_THETAS_DEG', 'memory_estimate', 'check_request_memory', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'SUMMARY_UNITS', 'output_files',
            'render_spheres',
            'plane_of_incidence', 'write_outputs']
 
@@ -284,6 +284,15 @@ def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_
 
 OUTPUT_FILES = ("brdf_spectral.exr", "brdf_rgb.exr", "brdf.png", "sphere_wave.png", "sphere_microfacet.png",
                 "sphere_wave.exr", "sphere_microfacet.exr", "sphere_diff.png", "lobes.png", "summary.json")
+#: units of the quantities in ``summary.json`` (keys ending in _nm, _m, _deg, _s carry their unit in the name)
+SUMMARY_UNITS = {
+    "albedo": "1 (directional albedo: reflected / incident power)", "microfacet_albedo": "1",
+    "diffraction_albedo": "1", "coherent_specular_fraction": "1 (share of the specular energy that stays coherent)",
+    "rgb_albedo": "1, linear RGB of the albedo spectrum under the illuminant, white-balanced to the space white",
+    "microfacet_rgb_albedo": "1, as rgb_albedo", "delta_e2000": "CIEDE2000 colour difference (1 ≈ just noticeable)",
+    "brdf images": "1/sr (BRDF, not multiplied by cos theta_o)", "sphere images": "radiance; irradiance pi",
+}
+
 #: the extra files of an environment-lit render (:func:`write_outputs` with *environment*)
 ENVIRONMENT_FILES = ("sphere_env_wave.exr", "sphere_env_microfacet.exr", "sphere_env.png")
 
@@ -430,6 +439,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
         "timings_s": timings,
         "parameters": sim.params,
         "files": list(files),
+        "units": SUMMARY_UNITS,
     }
     io.write_json(out / "summary.json", summary)
     return summary

@@ -49,7 +49,12 @@ def run(args):
         io.prepare_outdir(args.output, overwrite=args.overwrite, expected=files)
     sim = simulation_from_args(args)
     rows = cmp.compare(sim, angles, tail_deg=args.tail)
-    data = {"parameters": sim.params, "tail_deg": args.tail, "rows": rows}
+    data = {"parameters": sim.params, "tail_deg": args.tail, "rows": rows,
+            "units": {"theta_i_deg": "deg", "albedo_Y_wave": "1 (luminance Y of the albedo's colour)",
+                      "albedo_Y_microfacet": "1", "fwhm_deg_wave": "deg (in the plane of incidence)",
+                      "fwhm_deg_microfacet": "deg", "tail_fraction_wave": "1 (share of the albedo)",
+                      "tail_fraction_microfacet": "1", "delta_e2000_albedo": "CIEDE2000",
+                      "delta_e2000_sphere_mean": "CIEDE2000", "delta_e2000_sphere_max": "CIEDE2000"}}
     if args.output:
 
         out = Path(args.output)

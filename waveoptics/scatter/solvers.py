@@ -356,6 +356,10 @@ class ScatterResult:
             "grid": {"n_u": self.grid.n_u, "n_v": self.grid.n_v, "u_range": self.grid.u_range,
                      "v_range": self.grid.v_range},
             "timings_s": self.timings_s, "warnings": self.warnings, "info": self.info,
+            "units": {"albedo": "1 (reflected / incident power)", "coherent_specular_fraction": "1",
+                      "scattered_fraction": "1", "albedo_inner": "1", "flat_albedo": "1",
+                      "fresnel_specular": "1", "horizon_sin": "1 (sine of the horizon cut)",
+                      "grid": "direction cosines u = sin θ cos φ, v = sin θ sin φ", "lobes.exr": "1/sr"},
         }
 
 
