@@ -297,3 +297,22 @@ def test_exr_images_put_the_highest_v_on_top(tmp_path):
     row, col = np.unravel_index(np.argmax(img), img.shape)
     assert row > img.shape[0] / 2 and abs(col - img.shape[1] / 2) <= 1
     assert "row 0 = highest v" in header["parametrization"] and "1/sr" in header["waveoptics_unit"]
+
+
+def test_simulate_and_scatter_take_units_and_spacing_for_a_bare_text_grid(capsys, tmp_path):
+    """Issue 19: a profilometer grid without a units header was refused with 'pass --units', which simulate and
+    scatter did not have."""
+    h = np.random.default_rng(5).normal(0, 0.01, (48, 48))   # heights in µm, no header
+    np.savetxt(tmp_path / "measured.txt", h)
+    _one_line_error(capsys, ["scatter", "--surface", str(tmp_path / "measured.txt"), "--material", "Al",
+                             "--incident", "30", "--wavelengths", "550", "--resolution", "16", "-o",
+                             str(tmp_path / "s0")], "--units")
+    assert cli_main(["scatter", "--surface", str(tmp_path / "measured.txt"), "--units", "um", "--spacing", "100nm",
+                     "--material", "Al", "--incident", "30", "--wavelengths", "550", "--resolution", "16", "-o",
+                     str(tmp_path / "s1"), "--quiet"]) == 0
+    assert cli_main(["simulate", "--surface", str(tmp_path / "measured.txt"), "--units", "um", "--spacing",
+                     "100nm", "--resolution", "16", "--sphere-size", "16", "--wavelengths", "550", "-o",
+                     str(tmp_path / "s2"), "--quiet", "--json"]) == 0
+    capsys.readouterr()
+    summary = json.loads((tmp_path / "s2" / "summary.json").read_text())
+    assert summary["parameters"]["sigma_nano_m"] == pytest.approx(0.01e-6, rel=0.1)

@@ -26,6 +26,7 @@ def register(sub) -> None:
     p.add_argument("--surface", required=True, metavar="FILE",
                    help="height-field file (.npz .npy .exr .txt .xyz; see 'waveoptics surface')")
     p.add_argument("--spacing", metavar="D[,DY]", help="grid spacing with unit, when the file does not state it")
+    p.add_argument("--units", metavar="UNIT", help="units of the heights in a text or foreign file, e.g. um")
     p.add_argument("--material", required=True, metavar="M",
                    help="material preset, shelf/book/page, constant index (1.5, 0.2+3.1j), f0:VALUE, or 'one' "
                         "for F = 1")
@@ -80,7 +81,7 @@ def run(args) -> int:
     wl = parse_wavelengths(args.wavelengths)
     theta, phi = parse_direction(args.incident, name="--incident")
     order = _order(args.order)
-    hf = surfaces.load(args.surface, spacing=args.spacing)
+    hf = surfaces.load(args.surface, spacing=args.spacing, units=args.units)
     fresnel_function(args.material)      # refuse a bad material before computing
     prepare_outdir(args.output, overwrite=args.overwrite, expected=scatter.SCATTER_FILES)
     rt = get_runtime(args.device) if args.solver == "direct" and args.backend == "opencl" else None

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import os
 
-from ..errors import FieldError
+from ..errors import FieldError, WaveopticsError
 from ..io.files import prepare_outdir
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
@@ -14,6 +14,9 @@ def add_scene_options(p) -> None:
     """Options that describe the surface, light and sampling (shared by simulate and compare)."""
     src = p.add_mutually_exclusive_group()
     src.add_argument("--surface", metavar="FILE", help="nano height field (.npz/.npy/.exr/.txt); fft or direct solver")
+    p.add_argument("--spacing", metavar="D[,DY]", help="grid spacing of --surface with unit, when the file does not "
+                                                       "state it")
+    p.add_argument("--units", metavar="UNIT", help="units of the heights in a --surface text or foreign file, e.g. um")
     src.add_argument("--nano", metavar="MODEL:PARAMS", default=None,
                      help="nano roughness, e.g. abc:sigma=10nm,B=2um,C=2.6 | gaussian:sigma=5nm,T=1um | "
                           "exponential:sigma=5nm,T=1um | sinusoid:amplitude=40nm,period=2um | "
@@ -63,12 +66,23 @@ def request_from_args(args):
         polarization=args.polarization)
 
 
+def _surface(args):
+    """The --surface height field loaded with --spacing/--units when they are given (else the request loads it)."""
+    if args.surface is None or (getattr(args, "spacing", None) is None and getattr(args, "units", None) is None):
+        if getattr(args, "spacing", None) is not None or getattr(args, "units", None) is not None:
+            raise WaveopticsError("--spacing and --units describe a --surface file; give one")
+        return None
+    from .. import surfaces
+
+    return surfaces.load(args.surface, spacing=args.spacing, units=args.units)
+
+
 def simulation_from_args(args, bar=None):
     """Run :func:`waveoptics.simulate.run` on the request of the scene options."""
     from .. import simulate as sim_mod
 
     return sim_mod.run(request_from_args(args), device=args.device,
-                       progress=None if bar is None else bar.update)
+                       progress=None if bar is None else bar.update, surface=_surface(args))
 
 
 def register(sub):
@@ -112,7 +126,8 @@ def run(args):
     prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.output_files(env is not None))
     bar = progress(total=sim_mod.sphere_steps(req), desc="simulate", args=args)
     try:
-        sim = sim_mod.run(req, device=args.device, progress=bar.update, max_memory=args.max_memory)
+        sim = sim_mod.run(req, device=args.device, progress=bar.update, max_memory=args.max_memory,
+                          surface=_surface(args))
     finally:
         bar.close()
     summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size,
