@@ -247,7 +247,8 @@ def test_oren_nayar_limits():
 
 MODEL_CASES = [dict(ndf=n, shadowing=s) for n in brdf.NDFS for s in brdf.SHADOWINGS] + [
     dict(ndf="ggx", alpha_y=0.05), dict(ndf="beckmann", alpha_y=0.6, shadowing="smith"),
-    dict(ndf="ggx", diffuse="oren-nayar", kd=0.7, sigma=0.4), dict(ndf="beckmann", kd=0.5, fresnel="schlick")]
+    dict(ndf="ggx", diffuse="oren-nayar", kd=0.7, sigma=0.4), dict(ndf="beckmann", kd=0.5, fresnel="schlick"),
+    dict(ndf="ggx", diffuse="burley", kd=0.6, sigma=0.8)]
 
 
 @pytest.mark.parametrize("case", MODEL_CASES, ids=lambda c: "-".join(f"{v}" for v in c.values()))
@@ -343,6 +344,7 @@ def _kernel_close(fc, fn, precision):
 
 KERNEL_CASES = [dict(ndf=n, shadowing=s) for n in brdf.NDFS for s in brdf.SHADOWINGS] + [
     dict(fresnel="schlick"), dict(fresnel="one"), dict(diffuse="oren-nayar", sigma=0.4),
+    dict(diffuse="burley", sigma=0.7), dict(diffuse="burley", sigma=0.0, tradeoff=False),
     dict(diffuse="none"), dict(tradeoff=False), dict(ndf="beckmann", alpha_y=0.1),
     dict(ndf="abc", abc_c=0.7)]
 
@@ -441,3 +443,29 @@ def test_cli_errors_are_one_line_exit_2(capsys, argv, msg):
     assert rc == 2
     lines = err.strip().splitlines()
     assert len(lines) == 1 and msg in lines[0], err
+
+
+def test_burley_diffuse_against_the_course_notes():
+    """Burley 2012 §5.3 written here from the notes: (kd/π)(1 + (F_D90 − 1)(1 − cos θl)⁵)(1 + (F_D90 − 1)
+    (1 − cos θv)⁵), F_D90 = 0.5 + 2 r cos²θd; r = 0.25 at θd = 0 gives F_D90 = 1, i.e. Lambert."""
+    rng = np.random.default_rng(9)
+    wi, wo = random_upper(rng, 300), random_upper(rng, 300)
+    for r in (0.0, 0.3, 1.0):
+        h = (wi + wo) / np.linalg.norm(wi + wo, axis=1, keepdims=True)
+        cd = np.sum(wi * h, axis=1)
+        fd90 = 0.5 + 2 * r * cd ** 2
+        ref = 0.7 / np.pi * (1 + (fd90 - 1) * (1 - wi[:, 2]) ** 5) * (1 + (fd90 - 1) * (1 - wo[:, 2]) ** 5)
+        np.testing.assert_allclose(brdf.burley(wi, wo, 0.7, r), ref, rtol=1e-12)
+    n = np.array([0.0, 0.0, 1.0])
+    assert brdf.burley(n, n, 1.0, 0.25) == pytest.approx(1 / np.pi)
+    with pytest.raises(Exception, match="roughness"):
+        brdf.burley(n, n, 1.0, 1.5)
+
+
+def test_burley_albedo_range_as_documented():
+    def E(r, th):
+        wi = np.array([np.sin(np.radians(th)), 0.0, np.cos(np.radians(th))])
+        return float(brdf.directional_albedo(lambda a, b: brdf.burley(a, b, 1.0, r), wi, alpha=1.0))
+    assert E(0.0, 0) == pytest.approx(0.976, abs=2e-3) and E(1.0, 0) == pytest.approx(1.036, abs=2e-3)
+    assert E(0.0, 89) == pytest.approx(0.53, abs=0.01) and E(1.0, 89) == pytest.approx(1.52, abs=0.01)
+    assert all(1.0 <= E(0.5, th) <= 1.03 for th in (0, 30, 60, 75, 85, 89))

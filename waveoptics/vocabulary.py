@@ -23,7 +23,7 @@ DIFFRACTION = ("kirchhoff", "ghs", "rghs", "ohs", "rohs")
 NDF_NAMES = ("ggx", "beckmann", "blinn-phong", "abc")
 SHADOWING_NAMES = ("smith", "smith-correlated", "cook-torrance", "implicit")
 FRESNEL_NAMES = ("exact", "schlick", "one")
-DIFFUSE_NAMES = ("none", "lambert", "oren-nayar")
+DIFFUSE_NAMES = ("none", "lambert", "oren-nayar", "burley")
 
 #: nano-roughness of a request that names none: aluminium-like polish, ABC statistics (Church et al. 1989)
 DEFAULT_NANO = "abc:sigma=10nm,B=2um,C=2.6"

@@ -144,11 +144,11 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
     F0 : array_like, optional
         Normal-incidence reflectance (Schlick).
     diffuse : str
-        ``"none"``, ``"lambert"`` or ``"oren-nayar"``.
+        ``"none"``, ``"lambert"``, ``"oren-nayar"`` or ``"burley"`` (Burley 2012).
     kd : array_like
         Diffuse albedo in [0, 1] (0: no diffuse term; metals have none).
     sigma : float
-        Oren-Nayar roughness (radians), separate from the specular α.
+        Diffuse roughness, separate from the specular α: Oren-Nayar σ in radians, or Burley's r in [0, 1].
     tradeoff : bool
         Weight the diffuse term by :func:`diffuse_tradeoff` (energy conservation between the two terms).
 
@@ -175,6 +175,9 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
     sigma = float(sigma)
     if not np.isfinite(sigma) or sigma < 0:
         raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")
+    if diffuse == "burley" and sigma > 1:
+        raise WaveopticsError(f"sigma={sigma!r} is not allowed for the burley diffuse term; its roughness r must be "
+                              "in [0, 1]")
     wi = _as_dirs(wi, "wi")
     wo = _as_dirs(wo, "wo")
     wi, wo = np.broadcast_arrays(wi, wo)

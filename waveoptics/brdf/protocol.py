@@ -179,7 +179,7 @@ class MicrofacetBRDF(BRDF):
     abc_c : float
         Tail exponent of the ABC NDF.
     diffuse_sigma : float
-        Oren-Nayar roughness σ in radians (separate from the specular α).
+        Diffuse roughness, separate from the specular α: Oren-Nayar σ in radians, Burley's r in [0, 1].
 
     Sampling: visible normals for GGX, D cos θ_m for the other NDFs (:mod:`waveoptics.brdf.sampling`), cosine
     sampling for the diffuse term, mixed in proportion F(θ_i) : kd (1 − F(θ_i)).

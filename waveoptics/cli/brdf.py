@@ -75,6 +75,8 @@ def _microfacet_arguments(g) -> None:
     g.add_argument("--kd", type=float, default=0.0, metavar="C", help="diffuse albedo in [0, 1] (default 0)")
     g.add_argument("--sigma", type=float, default=0.0, metavar="DEG",
                    help="Oren-Nayar roughness σ in degrees (separate from the specular α)")
+    g.add_argument("--diffuse-roughness", type=float, default=0.5, metavar="R",
+                   help="Burley diffuse roughness r in [0, 1] (--diffuse burley; default 0.5)")
     g.add_argument("--no-tradeoff", action="store_true",
                    help="do not weight the diffuse term by (1 - F(θi))(1 - F(θo)) / (1 - F̄)")
     g.add_argument("--backend", choices=["numpy", "opencl"], default="numpy",
@@ -105,8 +107,11 @@ def _microfacet_params(args, wavelength_nm) -> dict:
         raise WaveopticsError(f"--sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
                               "[0, 90] degrees")
     abc_c = brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c
+    if args.diffuse == "burley" and not 0 <= args.diffuse_roughness <= 1:
+        raise WaveopticsError(f"--diffuse-roughness {args.diffuse_roughness!r} is not allowed; it must be in [0, 1]")
+    sigma = args.diffuse_roughness if args.diffuse == "burley" else float(np.radians(args.sigma))
     return dict(alpha=alpha, alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing, abc_c=abc_c,
-                diffuse=args.diffuse, kd=args.kd, sigma=float(np.radians(args.sigma)),
+                diffuse=args.diffuse, kd=args.kd, sigma=sigma,
                 tradeoff=not args.no_tradeoff, **fi)
 
 

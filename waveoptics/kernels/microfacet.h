@@ -7,7 +7,7 @@
  *   WO_NDF       0 ggx [0], 1 beckmann, 2 blinn-phong, 3 abc
  *   WO_SHADOWING 0 smith, 1 smith-correlated [1], 2 cook-torrance, 3 implicit
  *   WO_FRESNEL   0 exact (complex eta) [0], 1 schlick (F0), 2 one (white furnace)
- *   WO_DIFFUSE   0 none, 1 lambert [1], 2 oren-nayar;   WO_TRADEOFF 0/1 [1]
+ *   WO_DIFFUSE   0 none, 1 lambert [1], 2 oren-nayar, 3 burley;   WO_TRADEOFF 0/1 [1]
  * References: Cook & Torrance, ACM TOG 1(1) 1982; Walter et al., EGSR 2007; Heitz, JCGT 3(2) 2014;
  * Loew et al., ACM TOG 31(1) 2012 (ABC); Oren & Nayar, SIGGRAPH 1994; Shirley et al., Pacific Graphics 1997.
  */
@@ -297,6 +297,22 @@ inline real_t oren_nayar(real3_t wi, real3_t wo, real_t kd, real_t sigma)
     return kd / WO_PI * (A + B * proj / fmax(wi.z, wo.z));
 }
 
+/* Burley's diffuse (Burley 2012 §5.3; twin: brdf.diffuse._burley); r in [0, 1] arrives as `sigma` */
+inline real_t burley(real3_t wi, real3_t wo, real_t kd, real_t r)
+{
+    if (wi.z <= R(0.0) || wo.z <= R(0.0)) return R(0.0);
+    real3_t s = wi + wo;
+    real_t len = length(s);
+    real3_t h = (len > R(0.0)) ? s / len : (real3_t)(R(0.0), R(0.0), R(1.0));
+    real_t cd = wo_clamp(dot(wi, h), R(0.0), R(1.0));
+    real_t fd90 = R(0.5) + R(2.0) * r * cd * cd;
+    real_t a = R(1.0) - wo_clamp(wi.z, R(0.0), R(1.0));
+    real_t b = R(1.0) - wo_clamp(wo.z, R(0.0), R(1.0));
+    real_t a5 = a * a * a * a * a;
+    real_t b5 = b * b * b * b * b;
+    return kd / WO_PI * (R(1.0) + (fd90 - R(1.0)) * a5) * (R(1.0) + (fd90 - R(1.0)) * b5);
+}
+
 inline real_t lambert(real3_t wi, real3_t wo, real_t kd)
 {
     return (wi.z <= R(0.0) || wo.z <= R(0.0)) ? R(0.0) : kd / WO_PI;
@@ -319,6 +335,8 @@ inline real_t brdf(real3_t wi, real3_t wo, real_t ax, real_t ay, real_t c, cplx_
     if (kd > R(0.0)) {
 #if WO_DIFFUSE == 1
         real_t fd = lambert(wi, wo, kd);
+#elif WO_DIFFUSE == 3
+        real_t fd = burley(wi, wo, kd, sigma);
 #else
         real_t fd = oren_nayar(wi, wo, kd, sigma);
 #endif
