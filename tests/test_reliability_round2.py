@@ -316,3 +316,11 @@ def test_simulate_and_scatter_take_units_and_spacing_for_a_bare_text_grid(capsys
     capsys.readouterr()
     summary = json.loads((tmp_path / "s2" / "summary.json").read_text())
     assert summary["parameters"]["sigma_nano_m"] == pytest.approx(0.01e-6, rel=0.1)
+
+
+@pytest.mark.parametrize("workers", [None, "2"])
+def test_a_task_error_on_dask_workers_is_one_line(capsys, tmp_path, workers):
+    """Issue 17: an error raised on the workers printed a 20-line worker log per task before the one-line error."""
+    argv = ["table", "--nano", "abc:sigma=500nm,B=2um,C=2.6", "--material", "Au", "--incident-angles", "0,30",
+            "--wavelengths", "450,550", "--resolution", "16", "-o", str(tmp_path / "t.h5")]
+    _one_line_error(capsys, argv + (["--workers", workers] if workers else []), "too rough")

@@ -46,6 +46,7 @@ References
 from __future__ import annotations
 
 import contextlib
+import logging
 import time
 from typing import Callable, NamedTuple
 
@@ -70,7 +71,10 @@ __all__ = ['LOOPBACK', 'dask_client', 'local_cluster', 'WarmWorker', 'DEFAULT_RE
 #: scheduler and each worker still serve health/metrics over HTTP, on all interfaces (0.0.0.0:8787 and a random
 #: port) unless given an address; the dashboard itself stays off.
 LOOPBACK = dict(dashboard_address=None, worker_dashboard_address="127.0.0.1:0",
-                scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"})
+                scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+                # a task's error reaches the user once, as the one-line error of the command; the workers' own
+                # ERROR logs of it ("Compute Failed", 20 lines with a traceback per task) are noise
+                silence_logs=logging.CRITICAL)
 
 
 def _check_cluster_args(workers, scheduler) -> None:
