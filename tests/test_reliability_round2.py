@@ -324,3 +324,19 @@ def test_a_task_error_on_dask_workers_is_one_line(capsys, tmp_path, workers):
     argv = ["table", "--nano", "abc:sigma=500nm,B=2um,C=2.6", "--material", "Au", "--incident-angles", "0,30",
             "--wavelengths", "450,550", "--resolution", "16", "-o", str(tmp_path / "t.h5")]
     _one_line_error(capsys, argv + (["--workers", workers] if workers else []), "too rough")
+
+
+def test_a_unitless_spacing_in_a_scene_file_is_refused(tmp_path):
+    """Issue 17: spacing = 5 in a scene meant 5 m while --spacing 5 on the command line is refused."""
+    from waveoptics import surfaces
+    from waveoptics.planning import scene
+
+    surfaces.save(surfaces.gaussian("5nm", "1um", "16um", 32, seed=1), tmp_path / "h.npz")
+    text = ('name = "t"\n[[materials]]\nname = "m"\nmaterial = "Au"\nroughness = 0.1\n[materials.nano]\n'
+            'file = {path = "h.npz", spacing = SPACING}\n[[lights]]\nname = "sun"\nspd = "D65"\n'
+            'directions_deg = [[30, 0]]\n')
+    (tmp_path / "bad.toml").write_text(text.replace("SPACING", "5"))
+    with pytest.raises(WaveopticsError, match=r"spacing = 5 needs a unit"):
+        scene.load(tmp_path / "bad.toml")
+    (tmp_path / "good.toml").write_text(text.replace("SPACING", '"5nm"'))
+    scene.load(tmp_path / "good.toml")

@@ -61,6 +61,7 @@ from ..vocabulary import DIFFRACTION
 from ..errors import WaveopticsError, did_you_mean
 from ..materials.database import get_material
 from ..request import parse_nano
+from ..units import parse_length
 
 try:  # Python >= 3.11
     import tomllib
@@ -320,6 +321,16 @@ def _nano(ctx, value, key, base: Path) -> NanoSpec:
     if not p.is_file():
         raise ctx.err(k, f"= {str(p)!r} does not exist (paths are relative to the scene file)")
     opts = {q: f[q] for q in ("spacing", "units") if q in f}
+    if "spacing" in opts:   # the command line's rule: a length always carries its unit (5 would mean 5 m)
+        values = opts["spacing"] if isinstance(opts["spacing"], list) else [opts["spacing"]]
+        for v in values:
+            if not isinstance(v, str):
+                raise ctx.err(k + ".spacing", f"= {v!r} needs a unit, e.g. \"50nm\" (as --spacing on the command "
+                                              "line)")
+            try:
+                parse_length(v, name="spacing")
+            except ValueError as exc:
+                raise ctx.err(k + ".spacing", f"= {v!r}: {str(exc).split(': ', 1)[-1]}") from None
     return NanoSpec("file", path=p, params=opts)
 
 
