@@ -231,8 +231,24 @@ def test_cli_twoscale_values_and_parts(capsys):
     assert sum(v["components"].values()) == pytest.approx(v["brdf"], rel=1e-12)
 
 
-def test_cli_twoscale_refuses_a_height_field(capsys, tmp_path):
-    code = cli_main(["brdf", "--model", "twoscale", "--material", "gold", "--alpha", "0.1",
-                     "--surface", str(tmp_path / "x.npz"), "--incident", "30", "--albedo"])
+def test_cli_twoscale_with_a_height_field(capsys, tmp_path):
+    """--surface: the diffracted part is the grid model's Kirchhoff lobe of that height field at the requested
+    incidence (a table node: nothing interpolated in θ_i), read bilinearly at the outgoing direction."""
+    from waveoptics import surfaces
+
+    hf = surfaces.gaussian("8nm", "1.5um", "32um", 128, seed=1)
+    surfaces.save(hf, tmp_path / "h.npz")
+    code = cli_main(["brdf", "--model", "twoscale", "--material", "gold", "--alpha", "0.05", "--surface",
+                     str(tmp_path / "h.npz"), "--incident", "30", "--outgoing", "40,180", "--wavelength", "550",
+                     "--resolution", "64", "--json", "--quiet"])
+    assert code == 0
+    v = json.loads(capsys.readouterr().out)["values"][0]
+    grid = DirectionGrid.hemisphere(64)
+    L = brdf.evaluate(_dir(30), [550.0], "gold", Micro(alpha=0.05), brdf.Nano(surface=hf), grid, solver="fft")
+    wo = _dir(40, 180)
+    assert v["components"]["diffraction"] == pytest.approx(float(grid.interpolate(L.diffraction[0], wo[0], wo[1])),
+                                                           rel=1e-6)
+    code = cli_main(["brdf", "--model", "twoscale", "--material", "gold", "--alpha", "0.1", "--nano",
+                     "gaussian:sigma=5nm,T=1um", "--surface", str(tmp_path / "h.npz"), "--incident", "30", "--albedo"])
     err = capsys.readouterr().err
-    assert code == 2 and "--nano" in err and err.count("\n") == 1
+    assert code == 2 and "only one of" in err and err.count("\n") == 1

@@ -376,15 +376,30 @@ def _twoscale_arguments(g) -> None:
     --diffraction; nothing of its own."""
 
 
-def _twoscale_setup(args, wavelength_nm):
+def _twoscale_setup(args, wavelength_nm, wi=None):
+    """The two-scale BRDF function of the options, built once per command (evaluation, parts and albedo share it).
+
+    With ``--nano`` statistics it is :class:`waveoptics.brdf.TwoScaleBRDF` (exact at any direction pair); with a
+    ``--surface`` height field, :class:`waveoptics.brdf.TabulatedTwoScaleBRDF` with its incidence nodes at the
+    requested incident angles (so nothing is interpolated in θ_i) and 4 light azimuths."""
     import numpy as np
 
-    from .. import brdf
+    key = (tuple(np.asarray(wavelength_nm, dtype=float).tolist()),
+           None if wi is None else tuple(np.round(np.degrees(np.arccos(np.clip(wi[:, 2], -1, 1))), 9)))
+    cache = args.__dict__.setdefault("_brdf_functions", {})
+    if key not in cache:
+        cache[key] = _twoscale_build(args, wavelength_nm, wi)
+    return cache[key]
+
+
+def _twoscale_build(args, wavelength_nm, wi):
+    import numpy as np
+
+    from .. import brdf, surfaces
     from ..request import make_nano
 
-    if args.surface:
-        raise WaveopticsError("--model twoscale takes nano statistics (--nano MODEL:params); a nano height field "
-                              "(--surface) is evaluated on a direction grid by 'waveoptics simulate --surface'")
+    if args.surface and args.nano:
+        raise WaveopticsError("give only one of --nano MODEL:params and --surface FILE for --model twoscale")
     if args.polarization != "unpolarized":
         raise WaveopticsError(f"--polarization {args.polarization} is not available for --model twoscale "
                               "(unpolarized only; polarized two-scale lobes: 'waveoptics simulate --polarization')")
@@ -401,17 +416,27 @@ def _twoscale_setup(args, wavelength_nm):
         raise WaveopticsError(f"--sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
                               "[0, 90] degrees")
     micro = brdf.Micro(alpha=_alpha(args), alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing)
-    nano = make_nano(args.nano or _default_nano(), wavelength_nm)
-    return brdf.TwoScaleBRDF(material=spec if spec is not None else "aluminium", micro=micro, nano=nano,
-                             kd=args.kd, diffuse=args.diffuse, fresnel=args.fresnel,
-                             abc_c=brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c,
-                             diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction)
+    common = dict(material=spec if spec is not None else "aluminium", micro=micro, kd=args.kd,
+                  diffuse=args.diffuse, fresnel=args.fresnel,
+                  abc_c=brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c,
+                  diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction)
+    if args.surface:
+        nano = brdf.Nano(surface=surfaces.load(args.surface, spacing=args.spacing))
+        thetas = (0.0,) if wi is None else tuple(sorted(set(
+            float(t) for t in np.round(np.degrees(np.arccos(np.clip(wi[:, 2], -1, 1))), 9))))
+        return brdf.TabulatedTwoScaleBRDF(nano=nano, wavelengths_nm=tuple(np.asarray(wavelength_nm, dtype=float)),
+                                          resolution=args.resolution or 128, thetas_deg=thetas, solver="fft",
+                                          **common)
+    return brdf.TwoScaleBRDF(nano=make_nano(args.nano or _default_nano(), wavelength_nm), **common)
 
 
 def _twoscale_describe(args) -> dict:
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
                                        "fresnel", "diffuse", "kd", "diffraction")}
-    d["nano"] = args.nano or _default_nano()
+    if args.surface:
+        d["surface"] = args.surface
+    else:
+        d["nano"] = args.nano or _default_nano()
     return d
 
 
@@ -423,7 +448,7 @@ def _table_arguments(g) -> None:
     g.add_argument("--table", metavar="FILE", help="BRDF table written by 'waveoptics table' (.h5)")
 
 
-def _table_setup(args, wavelength_nm):
+def _table_setup(args, wavelength_nm, wi=None):
     from ..distributed.table import open_table
 
     if not args.table:
@@ -440,19 +465,19 @@ def _table_describe(args) -> dict:
 
 
 def _function_model(add_arguments, setup, describe, help_text) -> Model:
-    """A :class:`Model` whose *setup(args, wavelength_nm)* returns a BRDF function with ``eval``, ``eval_parts``
+    """A :class:`Model` whose *setup(args, wavelength_nm, wi)* returns a BRDF function with ``eval``, ``eval_parts``
     and ``albedo`` (directions (n, 3), wavelengths (n_λ,); results (n_λ, n_in, n_out) and (n_λ, n_in))."""
 
     def evaluate(args, wi, wo, wavelength_nm):
-        return setup(args, wavelength_nm).eval(wi[None, :, None, :], wo[None, None, :, :],
-                                               wavelength_nm[:, None, None])
+        return setup(args, wavelength_nm, wi).eval(wi[None, :, None, :], wo[None, None, :, :],
+                                                   wavelength_nm[:, None, None])
 
     def components(args, wi, wo, wavelength_nm):
-        return setup(args, wavelength_nm).eval_parts(wi[None, :, None, :], wo[None, None, :, :],
-                                                     wavelength_nm[:, None, None])
+        return setup(args, wavelength_nm, wi).eval_parts(wi[None, :, None, :], wo[None, None, :, :],
+                                                         wavelength_nm[:, None, None])
 
     def albedo(args, wi, wavelength_nm):
-        return setup(args, wavelength_nm).albedo(wi[None, :, :], wavelength_nm[:, None])
+        return setup(args, wavelength_nm, wi).albedo(wi[None, :, :], wavelength_nm[:, None])
 
     return Model(add_arguments, evaluate, albedo, describe, help_text, components=components)
 
