@@ -180,6 +180,9 @@ class MicrofacetBRDF(BRDF):
         Tail exponent of the ABC NDF.
     diffuse_sigma : float
         Diffuse roughness, separate from the specular α: Oren-Nayar σ in radians, Burley's r in [0, 1].
+    multiple_scattering : bool
+        Add Kulla & Conty's (2017) compensation lobe for light that bounces between facets
+        (:mod:`waveoptics.brdf.multiscatter`): the white furnace then holds at every incidence.
 
     Sampling: visible normals for GGX, D cos θ_m for the other NDFs (:mod:`waveoptics.brdf.sampling`), cosine
     sampling for the diffuse term, mixed in proportion F(θ_i) : kd (1 − F(θ_i)).
@@ -198,6 +201,7 @@ class MicrofacetBRDF(BRDF):
     fresnel: str = "exact"
     abc_c: float = ABC_C_DEFAULT
     diffuse_sigma: float = 0.0
+    multiple_scattering: bool = False
 
     def __post_init__(self):
         if not (np.isfinite(self.diffuse_sigma) and 0 <= self.diffuse_sigma <= np.pi / 2):
@@ -252,18 +256,49 @@ class MicrofacetBRDF(BRDF):
         ndf, ax, ay = self._micro_args()
         return pdf_reflected(wi, wo, ndf=ndf, ax=ax, ay=ay, c=self.abc_c)
 
+    # -- multiple scattering (Kulla & Conty 2017) ------------------------------------------------------------
+    def _ms_table(self):
+        from .multiscatter import albedo_table
+
+        ndf, ax, ay = self._micro_args()
+        return albedo_table(ndf, float(np.sqrt(ax * ay)), self.micro.shadowing, float(self.abc_c))
+
+    def _F_ms(self, lam):
+        from .fresnel_terms import F_mean
+        from .multiscatter import F_ms
+
+        return float(F_ms(float(F_mean(self._F(lam))), self._ms_table().E_avg))
+
+    def _f_ms(self, wi, wo, lam):
+        if not self.multiple_scattering:
+            return np.zeros(wi.shape[0])
+        from .multiscatter import f_ms
+
+        return f_ms(wi[:, 2], wo[:, 2], self._ms_table()) * self._F_ms(lam)
+
     # -- protocol ------------------------------------------------------------------------------------------
     def _eval1(self, wi, wo, lam):
         F_fn = self._F(lam)
-        return self._f_specular(wi, wo, F_fn) + self._f_diffuse(wi, wo, F_fn)
+        return self._f_specular(wi, wo, F_fn) + self._f_diffuse(wi, wo, F_fn) + self._f_ms(wi, wo, lam)
+
+    def _p_cosine(self, wi, lam):
+        """Probability of cosine sampling: the diffuse term and the multiple-scattering lobe, against F(θ_i) for the
+        specular lobe."""
+        pd = self._p_diffuse(wi, lam)
+        if not self.multiple_scattering:
+            return pd
+        Fi = self._F(lam)(np.clip(wi[:, 2], 0.0, 1.0))
+        d = pd * Fi / np.maximum(1.0 - pd, 1e-300)          # kd (1 − F) in the units of Fi
+        m = (1.0 - self._ms_table()(wi[:, 2])) * self._F_ms(lam)
+        return (d + m) / np.maximum(Fi + d + m, 1e-300)
 
     def _pdf1(self, wi, wo, lam):
-        pd = self._p_diffuse(wi, lam)
-        return (1.0 - pd) * self._pdf_specular(wi, wo) + pd * pdf_cosine(wo)
+        pc = self._p_cosine(wi, lam)
+        return (1.0 - pc) * self._pdf_specular(wi, wo) + pc * pdf_cosine(wo)
 
     def _sample1(self, wi, u, lam):
-        pd = self._p_diffuse(wi, lam)
-        idx, u[:, 0] = lobe_choice(u[:, 0], [1.0 - pd, pd])
+        pc = self._p_cosine(wi, lam)
+        idx, u[:, 0] = lobe_choice(u[:, 0], [1.0 - pc, pc])
         return np.where((idx == 1)[:, None], sample_cosine(u), self._sample_specular(wi, u))
 
     def _albedo_parts(self, lam):
