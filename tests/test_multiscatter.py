@@ -52,3 +52,23 @@ def test_reciprocity_and_sampling_with_compensation():
         return np.where((s.weight > 0)[:, None], s.wo, np.nan)
     r = chi2_test(sample, lambda x: b.pdf(d, x, 550.0), sample_count=100_000, res=41, ires=6)
     assert r.passed, r.message
+
+
+def test_two_scale_models_refuse_the_option_instead_of_ignoring_it():
+    from waveoptics.brdf import TwoScaleBRDF
+    from waveoptics.request import make_nano
+
+    with pytest.raises(Exception, match="multiple_scattering is not available for the two-scale model"):
+        TwoScaleBRDF("Au", Micro(alpha=0.3), nano=make_nano("gaussian:sigma=5nm,T=1um", [550.0]),
+                     multiple_scattering=True)
+
+
+def test_diffuse_and_compensation_sampling_of_a_dielectric_passes_chi2():
+    b = MicrofacetBRDF("PMMA", Micro(alpha=1.0, ndf="beckmann"), kd=0.8, multiple_scattering=True)
+    d = _dir(70)
+
+    def sample(u):
+        s = b.sample(d, 450.0, u)
+        return np.where((s.weight > 0)[:, None], s.wo, np.nan)
+    r = chi2_test(sample, lambda x: b.pdf(d, x, 450.0), sample_count=100_000, res=41, ires=6)
+    assert r.passed, r.message

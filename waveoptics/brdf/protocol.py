@@ -284,11 +284,10 @@ class MicrofacetBRDF(BRDF):
     def _p_cosine(self, wi, lam):
         """Probability of cosine sampling: the diffuse term and the multiple-scattering lobe, against F(θ_i) for the
         specular lobe."""
-        pd = self._p_diffuse(wi, lam)
         if not self.multiple_scattering:
-            return pd
+            return self._p_diffuse(wi, lam)
         Fi = self._F(lam)(np.clip(wi[:, 2], 0.0, 1.0))
-        d = pd * Fi / np.maximum(1.0 - pd, 1e-300)          # kd (1 − F) in the units of Fi
+        d = self.kd * (1.0 - Fi) if self._has_diffuse() else np.zeros(wi.shape[0])
         m = (1.0 - self._ms_table()(wi[:, 2])) * self._F_ms(lam)
         return (d + m) / np.maximum(Fi + d + m, 1e-300)
 
@@ -319,6 +318,13 @@ class TwoScaleParts(MicrofacetBRDF):
 
     nano: object = None          # waveoptics.brdf.Nano or None
     diffraction: str = "kirchhoff"
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.multiple_scattering:
+            raise FieldError("multiple_scattering is not available for the two-scale model yet (its coherent and "
+                             "diffracted parts both come from the single-scattering lobe); use MicrofacetBRDF",
+                             "multiple_scattering")
 
     @property
     def _rough(self) -> bool:
