@@ -12,7 +12,7 @@ $(STAMP): pyproject.toml scripts/install-opencl.sh
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV) || { \
 	  echo "python3 -m venv failed; trying Debian's python3-venv"; \
 	  apt-get update -qq && apt-get install -y -qq python3-venv >/dev/null && $(PYTHON) -m venv $(VENV); }
-	$(PY) -m pip install -q --disable-pip-version-check -e '.[test]'
+	$(PY) -m pip install -q --disable-pip-version-check -e '.[test,instruments]'
 	bash scripts/install-opencl.sh $(PY)
 	@touch $(STAMP)
 

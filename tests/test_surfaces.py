@@ -380,7 +380,8 @@ def _write(path, content):
     ("bin.xyz", lambda p: _write(p, b"\x00\x01\x02"), "binary data"),
     ("nospacing.npy", lambda p: np.save(p, np.zeros((3, 3))), "does not state its grid spacing"),
     ("badunit.txt", lambda p: _write(p, "# units = furlong\n# dx = 5\n1 2\n"), "unknown units 'furlong'"),
-    ("surface.tif", lambda p: _write(p, b"II*\x00"), "unsupported extension '.tif'"),
+    ("surface.bmp", lambda p: _write(p, b"BM\x00\x00"), "unsupported extension '.bmp'"),
+    ("surface.tif", lambda p: _write(p, b"II*\x00"), "not in an instrument format SurfaceTopography can read"),
     ("grid.xyz", lambda p: _write(p, "# units = um\n0 0 1\n0.3 0 1\n1 0 2\n"), "not on a regular grid"),
     ("dup.xyz", lambda p: _write(p, "# units = um\n0 0 1\n1 0 1\n1 0 2\n"), "duplicate"),
 ])

@@ -48,6 +48,48 @@ def add_common(parser, *, json: bool = True, device: bool = True) -> None:
     parser.add_argument("--quiet", action="store_true", help="do not print warnings")
 
 
+#: what ``--surface`` reads, in every command's help
+SURFACE_FORMATS_HELP = (".npz .npy .exr .txt .csv .xyz, or an instrument file (.x3p .sur .datx .sdf .opd .plu .gwy "
+                        ".nc ..., read by SurfaceTopography)")
+
+
+def add_surface(parser, *, group=None, required: bool = False, help: str | None = None, positional: bool = False):
+    """Add the height-field file option (``--surface FILE``, or a positional FILE) and the options that complete
+    a file's metadata, ``--spacing``, ``--units`` and ``--channel``, with the same meaning in every command
+    (:func:`load_surface` reads them)."""
+    text = help or f"height-field file: {SURFACE_FORMATS_HELP}"
+    if positional:
+        parser.add_argument("surface", metavar="FILE", help=text)
+    else:
+        (group or parser).add_argument("--surface", required=required, metavar="FILE", help=text)
+    parser.add_argument("--spacing", metavar="D[,DY]",
+                        help="grid spacing of the height field with unit, e.g. 50nm or 50nm,80nm: needed when the "
+                             "file does not state it, and overrides it when it does")
+    parser.add_argument("--units", metavar="UNIT",
+                        help="unit of heights and lengths in a height-field file that does not state it: "
+                             "m, mm, um, nm, pm or A")
+    parser.add_argument("--channel", metavar="N|NAME",
+                        help="data channel of an instrument file, by index or name (default: the file's height "
+                             "channel)")
+
+
+def load_surface(args, *, required: bool = True):
+    """The height field named by ``--surface`` (or the positional FILE), read with ``--spacing``, ``--units``,
+    ``--channel`` (and ``--layout``, ``--nan-is-mask`` where the command has them); None when no file is named
+    and *required* is False. Metadata options without a file are refused."""
+    if args.surface is None:
+        given = [f"--{k}" for k in ("spacing", "units", "channel") if getattr(args, k, None) is not None]
+        if given:
+            from ..errors import WaveopticsError
+
+            raise WaveopticsError(f"{' and '.join(given)} describe a --surface file; give one")
+        return None
+    from .. import surfaces
+
+    return surfaces.load(args.surface, spacing=args.spacing, units=args.units, channel=args.channel,
+                         layout=getattr(args, "layout", None), nan_is_mask=getattr(args, "nan_is_mask", False))
+
+
 def add_output(parser, *, required: bool = True, help: str = "output directory") -> None:
     """Add ``-o/--output`` and ``--overwrite``."""
     parser.add_argument("-o", "--output", required=required, metavar="OUTDIR", help=help)

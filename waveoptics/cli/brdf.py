@@ -19,7 +19,7 @@ from typing import Callable
 from ..errors import WaveopticsError
 from ..vocabulary import DIFFRACTION, DIFFUSE_NAMES, FRESNEL_NAMES, NDF_NAMES, POLARIZATIONS, SHADOWING_NAMES
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
-from ._common import add_common, emit, progress
+from ._common import add_common, add_surface, emit, load_surface, progress
 
 
 @dataclass(frozen=True)
@@ -200,8 +200,7 @@ def _microfacet_describe(args) -> dict:
 
 
 def _kirchhoff_arguments(g) -> None:
-    g.add_argument("--surface", metavar="FILE", help="height-field file (.npz .npy .exr .txt .xyz)")
-    g.add_argument("--spacing", metavar="D[,DY]", help="grid spacing with unit, when the file does not state it")
+    add_surface(g)
     g.add_argument("--solver", choices=("direct", "fft"), default="direct",
                    help="direct Kirchhoff sum (default; --backend numpy|opencl) or fft on a hemisphere grid "
                         "(interpolated at the outgoing directions)")
@@ -215,7 +214,6 @@ def _kirchhoff_arguments(g) -> None:
 
 def _kirchhoff_setup(args, wavelength_nm):
 
-    from .. import surfaces
     from ..materials.database import get_material
     from ..materials.fresnel import F_schlick
     from ..runtime import get_runtime
@@ -239,7 +237,7 @@ def _kirchhoff_setup(args, wavelength_nm):
                 return F_schlick(c, _m.F0(w))
         else:
             F = mat
-    hf = surfaces.load(args.surface, spacing=args.spacing)
+    hf = load_surface(args)
     rt = None
     if args.backend == "opencl" and args.solver == "direct":
 
@@ -305,7 +303,7 @@ def _rayleigh_rice_setup(args, wavelength_nm):
         raise WaveopticsError("--model rayleigh-rice needs exactly one of --nano MODEL:params (height statistics) "
                               "and --surface FILE (its periodogram is the PSD)")
     if args.surface:
-        psd = surfaces.PeriodogramPSD(surfaces.load(args.surface, spacing=args.spacing))
+        psd = surfaces.PeriodogramPSD(load_surface(args))
     else:
         model, p = parse_nano(args.nano)
         if model not in surfaces.PSD_MODELS:
@@ -395,7 +393,7 @@ def _twoscale_setup(args, wavelength_nm, wi=None):
 def _twoscale_build(args, wavelength_nm, wi):
     import numpy as np
 
-    from .. import brdf, surfaces
+    from .. import brdf
     from ..request import make_nano
 
     if args.surface and args.nano:
@@ -421,7 +419,7 @@ def _twoscale_build(args, wavelength_nm, wi):
                   abc_c=brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c,
                   diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction)
     if args.surface:
-        nano = brdf.Nano(surface=surfaces.load(args.surface, spacing=args.spacing))
+        nano = brdf.Nano(surface=load_surface(args))
         thetas = (0.0,) if wi is None else tuple(sorted(set(
             float(t) for t in np.round(np.degrees(np.arccos(np.clip(wi[:, 2], -1, 1))), 9))))
         return brdf.TabulatedTwoScaleBRDF(nano=nano, wavelengths_nm=tuple(np.asarray(wavelength_nm, dtype=float)),

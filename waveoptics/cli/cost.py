@@ -7,7 +7,7 @@ from __future__ import annotations
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
 from ..units import parse_direction
-from ._common import add_common, emit, progress
+from ._common import add_common, add_surface, emit, load_surface, progress
 
 
 def _list(text, conv, name):
@@ -29,11 +29,10 @@ def register(sub) -> None:
                                    "ΔE2000 of the albedo colour and the wall time; mark the Pareto front and "
                                    "recommend the fastest setting meeting --target-error.")
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--surface", metavar="FILE", help="height-field file (see 'waveoptics surface')")
+    add_surface(p, group=src)
     src.add_argument("--model", default="gaussian:sigma=20nm,corr_length=1um", metavar="MODEL:k=v,...",
                      help="surface generator and parameters (default gaussian:sigma=20nm,corr_length=1um; e.g. "
                           "sinusoid:amplitude=40nm,period=1.6um)")
-    p.add_argument("--spacing", metavar="D[,DY]", help="grid spacing with unit, when the file does not state it")
     p.add_argument("--size", default="12.8um", help="model patch size with unit (default 12.8um)")
     p.add_argument("--samples", default="128", help="model grid samples per side (default 128)")
     p.add_argument("--seed", type=int, default=0, help="seed of the first realization (default 0)")
@@ -63,7 +62,6 @@ def register(sub) -> None:
 def run(args) -> int:
 
     from .. import cost
-    from .. import surfaces
     from ..materials import fresnel_function
     from ..runtime import get_runtime
 
@@ -72,7 +70,7 @@ def run(args) -> int:
 
     fresnel_function(mat)                                   # refuse a bad material before computing
     if args.surface:
-        hf = surfaces.load(args.surface, spacing=args.spacing)
+        hf = load_surface(args)
         cfg = cost.Config(hf, mat, (theta, phi), args.illuminant, False, args.seed, str(args.surface))
     else:
         cfg = cost.model_config(args.model, args.size, int(_list(args.samples, int, "--samples")[0]), material=mat,

@@ -15,7 +15,7 @@ from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
 from ..vocabulary import DIFFRACTION, POLARIZATIONS
 from ..units import parse_direction, parse_wavelengths
-from ._common import add_common, add_output, emit, progress
+from ._common import add_common, add_output, add_surface, emit, load_surface, progress
 
 
 def register(sub) -> None:
@@ -23,10 +23,7 @@ def register(sub) -> None:
                        description="Compute the Kirchhoff (wave-optics) BRDF of a height-field patch over the "
                                    "whole projected hemisphere for each wavelength, with its directional albedo "
                                    "and the coherent (specular) and scattered fractions.")
-    p.add_argument("--surface", required=True, metavar="FILE",
-                   help="height-field file (.npz .npy .exr .txt .xyz; see 'waveoptics surface')")
-    p.add_argument("--spacing", metavar="D[,DY]", help="grid spacing with unit, when the file does not state it")
-    p.add_argument("--units", metavar="UNIT", help="units of the heights in a text or foreign file, e.g. um")
+    add_surface(p, required=True)
     p.add_argument("--material", required=True, metavar="M",
                    help="material preset, shelf/book/page, constant index (1.5, 0.2+3.1j), f0:VALUE, or 'one' "
                         "for F = 1")
@@ -74,14 +71,13 @@ def _order(text):
 def run(args) -> int:
 
     from .. import scatter
-    from .. import surfaces
     from ..materials.database import fresnel_function
     from ..runtime import get_runtime
 
     wl = parse_wavelengths(args.wavelengths)
     theta, phi = parse_direction(args.incident, name="--incident")
     order = _order(args.order)
-    hf = surfaces.load(args.surface, spacing=args.spacing, units=args.units)
+    hf = load_surface(args)
     fresnel_function(args.material)      # refuse a bad material before computing
     prepare_outdir(args.output, overwrite=args.overwrite, expected=scatter.SCATTER_FILES)
     rt = get_runtime(args.device) if args.solver == "direct" and args.backend == "opencl" else None
@@ -98,7 +94,8 @@ def run(args) -> int:
     extra = {"surface": str(args.surface), "material": str(args.material)}
     if rt is not None:
         extra["device"] = rt.name
-    paths = scatter.write_scatter(res, args.output, overwrite=args.overwrite, header=extra)
+    paths = scatter.write_scatter(res, args.output, overwrite=args.overwrite, header=extra,
+                                  surface_info=hf.provenance())
     if not args.json:
         for w in caught:
             print(f"waveoptics scatter: warning: {w.message}", file=sys.stderr)
@@ -107,5 +104,5 @@ def run(args) -> int:
                                            res.scattered_fraction))
     text = (f"{rows}\nwrote {', '.join(str(p) for p in paths.values())} "
             f"({res.timings_s['total']:.3g} s, solver {res.solver})")
-    emit(args, {**res.summary(), **extra, "outputs": {k: str(v) for k, v in paths.items()}}, text)
+    emit(args, {**res.summary(), **extra, "surface_info": hf.provenance(), "outputs": {k: str(v) for k, v in paths.items()}}, text)
     return 0

@@ -3,20 +3,17 @@ from __future__ import annotations
 
 import os
 
-from ..errors import FieldError, WaveopticsError
+from ..errors import FieldError
 from ..io.files import prepare_outdir
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
-from ._common import add_common, add_output, emit, progress
+from ._common import SURFACE_FORMATS_HELP, add_common, add_output, add_surface, emit, load_surface, progress
 
 
 def add_scene_options(p) -> None:
     """Options that describe the surface, light and sampling (shared by simulate and compare)."""
     src = p.add_mutually_exclusive_group()
-    src.add_argument("--surface", metavar="FILE", help="nano height field (.npz/.npy/.exr/.txt); fft or direct solver")
-    p.add_argument("--spacing", metavar="D[,DY]", help="grid spacing of --surface with unit, when the file does not "
-                                                       "state it")
-    p.add_argument("--units", metavar="UNIT", help="units of the heights in a --surface text or foreign file, e.g. um")
+    add_surface(p, group=src, help=f"nano height field (fft or direct solver): {SURFACE_FORMATS_HELP}")
     src.add_argument("--nano", metavar="MODEL:PARAMS", default=None,
                      help="nano roughness, e.g. abc:sigma=10nm,B=2um,C=2.6 | gaussian:sigma=5nm,T=1um | "
                           "exponential:sigma=5nm,T=1um | sinusoid:amplitude=40nm,period=2um | "
@@ -67,14 +64,8 @@ def request_from_args(args):
 
 
 def _surface(args):
-    """The --surface height field loaded with --spacing/--units when they are given (else the request loads it)."""
-    if args.surface is None or (getattr(args, "spacing", None) is None and getattr(args, "units", None) is None):
-        if getattr(args, "spacing", None) is not None or getattr(args, "units", None) is not None:
-            raise WaveopticsError("--spacing and --units describe a --surface file; give one")
-        return None
-    from .. import surfaces
-
-    return surfaces.load(args.surface, spacing=args.spacing, units=args.units)
+    """The --surface height field read with its metadata options (None without --surface)."""
+    return load_surface(args, required=False)
 
 
 def simulation_from_args(args, bar=None):

@@ -4,7 +4,7 @@ from __future__ import annotations
 import inspect
 
 from ..errors import WaveopticsError
-from ._common import add_common, emit
+from ._common import add_common, add_surface, emit, load_surface
 
 #: CLI option -> generator parameter (lengths stay strings with units; the generators parse them)
 _MODEL_OPTIONS = {
@@ -49,7 +49,8 @@ def register(sub):
                    help="rescale this realization to exactly σ (default: ensemble rms σ)")
     g.add_argument("--no-renormalize", action="store_true",
                    help="keep the PSD as given even where the grid resolves only part of σ²")
-    g.add_argument("-o", "--output", required=True, metavar="FILE", help="output file (.npz .npy .exr .txt .csv .xyz)")
+    g.add_argument("-o", "--output", required=True, metavar="FILE",
+                   help="output file (.npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc through SurfaceTopography)")
     g.add_argument("--overwrite", action="store_true", help="replace an existing output")
     add_common(g, device=False)
     g.set_defaults(func=run_generate, command="surface generate")
@@ -57,9 +58,7 @@ def register(sub):
     s = ss.add_parser("stats", help="statistics of a height-field file",
                       description="rms height, rms slope, correlation length (1/e of the autocovariance), "
                                   "Beckmann α = 2σ/T and optional PSD fits.")
-    s.add_argument("file", help="height-field file (.npz .npy .exr .txt .dat .asc .csv .xyz)")
-    s.add_argument("--spacing", help="grid spacing D or DX,DY with unit, when the file does not state it")
-    s.add_argument("--units", help="units of the values in a text or foreign file, e.g. um")
+    add_surface(s, positional=True)
     s.add_argument("--layout", choices=("matrix", "xyz"), help="text layout (default: detected)")
     s.add_argument("--nan-is-mask", action="store_true", help="treat NaN heights as missing samples")
     s.add_argument("--detrend", choices=("mean", "plane", "none"), default="mean",
@@ -125,9 +124,9 @@ def run_stats(args):
 
     from .. import surfaces
 
-    hf = surfaces.load(args.file, spacing=args.spacing, units=args.units, layout=args.layout,
-                       nan_is_mask=args.nan_is_mask)
+    hf = load_surface(args)
     st = surfaces.stats(hf, detrend=args.detrend)
+    st["surface_info"] = hf.provenance()
     fits = [surfaces.fit_psd(hf, m, detrend=args.detrend) for m in dict.fromkeys(args.fit)]
     if fits:
         st["psd_fit"] = {f["model"]: f for f in fits}
@@ -141,7 +140,7 @@ def run_stats(args):
     def num(v):
         return "n/a" if v is None else f"{v:.4g}"
 
-    lines = [f"file            {args.file}",
+    lines = [f"file            {args.surface}",
              f"samples         {st['samples'][0]} x {st['samples'][1]}"
              f"{' (profile)' if st['profile'] else ''}, valid {st['valid_fraction']:.1%}",
              f"spacing         {nm(st['spacing_m'][0])} x {nm(st['spacing_m'][1])}",
@@ -155,6 +154,11 @@ def run_stats(args):
                          f"sigma {nm(f['sigma_m'])}")
         else:
             lines.append(f"fit {f['model']:<12}sigma {nm(f['sigma_m'])}, T {nm(f['corr_length_m'])}")
+    info = st["surface_info"]
+    if "source_format" in info:
+        inst = info.get("instrument", {}).get("name") if isinstance(info.get("instrument"), dict) else None
+        lines.insert(1, f"format          {info['source_format']}, channel {info['channel']!r}, unit {info['file_unit']}"
+                        + (f", instrument {inst}" if inst else ""))
     if args.plot:
         lines.append(f"plot            {args.plot}")
     emit(args, st, "\n".join(lines))

@@ -26,7 +26,8 @@ Schema (``examples/scenes/*.toml`` are worked examples)::
     [materials.nano]                     # optional nano surface, exactly one of:
     statistics = "abc:sigma=2nm,B=2um,C=2.6"      #   height statistics (gaussian | exponential | abc)
     # generator = {model = "sinusoid", amplitude = "40nm", period = "1.6um", size = "24um", samples = 256}
-    # file = "surface.npz"   (or {path = "...", spacing = "50nm", units = "nm"}), relative to the scene file
+    # file = "surface.npz"   (or {path = "...", spacing = "50nm", units = "nm", channel = 0}), relative to the
+    #                         scene file; instrument formats (.x3p .sur .datx .sdf .gwy ...) read by SurfaceTopography
 
     [[lights]]
     name = "sun"
@@ -78,7 +79,7 @@ KEYS = {
     "materials": ("name", "material", "ior", "roughness", "ndf", "shadowing", "diffuse_albedo", "nano",
                   "diffraction"),
     "nano": ("statistics", "generator", "file"),
-    "file": ("path", "spacing", "units"),
+    "file": ("path", "spacing", "units", "channel"),
     "lights": ("name", "spd", "directions_deg"),
     "view": ("directions_deg", "camera"),
     "output": ("spectral_brdf", "rgb_images", "tables", "resolution", "sphere_size"),
@@ -320,7 +321,7 @@ def _nano(ctx, value, key, base: Path) -> NanoSpec:
         p = base / p
     if not p.is_file():
         raise ctx.err(k, f"= {str(p)!r} does not exist (paths are relative to the scene file)")
-    opts = {q: f[q] for q in ("spacing", "units") if q in f}
+    opts = {q: f[q] for q in ("spacing", "units", "channel") if q in f}
     if "spacing" in opts:   # the command line's rule: a length always carries its unit (5 would mean 5 m)
         values = opts["spacing"] if isinstance(opts["spacing"], list) else [opts["spacing"]]
         for v in values:

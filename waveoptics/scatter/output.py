@@ -50,18 +50,22 @@ def plot_scatter(result: ScatterResult, path, *, overwrite: bool = True, max_lob
 SCATTER_FILES = ("lobes.exr", "summary.json", "lobes.png")
 
 
-def write_scatter(result: ScatterResult, outdir, *, overwrite: bool = False, header: dict | None = None) -> dict:
+def write_scatter(result: ScatterResult, outdir, *, overwrite: bool = False, header: dict | None = None,
+                  surface_info: dict | None = None) -> dict:
     """Write ``lobes.exr`` (spectral OpenEXR, one ``T.<λ>nm`` layer per wavelength, BRDF in 1/sr on the
-    direction-cosine grid), ``summary.json`` and ``lobes.png`` into *outdir*. Returns {name: path}."""
+    direction-cosine grid), ``summary.json`` and ``lobes.png`` into *outdir*. Returns {name: path}.
+
+    *header* (strings) goes into the EXR header and the summary; *surface_info* (the height field's
+    :meth:`~waveoptics.surfaces.HeightField.provenance`: grid, file, instrument) into the summary only."""
 
     final = prepare_outdir(outdir, overwrite=overwrite, expected=SCATTER_FILES)
     # the set is staged and moved into place whole (summary.json last): a failure leaves an earlier set intact
     with staged_outputs(final, SCATTER_FILES, last="summary.json") as out:
-        _write_scatter(result, out, header)
+        _write_scatter(result, out, header, surface_info)
     return {name: final / name for name in SCATTER_FILES}
 
 
-def _write_scatter(result: ScatterResult, out, header) -> None:
+def _write_scatter(result: ScatterResult, out, header, surface_info=None) -> None:
     th = math.degrees(math.acos(min(1.0, float(result.incident[2]))))
     ph = math.degrees(math.atan2(result.incident[1], result.incident[0]))
     hdr = {**result.grid.header(), "quantity": "BRDF f (1/sr), Kirchhoff model, ensemble mean",
@@ -71,4 +75,5 @@ def _write_scatter(result: ScatterResult, out, header) -> None:
     layers = {float(w): result.grid.to_image(result.brdf[i]) for i, w in enumerate(result.wavelengths_nm)}
     write_spectral_exr(out / "lobes.exr", layers, hdr)
     plot_scatter(result, out / "lobes.png")
-    write_json(out / "summary.json", {**result.summary(), **(header or {})})
+    extra = {} if surface_info is None else {"surface_info": surface_info}
+    write_json(out / "summary.json", {**result.summary(), **(header or {}), **extra})

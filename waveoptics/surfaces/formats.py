@@ -1,4 +1,6 @@
-"""Height-field files: .npz, .npy (+ JSON sidecar), OpenEXR and text grids / xyz point lists, read and written.
+"""Height-field files: .npz, .npy (+ JSON sidecar), OpenEXR and text grids / xyz point lists, read and written
+here; instrument formats (.x3p, .sur, .datx, .sdf, .gwy, .nc, ...) through SurfaceTopography
+(:mod:`waveoptics.surfaces.instruments`).
 """
 from __future__ import annotations
 
@@ -14,8 +16,10 @@ from ..io.files import atomic_path, read_exr, to_json, write_exr
 from ..units import LENGTH_UNITS
 from .generators import _length
 from .heightfield import HeightField
+from . import instruments
+from .instruments import INSTRUMENT_EXTS, WRITERS
 
-__all__ = ['TEXT_EXTS', 'FORMATS', 'load', 'save']
+__all__ = ['TEXT_EXTS', 'FORMATS', 'READ_FORMATS', 'WRITE_FORMATS', 'load', 'save']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Files
@@ -29,8 +33,15 @@ __all__ = ['TEXT_EXTS', 'FORMATS', 'load', 'save']
 #       stated spacing; .xyz (or any text file with '# layout = xyz', or three columns forming a grid):
 #       x y z columns on a regular grid (missing points become masked).
 
+# other  instrument formats (INSTRUMENT_EXTS) through SurfaceTopography; .x3p, .gwy and .nc are also written.
+
 TEXT_EXTS = (".txt", ".dat", ".asc", ".csv", ".xyz")
+#: formats waveoptics reads and writes itself
 FORMATS = (".npy", ".npz", ".exr") + TEXT_EXTS
+#: every extension :func:`load` reads (instrument formats need the optional SurfaceTopography)
+READ_FORMATS = FORMATS + INSTRUMENT_EXTS
+#: every extension :func:`save` writes
+WRITE_FORMATS = FORMATS + tuple(WRITERS)
 
 _MAGIC = {b"\x93NUMPY": "a NumPy .npy file", b"PK\x03\x04": "a zip/.npz archive",
           b"\x76\x2f\x31\x01": "an OpenEXR image", b"\x89PNG": "a PNG image", b"\xff\xd8\xff": "a JPEG image",
@@ -46,12 +57,14 @@ def _sniff(head: bytes) -> str:
     return "text"
 
 
-def _ext(path) -> str:
+def _ext(path, allowed=READ_FORMATS) -> str:
 
     ext = Path(path).suffix.lower()
-    if ext not in FORMATS:
+    if ext not in allowed:
+        more = " and the instrument formats SurfaceTopography reads (.x3p .sur .datx .sdf .gwy .nc ...)" \
+            if allowed is READ_FORMATS else f", {', '.join(WRITERS)}"
         raise WaveopticsError(f"height-field file {str(path)!r} has unsupported extension {ext or '(none)'!r}; "
-                              f"allowed: {', '.join(FORMATS)}")
+                              f"allowed: {', '.join(FORMATS)}{more}")
     return ext
 
 
@@ -112,13 +125,15 @@ def _json_meta(text, what):
     return meta if isinstance(meta, dict) else {}
 
 
-def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False) -> HeightField:
+def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False, channel=None) -> HeightField:
     """Read a height field, choosing the format by extension (see :data:`FORMATS`).
 
     Parameters
     ----------
     path : str or Path
-        .npz, .npy (+ optional sidecar ``path.json``), .exr, or a text grid (.txt .dat .asc .csv .xyz).
+        .npz, .npy (+ optional sidecar ``path.json``), .exr, a text grid (.txt .dat .asc .csv .xyz), or an
+        instrument file SurfaceTopography reads (:data:`~waveoptics.surfaces.instruments.INSTRUMENT_EXTS`: .x3p,
+        .sur, .datx, .sdf, .opd, .plu, .gwy, .nc, a binary MetroPro .dat, ...).
     spacing : float or str or (dx, dy), m, optional
         Grid spacing; overrides what the file states. Required for a plain .npy without sidecar, and for a text
         matrix or EXR without spacing in its header.
@@ -129,12 +144,16 @@ def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False) -> H
         Text layout; by default from a '# layout =' line, the .xyz extension, or three columns forming a grid.
     nan_is_mask : bool
         Treat NaN heights as missing samples (mask) instead of an error. Files written by :func:`save`
-        declare this themselves.
+        declare this themselves, and so do instrument files (their undefined samples become the mask).
+    channel : int or str, optional
+        Data channel of an instrument file, by index or name (default: the file's default channel).
 
     Returns
     -------
     HeightField
-        Heights and spacings in metres; ``meta["source"]`` is the path.
+        Heights and spacings in metres; ``meta["source"]`` is the path, and an instrument file adds
+        ``meta["source_format"]``, ``meta["channel"]``, ``meta["file_unit"]`` and the instrument and
+        acquisition time where the file records them.
 
     Raises
     ------
@@ -152,8 +171,13 @@ def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False) -> H
     with open(p, "rb") as fh:
         head = fh.read(4096)
     kind = _sniff(head)
+    if ext == ".dat" and kind == "binary data":
+        ext = ".metropro"   # a binary .dat is a Zygo MetroPro file, not a text grid
+    if channel is not None and ext in FORMATS:
+        raise FieldError(f"{{channel}} {channel!r} applies to instrument files; {str(p)!r} has one height channel",
+                         "channel")
     expect = {".npy": "a NumPy .npy file", ".npz": "a zip/.npz archive", ".exr": "an OpenEXR image"}.get(ext, "text")
-    if kind != expect:
+    if ext in FORMATS and kind != expect:
         what = f"a {ext} text grid" if expect == "text" else expect
         raise WaveopticsError(f"{str(p)!r} is not {what} (its content looks like {kind})")
     sp = _spacing_arg(spacing)
@@ -166,8 +190,10 @@ def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False) -> H
             hf = _load_npy(p, sp, units, nan_is_mask)
         elif ext == ".exr":
             hf = _load_exr(p, sp, units, nan_is_mask)
-        else:
+        elif ext in TEXT_EXTS:
             hf = _load_text(p, sp, units, layout, nan_is_mask)
+        else:
+            hf = instruments.read(p, sp, units, channel)
     except FieldError as exc:  # keep the field, so that the CLI can name its flag
         prefix = "" if str(p) in str(exc) else f"{str(p)!r}: "
         raise FieldError(prefix + exc.template, *exc.fields) from None
@@ -428,7 +454,9 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
     path : str or Path
         .npz (bit-exact, self-contained), .npy (bit-exact heights plus sidecar ``path.json`` with the spacing),
         .exr (float32 heights in metres, spacing as exact strings in the header), .txt/.dat/.asc/.csv (matrix
-        with '# dx = ...' header, 17 significant digits: bit-exact) or .xyz (x y z columns).
+        with '# dx = ...' header, 17 significant digits: bit-exact), .xyz (x y z columns), or through
+        SurfaceTopography's writers .x3p (ISO 5436-2), .gwy (Gwyddion) and .nc (NetCDF) (heights in metres;
+        ``meta["instrument"]`` is kept, other metadata is not).
     overwrite : bool
         Replace an existing file (default: refuse).
 
@@ -439,7 +467,11 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
 
 
     p = Path(path)
-    ext = _ext(p)
+    ext = _ext(p, WRITE_FORMATS)
+    if ext in WRITERS:
+        with atomic_path(p, overwrite=overwrite) as tmp:
+            instruments.write(hf, tmp, ext)
+        return p
     meta_json = to_json(hf.meta)
     masked = hf.mask is not None
     h_nan = np.where(hf.valid, hf.heights, np.nan) if masked else hf.heights

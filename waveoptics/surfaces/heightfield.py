@@ -114,6 +114,19 @@ class HeightField:
         """Boolean (ny, nx): the mask, or all True when there is none."""
         return np.ones(self.shape, bool) if self.mask is None else self.mask
 
+    #: meta keys that say where a height field came from (file, instrument, channel, unit of the file)
+    PROVENANCE_KEYS = ("source", "source_format", "channel", "file_unit", "instrument", "acquisition_time",
+                       "model", "seed", "cropped_from", "split_cutoff_period_m")
+
+    def provenance(self) -> dict:
+        """Where this height field came from and its grid: ``samples`` [nx, ny], ``spacing_m`` [dx, dy] (m), and
+        the :attr:`PROVENANCE_KEYS` its ``meta`` holds (an instrument file's format, channel, unit, instrument and
+        acquisition time; a generator's model and seed). Written into outputs that used the field."""
+        out = {"samples": [self.shape[1], self.shape[0]], "spacing_m": [self.dx, self.dy],
+               "valid_fraction": float(self.valid.mean())}
+        out.update({k: self.meta[k] for k in self.PROVENANCE_KEYS if k in self.meta})
+        return out
+
     def coords(self) -> tuple[np.ndarray, np.ndarray]:
         """Sample positions x (nx,) and y (ny,) in metres, centred on the patch."""
         ny, nx = self.shape
