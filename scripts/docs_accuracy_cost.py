@@ -38,7 +38,7 @@ the error and the wall time, marks the Pareto front (settings no other setting b
 recommends the fastest setting meeting `--target-error`:
 
 ```
-waveoptics cost --model gaussian:sigma=5nm,corr_length=0.5um --size 12.16um --samples 128 --material Au \\
+waveoptics cost --generator gaussian:sigma=5nm,corr_length=0.5um --size 12.16um --samples 128 --material Au \\
     --incident 30 --target-error 0.01 -o out/cost          # cost.json, cost.png (error vs time), cost.md
 waveoptics cost --surface patch.npz --solvers fft,direct --resolutions 64,128 --budget 120 --json
 ```

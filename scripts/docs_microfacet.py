@@ -39,7 +39,7 @@ E = brdf.albedo(wi, alpha=0.2, fresnel="one")                             # ∫ 
 ```
 ```
 waveoptics brdf --model microfacet --ndf ggx --shadowing smith --alpha 0.2 --material Au \
-    --wavelength 450,550,650 --incident 30 --outgoing 30,180 --outgoing 45,180 --json
+    --wavelengths 450,550,650 --incident 30 --outgoing 30,180 --outgoing 45,180 --json
 waveoptics brdf --ndf beckmann --alpha 0.3 --ior 1.5 --kd 0.8 --incident 60 --albedo
 ```
 

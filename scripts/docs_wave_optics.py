@@ -460,7 +460,7 @@ def main():
                  "F(θ_d) instead of Q: the two agree to first order near the specular direction and part away from "
                  "it. ABC surface σ = 3 nm, B = 5 µm, C = 3, n = 1 + 6i, 550 nm, θ_i = 30°, in the plane of "
                  "incidence:\n\n" + _rayleigh_rice_table() + "\n\n"
-                 "`waveoptics brdf --model rayleigh-rice --nano abc:sigma=3nm,B=5um,C=3 --ior 1+6j --wavelength 550 "
+                 "`waveoptics brdf --model rayleigh-rice --nano abc:sigma=3nm,B=5um,C=3 --ior 1+6j --wavelengths 550 "
                  "--incident 30 --outgoing 60,180 [--polarization s|p|unpolarized] --json` prints `values` (1/sr) "
                  "with the four polarized BRDFs under `components`; `--surface FILE` takes the PSD from a height field's "
                  "periodogram. The Kirchhoff and two-scale routes take `--polarization s|p` too (`scatter`, "

@@ -900,7 +900,7 @@ def _bad_inputs() -> list[BadInput]:
     # parameters (values out of range) ---------------------------------------------------------------------
     add(BadInput("sigma-negative", "parameter", "negative σ (surface generate)", r"sigma '-5nm' is negative",
                  api=lambda tmp: surfaces.gaussian("-5nm", "1um", "8um", 32, seed=1),
-                 argv=lambda tmp: ["surface", "generate", "--model", "gaussian", "--sigma=-5nm", "--corr-length",
+                 argv=lambda tmp: ["surface", "generate", "--generator", "gaussian", "--sigma=-5nm", "--corr-length",
                                    "1um", "--samples", "32", "-o", str(tmp / "g.npz")], same=True))
     add(BadInput("nano-sigma-negative", "parameter", "negative σ_nano (simulate --nano)",
                  r"--nano sigma '-5nm' is negative",
@@ -977,28 +977,28 @@ def _bad_inputs() -> list[BadInput]:
     add(BadInput("scratch-count-fraction", "parameter", "scratches:count=2.5", r"count=2\.5 is not allowed",
                  argv=lambda tmp: _simulate_argv(tmp, "--nano", "scratches:count=2.5,width=1um,depth=5nm"),
                  fixed="simulate.py: make_nano truncated the count to 2"))
-    add(BadInput("angles-above-90", "parameter", "compare --angles 0,95", r"--angles θ=95\.0° is outside",
-                 argv=lambda tmp: ["compare", "--angles", "0,95"]))
+    add(BadInput("angles-above-90", "parameter", "compare --incident-angles 0,95", r"--incident-angles θ=95\.0° is outside",
+                 argv=lambda tmp: ["compare", "--incident-angles", "0,95"]))
     add(BadInput("samples-zero", "parameter", "--samples 0", r"samples '0' is not allowed",
                  api=lambda tmp: surfaces.gaussian("5nm", "1um", "8um", "0", seed=1),
-                 argv=lambda tmp: ["surface", "generate", "--model", "gaussian", "--sigma", "5nm", "--corr-length",
+                 argv=lambda tmp: ["surface", "generate", "--generator", "gaussian", "--sigma", "5nm", "--corr-length",
                                    "1um", "--samples", "0", "-o", str(tmp / "g.npz")], same=True))
     add(BadInput("roughness-negative", "parameter", "perceptual roughness r = −1", r"roughness=-1\.0 is not allowed",
                  api=lambda tmp: brdf.alpha_from_roughness(-1.0),
                  argv=lambda tmp: _brdf_argv("--roughness=-1", alpha=None), same=True,
                  fixed="microfacet.py: alpha_from_roughness squared r = −1 into α = 1 and brdf ran"))
-    add(BadInput("angles-empty", "parameter", "compare --angles ''", r"--angles '' holds no number",
+    add(BadInput("angles-empty", "parameter", "compare --incident-angles ''", r"--incident-angles '' holds no number",
                  api=lambda tmp: units.parse_number_list("", name="angles_deg"),
-                 argv=lambda tmp: ["compare", "--angles", ""], same=True,
+                 argv=lambda tmp: ["compare", "--incident-angles", ""], same=True,
                  fixed="units.py: an empty list was accepted and compare printed an empty table"))
     add(BadInput("scratch-count-huge", "parameter", "scratches --count 1e9", r"count=1000000000\.0 is not allowed; "
                  r"it must be a whole number in 0\.\.10000",
                  api=lambda tmp: surfaces.scratches(1e9, "1um", "5nm", "8um", 8),
-                 argv=lambda tmp: ["surface", "generate", "--model", "scratches", "--count", "1e9", "--width", "1um",
+                 argv=lambda tmp: ["surface", "generate", "--generator", "scratches", "--count", "1e9", "--width", "1um",
                                    "--depth", "5nm", "--samples", "8", "-o", str(tmp / "g.npz")], same=True,
                  fixed="surfaces.py: a billion scratches were accepted (one grid pass each: a run of days)"))
     add(BadInput("length-without-unit", "parameter", "--sigma 5 (no unit)", r"sigma '5' needs a unit",
-                 argv=lambda tmp: ["surface", "generate", "--model", "gaussian", "--sigma", "5", "--corr-length",
+                 argv=lambda tmp: ["surface", "generate", "--generator", "gaussian", "--sigma", "5", "--corr-length",
                                    "1um", "-o", str(tmp / "g.npz")]))
 
     # names ------------------------------------------------------------------------------------------------
@@ -1040,9 +1040,9 @@ def _bad_inputs() -> list[BadInput]:
                  api=lambda tmp: units.parse_wavelengths("550:inf:1"),
                  argv=lambda tmp: ["simulate", "--wavelengths", "550:inf:1", "-o", str(tmp / "o")],
                  fixed="units.py: OverflowError traceback"))
-    add(BadInput("range-too-long", "parameter", "compare --angles 0:80:0.00001", r"holds 8e\+06 values; at most",
+    add(BadInput("range-too-long", "parameter", "compare --incident-angles 0:80:0.00001", r"holds 8e\+06 values; at most",
                  api=lambda tmp: units.parse_number_list("0:80:0.00001", name="angles_deg"),
-                 argv=lambda tmp: ["compare", "--angles", "0:80:0.00001"], same=True,
+                 argv=lambda tmp: ["compare", "--incident-angles", "0:80:0.00001"], same=True,
                  fixed="units.py: 8 million angles accepted; compare ran for hours without output"))
     add(BadInput("wavelength-stray-text", "parameter", "--wavelengths 4nm00", r"'4nm00' is not a number list",
                  api=lambda tmp: units.parse_wavelengths("4nm00"),
@@ -1060,7 +1060,7 @@ def _bad_inputs() -> list[BadInput]:
                  fixed="fft.py: (v_z h)^K overflowed: 'albedo nan' with exit 0"))
     add(BadInput("spread-huge", "parameter", "scratches --spread 1e308", r"spread_deg=1e\+308 is not allowed",
                  api=lambda tmp: surfaces.scratches(5, "1um", "5nm", "8um", 8, spread_deg=1e308),
-                 argv=lambda tmp: ["surface", "generate", "--model", "scratches", "--count", "5", "--width", "1um",
+                 argv=lambda tmp: ["surface", "generate", "--generator", "scratches", "--count", "5", "--width", "1um",
                                    "--depth", "5nm", "--size", "8um", "--samples", "8", "--spread", "1e308", "-o",
                                    str(tmp / "g.npz")],
                  fixed="generators.py: OverflowError traceback from the random generator"))
@@ -1096,7 +1096,7 @@ def _bad_inputs() -> list[BadInput]:
     add(BadInput("outfile-parent-missing", "output", "output file in a directory that does not exist",
                  r"output directory .*nodir' does not exist",
                  api=lambda tmp: surfaces.save(_hf(0.0, (4, 4)), tmp / "nodir" / "g.npz"),
-                 argv=lambda tmp: ["surface", "generate", "--model", "flat", "--samples", "8", "-o",
+                 argv=lambda tmp: ["surface", "generate", "--generator", "flat", "--samples", "8", "-o",
                                    str(tmp / "nodir" / "g.npz")], same=True))
 
     def existing_scatter(tmp):
@@ -1120,7 +1120,7 @@ def _bad_inputs() -> list[BadInput]:
     add(BadInput("output-exists-surface", "output", "surface generate onto an existing file",
                  r"g\.npz' already exists; pass --overwrite", setup=lambda tmp: _write(tmp, "g.npz", b"old"),
                  api=lambda tmp: surfaces.save(_hf(0.0, (4, 4)), tmp / "g.npz"),
-                 argv=lambda tmp: ["surface", "generate", "--model", "flat", "--samples", "8", "-o",
+                 argv=lambda tmp: ["surface", "generate", "--generator", "flat", "--samples", "8", "-o",
                                    str(tmp / "g.npz")], same=True))
     add(BadInput("output-exists-metamer", "output", "metamer plot onto an existing PNG",
                  r"m\.png' already exists; pass --overwrite", setup=lambda tmp: _write(tmp, "m.png", b"old"),

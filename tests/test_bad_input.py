@@ -182,7 +182,7 @@ def test_killed_writer_never_leaves_a_partial_file_under_the_final_name(tmp_path
 
 def test_existing_outputs_are_replaced_only_with_overwrite(tmp_path, capsys):
     out = tmp_path / "g.npz"
-    argv = ["surface", "generate", "--model", "flat", "--samples", "8", "-o", str(out)]
+    argv = ["surface", "generate", "--generator", "flat", "--samples", "8", "-o", str(out)]
     assert cli_main(argv) == 0
     before = out.read_bytes()
     assert cli_main(argv) == 2 and out.read_bytes() == before
@@ -197,7 +197,7 @@ def test_read_only_output_directory(tmp_path, capsys):
     ro.mkdir()
     ro.chmod(0o500)
     try:
-        rc = cli_main(["surface", "generate", "--model", "flat", "--samples", "8", "-o", str(ro / "g.npz")])
+        rc = cli_main(["surface", "generate", "--generator", "flat", "--samples", "8", "-o", str(ro / "g.npz")])
         err = capsys.readouterr().err
         assert rc == 2 and err.count("\n") == 1 and "Traceback" not in err
         assert not any(ro.iterdir())

@@ -221,7 +221,7 @@ def test_a_wrong_pdf_is_rejected():
 def test_cli_twoscale_values_and_parts(capsys):
     code = cli_main(["brdf", "--model", "twoscale", "--material", "gold", "--micro-alpha", "0.1",
                      "--nano", "gaussian:sigma=10nm,T=2um", "--incident", "30", "--outgoing", "30,180",
-                     "--outgoing", "40,180", "--wavelength", "450,650", "--json"])
+                     "--outgoing", "40,180", "--wavelengths", "450,650", "--json"])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["units"]["brdf"] == "1/sr" and len(doc["values"]) == 4
@@ -239,7 +239,7 @@ def test_cli_twoscale_with_a_height_field(capsys, tmp_path):
     hf = surfaces.gaussian("8nm", "1.5um", "32um", 128, seed=1)
     surfaces.save(hf, tmp_path / "h.npz")
     code = cli_main(["brdf", "--model", "twoscale", "--material", "gold", "--alpha", "0.05", "--surface",
-                     str(tmp_path / "h.npz"), "--incident", "30", "--outgoing", "40,180", "--wavelength", "550",
+                     str(tmp_path / "h.npz"), "--incident", "30", "--outgoing", "40,180", "--wavelengths", "550",
                      "--resolution", "64", "--json", "--quiet"])
     assert code == 0
     v = json.loads(capsys.readouterr().out)["values"][0]

@@ -213,9 +213,9 @@ def test_cli_brdf_model_table(table_file, capsys):
 
     path, _ = table_file
     assert cli_main(["brdf", "--model", "table", "--table", str(path), "--incident", "25", "--outgoing", "25,180",
-                     "--wavelength", "450,650", "--json"]) == 0
+                     "--wavelengths", "450,650", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert len(doc["values"]) == 2 and all(v["brdf"] > 0 for v in doc["values"])
     assert cli_main(["brdf", "--model", "table", "--table", str(path), "--incident", "25", "--outgoing", "25,180",
-                     "--wavelength", "500"]) == 2
+                     "--wavelengths", "500"]) == 2
     assert "500 nm is not in this table" in capsys.readouterr().err

@@ -162,7 +162,7 @@ def test_bad_inputs_raise_one_clear_error():
 
 def test_cli_cost(tmp_path):
     out = tmp_path / "c"
-    args = [sys.executable, "-m", "waveoptics", "cost", "--model", "sinusoid:amplitude=30nm,period=0.8um",
+    args = [sys.executable, "-m", "waveoptics", "cost", "--generator", "sinusoid:amplitude=30nm,period=0.8um",
             "--size", "3.2um", "--samples", "16", "--resolutions", "4,8", "--solvers", "fft,direct",
             "--precisions", "float32", "--illuminant", LASER, "--target-error", "0.5", "--json", "-o", str(out)]
     r = subprocess.run(args, capture_output=True, text=True, timeout=300)

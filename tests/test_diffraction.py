@@ -438,7 +438,7 @@ def test_cli_scatter_and_brdf(tmp_path):
              "--solver", "direct", "--resolution", "32", "-o", str(tmp_path / "d"), "--json")
     assert r.returncode == 0, r.stderr
     r = _cli("brdf", "--model", "kirchhoff", "--surface", str(surf), "--fresnel", "one", "--incident", "30",
-             "--outgoing", "30,180", "--outgoing", "60,180", "--wavelength", "500", "--json")
+             "--outgoing", "30,180", "--outgoing", "60,180", "--wavelengths", "500", "--json")
     assert r.returncode == 0, r.stderr
     vals = [v["brdf"] for v in json.loads(r.stdout)["values"]]
     assert vals[0] > 100 * vals[1] > 0                # specular peak vs far off-specular

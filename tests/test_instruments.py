@@ -148,11 +148,11 @@ def test_cli_commands_take_a_headerless_text_grid_with_units_and_spacing(tmp_pat
     surfaces.save(surfaces.HeightField(h_um * 1e-6, 1e-7), tmp_path / "ref.npz")
     common = ["--material", "Al", "--incident", "10", "--json"]
     rc, out, err, _ = run_cli(["brdf", "--model", "kirchhoff", "--surface", str(tmp_path / "plain.txt"),
-                               "--units", "um", "--spacing", "100nm", "--wavelength", "550",
+                               "--units", "um", "--spacing", "100nm", "--wavelengths", "550",
                                "--outgoing", "12,180", *common])
     assert rc == 0, err
     rc2, out2, err2, _ = run_cli(["brdf", "--model", "kirchhoff", "--surface", str(tmp_path / "ref.npz"),
-                                  "--wavelength", "550", "--outgoing", "12,180", *common])
+                                  "--wavelengths", "550", "--outgoing", "12,180", *common])
     assert rc2 == 0, err2
     (a,), (b,) = json.loads(out)["values"], json.loads(out2)["values"]
     assert a["brdf"] == pytest.approx(b["brdf"], rel=1e-12) and a["brdf"] > 0
@@ -163,5 +163,59 @@ def test_cli_commands_take_a_headerless_text_grid_with_units_and_spacing(tmp_pat
     summary = json.loads((tmp_path / "sc" / "summary.json").read_text())
     assert summary["surface_info"]["spacing_m"] == pytest.approx([1e-7, 1e-7], rel=1e-12)
     rc, out, err, _ = run_cli(["brdf", "--model", "kirchhoff", "--surface", str(tmp_path / "plain.txt"),
-                               "--wavelength", "550", "--outgoing", "12,180", *common])
+                               "--wavelengths", "550", "--outgoing", "12,180", *common])
     assert rc == 2 and "--units" in err
+
+
+def test_crop_region_takes_the_named_samples_and_refuses_outside():
+    h = np.arange(12 * 20, dtype=float).reshape(12, 20) * 1e-9
+    hf = surfaces.HeightField(h, 0.1e-6, 0.2e-6)
+    c = surfaces.crop_region(hf, 0.3e-6, 0.4e-6, 0.5e-6, 1.0e-6)     # x samples 3..7, y samples 2..6
+    np.testing.assert_array_equal(c.heights, h[2:7, 3:8])
+    assert c.meta["cropped"] == {"from_samples": [20, 12], "origin_samples": [3, 2]}
+    assert surfaces.parse_region("0um,0.4um,0.5um,1um") == pytest.approx((0.0, 0.4e-6, 0.5e-6, 1e-6))
+    with pytest.raises(ValueError, match="beyond"):
+        surfaces.crop_region(hf, 1.8e-6, 0.0, 0.5e-6, 1e-6)
+    with pytest.raises(ValueError, match="X,Y,WIDTH,HEIGHT"):
+        surfaces.parse_region("1um,2um")
+
+
+def test_level_removes_a_tilt_exactly_over_the_valid_samples():
+    rng = np.random.default_rng(9)
+    ny, nx = 30, 40
+    x = np.arange(nx) * 1e-7
+    y = np.arange(ny) * 2e-7
+    plane = 3e-9 + 0.02 * x[None, :] - 0.01 * y[:, None]
+    mask = rng.random((ny, nx)) > 0.1
+    hf = surfaces.HeightField(plane + 50.0 * np.where(mask, 0, 1) * 1e-9, 1e-7, 2e-7, mask)  # junk where masked
+    lev = surfaces.level(hf, "plane")
+    np.testing.assert_allclose(lev.heights[mask], 0.0, atol=1e-18)
+    assert lev.meta["levelled"] == "plane"
+    assert surfaces.level(hf, "none") is hf
+    prof = surfaces.HeightField((0.01 * x)[None, :], 1e-7)        # a profile: tilt along x only
+    np.testing.assert_allclose(surfaces.level(prof, "plane").heights, 0.0, atol=1e-18)
+
+
+def test_cli_prepare_keeps_provenance(tmp_path):
+    h, sizes = _ramp(40, 30, 8.0, 6.0)
+    Topography(h, sizes, unit="µm").to_x3p(str(tmp_path / "raw.x3p"))
+    rc, out, err, _ = run_cli(["surface", "prepare", str(tmp_path / "raw.x3p"), "--crop", "0um,0um,4um,3um", "-o",
+                               str(tmp_path / "p.npz"), "--json"])
+    assert rc == 0, err
+    back = surfaces.load(tmp_path / "p.npz")
+    assert back.shape == (15, 20)
+    info = back.provenance()
+    assert info["source_format"] == "x3p" and info["levelled"] == "plane"
+    assert info["prepared_from"].endswith("raw.x3p")
+    rc, out, err, _ = run_cli(["surface", "prepare", str(tmp_path / "raw.x3p"), "-o", str(tmp_path / "p.npz")])
+    assert rc == 2 and "exists" in err                           # never replaced without --overwrite
+
+
+def test_docs_sample_is_a_readable_x3p():
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "docs" / "data" / "brushed_aluminium.x3p"
+    hf = surfaces.load(path)
+    assert hf.shape == (256, 256) and hf.dx == pytest.approx(90e-9, rel=1e-6)
+    assert 0.99 < hf.valid.mean() < 1.0
+    assert hf.meta["source_format"] == "x3p"

@@ -404,7 +404,7 @@ def run_cli(capsys, *argv):
 
 def test_cli_json_values_match_library(capsys):
     rc, out, _ = run_cli(capsys, "--ndf", "beckmann", "--shadowing", "smith", "--alpha", "0.2", "--ior",
-                         "0.2+3.1j", "--wavelength", "450,650", "--incident", "30", "--outgoing", "30,180",
+                         "0.2+3.1j", "--wavelengths", "450,650", "--incident", "30", "--outgoing", "30,180",
                          "--outgoing", "45,90", "--json")
     assert rc == 0
     data = json.loads(out)

@@ -115,7 +115,7 @@ def test_kirchhoff_and_rayleigh_rice_agree_to_first_order_near_specular():
 
 def test_cli_point_evaluation_json(capsys):
     argv = ["brdf", "--model", "rayleigh-rice", "--nano", "abc:sigma=3nm,B=5um,C=3", "--ior", "1+6j",
-            "--wavelength", "550", "--incident", "30", "--outgoing", "60,180", "--outgoing", "20,90", "--json"]
+            "--wavelengths", "550", "--incident", "30", "--outgoing", "60,180", "--outgoing", "20,90", "--json"]
     assert cli_main(argv) == 0
     import json
 

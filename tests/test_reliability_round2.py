@@ -40,8 +40,8 @@ def test_wavelength_units_per_value():
 
 
 def test_cli_ranges_and_generators(capsys, tmp_path):
-    _one_line_error(capsys, ["compare", "--angles", "0:inf:1"], "--angles", "finite")
-    _one_line_error(capsys, ["surface", "generate", "--model", "scratches", "--count", "5", "--width", "1um",
+    _one_line_error(capsys, ["compare", "--incident-angles", "0:inf:1"], "--incident-angles", "finite")
+    _one_line_error(capsys, ["surface", "generate", "--generator", "scratches", "--count", "5", "--width", "1um",
                              "--depth", "10nm", "--spread", "1e308", "--size", "20um", "--samples", "32", "-o",
                              str(tmp_path / "s.npz")], "spread")
     np.savez(tmp_path / "e.npz", heights=np.zeros((8, 8)), dx=np.array([]))
@@ -202,7 +202,7 @@ def test_warnings_are_one_line_each_and_quiet_silences_them(capsys, tmp_path):
 
 
 def test_an_aliased_grating_and_a_non_hdf5_table_are_refused(capsys, tmp_path):
-    _one_line_error(capsys, ["surface", "generate", "--model", "sinusoid", "--amplitude", "10nm", "--period", "100nm",
+    _one_line_error(capsys, ["surface", "generate", "--generator", "sinusoid", "--amplitude", "10nm", "--period", "100nm",
                              "--size", "10um", "--samples", "64", "-o", str(tmp_path / "s.npz")], "Nyquist")
     _one_line_error(capsys, ["table", "--incident-angles", "0,30", "-o", str(tmp_path / "t.txt")], "HDF5")
     assert not (tmp_path / "t.txt").exists()

@@ -96,7 +96,7 @@ def test_split_surface_run(tmp_path, capsys):
 
 def test_compare_table_and_files(tmp_path, capsys):
     out = tmp_path / "cmp"
-    assert main(["compare", "--angles", "0,40,80", "-o", str(out), "--resolution", "32",
+    assert main(["compare", "--incident-angles", "0,40,80", "-o", str(out), "--resolution", "32",
                  "--wavelengths", "450,550,650", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     rows = data["rows"]

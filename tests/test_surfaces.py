@@ -423,7 +423,7 @@ def _exr_bytes(p):
 
 def test_cli_generate_then_stats_json(tmp_path, capsys):
     out = tmp_path / "g.npz"
-    rc = cli_main(["surface", "generate", "--model", "gaussian", "--sigma", "5nm", "--corr-length", "1.2um",
+    rc = cli_main(["surface", "generate", "--generator", "gaussian", "--sigma", "5nm", "--corr-length", "1.2um",
                    "--size", "64um", "--samples", "256", "--seed", "3", "-o", str(out)])
     assert rc == 0 and out.is_file()
     capsys.readouterr()
@@ -451,7 +451,7 @@ def test_cli_generate_then_stats_json(tmp_path, capsys):
 ])
 def test_cli_generate_every_model(tmp_path, capsys, model, opts):
     out = tmp_path / f"{model}.exr"
-    rc = cli_main(["surface", "generate", "--model", model, "--samples", "64x32", "--size", "16um,8um",
+    rc = cli_main(["surface", "generate", "--generator", model, "--samples", "64x32", "--size", "16um,8um",
                    *opts, "-o", str(out), "--json"])
     data = json.loads(capsys.readouterr().out)
     assert rc == 0 and data["stats"]["samples"] == [64, 32]
@@ -459,11 +459,11 @@ def test_cli_generate_every_model(tmp_path, capsys, model, opts):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--model", "gaussian", "--sigma", "5nm"], "needs --corr-length"),
-    (["--model", "gaussian", "--sigma", "5nm", "--corr-length", "1um", "--period", "2um"],
-     "--period is not an option of model 'gaussian'"),
-    (["--model", "gaussian", "--sigma", "5", "--corr-length", "1um"], "needs a unit"),
-    (["--model", "sinusoid", "--amplitude", "1nm", "--period", "1um", "--seed", "3"], "--seed is not an option"),
+    (["--generator", "gaussian", "--sigma", "5nm"], "needs --corr-length"),
+    (["--generator", "gaussian", "--sigma", "5nm", "--corr-length", "1um", "--period", "2um"],
+     "--period is not an option of generator 'gaussian'"),
+    (["--generator", "gaussian", "--sigma", "5", "--corr-length", "1um"], "needs a unit"),
+    (["--generator", "sinusoid", "--amplitude", "1nm", "--period", "1um", "--seed", "3"], "--seed is not an option"),
 ])
 def test_cli_errors_exit_2_with_one_line(tmp_path, capsys, argv, message):
     rc = cli_main(["surface", "generate", *argv, "-o", str(tmp_path / "x.npz")])

@@ -137,7 +137,8 @@ def model_config(model: str, size="12.8um", samples=128, *, material=None, incid
 
 
 def parse_model(text: str) -> tuple[str, dict]:
-    """``MODEL:key=value,...`` -> (model, {key: value}); values stay strings where they carry units."""
+    """``MODEL:key=value,...`` -> (model, {key: value}); values stay strings where they carry units. ``T`` is
+    accepted for ``corr_length``, as in ``--nano`` text."""
     kind, _, rest = str(text).strip().partition(":")
     params = {}
     for item in filter(None, (s.strip() for s in rest.split(","))):
@@ -145,11 +146,16 @@ def parse_model(text: str) -> tuple[str, dict]:
         if not eq or not key.strip():
             raise WaveopticsError(f"surface model parameter {item!r} is not allowed; write key=value, e.g. "
                                   "gaussian:sigma=20nm,corr_length=1um")
+        key = _GENERATOR_ALIASES.get(key.strip(), key.strip())
         try:
-            params[key.strip()] = float(val)
+            params[key] = float(val)
         except ValueError:
-            params[key.strip()] = val.strip()
+            params[key] = val.strip()
     return kind.strip().lower(), params
+
+
+#: the --nano spelling of generator parameters (one vocabulary: T is the correlation length everywhere)
+_GENERATOR_ALIASES = {"T": "corr_length", "corr": "corr_length", "corr-length": "corr_length"}
 
 
 @dataclass(frozen=True)

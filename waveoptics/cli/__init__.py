@@ -16,6 +16,7 @@ import warnings
 from .. import __version__
 from ..errors import FieldError
 from ._common import field_flags
+from ._options import deprecations
 
 
 class _Parser(argparse.ArgumentParser):
@@ -71,6 +72,8 @@ def main(argv=None) -> int:
     debug = getattr(args, "debug", False)
     with warnings.catch_warnings():
         _warning_channel(args)
+        for note in deprecations(args):   # renamed options (cli/_options.py RENAMED): one line each
+            warnings.warn(note, UserWarning, stacklevel=1)
         return _run(args, parser, debug)
 
 

@@ -1,20 +1,22 @@
 """Options and output helpers shared by all sub-commands."""
 from __future__ import annotations
 
+import argparse
 import sys
 
 
 from ..io.files import to_json
+from ._options import option
 
 #: request fields whose option has another name (the dest of the option that carries the field); every other
 #: field is carried by the option of the same dest (``micro_alpha`` → ``--micro-alpha``)
 FIELD_DESTS = {
     "incident_deg": ("incident",),
-    "wavelengths_nm": ("wavelengths", "wavelength"),
+    "wavelengths_nm": ("wavelengths",),
     "accuracy_dE": ("accuracy",),
     "thetas_deg": ("incident_angles",),
     "phi_deg": ("phi",),
-    "angles_deg": ("angles",),
+    "angles_deg": ("incident_angles",),
     "vary": ("vary",),
 }
 
@@ -25,7 +27,7 @@ def field_flags(parser) -> dict:
     by_dest = {}
     for action in parser._actions:
         longs = [o for o in action.option_strings if o.startswith("--")]
-        if longs:
+        if longs and action.help != argparse.SUPPRESS:   # a renamed option's hidden old name is not the name
             by_dest[action.dest] = longs[0]
     flags = dict(by_dest)
     for field, dests in FIELD_DESTS.items():
@@ -37,15 +39,13 @@ def field_flags(parser) -> dict:
 
 
 def add_common(parser, *, json: bool = True, device: bool = True) -> None:
-    """Add ``--device``, ``--json`` and ``--debug`` to a sub-command parser."""
+    """Add ``--device``, ``--json``, ``--debug`` and ``--quiet`` to a sub-command parser."""
     if device:
-        parser.add_argument("--device", metavar="NAME",
-                            help="OpenCL device: substring of 'platform device' or P:D indices "
-                                 "(default: $WAVEOPTICS_DEVICE, else first GPU, else PoCL CPU)")
+        option(parser, "--device")
     if json:
-        parser.add_argument("--json", action="store_true", help="print machine-readable JSON on stdout")
-    parser.add_argument("--debug", action="store_true", help="show the Python traceback on errors")
-    parser.add_argument("--quiet", action="store_true", help="do not print warnings")
+        option(parser, "--json", action="store_true")
+    option(parser, "--debug", action="store_true")
+    option(parser, "--quiet", action="store_true")
 
 
 #: what ``--surface`` reads, in every command's help
@@ -53,24 +53,17 @@ SURFACE_FORMATS_HELP = (".npz .npy .exr .txt .csv .xyz, or an instrument file (.
                         ".nc ..., read by SurfaceTopography)")
 
 
-def add_surface(parser, *, group=None, required: bool = False, help: str | None = None, positional: bool = False):
+def add_surface(parser, *, group=None, required: bool = False, note: str | None = None, positional: bool = False):
     """Add the height-field file option (``--surface FILE``, or a positional FILE) and the options that complete
     a file's metadata, ``--spacing``, ``--units`` and ``--channel``, with the same meaning in every command
     (:func:`load_surface` reads them)."""
-    text = help or f"height-field file: {SURFACE_FORMATS_HELP}"
+    text = SURFACE_FORMATS_HELP + (f"; {note}" if note else "")
     if positional:
-        parser.add_argument("surface", metavar="FILE", help=text)
+        parser.add_argument("surface", metavar="FILE", help=f"height-field file: {text}")
     else:
-        (group or parser).add_argument("--surface", required=required, metavar="FILE", help=text)
-    parser.add_argument("--spacing", metavar="D[,DY]",
-                        help="grid spacing of the height field with unit, e.g. 50nm or 50nm,80nm: needed when the "
-                             "file does not state it, and overrides it when it does")
-    parser.add_argument("--units", metavar="UNIT",
-                        help="unit of heights and lengths in a height-field file that does not state it: "
-                             "m, mm, um, nm, pm or A")
-    parser.add_argument("--channel", metavar="N|NAME",
-                        help="data channel of an instrument file, by index or name (default: the file's height "
-                             "channel)")
+        option(parser, "--surface", group=group, required=required, note=text)
+    for flag in ("--spacing", "--units", "--channel"):
+        option(parser, flag)
 
 
 def load_surface(args, *, required: bool = True):
@@ -90,10 +83,11 @@ def load_surface(args, *, required: bool = True):
                          layout=getattr(args, "layout", None), nan_is_mask=getattr(args, "nan_is_mask", False))
 
 
-def add_output(parser, *, required: bool = True, help: str = "output directory") -> None:
+def add_output(parser, *, required: bool = True, note: str = "a directory", metavar: str = "OUTDIR",
+               overwrite_note: str | None = None) -> None:
     """Add ``-o/--output`` and ``--overwrite``."""
-    parser.add_argument("-o", "--output", required=required, metavar="OUTDIR", help=help)
-    parser.add_argument("--overwrite", action="store_true", help="replace outputs that already exist")
+    option(parser, "--output", short="-o", required=required, metavar=metavar, note=note)
+    option(parser, "--overwrite", action="store_true", note=overwrite_note)
 
 
 def emit(args, data, text: str | None = None) -> None:
@@ -116,9 +110,5 @@ def progress(iterable=None, *, total=None, desc=None, args=None):
 def add_colour(parser, *, illuminant: bool = True) -> None:
     """Add ``--illuminant`` (unless *illuminant* is False) and ``--observer`` (see :mod:`waveoptics.colour`)."""
     if illuminant:
-        parser.add_argument("--illuminant", default="D65", metavar="SPD",
-                            help="light: D65 (default), D50, A, F1..F12, E, blackbody:5500K, laser:465,532,638, "
-                                 "rgb-laser or a CSV file")
-    parser.add_argument("--observer", default="CIE 1931 2 Degree Standard Observer", metavar="NAME",
-                        help="CIE 1931 2 Degree Standard Observer (default) or CIE 1964 10 Degree Standard Observer "
-                             "(aliases 2, 10)")
+        option(parser, "--illuminant", default="D65")
+    option(parser, "--observer", default="CIE 1931 2 Degree Standard Observer", note="default the 1931 2° observer")

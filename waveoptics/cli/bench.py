@@ -6,7 +6,7 @@ FFTs and a NumPy FFT pipeline, plus the measured error of the device's math buil
 from __future__ import annotations
 
 from ..io.files import atomic_path, prepare_outdir, write_json
-from ._common import add_common, emit, progress
+from ._common import add_common, add_output, emit, progress
 
 FILES = ("bench.json", "bench.md")
 
@@ -18,8 +18,7 @@ def register(sub) -> None:
                                    "and the NumPy twin; FFT implementations; the fft solver against a NumPy FFT "
                                    "pipeline; scaling with samples and directions; math built-in errors.")
     p.add_argument("--quick", action="store_true", help="small sizes only (seconds; for smoke tests)")
-    p.add_argument("-o", "--output", metavar="OUTDIR", help="also write bench.json and bench.md here")
-    p.add_argument("--overwrite", action="store_true", help="replace outputs that already exist")
+    add_output(p, required=False, note="a directory: also write bench.json and bench.md")
     add_common(p)
     p.set_defaults(func=run)
 

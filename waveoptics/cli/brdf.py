@@ -20,6 +20,7 @@ from ..errors import WaveopticsError
 from ..vocabulary import DIFFRACTION, DIFFUSE_NAMES, FRESNEL_NAMES, NDF_NAMES, POLARIZATIONS, SHADOWING_NAMES
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
 from ._common import add_common, add_surface, emit, load_surface, progress
+from ._options import option, renamed
 
 
 @dataclass(frozen=True)
@@ -56,33 +57,31 @@ class Model:
 def _microfacet_arguments(g) -> None:
 
 
-    g.add_argument("--ndf", choices=sorted(NDF_NAMES), default="ggx", help="normal distribution (default ggx)")
+    option(g, "--ndf", choices=sorted(NDF_NAMES), default="ggx")
     g.add_argument("--shadowing", choices=sorted(SHADOWING_NAMES), default="smith-correlated",
                    help="masking-shadowing term (default smith-correlated)")
-    g.add_argument("--alpha", "--micro-alpha", dest="alpha", type=float, metavar="A",
-                   help="NDF slope scale α in [0, 2] (α_x if anisotropic); 0 = sharpest representable "
-                        "(microfacet, twoscale: the micro roughness)")
+    option(g, "--micro-alpha", short="--alpha", dest="alpha",
+           note="in [0, 2]; α_x if anisotropic; 0 = sharpest representable")
     g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
     g.add_argument("--alpha-y", type=float, metavar="A", help="α_y for anisotropic ggx/beckmann")
     g.add_argument("--abc-c", type=float, default=None, metavar="C",
                    help="tail exponent C of the abc NDF (default: waveoptics.brdf.ABC_C_DEFAULT, 2)")
-    g.add_argument("--material", metavar="NAME", help="material preset, shelf/book/page, or f0:VALUE "
-                                                     "(see 'waveoptics materials')")
+    option(g, "--material", note="or --ior")
     g.add_argument("--ior", metavar="N+Kj", help="constant complex index, e.g. 1.5 or 0.2+3.1j")
     g.add_argument("--fresnel", choices=sorted(FRESNEL_NAMES), default="exact",
                    help="Fresnel factor: exact, schlick, or one (F = 1, white furnace)")
     g.add_argument("--diffuse", choices=sorted(DIFFUSE_NAMES), default="lambert", help="diffuse term (default lambert)")
-    g.add_argument("--kd", type=float, default=0.0, metavar="C", help="diffuse albedo in [0, 1] (default 0)")
-    g.add_argument("--sigma", type=float, default=0.0, metavar="DEG",
-                   help="Oren-Nayar roughness σ in degrees (separate from the specular α)")
+    option(g, "--kd", default=0.0, note="applied as given, to metals too")
+    g.add_argument("--diffuse-sigma", dest="sigma", type=float, default=0.0, metavar="DEG",
+                   help="Oren-Nayar roughness σ in degrees (--diffuse oren-nayar; separate from the specular α; "
+                        "default 0)")
+    renamed(g, "brdf", "--sigma", dest="sigma", type=float)
     g.add_argument("--diffuse-roughness", type=float, default=0.5, metavar="R",
                    help="Burley diffuse roughness r in [0, 1] (--diffuse burley; default 0.5)")
     g.add_argument("--no-tradeoff", action="store_true",
                    help="do not weight the diffuse term by (1 - F(θi))(1 - F(θo)) / (1 - F̄)")
-    g.add_argument("--backend", choices=["numpy", "opencl"], default="numpy",
-                   help="evaluate with NumPy (default) or the OpenCL kernel (albedo always uses NumPy)")
-    g.add_argument("--precision", choices=["float32", "float64"], default="float32",
-                   help="OpenCL precision (default float32)")
+    option(g, "--backend", choices=["numpy", "opencl"], default="numpy", note="albedo always uses NumPy")
+    option(g, "--precision", choices=["float32", "float64"], default="float32")
 
 
 def _microfacet_params(args, wavelength_nm) -> dict:
@@ -104,7 +103,7 @@ def _microfacet_params(args, wavelength_nm) -> dict:
         fi = brdf.fresnel_inputs(spec, wavelength_nm, args.fresnel)
         _report_clamped(spec, wavelength_nm, args)
     if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
-        raise WaveopticsError(f"--sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
+        raise WaveopticsError(f"--diffuse-sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
                               "[0, 90] degrees")
     abc_c = brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c
     if args.diffuse == "burley" and not 0 <= args.diffuse_roughness <= 1:
@@ -201,15 +200,14 @@ def _microfacet_describe(args) -> dict:
 
 def _kirchhoff_arguments(g) -> None:
     add_surface(g)
-    g.add_argument("--solver", choices=("direct", "fft"), default="direct",
-                   help="direct Kirchhoff sum (default; --backend numpy|opencl) or fft on a hemisphere grid "
-                        "(interpolated at the outgoing directions)")
-    g.add_argument("--resolution", type=int, metavar="N",
-                   help="fft grid / --albedo grid cells per side (default: resolves the specular spike, albedo 256)")
-    g.add_argument("--realizations", type=int, default=1, metavar="N", help="average over N tiles of the surface")
-    g.add_argument("--window", default="hann", metavar="NAME", help="taper over the patch (default hann)")
-    g.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
-                   help="diffraction model (kirchhoff; default kirchhoff, else ghs, rghs, ohs, rohs)")
+    option(g, "--solver", choices=("direct", "fft"), default="direct",
+           note="direct Kirchhoff sum (--backend numpy|opencl) or fft on a hemisphere grid (interpolated at the "
+                "outgoing directions)")
+    option(g, "--resolution", note="of the fft grid and the --albedo quadrature (default: resolves the specular "
+                                   "spike; albedo 256)")
+    option(g, "--realizations", default=1)
+    option(g, "--window", default="hann")
+    option(g, "--diffraction", default="kirchhoff", choices=DIFFRACTION)
 
 
 def _kirchhoff_setup(args, wavelength_nm):
@@ -284,13 +282,9 @@ def _kirchhoff_describe(args) -> dict:
 
 
 def _rayleigh_rice_arguments(g) -> None:
-    g.add_argument("--nano", metavar="MODEL:PARAMS",
-                   help="surface statistics, e.g. abc:sigma=3nm,B=5um,C=3 or gaussian:sigma=2nm,T=1um "
-                        "(rayleigh-rice: or --surface FILE, whose periodogram is the PSD; --material or --ior give "
-                        "the substrate; twoscale: the nano-roughness, default " + _default_nano() + ")")
-    g.add_argument("--polarization", choices=POLARIZATIONS, default="unpolarized",
-                   help="polarization of the incident light relative to the plane of incidence; the scattered light "
-                        "is not analyzed (rayleigh-rice and kirchhoff; default unpolarized)")
+    option(g, "--nano", note="rayleigh-rice: statistics, or --surface FILE whose periodogram is the PSD; "
+                             "twoscale: default " + _default_nano())
+    option(g, "--polarization", choices=POLARIZATIONS, default="unpolarized", note="rayleigh-rice and kirchhoff")
 
 
 def _rayleigh_rice_setup(args, wavelength_nm):
@@ -411,7 +405,7 @@ def _twoscale_build(args, wavelength_nm, wi):
     if spec is not None:
         _report_clamped(spec, wavelength_nm, args)
     if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
-        raise WaveopticsError(f"--sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
+        raise WaveopticsError(f"--diffuse-sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
                               "[0, 90] degrees")
     micro = brdf.Micro(alpha=_alpha(args), alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing)
     common = dict(material=spec if spec is not None else "aluminium", micro=micro, kd=args.kd,
@@ -513,10 +507,9 @@ def register(sub) -> None:
                                    "normal, φ about it. Models: " +
                                    "; ".join(f"{k}: {m.help}" for k, m in MODELS.items()))
     p.add_argument("--model", choices=sorted(MODELS), default="microfacet", help="BRDF model (default microfacet)")
-    p.add_argument("--wavelength", default="550", metavar="NM[,NM...]",
-                   help="wavelengths in nm: 550, 450,550,650 or 400:700:10 (default 550)")
-    p.add_argument("--incident", action="append", required=True, metavar="THETA[,PHI]",
-                   help="direction to the light in degrees (repeat for several)")
+    option(p, "--wavelengths", default="550")
+    renamed(p, "brdf", "--wavelength", dest="wavelengths")
+    option(p, "--incident", action="append", required=True, note="repeat for several")
     p.add_argument("--outgoing", action="append", metavar="THETA,PHI",
                    help="direction to the viewer in degrees (repeat for several)")
     p.add_argument("--albedo", action="store_true",
@@ -532,7 +525,7 @@ def run(args) -> int:
     import numpy as np
 
     model = MODELS[args.model]
-    wl = parse_wavelengths(args.wavelength, name="--wavelength")
+    wl = parse_wavelengths(args.wavelengths, name="--wavelengths")
     inc = [parse_direction(t, name="--incident") for t in args.incident]
     wi = direction_from_angles([t for t, _ in inc], [p for _, p in inc])
     head = {"model": args.model, "parameters": model.describe(args),

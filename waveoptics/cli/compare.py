@@ -9,7 +9,8 @@ from pathlib import Path
 
 from ..errors import WaveopticsError
 from ..units import check_theta, parse_number_list
-from ._common import add_common, emit
+from ._common import add_common, add_output, emit
+from ._options import option, renamed
 
 
 def register(sub):
@@ -22,11 +23,11 @@ def register(sub):
                                    "colour and of rendered spheres. Same surface options as 'simulate'.")
 
     add_scene_options(p)
-    p.add_argument("--angles", default="0:80:10", metavar="DEG", help="incident angles in degrees (default 0:80:10)")
+    option(p, "--incident-angles", default="0:80:10")
+    renamed(p, "compare", "--angles", dest="incident_angles")
     p.add_argument("--tail", type=float, default=10.0, metavar="DEG",
                    help="tail = energy farther than this from the mirror direction (default 10°)")
-    p.add_argument("-o", "--output", metavar="OUTDIR", help="also write compare.json, compare.csv and compare.png")
-    p.add_argument("--overwrite", action="store_true", help="replace outputs that already exist")
+    add_output(p, required=False, note="a directory: also write compare.json, compare.csv and compare.png")
     add_common(p)
     p.set_defaults(func=run)
 
@@ -38,10 +39,10 @@ def run(args):
     from .. import io
     from .simulate import simulation_from_args
 
-    angles = parse_number_list(args.angles, name="angles_deg")
-    check_theta(angles, name="--angles")
+    angles = parse_number_list(args.incident_angles, name="angles_deg")
+    check_theta(angles, name="--incident-angles")
     if (angles >= 90).any():
-        raise WaveopticsError("--angles must stay below 90 degrees (the light must be above the horizon)")
+        raise WaveopticsError("--incident-angles must stay below 90 degrees (the light must be above the horizon)")
     if not (0 < args.tail < 90):
         raise WaveopticsError(f"--tail {args.tail!r} is not allowed; use an angle in (0, 90) degrees")
     files = ("compare.json", "compare.csv", "compare.png")

@@ -7,7 +7,8 @@ from __future__ import annotations
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
 from ..units import parse_direction
-from ._common import add_common, add_surface, emit, load_surface, progress
+from ._common import add_common, add_output, add_surface, emit, load_surface, progress
+from ._options import option, renamed
 
 
 def _list(text, conv, name):
@@ -30,22 +31,24 @@ def register(sub) -> None:
                                    "recommend the fastest setting meeting --target-error.")
     src = p.add_mutually_exclusive_group()
     add_surface(p, group=src)
-    src.add_argument("--model", default="gaussian:sigma=20nm,corr_length=1um", metavar="MODEL:k=v,...",
-                     help="surface generator and parameters (default gaussian:sigma=20nm,corr_length=1um; e.g. "
-                          "sinusoid:amplitude=40nm,period=1.6um)")
-    p.add_argument("--size", default="12.8um", help="model patch size with unit (default 12.8um)")
-    p.add_argument("--samples", default="128", help="model grid samples per side (default 128)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the first realization (default 0)")
-    p.add_argument("--material", default="Al", metavar="M", help="material (default Al; 'one' for F = 1)")
-    p.add_argument("--incident", default="30,0", metavar="THETA[,PHI]", help="direction to the light, degrees")
-    p.add_argument("--illuminant", default="D65", metavar="SPD", help="light source (default D65)")
+    option(p, "--generator", group=src, default="gaussian:sigma=20nm,corr_length=1um", metavar="MODEL:k=v,...",
+           note="and its parameters, e.g. sinusoid:amplitude=40nm,period=1.6um")
+    renamed(p, "cost", "--model", dest="generator")
+    option(p, "--size", default="12.8um")
+    option(p, "--samples", default="128")
+    option(p, "--seed", default=0, note="of the first realization")
+    option(p, "--material", default="Al", note="or 'one' for F = 1")
+    option(p, "--incident", default="30,0")
+    option(p, "--illuminant", default="D65")
     p.add_argument("--solvers", default="fft0,fft,direct", help="solvers of the ladder (default fft0,fft,direct)")
     p.add_argument("--resolutions", default="32,64,128",
                    help="direction-grid resolutions; each must divide the largest (default 32,64,128)")
     p.add_argument("--colour-accuracy", default="4,1,0.5", metavar="DE,...",
                    help="wavelength grids chosen for these ΔE2000 colour accuracies (default 4,1,0.5)")
-    p.add_argument("--realizations", default=None,
-                   help="realization counts (default 1,2 for random models, 1 otherwise)")
+    p.add_argument("--realization-counts", default=None, metavar="N,...",
+                   help="numbers of surface realizations averaged, one ladder step each (default 1,2 for random "
+                        "models, 1 otherwise)")
+    renamed(p, "cost", "--realizations", dest="realization_counts")
     p.add_argument("--precisions", default="float32,float64", help="direct solver precisions")
     p.add_argument("--budget", type=float, default=None, metavar="SECONDS",
                    help="time for the ladder after the reference; settings predicted to overrun are skipped")
@@ -53,8 +56,7 @@ def register(sub) -> None:
                    help="recommend the fastest setting whose --metric is <= E")
     p.add_argument("--metric", default="error_rel_l2", choices=("error_rel_l2", "error_albedo", "delta_e2000"),
                    help="error used for the Pareto front and the recommendation (default error_rel_l2)")
-    p.add_argument("-o", "--output", metavar="OUTDIR", help="write cost.json, cost.png (error vs time), cost.md")
-    p.add_argument("--overwrite", action="store_true", help="replace outputs that already exist")
+    add_output(p, required=False, note="a directory: cost.json, cost.png (error vs time), cost.md")
     add_common(p)
     p.set_defaults(func=run)
 
@@ -73,9 +75,9 @@ def run(args) -> int:
         hf = load_surface(args)
         cfg = cost.Config(hf, mat, (theta, phi), args.illuminant, False, args.seed, str(args.surface))
     else:
-        cfg = cost.model_config(args.model, args.size, int(_list(args.samples, int, "--samples")[0]), material=mat,
+        cfg = cost.model_config(args.generator, args.size, int(_list(args.samples, int, "--samples")[0]), material=mat,
                                 incident=(theta, phi), illuminant=args.illuminant, seed=args.seed)
-    reals = (_list(args.realizations, int, "--realizations") if args.realizations
+    reals = (_list(args.realization_counts, int, "--realization-counts") if args.realization_counts
              else ([1, 2] if cfg.random else [1]))
     settings = cost.ladder(_list(args.solvers, str, "--solvers"), _list(args.resolutions, int, "--resolutions"),
                            _list(args.colour_accuracy, float, "--colour-accuracy"), reals,

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..units import parse_wavelengths
-from ._common import add_colour, add_common, emit
+from ._common import add_colour, add_common, add_output, emit
 
 
 def register(sub):
@@ -15,8 +15,7 @@ def register(sub):
     p.add_argument("--lines", default="467,532,630", metavar="NM,NM,NM",
                    help="three laser wavelengths in nm (default: the BT.2020 primaries 467,532,630)")
     add_colour(p, illuminant=False)
-    p.add_argument("-o", "--output", metavar="PNG", help="write a plot of both spectra to this PNG file")
-    p.add_argument("--overwrite", action="store_true", help="replace the PNG if it exists")
+    add_output(p, required=False, metavar="PNG", note="a PNG file: a plot of both spectra")
     add_common(p, device=False)
     p.set_defaults(func=run)
 

@@ -16,6 +16,7 @@ from ..io.files import prepare_outdir
 from ..vocabulary import DIFFRACTION, POLARIZATIONS
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, add_surface, emit, load_surface, progress
+from ._options import option
 
 
 def register(sub) -> None:
@@ -24,35 +25,24 @@ def register(sub) -> None:
                                    "whole projected hemisphere for each wavelength, with its directional albedo "
                                    "and the coherent (specular) and scattered fractions.")
     add_surface(p, required=True)
-    p.add_argument("--material", required=True, metavar="M",
-                   help="material preset, shelf/book/page, constant index (1.5, 0.2+3.1j), f0:VALUE, or 'one' "
-                        "for F = 1")
-    p.add_argument("--incident", required=True, metavar="THETA[,PHI]", help="direction to the light, degrees")
-    p.add_argument("--wavelengths", default="400:700:10", metavar="NM",
-                   help="wavelengths in nm: 550, 450,550,650 or 400:700:10 (default 400:700:10)")
-    p.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
-                   help="diffraction model: kirchhoff (default), ghs, rghs, ohs, rohs (docs/physics.md §10)")
-    p.add_argument("--polarization", default="unpolarized", choices=POLARIZATIONS,
-                   help="polarization of the incident light relative to the plane of incidence; each facet "
-                        "reflects its own s/p split (default unpolarized; needs a material with a complex index)")
-    p.add_argument("--solver", choices=("fft", "direct"), default="fft",
-                   help="fft: chirp-z transforms with a banded Taylor series in v_z (default); direct: the "
-                        "Kirchhoff sum on the OpenCL device")
-    p.add_argument("--resolution", type=int, default=256, metavar="N",
-                   help="cells per side of the direction-cosine grid (default 256)")
-    p.add_argument("--realizations", type=int, default=1, metavar="N",
-                   help="average over N tiles of the surface (default 1: the whole patch)")
+    option(p, "--material", required=True, note="or 'one' for F = 1")
+    option(p, "--incident", required=True)
+    option(p, "--wavelengths", default="400:700:10")
+    option(p, "--diffraction", default="kirchhoff", choices=DIFFRACTION)
+    option(p, "--polarization", default="unpolarized", choices=POLARIZATIONS,
+           note="each facet reflects its own s/p split; needs a material with a complex index")
+    option(p, "--solver", choices=("fft", "direct"), default="fft",
+           note="fft: chirp-z transforms with a banded Taylor series in v_z; direct: the Kirchhoff sum")
+    option(p, "--resolution", default=256)
+    option(p, "--realizations", default=1, note="1: the whole patch")
     p.add_argument("--order", default="auto", metavar="K",
                    help="fft solver: 'auto' (exact to 1e-8) or a fixed Taylor order about the specular v_z; "
                         "0 freezes v_z (paraxial)")
-    p.add_argument("--window", default="hann", metavar="NAME",
-                   help="taper over the patch: a scipy.signal.windows name (default hann; boxcar = none)")
-    p.add_argument("--detrend", choices=("mean", "plane", "none"), default="mean",
-                   help="remove the mean (default) or also the tilt (plane) of each patch, weighted by the window")
-    p.add_argument("--precision", choices=("float32", "float64"), default="float32",
-                   help="direct solver precision (default float32)")
-    p.add_argument("--backend", choices=("opencl", "numpy"), default="opencl",
-                   help="direct solver: OpenCL kernel (default) or its float64 NumPy twin")
+    option(p, "--window", default="hann")
+    option(p, "--detrend", choices=("mean", "plane", "none"), default="mean",
+           note="of each patch, weighted by the window")
+    option(p, "--precision", choices=("float32", "float64"), default="float32", note="direct solver")
+    option(p, "--backend", choices=("opencl", "numpy"), default="opencl", note="direct solver")
     add_output(p)
     add_common(p)
     p.set_defaults(func=run)

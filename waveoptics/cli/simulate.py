@@ -5,45 +5,34 @@ import os
 
 from ..errors import FieldError
 from ..io.files import prepare_outdir
-from ..vocabulary import DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
+from ..vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
-from ._common import SURFACE_FORMATS_HELP, add_common, add_output, add_surface, emit, load_surface, progress
+from ._common import add_common, add_output, add_surface, emit, load_surface, progress
+from ._options import option
 
 
 def add_scene_options(p) -> None:
     """Options that describe the surface, light and sampling (shared by simulate and compare)."""
     src = p.add_mutually_exclusive_group()
-    add_surface(p, group=src, help=f"nano height field (fft or direct solver): {SURFACE_FORMATS_HELP}")
-    src.add_argument("--nano", metavar="MODEL:PARAMS", default=None,
-                     help="nano roughness, e.g. abc:sigma=10nm,B=2um,C=2.6 | gaussian:sigma=5nm,T=1um | "
-                          "exponential:sigma=5nm,T=1um | sinusoid:amplitude=40nm,period=2um | "
-                          "scratches:count=20,width=200nm,depth=30nm (default abc:sigma=10nm,B=2um,C=2.6; "
-                          "sigma=0 disables it)")
-    p.add_argument("--micro-alpha", type=float, default=0.05, metavar="A",
-                   help="micro NDF roughness α (default 0.05)")
-    p.add_argument("--ndf", default="beckmann", choices=["ggx", "beckmann"], help="micro NDF (default beckmann)")
-    p.add_argument("--material", default="Al", metavar="M", help="material name, shelf/book/page, n+kj or f0:... "
-                                                                   "(default Al)")
-    p.add_argument("--incident", default="30", metavar="THETA[,PHI]", help="light direction in degrees (default 30)")
-    p.add_argument("--illuminant", default="D65", help="light source: D65, A, F2, blackbody:3000K, laser:532, "
-                                                       "rgb-laser, FILE.csv (default D65)")
-    p.add_argument("--wavelengths", metavar="NM", help="wavelengths in nm (400:700:10 or 450,550,650); "
-                                                       "default: chosen from the illuminant and --accuracy")
-    p.add_argument("--accuracy", type=float, default=1.0, metavar="DE",
-                   help="colour accuracy (ΔE2000) that picks the wavelength step (default 1.0)")
-    p.add_argument("--resolution", type=int, default=128, metavar="N", help="direction grid N×N (default 128)")
-    p.add_argument("--solver", default="auto", choices=NANO_SOLVERS,
-                   help="nano lobe: psd (statistics), fft or direct (height field); auto picks (default)")
-    p.add_argument("--kd", type=float, default=0.5, help="diffuse albedo of a dielectric (metals: none)")
-    p.add_argument("--precision", default="float32", choices=PRECISIONS,
-                   help="OpenCL precision for height-field solvers (default float32)")
-    p.add_argument("--seed", type=int, default=0, help="seed of generated nano surfaces (default 0)")
-    p.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
-                   help="diffraction model of the nano lobe: kirchhoff (default), ghs, rghs, ohs, rohs "
-                        "(docs/physics.md §10)")
-    p.add_argument("--polarization", default="unpolarized", choices=POLARIZATIONS,
-                   help="polarization of the incident light relative to the plane of incidence; each facet "
-                        "reflects its own s/p split (default unpolarized)")
+    add_surface(p, group=src, note="the nano height field (fft or direct solver)")
+    option(p, "--nano", group=src, note=f"default {DEFAULT_NANO}; sigma=0 disables it; also "
+                                         "exponential:sigma=5nm,T=1um, scratches:count=20,width=200nm,depth=30nm")
+    option(p, "--micro-alpha", default=0.05)
+    option(p, "--ndf", default="beckmann", choices=["ggx", "beckmann"])
+    option(p, "--material", default="Al")
+    option(p, "--incident", default="30")
+    option(p, "--illuminant", default="D65")
+    option(p, "--wavelengths", note="default: chosen from the illuminant and --accuracy")
+    option(p, "--accuracy", default=1.0)
+    option(p, "--resolution", default=128)
+    option(p, "--solver", default="auto", choices=NANO_SOLVERS,
+           note="psd (statistics), fft or direct (height field); auto picks")
+    option(p, "--kd", default=0.5, note="of a dielectric; metals have none")
+    option(p, "--precision", default="float32", choices=PRECISIONS)
+    option(p, "--seed", default=0)
+    option(p, "--diffraction", default="kirchhoff", choices=DIFFRACTION)
+    option(p, "--polarization", default="unpolarized", choices=POLARIZATIONS,
+           note="each facet reflects its own s/p split")
     p.add_argument("--split", action="store_true",
                    help="--surface holds both scales: split it at a cut-off period of 10 λmax; the micro α comes "
                         "from the long-period slopes, the short-period part diffracts")
@@ -84,7 +73,7 @@ def register(sub):
                     "previews, sphere renders of both models and their ΔE2000, lobe cross-sections and "
                     "summary.json. With no options it runs a nano-rough aluminium under D65.")
     add_scene_options(p)
-    p.add_argument("--sphere-size", type=int, default=256, metavar="PX", help="sphere render size (default 256)")
+    option(p, "--sphere-size", default=256)
     p.add_argument("--environment", metavar="MAP",
                    help="also render both spheres lit by an environment: sky, studio, constant or an equirectangular "
                         ".exr (+y up; multiple importance sampling at --sphere-size; sphere_env_*.exr and "

@@ -1,10 +1,11 @@
-"""``waveoptics surface generate|stats``: make height fields and measure them (logic in :mod:`waveoptics.surfaces`)."""
+"""``waveoptics surface generate|stats|prepare``: make height fields, measure them, level and crop them (logic in :mod:`waveoptics.surfaces`)."""
 from __future__ import annotations
 
 import inspect
 
 from ..errors import WaveopticsError
-from ._common import add_common, add_surface, emit, load_surface
+from ._common import add_common, add_output, add_surface, emit, load_surface
+from ._options import option, renamed
 
 #: CLI option -> generator parameter (lengths stay strings with units; the generators parse them)
 _MODEL_OPTIONS = {
@@ -39,19 +40,19 @@ def register(sub):
     g = ss.add_parser("generate", help="generate a height field and write it to a file",
                       description="Generate a height field (heights in metres) and write it as .npz, .npy "
                                   "(+ .json sidecar), .exr or a text grid, chosen by the extension of -o.")
-    g.add_argument("--model", required=True, choices=MODELS, help="surface model")
-    g.add_argument("--size", default="64um", help="patch size L or LX,LY with unit (default 64um)")
-    g.add_argument("--samples", default="1024", help="grid samples N, NXxNY or NX,NY (default 1024)")
-    g.add_argument("--seed", type=int, default=None, help="random seed (default: drawn and recorded)")
+    option(g, "--generator", choices=MODELS, note="its parameters follow as options")
+    renamed(g, "surface generate", "--model", dest="generator")
+    option(g, "--size", default="64um")
+    option(g, "--samples", default="1024", note="or NXxNY, NX,NY")
+    option(g, "--seed", note="default: drawn and recorded")
     for name, (flag, text) in _MODEL_OPTIONS.items():
         g.add_argument(flag, dest=f"m_{name}", metavar="VALUE", help=text)
     g.add_argument("--exact-rms", action="store_true",
                    help="rescale this realization to exactly σ (default: ensemble rms σ)")
     g.add_argument("--no-renormalize", action="store_true",
                    help="keep the PSD as given even where the grid resolves only part of σ²")
-    g.add_argument("-o", "--output", required=True, metavar="FILE",
-                   help="output file (.npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc through SurfaceTopography)")
-    g.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    add_output(g, metavar="FILE", note="a height-field file: .npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc "
+                                       "through SurfaceTopography")
     add_common(g, device=False)
     g.set_defaults(func=run_generate, command="surface generate")
 
@@ -61,28 +62,68 @@ def register(sub):
     add_surface(s, positional=True)
     s.add_argument("--layout", choices=("matrix", "xyz"), help="text layout (default: detected)")
     s.add_argument("--nan-is-mask", action="store_true", help="treat NaN heights as missing samples")
-    s.add_argument("--detrend", choices=("mean", "plane", "none"), default="mean",
-                   help="remove the mean (default) or a least-squares plane before the statistics")
+    option(s, "--detrend", choices=("mean", "plane", "none"), default="mean", note="before the statistics")
     s.add_argument("--fit", action="append", choices=("gaussian", "exponential", "abc"), default=[],
                    help="fit this PSD model (repeatable)")
     s.add_argument("--plot", metavar="PNG", help="write the height map and radial PSD (with fits) as PNG")
-    s.add_argument("--overwrite", action="store_true", help="replace an existing --plot file")
+    option(s, "--overwrite", action="store_true", note="here the --plot file")
     add_common(s, device=False)
     s.set_defaults(func=run_stats, command="surface stats")
+    _register_prepare(ss)
+
+
+def _register_prepare(ss) -> None:
+    q = ss.add_parser("prepare", help="level and crop a measured height field and write it in any format",
+                      description="Prepare a measured height field for simulation: read it (any instrument format, "
+                                  "with --units/--spacing/--channel where the file lacks them), remove the mean or "
+                                  "the least-squares plane, crop a region, and write it (heights in metres, "
+                                  "provenance kept).")
+    add_surface(q, positional=True)
+    q.add_argument("--layout", choices=("matrix", "xyz"), help="text layout (default: detected)")
+    q.add_argument("--nan-is-mask", action="store_true", help="treat NaN heights as missing samples")
+    option(q, "--detrend", choices=("plane", "mean", "none"), default="plane")
+    q.add_argument("--crop", metavar="X,Y,W,H",
+                   help="keep the region X..X+W, Y..Y+H (lengths with units from the first sample, e.g. "
+                        "0um,0um,40um,40um)")
+    add_output(q, metavar="FILE", note="a height-field file: .npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc "
+                                       "through SurfaceTopography")
+    add_common(q, device=False)
+    q.set_defaults(func=run_prepare, command="surface prepare")
+
+
+def run_prepare(args):
+
+    from .. import surfaces
+
+    hf = load_surface(args)
+    if args.crop is not None:
+        hf = surfaces.crop_region(hf, *surfaces.parse_region(args.crop))
+    hf = surfaces.level(hf, args.detrend)
+    hf = surfaces.HeightField(hf.heights, hf.dx, hf.dy, hf.mask, {**hf.meta, "prepared_from": hf.meta.get("source")})
+    path = surfaces.save(hf, args.output, overwrite=args.overwrite)
+    st = surfaces.stats(hf, detrend="none")
+    data = {"output": str(path), "surface_info": hf.provenance(), "stats": st}
+    text = (f"wrote {path}: {st['samples'][0]} x {st['samples'][1]} samples at {hf.dx * 1e9:.4g} x "
+            f"{hf.dy * 1e9:.4g} nm, rms height {st['rms_height_m'] * 1e9:.4g} nm after {args.detrend} removal"
+            + (f", region {args.crop}" if args.crop else ""))
+    emit(args, data, text)
+    return 0
 
 
 def _model_params(args) -> dict:
 
     from .. import surfaces
 
-    accepted = inspect.signature(surfaces.GENERATORS[args.model]).parameters
+    if args.generator is None:
+        raise WaveopticsError(f"surface generate needs --generator ({', '.join(MODELS)})")
+    accepted = inspect.signature(surfaces.GENERATORS[args.generator]).parameters
     params = {"size": args.size, "samples": args.samples}
     for name, (flag, _) in _MODEL_OPTIONS.items():
         value = getattr(args, f"m_{name}")
         if value is None:
             continue
         if name not in accepted:
-            raise WaveopticsError(f"{flag} is not an option of model {args.model!r}")
+            raise WaveopticsError(f"{flag} is not an option of generator {args.generator!r}")
         if name in _FLOAT_PARAMS or name == "count":
             try:
                 value = float(value)
@@ -91,16 +132,16 @@ def _model_params(args) -> dict:
         params[name] = value
     for name, par in accepted.items():
         if par.default is inspect.Parameter.empty and name not in params:
-            raise WaveopticsError(f"model {args.model!r} needs {_MODEL_OPTIONS[name][0]}")
+            raise WaveopticsError(f"generator {args.generator!r} needs {_MODEL_OPTIONS[name][0]}")
     if "seed" in accepted:
         params["seed"] = args.seed
     elif args.seed is not None:
-        raise WaveopticsError(f"--seed is not an option of model {args.model!r} (it is deterministic)")
+        raise WaveopticsError(f"--seed is not an option of generator {args.generator!r} (it is deterministic)")
     if "exact_rms" in accepted:
         params["exact_rms"] = args.exact_rms
         params["renormalize"] = not args.no_renormalize
     elif args.exact_rms or args.no_renormalize:
-        raise WaveopticsError(f"--exact-rms/--no-renormalize apply to random spectral models, not {args.model!r}")
+        raise WaveopticsError(f"--exact-rms/--no-renormalize apply to random spectral models, not {args.generator!r}")
     return params
 
 
@@ -109,11 +150,11 @@ def run_generate(args):
     from .. import surfaces
 
     params = _model_params(args)
-    hf = surfaces.generate(args.model, **params)
+    hf = surfaces.generate(args.generator, **params)
     path = surfaces.save(hf, args.output, overwrite=args.overwrite)
     st = surfaces.stats(hf)
-    data = {"output": str(path), "model": args.model, "meta": hf.meta, "stats": st}
-    text = (f"wrote {path}: {args.model}, {st['samples'][0]}x{st['samples'][1]} samples at "
+    data = {"output": str(path), "model": args.generator, "meta": hf.meta, "stats": st}
+    text = (f"wrote {path}: {args.generator}, {st['samples'][0]}x{st['samples'][1]} samples at "
             f"{st['spacing_m'][0] * 1e9:.4g} x {st['spacing_m'][1] * 1e9:.4g} nm, rms height "
             f"{st['rms_height_m'] * 1e9:.4g} nm, rms slope {st['rms_slope']:.4g}")
     emit(args, data, text)

@@ -4,6 +4,7 @@ from __future__ import annotations
 from ..errors import WaveopticsError
 from ..units import parse_direction
 from ._common import add_common, emit, progress
+from ._options import option
 from .table import add_case_options, add_cluster_options, case_from_args
 
 #: --vary names listed in the help (kept equal to waveoptics.distributed.VARY by tests/test_distributed.py; the
@@ -24,12 +25,10 @@ def register(sub):
     p.add_argument("--vary", action="append", default=[], metavar="NAME=VALUES", required=True,
                    help="a parameter and its values, repeatable: material=Au,Ag,Cu  sigma_nano=1nm:20nm:5 (START:"
                         "STOP:STEP, a bare STEP in START's unit)  micro_alpha=0.05,0.2  theta=0:60:30")
-    p.add_argument("--incident", default=None, metavar="THETA[,PHI]",
-                   help="light direction in degrees (default 30; with a scene file, its light's first direction)")
-    p.add_argument("--sphere-size", type=int, default=64, metavar="PX",
-                   help="sphere render size for the per-pixel ΔE2000 (default 64; 0 skips the renders)")
+    option(p, "--incident", note="default 30; with a scene file, its light's first direction")
+    option(p, "--sphere-size", default=64, note="for the per-pixel ΔE2000; 0 skips the renders")
     add_case_options(p, resolution=64)
-    p.add_argument("-o", "--output", required=True, metavar="OUT.csv", help="output table (.csv or .json)")
+    option(p, "--output", short="-o", required=True, metavar="OUT.csv", note="a table (.csv or .json)")
     add_cluster_options(p)
     add_common(p)
     p.set_defaults(func=run)

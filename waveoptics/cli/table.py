@@ -10,7 +10,8 @@ from pathlib import Path
 from ..errors import WaveopticsError
 from ..units import parse_number_list, parse_wavelengths
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PRECISIONS
-from ._common import add_common, emit, progress
+from ._common import SURFACE_FORMATS_HELP, add_common, emit, progress
+from ._options import option
 
 SCENE_SUFFIXES = (".toml",)
 
@@ -20,35 +21,27 @@ def add_case_options(p, *, resolution: int) -> None:
 
     With a scene file they override the scene's values; their defaults are None so that "not given" is visible.
     """
-    p.add_argument("--nano", metavar="MODEL:PARAMS",
-                   help="nano roughness instead of a SURFACE file, e.g. abc:sigma=10nm,B=2um,C=2.6 (the default) "
-                        "| gaussian:sigma=5nm,T=1um | sinusoid:amplitude=40nm,period=2um")
-    p.add_argument("--material", default=None, metavar="M",
-                   help="material name, shelf/book/page, n+kj or f0:... (default Al); with a scene file: the name "
-                        "of one of its materials (default the first)")
+    option(p, "--nano", note="instead of a SURFACE file (default abc:sigma=10nm,B=2um,C=2.6)")
+    for flag in ("--spacing", "--units", "--channel"):
+        option(p, flag)
+    option(p, "--material", note="default Al; with a scene file: the name of one of its materials (default the "
+                                 "first)")
     p.add_argument("--light", default=None, metavar="NAME",
                    help="with a scene file: the name of one of its lights (default the first)")
-    p.add_argument("--micro-alpha", type=float, default=None, metavar="A",
-                   help="micro NDF roughness α (default 0 with a SURFACE file, whose heights are the whole "
-                        "geometry; 0.05 with --nano)")
-    p.add_argument("--ndf", default=None, choices=["ggx", "beckmann"], help="micro NDF (default beckmann)")
-    p.add_argument("--wavelengths", metavar="NM", help="wavelengths in nm (400:700:10 or 450,550,650); default: "
-                                                       "chosen from the illuminant and --accuracy")
-    p.add_argument("--illuminant", default=None, help="light for RGB and the default wavelengths: D65 (default), A, "
-                                                      "F2, blackbody:3000K, laser:532, FILE.csv")
-    p.add_argument("--accuracy", type=float, default=None, metavar="DE",
-                   help="colour accuracy (ΔE2000) that picks the wavelength step (default 1.0)")
-    p.add_argument("--resolution", type=int, default=None, metavar="N",
-                   help=f"direction grid N×N over the projected hemisphere (default {resolution})")
+    option(p, "--micro-alpha", note="default 0 with a SURFACE file, whose heights are the whole geometry; 0.05 "
+                                    "with --nano")
+    option(p, "--ndf", choices=["ggx", "beckmann"], note="default beckmann")
+    option(p, "--wavelengths", note="default: chosen from the illuminant and --accuracy")
+    option(p, "--illuminant", note="for RGB and the default wavelengths (default D65)")
+    option(p, "--accuracy", note="default 1.0")
+    option(p, "--resolution", note=f"default {resolution}")
     p.set_defaults(default_resolution=resolution)
-    p.add_argument("--solver", default="auto", choices=NANO_SOLVERS,
-                   help="nano lobe: psd (statistics), fft or direct (height field); auto picks (default)")
-    p.add_argument("--diffraction", default="kirchhoff", choices=DIFFRACTION,
-                   help="diffraction model of the nano lobe (default kirchhoff; docs/physics.md §10)")
-    p.add_argument("--kd", type=float, default=None, help="diffuse albedo of a dielectric (default 0.5; metals: none)")
-    p.add_argument("--precision", default="float32", choices=PRECISIONS,
-                   help="OpenCL precision of the height-field solvers (default float32)")
-    p.add_argument("--seed", type=int, default=None, help="seed of generated nano surfaces (default 0)")
+    option(p, "--solver", default="auto", choices=NANO_SOLVERS,
+           note="psd (statistics), fft or direct (height field); auto picks")
+    option(p, "--diffraction", default="kirchhoff", choices=DIFFRACTION)
+    option(p, "--kd", note="of a dielectric; metals have none (default 0.5)")
+    option(p, "--precision", default="float32", choices=PRECISIONS)
+    option(p, "--seed", note="default 0")
 
 
 def add_cluster_options(p) -> None:
@@ -60,7 +53,7 @@ def add_cluster_options(p) -> None:
     g.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler")
     p.add_argument("--resume", action="store_true",
                    help="continue OUT.partial left by an interrupted run (computes only the missing tasks)")
-    p.add_argument("--overwrite", action="store_true", help="replace OUT and discard OUT.partial if they exist")
+    option(p, "--overwrite", action="store_true", note="and discard OUT.partial")
 
 
 def _is_scene(source) -> bool:
@@ -80,7 +73,11 @@ def case_from_args(args, *, source=None):
                  resolution=args.resolution, solver=args.solver, kd=args.kd, precision=args.precision,
                  diffraction=args.diffraction,
                  seed=args.seed, incident_deg=getattr(args, "incident_deg", None))
+    meta_opts = [f for f in ("spacing", "units", "channel") if getattr(args, f, None) is not None]
     if _is_scene(source):
+        if meta_opts:
+            raise WaveopticsError(f"--{meta_opts[0]} describes a SURFACE file; a scene file states its surface's "
+                                  "spacing and units in its file = {...} table")
         if args.nano:
             raise WaveopticsError("--nano cannot be used with a scene file: the scene's material defines its nano "
                                   "roughness")
@@ -102,7 +99,14 @@ def case_from_args(args, *, source=None):
         kw["material"] = args.material
     case = SimulationRequest(nano=None if source else (args.nano or DEFAULT_NANO),
                              surface=str(source) if source else None, **kw)
-    return case, None
+    if source is None and meta_opts:
+        raise WaveopticsError(f"--{meta_opts[0]} describes a SURFACE file; give one")
+    hf = None
+    if source is not None and meta_opts:   # the file needs its metadata completed: read it here, once
+        from .. import surfaces
+
+        hf = surfaces.load(source, spacing=args.spacing, units=args.units, channel=args.channel)
+    return case, hf
 
 
 def register(sub):
@@ -115,17 +119,14 @@ def register(sub):
                     "in-process by default, on N local worker processes with --workers N, or on a cluster with "
                     "--scheduler; finished tasks are kept in OUT.partial so --resume continues a run.")
     p.add_argument("source", nargs="?", metavar="SURFACE|SCENE",
-                   help="nano height-field file (.npz/.npy/.exr/.txt; fft/direct solver) or a scene file (.toml)")
-    p.add_argument("--incident-angles", default="0:85:5", metavar="DEG",
-                   help="incident zenith angles in degrees, START:STOP:STEP or A,B,C (default 0:85:5)")
+                   help=f"nano height-field file ({SURFACE_FORMATS_HELP}; fft/direct solver) or a scene file (.toml)")
+    option(p, "--incident-angles", default="0:85:5")
     p.add_argument("--phi", type=float, default=0.0, metavar="DEG", help="incident azimuth in degrees (default 0)")
-    p.add_argument("--realizations", type=int, default=1, metavar="N",
-                   help="average N surface realizations: tiles of the SURFACE file, or seeds of a generated "
-                        "--nano surface with --solver fft/direct (default 1)")
+    option(p, "--realizations", default=1, note="seeds of a generated --nano surface need --solver fft/direct")
     p.add_argument("--batch", type=int, default=None, metavar="B",
                    help="wavelengths per task (default 8)")
     add_case_options(p, resolution=128)
-    p.add_argument("-o", "--output", required=True, metavar="OUT.h5", help="output HDF5 file")
+    option(p, "--output", short="-o", required=True, metavar="OUT.h5", note="an HDF5 file")
     add_cluster_options(p)
     add_common(p)
     p.set_defaults(func=run)

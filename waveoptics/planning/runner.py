@@ -203,8 +203,12 @@ def execute(plan: Plan, outdir, *, overwrite: bool = False, device=None, progres
         if sc.output.tables:
             name = f"{p}_table.csv"
             with io.atomic_path(out / name) as tmp:
+                # units in every header; RGB is linear sRGB of the BRDF under the light, white-balanced to the
+                # light (a white reflector is grey under a 532 nm laser too): said in the header, not assumed
+                light = str(getattr(e.spd, "name", e.light_name)).replace(",", ";")
+                wb = f"linear sRGB 1/sr white-balanced to {light}"
                 head = ["light_theta_deg", "light_phi_deg", "view_theta_deg", "view_phi_deg"] + \
-                       [f"f_{lam:g}nm" for lam in w] + ["R", "G", "B"]
+                       [f"f_{lam:g}nm_per_sr" for lam in w] + [f"{c} ({wb})" for c in "RGB"]
                 lines = [",".join(head)]
                 for r in rows:
                     vals = r["light_deg"] + r["view_deg"] + list(r["brdf"]) + list(r["rgb"])

@@ -56,9 +56,10 @@ def detrended(hf: HeightField, detrend: str = "mean") -> np.ndarray:
     elif detrend == "plane":
         x, y = hf.coords()
         X, Y = np.broadcast_arrays(x[None, :], y[:, None])
-        cols = [np.ones(valid.sum())] + [c[valid] for c in (X, Y) if np.ptp(c[valid]) > 0]
+        axes = [c for c in (X, Y) if np.ptp(c[valid]) > 0]   # a profile has no tilt across it
+        cols = [np.ones(valid.sum())] + [c[valid] for c in axes]
         coef, *_ = np.linalg.lstsq(np.stack(cols, axis=1), hf.heights[valid], rcond=None)
-        fit = coef[0] + sum(c * k for c, k in zip((X, Y)[: len(cols) - 1], coef[1:]))
+        fit = coef[0] + sum(c * k for c, k in zip(axes, coef[1:]))
         h = hf.heights - fit
     return np.where(valid, h, 0.0)
 

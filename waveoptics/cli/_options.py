@@ -1,0 +1,147 @@
+"""One vocabulary for the command line: every option that more than one command takes is defined here once — its
+flag, the quantity it means (with its unit), its metavar and type — and each command adds it with its own default
+and, where needed, a note on what that command does with it. A test holds every parser to these definitions, and
+``docs/cli.md`` is generated from the parsers.
+
+Renamed options keep working for one release as hidden aliases that print a one-line deprecation warning
+(:data:`RENAMED`; the changelog lists them).
+"""
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+
+__all__ = ["Option", "OPTIONS", "RENAMED", "REMOVED_IN", "option", "renamed", "deprecations"]
+
+#: the release that drops the aliases of :data:`RENAMED`
+REMOVED_IN = "0.3"
+
+
+@dataclass(frozen=True)
+class Option:
+    """A command-line option shared by several commands: *meaning* starts its help in every command."""
+
+    flag: str
+    meaning: str
+    metavar: str | None = None
+    type: type | None = None
+    unit: str = ""
+
+
+OPTIONS = {o.flag: o for o in (
+    Option("--wavelengths", "wavelengths in nm: 550, 450,550,650 or 400:700:10 (a unit may follow: 550nm, 0.55um)",
+           "NM", unit="nm"),
+    Option("--incident", "direction to the light: θ from the normal, φ about it, in degrees", "THETA[,PHI]",
+           unit="deg"),
+    Option("--incident-angles", "incident angles θ in degrees: 0:80:10 or 0,30,60", "DEG", unit="deg"),
+    Option("--accuracy", "colour accuracy (ΔE2000) that picks the wavelength step", "DE", float, "ΔE2000"),
+    Option("--material", "material: a name (see 'waveoptics materials'), shelf/book/page, a constant index n+kj "
+                         "(1.5, 0.2+3.1j) or f0:VALUE", "M"),
+    Option("--illuminant", "light: D65, D50, A, F1..F12, E, blackbody:5500K, laser:465,532,638, rgb-laser or a CSV "
+                           "file", "SPD"),
+    Option("--kd", "diffuse albedo kd in [0, 1]", "KD", float, "1"),
+    Option("--micro-alpha", "micro-scale NDF roughness α (slope scale; 0 = smooth)", "A", float, "1"),
+    Option("--ndf", "microfacet normal distribution"),
+    Option("--nano", "nano-roughness MODEL:key=value,... with units, e.g. abc:sigma=10nm,B=2um,C=2.6, "
+                     "gaussian:sigma=5nm,T=1um (T or corr_length), sinusoid:amplitude=40nm,period=2um",
+           "MODEL:PARAMS"),
+    Option("--diffraction", "diffraction model of the nano lobe: kirchhoff, ghs, rghs, ohs or rohs "
+                            "(docs/physics.md §10)"),
+    Option("--polarization", "polarization of the incident light relative to the plane of incidence: unpolarized, "
+                             "s or p (the scattered light is not analyzed)"),
+    Option("--precision", "OpenCL floating-point precision of the height-field solvers"),
+    Option("--solver", "solver of the diffracted (nano) lobe"),
+    Option("--backend", "where the direct Kirchhoff sum runs: the OpenCL kernel or its float64 NumPy twin"),
+    Option("--resolution", "cells per side of the direction-cosine grid over the projected hemisphere", "N", int),
+    Option("--realizations", "surface realizations averaged (tiles of a height-field file, or seeds of a generated "
+                             "surface)", "N", int),
+    Option("--samples", "grid samples of a generated surface: N per side", "N"),
+    Option("--size", "patch size of a generated surface with unit: L or LX,LY", "L", unit="m"),
+    Option("--seed", "random seed of generated surfaces", "SEED", int),
+    Option("--sphere-size", "size of the sphere renders in pixels", "PX", int, "px"),
+    Option("--window", "taper over the patch: a scipy.signal.windows name (boxcar = none)", "NAME"),
+    Option("--detrend", "what to remove from the heights first: mean, plane (least squares: levelling) or none"),
+    Option("--generator", "surface generator"),
+    Option("--surface", "height-field file", "FILE"),
+    Option("--spacing", "grid spacing of the height field with unit, e.g. 50nm or 50nm,80nm: needed when the "
+                        "file does not state it, and overrides it when it does", "D[,DY]", unit="m"),
+    Option("--units", "unit of heights and lengths in a height-field file that does not state it: m, mm, um, nm, "
+                      "pm or A", "UNIT"),
+    Option("--channel", "data channel of an instrument file, by index or name (default: the file's height "
+                        "channel)", "N|NAME"),
+    Option("--output", "where the outputs go"),
+    Option("--overwrite", "replace outputs that already exist"),
+    Option("--device", "OpenCL device: substring of 'platform device' or P:D indices (default: "
+                       "$WAVEOPTICS_DEVICE, else first GPU, else PoCL CPU)", "NAME"),
+    Option("--json", "print machine-readable JSON (with units) on stdout"),
+    Option("--debug", "show the Python traceback on errors"),
+    Option("--quiet", "do not print warnings"),
+    Option("--observer", "CIE observer: CIE 1931 2 Degree Standard Observer or CIE 1964 10 Degree Standard "
+                         "Observer (aliases 2, 10)", "NAME"),
+)}
+
+#: (command, old flag) → new flag: options renamed for one vocabulary, accepted until :data:`REMOVED_IN`
+RENAMED = {
+    ("brdf", "--wavelength"): "--wavelengths",
+    ("brdf", "--sigma"): "--diffuse-sigma",
+    ("compare", "--angles"): "--incident-angles",
+    ("cost", "--model"): "--generator",
+    ("cost", "--realizations"): "--realization-counts",
+    ("surface generate", "--model"): "--generator",
+}
+
+
+def _help(meaning: str, note: str | None, default) -> str:
+    text = meaning + (f"; {note}" if note else "")
+    if default not in (None, False, argparse.SUPPRESS) and "default" not in (note or ""):
+        text += f" (default {default})"
+    return text
+
+
+def option(parser, flag: str, *, default=None, note: str | None = None, group=None, **kwargs):
+    """Add the shared option *flag* (:data:`OPTIONS`) to *parser* (or its *group*) with this command's *default*
+    and *note*; ``kwargs`` (choices, action, required, dest, ...) pass to argparse. Short forms (``-o``) go in
+    ``kwargs["short"]``."""
+    o = OPTIONS[flag]
+    short = kwargs.pop("short", None)
+    args = (short, flag) if short else (flag,)
+    spec = {"help": _help(o.meaning, note, default), "default": default}
+    if kwargs.get("action") not in ("store_true", "store_false"):
+        if o.metavar and "choices" not in kwargs:
+            spec["metavar"] = o.metavar
+        if o.type is not None:
+            spec["type"] = o.type
+    spec.update(kwargs)
+    return (group or parser).add_argument(*args, **spec)
+
+
+class _Renamed(argparse.Action):
+    """A renamed option's old flag: stores into the new option's destination and records the deprecation."""
+
+    def __init__(self, option_strings, dest, new_flag=None, store=None, **kwargs):
+        self.new_flag = new_flag
+        self.store = store
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if self.store == "append":
+            items = list(getattr(namespace, self.dest, None) or [])
+            items.append(values)
+            values = items
+        setattr(namespace, self.dest, values)
+        notes = list(getattr(namespace, "_deprecations", []))
+        notes.append(f"{option_string} is deprecated and will be removed in waveoptics {REMOVED_IN}; use "
+                     f"{self.new_flag}")
+        namespace._deprecations = notes
+
+
+def renamed(parser, command: str, old: str, *, dest: str, type=None, append: bool = False) -> None:
+    """Accept the old flag *old* of *command* (:data:`RENAMED`) as a hidden alias storing into *dest*."""
+    new = RENAMED[(command, old)]
+    parser.add_argument(old, dest=dest, action=_Renamed, new_flag=new, type=type, default=argparse.SUPPRESS,
+                        store="append" if append else None, help=argparse.SUPPRESS)
+
+
+def deprecations(args) -> list[str]:
+    """The deprecation notes recorded while parsing *args* (printed as one-line warnings by the CLI)."""
+    return list(getattr(args, "_deprecations", []))
