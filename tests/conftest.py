@@ -33,3 +33,17 @@ def precision(request, rt):
 def rng():
     """A seeded generator (seed 12345)."""
     return np.random.default_rng(12345)
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _private_cache(tmp_path_factory):
+    """The per-user cache (cost-model calibration, plans) lives in a temporary directory during the tests."""
+    import os
+
+    old = os.environ.get("WAVEOPTICS_CACHE_DIR")
+    os.environ["WAVEOPTICS_CACHE_DIR"] = str(tmp_path_factory.mktemp("wocache"))
+    yield
+    if old is None:
+        os.environ.pop("WAVEOPTICS_CACHE_DIR", None)
+    else:
+        os.environ["WAVEOPTICS_CACHE_DIR"] = old

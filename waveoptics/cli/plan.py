@@ -23,6 +23,9 @@ def register(sub):
                     "model calibrated on this machine. Nothing is written.")
     p.add_argument("scene", metavar="SCENE", help="scene file (.toml), see examples/scenes/")
     add_force(p)
+    p.add_argument("--recalibrate", action="store_true",
+                   help="time this machine's cost model again (it is timed once and cached; also after an "
+                        "upgrade), and plan afresh instead of answering from the cache of earlier plans")
     add_common(p)
     p.set_defaults(func=run)
 
@@ -37,10 +40,64 @@ def make_plan(args):
         raise WaveopticsError(f"--max-resolution {args.max_resolution} is not allowed; use 8..2048")
     force = planning.parse_force(args.force)
     sc = scene.load(args.scene)
-    return planning.plan_scene(sc, force=force, device=args.device, max_resolution=args.max_resolution)
+    return planning.plan_scene(sc, force=force, device=args.device, max_resolution=args.max_resolution,
+                               recalibrate=getattr(args, "recalibrate", False))
+
+
+def _plan_key(args) -> str | None:
+    """Cache key of a plan: the scene's bytes, the bytes of every file it names (surfaces, spectra), the options
+    and the device; None when the scene cannot be read (the planner then says why)."""
+    import hashlib
+    import json
+    import os
+    import tomllib
+    from pathlib import Path
+
+    from ..cache import file_digest
+
+    scene = Path(args.scene)
+    try:
+        raw = scene.read_bytes()
+        doc = tomllib.loads(raw.decode("utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+    named = []
+
+    def walk(v):
+        if isinstance(v, dict):
+            for x in v.values():
+                walk(x)
+        elif isinstance(v, list):
+            for x in v:
+                walk(x)
+        elif isinstance(v, str) and len(v) < 4096:
+            p = (scene.parent / os.path.expanduser(v))
+            if p.is_file():
+                named.append((v, file_digest(p)))
+
+    walk(doc)
+    key = {"scene": hashlib.sha256(raw).hexdigest(), "files": sorted(named), "force": sorted(args.force),
+           "max_resolution": args.max_resolution,
+           "device": args.device or os.environ.get("WAVEOPTICS_DEVICE", "")}
+    return hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()
 
 
 def run(args):
+    from .. import cache
+
+    key = _plan_key(args)
+    hit = cache.get("plans", key) if key and not args.recalibrate else None
+    if isinstance(hit, dict) and "data" in hit and "text" in hit:
+        emit(args, {**hit["data"], "from_cache": True},
+             hit["text"] + "\n(the plan of this scene made earlier on this machine; --recalibrate plans afresh)")
+        return 0
+    import json
+
+    from ..io.files import to_json
+
     plan = make_plan(args)
-    emit(args, plan.as_dict(), plan.table())
+    data, text = json.loads(to_json(plan.as_dict())), plan.table()
+    if key:
+        cache.put("plans", key, {"data": data, "text": text})
+    emit(args, data, text)
     return 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import time
 from dataclasses import dataclass
 
@@ -18,7 +19,7 @@ from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g, series_terms
 from ..units import direction_from_angles
 
-__all__ = ['CostModel', 'fft_units', 'psd_terms', 'calibrate', 'calibrate_direct']
+__all__ = ['CostModel', 'fft_units', 'psd_terms', 'calibrate', 'calibrate_direct', 'calibration', 'direct_calibration']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Cost model, calibrated on this machine once per process
@@ -124,6 +125,41 @@ def calibrate() -> CostModel:
     fft_unit = t_fft / fft_units((smp.nx, smp.ny), (32, 32))
     return CostModel(float(call), float(cell), float(cell_wl), diffuse, float(psd_wl), float(psd_cell_wl),
                      float(psd_term), fft_unit, time.perf_counter() - t0)
+
+
+def calibration(*, recalibrate: bool = False) -> CostModel:
+    """The cost model of this machine: timed once by :func:`calibrate` and kept in the per-user cache
+    (:mod:`waveoptics.cache`, keyed by the machine); *recalibrate* times it again and replaces the cached one."""
+    from .. import cache
+
+    if not recalibrate:
+        hit = cache.get("calibration", "cost_model")
+        if isinstance(hit, dict) and set(hit) == set(CostModel.__dataclass_fields__):
+            return CostModel(**hit)
+    elif hasattr(calibrate, "cache_clear"):
+        calibrate.cache_clear()   # the in-process memo too
+    cm = calibrate()
+    cache.put("calibration", "cost_model", cm.as_dict())
+    return cm
+
+
+def direct_calibration(device: str | None = None, precision: str = "float32", *,
+                       recalibrate: bool = False) -> tuple[float | None, str]:
+    """:func:`calibrate_direct` kept in the per-user cache per device and precision (an unavailable device is
+    not cached: it may be installed later)."""
+    from .. import cache
+
+    key = f"direct|{device or os.environ.get('WAVEOPTICS_DEVICE', '')}|{precision}"
+    if not recalibrate:
+        hit = cache.get("calibration", key)
+        if isinstance(hit, (int, float)) and hit > 0:
+            return float(hit), ""
+    elif hasattr(calibrate_direct, "cache_clear"):
+        calibrate_direct.cache_clear()
+    term, why = calibrate_direct(device, precision)
+    if term is not None:
+        cache.put("calibration", key, term)
+    return term, why
 
 
 @functools.lru_cache(maxsize=4)

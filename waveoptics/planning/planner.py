@@ -45,7 +45,8 @@ For every (material, light) pair of a :class:`waveoptics.planning.scene.Scene` t
     ΔE / 903.3 (CIE L* slope near black) — sits at (ΔE / 903.3 / π) (λ/L)² of the peak. float64 is chosen
     when the floor exceeds :data:`FLOOR_MARGIN` of that level (large patches, tall heights).
 
-Costs come from a calibration timed once per process on this machine (:func:`calibrate`): seconds per grid
+Costs come from a calibration timed once per machine and cached (:func:`calibration`; ``waveoptics plan
+--recalibrate`` times it again): seconds per grid
 cell, per cell and wavelength, per PSD series term, per chirp-z work unit and per direct-sum term.
 
 References
@@ -79,7 +80,7 @@ from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g
 from ..simulate import sphere_evaluations
 from ..units import direction_from_angles, parse_length
-from .costmodel import CostModel, _best, calibrate, calibrate_direct, fft_units, psd_terms
+from .costmodel import CostModel, _best, calibration, direct_calibration, fft_units, psd_terms
 from .decisions import (
     LAMBDA_REF_NM,
     ORDER_EFFICIENCY_MIN,
@@ -648,7 +649,7 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
     hf_info = {"hf_solvers": hf_solvers}
     if hf_solvers:
         smp = scatter.samples(e.hf)
-        direct_term, no_direct = calibrate_direct(e.device)
+        direct_term, no_direct = direct_calibration(e.device)
         wi0 = direction_from_angles(*e.light.directions_deg[0])
         # the height field's own coherent fraction (a histogram of its heights) is computed per grid and λ
         probe = twoscale.Nano(surface=e.hf)
@@ -777,7 +778,8 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
                      metrics=e.metrics, forced=dict(force), diffraction=e.diffraction_model)
 
 
-def plan_scene(scene: Scene, *, force: dict | None = None, device=None, max_resolution: int | None = None) -> Plan:
+def plan_scene(scene: Scene, *, force: dict | None = None, device=None, max_resolution: int | None = None,
+               recalibrate: bool = False) -> Plan:
     """Plan a scene: decide, for every material under every light, the effects, solver, grid and wavelengths.
 
     Parameters
@@ -788,6 +790,8 @@ def plan_scene(scene: Scene, *, force: dict | None = None, device=None, max_reso
         OpenCL device for the direct solver's calibration.
     max_resolution : int, optional
         Cap on the direction grid (the scene's ``output.resolution`` is used as given).
+    recalibrate : bool
+        Time the cost model again instead of using this machine's cached calibration (:func:`calibration`).
 
     Returns
     -------
@@ -795,7 +799,7 @@ def plan_scene(scene: Scene, *, force: dict | None = None, device=None, max_reso
     """
     t0 = time.perf_counter()
     force = dict(force or {})
-    cm = calibrate()
+    cm = calibration(recalibrate=recalibrate)
     entries = [_plan_entry(scene, m, light, force, cm, device, max_resolution)
                for m in scene.materials for light in scene.lights]
     return Plan(scene=scene, entries=entries, cost_model=cm, planning_time_s=time.perf_counter() - t0, force=force)
