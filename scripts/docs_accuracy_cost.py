@@ -48,8 +48,10 @@ waveoptics cost --surface patch.npz --solvers fft,direct --resolutions 64,128 --
 OpenCL device in float32 or float64 (`waveoptics.scatter`). Wavelengths: the grid
 `colour.simulation_wavelengths` picks for a colour accuracy ΔE under the illuminant (@wl_ladder@ under D65).
 
-**Reference.** The direct sum in float64 at the finest resolution of the ladder and a denser spectrum (@wl_ref@);
-for random surfaces one run per realization, @n_ref@ realizations.
+**Reference.** Here the direct sum in float64 (`--reference direct`) at the finest resolution of the ladder and a
+denser spectrum (@wl_ref@); for random surfaces one run per realization, @n_ref@ realizations. The command's
+default reference is the fft solver in float64 (exact Kirchhoff to 1e-8), with a 35 s budget for the ladder:
+[cost-defaults.md](cost-defaults.md) runs both and compares their recommendations.
 
 **Errors** (`waveoptics.cost`): `rel. L2` — ‖E − E_ref‖₂/‖E_ref‖₂ of the reflected energy per direction cell
 E = f du dv over all reference wavelengths and cells (the reference summed onto the setting's coarser grid, the
@@ -115,7 +117,8 @@ def main(argv=None):
         res_ladder = (8, 16, 32) if quick else cost.DEFAULT_RESOLUTIONS
         settings = cost.ladder(resolutions=res_ladder, colour_de=COLOUR_DE,
                                realizations=(1, 2) if cfg.random else (1,))
-        res = cost.study(cfg, settings, target_error=1e-2, runtime=rt, budget_s=60 if quick else 400)
+        res = cost.study(cfg, settings, target_error=1e-2, runtime=rt, budget_s=60 if quick else 400,
+                         reference_solver="direct")
         cost.plot(res, IMG / f"accuracy_cost_{key}.png", title=title)
         out[key] = res
         parts.append(section(key, title, res))

@@ -32,7 +32,7 @@ ROW_KEYS = {"solver", "resolution", "wavelengths", "precision", "error_rel_l2", 
 def small_study():
     cfg = cost.model_config(MODEL, "3.2um", 24, material="Al", illuminant=LASER, seed=3)
     st_ = cost.ladder(("fft0", "fft", "direct"), (8, 16), (1.0,), (1, 2), ("float32", "float64"))
-    return cfg, st_, cost.study(cfg, st_, target_error=1e-3)
+    return cfg, st_, cost.study(cfg, st_, target_error=1e-3, reference_solver="direct")   # the independent reference
 
 
 def test_pareto_front_by_hand():
@@ -177,3 +177,22 @@ def test_cli_cost(tmp_path):
     assert again.returncode == 2 and "already exists" in again.stderr
     bad = subprocess.run(args[:-3] + ["--resolutions", "5,8"], capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "divide" in bad.stderr
+
+
+def test_default_fft_reference_agrees_with_the_direct_reference(small_study):
+    """The default reference (fft, float64) and the independent direct-sum reference rank the ladder alike: every
+    rung's relative L2 error differs by no more than the fft reference's own error (≤ 1e-8 of the lobe), so the same
+    rungs meet a target (which of them is fastest is a timing, compared in docs/cost-defaults.md)."""
+    cfg, st_, res_direct = small_study
+    res_fft = cost.study(cfg, st_, target_error=1e-3)
+    assert res_fft["reference"]["solver"] == "fft" and res_direct["reference"]["solver"] == "direct"
+    meet = {"fft": set(), "direct": set()}
+    for i, (a, b) in enumerate(zip(res_fft["settings"], res_direct["settings"])):
+        if a["same_as_reference"] or b["same_as_reference"]:
+            continue
+        assert abs(a["error_rel_l2"] - b["error_rel_l2"]) < TOL["fft_vs_direct64"]
+        if a["error_rel_l2"] <= 1e-3:
+            meet["fft"].add(i)
+        if b["error_rel_l2"] <= 1e-3:
+            meet["direct"].add(i)
+    assert meet["fft"] == meet["direct"] and meet["fft"]

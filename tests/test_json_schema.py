@@ -56,6 +56,11 @@ def test_simulate_and_compare(surface_file, tmp_path):
     validate(_json(["compare", *common, "--incident-angles", "0,40"]), "compare")
 
 
+def test_cost():
+    validate(_json(["cost", "--generator", "sinusoid:amplitude=30nm,period=0.8um", "--size", "3.2um", "--samples",
+                    "32", "--resolutions", "8,16", "--colour-accuracy", "4", "--solvers", "fft0,fft"]), "cost")
+
+
 def test_schemas_reject_what_they_should():
     good = {"model": "microfacet", "parameters": {}, "units": {"brdf": "1/sr"},
             "values": [{"incident": [30, 0], "outgoing": [30, 180], "wavelength_nm": 550, "brdf": 0.1}]}

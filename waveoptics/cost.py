@@ -60,7 +60,7 @@ from .io.files import atomic_path, prepare_outdir, write_json
 from .runtime import get_runtime
 from .surfaces.heightfield import HeightField
 
-__all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
+__all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'REFERENCE_SOLVERS', 'DEFAULT_TARGET_ERROR', 'DEFAULT_BUDGET_S', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
 
 #: setting solver name -> keyword arguments of :func:`waveoptics.scatter.scatter`
 SOLVERS = {
@@ -78,6 +78,10 @@ DEFAULT_COLOUR_DE = (4.0, 1.0, 0.5)
 DEFAULT_PRECISIONS = ("float32", "float64")
 #: realizations of the reference for random surfaces (at least twice the ladder's largest)
 REFERENCE_REALIZATIONS = 4
+#: the command line's defaults: recommend the fastest setting within 1 % relative L2 of the reference, and give
+#: the ladder 35 s after the reference (rungs predicted to overrun are skipped and listed)
+DEFAULT_TARGET_ERROR = 1e-2
+DEFAULT_BUDGET_S = 35.0
 
 
 @dataclass(frozen=True)
@@ -333,11 +337,20 @@ def _units(s: Setting, n_wl: int) -> float:
     return float(s.resolution) ** 2 * n_wl * s.realizations
 
 
-def reference_setting(settings, cfg: Config, solver: str = "direct", precision: str = "float64",
+#: solvers the reference may use: ``fft`` (order auto, float64: exact Kirchhoff to 1e-8 Σw against the direct
+#: sum, docs/wave-optics.md) is the default; ``direct`` (float64 on the OpenCL device) is the independent check,
+#: about 20× slower on a CPU device
+REFERENCE_SOLVERS = ("fft", "direct")
+
+
+def reference_setting(settings, cfg: Config, solver: str = "fft", precision: str = "float64",
                       runtime=None) -> Setting:
     """The reference: the finest resolution of the ladder, half the ladder's finest colour accuracy ΔE (a denser
-    wavelength grid), :data:`REFERENCE_REALIZATIONS` (or twice the ladder's largest) for random surfaces. ``direct`` needs OpenCL; float64 falls
-    back to the ``fft`` solver (exact Kirchhoff to 1e-8 Σw) where the device has no fp64."""
+    wavelength grid), :data:`REFERENCE_REALIZATIONS` (or twice the ladder's largest) for random surfaces, with
+    *solver* (:data:`REFERENCE_SOLVERS`). ``direct`` needs OpenCL; float64 falls back to the ``fft`` solver where
+    the device has no fp64."""
+    if solver not in REFERENCE_SOLVERS:
+        raise unknown("reference solver", solver, REFERENCE_SOLVERS)
     res = max(s.resolution for s in settings)
     de = min(s.colour_de for s in settings) / 2
     n = max(REFERENCE_REALIZATIONS, 2 * max(s.realizations for s in settings)) if cfg.random else 1
@@ -348,7 +361,7 @@ def reference_setting(settings, cfg: Config, solver: str = "direct", precision: 
 
 def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float | None = None,
           target_error: float | None = None, metric: str = "error_rel_l2", reference: Setting | None = None,
-          runtime=None, progress=None) -> dict:
+          reference_solver: str = "fft", runtime=None, progress=None) -> dict:
     """Run the accuracy–cost study (see the module docstring).
 
     Parameters
@@ -364,7 +377,9 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
     metric : str
         One of :data:`METRICS`; used for the Pareto front and the recommendation.
     reference : Setting, optional
-        Default :func:`reference_setting`.
+        Default :func:`reference_setting` with *reference_solver*.
+    reference_solver : {'fft', 'direct'}
+        Solver of the default reference (:data:`REFERENCE_SOLVERS`).
     progress : callable, optional
         Called with 1 after the reference and after each setting.
 
@@ -391,10 +406,11 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
     settings = list(settings)
     if not settings:
         raise WaveopticsError("the ladder is empty; give at least one solver, resolution and colour accuracy")
-    if runtime is None and any(s.solver == "direct" for s in settings + [reference] if s is not None):
+    if runtime is None and (reference_solver == "direct"
+                            or any(s.solver == "direct" for s in settings + [reference] if s is not None)):
 
         runtime = get_runtime()
-    ref_s = reference or reference_setting(settings, cfg, runtime=runtime)
+    ref_s = reference or reference_setting(settings, cfg, reference_solver, runtime=runtime)
     for s in settings:
         if ref_s.resolution % s.resolution:
             raise WaveopticsError(f"resolution {s.resolution} does not divide the reference resolution "

@@ -22,6 +22,7 @@ SCHEMAS = {
     "brdf": "brdf.schema.json",
     "surface_stats": "surface_stats.schema.json",
     "compare": "compare.schema.json",
+    "cost": "cost.schema.json",
 }
 
 
