@@ -80,8 +80,8 @@ K = (α_p + 2) B(½, s)/(2π). Heitz's Λ(μ) = (1/μ)∫_μ^∞ (x − μ) P2(x
 with the regularized incomplete beta function I. (Walter et al. recommend Beckmann's Λ at the equivalent α
 instead; that is an approximation, this is exact and satisfies the Smith identity.)
 
-**ABC.** Near the normal 1 − n·m ≈ tan²θ/2, so D ∝ (1 + tan²θ/α²)^{−C}: α is the slope scale and C (`abc_c`,
-`--abc-c`, default @abc_c@) the tail (C = 2: GGX-like core; small C: long tail, D stays finite at the horizon).
+**ABC.** Near the normal 1 − n·m ≈ tan²θ/2, so D ∝ (1 + tan²θ/α²)^{−C}: α is the slope scale and C (`ndf_shape`,
+`--ndf-shape`, default @ndf_shape@) the tail (C = 2: GGX-like core; small C: long tail, D stays finite at the horizon).
 The normalization is closed-form: with E(p) = ((1 + B)^p − 1)/p, A = 1/(2π (E(1−C)/B − (E(2−C) − E(1−C))/B²)),
 E(0) = ln(1 + B) covering C = 1 and C = 2. Λ has no closed form; it is computed from the slope law by the
 radial integral (`Lambda_radial`)
@@ -412,7 +412,7 @@ def figure():
     m = _dirs(np.degrees(t))
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     styles = {"beckmann": dict(ndf="beckmann"), "ggx": dict(ndf="ggx"), "blinn-phong": dict(ndf="blinn-phong"),
-              "abc (C = 0.75)": dict(ndf="abc", abc_c=0.75)}
+              "abc (C = 0.75)": dict(ndf="abc", ndf_shape=0.75)}
     for label, kw in styles.items():
         ax1.semilogy(np.degrees(t), brdf.D(m, a, **kw) * np.cos(t), label=label)
     ax1.set_xlabel("θ_m (degrees)")
@@ -450,7 +450,7 @@ def main():
     on = oren_nayar_max()
     n_pairs, n_eval = 20000, 200000
     values = {
-        "abc_c": f"{brdf.ABC_C_DEFAULT:g}", "quad_table": quadrature_accuracy(), "ident_table": identities(),
+        "ndf_shape": f"{brdf.ABC_C_DEFAULT:g}", "quad_table": quadrature_accuracy(), "ident_table": identities(),
         "loss_table": loss, "shadow_table": shadow, "emax": f"{emax:.10f}",
         "tradeoff_excess": f"{tradeoff_excess():+.1e}", "on_max": f"{on[0]:.4f}", "on_sigma": f"{on[1]:.2f}",
         "on_theta": f"{on[2]:g}", "on_total": f"{on[3]:.4f}", "kernel_table": kernel_agreement(rt, n_pairs), "n_pairs": str(n_pairs),

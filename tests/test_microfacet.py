@@ -65,7 +65,7 @@ def test_ndf_normalization_isotropic(ndf, alpha):
 @pytest.mark.parametrize("alpha", [0.01, 0.3, 2.0])
 def test_abc_normalization_including_log_cases(alpha, c):
     # C = 1 and C = 2 are the logarithmic limits of the closed form
-    val = integrate.quad(lambda t: float(brdf.D(dirs(np.degrees(t)), alpha, ndf="abc", abc_c=c))
+    val = integrate.quad(lambda t: float(brdf.D(dirs(np.degrees(t)), alpha, ndf="abc", ndf_shape=c))
                          * np.cos(t) * np.sin(t) * 2 * np.pi, 0, np.pi / 2, points=[alpha, 3 * alpha], limit=400)[0]
     assert val == pytest.approx(1.0, abs=1e-7)
 
@@ -329,8 +329,8 @@ def test_bad_inputs_name_the_value():
         brdf.brdf(m, m, alpha=0.1, eta=1.5, shadowing="smit")
     with pytest.raises(WaveopticsError, match="non-finite"):
         brdf.brdf(np.array([np.nan, 0, 1]), m, alpha=0.1, eta=1.5)
-    with pytest.raises(WaveopticsError, match="abc_c"):
-        brdf.D(m, 0.1, ndf="abc", abc_c=0.0)
+    with pytest.raises(WaveopticsError, match="ndf_shape"):
+        brdf.D(m, 0.1, ndf="abc", ndf_shape=0.0)
 
 
 # ---------------------------------------------------------------------------------------------- OpenCL twins
@@ -342,11 +342,13 @@ def _kernel_close(fc, fn, precision):
     return err
 
 
-KERNEL_CASES = [dict(ndf=n, shadowing=s) for n in brdf.NDFS for s in brdf.SHADOWINGS] + [
+#: NDFs with an OpenCL kernel (EPD and SGD are NumPy only; the kernel route refuses them, tested below)
+KERNEL_NDFS = [n for n, v in brdf.NDFS.items() if v.cl_id is not None]
+KERNEL_CASES = [dict(ndf=n, shadowing=s) for n in KERNEL_NDFS for s in brdf.SHADOWINGS] + [
     dict(fresnel="schlick"), dict(fresnel="one"), dict(diffuse="oren-nayar", sigma=0.4),
     dict(diffuse="burley", sigma=0.7), dict(diffuse="burley", sigma=0.0, tradeoff=False),
     dict(diffuse="none"), dict(tradeoff=False), dict(ndf="beckmann", alpha_y=0.1),
-    dict(ndf="abc", abc_c=0.7)]
+    dict(ndf="abc", ndf_shape=0.7)]
 
 
 @pytest.mark.parametrize("case", KERNEL_CASES, ids=lambda c: "-".join(f"{v}" for v in c.values()))
@@ -365,7 +367,13 @@ def test_brdf_kernel_matches_numpy(rt, precision, case):
     _kernel_close(fc, brdf.brdf(wi[None], wo[None], **kw), precision)
 
 
-@pytest.mark.parametrize("ndf", list(brdf.NDFS))
+def test_ndfs_without_kernel_are_refused_by_the_kernel_route(rt):
+    for ndf in set(brdf.NDFS) - set(KERNEL_NDFS):
+        with pytest.raises(WaveopticsError, match="no OpenCL kernel"):
+            brdf.D_cl(dirs([10.0]), 0.2, ndf=ndf, runtime=rt)
+
+
+@pytest.mark.parametrize("ndf", KERNEL_NDFS)
 def test_D_and_Lambda_kernels_match_numpy(rt, precision, ndf):
     rng = np.random.default_rng(4)
     w = random_upper(rng, 500)
@@ -385,7 +393,7 @@ def test_kernel_hard_cases_finite(rt, precision):
     w[T.ravel() == 90.0, 2] = 0.0  # exactly in the tangent plane
     wi = np.repeat(w, len(w), axis=0)
     wo = np.tile(w, (len(w), 1))
-    for ndf in brdf.NDFS:
+    for ndf in KERNEL_NDFS:
         for alpha in (0.0, 0.001, 1.0):
             f = brdf.brdf_cl(wi, wo, alpha=alpha, ndf=ndf, eta=[1.5, 1.4 + 7.5j], kd=[0.5, 0.0], runtime=rt,
                            precision=precision)

@@ -38,7 +38,7 @@ import numpy as np
 
 from . import colour, surfaces
 from .brdf import NDFS, SHADOWINGS, twoscale
-from .errors import FieldError, unknown
+from .errors import FieldError, WaveopticsError, unknown
 from .materials import get_material
 from .surfaces import HeightField
 from .units import check_theta, check_wavelengths, parse_length
@@ -243,6 +243,9 @@ class SimulationRequest:
         Diffraction model of the nano lobe, one of :data:`waveoptics.vocabulary.DIFFRACTION` (default kirchhoff).
     polarization : str
         Of the incident light, one of :data:`waveoptics.vocabulary.POLARIZATIONS` (default unpolarized).
+    ndf_shape : float, optional
+        Shape parameter of the micro NDF where it has one: ABC's tail exponent C, EPD's and SGD's exponent p
+        (default: the NDF's own, :data:`waveoptics.brdf.NDFS`).
     """
 
     material: str = "Al"
@@ -263,6 +266,7 @@ class SimulationRequest:
     split: bool = False
     diffraction: str = "kirchhoff"
     polarization: str = "unpolarized"
+    ndf_shape: float | None = None
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalization
@@ -300,6 +304,13 @@ class SimulationRequest:
                                ("polarization", POLARIZATIONS)):
             if getattr(self, field) not in allowed:
                 raise unknown(field, getattr(self, field), allowed, field=field)
+        if self.ndf_shape is not None:
+            shape = _finite_number(self.ndf_shape, "ndf_shape")
+            try:
+                twoscale.Micro(alpha=min(alpha, 2.0), ndf=self.ndf, ndf_shape=shape)
+            except WaveopticsError as exc:
+                raise FieldError("{ndf_shape} " + str(exc).split(" ", 1)[1], "ndf_shape") from None
+            set_("ndf_shape", shape)
         if self.surface is None and self.nano is None:
             raise FieldError("a request needs nano roughness: {nano} MODEL:params or a height-field {surface}",
                              "nano", "surface")
@@ -329,7 +340,7 @@ class SimulationRequest:
 
     def micro(self) -> twoscale.Micro:
         """The micro-scale roughness of this request."""
-        return twoscale.Micro(alpha=self.micro_alpha, ndf=self.ndf, shadowing=self.shadowing)
+        return twoscale.Micro(alpha=self.micro_alpha, ndf=self.ndf, shadowing=self.shadowing, ndf_shape=self.ndf_shape)
 
     def params(self) -> dict:
         """Fields as plain data (JSON-able), with the resolved wavelength list."""

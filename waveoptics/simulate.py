@@ -163,7 +163,8 @@ def _nano_of(req: SimulationRequest, w, surface, micro: twoscale.Micro):
     if req.split:
         hf = surface if surface is not None else surfaces.load(req.surface)
         measured, nano_hf, split_info = twoscale.split_scales(hf, w, ndf=req.ndf)
-        micro = twoscale.Micro(alpha=measured.alpha, alpha_y=measured.alpha_y, ndf=req.ndf, shadowing=req.shadowing)
+        micro = twoscale.Micro(alpha=measured.alpha, alpha_y=measured.alpha_y, ndf=req.ndf, shadowing=req.shadowing,
+                               ndf_shape=req.ndf_shape)
         return micro, twoscale.Nano(surface=crop(nano_hf, MAX_NANO_SAMPLES)), split_info
     if req.surface is not None and surface is None:
         surface = req.surface

@@ -20,7 +20,7 @@ POLARIZATIONS = ("unpolarized", "s", "p")
 DIFFRACTION = ("kirchhoff", "ghs", "rghs", "ohs", "rohs")
 
 #: microfacet terms by name (the keys of :data:`waveoptics.brdf.NDFS`, ``SHADOWINGS``, ``FRESNELS``, ``DIFFUSES``)
-NDF_NAMES = ("ggx", "beckmann", "blinn-phong", "abc")
+NDF_NAMES = ("ggx", "beckmann", "blinn-phong", "abc", "epd", "sgd")
 SHADOWING_NAMES = ("smith", "smith-correlated", "cook-torrance", "implicit")
 FRESNEL_NAMES = ("exact", "schlick", "one")
 DIFFUSE_NAMES = ("none", "lambert", "oren-nayar", "burley")

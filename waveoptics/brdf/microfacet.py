@@ -54,7 +54,7 @@ from ..materials.database import get_material
 from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .fresnel_terms import FRESNELS, _fresnel_fn
-from .ndf import ABC_C_DEFAULT, COS_MIN, _as_dirs, _check_alpha, _dot, _ndf, half_vector
+from .ndf import COS_MIN, _as_dirs, _check_alpha, _dot, _ndf, half_vector
 from .shadowing import _shadowing
 
 __all__ = ['specular', 'brdf', 'fresnel_inputs', 'spectral_brdf']
@@ -68,14 +68,14 @@ __all__ = ['specular', 'brdf', 'fresnel_inputs', 'spectral_brdf']
 
 
 def specular(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated", fresnel="exact",
-             eta=None, F0=None, abc_c=ABC_C_DEFAULT):
+             eta=None, F0=None, ndf_shape=None):
     """Microfacet specular BRDF F(v·h) G(l, v, h) D(h) / (4 (n·l)(n·v)) in 1/sr.
 
     Parameters
     ----------
     wi, wo : array_like (..., 3)
         Unit directions to the light (l) and to the viewer (v); they broadcast.
-    alpha, alpha_y, ndf, abc_c
+    alpha, alpha_y, ndf, ndf_shape
         NDF and its roughness, as in :func:`D`.
     shadowing : str
         One of :data:`SHADOWINGS`.
@@ -97,13 +97,13 @@ def specular(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correla
     .. [2] B. Walter et al., EGSR 2007, eq. (20).
     """
     spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
     gfn, _ = _shadowing(shadowing)
     F_fn = _fresnel_fn(fresnel, eta, F0)
     wi = _as_dirs(wi, "wi")
     wo = _as_dirs(wo, "wo")
     wi, wo = np.broadcast_arrays(wi, wo)
-    return _specular(wi, wo, spec, ax, ay, abc_c, gfn, F_fn)
+    return _specular(wi, wo, spec, ax, ay, ndf_shape, gfn, F_fn)
 
 
 def _specular(wi, wo, spec, ax, ay, c, gfn, F_fn):
@@ -126,14 +126,14 @@ def _specular(wi, wo, spec, ax, ay, c, gfn, F_fn):
 
 
 def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated", fresnel="exact", eta=None,
-         F0=None, abc_c=ABC_C_DEFAULT, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True):
+         F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True):
     """Microfacet BRDF f = f_s + w f_d: specular lobe plus an optional diffuse term, in 1/sr (not × cos).
 
     Parameters
     ----------
     wi, wo : array_like (..., 3)
         Unit directions to the light and to the viewer (normalized here; they broadcast).
-    alpha, alpha_y, ndf, abc_c
+    alpha, alpha_y, ndf, ndf_shape
         Specular NDF and roughness (see :func:`D`).
     shadowing : str
         ``"smith"``, ``"smith-correlated"``, ``"cook-torrance"`` or ``"implicit"``.
@@ -164,7 +164,7 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
     .. [3] M. Oren, S. K. Nayar, SIGGRAPH 1994 (rough diffuse).
     """
     spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
     gfn, _ = _shadowing(shadowing)
     F_fn = _fresnel_fn(fresnel, eta, F0)
     if diffuse not in DIFFUSES:
@@ -181,7 +181,7 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
     wi = _as_dirs(wi, "wi")
     wo = _as_dirs(wo, "wo")
     wi, wo = np.broadcast_arrays(wi, wo)
-    f = _specular(wi, wo, spec, ax, ay, abc_c, gfn, F_fn)
+    f = _specular(wi, wo, spec, ax, ay, ndf_shape, gfn, F_fn)
     if diffuse != "none" and np.any(kd > 0):
         fd = DIFFUSES[diffuse][0](wi, wo, kd, sigma)
         if tradeoff:

@@ -54,14 +54,14 @@ class AlbedoTable:
 
 
 @functools.lru_cache(maxsize=64)
-def albedo_table(ndf: str, alpha: float, shadowing: str, abc_c: float) -> AlbedoTable:
+def albedo_table(ndf: str, alpha: float, shadowing: str, ndf_shape: float | None) -> AlbedoTable:
     """E(μ) and E_avg of the F = 1 specular lobe (isotropic *alpha*) by :func:`waveoptics.brdf.directional_albedo`."""
     x, w = _gl01(MS_NODES)
     E = np.empty(x.size)
     for i, mu in enumerate(x):
         wi = np.array([np.sqrt(max(1.0 - mu * mu, 0.0)), 0.0, mu])
         E[i] = float(directional_albedo(
-            lambda a, b: specular(a, b, alpha=alpha, ndf=ndf, shadowing=shadowing, fresnel="one", abc_c=abc_c),
+            lambda a, b: specular(a, b, alpha=alpha, ndf=ndf, shadowing=shadowing, fresnel="one", ndf_shape=ndf_shape),
             wi, alpha=alpha))
     # guard: a single-scattering albedo cannot exceed 1, but the quadrature's error can put it up to 2.3e-4 above
     # (measured over the four NDFs, α from 1e-4 to 2, all 64 nodes); above 1 the lobe 1 − E would turn negative

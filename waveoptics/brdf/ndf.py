@@ -1,4 +1,4 @@
-"""Normal distribution functions D and Smith's Λ for GGX, Beckmann, Blinn-Phong and ABC, isotropic and
+"""Normal distribution functions D and Smith's Λ for GGX, Beckmann, Blinn-Phong, ABC, EPD and SGD, isotropic and
 anisotropic, and the roughness conversions.
 
 References
@@ -9,6 +9,8 @@ References
 .. [3] J. Löw, J. Kronander, A. Ynnerman, J. Unger, "BRDF Models for Accurate and Efficient Rendering of
    Glossy Surfaces", ACM TOG 31(1):9, 2012 (ABC).
 .. [4] B. Burley, "Physically-Based Shading at Disney", SIGGRAPH 2012 course notes (α = r²).
+.. [5] N. Holzschuch, R. Pacanowski, ACM TOG 36(4):66, 2017 (EPD).
+.. [6] M. M. Bagher, C. Soler, N. Holzschuch, Computer Graphics Forum 31(4), 2012 (SGD).
 """
 from __future__ import annotations
 
@@ -21,7 +23,7 @@ from scipy import special
 
 from ..errors import WaveopticsError, unknown
 
-__all__ = ['ALPHA_MIN', 'ALPHA_MAX', 'COS_MIN', 'ABC_C_DEFAULT', 'LAMBDA_GL_ORDER', 'alpha_from_roughness', 'roughness_from_alpha', 'blinn_phong_exponent', 'alpha_from_blinn_phong', 'half_vector', 'reflect', 'D_ggx', 'Lambda_ggx', 'D_beckmann', 'Lambda_beckmann', 'D_blinn_phong', 'Lambda_blinn_phong', 'abc_normalization', 'D_abc', 'Lambda_radial', 'Lambda_abc', 'NDF', 'NDFS', 'D', 'Lambda', 'G1']
+__all__ = ['ALPHA_MIN', 'ALPHA_MAX', 'COS_MIN', 'ABC_C_DEFAULT', 'LAMBDA_GL_ORDER', 'alpha_from_roughness', 'roughness_from_alpha', 'blinn_phong_exponent', 'alpha_from_blinn_phong', 'half_vector', 'reflect', 'D_ggx', 'Lambda_ggx', 'D_beckmann', 'Lambda_beckmann', 'D_blinn_phong', 'Lambda_blinn_phong', 'abc_normalization', 'D_abc', 'Lambda_radial', 'Lambda_abc', 'EPD_P_DEFAULT', 'epd_normalization', 'D_epd', 'Lambda_epd', 'SGD_P_DEFAULT', 'gamma_upper', 'sgd_normalization', 'D_sgd', 'Lambda_sgd', 'SHAPE_RANGE', 'NDF', 'NDFS', 'D', 'Lambda', 'G1']
 
 #: roughness floor (guard): narrower lobes are not representable at sampled directions
 ALPHA_MIN = 1e-4
@@ -281,7 +283,7 @@ def _expm1_over(p, L):
     return np.where(p == 0, L, np.expm1(p * L) / safe)
 
 
-def abc_normalization(alpha, c=ABC_C_DEFAULT):
+def abc_normalization(alpha, c=None):
     """Constant A of the ABC NDF D = A (1 + B(1 − n·m))^{−C}, B = 2/α², such that ∫ D (n·m) dω = 1.
 
     A = 1 / (2π (I₁ − I₂)), I₁ = ∫₀¹ (1 + Bu)^{−C} du, I₂ = ∫₀¹ u (1 + Bu)^{−C} du (u = 1 − cos θ), in closed
@@ -291,6 +293,7 @@ def abc_normalization(alpha, c=ABC_C_DEFAULT):
     ----------
     .. [1] J. Löw et al., ACM TOG 31(1), 2012, §5 (the ABC microfacet distribution).
     """
+    c = ABC_C_DEFAULT if c is None else c
     B = _abc_B(np.asarray(alpha, dtype=float))
     L = np.log1p(B)
     e1 = _expm1_over(1.0 - c, L)
@@ -300,7 +303,7 @@ def abc_normalization(alpha, c=ABC_C_DEFAULT):
     return 1.0 / (2.0 * np.pi * (i1 - i2))
 
 
-def D_abc(m, ax, ay=None, c=ABC_C_DEFAULT):
+def D_abc(m, ax, ay=None, c=None):
     """ABC NDF of Löw et al. (2012): A / (1 + B(1 − n·m))^C with B = 2/α² (isotropic, α = ax).
 
     Near the normal 1 − n·m ≈ tan²θ/2, so D ∝ (1 + tan²θ/α²)^{−C}: α is the slope scale like GGX's and C sets
@@ -310,6 +313,7 @@ def D_abc(m, ax, ay=None, c=ABC_C_DEFAULT):
     ----------
     .. [1] J. Löw, J. Kronander, A. Ynnerman, J. Unger, ACM TOG 31(1):9, 2012, §5.
     """
+    c = ABC_C_DEFAULT if c is None else c
     A = abc_normalization(ax, c)
     val = A * (1.0 + _abc_B(ax) * _one_minus_cos(m)) ** (-c)
     return np.where(m[..., 2] > 0, val, 0.0)
@@ -368,7 +372,7 @@ def _P22_abc(r, ax, c):
     return abc_normalization(ax, c) * (1.0 + _abc_B(ax) * one_minus) ** (-c) / (q ** 4)
 
 
-def Lambda_abc(w, ax, ay=None, c=ABC_C_DEFAULT):
+def Lambda_abc(w, ax, ay=None, c=None):
     """Smith Λ of the ABC NDF (no closed form): :func:`Lambda_radial` of its slope law.
 
     References
@@ -376,7 +380,134 @@ def Lambda_abc(w, ax, ay=None, c=ABC_C_DEFAULT):
     .. [1] E. Heitz, JCGT 3(2), 2014, eq. (72).
     .. [2] J. Löw et al., ACM TOG 31(1), 2012.
     """
+    c = ABC_C_DEFAULT if c is None else c
     return Lambda_radial(w, lambda r: _P22_abc(r, ax, c), ax)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# EPD: exponential power distribution of slopes (Holzschuch & Pacanowski 2017)
+
+#: default exponent p of the EPD (p = 1 is Beckmann)
+EPD_P_DEFAULT = 1.0
+
+
+def _tan2(m):
+    """tan²θ from the components, (m_x² + m_y²)/m_z² (not (1 − m_z²)/m_z², which cancels near the normal)."""
+    cz = m[..., 2]
+    return np.where(cz > 0, (m[..., 0] ** 2 + m[..., 1] ** 2) / np.where(cz > 0, cz * cz, 1.0), np.inf)
+
+
+def epd_normalization(alpha, p):
+    """Constant of the EPD slope law P22(r) = N exp(−(r²/α²)^p): N = p / (π α² Γ(1/p)), so that
+    ∫ P22 d²r = 2π ∫₀^∞ r P22 dr = 1 (substitute u = (r/α)^{2p})."""
+    return p / (np.pi * alpha * alpha * special.gamma(1.0 / p))
+
+
+def _P22_epd(r, ax, p):
+    return epd_normalization(ax, p) * np.exp(-((r * r) / (ax * ax)) ** p)
+
+
+def D_epd(m, ax, ay=None, c=None):
+    """Exponential power NDF: D(m) = P22(tan θ_m) / cos⁴θ_m with the slope law P22(r) = N exp(−(r²/α²)^p).
+
+    p = 1 is Beckmann; p < 1 has longer tails (closer to measured polished metals), p > 1 a flatter core and a
+    faster fall-off. Isotropic; α is the slope scale, p the ``ndf_shape`` (default :data:`EPD_P_DEFAULT`).
+
+    References
+    ----------
+    .. [1] N. Holzschuch, R. Pacanowski, "A two-scale microfacet reflectance model combining reflection and
+       diffraction", ACM TOG 36(4):66, 2017, §4.2 (EPD slope distribution).
+    .. [2] E. Heitz, JCGT 3(2), 2014, eq. (8) (D from the slope distribution, D = P22 / cos⁴θ).
+    """
+    p = EPD_P_DEFAULT if c is None else c
+    cz = m[..., 2]
+    t2 = _tan2(m)
+    with np.errstate(over="ignore", invalid="ignore"):
+        val = epd_normalization(ax, p) * np.exp(-(t2 / (ax * ax)) ** p) / np.where(cz > 0, cz, 1.0) ** 4
+    return np.where(cz > 0, np.nan_to_num(val, nan=0.0, posinf=0.0), 0.0)
+
+
+def Lambda_epd(w, ax, ay=None, c=None):
+    """Smith Λ of the EPD (no closed form for p ≠ 1): :func:`Lambda_radial` of its slope law.
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, eq. (72).
+    """
+    p = EPD_P_DEFAULT if c is None else c
+    return Lambda_radial(w, lambda r: _P22_epd(r, ax, p), ax)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# SGD: shifted gamma distribution (Bagher, Soler & Holzschuch 2012)
+
+#: default exponent p of the SGD
+SGD_P_DEFAULT = 1.0
+
+
+def gamma_upper(a, y):
+    """Upper incomplete gamma Γ(a, y) = ∫_y^∞ t^{a−1} e^{−t} dt for any real a and y > 0.
+
+    a > 0: SciPy's regularized ``gammaincc`` times Γ(a); a = 0: E₁(y); a < 0: the recurrence
+    Γ(a, y) = (Γ(a + 1, y) − y^a e^{−y}) / a, applied upward from a + n in [0, 1).
+
+    References
+    ----------
+    .. [1] NIST DLMF §8.8.2 (recurrence), §8.4.4 (Γ(0, y) = E₁(y)).
+    """
+    a = float(a)
+    y = np.asarray(y, dtype=float)
+    if a > 0:
+        return special.gammaincc(a, y) * special.gamma(a)
+    n = int(np.ceil(-a)) if a != int(a) else int(-a)
+    base = a + n                     # in [0, 1)
+    g = special.exp1(y) if base == 0 else special.gammaincc(base, y) * special.gamma(base)
+    for k in range(n, 0, -1):        # Γ(b − 1, y) = (Γ(b, y) − y^{b−1} e^{−y}) / (b − 1), b = a + k
+        b = a + k
+        g = (g - y ** (b - 1.0) * np.exp(-y)) / (b - 1.0)
+    return g
+
+
+def sgd_normalization(alpha, p):
+    """Constant K of the SGD slope law P22(x) = K e^{−(α² + x)/α} / (α² + x)^p in x = tan²θ:
+    K = α^{p−1} / Γ(1 − p, α), so that ∫₀^∞ P22 dx = 1 (y = (α² + x)/α turns the integral into
+    α^{1−p} Γ(1 − p, α))."""
+    return alpha ** (p - 1.0) / gamma_upper(1.0 - p, alpha)
+
+
+def _P22x_sgd(x, ax, p):
+    return sgd_normalization(ax, p) * np.exp(-(ax * ax + x) / ax) / (ax * ax + x) ** p
+
+
+def D_sgd(m, ax, ay=None, c=None):
+    """Shifted gamma NDF: D(m) = P22(tan²θ_m) / (π cos⁴θ_m), P22(x) = K e^{−(α² + x)/α} / (α² + x)^p.
+
+    Fitted to the MERL measurements by Bagher et al., whose materials need tails between GGX's and Beckmann's:
+    the power law (α² + x)^{−p} sets the tail, the exponential cuts it at tan²θ ~ α. Isotropic; α is a scale of
+    tan²θ (the slope scale is about √α), p the ``ndf_shape`` (default :data:`SGD_P_DEFAULT`).
+
+    References
+    ----------
+    .. [1] M. M. Bagher, C. Soler, N. Holzschuch, "Accurate fitting of measured reflectances using a Shifted
+       Gamma micro-facet distribution", Computer Graphics Forum 31(4), 2012, §4 (eqs. 9–11).
+    """
+    p = SGD_P_DEFAULT if c is None else c
+    cz = m[..., 2]
+    x = _tan2(m)
+    with np.errstate(over="ignore", invalid="ignore", under="ignore"):
+        val = _P22x_sgd(x, ax, p) / (np.pi * np.where(cz > 0, cz, 1.0) ** 4)
+    return np.where(cz > 0, np.nan_to_num(val, nan=0.0, posinf=0.0), 0.0)
+
+
+def Lambda_sgd(w, ax, ay=None, c=None):
+    """Smith Λ of the SGD: :func:`Lambda_radial` of its slope law P22(r²)/π, nodes placed at the slope scale √α.
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, eq. (72).
+    """
+    p = SGD_P_DEFAULT if c is None else c
+    return Lambda_radial(w, lambda r: _P22x_sgd(r * r, ax, p) / np.pi, np.sqrt(ax))
 
 
 @dataclass(frozen=True)
@@ -393,8 +524,10 @@ class NDF:
     D: Callable
     Lambda: Callable
     anisotropic: bool
-    cl_id: int
+    cl_id: int | None
     reference: str
+    shape: str | None = None            # the symbol of its shape parameter (``ndf_shape``), if it has one
+    shape_default: float | None = None
 
     def G1(self, w, m, ax, ay=None, c=None):
         """Smith masking G1(w, m) = χ⁺(w · m) / (1 + Λ(w)) (unitless)."""
@@ -406,8 +539,16 @@ NDFS: dict[str, NDF] = {
     "ggx": NDF("ggx", D_ggx, Lambda_ggx, True, 0, "Trowbridge & Reitz 1975; Walter et al. 2007"),
     "beckmann": NDF("beckmann", D_beckmann, Lambda_beckmann, True, 1, "Beckmann & Spizzichino 1963"),
     "blinn-phong": NDF("blinn-phong", D_blinn_phong, Lambda_blinn_phong, False, 2, "Blinn 1977; Walter 2007"),
-    "abc": NDF("abc", D_abc, Lambda_abc, False, 3, "Löw et al. 2012"),
+    "abc": NDF("abc", D_abc, Lambda_abc, False, 3, "Löw et al. 2012", "C", ABC_C_DEFAULT),
+    "epd": NDF("epd", D_epd, Lambda_epd, False, None, "Holzschuch & Pacanowski 2017", "p", EPD_P_DEFAULT),
+    "sgd": NDF("sgd", D_sgd, Lambda_sgd, False, None, "Bagher, Soler & Holzschuch 2012", "p", SGD_P_DEFAULT),
 }
+
+
+#: allowed range (open below) of each NDF's shape parameter: ABC's C > 0; EPD's p in (0, 20] (Γ(1/p) overflows
+#: below 0.006, and p → ∞ is a flat disc); SGD's p in (0, 5] (the recurrence of :func:`gamma_upper` stays
+#: accurate there, and Bagher et al. fit p in [0, 2])
+SHAPE_RANGE = {"abc": (0.0, np.inf), "epd": (0.0, 20.0), "sgd": (0.0, 5.0)}
 
 
 def _ndf(name) -> NDF:
@@ -416,7 +557,7 @@ def _ndf(name) -> NDF:
     return NDFS[name]
 
 
-def _check_alpha(alpha, alpha_y, ndf: NDF, abc_c):
+def _check_alpha(alpha, alpha_y, ndf: NDF, ndf_shape):
     """Validate (public boundary) and floor α (guard); returns (ax, ay)."""
     for label, a in (("alpha", alpha), ("alpha_y", alpha_y)):
         if a is None:
@@ -433,12 +574,19 @@ def _check_alpha(alpha, alpha_y, ndf: NDF, abc_c):
     if ndf.name == "blinn-phong" and ax > 1.0:
         raise WaveopticsError(f"alpha={alpha!r} is not allowed for blinn-phong; need α <= 1 "
                               "(exponent 2/α² − 2 >= 0)")
-    if ndf.name == "abc" and not (np.isfinite(abc_c) and abc_c > 0):
-        raise WaveopticsError(f"abc_c={abc_c!r} is not allowed; the ABC tail exponent C must be > 0")
+    if ndf_shape is not None:
+        if ndf.shape is None:
+            raise WaveopticsError(f"ndf_shape={ndf_shape!r} is not allowed for NDF {ndf.name!r}, which has no shape "
+                                  "parameter; NDFs with one: " + ", ".join(f"{k} ({v.shape})" for k, v in NDFS.items()
+                                                                          if v.shape))
+        lo, hi = SHAPE_RANGE[ndf.name]
+        if not (np.isfinite(ndf_shape) and lo < ndf_shape <= hi):
+            raise WaveopticsError(f"ndf_shape={ndf_shape!r} is not allowed for {ndf.name}; its {ndf.shape} must be in "
+                                  f"({lo:g}, {hi:g}]")
     return ax, ay
 
 
-def D(m, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT):
+def D(m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     """Normal distribution function D(m) in 1/sr (``ndf`` one of :data:`NDFS`).
 
     Parameters
@@ -450,9 +598,10 @@ def D(m, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT):
     alpha_y : float, optional
         α_y for ``"ggx"`` and ``"beckmann"`` (default: isotropic).
     ndf : str
-        ``"ggx"``, ``"beckmann"``, ``"blinn-phong"`` or ``"abc"``.
-    abc_c : float
-        Tail exponent C of ``"abc"``.
+        ``"ggx"``, ``"beckmann"``, ``"blinn-phong"``, ``"abc"``, ``"epd"`` or ``"sgd"``.
+    ndf_shape : float, optional
+        Shape parameter of the NDFs that have one (:data:`SHAPE_RANGE`): ABC's tail exponent C, EPD's and SGD's
+        exponent p; None takes the NDF's default.
 
     Returns
     -------
@@ -464,11 +613,11 @@ def D(m, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT):
     .. [1] E. Heitz, JCGT 3(2), 2014, §2 (definition and normalization).
     """
     spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
-    return spec.D(_as_dirs(m, "m"), ax, ay, abc_c)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
+    return spec.D(_as_dirs(m, "m"), ax, ay, ndf_shape)
 
 
-def Lambda(w, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT):
+def Lambda(w, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     """Smith's Λ(w) of an NDF (dimensionless, ≥ 0; +inf for w_z <= 0, where G1 = 0).
 
     Parameters are those of :func:`D`; *w* are unit directions (..., 3).
@@ -478,11 +627,11 @@ def Lambda(w, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT):
     .. [1] E. Heitz, JCGT 3(2), 2014, §5 (eq. 72), eqs. (81), (86).
     """
     spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
-    return spec.Lambda(_as_dirs(w, "w"), ax, ay, abc_c)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
+    return spec.Lambda(_as_dirs(w, "w"), ax, ay, ndf_shape)
 
 
-def G1(w, m, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT):
+def G1(w, m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     """Smith masking function G1(w, m) = χ⁺(w·m) / (1 + Λ(w)), in [0, 1].
 
     References
@@ -490,10 +639,10 @@ def G1(w, m, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT):
     .. [1] E. Heitz, JCGT 3(2), 2014, eq. (43).
     """
     spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
     w = _as_dirs(w, "w")
     m = _as_dirs(m, "m")
-    return _G1(w, m, spec.Lambda(w, ax, ay, abc_c))
+    return _G1(w, m, spec.Lambda(w, ax, ay, ndf_shape))
 
 
 def _G1(w, m, lam):

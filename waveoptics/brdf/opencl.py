@@ -12,7 +12,14 @@ from ..runtime import build_options, build_program, get_runtime
 from .diffuse import DIFFUSES
 from .fresnel_terms import F_mean
 from .microfacet import FRESNELS, _fresnel_fn
-from .ndf import ABC_C_DEFAULT, _as_dirs, _check_alpha, _ndf
+from .ndf import NDFS, _as_dirs, _check_alpha, _ndf
+
+
+def _shape(spec, ndf_shape) -> float:
+    """The shape parameter passed to the kernel: the given one, the NDF's default, or 0 (unused)."""
+    if ndf_shape is not None:
+        return float(ndf_shape)
+    return float(spec.shape_default) if spec.shape_default is not None else 0.0
 from .shadowing import _shadowing
 
 __all__ = ['D_cl', 'Lambda_cl', 'brdf_cl']
@@ -45,7 +52,11 @@ def _kernel(prg, name):
 def _defines(ndf=None, shadowing=None, fresnel=None, diffuse=None, tradeoff=None):
     d = []
     if ndf is not None:
-        d.append(f"-DWO_NDF={_ndf(ndf).cl_id}")
+        spec = _ndf(ndf)
+        if spec.cl_id is None:
+            raise WaveopticsError(f"NDF {ndf!r} has no OpenCL kernel; evaluate it with NumPy (kernel NDFs: "
+                                  + ", ".join(k for k, v in NDFS.items() if v.cl_id is not None) + ")")
+        d.append(f"-DWO_NDF={spec.cl_id}")
     if shadowing is not None:
         d.append(f"-DWO_SHADOWING={_shadowing(shadowing)[1]}")
     if fresnel is not None:
@@ -66,32 +77,32 @@ def _vec_dev(queue, w, dt):
     return cla.to_device(queue, np.ascontiguousarray(np.asarray(w, dtype=dt).reshape(-1, 3)).ravel())
 
 
-def _ndf_kernel(kname, w, alpha, alpha_y, ndf, abc_c, runtime, precision):
+def _ndf_kernel(kname, w, alpha, alpha_y, ndf, ndf_shape, runtime, precision):
 
     spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
     w = _as_dirs(w, "w")
     rt, dt, prg = _cl_setup(runtime, precision, _defines(ndf=ndf))
     n = w.size // 3
     d_w = _vec_dev(rt.queue, w, dt)
     d_out = cla.empty(rt.queue, max(n, 1), dt)
-    _kernel(prg, kname)(rt.queue, (max(n, 1),), None, d_w.data, d_out.data, dt(ax), dt(ay), dt(abc_c),
+    _kernel(prg, kname)(rt.queue, (max(n, 1),), None, d_w.data, d_out.data, dt(ax), dt(ay), dt(_shape(spec, ndf_shape)),
                         np.int32(n))
     return d_out.get()[:n].reshape(w.shape[:-1]).astype(np.float64)
 
 
-def D_cl(m, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT, runtime=None, precision="float32"):
+def D_cl(m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None, runtime=None, precision="float32"):
     """OpenCL twin of :func:`D` (kernel ``D_eval`` in ``kernels/microfacet.cl``)."""
-    return _ndf_kernel("D_eval", m, alpha, alpha_y, ndf, abc_c, runtime, precision)
+    return _ndf_kernel("D_eval", m, alpha, alpha_y, ndf, ndf_shape, runtime, precision)
 
 
-def Lambda_cl(w, alpha, alpha_y=None, *, ndf="ggx", abc_c=ABC_C_DEFAULT, runtime=None, precision="float32"):
+def Lambda_cl(w, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None, runtime=None, precision="float32"):
     """OpenCL twin of :func:`Lambda` (kernel ``Lambda_eval``); +inf below the surface like the NumPy one."""
-    return _ndf_kernel("Lambda_eval", w, alpha, alpha_y, ndf, abc_c, runtime, precision)
+    return _ndf_kernel("Lambda_eval", w, alpha, alpha_y, ndf, ndf_shape, runtime, precision)
 
 
 def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated", fresnel="exact", eta=None,
-            F0=None, abc_c=ABC_C_DEFAULT, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True, runtime=None,
+            F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True, runtime=None,
             precision="float32"):
     """OpenCL twin of :func:`brdf` for N direction pairs at M wavelengths (kernel ``brdf_eval``).
 
@@ -115,7 +126,7 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlat
     """
 
     spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
     F_fn = _fresnel_fn(fresnel, eta, F0)
     kd_a = np.atleast_1d(np.asarray(kd, dtype=float))
     if np.any(~np.isfinite(kd_a) | (kd_a < 0) | (kd_a > 1)):
@@ -138,6 +149,6 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlat
     args = [_vec_dev(q, wi, dt), _vec_dev(q, wo, dt)]
     args += [cla.to_device(q, np.ascontiguousarray(a, dtype=dt)) for a in (eta_a.real, eta_a.imag, F0_a, kd_a, Fbar)]
     d_out = cla.empty(q, max(n * m, 1), dt)
-    _kernel(prg, "brdf_eval")(q, (max(n, 1), m), None, *[a.data for a in args], d_out.data, dt(ax), dt(ay), dt(abc_c),
+    _kernel(prg, "brdf_eval")(q, (max(n, 1), m), None, *[a.data for a in args], d_out.data, dt(ax), dt(ay), dt(_shape(spec, ndf_shape)),
                   dt(sigma), np.int32(n))
     return d_out.get()[: n * m].reshape(m, n).astype(np.float64)

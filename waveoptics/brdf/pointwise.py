@@ -150,7 +150,7 @@ class TwoScaleBRDF(TwoScaleParts):
 
     Parameters
     ----------
-    material, micro, kd, diffuse, fresnel, abc_c
+    material, micro, kd, diffuse, fresnel, ndf_shape
         As :class:`waveoptics.brdf.MicrofacetBRDF`.
     nano : Nano or None
         Nano-roughness statistics (:class:`waveoptics.surfaces.PSDModel`); None or σ = 0 gives the microfacet
@@ -224,7 +224,7 @@ class TwoScaleBRDF(TwoScaleParts):
         u = unit_nodes(self.nodes)
         ndf, ax, ay = self._micro_args()
         wi_b = np.broadcast_to(wi[:, None, :], (wi.shape[0], u.shape[0], 3))
-        m = sample_normal(wi_b, np.broadcast_to(u, wi_b.shape[:-1] + (2,)), ndf=ndf, ax=ax, ay=ay, c=self.abc_c)
+        m = sample_normal(wi_b, np.broadcast_to(u, wi_b.shape[:-1] + (2,)), ndf=ndf, ax=ax, ay=ay, c=self.ndf_shape)
         wo = reflect(wi_b, m)
         ok = wo[..., 2] > 0
         wo_ok = np.where(ok[..., None], wo, np.array([0.0, 0.0, 1.0]))

@@ -37,7 +37,7 @@ from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .fresnel_terms import FRESNELS
 from .microfacet import _specular
-from .ndf import ABC_C_DEFAULT, _as_dirs, _ndf
+from .ndf import ALPHA_MAX, _as_dirs, _check_alpha, _ndf
 from .quadrature import directional_albedo
 from .sampling import pdf_reflected, sample_reflected
 from .shadowing import _shadowing
@@ -176,7 +176,7 @@ class MicrofacetBRDF(BRDF):
         A name in :data:`waveoptics.brdf.DIFFUSES`.
     fresnel : str
         ``exact`` (the material's F) or ``one`` (F = 1, white furnace).
-    abc_c : float
+    ndf_shape : float
         Tail exponent of the ABC NDF.
     diffuse_sigma : float
         Diffuse roughness, separate from the specular α: Oren-Nayar σ in radians, Burley's r in [0, 1].
@@ -199,7 +199,7 @@ class MicrofacetBRDF(BRDF):
     kd: float = 0.0
     diffuse: str = "lambert"
     fresnel: str = "exact"
-    abc_c: float = ABC_C_DEFAULT
+    ndf_shape: float | None = None
     diffuse_sigma: float = 0.0
     multiple_scattering: bool = False
 
@@ -214,7 +214,15 @@ class MicrofacetBRDF(BRDF):
             raise unknown("Fresnel model", self.fresnel, [k for k in FRESNELS if k != "schlick"])
         if not (np.isfinite(self.kd) and 0 <= self.kd <= 1):
             raise FieldError(f"kd={self.kd!r} is not allowed; the diffuse albedo must be in [0, 1]", "kd")
-        _ndf(self.micro.ndf)
+        spec = _ndf(self.micro.ndf)
+        shape = getattr(self.micro, "ndf_shape", None)
+        if self.ndf_shape is None:
+            object.__setattr__(self, "ndf_shape", shape)
+        elif shape is not None and shape != self.ndf_shape:
+            raise FieldError(f"ndf_shape={self.ndf_shape!r} differs from micro.ndf_shape={shape!r}; give it once",
+                             "ndf_shape")
+        if self.ndf_shape is not None:
+            _check_alpha(min(self.micro.alpha, ALPHA_MAX), None, spec, self.ndf_shape)
 
     # -- pieces shared with the two-scale model ---------------------------------------------------------
     def _F(self, lam):
@@ -229,7 +237,7 @@ class MicrofacetBRDF(BRDF):
     def _f_specular(self, wi, wo, F_fn):
         ndf, ax, ay = self._micro_args()
         gfn, _ = _shadowing(self.micro.shadowing)
-        return _specular(wi, wo, _ndf(ndf), ax, ay, self.abc_c, gfn, F_fn)
+        return _specular(wi, wo, _ndf(ndf), ax, ay, self.ndf_shape, gfn, F_fn)
 
     def _has_diffuse(self):
         return (not self.material.is_metal) and self.kd > 0 and self.diffuse != "none"
@@ -249,19 +257,20 @@ class MicrofacetBRDF(BRDF):
 
     def _sample_specular(self, wi, u):
         ndf, ax, ay = self._micro_args()
-        wo, _ = sample_reflected(wi, u, ndf=ndf, ax=ax, ay=ay, c=self.abc_c)
+        wo, _ = sample_reflected(wi, u, ndf=ndf, ax=ax, ay=ay, c=self.ndf_shape)
         return wo
 
     def _pdf_specular(self, wi, wo):
         ndf, ax, ay = self._micro_args()
-        return pdf_reflected(wi, wo, ndf=ndf, ax=ax, ay=ay, c=self.abc_c)
+        return pdf_reflected(wi, wo, ndf=ndf, ax=ax, ay=ay, c=self.ndf_shape)
 
     # -- multiple scattering (Kulla & Conty 2017) ------------------------------------------------------------
     def _ms_table(self):
         from .multiscatter import albedo_table
 
         ndf, ax, ay = self._micro_args()
-        return albedo_table(ndf, float(np.sqrt(ax * ay)), self.micro.shadowing, float(self.abc_c))
+        shape = None if self.ndf_shape is None else float(self.ndf_shape)
+        return albedo_table(ndf, float(np.sqrt(ax * ay)), self.micro.shadowing, shape)
 
     def _F_ms(self, lam):
         from .fresnel_terms import F_mean

@@ -9,6 +9,9 @@ density p(ω_o) = p(m) / (4 |ω_i·m|) (Walter et al. 2007, eq. 14). Samplers by
 * ``beckmann``: D(m) cos θ_m, sampled exactly from its Gaussian slope law (anisotropic).
 * ``blinn-phong``: D(m) cos θ_m, cos θ_m = (1 − u₁)^{1/(α_p + 2)} (Walter et al. 2007, eq. 35).
 * ``abc``: D(m) cos θ_m by inverting its closed-form radial CDF (bisection to double precision).
+* ``epd``: D(m) cos θ_m exactly: (r/α)^{2p} is gamma-distributed with shape 1/p.
+* ``sgd``: D(m) cos θ_m by inverting the incomplete gamma function of its shifted slope law (closed form for
+  p < 1, Newton's method from a tabulated inverse for p ≥ 1).
 
 Where D(m) cos θ_m is used, normals the light cannot see are drawn too (their ω_o falls below the surface or G
 vanishes): the weight is then larger and noisier near grazing incidence than with visible normals, never biased.
@@ -24,13 +27,17 @@ References
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from ..errors import unknown
-from .ndf import (NDFS, _abc_B, _dot, _expm1_over, abc_normalization, blinn_phong_exponent, reflect)
+from scipy import special
+
+from .ndf import (ABC_C_DEFAULT, EPD_P_DEFAULT, NDFS, SGD_P_DEFAULT, _abc_B, _dot, _expm1_over, abc_normalization,
+                  blinn_phong_exponent, gamma_upper, reflect)
 
 __all__ = ['NormalSampler', 'NORMAL_SAMPLERS', 'sample_normal', 'pdf_normal', 'pdf_reflected', 'sample_reflected']
 
@@ -109,6 +116,7 @@ def abc_cdf(t, ax, c):
     """Radial CDF of the ABC normal density D(m) cos θ_m in t = 1 − cos θ_m:
     2πA ∫₀ᵗ (1 + Bs)^{−C} (1 − s) ds = 2πA [E₁/B − (E₂ − E₁)/B²], E_p = ((1 + Bt)^p − 1)/p at p = 1 − C, 2 − C
     (the integral of :func:`waveoptics.brdf.abc_normalization` stopped at t; 1 at t = 1)."""
+    c = ABC_C_DEFAULT if c is None else c
     B = _abc_B(ax)
     L = np.log1p(B * np.asarray(t, dtype=float))
     e1 = _expm1_over(1.0 - c, L)
@@ -130,6 +138,59 @@ def sample_dcos_abc(wi, ax, ay, c, u):
     return _from_cos(1.0 - 0.5 * (lo + hi), 2.0 * np.pi * u[..., 1])
 
 
+def _from_slope(r, phi):
+    """Unit normal of slope magnitude r (tan θ_m) at azimuth φ."""
+    cos_t = 1.0 / np.sqrt(1.0 + r * r)
+    return _from_cos(cos_t, phi)
+
+
+def sample_dcos_epd(wi, ax, ay, c, u):
+    """EPD normal with density D(m) cos θ_m, exactly: the slope law N exp(−(r/α)^{2p}) makes g = (r/α)^{2p}
+    Gamma(1/p)-distributed, so r = α g^{1/(2p)} with g = P⁻¹(1/p, u₁) (SciPy's ``gammaincinv``)."""
+    p = EPD_P_DEFAULT if c is None else c
+    g = special.gammaincinv(1.0 / p, u[..., 0])
+    return _from_slope(ax * g ** (0.5 / p), 2.0 * np.pi * u[..., 1])
+
+
+def sgd_y_survival(y, ax, p):
+    """P(Y > y) for Y = (α² + tan²θ_m)/α of SGD normals drawn with density D cos θ_m: Γ(1 − p, y) / Γ(1 − p, α)
+    (the density of Y is ∝ y^{−p} e^{−y} on [α, ∞))."""
+    return gamma_upper(1.0 - p, y) / gamma_upper(1.0 - p, ax)
+
+
+@functools.lru_cache(maxsize=32)
+def _sgd_inverse_table(ax, p):
+    """(log y, P(Y > y)) on 2049 nodes from α to α + 750 (beyond, e^{−y} underflows): the start of Newton's
+    method in :func:`sample_dcos_sgd`."""
+    t = np.linspace(np.log(ax), np.log(ax + 750.0), 2049)
+    return t, sgd_y_survival(np.exp(t), ax, p)
+
+
+def sample_dcos_sgd(wi, ax, ay, c, u):
+    """SGD normal with density D(m) cos θ_m: Y = (α² + tan²θ)/α solves P(Y > y) = 1 − u₁ — in closed form with
+    ``gammainccinv`` for p < 1; for p ≥ 1 by Newton's method in log y (the derivative of P(Y > y) is the density
+    −y^{−p} e^{−y} / Γ(1 − p, α)) from a tabulated inverse, kept inside the table's bracket; then
+    tan²θ = αY − α²."""
+    p = SGD_P_DEFAULT if c is None else c
+    target = 1.0 - u[..., 0]
+    if p < 1.0:
+        a = 1.0 - p
+        y = special.gammainccinv(a, target * special.gammaincc(a, ax))
+    else:
+        t_tab, s_tab = _sgd_inverse_table(float(ax), float(p))
+        t = np.interp(-target, -s_tab, t_tab)          # s_tab falls: interpolate on its negative
+        g = gamma_upper(1.0 - p, ax)
+        for _ in range(6):
+            yy = np.exp(t)
+            f = gamma_upper(1.0 - p, yy) / g - target
+            df = -(yy ** (1.0 - p)) * np.exp(-yy) / g   # d/dt of P(Y > e^t)
+            step = np.where(df < 0, f / np.where(df < 0, df, -1.0), 0.0)
+            t = np.clip(t - step, t_tab[0], t_tab[-1])
+        y = np.exp(t)
+    x = np.maximum(ax * y - ax * ax, 0.0)
+    return _from_slope(np.sqrt(x), 2.0 * np.pi * u[..., 1])
+
+
 @dataclass(frozen=True)
 class NormalSampler:
     """Sampling of microfacet normals for one NDF: ``sample(wi, ax, ay, c, u)`` → m and ``pdf(wi, m, ax, ay, c)``
@@ -148,6 +209,8 @@ NORMAL_SAMPLERS: dict[str, NormalSampler] = {
     "blinn-phong": NormalSampler(sample_dcos_blinn_phong, pdf_dcos("blinn-phong"), False,
                                  "Walter et al. 2007, eq. 35"),
     "abc": NormalSampler(sample_dcos_abc, pdf_dcos("abc"), False, "Löw et al. 2012 (radial CDF inverted)"),
+    "epd": NormalSampler(sample_dcos_epd, pdf_dcos("epd"), False, "Holzschuch & Pacanowski 2017 (gamma slopes)"),
+    "sgd": NormalSampler(sample_dcos_sgd, pdf_dcos("sgd"), False, "Bagher et al. 2012 (incomplete gamma inverted)"),
 }
 
 

@@ -12,7 +12,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import unknown
-from .ndf import _G1, ABC_C_DEFAULT, _as_dirs, _check_alpha, _dot, _ndf
+from .ndf import _G1, _as_dirs, _check_alpha, _dot, _ndf
 
 __all__ = ['G_smith', 'G_smith_correlated', 'G_cook_torrance', 'G_implicit', 'SHADOWINGS', 'G']
 
@@ -84,7 +84,7 @@ def _shadowing(name):
     return SHADOWINGS[name]
 
 
-def G(wi, wo, m, alpha, alpha_y=None, *, ndf="ggx", shadowing="smith-correlated", abc_c=ABC_C_DEFAULT):
+def G(wi, wo, m, alpha, alpha_y=None, *, ndf="ggx", shadowing="smith-correlated", ndf_shape=None):
     """Masking-shadowing G(l, v, m) in [0, 1] (``shadowing`` one of :data:`SHADOWINGS`).
 
     Parameters
@@ -93,7 +93,7 @@ def G(wi, wo, m, alpha, alpha_y=None, *, ndf="ggx", shadowing="smith-correlated"
         Unit directions to the light and to the viewer.
     m : array_like (..., 3)
         Unit microfacet normal (the half-vector for reflection).
-    alpha, alpha_y, ndf, abc_c
+    alpha, alpha_y, ndf, ndf_shape
         As in :func:`D` (used by the Smith terms).
     shadowing : str
         ``"smith"``, ``"smith-correlated"``, ``"cook-torrance"`` or ``"implicit"``.
@@ -104,6 +104,6 @@ def G(wi, wo, m, alpha, alpha_y=None, *, ndf="ggx", shadowing="smith-correlated"
     .. [2] R. L. Cook, K. E. Torrance, ACM TOG 1(1), 1982.
     """
     spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, abc_c)
+    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
     fn, _ = _shadowing(shadowing)
-    return fn(_as_dirs(wi, "wi"), _as_dirs(wo, "wo"), _as_dirs(m, "m"), lambda w: spec.Lambda(w, ax, ay, abc_c))
+    return fn(_as_dirs(wi, "wi"), _as_dirs(wo, "wo"), _as_dirs(m, "m"), lambda w: spec.Lambda(w, ax, ay, ndf_shape))

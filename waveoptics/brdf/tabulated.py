@@ -71,7 +71,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
 
     Parameters
     ----------
-    material, micro, kd, diffuse, fresnel, abc_c
+    material, micro, kd, diffuse, fresnel, ndf_shape
         As :class:`waveoptics.brdf.MicrofacetBRDF`.
     nano : Nano or None
         PSD statistics or a height field.

@@ -49,7 +49,7 @@ from ..surfaces.heightfield import HeightField
 from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .microfacet import specular
-from .ndf import ALPHA_MIN
+from .ndf import ALPHA_MAX, ALPHA_MIN
 from .quadrature import albedo, directional_albedo
 
 __all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'evaluate', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
@@ -69,16 +69,21 @@ class Micro:
     alpha_y: float | None = None
     ndf: str = "ggx"
     shadowing: str = "smith-correlated"
+    ndf_shape: float | None = None   # the NDF's shape parameter (ABC's C, EPD's/SGD's p); None: its default
 
     def __post_init__(self):
         for name, a in (("alpha", self.alpha), ("alpha_y", self.alpha_y)):
             if a is not None and (not np.isfinite(a) or a < 0):
                 raise WaveopticsError(f"micro {name}={a!r} is not allowed; it must be >= 0")
+        if self.ndf_shape is not None:
+            from .ndf import _check_alpha, _ndf
+
+            _check_alpha(min(self.alpha, ALPHA_MAX), None, _ndf(self.ndf), self.ndf_shape)
 
     def kw(self) -> dict:
         a = max(self.alpha, ALPHA_MIN)
         ay = None if self.alpha_y is None else max(self.alpha_y, ALPHA_MIN)
-        return {"alpha": a, "alpha_y": ay, "ndf": self.ndf, "shadowing": self.shadowing}
+        return {"alpha": a, "alpha_y": ay, "ndf": self.ndf, "shadowing": self.shadowing, "ndf_shape": self.ndf_shape}
 
 
 @dataclass(frozen=True)

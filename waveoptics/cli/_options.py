@@ -42,6 +42,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--kd", "diffuse albedo kd in [0, 1]", "KD", float, "1"),
     Option("--micro-alpha", "micro-scale NDF roughness α (slope scale; 0 = smooth)", "A", float, "1"),
     Option("--ndf", "microfacet normal distribution"),
+    Option("--ndf-shape", "shape parameter of the NDFs that have one: abc's tail exponent C (default 2), epd's and "
+                          "sgd's exponent p (default 1)", "S", float, "1"),
     Option("--nano", "nano-roughness MODEL:key=value,... with units, e.g. abc:sigma=10nm,B=2um,C=2.6, "
                      "gaussian:sigma=5nm,T=1um (T or corr_length), sinusoid:amplitude=40nm,period=2um",
            "MODEL:PARAMS"),
@@ -84,6 +86,7 @@ OPTIONS = {o.flag: o for o in (
 RENAMED = {
     ("brdf", "--wavelength"): "--wavelengths",
     ("brdf", "--sigma"): "--diffuse-sigma",
+    ("brdf", "--abc-c"): "--ndf-shape",
     ("compare", "--angles"): "--incident-angles",
     ("cost", "--model"): "--generator",
     ("cost", "--realizations"): "--realization-counts",

@@ -64,8 +64,8 @@ def _microfacet_arguments(g) -> None:
            note="in [0, 2]; α_x if anisotropic; 0 = sharpest representable")
     g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
     g.add_argument("--alpha-y", type=float, metavar="A", help="α_y for anisotropic ggx/beckmann")
-    g.add_argument("--abc-c", type=float, default=None, metavar="C",
-                   help="tail exponent C of the abc NDF (default: waveoptics.brdf.ABC_C_DEFAULT, 2)")
+    option(g, "--ndf-shape")
+    renamed(g, "brdf", "--abc-c", dest="ndf_shape", type=float)
     option(g, "--material", note="or --ior")
     g.add_argument("--ior", metavar="N+Kj", help="constant complex index, e.g. 1.5 or 0.2+3.1j")
     g.add_argument("--fresnel", choices=sorted(FRESNEL_NAMES), default="exact",
@@ -105,11 +105,11 @@ def _microfacet_params(args, wavelength_nm) -> dict:
     if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
         raise WaveopticsError(f"--diffuse-sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
                               "[0, 90] degrees")
-    abc_c = brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c
+    ndf_shape = args.ndf_shape
     if args.diffuse == "burley" and not 0 <= args.diffuse_roughness <= 1:
         raise WaveopticsError(f"--diffuse-roughness {args.diffuse_roughness!r} is not allowed; it must be in [0, 1]")
     sigma = args.diffuse_roughness if args.diffuse == "burley" else float(np.radians(args.sigma))
-    return dict(alpha=alpha, alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing, abc_c=abc_c,
+    return dict(alpha=alpha, alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing, ndf_shape=ndf_shape,
                 diffuse=args.diffuse, kd=args.kd, sigma=sigma,
                 tradeoff=not args.no_tradeoff, **fi)
 
@@ -186,8 +186,9 @@ def _microfacet_describe(args) -> dict:
 
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
                                        "fresnel", "diffuse", "kd", "backend")}
-    if args.ndf == "abc":
-        d["abc_c"] = brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c
+    spec = brdf.NDFS[args.ndf]
+    if spec.shape is not None:
+        d["ndf_shape"] = spec.shape_default if args.ndf_shape is None else args.ndf_shape
     if args.diffuse == "oren-nayar":
         d["sigma_deg"] = args.sigma
     d["tradeoff"] = not args.no_tradeoff
@@ -410,7 +411,7 @@ def _twoscale_build(args, wavelength_nm, wi):
     micro = brdf.Micro(alpha=_alpha(args), alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing)
     common = dict(material=spec if spec is not None else "aluminium", micro=micro, kd=args.kd,
                   diffuse=args.diffuse, fresnel=args.fresnel,
-                  abc_c=brdf.ABC_C_DEFAULT if args.abc_c is None else args.abc_c,
+                  ndf_shape=args.ndf_shape,
                   diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction)
     if args.surface:
         nano = brdf.Nano(surface=load_surface(args))

@@ -44,7 +44,8 @@ def case_from_scene(sc, *, material: str | None = None, light: str | None = None
             raise WaveopticsError(f"scene {sc.name!r} has no light {light!r}; it has "
                                   f"{', '.join(x.name for x in sc.lights)}")
         li = found[0]
-    kw = dict(material=mat.material, micro_alpha=mat.roughness, ndf=mat.ndf, shadowing=mat.shadowing,
+    kw = dict(material=mat.material, micro_alpha=mat.roughness, ndf=mat.ndf, ndf_shape=mat.ndf_shape,
+              shadowing=mat.shadowing,
               kd=mat.diffuse_albedo, illuminant=li.spd, incident_deg=tuple(li.directions_deg[0]),
               accuracy_dE=sc.delta_e, seed=sc.seed, nano=NO_NANO, surface=None)
     if sc.output.resolution is not None:

@@ -761,7 +761,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
     e = _Entry(scene, spec, light, force, cm, device, max_resolution)
     e.mat = get_material(spec.material)
     e.spd = colour.illuminant(light.spd)
-    e.micro = twoscale.Micro(alpha=spec.roughness, ndf=spec.ndf, shadowing=spec.shadowing)
+    e.micro = twoscale.Micro(alpha=spec.roughness, ndf=spec.ndf, shadowing=spec.shadowing, ndf_shape=spec.ndf_shape)
     e.cos_i = [math.cos(math.radians(t)) for t, _ in light.directions_deg]
     e.cos_max = 1.0 if e.sphere else max(e.cos_i)
     e.w_colour = colour.simulation_wavelengths(e.spd, e.dE)

@@ -19,7 +19,8 @@ Schema (``examples/scenes/*.toml`` are worked examples)::
     name = "gold"                        # unique
     material = "Au"                      # preset, shelf/book/page or f0:...   (or: ior = 1.5 / "0.2+3.1j")
     roughness = 0.1                      # micro NDF alpha >= 0
-    ndf = "ggx"                          # ggx | beckmann
+    ndf = "ggx"                          # ggx | beckmann | blinn-phong | abc | epd | sgd
+    # ndf_shape = 1.5                    # abc's C, epd's or sgd's p (default: the NDF's own)
     shadowing = "smith-correlated"       # see waveoptics.brdf.SHADOWINGS
     diffuse_albedo = 0.5                 # dielectric substrate's diffuse albedo in [0, 1] (metals: none)
     diffraction = "auto"                 # nano-lobe model: auto (the planner picks) | kirchhoff | ghs | rghs | ohs | rohs
@@ -76,8 +77,8 @@ __all__ = ['KEYS', 'CAMERAS', 'DEFAULT_DELTA_E', 'DEFAULT_LIGHT_DIRECTIONS', 'Na
 KEYS = {
     "": ("name", "description", "seed", "accuracy", "materials", "lights", "view", "output"),
     "accuracy": ("delta_e",),
-    "materials": ("name", "material", "ior", "roughness", "ndf", "shadowing", "diffuse_albedo", "nano",
-                  "diffraction"),
+    "materials": ("name", "material", "ior", "roughness", "ndf", "ndf_shape", "shadowing", "diffuse_albedo",
+                  "nano", "diffraction"),
     "nano": ("statistics", "generator", "file"),
     "file": ("path", "spacing", "units", "channel"),
     "lights": ("name", "spd", "directions_deg"),
@@ -130,6 +131,7 @@ class MaterialSpec:
     shadowing: str = "smith-correlated"
     diffuse_albedo: float = 0.5
     nano: NanoSpec | None = None
+    ndf_shape: float | None = None   # the NDF's shape parameter (ABC's C, EPD's/SGD's p); None: its default
     diffraction: str = "auto"        # a model of waveoptics.vocabulary.DIFFRACTION, or auto (the planner picks)
 
 
@@ -356,12 +358,26 @@ def _material(ctx, t, key, base) -> MaterialSpec:
     return MaterialSpec(
         name=name, material=spec,
         roughness=_number(ctx, t.get("roughness", 0.05), key + ".roughness", lo=0.0, hi=2.0),
-        ndf=_choice(ctx, t.get("ndf", "ggx"), key + ".ndf", ("ggx", "beckmann")),
+        ndf=_choice(ctx, t.get("ndf", "ggx"), key + ".ndf", tuple(brdf.NDFS)),
+        ndf_shape=_ndf_shape(ctx, t, key),
         shadowing=_choice(ctx, t.get("shadowing", "smith-correlated"), key + ".shadowing",
                           tuple(brdf.SHADOWINGS)),
         diffuse_albedo=_number(ctx, t.get("diffuse_albedo", 0.5), key + ".diffuse_albedo", lo=0.0, hi=1.0),
         nano=_nano(ctx, t["nano"], key + ".nano", base) if "nano" in t else None,
         diffraction=_choice(ctx, t.get("diffraction", "auto"), key + ".diffraction", ("auto",) + DIFFRACTION))
+
+
+def _ndf_shape(ctx, t, key):
+    """materials.ndf_shape: a number in the NDF's range, only for an NDF that has a shape parameter."""
+    if "ndf_shape" not in t:
+        return None
+    spec = brdf.NDFS.get(t.get("ndf", "ggx"))
+    if spec is None or spec.shape is None:
+        raise ctx.err(key + ".ndf_shape", f"applies to NDFs with a shape parameter "
+                                          f"({', '.join(k for k, v in brdf.NDFS.items() if v.shape)}), not "
+                                          f"{t.get('ndf', 'ggx')!r}")
+    lo, hi = brdf.ndf.SHAPE_RANGE[spec.name]
+    return _number(ctx, t["ndf_shape"], key + ".ndf_shape", lo=lo, hi=None if math.isinf(hi) else hi, lo_open=True)
 
 
 def _light(ctx, t, key) -> LightSpec:
