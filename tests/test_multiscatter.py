@@ -72,3 +72,46 @@ def test_diffuse_and_compensation_sampling_of_a_dielectric_passes_chi2():
         return np.where((s.weight > 0)[:, None], s.wo, np.nan)
     r = chi2_test(sample, lambda x: b.pdf(d, x, 450.0), sample_count=100_000, res=41, ires=6)
     assert r.passed, r.message
+
+
+def test_cli_multiple_scattering_white_furnace_and_values():
+    """brdf --multiple-scattering: the white furnace (F = 1) holds to ≥ 0.99 for α up to 1 at several incidences,
+    the values are those of MicrofacetBRDF(multiple_scattering=True), the option is stated in the output, and it is
+    refused where it does not apply."""
+    import json
+
+    from hard_cases import run_cli
+
+    for alpha in ("0.1", "0.5", "1.0"):
+        rc, out, err, _ = run_cli(["brdf", "--model", "microfacet", "--fresnel", "one", "--alpha", alpha,
+                                   "--incident", "0", "--incident", "45", "--incident", "75", "--albedo",
+                                   "--multiple-scattering", "--json"])
+        assert rc == 0, err
+        d = json.loads(out)
+        assert d["parameters"]["multiple_scattering"] is True
+        assert all(0.99 <= r["albedo"] <= 1.0 + 1e-3 for r in d["albedo"]), (alpha, d["albedo"])
+    rc, out, err, _ = run_cli(["brdf", "--model", "microfacet", "--material", "Au", "--alpha", "0.6",
+                               "--incident", "30", "--outgoing", "50,180", "--wavelengths", "450,650",
+                               "--multiple-scattering", "--json"])
+    assert rc == 0, err
+    b = MicrofacetBRDF("Au", Micro(alpha=0.6, ndf="ggx"), multiple_scattering=True)
+    wi = np.array([np.sin(np.radians(30)), 0, np.cos(np.radians(30))])
+    wo = np.array([-np.sin(np.radians(50)), 0, np.cos(np.radians(50))])
+    for row in json.loads(out)["values"]:
+        assert row["brdf"] == pytest.approx(float(b.eval(wi, wo, row["wavelength_nm"])), rel=1e-9)
+    rc, out, err, _ = run_cli(["brdf", "--model", "microfacet", "--material", "Au", "--alpha", "0.6",
+                               "--incident", "30", "--outgoing", "50,180", "--multiple-scattering",
+                               "--backend", "opencl"])
+    assert rc == 2 and "NumPy" in err
+
+
+def test_cli_disney_diffuse_is_burley():
+    import json
+
+    from hard_cases import run_cli
+
+    base = ["brdf", "--model", "microfacet", "--ior", "1.5", "--alpha", "0.3", "--incident", "30", "--outgoing",
+            "40,180", "--kd", "0.5", "--diffuse-roughness", "0.7", "--json"]
+    rc1, out1, _, _ = run_cli([*base, "--diffuse", "disney"])
+    rc2, out2, _, _ = run_cli([*base, "--diffuse", "burley"])
+    assert rc1 == rc2 == 0 and json.loads(out1)["values"] == json.loads(out2)["values"]

@@ -4,7 +4,7 @@ imports so that the command line can build its parsers without loading the numer
 from __future__ import annotations
 
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
-           "FRESNEL_NAMES", "DIFFUSE_NAMES", "DEFAULT_NANO"]
+           "FRESNEL_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -24,6 +24,8 @@ NDF_NAMES = ("ggx", "beckmann", "blinn-phong", "abc", "epd", "sgd")
 SHADOWING_NAMES = ("smith", "smith-correlated", "cook-torrance", "implicit")
 FRESNEL_NAMES = ("exact", "schlick", "one")
 DIFFUSE_NAMES = ("none", "lambert", "oren-nayar", "burley")
+#: other names of diffuse terms (Burley's diffuse is known as the "Disney" diffuse)
+DIFFUSE_ALIASES = {"disney": "burley"}
 
 #: nano-roughness of a request that names none: aluminium-like polish, ABC statistics (Church et al. 1989)
 DEFAULT_NANO = "abc:sigma=10nm,B=2um,C=2.6"

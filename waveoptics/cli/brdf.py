@@ -17,7 +17,7 @@ from typing import Callable
 
 
 from ..errors import WaveopticsError
-from ..vocabulary import DIFFRACTION, DIFFUSE_NAMES, FRESNEL_NAMES, NDF_NAMES, POLARIZATIONS, SHADOWING_NAMES
+from ..vocabulary import DIFFRACTION, DIFFUSE_ALIASES, DIFFUSE_NAMES, FRESNEL_NAMES, NDF_NAMES, POLARIZATIONS, SHADOWING_NAMES
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
 from ._common import add_common, add_surface, emit, load_surface, progress
 from ._options import option, renamed
@@ -70,7 +70,8 @@ def _microfacet_arguments(g) -> None:
     g.add_argument("--ior", metavar="N+Kj", help="constant complex index, e.g. 1.5 or 0.2+3.1j")
     g.add_argument("--fresnel", choices=sorted(FRESNEL_NAMES), default="exact",
                    help="Fresnel factor: exact, schlick, or one (F = 1, white furnace)")
-    g.add_argument("--diffuse", choices=sorted(DIFFUSE_NAMES), default="lambert", help="diffuse term (default lambert)")
+    g.add_argument("--diffuse", choices=sorted(DIFFUSE_NAMES + tuple(DIFFUSE_ALIASES)), default="lambert",
+                   help="diffuse term (default lambert; disney is burley)")
     option(g, "--kd", default=0.0, note="applied as given, to metals too")
     g.add_argument("--diffuse-sigma", dest="sigma", type=float, default=0.0, metavar="DEG",
                    help="Oren-Nayar roughness σ in degrees (--diffuse oren-nayar; separate from the specular α; "
@@ -78,6 +79,9 @@ def _microfacet_arguments(g) -> None:
     renamed(g, "brdf", "--sigma", dest="sigma", type=float)
     g.add_argument("--diffuse-roughness", type=float, default=0.5, metavar="R",
                    help="Burley diffuse roughness r in [0, 1] (--diffuse burley; default 0.5)")
+    g.add_argument("--multiple-scattering", action="store_true",
+                   help="add the light single scattering loses between facets (Kulla & Conty 2017 energy "
+                        "compensation; NumPy, exact or one Fresnel; off by default)")
     g.add_argument("--no-tradeoff", action="store_true",
                    help="do not weight the diffuse term by (1 - F(θi))(1 - F(θo)) / (1 - F̄)")
     option(g, "--backend", choices=["numpy", "opencl"], default="numpy", note="albedo always uses NumPy")
@@ -149,6 +153,22 @@ def _per_wavelength(kw: dict, n_axes: int) -> dict:
     return out
 
 
+def _ms_brdf(args, kw):
+    """The microfacet BRDF function with multiple-scattering compensation (:class:`waveoptics.MicrofacetBRDF`)."""
+    from .. import brdf
+
+    if args.backend == "opencl":
+        raise WaveopticsError("--multiple-scattering is evaluated with NumPy; drop --backend opencl")
+    if args.fresnel not in ("exact", "one"):
+        raise WaveopticsError(f"--multiple-scattering needs --fresnel exact or one, not {args.fresnel!r}")
+    spec = args.material if args.material is not None else args.ior
+    micro = brdf.Micro(alpha=kw["alpha"], alpha_y=kw["alpha_y"], ndf=kw["ndf"], shadowing=kw["shadowing"],
+                       ndf_shape=kw["ndf_shape"])
+    # with --fresnel one and no material the index is never used (F = 1); a dielectric keeps the diffuse term
+    return brdf.MicrofacetBRDF(spec if spec is not None else "1.5", micro, kd=kw["kd"], diffuse=kw["diffuse"],
+                               fresnel=args.fresnel, diffuse_sigma=kw["sigma"], multiple_scattering=True)
+
+
 def _microfacet_evaluate(args, wi, wo, wavelength_nm):
 
     from .. import brdf
@@ -157,6 +177,9 @@ def _microfacet_evaluate(args, wi, wo, wavelength_nm):
 
     kw = _microfacet_params(args, wavelength_nm)
     n_w = len(wavelength_nm)
+    if args.multiple_scattering:
+        lam = np.asarray(wavelength_nm, dtype=float)
+        return _ms_brdf(args, kw).eval(wi[None, :, None, :], wo[None, None, :, :], lam[:, None, None])
     if args.backend == "opencl":
 
         a = np.repeat(wi, len(wo), axis=0)
@@ -176,7 +199,13 @@ def _microfacet_albedo(args, wi, wavelength_nm):
     from .. import brdf
     import numpy as np
 
-    kw = _per_wavelength(_microfacet_params(args, wavelength_nm), 1)
+    kw = _microfacet_params(args, wavelength_nm)
+    if args.multiple_scattering:
+        b = _ms_brdf(args, kw)
+        lam = np.asarray(wavelength_nm, dtype=float)
+        out = [b.albedo(w[None, :], lam) for w in progress(wi, desc="albedo", args=args)]
+        return np.stack(out, axis=-1)
+    kw = _per_wavelength(kw, 1)
     out = [brdf.albedo(w, **kw) for w in progress(wi, desc="albedo", args=args)]
     return np.broadcast_to(np.stack(out, axis=-1), (len(wavelength_nm), len(wi)))
 
@@ -185,7 +214,7 @@ def _microfacet_describe(args) -> dict:
     from .. import brdf
 
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
-                                       "fresnel", "diffuse", "kd", "backend")}
+                                       "fresnel", "diffuse", "kd", "backend", "multiple_scattering")}
     spec = brdf.NDFS[args.ndf]
     if spec.shape is not None:
         d["ndf_shape"] = spec.shape_default if args.ndf_shape is None else args.ndf_shape
@@ -526,6 +555,11 @@ def run(args) -> int:
     import numpy as np
 
     model = MODELS[args.model]
+    if getattr(args, "diffuse", None) in DIFFUSE_ALIASES:
+        args.diffuse = DIFFUSE_ALIASES[args.diffuse]
+    if getattr(args, "multiple_scattering", False) and args.model != "microfacet":
+        raise WaveopticsError(f"--multiple-scattering applies to --model microfacet, not {args.model!r} (the "
+                              "two-scale model has no compensation yet)")
     wl = parse_wavelengths(args.wavelengths, name="--wavelengths")
     inc = [parse_direction(t, name="--incident") for t in args.incident]
     wi = direction_from_angles([t for t, _ in inc], [p for _, p in inc])
