@@ -219,3 +219,53 @@ def test_docs_sample_is_a_readable_x3p():
     assert hf.shape == (256, 256) and hf.dx == pytest.approx(90e-9, rel=1e-6)
     assert 0.99 < hf.valid.mean() < 1.0
     assert hf.meta["source_format"] == "x3p"
+
+
+def test_transform_stretch_is_exact_and_scales_slopes():
+    hf = surfaces.generate("gaussian", size="12.8um", samples="128", sigma="10nm", corr_length="0.8um", seed=3)
+    st = surfaces.stats(hf)
+    t = surfaces.transform(hf, stretch=(2.0, 0.5), height_scale=3.0)
+    np.testing.assert_array_equal(t.heights, 3.0 * hf.heights)
+    assert (t.dx, t.dy) == (2 * hf.dx, 0.5 * hf.dy)
+    st2 = surfaces.stats(t)
+    assert st2["rms_slope_x"] == pytest.approx(st["rms_slope_x"] * 3 / 2, rel=1e-12)
+    assert st2["rms_slope_y"] == pytest.approx(st["rms_slope_y"] * 3 / 0.5, rel=1e-12)
+    with pytest.raises(ValueError, match="along x"):
+        surfaces.transform(hf, stretch=(0.0, 1.0))
+
+
+def test_transform_rotation_turns_features_counter_clockwise():
+    """A bump on +x lands on +y after 90°; a grating's slope moves from x to y in proportion cos φ, sin φ; what the
+    turned patch does not cover is masked; 90° on a square patch loses nothing."""
+    n, dx = 65, 1e-7
+    x = (np.arange(n) - (n - 1) / 2) * dx
+    X, Y = np.meshgrid(x, x)
+    bump = np.exp(-((X - 20 * dx) ** 2 + Y ** 2) / (3 * dx) ** 2) * 1e-8
+    r = surfaces.transform(surfaces.HeightField(bump, dx), rotate_deg=90.0)
+    iy, ix = np.unravel_index(np.argmax(r.heights), r.shape)
+    assert (ix, iy) == ((n - 1) // 2, (n - 1) // 2 + 20)
+    assert r.mask is None
+    gr = surfaces.generate("sinusoid", amplitude="20nm", period="2um", size="25.6um", samples=256)
+    s0 = surfaces.stats(gr)["rms_slope_x"]
+    for phi in (30.0, 60.0):
+        rr = surfaces.transform(gr, rotate_deg=phi)
+        st = surfaces.stats(rr)
+        assert st["rms_slope_x"] == pytest.approx(s0 * np.cos(np.radians(phi)), rel=0.02)
+        assert st["rms_slope_y"] == pytest.approx(s0 * np.sin(np.radians(phi)), rel=0.02)
+        assert 0.6 < rr.valid.mean() < 1.0 and rr.meta["periodic"] is False
+
+
+def test_cli_transform(tmp_path):
+    import json
+
+    surfaces.save(surfaces.generate("gaussian", size="6.4um", samples="64", sigma="5nm", corr_length="0.5um",
+                                    seed=1), tmp_path / "g.npz")
+    rc, out, err, _ = run_cli(["surface", "transform", str(tmp_path / "g.npz"), "--stretch", "1.5", "--rotate", "0",
+                               "-o", str(tmp_path / "t.x3p"), "--json"])
+    assert rc == 0, err
+    d = json.loads(out)
+    assert d["after"]["rms_slope_x"] == pytest.approx(d["before"]["rms_slope_x"] / 1.5, rel=1e-6)
+    assert surfaces.load(tmp_path / "t.x3p").dx == pytest.approx(1.5e-7, rel=1e-6)
+    rc, out, err, _ = run_cli(["surface", "transform", str(tmp_path / "g.npz"), "--stretch", "1,2,3", "-o",
+                               str(tmp_path / "u.npz")])
+    assert rc == 2 and "--stretch" in err

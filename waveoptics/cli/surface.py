@@ -1,4 +1,5 @@
-"""``waveoptics surface generate|stats|prepare``: make height fields, measure them, level and crop them (logic in :mod:`waveoptics.surfaces`)."""
+"""``waveoptics surface generate|stats|prepare|transform``: make height fields, measure them, level, crop and
+deform them (logic in :mod:`waveoptics.surfaces`)."""
 from __future__ import annotations
 
 import inspect
@@ -27,6 +28,8 @@ _MODEL_OPTIONS = {
     "variation": ("--variation", "relative spread of scratch width and depth, 0..1 (scratches)"),
 }
 _FLOAT_PARAMS = {"A", "C", "orientation_deg", "phase_deg", "spread_deg", "variation"}
+#: what -o writes for the commands that write a height field
+HEIGHT_FIELD_OUTPUT = "a height-field file: .npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc through SurfaceTopography"
 MODELS = ("flat", "gaussian", "exponential", "abc", "sinusoid", "scratches")
 
 
@@ -51,8 +54,7 @@ def register(sub):
                    help="rescale this realization to exactly σ (default: ensemble rms σ)")
     g.add_argument("--no-renormalize", action="store_true",
                    help="keep the PSD as given even where the grid resolves only part of σ²")
-    add_output(g, metavar="FILE", note="a height-field file: .npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc "
-                                       "through SurfaceTopography")
+    add_output(g, metavar="FILE", note=HEIGHT_FIELD_OUTPUT)
     add_common(g, device=False)
     g.set_defaults(func=run_generate, command="surface generate")
 
@@ -70,6 +72,7 @@ def register(sub):
     add_common(s, device=False)
     s.set_defaults(func=run_stats, command="surface stats")
     _register_prepare(ss)
+    _register_transform(ss)
 
 
 def _register_prepare(ss) -> None:
@@ -85,10 +88,55 @@ def _register_prepare(ss) -> None:
     q.add_argument("--crop", metavar="X,Y,W,H",
                    help="keep the region X..X+W, Y..Y+H (lengths with units from the first sample, e.g. "
                         "0um,0um,40um,40um)")
-    add_output(q, metavar="FILE", note="a height-field file: .npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc "
-                                       "through SurfaceTopography")
+    add_output(q, metavar="FILE", note=HEIGHT_FIELD_OUTPUT)
     add_common(q, device=False)
     q.set_defaults(func=run_prepare, command="surface prepare")
+
+
+def _register_transform(ss) -> None:
+    q = ss.add_parser("transform", help="stretch, rotate or scale a height field and write it",
+                      description="Deform a height field: stretch it laterally (spacings scale, the samples stay), "
+                                  "rotate it about the patch centre (cubic resampling; what the turned patch does "
+                                  "not cover is masked), scale its heights, and write it with its provenance. "
+                                  "Stretching by s scales the slopes, and an NDF's α, by 1/s along that axis.")
+    add_surface(q, positional=True)
+    q.add_argument("--stretch", default="1", metavar="SX[,SY]",
+                   help="lateral stretch factors > 0 (one number: both axes; default 1)")
+    q.add_argument("--rotate", type=float, default=0.0, metavar="DEG",
+                   help="counter-clockwise rotation in degrees (default 0)")
+    q.add_argument("--height-scale", type=float, default=1.0, metavar="S", help="factor on the heights (default 1)")
+    add_output(q, metavar="FILE", note=HEIGHT_FIELD_OUTPUT)
+    add_common(q, device=False)
+    q.set_defaults(func=run_transform, command="surface transform")
+
+
+def run_transform(args):
+
+    from .. import surfaces
+    from ..units import parse_number_list
+
+    stretch = parse_number_list(args.stretch, name="stretch")
+    if stretch.size not in (1, 2):
+        raise WaveopticsError(f"--stretch {args.stretch!r} is not allowed; give SX or SX,SY")
+    hf = load_surface(args)
+    before = surfaces.stats(hf)
+    out = surfaces.transform(hf, stretch=tuple(stretch) if stretch.size == 2 else float(stretch[0]),
+                             rotate_deg=args.rotate, height_scale=args.height_scale)
+    out = surfaces.HeightField(out.heights, out.dx, out.dy, out.mask,
+                               {**out.meta, "prepared_from": hf.meta.get("source")})
+    path = surfaces.save(out, args.output, overwrite=args.overwrite)
+    after = surfaces.stats(out)
+    keys = ("rms_height_m", "rms_slope_x", "rms_slope_y", "beckmann_alpha")
+    data = {"output": str(path), "surface_info": out.provenance(), "before": {k: before[k] for k in keys},
+            "after": {k: after[k] for k in keys}}
+
+    def num(v):
+        return "n/a" if v is None else f"{v:.4g}"
+
+    text = (f"wrote {path}: rms slope x {num(before['rms_slope_x'])} -> {num(after['rms_slope_x'])}, "
+            f"y {num(before['rms_slope_y'])} -> {num(after['rms_slope_y'])}, valid {after['valid_fraction']:.1%}")
+    emit(args, data, text)
+    return 0
 
 
 def run_prepare(args):

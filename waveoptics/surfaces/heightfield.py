@@ -116,7 +116,7 @@ class HeightField:
 
     #: meta keys that say where a height field came from (file, instrument, channel, unit of the file)
     PROVENANCE_KEYS = ("source", "source_format", "channel", "file_unit", "instrument", "acquisition_time",
-                       "model", "seed", "cropped_from", "cropped", "levelled", "prepared_from", "split_cutoff_period_m")
+                       "model", "seed", "cropped_from", "cropped", "levelled", "transformed", "prepared_from", "split_cutoff_period_m")
 
     def provenance(self) -> dict:
         """Where this height field came from and its grid: ``samples`` [nx, ny], ``spacing_m`` [dx, dy] (m), and
