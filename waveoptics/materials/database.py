@@ -38,7 +38,7 @@ from ..errors import FieldError, WaveopticsError, unknown
 from ..materials import fresnel
 from ..units import check_wavelengths
 
-__all__ = ['PolarizedFresnel', 'MAX_CLAMP_NM', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'search', 'fresnel_function']
+__all__ = ['PolarizedFresnel', 'MAX_CLAMP_NM', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'data_sets', 'VISIBLE_NM', 'search', 'fresnel_function']
 
 #: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
 MAX_CLAMP_NM = 100.0
@@ -297,6 +297,20 @@ def get_material(spec) -> Material:
     if s.lower().startswith("f0:"):
         return _f0_material(s)
     table = _alias_table()
+    if "@" in s:   # PRESET@PAGE: another measured data set of the preset's book ("Au@Babar")
+        base, _, page = s.partition("@")
+        if base.strip().lower() not in table:
+            raise unknown("material", base.strip(), list(PRESETS), field="material")
+        name = table[base.strip().lower()]
+        p = PRESETS[name]
+        pages = {d["page"].lower(): d["page"] for d in data_sets(name)}
+        if page.strip().lower() not in pages:
+            raise FieldError(f"{{material}} {s!r}: {name} has no data set {page.strip()!r}; it has "
+                             f"{', '.join(sorted(pages.values(), key=str.lower))}", "material")
+        pg = pages[page.strip().lower()]
+        nk, rng = _database_material(p.shelf, p.book, pg)
+        return Material(name=f"{name}@{pg}", source=f"refractiveindex.info {p.shelf}/{p.book}/{pg}",
+                        category=p.category, _nk=nk, wavelength_range_nm=rng)
     if s.lower() in table:
         name = table[s.lower()]
         p = PRESETS[name]
@@ -315,6 +329,43 @@ def get_material(spec) -> Material:
         return Material(name=s, source="constant index", category=cat,
                         _nk=lambda w, e=eta: np.full(np.shape(w), e, dtype=np.complex128))
     raise unknown("material", s, list(PRESETS) + [a for p in PRESETS.values() for a in p.aliases])
+
+
+#: the visible range a data set must cover for its F0 colour to need no clamping (nm)
+VISIBLE_NM = (380.0, 780.0)
+
+
+@functools.lru_cache(maxsize=64)
+def _book_pages(shelf: str, book: str) -> tuple:
+    with contextlib.redirect_stdout(io.StringIO()):
+        matches = list(refractiveindex.search(book))
+    return tuple((m.page, m.name, m.divider) for m in matches if m.shelf == shelf and m.book == book)
+
+
+def data_sets(name: str) -> list[dict]:
+    """Every data set the bundled refractiveindex.info database has for the book of preset *name*.
+
+    Returns a list of ``{"spec": "PRESET@PAGE", "page", "name" (authors, year, range), "kind" (the database's
+    heading: experimental, model, ...), "range_nm", "covers_visible", "default"}``, the preset's own first.
+    Data sets whose range is too far from the visible to be used (:data:`MAX_CLAMP_NM`) are kept and flagged.
+    """
+    table = _alias_table()
+    if str(name).lower() not in table:
+        raise unknown("material preset", name, list(PRESETS), field="material")
+    key = table[str(name).lower()]
+    p = PRESETS[key]
+    out = []
+    for page, title, divider in _book_pages(p.shelf, p.book):
+        try:
+            _, rng = _database_material(p.shelf, p.book, page)
+        except WaveopticsError:
+            continue
+        out.append({"spec": f"{key}@{page}", "page": page, "name": title, "kind": divider,
+                    "range_nm": [rng[0], rng[1]],
+                    "covers_visible": bool(rng[0] <= VISIBLE_NM[0] and rng[1] >= VISIBLE_NM[1]),
+                    "default": page == p.page})
+    out.sort(key=lambda d: (not d["default"], d["page"].lower()))
+    return out
 
 
 def search(query: str, limit: int | None = 30, *, with_total: bool = False):
