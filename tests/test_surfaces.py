@@ -477,3 +477,19 @@ def test_cli_stats_bad_file(tmp_path, capsys):
     p.write_bytes(b"")
     assert cli_main(["surface", "stats", str(p)]) == 2
     assert "is empty" in capsys.readouterr().err
+
+
+def test_psd_fit_that_ends_on_a_bound_says_so():
+    """An ABC fit to a Gaussian spectrum runs its exponent C to the cap (40): the fit reports ``at_bound`` and
+    warns instead of handing back the cap as a measured C; a real ABC surface fits inside the bounds."""
+    import warnings
+
+    hf = S.generate("gaussian", size="12.8um", samples="128", sigma="20nm", corr_length="0.6um", seed=3)
+    with pytest.warns(UserWarning, match="ended at the bound of C"):
+        fit = S.fit_psd(hf, "abc")
+    assert fit["at_bound"] == ["C"]
+    abc = S.abc("2um", 2.6, "64um", 512, seed=1, sigma="5nm")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fit = S.fit_psd(abc, "abc")
+    assert fit["at_bound"] == [] and fit["C"] == pytest.approx(2.6, abs=0.15)

@@ -312,7 +312,9 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
     -------
     dict
         ``model``; ``sigma_m``; for gaussian/exponential ``corr_length_m`` (and for gaussian ``beckmann_alpha``
-        = 2σ/T); for abc ``A_m4``, ``B_m``, ``C``; ``f_range_per_m`` (fitted band) and ``rms_log_residual``.
+        = 2σ/T); for abc ``A_m4``, ``B_m``, ``C``; ``f_range_per_m`` (fitted band), ``rms_log_residual``,
+        ``resolved`` (the fitted length is above the sample spacing) and ``at_bound`` (parameters the fit left on
+        their bounds, e.g. C = 40 when the ABC model does not fit; a warning says so).
 
     Notes
     -----
@@ -394,6 +396,14 @@ def fit_psd(hf: HeightField, model: str = "gaussian", *, window="auto", detrend:
                       "fit's length and exponent are not measured", stacklevel=2)
     else:
         out["resolved"] = True
+    # an exponent that ends on its bound was not found by the fit: the model does not describe this PSD (e.g. an
+    # ABC fit to a Gaussian spectrum runs C up to its cap); report it rather than hand back the cap as a value
+    out["at_bound"] = [n for n, v, a, b in zip(names, sol.x, lo, hi) if np.isfinite(b) and abs(v - b) < 1e-6 * abs(b)
+                       or np.isfinite(a) and abs(v - a) < 1e-6 * max(abs(a), 1.0)]
+    if out["at_bound"]:
+        warnings.warn(f"the {model} fit ended at the bound of {', '.join(out['at_bound'])} (rms log residual "
+                      f"{out['rms_log_residual']:.3g}): the {model} model does not describe this PSD, so those "
+                      "parameters are not measured", stacklevel=2)
     return out
 
 
