@@ -42,7 +42,7 @@ from .errors import FieldError, WaveopticsError, unknown
 from .materials import get_material
 from .surfaces import HeightField
 from .units import check_theta, check_wavelengths, parse_length
-from .vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, POLARIZATIONS, PRECISIONS
+from .vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "parse_nano", "nano_surface_size", "make_nano", "crop"]
@@ -299,7 +299,7 @@ class SimulationRequest:
         if not 0 < acc < 100:
             raise FieldError(f"{{accuracy_dE}} {self.accuracy_dE!r} is not allowed; use a ΔE2000 in (0, 100)",
                              "accuracy_dE")
-        for field, allowed in (("solver", SOLVERS), ("precision", PRECISIONS), ("ndf", NDFS),
+        for field, allowed in (("solver", SOLVERS), ("precision", PRECISIONS), ("ndf", PARAMETRIC_NDF_NAMES),
                                ("shadowing", SHADOWINGS), ("diffraction", DIFFRACTION),
                                ("polarization", POLARIZATIONS)):
             if getattr(self, field) not in allowed:

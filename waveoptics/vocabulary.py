@@ -4,7 +4,7 @@ imports so that the command line can build its parsers without loading the numer
 from __future__ import annotations
 
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
-           "FRESNEL_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO"]
+           "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -20,7 +20,9 @@ POLARIZATIONS = ("unpolarized", "s", "p")
 DIFFRACTION = ("kirchhoff", "ghs", "rghs", "ohs", "rohs")
 
 #: microfacet terms by name (the keys of :data:`waveoptics.brdf.NDFS`, ``SHADOWINGS``, ``FRESNELS``, ``DIFFUSES``)
-NDF_NAMES = ("ggx", "beckmann", "blinn-phong", "abc", "epd", "sgd")
+NDF_NAMES = ("ggx", "beckmann", "blinn-phong", "abc", "epd", "sgd", "tabulated")
+#: the NDFs a request or scene names by parameters alone (``tabulated`` needs a micro-scale height field)
+PARAMETRIC_NDF_NAMES = NDF_NAMES[:-1]
 SHADOWING_NAMES = ("smith", "smith-correlated", "cook-torrance", "implicit")
 FRESNEL_NAMES = ("exact", "schlick", "one")
 DIFFUSE_NAMES = ("none", "lambert", "oren-nayar", "burley")

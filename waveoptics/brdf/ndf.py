@@ -22,6 +22,7 @@ import numpy as np
 from scipy import special
 
 from ..errors import WaveopticsError, unknown
+from .measured_ndf import D_tabulated, Lambda_tabulated, SlopeTable
 
 __all__ = ['ALPHA_MIN', 'ALPHA_MAX', 'COS_MIN', 'ABC_C_DEFAULT', 'LAMBDA_GL_ORDER', 'alpha_from_roughness', 'roughness_from_alpha', 'blinn_phong_exponent', 'alpha_from_blinn_phong', 'half_vector', 'reflect', 'D_ggx', 'Lambda_ggx', 'D_beckmann', 'Lambda_beckmann', 'D_blinn_phong', 'Lambda_blinn_phong', 'abc_normalization', 'D_abc', 'Lambda_radial', 'Lambda_abc', 'EPD_P_DEFAULT', 'epd_normalization', 'D_epd', 'Lambda_epd', 'SGD_P_DEFAULT', 'gamma_upper', 'sgd_normalization', 'D_sgd', 'Lambda_sgd', 'SHAPE_RANGE', 'NDF', 'NDFS', 'D', 'Lambda', 'G1']
 
@@ -542,6 +543,9 @@ NDFS: dict[str, NDF] = {
     "abc": NDF("abc", D_abc, Lambda_abc, False, 3, "Löw et al. 2012", "C", ABC_C_DEFAULT),
     "epd": NDF("epd", D_epd, Lambda_epd, False, None, "Holzschuch & Pacanowski 2017", "p", EPD_P_DEFAULT),
     "sgd": NDF("sgd", D_sgd, Lambda_sgd, False, None, "Bagher, Soler & Holzschuch 2012", "p", SGD_P_DEFAULT),
+    # the slopes of a micro-scale height field, tabulated (its ndf_shape is the SlopeTable; α is not used)
+    "tabulated": NDF("tabulated", D_tabulated, Lambda_tabulated, True, None, "Heitz 2014 (measured slopes)",
+                     "table", None),
 }
 
 
@@ -574,11 +578,15 @@ def _check_alpha(alpha, alpha_y, ndf: NDF, ndf_shape):
     if ndf.name == "blinn-phong" and ax > 1.0:
         raise WaveopticsError(f"alpha={alpha!r} is not allowed for blinn-phong; need α <= 1 "
                               "(exponent 2/α² − 2 >= 0)")
-    if ndf_shape is not None:
+    if ndf.name == "tabulated":
+        if not isinstance(ndf_shape, SlopeTable):
+            raise WaveopticsError("NDF 'tabulated' needs its slope table as ndf_shape "
+                                  "(waveoptics.brdf.slope_table(height_field))")
+    elif ndf_shape is not None:
         if ndf.shape is None:
             raise WaveopticsError(f"ndf_shape={ndf_shape!r} is not allowed for NDF {ndf.name!r}, which has no shape "
                                   "parameter; NDFs with one: " + ", ".join(f"{k} ({v.shape})" for k, v in NDFS.items()
-                                                                          if v.shape))
+                                                                          if v.shape and k in SHAPE_RANGE))
         lo, hi = SHAPE_RANGE[ndf.name]
         if not (np.isfinite(ndf_shape) and lo < ndf_shape <= hi):
             raise WaveopticsError(f"ndf_shape={ndf_shape!r} is not allowed for {ndf.name}; its {ndf.shape} must be in "

@@ -269,7 +269,7 @@ class MicrofacetBRDF(BRDF):
         from .multiscatter import albedo_table
 
         ndf, ax, ay = self._micro_args()
-        shape = None if self.ndf_shape is None else float(self.ndf_shape)
+        shape = float(self.ndf_shape) if isinstance(self.ndf_shape, (int, float, np.number)) else self.ndf_shape
         return albedo_table(ndf, float(np.sqrt(ax * ay)), self.micro.shadowing, shape)
 
     def _F_ms(self, lam):

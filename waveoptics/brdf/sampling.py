@@ -36,6 +36,8 @@ import numpy as np
 from ..errors import unknown
 from scipy import special
 
+from .measured_ndf import sample_dcos_tabulated
+
 from .ndf import (ABC_C_DEFAULT, EPD_P_DEFAULT, NDFS, SGD_P_DEFAULT, _abc_B, _dot, _expm1_over, abc_normalization,
                   blinn_phong_exponent, gamma_upper, reflect)
 
@@ -211,6 +213,8 @@ NORMAL_SAMPLERS: dict[str, NormalSampler] = {
     "abc": NormalSampler(sample_dcos_abc, pdf_dcos("abc"), False, "Löw et al. 2012 (radial CDF inverted)"),
     "epd": NormalSampler(sample_dcos_epd, pdf_dcos("epd"), False, "Holzschuch & Pacanowski 2017 (gamma slopes)"),
     "sgd": NormalSampler(sample_dcos_sgd, pdf_dcos("sgd"), False, "Bagher et al. 2012 (incomplete gamma inverted)"),
+    "tabulated": NormalSampler(sample_dcos_tabulated, pdf_dcos("tabulated"), False,
+                               "a bin by its mass, a slope uniformly in it"),
 }
 
 

@@ -58,6 +58,9 @@ def _microfacet_arguments(g) -> None:
 
 
     option(g, "--ndf", choices=sorted(NDF_NAMES), default="ggx")
+    g.add_argument("--micro-surface", metavar="FILE",
+                   help="micro-scale height field whose slopes are the NDF (tabulated; sets --ndf tabulated; "
+                        "--spacing/--units/--channel describe it when no --surface is given)")
     g.add_argument("--shadowing", choices=sorted(SHADOWING_NAMES), default="smith-correlated",
                    help="masking-shadowing term (default smith-correlated)")
     option(g, "--micro-alpha", short="--alpha", dest="alpha",
@@ -94,7 +97,11 @@ def _microfacet_params(args, wavelength_nm) -> dict:
     import numpy as np
 
 
-    alpha = _alpha(args)
+    ndf, ndf_shape, alpha_y = args.ndf, args.ndf_shape, args.alpha_y
+    if args.micro_surface is not None or args.ndf == "tabulated":
+        ndf, ndf_shape, alpha, alpha_y = _measured_ndf(args)
+    else:
+        alpha = _alpha(args)
     if args.material is not None and args.ior is not None:
         raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
     spec = args.material if args.material is not None else args.ior
@@ -109,13 +116,35 @@ def _microfacet_params(args, wavelength_nm) -> dict:
     if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
         raise WaveopticsError(f"--diffuse-sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
                               "[0, 90] degrees")
-    ndf_shape = args.ndf_shape
     if args.diffuse == "burley" and not 0 <= args.diffuse_roughness <= 1:
         raise WaveopticsError(f"--diffuse-roughness {args.diffuse_roughness!r} is not allowed; it must be in [0, 1]")
     sigma = args.diffuse_roughness if args.diffuse == "burley" else float(np.radians(args.sigma))
-    return dict(alpha=alpha, alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing, ndf_shape=ndf_shape,
+    return dict(alpha=alpha, alpha_y=alpha_y, ndf=ndf, shadowing=args.shadowing, ndf_shape=ndf_shape,
                 diffuse=args.diffuse, kd=args.kd, sigma=sigma,
                 tradeoff=not args.no_tradeoff, **fi)
+
+
+def _measured_ndf(args):
+    """(ndf, slope table, α, α_y) from --micro-surface: the NDF is the height field's slope law; α and α_y are
+    the Beckmann-equivalent widths √2 × rms slope, which place the albedo quadrature's nodes."""
+    import math
+
+    from .. import brdf, surfaces
+
+    if args.micro_surface is None:
+        raise WaveopticsError("--ndf tabulated needs --micro-surface FILE (the height field whose slopes it tabulates)")
+    if args.alpha is not None or args.roughness is not None or args.ndf_shape is not None:
+        raise WaveopticsError("--micro-surface sets the NDF from the file's slopes; drop --alpha, --roughness and "
+                              "--ndf-shape")
+    if getattr(args, "surface", None) is not None and any(getattr(args, k, None) is not None
+                                                          for k in ("spacing", "units", "channel")):
+        raise WaveopticsError("--spacing/--units/--channel would describe both --surface and --micro-surface; "
+                              "give files that state their own metadata")
+    hf = surfaces.load(args.micro_surface, spacing=getattr(args, "spacing", None), units=getattr(args, "units", None),
+                       channel=getattr(args, "channel", None))
+    table = brdf.slope_table(hf)
+    sx, sy = table.rms_slope()
+    return "tabulated", table, math.sqrt(2) * sx, math.sqrt(2) * sy
 
 
 def _alpha(args) -> float:
@@ -216,7 +245,10 @@ def _microfacet_describe(args) -> dict:
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
                                        "fresnel", "diffuse", "kd", "backend", "multiple_scattering")}
     spec = brdf.NDFS[args.ndf]
-    if spec.shape is not None:
+    if args.micro_surface is not None:
+        d["ndf"] = "tabulated"
+        d["micro_surface"] = args.micro_surface
+    elif spec.shape is not None and spec.name != "tabulated":
         d["ndf_shape"] = spec.shape_default if args.ndf_shape is None else args.ndf_shape
     if args.diffuse == "oren-nayar":
         d["sigma_deg"] = args.sigma

@@ -5,7 +5,7 @@ import os
 
 from ..errors import FieldError
 from ..io.files import prepare_outdir
-from ..vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, NDF_NAMES, POLARIZATIONS, PRECISIONS
+from ..vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, add_surface, emit, load_surface, progress
 from ._options import option
@@ -18,7 +18,7 @@ def add_scene_options(p) -> None:
     option(p, "--nano", group=src, note=f"default {DEFAULT_NANO}; sigma=0 disables it; also "
                                          "exponential:sigma=5nm,T=1um, scratches:count=20,width=200nm,depth=30nm")
     option(p, "--micro-alpha", default=0.05)
-    option(p, "--ndf", default="beckmann", choices=NDF_NAMES)
+    option(p, "--ndf", default="beckmann", choices=PARAMETRIC_NDF_NAMES)
     option(p, "--ndf-shape")
     option(p, "--material", default="Al")
     option(p, "--incident", default="30")

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import WaveopticsError
 from ..units import parse_number_list, parse_wavelengths
-from ..vocabulary import DIFFRACTION, NANO_SOLVERS, NDF_NAMES, PRECISIONS
+from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, PRECISIONS
 from ._common import SURFACE_FORMATS_HELP, add_common, emit, progress
 from ._options import option
 
@@ -30,7 +30,7 @@ def add_case_options(p, *, resolution: int) -> None:
                    help="with a scene file: the name of one of its lights (default the first)")
     option(p, "--micro-alpha", note="default 0 with a SURFACE file, whose heights are the whole geometry; 0.05 "
                                     "with --nano")
-    option(p, "--ndf", choices=NDF_NAMES, note="default beckmann")
+    option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note="default beckmann")
     option(p, "--ndf-shape")
     option(p, "--wavelengths", note="default: chosen from the illuminant and --accuracy")
     option(p, "--illuminant", note="for RGB and the default wavelengths (default D65)")

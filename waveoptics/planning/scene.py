@@ -59,7 +59,7 @@ from pathlib import Path
 
 from .. import brdf, surfaces
 from ..colour.illuminants import illuminant
-from ..vocabulary import DIFFRACTION
+from ..vocabulary import DIFFRACTION, PARAMETRIC_NDF_NAMES
 from ..errors import WaveopticsError, did_you_mean
 from ..materials.database import get_material
 from ..request import parse_nano
@@ -358,7 +358,7 @@ def _material(ctx, t, key, base) -> MaterialSpec:
     return MaterialSpec(
         name=name, material=spec,
         roughness=_number(ctx, t.get("roughness", 0.05), key + ".roughness", lo=0.0, hi=2.0),
-        ndf=_choice(ctx, t.get("ndf", "ggx"), key + ".ndf", tuple(brdf.NDFS)),
+        ndf=_choice(ctx, t.get("ndf", "ggx"), key + ".ndf", PARAMETRIC_NDF_NAMES),
         ndf_shape=_ndf_shape(ctx, t, key),
         shadowing=_choice(ctx, t.get("shadowing", "smith-correlated"), key + ".shadowing",
                           tuple(brdf.SHADOWINGS)),
