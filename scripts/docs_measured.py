@@ -147,7 +147,7 @@ def main() -> None:
              "commands printed in that run.*\n",
              "Profilometers, white-light interferometers, confocal microscopes and AFMs write their height maps in "
              "their own formats. waveoptics reads them through "
-             "[SurfaceTopography](https://github.com/ComputationalMechanics/SurfaceTopography) "
+             "SurfaceTopography (the PyPI package of Pastewka et al., the surface-metrology community's reader of instrument formats) "
              "(`pip install 'waveoptics[instruments]'`; `make setup` installs it): .x3p (ISO 5436-2), .sdf "
              "(ISO 25178-71), .sur and .mnt (Digital Surf), .datx and binary .dat (Zygo), .opd and .opdx "
              "(Bruker/Wyko, Dektak), .plu/.plux (Sensofar), .vk4/.vk6 (Keyence), .al3d (Alicona), .gwy "
