@@ -493,3 +493,20 @@ def test_psd_fit_that_ends_on_a_bound_says_so():
         warnings.simplefilter("error")
         fit = S.fit_psd(abc, "abc")
     assert fit["at_bound"] == [] and fit["C"] == pytest.approx(2.6, abs=0.15)
+
+
+@pytest.mark.parametrize("body", ["1,5;2,25;3,0\n0,5;1,25;2,0\n", "1,5 2,25 3,0\n0,5 1,25 2,0\n",
+                                  "1.5,2.25,3.0\n0.5,1.25,2.0\n", "1,5; 2,25; 3\n0,5; 1,25; 2\n"])
+def test_decimal_commas_are_read_as_decimal_marks(tmp_path, body):
+    """A grid written by a spreadsheet in a decimal-comma locale ("1,5;2,25") is three values per row, not six;
+    plain comma-separated numbers stay comma-separated (issue 17: decimal commas were read as more columns)."""
+    p = tmp_path / "g.csv"
+    p.write_text("# units = um\n# dx = 0.1\n" + body)
+    hf = S.load(p)
+    np.testing.assert_allclose(hf.heights * 1e6, [[1.5, 2.25, 3.0], [0.5, 1.25, 2.0]], rtol=1e-12)
+
+
+def test_comma_separated_integers_stay_columns(tmp_path):
+    p = tmp_path / "i.csv"
+    p.write_text("# units = nm\n# dx = 0.1\n1,2,3\n4,5,6\n")
+    np.testing.assert_allclose(S.load(p).heights * 1e9, [[1, 2, 3], [4, 5, 6]])

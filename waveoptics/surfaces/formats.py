@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import io as _io
 import json
+import re
 import zipfile
 from pathlib import Path
 
@@ -303,7 +304,7 @@ def _parse_text(p):
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError:
         raise WaveopticsError("is not UTF-8 text") from None
-    header, rows = {}, []
+    header, lines = {}, []
     for i, line in enumerate(text.splitlines(), 1):
         s = line.strip()
         if not s:
@@ -316,13 +317,38 @@ def _parse_text(p):
                     header[k.strip().lower()] = v.strip()
                     break
             continue
-        rows.append((i, s.replace(",", " ").replace(";", " ").split()))
+        lines.append((i, s))
+    decimal_comma = _decimal_comma(lines)
+    rows = []
+    for i, s in lines:
+        if decimal_comma:   # "1,5;2,25" or "1,5 2,25": commas are decimal marks, ';' or blanks separate
+            rows.append((i, s.replace(";", " ").replace(",", ".").split()))
+        else:
+            rows.append((i, s.replace(",", " ").replace(";", " ").split()))
     # one leading line of column names (e.g. "x y z") is allowed
     if rows and all(not _is_number(t) for t in rows[0][1]):
         rows = rows[1:]
     if not rows:
         raise WaveopticsError("holds no data rows")
     return header, rows
+
+
+_DECIMAL_COMMA = re.compile(r"^[-+]?\d+,\d+(?:[eE][-+]?\d+)?$")
+
+
+def _decimal_comma(lines) -> bool:
+    """Whether the data use decimal commas (as spreadsheets in many locales write them): the first data lines
+    separate their values by ';' or blanks and every value holds one comma between digits. Plain comma-separated
+    numbers ("1.5,2.25" or "1,2,3") are not decimal commas."""
+    for _, s in lines[:5]:
+        toks = [t for t in re.split(r"[;\s]+", s) if t]
+        if not toks:
+            continue
+        if any(not (_DECIMAL_COMMA.match(t) or _is_number(t)) for t in toks):
+            return False
+        if not any(_DECIMAL_COMMA.match(t) for t in toks) or (len(toks) == 1 and ";" not in s):
+            return False
+    return bool(lines)
 
 
 def _is_number(t) -> bool:
