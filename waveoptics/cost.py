@@ -59,6 +59,7 @@ from .io.figures import save_figure
 from .io.files import atomic_path, prepare_outdir, write_json
 from .runtime import get_runtime
 from .surfaces.heightfield import HeightField
+from .vocabulary import COST_BUDGET_S, COST_TARGET_ERROR
 
 __all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'REFERENCE_SOLVERS', 'DEFAULT_TARGET_ERROR', 'DEFAULT_BUDGET_S', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
 
@@ -78,10 +79,8 @@ DEFAULT_COLOUR_DE = (4.0, 1.0, 0.5)
 DEFAULT_PRECISIONS = ("float32", "float64")
 #: realizations of the reference for random surfaces (at least twice the ladder's largest)
 REFERENCE_REALIZATIONS = 4
-#: the command line's defaults: recommend the fastest setting within 1 % relative L2 of the reference, and give
-#: the ladder 35 s after the reference (rungs predicted to overrun are skipped and listed)
-DEFAULT_TARGET_ERROR = 1e-2
-DEFAULT_BUDGET_S = 35.0
+#: the command line's defaults (:mod:`waveoptics.vocabulary`, where the parser reads them without this module)
+DEFAULT_TARGET_ERROR, DEFAULT_BUDGET_S = COST_TARGET_ERROR, COST_BUDGET_S
 
 
 @dataclass(frozen=True)

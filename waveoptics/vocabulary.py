@@ -4,7 +4,7 @@ imports so that the command line can build its parsers without loading the numer
 from __future__ import annotations
 
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
-           "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO"]
+           "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO", "COST_TARGET_ERROR", "COST_BUDGET_S"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -31,3 +31,8 @@ DIFFUSE_ALIASES = {"disney": "burley"}
 
 #: nano-roughness of a request that names none: aluminium-like polish, ABC statistics (Church et al. 1989)
 DEFAULT_NANO = "abc:sigma=10nm,B=2um,C=2.6"
+
+#: defaults of the accuracy-cost study (waveoptics cost): recommend the fastest setting within 1 % relative L2 of
+#: the reference, and give the ladder 35 s after the reference (rungs predicted to overrun are skipped and listed)
+COST_TARGET_ERROR = 1e-2
+COST_BUDGET_S = 35.0

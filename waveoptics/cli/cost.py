@@ -7,6 +7,7 @@ from __future__ import annotations
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
 from ..units import parse_direction
+from ..vocabulary import COST_BUDGET_S, COST_TARGET_ERROR
 from ._common import add_common, add_output, add_surface, emit, load_surface, progress
 from ._options import option, renamed
 
@@ -50,11 +51,11 @@ def register(sub) -> None:
                         "models, 1 otherwise)")
     renamed(p, "cost", "--realizations", dest="realization_counts")
     p.add_argument("--precisions", default="float32,float64", help="direct solver precisions")
-    p.add_argument("--budget", default="35", metavar="SECONDS",
+    p.add_argument("--budget", default=f"{COST_BUDGET_S:g}", metavar="SECONDS",
                    help="time for the ladder after the reference, in s; settings predicted to overrun are skipped "
-                        "and listed (default 35; 'none' runs every setting)")
-    p.add_argument("--target-error", type=float, default=0.01, metavar="E",
-                   help="recommend the fastest setting whose --metric is <= E (default 0.01)")
+                        f"and listed (default {COST_BUDGET_S:g}; 'none' runs every setting)")
+    p.add_argument("--target-error", type=float, default=COST_TARGET_ERROR, metavar="E",
+                   help=f"recommend the fastest setting whose --metric is <= E (default {COST_TARGET_ERROR:g})")
     p.add_argument("--reference", choices=("fft", "direct"), default="fft",
                    help="solver of the reference (float64, finest grid, denser spectrum): fft (default; exact "
                         "Kirchhoff to 1e-8) or direct (the independent direct sum, about 20x slower on a CPU)")
