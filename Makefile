@@ -8,17 +8,19 @@ STAMP  := $(VENV)/.installed
 
 setup: $(STAMP)
 
-$(STAMP): pyproject.toml scripts/install-opencl.sh
+$(STAMP): pyproject.toml scripts/install-opencl.sh scripts/install-llvm.sh
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV) || { \
 	  echo "python3 -m venv failed; trying Debian's python3-venv"; \
 	  apt-get update -qq && apt-get install -y -qq python3-venv >/dev/null && $(PYTHON) -m venv $(VENV); }
-	$(PY) -m pip install -q --disable-pip-version-check -e '.[test,instruments]'
+	$(PY) -m pip install -q --disable-pip-version-check -e '.[test,instruments,render]'
 	bash scripts/install-opencl.sh $(PY)
+	bash scripts/install-llvm.sh $(PY)
 	@touch $(STAMP)
 
 demo: $(STAMP)
 	$(VENV)/bin/waveoptics info
 	$(VENV)/bin/waveoptics simulate -o out/demo --overwrite
+	$(VENV)/bin/waveoptics render --material gold --micro-alpha 0.2 -o out/render --overwrite
 
 test: $(STAMP)
 	$(PY) -m pytest -q -ra

@@ -19,7 +19,7 @@ LAYERS = (
     ("scatter", ("scatter",)),
     ("brdf", ("brdf",)),
     ("request", ("request",)),
-    ("jobs", ("simulate", "render", "lighting", "compare", "cost", "bench")),
+    ("jobs", ("simulate", "render", "lighting", "compare", "cost", "bench", "renderers")),
     ("planning", ("planning",)),
     ("distributed", ("distributed",)),
     ("interface", ("cli", "__main__", "")),

@@ -20,6 +20,7 @@ import numpy as np
 from colour import cctf_encoding  # colour-science (this package's own colour sub-package is imported below)
 
 from . import colour
+from .colour import reflectance_to_rgb_matrix as spectral_to_rgb_matrix
 from .io import figures
 
 __all__ = ['sphere_geometry', 'tangent_frames', 'local_directions', 'PIXEL_CHUNK', 'render_sphere',
@@ -100,14 +101,6 @@ def render_sphere(brdf_fn, wavelengths_nm, light_world, *, size=256, illuminant=
     return rgb, mask
 
 
-def spectral_to_rgb_matrix(wavelengths_nm, illuminant="D65", space="sRGB"):
-    """The linear map (n_λ, 3) from a reflectance spectrum on *wavelengths_nm* to linear RGB under *illuminant*
-    (white-balanced to the space white): :func:`waveoptics.colour.reflectance_to_rgb` is linear in the spectrum,
-    so its rows are the RGB of unit reflectance at one wavelength."""
-    w = np.asarray(wavelengths_nm, dtype=float)
-    return colour.reflectance_to_rgb(np.eye(w.size), w, illuminant, space=space)
-
-
 def render_sphere_environment(brdf_fn, wavelengths_nm, env, *, size=128, spp=16, seed=0, illuminant="D65",
                               sample_wavelength_nm=None, progress=None):
     """Linear RGB image (size, size, 3) of a sphere with the BRDF *brdf_fn* under an environment map.
@@ -116,7 +109,7 @@ def render_sphere_environment(brdf_fn, wavelengths_nm, env, *, size=128, spp=16,
     heuristic, Veach & Guibas 1995): *spp* directions from the BRDF's own sampler (``sample`` with the view as its
     first direction, at *sample_wavelength_nm*, default the wavelength nearest 555 nm) and *spp* from the map's
     luminance (:class:`waveoptics.lighting.Environment`). The BRDF spectrum of every sample becomes RGB through
-    :func:`spectral_to_rgb_matrix` and multiplies the map's RGB radiance (the usual RGB product: exact for a
+    :func:`waveoptics.colour.reflectance_to_rgb_matrix` and multiplies the map's RGB radiance (the usual RGB product: exact for a
     spectrally flat map). A white Lambertian sphere in a constant map of radiance 1 is 1.
 
     Returns
@@ -180,11 +173,11 @@ def tonemap(rgb, exposure: float | None = None):
 
 
 def plot_spheres(images, titles, path, *, overwrite=True, diff=None, diff_title="ΔE2000", light_deg=None,
-                 exposure=None):
+                 exposure=None, caption=None):
     """A row of tone-mapped sphere renders (shared exposure), optionally with a ΔE2000 map.
 
     Every panel keeps a square aspect (the colour bar is attached beside its panel, not carved out of it); the
-    light direction *light_deg* (θ, φ) and the *exposure* are written under the row.
+    light direction *light_deg* (θ, φ), the *exposure* and a *caption* are written under the row.
     """
     from mpl_toolkits.axes_grid1 import make_axes_locatable
 
@@ -210,6 +203,8 @@ def plot_spheres(images, titles, path, *, overwrite=True, diff=None, diff_title=
                      "x right, y up)")
     if exposure is not None:
         notes.append(f"exposure × {exposure:.3g}, Reinhard tone map, sRGB")
+    if caption:
+        notes.append(caption)
     if notes:
         fig.text(0.5, 0.02, "; ".join(notes), ha="center", fontsize=8)
     figures.save_figure(fig, path, overwrite=overwrite)

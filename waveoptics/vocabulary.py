@@ -4,7 +4,8 @@ imports so that the command line can build its parsers without loading the numer
 from __future__ import annotations
 
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
-           "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO", "COST_TARGET_ERROR", "COST_BUDGET_S"]
+           "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO", "COST_TARGET_ERROR", "COST_BUDGET_S",
+           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -36,3 +37,8 @@ DEFAULT_NANO = "abc:sigma=10nm,B=2um,C=2.6"
 #: the reference, and give the ladder 35 s after the reference (rungs predicted to overrun are skipped and listed)
 COST_TARGET_ERROR = 1e-2
 COST_BUDGET_S = 35.0
+
+#: renderers (waveoptics.renderers): default largest step (nm) between the wavelength nodes of the BRDF handed to a
+#: renderer, and how the wave-optics BRDF enters Mitsuba 3 (its RGL export read by 'measured', or the plugin)
+RENDER_WAVELENGTH_STEP_NM = 20.0
+RENDER_BSDFS = ("measured", "plugin")

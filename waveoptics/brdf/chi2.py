@@ -6,8 +6,10 @@ with expected count below 5 are pooled (Pearson's rule), a sample in a cell of e
 outright, and the statistic Σ (O − E)² / E is compared with the χ² law of (cells − 1) degrees of freedom; the
 sampler is rejected when the p-value is below the significance level (Šidák-corrected for several tests).
 
-Mitsuba 3's own ``mitsuba.chi2.ChiSquareTest`` needs one of its JIT (LLVM) variants; on Debian 12's LLVM 15 its
-histogram kernel aborts ("Cannot select: fmaximum"), so the same procedure is written here in NumPy.
+Mitsuba 3's own ``mitsuba.chi2.ChiSquareTest`` needs Mitsuba (an optional extra) and one of its JIT (LLVM)
+variants with LLVM >= 17 (Debian 12's LLVM 15 and 16 abort: "Cannot select: fmaximum"), so the library's samplers
+are tested with the same procedure written here in NumPy; the Mitsuba plugin (:mod:`waveoptics.renderers.mitsuba`)
+is tested with Mitsuba's own.
 
 References
 ----------

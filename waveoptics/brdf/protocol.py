@@ -43,7 +43,8 @@ from .sampling import pdf_reflected, sample_reflected
 from .shadowing import _shadowing
 from .twoscale import Micro
 
-__all__ = ['BRDFSample', 'BRDF', 'MicrofacetBRDF', 'TwoScaleParts', 'sample_cosine', 'pdf_cosine', 'lobe_choice']
+__all__ = ['BRDFSample', 'BRDF', 'MicrofacetBRDF', 'TwoScaleParts', 'sample_cosine', 'pdf_cosine', 'lobe_choice',
+           'check_uniform']
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,14 @@ def lobe_choice(u0, probs):
     return idx, np.clip(remapped, 0.0, np.nextafter(1.0, 0.0))
 
 
+def check_uniform(u):
+    """*u* as a float array of uniform numbers in [0, 1) with last axis 2 (else a FieldError naming ``u``)."""
+    u = np.asarray(u, dtype=float)
+    if u.shape[-1:] != (2,) or np.any(~np.isfinite(u)) or np.any((u < 0) | (u >= 1)):
+        raise FieldError(f"u must be uniform numbers in [0, 1) of shape (..., 2), got shape {u.shape}", "u")
+    return u
+
+
 def _broadcast(wi, wo, wavelength_nm):
     """Flatten broadcast (wi, wo, λ) to (n, 3), (n, 3), (n,); returns them and the batch shape."""
     wi = _as_dirs(wi, "wi")
@@ -102,28 +111,23 @@ class BRDF:
     def eval(self, wi, wo, wavelength_nm):
         """f(ω_i, ω_o, λ) in 1/sr (broadcast shape of the inputs)."""
         wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
-        return self._by_wavelength(self._eval1, wi, wo, lam).reshape(shape)
+        return self._eval_flat(wi, wo, lam).reshape(shape)
 
     def pdf(self, wi, wo, wavelength_nm):
         """Density (1/sr over ω_o) of :meth:`sample`."""
         wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
-        return self._by_wavelength(self._pdf1, wi, wo, lam).reshape(shape)
+        return self._pdf_flat(wi, wo, lam).reshape(shape)
 
     def sample(self, wi, wavelength_nm, u) -> BRDFSample:
         """Importance-sample ω_o for ω_i at λ from u (..., 2) uniform in [0, 1)²."""
-        u = np.asarray(u, dtype=float)
-        if u.shape[-1:] != (2,) or np.any(~np.isfinite(u)) or np.any((u < 0) | (u >= 1)):
-            raise FieldError(f"u must be uniform numbers in [0, 1) of shape (..., 2), got shape {u.shape}", "u")
+        u = check_uniform(u)
         wi_b, u2, lam, shape = _broadcast(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
         u_flat = np.broadcast_to(u, shape + (2,)).reshape(-1, 2)
-        wo = np.zeros_like(wi_b)
-        for val in np.unique(lam):
-            sel = lam == val
-            wo[sel] = self._sample1(wi_b[sel], u_flat[sel].copy(), float(val))
+        wo = self._sample_flat(wi_b, u_flat, lam)
         up = (wi_b[:, 2] > 0) & (wo[:, 2] > 0)
         wo_ok = np.where(up[:, None], wo, np.array([0.0, 0.0, 1.0]))
-        f = self._by_wavelength(self._eval1, wi_b, wo_ok, lam)
-        p = self._by_wavelength(self._pdf1, wi_b, wo_ok, lam)
+        f = self._eval_flat(wi_b, wo_ok, lam)
+        p = self._pdf_flat(wi_b, wo_ok, lam)
         ok = up & (p > 0)
         weight = np.where(ok, f * np.maximum(wo_ok[:, 2], 0.0) / np.where(ok, p, 1.0), 0.0)
         return BRDFSample(wo=wo.reshape(shape + (3,)), weight=weight.reshape(shape),
@@ -146,6 +150,20 @@ class BRDF:
                 out[j] += float(directional_albedo(
                     lambda a, b, f=f: f(np.broadcast_to(a, b.shape), b), w1, alpha=alpha, alpha_y=alpha_y))
         return out.reshape(shape)
+
+    # -- flat arrays (n, 3), (n,): one call of the one-wavelength methods per distinct wavelength ----------------
+    def _eval_flat(self, wi, wo, lam):
+        return self._by_wavelength(self._eval1, wi, wo, lam)
+
+    def _pdf_flat(self, wi, wo, lam):
+        return self._by_wavelength(self._pdf1, wi, wo, lam)
+
+    def _sample_flat(self, wi, u, lam):
+        wo = np.zeros_like(wi)
+        for val in np.unique(lam):
+            sel = lam == val
+            wo[sel] = self._sample1(wi[sel], u[sel].copy(), float(val))
+        return wo
 
     @staticmethod
     def _by_wavelength(fn, wi, wo, lam):

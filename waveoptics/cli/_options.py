@@ -41,7 +41,9 @@ OPTIONS = {o.flag: o for o in (
                            "file", "SPD"),
     Option("--kd", "diffuse albedo kd in [0, 1]", "KD", float, "1"),
     Option("--micro-alpha", "micro-scale NDF roughness α (slope scale; 0 = smooth)", "A", float, "1"),
+    Option("--alpha-y", "micro-scale α_y of an anisotropic NDF (α_x is --micro-alpha)", "A", float, "1"),
     Option("--ndf", "microfacet normal distribution"),
+    Option("--diffuse", "diffuse term of a dielectric's substrate"),
     Option("--ndf-shape", "shape parameter of the NDFs that have one: abc's tail exponent C (default 2), epd's and "
                           "sgd's exponent p (default 1)", "S", float, "1"),
     Option("--nano", "nano-roughness MODEL:key=value,... with units, e.g. abc:sigma=10nm,B=2um,C=2.6, "
@@ -61,6 +63,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--size", "patch size of a generated surface with unit: L or LX,LY", "L", unit="m"),
     Option("--seed", "random seed of generated surfaces", "SEED", int),
     Option("--sphere-size", "size of the sphere renders in pixels", "PX", int, "px"),
+    Option("--environment", "environment light: sky, studio, constant or an equirectangular .exr (+y up)", "MAP"),
+    Option("--spp", "samples per pixel", "N", int),
     Option("--window", "taper over the patch: a scipy.signal.windows name (boxcar = none)", "NAME"),
     Option("--detrend", "what to remove from the heights first: mean, plane (least squares: levelling) or none"),
     Option("--generator", "surface generator"),

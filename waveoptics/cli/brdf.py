@@ -66,15 +66,15 @@ def _microfacet_arguments(g) -> None:
     option(g, "--micro-alpha", short="--alpha", dest="alpha",
            note="in [0, 2]; α_x if anisotropic; 0 = sharpest representable")
     g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
-    g.add_argument("--alpha-y", type=float, metavar="A", help="α_y for anisotropic ggx/beckmann")
+    option(g, "--alpha-y", note="ggx and beckmann")
     option(g, "--ndf-shape")
     renamed(g, "brdf", "--abc-c", dest="ndf_shape", type=float)
     option(g, "--material", note="or --ior")
     g.add_argument("--ior", metavar="N+Kj", help="constant complex index, e.g. 1.5 or 0.2+3.1j")
     g.add_argument("--fresnel", choices=sorted(FRESNEL_NAMES), default="exact",
                    help="Fresnel factor: exact, schlick, or one (F = 1, white furnace)")
-    g.add_argument("--diffuse", choices=sorted(DIFFUSE_NAMES + tuple(DIFFUSE_ALIASES)), default="lambert",
-                   help="diffuse term (default lambert; disney is burley)")
+    option(g, "--diffuse", choices=sorted(DIFFUSE_NAMES + tuple(DIFFUSE_ALIASES)), default="lambert",
+           note="disney is burley")
     option(g, "--kd", default=0.0, note="applied as given, to metals too")
     g.add_argument("--diffuse-sigma", dest="sigma", type=float, default=0.0, metavar="DEG",
                    help="Oren-Nayar roughness σ in degrees (--diffuse oren-nayar; separate from the specular α; "

@@ -75,15 +75,12 @@ def register(sub):
                     "summary.json. With no options it runs a nano-rough aluminium under D65.")
     add_scene_options(p)
     option(p, "--sphere-size", default=256)
-    p.add_argument("--environment", metavar="MAP",
-                   help="also render both spheres lit by an environment: sky, studio, constant or an equirectangular "
-                        ".exr (+y up; multiple importance sampling at --sphere-size; sphere_env_*.exr and "
-                        "sphere_env.png)")
+    option(p, "--environment", note="also render both spheres lit by it (multiple importance sampling at "
+                                    "--sphere-size; sphere_env_*.exr and sphere_env.png)")
     p.add_argument("--max-memory", metavar="SIZE",
                    help="memory budget of the run, e.g. 4GB (default: half the machine's memory, or "
                         "$WAVEOPTICS_MAX_MEMORY); a larger estimate is refused before any work")
-    p.add_argument("--spp", type=int, default=16, metavar="N",
-                   help="samples per pixel and technique of the environment render (default 16)")
+    option(p, "--spp", default=16, note="and technique, of the environment render")
     p.add_argument("--colourspace", default="sRGB", choices=["sRGB", "ACEScg", "Display P3"],
                    help="linear RGB space of brdf_rgb.exr and the RGB albedos (default sRGB; PNGs are sRGB)")
     add_output(p)

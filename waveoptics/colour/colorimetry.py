@@ -75,7 +75,7 @@ from ..units import check_wavelengths
 from .illuminants import SPD, _as_spd
 from .observers import DEFAULT_OBSERVER, cmf_at, cmfs, observer_name
 
-__all__ = ['SPACES', 'CAT', 'VISIBLE_NM', 'spd_to_XYZ', 'TRISTIMULUS_METHODS', 'tristimulus_weights', 'reflectance_to_XYZ', 'white_XYZ', 'space_name', 'XYZ_to_rgb', 'reflectance_to_rgb', 'rgb_to_srgb8', 'delta_e2000', 'luminance']
+__all__ = ['SPACES', 'CAT', 'VISIBLE_NM', 'spd_to_XYZ', 'TRISTIMULUS_METHODS', 'tristimulus_weights', 'reflectance_to_XYZ', 'white_XYZ', 'space_name', 'XYZ_to_rgb', 'reflectance_to_rgb', 'reflectance_to_rgb_matrix', 'rgb_to_srgb8', 'delta_e2000', 'luminance']
 
 
 #: RGB working spaces (colour-science names) and their aliases
@@ -315,6 +315,14 @@ def reflectance_to_rgb(R, wavelengths_nm, illuminant="D65", observer=DEFAULT_OBS
     XYZ = reflectance_to_XYZ(R, wavelengths_nm, illuminant, observer, method)
     white = white_XYZ(illuminant, observer) if adapt else None
     return XYZ_to_rgb(XYZ, space, white)
+
+
+def reflectance_to_rgb_matrix(wavelengths_nm, illuminant="D65", space="sRGB") -> np.ndarray:
+    """The linear map M (n, 3) from a reflectance sampled at *wavelengths_nm* to linear RGB, rgb = R @ M:
+    :func:`reflectance_to_rgb` is linear in R, so row j is the RGB of unit reflectance at wavelength j alone (a
+    white reflector gives (1, 1, 1))."""
+    w = np.asarray(wavelengths_nm, dtype=float)
+    return reflectance_to_rgb(np.eye(w.size), w, illuminant, space=space)
 
 
 def luminance(rgb, space="sRGB") -> np.ndarray:

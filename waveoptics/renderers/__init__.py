@@ -1,0 +1,11 @@
+"""Renderers: the BRDF taken into Mitsuba 3 (a BSDF plugin), into the RGL tabulated-BSDF format that Mitsuba 3's
+and pbrt-v4's ``measured`` models read, and rendered scenes (``waveoptics render``).
+
+Modules: model (the BRDF a renderer receives), mitsuba (loading Mitsuba 3 and the ``waveoptics`` plugin), rgl
+(export to the RGL ``.bsdf`` tensor format). Mitsuba 3 is the optional extra ``render``; nothing here imports it
+until it is used.
+"""
+from .model import *  # noqa: F401,F403
+from . import model  # noqa: F401
+
+__all__ = model.__all__
