@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import WaveopticsError
 
-__all__ = ['SlopeTable', 'slope_table', 'D_tabulated', 'Lambda_tabulated']
+__all__ = ['SlopeTable', 'slope_table', 'footprint_ndf', 'D_tabulated', 'Lambda_tabulated']
 
 _MU = np.logspace(-3, 3, 161)
 _PHI = np.linspace(0.0, 2.0 * np.pi, 73)
@@ -61,7 +61,8 @@ class SlopeTable:
         return float(np.sqrt(np.sum(w * c[None, :] ** 2))), float(np.sqrt(np.sum(w * c[:, None] ** 2)))
 
 
-def _slopes(hf):
+def _slopes(hf, weights=None):
+    """Slopes (x̃, ỹ) of the samples that have them, and their weights (*weights* (ny, nx) there, else 1)."""
     h = hf.heights
     valid = hf.valid
     if hf.meta.get("periodic") and hf.mask is None:
@@ -76,16 +77,21 @@ def _slopes(hf):
         gy[1:-1, :] = (h[2:, :] - h[:-2, :]) / (2 * hf.dy)
         ok[1:-1, 1:-1] = True
         ok[1:-1, 1:-1] &= valid[1:-1, 2:] & valid[1:-1, :-2] & valid[2:, 1:-1] & valid[:-2, 1:-1]
-    return gx[ok], gy[ok]
+    w = np.ones(h.shape) if weights is None else np.asarray(weights, dtype=float)
+    return gx[ok], gy[ok], w[ok]
 
 
-def slope_table(hf, bins: int | None = None) -> SlopeTable:
+def slope_table(hf, bins: int | None = None, weights=None) -> SlopeTable:
     """The tabulated NDF of height field *hf* (see the module docstring).
 
     Parameters
     ----------
     hf : HeightField
         The micro-scale geometry (its spacing must resolve the slopes).
+    weights : ndarray (ny, nx), optional
+        Weight of each sample's facet (≥ 0): a pixel footprint's Gaussian gives the NDF that pixel sees, the
+        patch NDF of Yan et al. 2014/2016 (:func:`footprint_ndf`). Every sample covers the same projected area
+        Δx Δy, so the weights are those of the footprint alone.
     bins : int, optional
         Bins per slope axis (default N^{1/3} for N slopes, in [16, 128]). The table is the empirical law: a bin
         holding the mass p carries a relative noise of about 1/√(N p) (262144 slopes of a Gaussian surface in
@@ -93,12 +99,17 @@ def slope_table(hf, bins: int | None = None) -> SlopeTable:
     """
     if 1 in hf.shape:
         raise WaveopticsError("a tabulated NDF needs a 2-D height field; a profile has no slopes across it")
-    sx, sy = _slopes(hf)
+    sx, sy, ws = _slopes(hf, weights)
     if sx.size < 64:
         raise WaveopticsError(f"a tabulated NDF needs at least 64 slope samples; this height field gives {sx.size}")
-    n = int(bins) if bins is not None else int(np.clip(round(sx.size ** (1.0 / 3.0)), 16, 128))
+    if not (np.all(np.isfinite(ws)) and np.all(ws >= 0) and ws.sum() > 0):
+        raise WaveopticsError("slope weights must be finite, >= 0 and not all 0")
+    keep = ws > 0
+    sx, sy, ws = sx[keep], sy[keep], ws[keep]
+    n_eff = ws.sum() ** 2 / np.sum(ws * ws)          # Kish's effective sample size of the weighted law
+    n = int(bins) if bins is not None else int(np.clip(round(n_eff ** (1.0 / 3.0)), 16, 128))
     L = 1.0001 * max(float(np.max(np.abs(sx))), float(np.max(np.abs(sy))), 1e-12)
-    H, _, _ = np.histogram2d(sy, sx, bins=n, range=[[-L, L], [-L, L]])
+    H, _, _ = np.histogram2d(sy, sx, bins=n, range=[[-L, L], [-L, L]], weights=ws)
     step = 2 * L / n
     P = H / (H.sum() * step * step)
     # Λ table: 3 × 3 points per bin carry the bin's mass
@@ -115,7 +126,27 @@ def slope_table(hf, bins: int | None = None) -> SlopeTable:
         q = xs * np.cos(phi) + ys * np.sin(phi)
         lam[k] = np.sum(ws[None, :] * np.maximum(q[None, :] - _MU[:, None], 0.0), axis=1) / _MU
     return SlopeTable(L=L, P=P, lam=lam, source={"samples": list(hf.shape[::-1]), "slopes": int(sx.size),
-                                                  "bins": n, "source": hf.meta.get("source")})
+                                                  "effective_slopes": float(n_eff), "bins": n,
+                                                  "source": hf.meta.get("source"),
+                                                  "weighted": weights is not None})
+
+
+def footprint_ndf(field, fp, bins: int | None = None) -> SlopeTable:
+    """The NDF a pixel footprint sees: the slope distribution of the patch under footprint *fp*
+    (:class:`waveoptics.surfaces.Footprint`) weighted by its Gaussian (Yan et al. 2014, 2016), on *field*
+    (HeightField or memory-mapped :class:`waveoptics.surfaces.LargeHeightField`).
+
+    References
+    ----------
+    .. [1] L.-Q. Yan et al., ACM TOG 33(4), 116, 2014; 35(4), 56, 2016 (the NDF of a pixel footprint).
+    """
+    from ..surfaces.footprint import footprint_patch
+
+    patch, G = footprint_patch(field, fp)
+    table = slope_table(patch, bins, weights=G)
+    table.source["footprint"] = {"x_m": fp.x, "y_m": fp.y, "sigma_m": fp.sigma, "sigma_y_m": fp.sigma_y or fp.sigma,
+                                 "angle_deg": fp.angle_deg}
+    return table
 
 
 def D_tabulated(m, ax, ay=None, c=None):

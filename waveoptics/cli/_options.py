@@ -69,6 +69,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--detrend", "what to remove from the heights first: mean, plane (least squares: levelling) or none"),
     Option("--generator", "surface generator"),
     Option("--surface", "height-field file", "FILE"),
+    Option("--footprint", "a pixel footprint: Gaussian centred at X,Y (from the first sample) of width SIGMA "
+                          "(SIGMA_Y, turned by ANGLE degrees for an ellipse), lengths with units", "X,Y,SIGMA"),
     Option("--spacing", "grid spacing of the height field with unit, e.g. 50nm or 50nm,80nm: needed when the "
                         "file does not state it, and overrides it when it does", "D[,DY]", unit="m"),
     Option("--units", "unit of heights and lengths in a height-field file that does not state it: m, mm, um, nm, "

@@ -61,6 +61,8 @@ def _microfacet_arguments(g) -> None:
     g.add_argument("--micro-surface", metavar="FILE",
                    help="micro-scale height field whose slopes are the NDF (tabulated; sets --ndf tabulated; "
                         "--spacing/--units/--channel describe it when no --surface is given)")
+    option(g, "--footprint", note="with --micro-surface: the NDF of that footprint only (a glint); a .npy "
+                                  "file is memory-mapped")
     g.add_argument("--shadowing", choices=sorted(SHADOWING_NAMES), default="smith-correlated",
                    help="masking-shadowing term (default smith-correlated)")
     option(g, "--micro-alpha", short="--alpha", dest="alpha",
@@ -140,11 +142,31 @@ def _measured_ndf(args):
                                                           for k in ("spacing", "units", "channel")):
         raise WaveopticsError("--spacing/--units/--channel would describe both --surface and --micro-surface; "
                               "give files that state their own metadata")
-    hf = surfaces.load(args.micro_surface, spacing=getattr(args, "spacing", None), units=getattr(args, "units", None),
-                       channel=getattr(args, "channel", None))
-    table = brdf.slope_table(hf)
+    if args.footprint is not None:   # the NDF one pixel sees (memory-mapped for a .npy)
+        fp = surfaces.Footprint.parse(args.footprint)
+        if getattr(args, "channel", None) is None:
+            field = surfaces.open_large(args.micro_surface, spacing=_spacing(args), units=getattr(args, "units", None))
+        else:
+            field = surfaces.load(args.micro_surface, spacing=getattr(args, "spacing", None),
+                                  units=getattr(args, "units", None), channel=args.channel)
+        table = brdf.footprint_ndf(field, fp)
+    else:
+        hf = surfaces.load(args.micro_surface, spacing=getattr(args, "spacing", None),
+                           units=getattr(args, "units", None), channel=getattr(args, "channel", None))
+        table = brdf.slope_table(hf)
     sx, sy = table.rms_slope()
     return "tabulated", table, math.sqrt(2) * sx, math.sqrt(2) * sy
+
+
+def _spacing(args):
+    """--spacing as (dx, dy) in m, or None."""
+    from ..units import parse_length
+
+    sp = getattr(args, "spacing", None)
+    if sp is None:
+        return None
+    parts = [parse_length(x, name="spacing") for x in str(sp).split(",")]
+    return parts[0], parts[-1]
 
 
 def _alpha(args) -> float:
@@ -248,6 +270,8 @@ def _microfacet_describe(args) -> dict:
     if args.micro_surface is not None:
         d["ndf"] = "tabulated"
         d["micro_surface"] = args.micro_surface
+        if args.footprint is not None:
+            d["footprint"] = args.footprint
     elif spec.shape is not None and spec.name != "tabulated":
         d["ndf_shape"] = spec.shape_default if args.ndf_shape is None else args.ndf_shape
     if args.diffuse == "oren-nayar":

@@ -2,7 +2,7 @@
 environment map, rendered by Mitsuba 3, side by side with their ΔE2000 (:mod:`waveoptics.renderers.scene`)."""
 from __future__ import annotations
 
-from ._common import add_common, add_output, emit, progress
+from ._common import add_common, add_output, emit, load_surface, progress
 from ._options import option
 from ._renderer import add_model, model_description, model_from_args, plugin_parameters
 
@@ -32,12 +32,106 @@ def register(sub):
                         "spectral variants) or plugin (the model itself through NumPy; slower) (default measured)")
     option(g, "--sphere-size", default=256, note="the image is PX x PX")
     option(g, "--spp", default=32)
+    gl = p.add_argument_group("glints (--glints)")
+    gl.add_argument("--glints", action="store_true",
+                    help="render the --surface height field as a plane where every pixel's footprint gives its "
+                         "own BRDF, wave optics beside geometric optics (NumPy; docs/glints.md); takes --material, "
+                         "--incident (the light), --view, --wavelengths and --sphere-size")
+    option(gl, "--incident", note="the point light's direction from the field's centre (default 30,0)")
+    gl.add_argument("--view", metavar="THETA[,PHI]",
+                    help="the camera's direction from the field's centre, degrees (default 30,180)")
+    option(gl, "--wavelengths", note="default 450:650:50")
     add_output(p)
     add_common(p, device=False)
     p.set_defaults(func=run)
 
 
+#: --glints options and their defaults
+_GLINT_DEFAULTS = {"incident": "30,0", "view": "30,180", "wavelengths": "450:650:50"}
+
+
 def run(args):
+    from ..errors import WaveopticsError
+
+    if args.glints:
+        return run_glints(args)
+    given = [k for k in _GLINT_DEFAULTS if getattr(args, k) is not None]
+    if given:
+        raise WaveopticsError(f"--{given[0]} belongs to --glints renders; the sphere render takes its light from "
+                              "--environment")
+    return run_render(args)
+
+
+#: model options that --glints does not take (the height field is the whole geometry), with their defaults
+_NOT_GLINTS = {"alpha": 0.1, "alpha_y": None, "nano": None, "kd": 0.0, "scene": None, "exact": False}
+
+
+def run_glints(args):
+    """``render --glints``: footprint BRDFs per pixel over a height field (:mod:`waveoptics.renderers.glints`)."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from .. import colour, surfaces
+    from ..errors import WaveopticsError
+    from ..io import files
+    from ..render import plot_spheres, tonemap
+    from ..renderers import glints
+    from ..units import parse_direction, parse_wavelengths
+    from .brdf import _spacing
+
+    given = [k for k, v in _NOT_GLINTS.items() if getattr(args, k) != v]
+    if given:
+        flag = {"alpha": "micro-alpha"}.get(given[0], given[0].replace("_", "-"))
+        raise WaveopticsError(f"--glints renders the --surface height field itself; drop --{flag}")
+    if args.surface is None:
+        raise WaveopticsError("--glints needs --surface FILE (the height field to render)")
+    out_names = ("glints_wave.exr", "glints_geometric.exr", "glints.png", "summary.json")
+    outdir = files.prepare_outdir(args.output, overwrite=args.overwrite, expected=out_names)
+    for k, v in _GLINT_DEFAULTS.items():
+        if getattr(args, k) is None:
+            setattr(args, k, v)
+    lt, lp = parse_direction(args.incident, name="--incident")
+    vt, vp = parse_direction(args.view, name="--view")
+    settings = glints.GlintSettings(size=args.sphere_size, view_deg=vt, view_azimuth_deg=vp, light_deg=lt,
+                                    light_azimuth_deg=lp, wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)))
+    if str(args.surface).lower().endswith(".npy") and args.channel is None:
+        field = surfaces.open_large(args.surface, spacing=_spacing(args), units=args.units)
+    else:
+        field = load_surface(args)
+    bar = progress(total=settings.size, desc="glints", args=args)
+    r = glints.render_glints(field, args.material, settings, progress=bar.update)
+    bar.close()
+    on = r.on_field
+    de = np.where(on, colour.delta_e2000(r.wave, r.geometric), 0.0)
+    # one exposure for both: the brighter image's 99th percentile of luminance on the field maps to 1 (glints are
+    # sparse, so a log-average key would be set by the dark background and burn every glint out)
+    exposure = 1.0 / max(float(np.percentile(colour.luminance(img[on]), 99)) for img in (r.wave, r.geometric))
+    with files.staged_outputs(outdir, out_names, last="summary.json") as stage:
+        for name, img in (("glints_wave.exr", r.wave), ("glints_geometric.exr", r.geometric)):
+            files.write_exr(stage / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
+                            {"waveoptics": "linear sRGB radiance of a unit-intensity point light"})
+        plot_spheres([tonemap(r.wave, exposure), tonemap(r.geometric, exposure)],
+                     [f"wave optics (footprint Kirchhoff)\n{args.material}, {Path(args.surface).name}",
+                      "geometric optics (footprint NDF)"], stage / "glints.png", diff=de,
+                     diff_title=f"ΔE2000 (mean {float(de[on].mean()):.1f})", exposure=exposure,
+                     caption=f"light at θ = {lt:g}°, φ = {lp:g}°; camera at θ = {vt:g}°, φ = {vp:g}°; footprint σ "
+                             f"≈ {r.footprint_sigma_m[0] * 1e6:.3g} × {r.footprint_sigma_m[1] * 1e6:.3g} µm")
+        summary = {"surface": str(args.surface), "material": args.material, "size_px": settings.size,
+                   "light_deg": [lt, lp], "view_deg": [vt, vp], "wavelengths_nm": list(settings.wavelengths_nm),
+                   "footprint_sigma_m": list(r.footprint_sigma_m),
+                   "pixels_on_field": int(on.sum()), "delta_e2000_mean": float(de[on].mean()),
+                   "timings_s": {k: (round(v, 6) if isinstance(v, float) else v) for k, v in r.timings_s.items()},
+                   "outputs": list(out_names)}
+        files.write_json(stage / "summary.json", summary)
+    t = r.timings_s
+    emit(args, summary, f"wrote {outdir}/ ({', '.join(out_names)}); {t['pixels']} pixels, wave "
+                        f"{t['wave_per_pixel'] * 1e3:.2f} ms/pixel ({t['wave']:.1f} s), geometric "
+                        f"{t['geometric_per_pixel'] * 1e3:.2f} ms/pixel ({t['geometric']:.1f} s)")
+    return 0
+
+
+def run_render(args):
     import json
     import time
     import warnings

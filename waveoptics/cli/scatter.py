@@ -38,7 +38,13 @@ def register(sub) -> None:
     p.add_argument("--order", default="auto", metavar="K",
                    help="fft solver: 'auto' (exact to 1e-8) or a fixed Taylor order about the specular v_z; "
                         "0 freezes v_z (paraxial)")
-    option(p, "--window", default="hann")
+    option(p, "--window", default="hann", note="gaussian:SIGMA (a length) is a Gaussian of that width centred on "
+                                                "the patch")
+    option(p, "--footprint", note="the BRDF of that footprint only (its Gaussian is the window; a .npy file is "
+                                  "memory-mapped and only the footprint's patch is read)")
+    p.add_argument("--coherence", metavar="L",
+                   help="with --footprint: width of the coherence area, with unit; windows of this width add "
+                        "incoherently over the footprint (default: the whole footprint is coherent)")
     option(p, "--detrend", choices=("mean", "plane", "none"), default="mean",
            note="of each patch, weighted by the window")
     option(p, "--precision", choices=("float32", "float64"), default="float32", note="direct solver")
@@ -58,6 +64,39 @@ def _order(text):
         raise WaveopticsError(f"--order {text!r} is not allowed; use 'auto' or an integer >= 0") from None
 
 
+def _footprint(args):
+    """(Footprint or None, the surface): with --footprint a .npy file is memory-mapped."""
+    from .. import surfaces
+
+    if args.footprint is None:
+        if args.coherence is not None:
+            raise WaveopticsError("--coherence is the coherence area inside a --footprint; give one")
+        return None, load_surface(args)
+    if args.realizations != 1:
+        raise WaveopticsError("--footprint is one patch; drop --realizations")
+    if args.window != "hann":
+        raise WaveopticsError("--footprint sets the window (its Gaussian); drop --window")
+    fp = surfaces.Footprint.parse(args.footprint)
+    if str(args.surface).lower().endswith(".npy") and args.channel is None:
+        from .brdf import _spacing
+
+        return fp, surfaces.open_large(args.surface, spacing=_spacing(args), units=args.units)
+    return fp, load_surface(args)
+
+
+def _coherence(args):
+    from ..units import parse_length
+
+    return None if args.coherence is None else parse_length(args.coherence, name="coherence")
+
+
+def _field_info(field, res) -> dict:
+    """What the output says about a footprint's surface: the file, its grid and the footprint."""
+    return {"source": str(getattr(field, "path", field.meta.get("source") if hasattr(field, "meta") else "")),
+            "samples": list(field.shape[::-1]), "spacing_m": [field.dx, field.dy],
+            "memory_mapped": not hasattr(field, "heights"), "footprint": res.info.get("footprint")}
+
+
 def run(args) -> int:
 
     from .. import scatter
@@ -67,25 +106,30 @@ def run(args) -> int:
     wl = parse_wavelengths(args.wavelengths)
     theta, phi = parse_direction(args.incident, name="--incident")
     order = _order(args.order)
-    hf = load_surface(args)
+    fp, field = _footprint(args)
+    hf = field if fp is None else None
     fresnel_function(args.material)      # refuse a bad material before computing
     prepare_outdir(args.output, overwrite=args.overwrite, expected=scatter.SCATTER_FILES)
     rt = get_runtime(args.device) if args.solver == "direct" and args.backend == "opencl" else None
     bar = progress(total=len(wl) * max(1, args.realizations), desc="scatter", args=args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", scatter.DiffractionWarning)
-        res = scatter.scatter(hf, (theta, phi), wl, args.material, solver=args.solver,
-                                  resolution=args.resolution, realizations=args.realizations, order=order,
-                                  window_name=args.window, detrend=args.detrend, precision=args.precision,
-                                  backend=args.backend, diffraction=args.diffraction,
-                                  polarization=args.polarization,
-                                  runtime=rt, progress=bar.update)
+        common = dict(solver=args.solver, resolution=args.resolution, order=order, detrend=args.detrend,
+                      precision=args.precision, backend=args.backend, diffraction=args.diffraction,
+                      polarization=args.polarization, runtime=rt)
+        if fp is None:
+            res = scatter.scatter(hf, (theta, phi), wl, args.material, realizations=args.realizations,
+                                  window_name=args.window, progress=bar.update, **common)
+        else:
+            res = scatter.footprint_scatter(field, fp, (theta, phi), wl, args.material, coherence_m=_coherence(args),
+                                            **common)
+    surface_info = hf.provenance() if hf is not None else _field_info(field, res)
     bar.close()
     extra = {"surface": str(args.surface), "material": str(args.material)}
     if rt is not None:
         extra["device"] = rt.name
     paths = scatter.write_scatter(res, args.output, overwrite=args.overwrite, header=extra,
-                                  surface_info=hf.provenance())
+                                  surface_info=surface_info)
     if not args.json:
         for w in caught:
             print(f"waveoptics scatter: warning: {w.message}", file=sys.stderr)
@@ -94,5 +138,5 @@ def run(args) -> int:
                                            res.scattered_fraction))
     text = (f"{rows}\nwrote {', '.join(str(p) for p in paths.values())} "
             f"({res.timings_s['total']:.3g} s, solver {res.solver})")
-    emit(args, {**res.summary(), **extra, "surface_info": hf.provenance(), "outputs": {k: str(v) for k, v in paths.items()}}, text)
+    emit(args, {**res.summary(), **extra, "surface_info": surface_info, "outputs": {k: str(v) for k, v in paths.items()}}, text)
     return 0

@@ -26,11 +26,13 @@ _MODEL_OPTIONS = {
     "spread_deg": ("--spread", "scratch directions uniform within ± this many degrees (scratches)"),
     "length": ("--length", "scratch length with unit; default: across the patch (scratches)"),
     "variation": ("--variation", "relative spread of scratch width and depth, 0..1 (scratches)"),
+    "size_flake": ("--flake-size", "mean flake diameter with unit, e.g. 5um (flakes)"),
+    "tilt": ("--tilt", "rms tilt of the flakes per axis, degrees (flakes)"),
 }
-_FLOAT_PARAMS = {"A", "C", "orientation_deg", "phase_deg", "spread_deg", "variation"}
+_FLOAT_PARAMS = {"A", "C", "orientation_deg", "phase_deg", "spread_deg", "variation", "tilt"}
 #: what -o writes for the commands that write a height field
 HEIGHT_FIELD_OUTPUT = "a height-field file: .npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc through SurfaceTopography"
-MODELS = ("flat", "gaussian", "exponential", "abc", "sinusoid", "scratches")
+MODELS = ("flat", "gaussian", "exponential", "abc", "sinusoid", "scratches", "flakes")
 
 
 def register(sub):

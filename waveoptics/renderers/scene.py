@@ -70,9 +70,10 @@ class RenderSettings:
 
     def __post_init__(self):
         if not (isinstance(self.size, (int, np.integer)) and 8 <= self.size <= 4096):
-            raise FieldError(f"image size {self.size!r} px is not allowed; give 8 to 4096", "size")
+            raise FieldError(f"{{sphere_size}} {self.size!r} px (the image size) is not allowed; give 8 to 4096",
+                             "sphere_size")
         if not (isinstance(self.spp, (int, np.integer)) and 1 <= self.spp <= 1 << 16):
-            raise FieldError(f"spp {self.spp!r} is not allowed; give 1 to 65536 samples per pixel", "spp")
+            raise FieldError(f"{{spp}} {self.spp!r} is not allowed; give 1 to 65536 samples per pixel", "spp")
 
 
 def _spectrum(mi, wavelengths, values):

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal.windows import get_window
 
-from ..errors import WaveopticsError, unknown
+from ..errors import FieldError, WaveopticsError, unknown
 from ..surfaces.heightfield import HeightField
 from ..surfaces.statistics import DETRENDS
 
@@ -21,15 +21,17 @@ DEFAULT_WINDOW = "hann"
 # Window, samples, Fresnel
 # ----------------------------------------------------------------------------------------------------------------
 
-def window(hf: HeightField, name: str = DEFAULT_WINDOW) -> np.ndarray:
+def window(hf: HeightField, name=DEFAULT_WINDOW) -> np.ndarray:
     """Smooth window w(x, y) = w_x(x) w_y(y) over the patch, zero where the mask is False.
 
     Parameters
     ----------
     hf : HeightField
-    name : str
+    name : str, tuple or ndarray
         A :func:`scipy.signal.windows.get_window` name (symmetric form), e.g. ``"hann"`` (default),
-        ``"blackmanharris"``, ``("tukey", 0.5)``, or ``"boxcar"`` (no taper: edge ringing, for comparison).
+        ``"blackmanharris"``, ``("tukey", 0.5)``, or ``"boxcar"`` (no taper: edge ringing, for comparison);
+        ``"gaussian:SIGMA"`` with a length (``"gaussian:1.5um"``: a Gaussian of that width in metres centred on
+        the patch, a pixel footprint, :mod:`waveoptics.surfaces.footprint`); or explicit weights (ny, nx) ≥ 0.
 
     Returns
     -------
@@ -49,9 +51,26 @@ def window(hf: HeightField, name: str = DEFAULT_WINDOW) -> np.ndarray:
     """
 
     ny, nx = hf.shape
+    if isinstance(name, np.ndarray):
+        w = np.asarray(name, dtype=float)
+        if w.shape != hf.shape or not np.all(np.isfinite(w)) or np.any(w < 0):
+            raise FieldError(f"explicit window weights must be finite, >= 0 and of the patch's shape {hf.shape}, "
+                             f"got shape {w.shape}", "window")
+        w = w * hf.valid
+        if not np.any(w > 0):
+            raise WaveopticsError("the window leaves no sample with positive weight (mask empty or patch too small)")
+        return w
+    if isinstance(name, str) and name.lower().startswith("gaussian:"):
+        from ..units import parse_length
+
+        sigma = parse_length(name.split(":", 1)[1], name="window")
+        name = ("gaussian", sigma / hf.dx)
+        name_y = ("gaussian", sigma / hf.dy)
+    else:
+        name_y = name
     try:
         wx = get_window(name, nx, fftbins=False) if nx > 1 else np.ones(1)
-        wy = get_window(name, ny, fftbins=False) if ny > 1 else np.ones(1)
+        wy = get_window(name_y, ny, fftbins=False) if ny > 1 else np.ones(1)
     except (ValueError, TypeError) as exc:
         raise WaveopticsError(f"window {name!r} is not allowed ({exc}); use a scipy.signal.windows name "
                               "such as 'hann', 'blackmanharris', ('tukey', 0.5) or 'boxcar'") from None

@@ -422,7 +422,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     flat = np.zeros(n_wl)
     chi = np.zeros(n_wl, np.complex128)
     msgs: list[str] = []
-    info = {"window": str(window_name), "diffraction": model.name, "polarization": polarization}
+    info = {"window": "explicit weights" if isinstance(window_name, np.ndarray) else str(window_name), "diffraction": model.name, "polarization": polarization}
     t_solve = t_flat = 0.0
     for r, hf in enumerate(hfs):
         smp = samples(hf, window_name, detrend)

@@ -249,12 +249,13 @@ def _load_npz(p, sp, units, nan_is_mask):
     return _finish(h * scale, sp, mask, meta, "the .npz archive")
 
 
-def _load_npy(p, sp, units, nan_is_mask):
+def _npy_parts(p, sp, units, nan_is_mask, *, mmap: bool = False):
+    """(array, scale to metres, spacing (dx, dy) m or None, meta, NaN allowed) of a .npy file and its sidecar; the
+    array is memory-mapped (nothing read yet) with *mmap*."""
     try:
-        a = np.load(p, allow_pickle=False)
+        a = np.load(p, allow_pickle=False, mmap_mode="r" if mmap else None)
     except (ValueError, OSError, EOFError) as exc:
         raise WaveopticsError(f"is truncated or not a valid .npy file ({str(exc).splitlines()[0]})") from None
-    h = _real_heights(a, "the .npy array")
     side = p.with_name(p.name + ".json")
     meta, allow_nan = {}, nan_is_mask
     if side.is_file():
@@ -270,7 +271,14 @@ def _load_npy(p, sp, units, nan_is_mask):
                 raise WaveopticsError(f"sidecar {side.name!r} spacing {info['dx']!r} is not a number") from None
     else:
         scale = _unit_scale(units or "m")
+    return a, scale, sp, meta, allow_nan
+
+
+def _load_npy(p, sp, units, nan_is_mask):
+    a, scale, sp, meta, allow_nan = _npy_parts(p, sp, units, nan_is_mask)
+    h = _real_heights(a, "the .npy array")
     h, mask = _nan_mask(h, allow_nan, "the .npy array")
+    side = p.with_name(p.name + ".json")
     return _finish(h * scale, sp, mask, meta, f"the .npy file (no sidecar {side.name!r})")
 
 
