@@ -335,8 +335,9 @@ class MicrofacetBRDF(BRDF):
 @dataclass(frozen=True)
 class TwoScaleParts(MicrofacetBRDF):
     """What every two-scale BRDF function shares (docs/physics.md §7): the coherent part A(θ_d) f_mf and the
-    diffuse substrate in closed form, the split of :meth:`eval_parts`, and sampling as a mixture of the
-    coherent, diffracted and diffuse lobes in proportion F(θ_i)A(θ_i) : F(θ_i)(1 − A(θ_i)) : kd(1 − F(θ_i)).
+    diffuse substrate in closed form, the optional multiple-scattering lobe of the micro NDF, the split of
+    :meth:`eval_parts`, and sampling as a mixture of the coherent, diffracted and cosine lobes in proportion
+    F(θ_i)A(θ_i) : F(θ_i)(1 − A(θ_i)) : kd(1 − F(θ_i)) + (1 − E(μ_i)) F_ms.
 
     Subclasses supply the diffracted part: ``_f_diffraction(wi, wo, lam)``, ``_pdf_diffraction``,
     ``_sample_diffraction(wi, u, lam)`` (invalid samples below the surface) and ``_diffraction_width(lam)``
@@ -346,12 +347,12 @@ class TwoScaleParts(MicrofacetBRDF):
     nano: object = None          # waveoptics.brdf.Nano or None
     diffraction: str = "kirchhoff"
 
-    def __post_init__(self):
-        super().__post_init__()
-        if self.multiple_scattering:
-            raise FieldError("multiple_scattering is not available for the two-scale model yet (its coherent and "
-                             "diffracted parts both come from the single-scattering lobe); use MicrofacetBRDF",
-                             "multiple_scattering")
+    # Multiple scattering (``multiple_scattering=True``): the Kulla-Conty lobe of the micro NDF, unchanged. The
+    # single-scattering two-scale lobe (coherent + diffracted) reflects the light of the single-scattering
+    # microfacet lobe, only redistributed in direction by the nano-roughness (its white furnace follows the
+    # microfacet albedo: tests/test_twoscale.py), so the light lost to multiple bounces between micro facets is
+    # the same 1 − E(μ_i); the compensation lobe is already direction-averaged (diffuse-like), so diffraction does
+    # not reshape it. The white furnace this gives is measured in tests/test_multiscatter.py.
 
     @property
     def _rough(self) -> bool:
@@ -374,12 +375,13 @@ class TwoScaleParts(MicrofacetBRDF):
     def _parts(self, wi, wo, lam):
         coherent, diffuse = self._smooth_parts(wi, wo, lam)
         diffraction = self._f_diffraction(wi, wo, lam) if self._rough else np.zeros(wi.shape[0])
-        return coherent, diffraction, diffuse
+        return coherent, diffraction, diffuse, self._f_ms(wi, wo, lam)
 
     def eval_parts(self, wi, wo, wavelength_nm) -> dict:
-        """The three parts of :meth:`eval` separately: ``coherent``, ``diffraction``, ``diffuse`` (1/sr)."""
+        """The parts of :meth:`eval` separately: ``coherent``, ``diffraction``, ``diffuse`` and ``multiple`` (the
+        multiple-scattering lobe; 0 unless ``multiple_scattering``), in 1/sr."""
         wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
-        out = {k: np.zeros(lam.size) for k in ("coherent", "diffraction", "diffuse")}
+        out = {k: np.zeros(lam.size) for k in ("coherent", "diffraction", "diffuse", "multiple")}
         for val in np.unique(lam):
             sel = lam == val
             for key, v in zip(out, self._parts(wi[sel], wo[sel], float(val))):
@@ -390,10 +392,13 @@ class TwoScaleParts(MicrofacetBRDF):
         return sum(self._parts(wi, wo, lam))
 
     def _probs(self, wi, lam):
-        """Lobe probabilities (coherent, diffracted, diffuse) for each ω_i."""
+        """Lobe probabilities (coherent, diffracted, cosine) for each ω_i: the cosine lobe serves the diffuse term
+        and the multiple-scattering lobe, in proportion kd (1 − F(θ_i)) + (1 − E(μ_i)) F_ms."""
         Fi = self._F(lam)(np.clip(wi[:, 2], 0.0, 1.0))
         A = self._A(np.clip(wi[:, 2], 0.0, 1.0), lam) * np.ones(wi.shape[0])
         d = self.kd * (1.0 - Fi) if self._has_diffuse() else np.zeros(wi.shape[0])
+        if self.multiple_scattering:
+            d = d + (1.0 - self._ms_table()(wi[:, 2])) * self._F_ms(lam)
         total = np.maximum(Fi + d, 1e-300)
         return Fi * A / total, Fi * (1.0 - A) / total, d / total
 
@@ -417,8 +422,9 @@ class TwoScaleParts(MicrofacetBRDF):
         _, ax, ay = self._micro_args()
 
         def smooth(x, y):
-            c, d = self._smooth_parts(x.reshape(-1, 3), y.reshape(-1, 3), lam)
-            return (c + d).reshape(y.shape[:-1])
+            a, b = x.reshape(-1, 3), y.reshape(-1, 3)
+            c, d = self._smooth_parts(a, b, lam)
+            return (c + d + self._f_ms(a, b, lam)).reshape(y.shape[:-1])
 
         parts = [(smooth, ax, ay)]
         if self._rough:

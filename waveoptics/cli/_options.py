@@ -44,6 +44,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--alpha-y", "micro-scale α_y of an anisotropic NDF (α_x is --micro-alpha)", "A", float, "1"),
     Option("--ndf", "microfacet normal distribution"),
     Option("--diffuse", "diffuse term of a dielectric's substrate"),
+    Option("--multiple-scattering", "add the light single scattering loses between micro facets (Kulla & Conty "
+                                    "2017 energy compensation)"),
     Option("--ndf-shape", "shape parameter of the NDFs that have one: abc's tail exponent C (default 2), epd's and "
                           "sgd's exponent p (default 1)", "S", float, "1"),
     Option("--nano", "nano-roughness MODEL:key=value,... with units, e.g. abc:sigma=10nm,B=2um,C=2.6, "

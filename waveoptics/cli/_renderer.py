@@ -24,6 +24,7 @@ def add_model(parser) -> None:
     option(g, "--kd", default=0.0, note="dielectrics only")
     option(g, "--diffuse", choices=sorted(DIFFUSE_NAMES + tuple(DIFFUSE_ALIASES)), default="lambert",
            note="disney is burley")
+    option(g, "--multiple-scattering", action="store_true", note="off by default")
     g.add_argument("--wavelength-step", default=f"{DEFAULT_WAVELENGTH_STEP_NM:g}nm", metavar="L",
                    help="largest spacing of the wavelength nodes over 360-830 nm, with unit "
                         f"(default {DEFAULT_WAVELENGTH_STEP_NM:g}nm); between nodes the BRDF is linear in λ")
@@ -78,13 +79,14 @@ def model_parameters(args) -> dict:
     if getattr(args, "scene", None):
         step = parse_length(args.wavelength_step, name="wavelength_step") * 1e9
         return dict(_scene_parameters(args), diffuse=args.diffuse, wavelength_step_nm=step,
-                    resolution=args.resolution, exact=args.exact)
+                    resolution=args.resolution, exact=args.exact, multiple_scattering=args.multiple_scattering)
     if args.surface is not None and args.nano is not None:
         raise WaveopticsError("give only one of --nano MODEL:params and --surface FILE")
     step = parse_length(args.wavelength_step, name="wavelength_step") * 1e9
     return dict(material=args.material, alpha=args.alpha, alpha_y=args.alpha_y, ndf=args.ndf, nano=args.nano,
                 surface=args.surface, diffraction=args.diffraction, kd=args.kd, diffuse=args.diffuse,
-                wavelength_step_nm=step, resolution=args.resolution, exact=args.exact)
+                wavelength_step_nm=step, resolution=args.resolution, exact=args.exact,
+                multiple_scattering=args.multiple_scattering)
 
 
 def model_from_args(args):
@@ -122,7 +124,7 @@ def model_description(args, kw: dict) -> dict:
                  nano=kw["nano"] if kw["nano"] is not None else "height field of the scene")
         return d
     d = {k: getattr(args, k) for k in ("material", "alpha", "alpha_y", "ndf", "diffraction", "kd", "diffuse",
-                                       "wavelength_step", "resolution", "exact")}
+                                       "wavelength_step", "resolution", "exact", "multiple_scattering")}
     if args.surface:
         d["surface"] = args.surface
     else:

@@ -84,9 +84,8 @@ def _microfacet_arguments(g) -> None:
     renamed(g, "brdf", "--sigma", dest="sigma", type=float)
     g.add_argument("--diffuse-roughness", type=float, default=0.5, metavar="R",
                    help="Burley diffuse roughness r in [0, 1] (--diffuse burley; default 0.5)")
-    g.add_argument("--multiple-scattering", action="store_true",
-                   help="add the light single scattering loses between facets (Kulla & Conty 2017 energy "
-                        "compensation; NumPy, exact or one Fresnel; off by default)")
+    option(g, "--multiple-scattering", action="store_true",
+           note="microfacet and twoscale; NumPy, exact or one Fresnel; off by default")
     g.add_argument("--no-tradeoff", action="store_true",
                    help="do not weight the diffuse term by (1 - F(θi))(1 - F(θo)) / (1 - F̄)")
     option(g, "--backend", choices=["numpy", "opencl"], default="numpy", note="albedo always uses NumPy")
@@ -497,7 +496,8 @@ def _twoscale_build(args, wavelength_nm, wi):
     common = dict(material=spec if spec is not None else "aluminium", micro=micro, kd=args.kd,
                   diffuse=args.diffuse, fresnel=args.fresnel,
                   ndf_shape=args.ndf_shape,
-                  diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction)
+                  diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction,
+                  multiple_scattering=args.multiple_scattering)
     if args.surface:
         nano = brdf.Nano(surface=load_surface(args))
         thetas = (0.0,) if wi is None else tuple(sorted(set(
@@ -510,7 +510,7 @@ def _twoscale_build(args, wavelength_nm, wi):
 
 def _twoscale_describe(args) -> dict:
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
-                                       "fresnel", "diffuse", "kd", "diffraction")}
+                                       "fresnel", "diffuse", "kd", "diffraction", "multiple_scattering")}
     if args.surface:
         d["surface"] = args.surface
     else:
@@ -613,9 +613,8 @@ def run(args) -> int:
     model = MODELS[args.model]
     if getattr(args, "diffuse", None) in DIFFUSE_ALIASES:
         args.diffuse = DIFFUSE_ALIASES[args.diffuse]
-    if getattr(args, "multiple_scattering", False) and args.model != "microfacet":
-        raise WaveopticsError(f"--multiple-scattering applies to --model microfacet, not {args.model!r} (the "
-                              "two-scale model has no compensation yet)")
+    if getattr(args, "multiple_scattering", False) and args.model not in ("microfacet", "twoscale"):
+        raise WaveopticsError(f"--multiple-scattering applies to --model microfacet and twoscale, not {args.model!r}")
     wl = parse_wavelengths(args.wavelengths, name="--wavelengths")
     inc = [parse_direction(t, name="--incident") for t in args.incident]
     wi = direction_from_angles([t for t, _ in inc], [p for _, p in inc])

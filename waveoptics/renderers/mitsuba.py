@@ -15,7 +15,7 @@ are those of :func:`waveoptics.renderers.renderer_brdf` (the two-scale model of 
 Mitsuba's ``eval`` is f cos θ_o (its convention); its ``si.wi`` is our first direction and its ``wo`` our second.
 Plugin parameters, as in a scene file: ``material`` (string), ``alpha``, ``alpha_y`` (float), ``ndf``,
 ``nano`` (``MODEL:params`` or ``none``), ``surface`` (height-field file), ``diffraction``, ``kd``, ``diffuse``,
-``wavelength_step`` (nm), ``resolution``, ``exact`` (bool). The plugin evaluates with NumPy, so in JIT variants it
+``wavelength_step`` (nm), ``resolution``, ``exact`` (bool), ``multiple_scattering`` (bool). The plugin evaluates with NumPy, so in JIT variants it
 runs in wavefront mode: :func:`register` turns Dr.Jit's symbolic loops and calls off.
 
 References
@@ -100,6 +100,7 @@ _PARAMETERS = {
     "diffraction": ("diffraction", str), "kd": ("kd", float), "diffuse": ("diffuse", str),
     "wavelength_step": ("wavelength_step_nm", float), "resolution": ("resolution", int),
     "exact": ("exact", bool), "shadowing": ("shadowing", str),
+    "multiple_scattering": ("multiple_scattering", bool),
 }
 
 

@@ -46,7 +46,8 @@ def renderer_brdf(material: str = "aluminium", alpha: float = 0.1, alpha_y: floa
                   ndf: str = "ggx", nano: str | None = None, surface=None,
                   diffraction: str = "kirchhoff", kd: float = 0.0, diffuse: str = "lambert",
                   wavelength_step_nm: float = DEFAULT_WAVELENGTH_STEP_NM, resolution: int = 128,
-                  exact: bool = False, shadowing: str = "smith-correlated") -> brdf.SpectralNodes:
+                  exact: bool = False, shadowing: str = "smith-correlated",
+                  multiple_scattering: bool = False) -> brdf.SpectralNodes:
     """The two-scale BRDF of these parameters at the renderer's wavelength nodes (see the module doc).
 
     Parameters
@@ -72,6 +73,8 @@ def renderer_brdf(material: str = "aluminium", alpha: float = 0.1, alpha_y: floa
         Direction-grid cells per axis of the tabulated diffracted lobes.
     exact : bool
         Pointwise quadrature instead of tabulated lobes (PSD statistics only; slow).
+    multiple_scattering : bool
+        Add the Kulla-Conty compensation lobe of the micro NDF (:mod:`waveoptics.brdf.multiscatter`).
     """
     from ..vocabulary import DEFAULT_NANO
 
@@ -80,7 +83,8 @@ def renderer_brdf(material: str = "aluminium", alpha: float = 0.1, alpha_y: floa
         raise FieldError("give only one of nano (statistics) and surface (a height-field file)", "nano")
     micro = brdf.Micro(alpha=float(alpha), alpha_y=None if alpha_y is None else float(alpha_y), ndf=ndf,
                        shadowing=shadowing)
-    common = dict(material=material, micro=micro, kd=float(kd), diffuse=diffuse, diffraction=diffraction)
+    common = dict(material=material, micro=micro, kd=float(kd), diffuse=diffuse, diffraction=diffraction,
+                  multiple_scattering=bool(multiple_scattering))
     if surface is not None:
         nano_obj = make_nano(None, nodes, surface=surface)
     else:

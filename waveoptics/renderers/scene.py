@@ -86,6 +86,8 @@ def reference_bsdf(mi, model, *, material, alpha, alpha_y, ndf, kd) -> tuple[dic
     from ..materials import get_material
 
     notes = []
+    if getattr(model.base, "multiple_scattering", False):
+        notes.append("the wave-optics BRDF has the multiple-scattering compensation; Mitsuba's rough models do not")
     distribution = ndf if ndf in REFERENCE_NDFS else "ggx"
     if distribution != ndf:
         notes.append(f"Mitsuba's rough models have no {ndf} NDF; the reference uses ggx with the same alpha")
