@@ -161,7 +161,7 @@ def main() -> None:
         "\"material\": \"gold\", \"alpha\": 0.2,\n                     \"nano\": \"abc:sigma=10nm,B=2um,C=2.6\", "
         "\"diffraction\": \"kirchhoff\"})\n```\n",
         "Parameters: `material`, `alpha`, `alpha_y`, `ndf`, `shadowing`, `nano` (`MODEL:params` or `none`), "
-        "`surface` (height-field file), `diffraction`, `kd`, `diffuse`, `wavelength_step` (nm), `resolution`, "
+        "`surface` (height-field file), `diffraction`, `kd`, `diffuse`, `multiple_scattering`, `wavelength_step` (nm), `resolution`, "
         "`exact`. Its `eval`, `pdf` and `sample` are the library's (`tests/test_renderers.py` checks them equal "
         "to float32 precision in four variants). Spectral variants evaluate at the path's four wavelengths and "
         "sample at the first (hero) one; RGB variants return f in linear sRGB (D65 white) and sample from the "
