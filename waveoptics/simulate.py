@@ -162,7 +162,7 @@ def _nano_of(req: SimulationRequest, w, surface, micro: twoscale.Micro):
     roughness measured from its long-period part."""
     if req.split:
         hf = surface if surface is not None else surfaces.load(req.surface)
-        measured, nano_hf, split_info = twoscale.split_scales(hf, w, ndf=req.ndf)
+        measured, nano_hf, split_info = twoscale.split_scales(hf, w, ndf=req.ndf, ndf_shape=req.ndf_shape)
         micro = twoscale.Micro(alpha=measured.alpha, alpha_y=measured.alpha_y, ndf=req.ndf, shadowing=req.shadowing,
                                ndf_shape=req.ndf_shape)
         return micro, twoscale.Nano(surface=crop(nano_hf, MAX_NANO_SAMPLES)), split_info

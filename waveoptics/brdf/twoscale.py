@@ -49,7 +49,7 @@ from ..surfaces.heightfield import HeightField
 from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .microfacet import specular
-from .ndf import ALPHA_MAX, ALPHA_MIN
+from .ndf import ALPHA_MAX, ALPHA_MIN, NDFS
 from .quadrature import albedo, directional_albedo
 
 __all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'evaluate', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
@@ -573,15 +573,31 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
 SPLIT_PERIODS_OF_LAMBDA = 10.0
 
 
+def _alpha_of_slopes(hf, ndf, ndf_shape, sx, sy):
+    """(α_x, α_y) of NDF *ndf* matching the slopes of *hf*: Beckmann √2 × rms slope per axis (exact for Gaussian
+    slopes); GGX per axis from the median |slope| (√3 × median, :data:`waveoptics.brdf.ndf_fit.GGX_AXIS_MEDIAN`);
+    the other (isotropic) NDFs from the median slope magnitude (:func:`waveoptics.brdf.alpha_for_median_slope`)."""
+    from .ndf_fit import GGX_AXIS_MEDIAN, alpha_for_median_slope
+
+    if ndf == "beckmann":
+        return float(np.sqrt(2) * (sx if sx is not None else sy)), float(np.sqrt(2) * (sy if sy is not None else sx))
+    gy, gx = np.gradient(hf.heights, hf.dy, hf.dx)
+    if ndf == "ggx":
+        return (float(np.median(np.abs(gx)) / GGX_AXIS_MEDIAN), float(np.median(np.abs(gy)) / GGX_AXIS_MEDIAN))
+    a = alpha_for_median_slope(ndf, float(np.median(np.hypot(gx, gy))), ndf_shape)
+    return a, a
+
+
 def split_scales(surface: HeightField, wavelengths_nm, *, cutoff_period_m: float | None = None,
-                 ndf: str = "beckmann"):
+                 ndf: str = "beckmann", ndf_shape=None):
     """Split a height field holding both scales into a micro NDF and a nano height field.
 
     The surface spectrum is cut at the spatial frequency f_c = 1 / Λ_c (default Λ_c = 10 λ_max): components of
     longer period form the micro-geometry, the rest the nano-geometry. The split is a smooth (Gaussian-edged)
-    partition of unity in frequency, so micro + nano = surface exactly. The micro part's per-axis rms slopes give
-    the NDF roughness: for Gaussian slopes the Beckmann α along an axis is √2 times the rms slope along it
-    (docs/physics.md §1: α = rms |∇h| = 2σ/T for an isotropic Gaussian surface).
+    partition of unity in frequency, so micro + nano = surface exactly. The micro part's slopes give the NDF
+    roughness: for Gaussian slopes the Beckmann α along an axis is √2 times the rms slope along it
+    (docs/physics.md §1: α = rms |∇h| = 2σ/T for an isotropic Gaussian surface); the other NDFs (*ndf*, with
+    *ndf_shape*) match the median slope instead (:mod:`waveoptics.brdf.ndf_fit`: GGX has no finite rms slope).
 
     Why 10 λ_max: a component of period Λ deflects light by sin θ = λ/Λ; beyond 10 λ that is < 0.1 (6°), where
     a slope distribution describes the deflection (stationary phase, docs/physics.md §1), while shorter periods
@@ -617,10 +633,13 @@ def split_scales(surface: HeightField, wavelengths_nm, *, cutoff_period_m: float
     micro_hf = HeightField(micro_h, surface.dx, surface.dy, surface.mask, dict(meta))
     nano_hf = HeightField(nano_h, surface.dx, surface.dy, surface.mask, {**meta, "split_cutoff_period_m": Lc})
     sx, sy = surfaces.rms_slopes(micro_hf)
-    ax = np.sqrt(2) * (sx if sx is not None else sy)
-    ay = np.sqrt(2) * (sy if sy is not None else sx)
+    ax, ay = _alpha_of_slopes(micro_hf, ndf, ndf_shape, sx, sy)
     iso = abs(ax - ay) <= 0.05 * max(ax, ay)
-    micro = Micro(alpha=float(np.sqrt(ax * ay)) if iso else float(ax), alpha_y=None if iso else float(ay), ndf=ndf)
+    if not iso and not NDFS[ndf].anisotropic:
+        ax = ay = float(np.sqrt(ax * ay))   # the NDF has no anisotropic form: the geometric mean, said in info
+        iso = True
+    micro = Micro(alpha=float(np.sqrt(ax * ay)) if iso else float(ax), alpha_y=None if iso else float(ay), ndf=ndf,
+                  ndf_shape=ndf_shape)
     info = {"cutoff_period_m": Lc, "micro_rms_height_m": float(micro_h.std()), "micro_rms_slopes": [sx, sy],
             "nano_rms_height_m": float(nano_h.std()), "micro_alpha": [float(ax), float(ay)]}
     return micro, nano_hf, info
