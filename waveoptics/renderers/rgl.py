@@ -104,18 +104,15 @@ class RGLGrid:
 
 
 def _mitsuba():
+    """Mitsuba 3 with the variant already set (any: the warps run in scalar and JIT variants), else scalar_rgb;
+    a missing installation is one line naming the extra (:func:`waveoptics.renderers.mitsuba.load_mitsuba`)."""
     from .mitsuba import load_mitsuba
 
-    import importlib.util
-    if importlib.util.find_spec("mitsuba") is not None:
+    try:
         import mitsuba as mi
-        try:
-            mi.variant()
-            if mi.variant() is not None:
-                return mi
-        except Exception:
-            pass
-    return load_mitsuba("scalar_rgb")
+    except ImportError:
+        return load_mitsuba("scalar_rgb")
+    return mi if mi.variant() is not None else load_mitsuba("scalar_rgb")
 
 
 def _points(mi, xy):
