@@ -80,13 +80,18 @@ def run_bad_inputs():
     return rows
 
 
-def run_lost_tests():
-    """(test name, outcome, skip reason) of the nothing-lost / console-script / --debug tests, run by pytest."""
+#: the round-two tests of issue 17: regressions per class, whole output sets under SIGKILL, the CLI fuzz test
+ROUND_TWO = ("test_reliability_round2.py", "test_output_sets.py", "test_cli_fuzz.py")
+
+
+def run_lost_tests(files=("test_bad_input.py",), k=LOST_TESTS):
+    """(test name, outcome, skip reason) of tests in *files* (by default the nothing-lost / console-script / --debug
+    tests), run by pytest."""
     with tempfile.TemporaryDirectory() as tmp:
         xml = Path(tmp) / "r.xml"
-        subprocess.run([sys.executable, "-m", "pytest", str(ROOT / "tests" / "test_bad_input.py"), "-q",
-                        "-p", "no:cacheprovider", "-k", LOST_TESTS, f"--junitxml={xml}"], cwd=ROOT,
-                       capture_output=True, text=True, timeout=900)
+        subprocess.run([sys.executable, "-m", "pytest", *(str(ROOT / "tests" / f) for f in files), "-q",
+                        "-p", "no:cacheprovider", *(("-k", k) if k else ()), f"--junitxml={xml}"], cwd=ROOT,
+                       capture_output=True, text=True, timeout=1800)
         out = []
         for tc in ET.parse(xml).getroot().iter("testcase"):
             kinds = {child.tag: child for child in tc}
@@ -105,7 +110,7 @@ def _status(out) -> str:
             }.get(out.status, f"**FAIL** {out.status}: {_esc(out.message)}")
 
 
-def render(cases, props, bads, lost, device) -> str:
+def render(cases, props, bads, lost, device, round_two=()) -> str:
     n_run = sum(1 for _, o, _ in cases if o.status != "skipped")
     nonfinite_now = sum(o.nonfinite for _, o, _ in cases)
     negative_now = sum(o.negative for _, o, _ in cases)
@@ -164,7 +169,9 @@ def render(cases, props, bads, lost, device) -> str:
           "(next section). Below ~1e-10 of the lobe peak float32 |U|² is noise: use `--precision float64` for deeper "
           "dynamic range.",
           "* **Files.** Every output goes through a temporary name in the same directory and `os.replace`; "
-          "existing outputs are refused without `--overwrite`.", ""]
+          "existing outputs are refused without `--overwrite`. Sets of files (simulate, scatter, compare, render, "
+          "scene runs) are staged whole and moved under a journal, their manifest (summary.json, plan.json, "
+          "compare.json) last (`waveoptics.io.staged_outputs`).", ""]
 
     L += ["## float32 against float64 (direct Kirchhoff kernel)", "",
           "| case | quantity | value |", "|---|---|---|"]
@@ -206,6 +213,24 @@ def render(cases, props, bads, lost, device) -> str:
         L.append(f"| `{name}` | {outcome}{': ' + _esc(why) if why else ''} |")
     L.append("")
 
+    import test_cli_fuzz as fuzz
+
+    FUZZ_EXAMPLES = fuzz.EXAMPLES
+    draws = len(fuzz.BASE) * FUZZ_EXAMPLES
+    L += ["## Round two: every class of failure, whole output sets, a fuzzed CLI", "",
+          "From `tests/test_reliability_round2.py` (one regression test per class of failure found by an adversarial "
+          "user), `tests/test_output_sets.py` (a child process kills itself with SIGKILL while staging and before "
+          "each move of the commit; what is left is the whole earlier set, or a directory without its manifest "
+          "whose journal the next run replays, never a mix) and `tests/test_cli_fuzz.py` (hypothesis, derandomized: "
+          f"{FUZZ_EXAMPLES} draws of up to four options with valid, edge and junk values for each of "
+          f"{len(fuzz.BASE)} commands, {draws} invocations: exit 0 or 2, one stderr line on 2, no traceback, "
+          "every printed or written number finite, memory within the budget).", "",
+          f"Passing: {sum(1 for _, o, _ in round_two if o == 'passed')} of {len(round_two)}.", "",
+          "| test | result |", "|---|---|"]
+    for name, outcome, why in round_two:
+        L.append(f"| `{name}` | {outcome}{': ' + _esc(why) if why else ''} |")
+    L.append("")
+
     L += ["## Found and fixed", "", "| case | what was wrong, and the fix |", "|---|---|"]
     for c in fixed_cases:
         L.append(f"| `{c.id}` | {_esc(c.fixed)} |")
@@ -223,8 +248,9 @@ def render(cases, props, bads, lost, device) -> str:
           "the two-scale model caps it.",
           "* Correlation lengths far below λ are outside the tangent-plane model: the result stays finite and "
           "bounded (scattered light is lost, never created), but it is not physical.",
-          "* Out-of-memory requests are caught as one line in the CLI, but a request that fits in memory yet runs "
-          "for hours (e.g. a 16384² direction grid with many wavelengths) is not refused up front.", ""]
+          "* Memory is estimated before any work for simulate, compare, scatter, table and generated surfaces "
+          "(`--max-memory`, default half the machine's memory); time is estimated for scenes (`plan`) and sweeps "
+          "only, so a request that fits in memory may still run long.", ""]
     return "\n".join(L)
 
 
@@ -235,10 +261,11 @@ def main():
     props = run_properties()
     bads = run_bad_inputs()
     lost = run_lost_tests()
+    round_two = run_lost_tests(ROUND_TWO, k=None)
     from waveoptics.io.files import atomic_path
 
     with atomic_path(DOC) as tmp:
-        tmp.write_text(render(cases, props, bads, lost, device) + "\n")
+        tmp.write_text(render(cases, props, bads, lost, device, round_two) + "\n")
     counts = Counter(o.status for _, o, _ in cases)
     print(f"wrote {DOC}: {len(cases)} hard cases {dict(counts)}, {len(bads)} bad inputs, {len(props)} properties")
 

@@ -15,7 +15,7 @@ import warnings
 
 from .. import __version__
 from ..errors import FieldError
-from ._common import field_flags
+from ._common import HELD_WARNINGS, field_flags
 from ._options import deprecations
 
 
@@ -77,9 +77,19 @@ def main(argv=None) -> int:
     debug = getattr(args, "debug", False)
     with warnings.catch_warnings():
         _warning_channel(args)
-        for note in deprecations(args):   # renamed options (cli/_options.py RENAMED): one line each
-            warnings.warn(note, UserWarning, stacklevel=1)
-        return _run(args, parser, debug)
+        HELD_WARNINGS.hold()
+        try:
+            for note in deprecations(args):   # renamed options (cli/_options.py RENAMED): one line each
+                warnings.warn(note, UserWarning, stacklevel=1)
+            rc = _run(args, parser, debug)
+        except BaseException:
+            HELD_WARNINGS.drop()
+            raise
+        if rc == 2:   # a refusal is one line: the warnings that came before it are dropped (the error names its cause)
+            HELD_WARNINGS.drop()
+        else:
+            HELD_WARNINGS.release()
+        return rc
 
 
 def _warning_channel(args) -> None:
@@ -97,14 +107,27 @@ def _warning_channel(args) -> None:
         text = " ".join(str(message).split())
         if text not in seen:
             seen.add(text)
-            print(f"waveoptics {args.command}: warning: {text}", file=sys.stderr)
+            HELD_WARNINGS.emit(f"waveoptics {args.command}: warning: {text}")
 
     warnings.showwarning = show
+
+
+def _memory_budget(args) -> None:
+    """``--max-memory``, where a command has it, is the budget of every estimate this process makes (also those
+    deep in the library, e.g. a generated surface's): validated once and set as ``WAVEOPTICS_MAX_MEMORY``."""
+    import os
+
+    spec = getattr(args, "max_memory", None)
+    if spec is not None:
+        from ..runtime import parse_size
+
+        os.environ["WAVEOPTICS_MAX_MEMORY"] = str(parse_size(spec))
 
 
 def _run(args, parser, debug) -> int:
     try:
         _check_device(args)
+        _memory_budget(args)
         rc = args.func(args)
     except KeyboardInterrupt:
         print("waveoptics: interrupted", file=sys.stderr)

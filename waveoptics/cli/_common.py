@@ -98,10 +98,41 @@ def emit(args, data, text: str | None = None) -> None:
         print(text)
 
 
+class _HeldWarnings:
+    """The warning lines of a command, held back until it either starts long work (a progress bar), or ends: on
+    success they are printed, on an error dropped, so that a refused command prints its one error line and nothing
+    else (its error names the cause), while a long run still shows its warnings before the wait."""
+
+    def __init__(self):
+        self.lines: list[str] | None = None   # None: print at once
+
+    def hold(self) -> None:
+        self.lines = []
+
+    def emit(self, line: str) -> None:
+        if self.lines is None:
+            print(line, file=sys.stderr)
+        else:
+            self.lines.append(line)
+
+    def release(self) -> None:
+        lines, self.lines = self.lines or [], None
+        for line in lines:
+            print(line, file=sys.stderr)
+
+    def drop(self) -> None:
+        self.lines = None
+
+
+HELD_WARNINGS = _HeldWarnings()
+
+
 def progress(iterable=None, *, total=None, desc=None, args=None):
-    """A tqdm progress bar on stderr, silent under ``--json`` or when stderr is not a terminal."""
+    """A tqdm progress bar on stderr, silent under ``--json`` or when stderr is not a terminal. Long work starts
+    here, so the warnings held so far are printed first."""
     from tqdm.auto import tqdm
 
+    HELD_WARNINGS.release()
 
     quiet = (args is not None and getattr(args, "json", False)) or not sys.stderr.isatty()
     return tqdm(iterable, total=total, desc=desc, disable=quiet, file=sys.stderr, leave=False)

@@ -81,6 +81,8 @@ OPTIONS = {o.flag: o for o in (
                         "channel)", "N|NAME"),
     Option("--output", "where the outputs go"),
     Option("--overwrite", "replace outputs that already exist"),
+    Option("--max-memory", "memory budget of the request, e.g. 4GB or 500MiB (default: half the machine's memory, "
+                           "or $WAVEOPTICS_MAX_MEMORY); a larger estimate is refused before any work", "SIZE"),
     Option("--device", "OpenCL device: substring of 'platform device' or P:D indices (default: "
                        "$WAVEOPTICS_DEVICE, else first GPU, else PoCL CPU)", "NAME"),
     Option("--json", "print machine-readable JSON (with units) on stdout"),
@@ -149,8 +151,13 @@ class _Renamed(argparse.Action):
 def renamed(parser, command: str, old: str, *, dest: str, type=None, append: bool = False) -> None:
     """Accept the old flag *old* of *command* (:data:`RENAMED`) as a hidden alias storing into *dest*."""
     new = RENAMED[(command, old)]
+    # the alias takes exactly what the new flag takes: its type and its choices (added first, so it is known)
+    target = next((a for a in parser._actions if new in a.option_strings), None)
+    choices = target.choices if target is not None else None
+    if type is None and target is not None:
+        type = target.type
     parser.add_argument(old, dest=dest, action=_Renamed, new_flag=new, type=type, default=argparse.SUPPRESS,
-                        store="append" if append else None, help=argparse.SUPPRESS)
+                        store="append" if append else None, help=argparse.SUPPRESS, choices=choices)
 
 
 def deprecations(args) -> list[str]:

@@ -28,6 +28,7 @@ def register(sub):
     p.add_argument("--tail", type=float, default=10.0, metavar="DEG",
                    help="tail = energy farther than this from the mirror direction (default 10°)")
     add_output(p, required=False, note="a directory: also write compare.json, compare.csv and compare.png")
+    option(p, "--max-memory")
     add_common(p)
     p.set_defaults(func=run)
 
@@ -37,7 +38,8 @@ def run(args):
 
     from .. import compare as cmp
     from .. import io
-    from .simulate import simulation_from_args
+    from .. import simulate as sim_mod
+    from .simulate import request_from_args, simulation_from_args
 
     angles = parse_number_list(args.incident_angles, name="angles_deg")
     check_theta(angles, name="--incident-angles")
@@ -45,10 +47,12 @@ def run(args):
         raise WaveopticsError("--incident-angles must stay below 90 degrees (the light must be above the horizon)")
     if not (0 < args.tail < 90):
         raise WaveopticsError(f"--tail {args.tail!r} is not allowed; use an angle in (0, 90) degrees")
-    files = ("compare.json", "compare.csv", "compare.png")
+    files = ("compare.csv", "compare.png", "compare.json")
+    req = request_from_args(args)
+    sim_mod.check_request_memory(req, max_memory=args.max_memory)   # before anything is created
     if args.output:
         io.prepare_outdir(args.output, overwrite=args.overwrite, expected=files)
-    sim = simulation_from_args(args)
+    sim = simulation_from_args(args, req=req)
     rows = cmp.compare(sim, angles, tail_deg=args.tail)
     data = {"parameters": sim.params, "tail_deg": args.tail, "rows": rows,
             "units": {"theta_i_deg": "deg", "albedo_Y_wave": "1 (luminance Y of the albedo's colour)",
@@ -58,16 +62,17 @@ def run(args):
                       "delta_e2000_sphere_mean": "CIEDE2000", "delta_e2000_sphere_max": "CIEDE2000"}}
     if args.output:
 
-        out = Path(args.output)
-        io.write_json(out / "compare.json", data)
         buf = _io.StringIO()
         wr = csv.DictWriter(buf, fieldnames=list(rows[0]))
         wr.writeheader()
         wr.writerows(rows)
-        with io.atomic_path(out / "compare.csv") as tmp:
-            tmp.write_text(buf.getvalue())
-        cmp.plot(rows, out / "compare.png", tail_deg=args.tail,
-                 title=f"{sim.params['material']}: two-scale vs microfacet ({sim.params['illuminant']})")
+        # the three files appear as a set, compare.json (the manifest) last (io.staged_outputs)
+        with io.staged_outputs(Path(args.output), files, last="compare.json") as out:
+            with io.atomic_path(out / "compare.csv") as tmp:
+                tmp.write_text(buf.getvalue())
+            cmp.plot(rows, out / "compare.png", tail_deg=args.tail,
+                     title=f"{sim.params['material']}: two-scale vs microfacet ({sim.params['illuminant']})")
+            io.write_json(out / "compare.json", data)
     emit(args, data, cmp.table_text(rows, args.tail) + (f"\nwrote {os.path.join(os.path.normpath(args.output), 'compare')}.{{json,csv,png}}"
                                                          if args.output else ""))
     return 0

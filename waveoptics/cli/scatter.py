@@ -34,6 +34,7 @@ def register(sub) -> None:
     option(p, "--solver", choices=("fft", "direct"), default="fft",
            note="fft: chirp-z transforms with a banded Taylor series in v_z; direct: the Kirchhoff sum")
     option(p, "--resolution", default=256)
+    option(p, "--max-memory")
     option(p, "--realizations", default=1, note="1: the whole patch")
     p.add_argument("--order", default="auto", metavar="K",
                    help="fft solver: 'auto' (exact to 1e-8) or a fixed Taylor order about the specular v_z; "
@@ -109,6 +110,7 @@ def run(args) -> int:
     fp, field = _footprint(args)
     hf = field if fp is None else None
     fresnel_function(args.material)      # refuse a bad material before computing
+    scatter.check_request_memory(args.resolution, len(wl), field.shape if fp is None else (0, 0), args.max_memory)
     prepare_outdir(args.output, overwrite=args.overwrite, expected=scatter.SCATTER_FILES)
     rt = get_runtime(args.device) if args.solver == "direct" and args.backend == "opencl" else None
     bar = progress(total=len(wl) * max(1, args.realizations), desc="scatter", args=args)
@@ -116,7 +118,7 @@ def run(args) -> int:
         warnings.simplefilter("always", scatter.DiffractionWarning)
         common = dict(solver=args.solver, resolution=args.resolution, order=order, detrend=args.detrend,
                       precision=args.precision, backend=args.backend, diffraction=args.diffraction,
-                      polarization=args.polarization, runtime=rt)
+                      polarization=args.polarization, runtime=rt, max_memory=args.max_memory)
         if fp is None:
             res = scatter.scatter(hf, (theta, phi), wl, args.material, realizations=args.realizations,
                                   window_name=args.window, progress=bar.update, **common)

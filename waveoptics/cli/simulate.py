@@ -58,12 +58,13 @@ def _surface(args):
     return load_surface(args, required=False)
 
 
-def simulation_from_args(args, bar=None):
-    """Run :func:`waveoptics.simulate.run` on the request of the scene options."""
+def simulation_from_args(args, bar=None, req=None):
+    """Run :func:`waveoptics.simulate.run` on the request of the scene options (or *req*, built from them)."""
     from .. import simulate as sim_mod
 
-    return sim_mod.run(request_from_args(args), device=args.device,
-                       progress=None if bar is None else bar.update, surface=_surface(args))
+    return sim_mod.run(req if req is not None else request_from_args(args), device=args.device,
+                       progress=None if bar is None else bar.update, surface=_surface(args),
+                       max_memory=getattr(args, "max_memory", None))
 
 
 def register(sub):
@@ -77,9 +78,7 @@ def register(sub):
     option(p, "--sphere-size", default=256)
     option(p, "--environment", note="also render both spheres lit by it (multiple importance sampling at "
                                     "--sphere-size; sphere_env_*.exr and sphere_env.png)")
-    p.add_argument("--max-memory", metavar="SIZE",
-                   help="memory budget of the run, e.g. 4GB (default: half the machine's memory, or "
-                        "$WAVEOPTICS_MAX_MEMORY); a larger estimate is refused before any work")
+    option(p, "--max-memory")
     option(p, "--spp", default=16, note="and technique, of the environment render")
     p.add_argument("--colourspace", default="sRGB", choices=["sRGB", "ACEScg", "Display P3"],
                    help="linear RGB space of brdf_rgb.exr and the RGB albedos (default sRGB; PNGs are sRGB)")

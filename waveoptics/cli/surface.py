@@ -50,6 +50,7 @@ def register(sub):
     option(g, "--size", default="64um")
     option(g, "--samples", default="1024", note="or NXxNY, NX,NY")
     option(g, "--seed", note="default: drawn and recorded")
+    option(g, "--max-memory")
     for name, (flag, text) in _MODEL_OPTIONS.items():
         g.add_argument(flag, dest=f"m_{name}", metavar="VALUE", help=text)
     g.add_argument("--exact-rms", action="store_true",

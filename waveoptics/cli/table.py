@@ -128,6 +128,7 @@ def register(sub):
                    help="wavelengths per task (default 8)")
     add_case_options(p, resolution=128)
     option(p, "--output", short="-o", required=True, metavar="OUT.h5", note="an HDF5 file")
+    option(p, "--max-memory", note="of one task")
     add_cluster_options(p)
     add_common(p)
     p.set_defaults(func=run)
@@ -148,7 +149,7 @@ def run(args):
     try:
         res = distributed.run_table(spec, args.output, surface=surface, workers=args.workers, scheduler=args.scheduler,
                                     resume=args.resume, overwrite=args.overwrite, device=args.device,
-                                    progress=bar.update)
+                                    progress=bar.update, max_memory=args.max_memory)
     finally:
         bar.close()
     n = res["computed"]

@@ -27,7 +27,7 @@ from .cases import _nano, _token, surface_digest
 from .cluster import DEFAULT_RETRIES, _check_cluster_args, _Job, _run_timed, _warm
 from .store import _refuse_or_prepare, _Store, partial_path
 
-__all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table', 'open_table']
+__all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'table_size', 'check_table_size', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table', 'open_table']
 
 #: version of the table file layout written by :func:`run_table`
 TABLE_FORMAT = "waveoptics-brdf-table"
@@ -206,9 +206,44 @@ def _check_table_path(output) -> None:
                          f"{', '.join('*' + x for x in TABLE_SUFFIXES)}", "output")
 
 
+def table_size(spec: TableSpec) -> dict:
+    """What a table request costs before any work: ``memory_bytes`` at the peak of one task (a wavelength batch on
+    the direction grid, :func:`waveoptics.simulate.memory_estimate` without sphere renders), ``file_bytes`` of the
+    uncompressed float32 datasets (brdf, microfacet, diffraction, and per realization when there are several)."""
+    from ..simulate import memory_estimate
+
+    n = int(spec.case.resolution)
+    n_l = len(spec.case.wavelengths())
+    per = len(spec.thetas_deg) * n_l * n * n * 4.0
+    return {"memory_bytes": memory_estimate(spec.case, sphere=False, n_lambda=min(spec.batch, n_l)),
+            "file_bytes": per * (3 + (spec.realizations if spec.realizations > 1 else 0))}
+
+
+def check_table_size(spec: TableSpec, output, max_memory=None) -> None:
+    """Refuse, in one line and before any work, a table whose task exceeds the memory budget
+    (:func:`waveoptics.runtime.check_memory`) or whose datasets would not fit on the output's file system."""
+    import shutil
+
+    from ..runtime import check_memory
+
+    size = table_size(spec)
+    check_memory(size["memory_bytes"], "one task of this table", "lower {resolution} or {batch}", max_memory,
+                 fields=("resolution", "batch"))
+    parent = Path(output).resolve().parent
+    try:
+        free = shutil.disk_usage(parent if parent.is_dir() else Path.cwd()).free
+    except OSError:
+        return
+    if size["file_bytes"] > free:
+        raise FieldError(f"{{output}}: the table needs up to {size['file_bytes'] / 1e9:.3g} GB and "
+                         f"{str(parent)!r} has {free / 1e9:.3g} GB free; lower {{resolution}}, the number of "
+                         "{wavelengths_nm} or of {thetas_deg}", "output", "resolution", "wavelengths_nm", "thetas_deg")
+
+
 def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = None, scheduler: str | None = None,
               client=None, resume: bool = False, overwrite: bool = False, device: str | None = None,
-              progress=None, retries: int = DEFAULT_RETRIES, task_fn: Callable = compute_block) -> dict:
+              progress=None, retries: int = DEFAULT_RETRIES, task_fn: Callable = compute_block,
+              max_memory=None) -> dict:
     """Compute a BRDF table on Dask and write it to *output* (HDF5, layout :data:`TABLE_LAYOUT`).
 
     Parameters
@@ -229,6 +264,8 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
         Retries of a task that raises.
     task_fn : callable
         The task function (default :func:`compute_block`; tests inject faults through it).
+    max_memory : int or str, optional
+        Memory budget of one task (:func:`check_table_size`, default :func:`waveoptics.runtime.memory_limit`).
 
     Returns
     -------
@@ -256,6 +293,7 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
     case = spec.case.validate()
     _check_realizations(case, spec.realizations)
     _check_cluster_args(workers, scheduler)
+    check_table_size(spec, final, max_memory)
     _refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
     if surface is not None:
         tiles = split_patch(surface, spec.realizations) if spec.realizations > 1 else [surface]

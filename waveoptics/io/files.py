@@ -2,15 +2,19 @@
 
 Every writer goes through :func:`atomic_path`: the data is written to a temporary name in the same
 directory and moved into place with :func:`os.replace` only when complete, so an interrupted or failed
-run leaves the previous result (if any) untouched.
+run leaves the previous result (if any) untouched. Sets of files (a run's EXRs, figures and summary) go through
+:func:`staged_outputs`: staged whole, then moved under a journal with the manifest last, so a killed run leaves
+the earlier set, or a directory without a manifest whose journal the next run replays (:func:`recover_staged`).
 """
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import json
 import os
 import shutil
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +22,7 @@ import OpenEXR
 
 from ..errors import OutputExistsError, WaveopticsError
 
-__all__ = ['NonFiniteOutputError', 'atomic_path', 'staged_outputs', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
+__all__ = ['NonFiniteOutputError', 'atomic_path', 'staged_outputs', 'recover_staged', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
 
 @contextlib.contextmanager
 def atomic_path(final, *, overwrite: bool = True):
@@ -56,34 +60,133 @@ def atomic_path(final, *, overwrite: bool = True):
         raise
 
 
-@contextlib.contextmanager
-def staged_outputs(directory, names, *, last=None):
-    """Write a set of output files as a whole: yield a hidden staging directory inside *directory*; when the block
-    succeeds, every file in *names* is moved from it into *directory* (*last* after the others, e.g. the summary
-    that says the set is complete) and the staging directory is removed; when it fails or is interrupted, the
-    staging directory is removed and *directory* is as it was.
+#: a staging directory's journal: written (and flushed to disk) once the new set is whole, before the first move
+JOURNAL = "journal.json"
+#: held (flock) by the process that stages a set, for as long as it runs; the kernel drops it when that process dies
+LOCK = "lock"
+#: a staging directory without a lock file younger than this (s) may still be starting up
+_YOUNG_S = 60.0
 
-    The moves are renames within one file system: a kill can only fall between two of them (a window of
-    microseconds, against the minutes of computing and writing that no longer touch the earlier set).
-    """
-    directory = Path(directory)
+
+def _stage_dirs(directory: Path):
     try:
-        stage = Path(tempfile.mkdtemp(prefix=".staging.", suffix=".partial", dir=directory))
-    except OSError as exc:
-        raise WaveopticsError(f"cannot write into {str(directory)!r}: {exc.strerror or exc}") from None
+        return sorted(p for p in directory.glob(".staging.*.partial") if p.is_dir())
+    except OSError:
+        return []
+
+
+def _owner_alive(stage: Path) -> bool:
+    """Whether the process that created *stage* still holds its lock (it is then still writing or committing)."""
+    lock = stage / LOCK
     try:
-        yield stage
-        order = [n for n in names if n != last] + ([last] if last in names else [])
-        missing = [n for n in order if not (stage / n).is_file()]
-        if missing:
-            raise WaveopticsError(f"output set in {str(directory)!r} is incomplete: {', '.join(missing)} missing")
-        for n in order:
+        fd = os.open(lock, os.O_RDWR)
+    except FileNotFoundError:   # killed before it took the lock, or still starting: judge by age
+        try:
+            return time.time() - stage.stat().st_mtime < _YOUNG_S
+        except OSError:
+            return False
+    except OSError:
+        return True             # cannot tell: leave it alone
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def _commit(stage: Path, directory: Path, order: list[str]) -> None:
+    """Move the staged set *order* (manifest last) into *directory*.
+
+    The manifest (the last name, e.g. summary.json) of the earlier set is removed first: from that moment until the
+    new manifest lands, the directory holds no manifest, i.e. no complete set, instead of a mix that looks whole.
+    Files already moved (a commit resumed after a kill) are skipped, so the commit can be replayed."""
+    with contextlib.suppress(FileNotFoundError):
+        os.unlink(directory / order[-1])
+    for n in order:
+        if (stage / n).is_file():
             try:
                 os.replace(stage / n, directory / n)
             except OSError as exc:
                 raise WaveopticsError(f"cannot write {str(directory / n)!r}: {exc.strerror or exc}") from None
+
+
+def recover_staged(directory) -> list[str]:
+    """Finish or clear what killed runs left in *directory*.
+
+    A staging directory whose owner is dead is either *journalled* (its set was whole and the commit had begun: the
+    commit is replayed, so the new set lands whole) or not (the run died while computing or writing: it is removed,
+    and the earlier set was never touched). Staging directories of live runs are left alone. Called before every
+    staged write and by :func:`prepare_outdir`; returns what it did, one line per staging directory.
+    """
+    directory = Path(directory)
+    done = []
+    for stage in _stage_dirs(directory):
+        if _owner_alive(stage):
+            continue
+        journal = stage / JOURNAL
+        try:
+            order = json.loads(journal.read_text())["order"] if journal.is_file() else None
+        except (OSError, ValueError, KeyError, TypeError):
+            order = None   # a journal cut short by the kill: its set had not started moving
+        if order:
+            _commit(stage, directory, [str(n) for n in order])
+            done.append(f"completed the interrupted output set of {str(stage)!r}")
+        else:
+            done.append(f"removed the unfinished output set {str(stage)!r}")
+        shutil.rmtree(stage, ignore_errors=True)
+    return done
+
+
+@contextlib.contextmanager
+def staged_outputs(directory, names, *, last=None):
+    """Write a set of output files as a whole: yield a hidden staging directory inside *directory*; when the block
+    succeeds, every file in *names* is moved from it into *directory* (*last*, the set's manifest such as
+    summary.json, after the others); when it fails or is interrupted, the staging directory is removed and
+    *directory* is as it was.
+
+    A kill (SIGKILL, power loss) cannot leave a mix that looks whole:
+
+    * before the set is whole, the earlier set is untouched; the next run into *directory* removes the litter;
+    * once it is whole, a journal listing the moves is written and flushed, the earlier manifest is removed, the
+      files are moved and the new manifest comes last. A kill between two moves leaves a directory *without a
+      manifest* (readers treat it as incomplete) and the journal; the next run into *directory*
+      (:func:`recover_staged`) replays the moves, so the new set lands whole.
+
+    The staging directory holds a lock for as long as its run lives, so concurrent runs never clear each other's.
+    """
+    directory = Path(directory)
+    recover_staged(directory)
+    stage = None
+    try:
+        stage = Path(tempfile.mkdtemp(prefix=".staging.", suffix=".partial", dir=directory))
+        lock_fd = os.open(stage / LOCK, os.O_RDWR | os.O_CREAT, 0o600)
+    except OSError as exc:
+        if stage is not None:
+            shutil.rmtree(stage, ignore_errors=True)
+        raise WaveopticsError(f"cannot write into {str(directory)!r}: {exc.strerror or exc}") from None
+    try:
+        fcntl.flock(lock_fd, fcntl.LOCK_EX)
+        yield stage
+        names = list(names)
+        last = last if last is not None else names[-1]
+        order = [n for n in names if n != last] + [last]
+        missing = [n for n in order if not (stage / n).is_file()]
+        if missing:
+            raise WaveopticsError(f"output set in {str(directory)!r} is incomplete: {', '.join(missing)} missing")
+        try:
+            with open(stage / (JOURNAL + ".tmp"), "w") as fh:
+                json.dump({"order": order}, fh)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(stage / (JOURNAL + ".tmp"), stage / JOURNAL)
+        except OSError as exc:
+            raise WaveopticsError(f"cannot write into {str(directory)!r}: {exc.strerror or exc}") from None
+        _commit(stage, directory, order)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+        os.close(lock_fd)
 
 
 def _umask() -> int:
@@ -112,6 +215,7 @@ def prepare_outdir(path, *, overwrite: bool = False, expected=()) -> Path:
         raise WaveopticsError(f"cannot create output directory {str(p)!r}: {exc.strerror}") from None
     if not os.access(p, os.W_OK | os.X_OK):
         raise WaveopticsError(f"output directory {str(p)!r} is not writable")
+    recover_staged(p)   # a set a killed run was moving into place lands whole before anything checks for it
     if not overwrite:
         clash = [name for name in expected if (p / name).exists()]
         if clash:

@@ -148,82 +148,85 @@ def execute(plan: Plan, outdir, *, overwrite: bool = False, device=None, progres
     sc = plan.scene
     data = plan.as_dict()
     results = {"scene": sc.name, "materials": []}
-    t_all = time.perf_counter()
-    for e, ed in zip(plan.entries, data["materials"]):
-        res = run_entry(e, device=device, progress=progress)
-        t_out = time.perf_counter()
-        p = entry_prefix(e, plan)
-        w = e.colour_wavelengths_nm
-        written, albedo = [], {}
-        for (th, ph), L in res.lobes.items():
-            t = _tag(th, ph)
-            if e.directions == "hemisphere":
-                albedo[t] = {"light_deg": [th, ph], "albedo": L.albedo("total"),
-                             "rgb": colour.reflectance_to_rgb(L.albedo("total"), w, e.spd)}
-                hdr = {k: str(v) for k, v in L.grid.header().items()}
-                hdr.update(waveoptics_incident_deg=f"{th:g} {ph:g}", waveoptics_material=e.material.name,
-                           waveoptics_unit="1/sr (a BRDF, not multiplied by cos theta_o)",
-                           waveoptics_quantity="BRDF f (1/sr), not x cos", waveoptics_scene=sc.name)
-                if sc.output.spectral_brdf:
-                    name = f"{p}_{t}_brdf_spectral.exr"
-                    io.write_spectral_exr(out / name, {float(lam): L.grid.to_image(L.total[i])
-                                                       for i, lam in enumerate(w)},
-                                          header=hdr, overwrite=True)
-                    written.append(name)
-                if sc.output.rgb_images:
-                    rgb = colour.reflectance_to_rgb(np.moveaxis(L.total, 0, -1), w, e.spd)
-                    io.write_exr(out / f"{p}_{t}_brdf_rgb.exr",
-                                 {c: L.grid.to_image(rgb[..., k]) for k, c in enumerate("RGB")}, header=hdr,
-                                 overwrite=True)
-                    img = np.where(L.grid.inside[..., None], render.tonemap(rgb), 0.0)[::-1]  # row 0 = top = +v
-                    k = max(1, 256 // max(img.shape[:2]))                   # nearest-neighbour zoom for viewing
-                    img = np.repeat(np.repeat(img, k, axis=0), k, axis=1)
-                    figures.save_png(out / f"{p}_{t}_brdf.png", img)
-                    written += [f"{p}_{t}_brdf_rgb.exr", f"{p}_{t}_brdf.png"]
-        sphere = None
-        if res.sphere_brdfs is not None and sc.output.rgb_images:
-            first = res.lobes[e.light_directions_deg[0]]
-            sim = Simulation(lobes=first, brdf_wave=res.sphere_brdfs[0], brdf_microfacet=res.sphere_brdfs[1],
-                             illuminant=e.spd, params={"incident_deg": list(e.light_directions_deg[0])})
-            wave, mfimg, dEmap, mask = render_spheres(sim, sc.output.sphere_size)
-            io.write_exr(out / f"{p}_sphere.exr", {"R": wave[..., 0], "G": wave[..., 1], "B": wave[..., 2]},
-                         header={"waveoptics_scene": sc.name, "waveoptics_material": e.material.name}, overwrite=True)
-            figures.save_png(out / f"{p}_sphere.png", render.tonemap(wave))
-            written += [f"{p}_sphere.exr", f"{p}_sphere.png"]
-            sphere = {"delta_e2000_vs_microfacet": {"mean": float(dEmap[mask].mean()) if mask.any() else 0.0,
-                                                    "max": float(dEmap[mask].max()) if mask.any() else 0.0}}
-        rows = view_values(res)
-        rows_mf = view_values(res, "microfacet")
-        rgb = _rgb_rows(rows, w, e.spd)
-        rgb_mf = _rgb_rows(rows_mf, w, e.spd)
-        for r, c, cm_ in zip(rows, rgb, rgb_mf):
-            r["rgb"] = c
-            r["microfacet_rgb"] = cm_
-            r["delta_e2000_vs_microfacet"] = float(colour.delta_e2000(c, cm_))
-        if sc.output.tables:
-            name = f"{p}_table.csv"
-            with io.atomic_path(out / name) as tmp:
-                # units in every header; RGB is linear sRGB of the BRDF under the light, white-balanced to the
-                # light (a white reflector is grey under a 532 nm laser too): said in the header, not assumed
-                light = str(getattr(e.spd, "name", e.light_name)).replace(",", ";")
-                wb = f"linear sRGB 1/sr white-balanced to {light}"
-                head = ["light_theta_deg", "light_phi_deg", "view_theta_deg", "view_phi_deg"] + \
-                       [f"f_{lam:g}nm_per_sr" for lam in w] + [f"{c} ({wb})" for c in "RGB"]
-                lines = [",".join(head)]
-                for r in rows:
-                    vals = r["light_deg"] + r["view_deg"] + list(r["brdf"]) + list(r["rgb"])
-                    lines.append(",".join(f"{v:.9g}" for v in vals))
-                tmp.write_text("\n".join(lines) + "\n")
-            written.append(name)
-        t_written = time.perf_counter() - t_out
-        ed.update(measured_time_s=res.time_s, outputs_time_s=t_written, files=written,
-                  estimate_ratio=res.time_s / e.estimated_time_s if e.estimated_time_s > 0 else None)
-        results["materials"].append({"name": e.name, "light": e.light_name, "wavelengths_nm": w,
-                                     "views": [{k: v for k, v in r.items() if k != "cos_i"} for r in rows],
-                                     "albedo": albedo, "sphere": sphere, "measured_time_s": res.time_s})
-    data["measured_time_s"] = float(sum(m["measured_time_s"] for m in data["materials"]))
-    data["run_time_s"] = time.perf_counter() - t_all
-    data["files"] = files
-    io.write_json(out / "results.json", results)
-    io.write_json(out / "plan.json", data)
+    # the whole set is staged and moved into place at the end, plan.json (the manifest) last: a run that fails or
+    # is killed leaves the earlier set, or no manifest and a journal the next run completes (io.staged_outputs)
+    with io.staged_outputs(out, files, last="plan.json") as stage:
+        t_all = time.perf_counter()
+        for e, ed in zip(plan.entries, data["materials"]):
+            res = run_entry(e, device=device, progress=progress)
+            t_out = time.perf_counter()
+            p = entry_prefix(e, plan)
+            w = e.colour_wavelengths_nm
+            written, albedo = [], {}
+            for (th, ph), L in res.lobes.items():
+                t = _tag(th, ph)
+                if e.directions == "hemisphere":
+                    albedo[t] = {"light_deg": [th, ph], "albedo": L.albedo("total"),
+                                 "rgb": colour.reflectance_to_rgb(L.albedo("total"), w, e.spd)}
+                    hdr = {k: str(v) for k, v in L.grid.header().items()}
+                    hdr.update(waveoptics_incident_deg=f"{th:g} {ph:g}", waveoptics_material=e.material.name,
+                               waveoptics_unit="1/sr (a BRDF, not multiplied by cos theta_o)",
+                               waveoptics_quantity="BRDF f (1/sr), not x cos", waveoptics_scene=sc.name)
+                    if sc.output.spectral_brdf:
+                        name = f"{p}_{t}_brdf_spectral.exr"
+                        io.write_spectral_exr(stage / name, {float(lam): L.grid.to_image(L.total[i])
+                                                           for i, lam in enumerate(w)},
+                                              header=hdr, overwrite=True)
+                        written.append(name)
+                    if sc.output.rgb_images:
+                        rgb = colour.reflectance_to_rgb(np.moveaxis(L.total, 0, -1), w, e.spd)
+                        io.write_exr(stage / f"{p}_{t}_brdf_rgb.exr",
+                                     {c: L.grid.to_image(rgb[..., k]) for k, c in enumerate("RGB")}, header=hdr,
+                                     overwrite=True)
+                        img = np.where(L.grid.inside[..., None], render.tonemap(rgb), 0.0)[::-1]  # row 0 = top = +v
+                        k = max(1, 256 // max(img.shape[:2]))                   # nearest-neighbour zoom for viewing
+                        img = np.repeat(np.repeat(img, k, axis=0), k, axis=1)
+                        figures.save_png(stage / f"{p}_{t}_brdf.png", img)
+                        written += [f"{p}_{t}_brdf_rgb.exr", f"{p}_{t}_brdf.png"]
+            sphere = None
+            if res.sphere_brdfs is not None and sc.output.rgb_images:
+                first = res.lobes[e.light_directions_deg[0]]
+                sim = Simulation(lobes=first, brdf_wave=res.sphere_brdfs[0], brdf_microfacet=res.sphere_brdfs[1],
+                                 illuminant=e.spd, params={"incident_deg": list(e.light_directions_deg[0])})
+                wave, mfimg, dEmap, mask = render_spheres(sim, sc.output.sphere_size)
+                io.write_exr(stage / f"{p}_sphere.exr", {"R": wave[..., 0], "G": wave[..., 1], "B": wave[..., 2]},
+                             header={"waveoptics_scene": sc.name, "waveoptics_material": e.material.name}, overwrite=True)
+                figures.save_png(stage / f"{p}_sphere.png", render.tonemap(wave))
+                written += [f"{p}_sphere.exr", f"{p}_sphere.png"]
+                sphere = {"delta_e2000_vs_microfacet": {"mean": float(dEmap[mask].mean()) if mask.any() else 0.0,
+                                                        "max": float(dEmap[mask].max()) if mask.any() else 0.0}}
+            rows = view_values(res)
+            rows_mf = view_values(res, "microfacet")
+            rgb = _rgb_rows(rows, w, e.spd)
+            rgb_mf = _rgb_rows(rows_mf, w, e.spd)
+            for r, c, cm_ in zip(rows, rgb, rgb_mf):
+                r["rgb"] = c
+                r["microfacet_rgb"] = cm_
+                r["delta_e2000_vs_microfacet"] = float(colour.delta_e2000(c, cm_))
+            if sc.output.tables:
+                name = f"{p}_table.csv"
+                with io.atomic_path(stage / name) as tmp:
+                    # units in every header; RGB is linear sRGB of the BRDF under the light, white-balanced to the
+                    # light (a white reflector is grey under a 532 nm laser too): said in the header, not assumed
+                    light = str(getattr(e.spd, "name", e.light_name)).replace(",", ";")
+                    wb = f"linear sRGB 1/sr white-balanced to {light}"
+                    head = ["light_theta_deg", "light_phi_deg", "view_theta_deg", "view_phi_deg"] + \
+                           [f"f_{lam:g}nm_per_sr" for lam in w] + [f"{c} ({wb})" for c in "RGB"]
+                    lines = [",".join(head)]
+                    for r in rows:
+                        vals = r["light_deg"] + r["view_deg"] + list(r["brdf"]) + list(r["rgb"])
+                        lines.append(",".join(f"{v:.9g}" for v in vals))
+                    tmp.write_text("\n".join(lines) + "\n")
+                written.append(name)
+            t_written = time.perf_counter() - t_out
+            ed.update(measured_time_s=res.time_s, outputs_time_s=t_written, files=written,
+                      estimate_ratio=res.time_s / e.estimated_time_s if e.estimated_time_s > 0 else None)
+            results["materials"].append({"name": e.name, "light": e.light_name, "wavelengths_nm": w,
+                                         "views": [{k: v for k, v in r.items() if k != "cos_i"} for r in rows],
+                                         "albedo": albedo, "sphere": sphere, "measured_time_s": res.time_s})
+        data["measured_time_s"] = float(sum(m["measured_time_s"] for m in data["materials"]))
+        data["run_time_s"] = time.perf_counter() - t_all
+        data["files"] = files
+        io.write_json(stage / "results.json", results)
+        io.write_json(stage / "plan.json", data)
     return data

@@ -51,6 +51,10 @@ def _number(value, name: str, *, lo=None, lo_open=False, hi=None) -> float:
     return v
 
 
+#: peak bytes per sample while generating a field (see :func:`_grid`)
+SAMPLE_BYTES = 90.0
+
+
 def _grid(size, samples) -> tuple[int, int, float, float]:
     """(nx, ny, dx, dy) from *size* (L or (Lx, Ly), m) and *samples* (n or (nx, ny)).
 
@@ -71,6 +75,10 @@ def _grid(size, samples) -> tuple[int, int, float, float]:
     nx, ny = (int(nsf[0]), int(nsf[0])) if len(nsf) == 1 else (int(nsf[0]), int(nsf[1]))
     if nx * ny > 2**27:
         raise WaveopticsError(f"samples {nx}x{ny} is too many; at most 2^27 samples per field")
+    from ..runtime import check_memory
+    # a generated field peaks at about 84 bytes per sample (complex FFT of the noise and its filter; GNU time,
+    # 4096² samples: 1.6 GB): refuse, before any work, a field the memory budget cannot hold
+    check_memory(SAMPLE_BYTES * nx * ny, f"a {nx}x{ny} surface", "lower {samples}", fields=("samples",))
     if isinstance(size, str) and "," in size:
         size = size.split(",")
     if isinstance(size, (list, tuple, np.ndarray)):

@@ -39,6 +39,12 @@ from ..errors import WaveopticsError
 
 __all__ = ['HeightField']
 
+#: largest |height| (m) a height field may hold, offsets included: a kilometre is far beyond any surface of wave
+#: optics (a metre-high offset over nanometre relief is a hard case that must still work), while heights near
+#: float64's range overflow every slope, phase and variance computed from them
+HEIGHT_MAX_M = 1e3
+
+
 @dataclass(frozen=True, eq=False)
 class HeightField:
     """Surface heights on a regular grid.
@@ -80,6 +86,10 @@ class HeightField:
             raise WaveopticsError(f"height field must be a non-empty 2-D grid, got shape {np.shape(self.heights)}")
         if not np.all(np.isfinite(h)):
             raise WaveopticsError("height field holds NaN or Inf values; heights must be finite (use a mask)")
+        top = float(np.max(np.abs(h)))
+        if top > HEIGHT_MAX_M:   # slopes, phases and variances of such heights overflow (and no optics is left)
+            raise WaveopticsError(f"height field reaches {top:.3g} m; heights beyond {HEIGHT_MAX_M:g} m are not a "
+                                  "surface this tool models (were they in another unit?)")
         dy = self.dx if self.dy is None else self.dy
         for name, v in (("dx", self.dx), ("dy", dy)):
             try:
