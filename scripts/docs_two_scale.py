@@ -56,31 +56,40 @@ def limits_table() -> str:
 
 
 def guard_table():
-    """The coherent-loss guard's factor against incidence and micro roughness on one height field."""
+    """The coherent-loss guard's factor against incidence and micro roughness, on one height field and one PSD."""
     mat = materials.get_material("1+6j")
     grid = DirectionGrid.hemisphere(96)
-    nano = twoscale.Nano(surface=surfaces.gaussian(24.6e-9, 1.65e-6, 128 * 137.5e-9, 128, 0))
+    cases = (("height field, Gaussian σ = 24.6 nm, T = 1.65 µm",
+              twoscale.Nano(surface=surfaces.gaussian(24.6e-9, 1.65e-6, 128 * 137.5e-9, 128, 0))),
+             ("PSD, ABC σ = 40 nm, B = 3.7 µm, C = 2.2",
+              twoscale.Nano(model=surfaces.PSDModel("abc", sigma=40e-9, B=3.7e-6, C=2.2))))
     thetas = (0.0, 40.0, 70.0, 80.0, 85.0)
-    rows = ["  | micro α | " + " | ".join(f"θ_i = {t:g}°" for t in thetas) + " |",
-            "  |---|" + "---|" * len(thetas)]
-    for alpha in (0.0, 0.3):
-        vals = []
-        for t in thetas:
-            L = twoscale.evaluate(direction_from_angles(t, 0.0), [550.0], mat, twoscale.Micro(alpha=alpha), nano,
-                                  grid, kd=0)
-            vals.append(f"{L.info['diffraction_energy_scale'][0]:.3f}")
-        rows.append(f"  | {alpha:g} | " + " | ".join(vals) + " |")
+    rows = ["  | nano roughness | micro α | " + " | ".join(f"θ_i = {t:g}°" for t in thetas) + " |",
+            "  |---|---|" + "---|" * len(thetas)]
+    for label, nano in cases:
+        for alpha in (0.0, 0.3):
+            vals = []
+            for t in thetas:
+                L = twoscale.evaluate(direction_from_angles(t, 0.0), [550.0], mat, twoscale.Micro(alpha=alpha), nano,
+                                      grid, kd=0)
+                vals.append(f"{L.info['diffraction_energy_scale'][0]:.3f}")
+            rows.append(f"  | {label} | {alpha:g} | " + " | ".join(vals) + " |")
     return "\n".join(rows)
 
 
 def band_table():
-    """σ, relevant σ, the share of σ² beyond the band and the light the full-σ exp(−g) withholds from the lobe."""
+    """Per surface and λ at θ_i = 30°: σ, σ_rel, the share of σ² beyond the band, the light the full-σ exp(−g) would
+    withhold from both halves, the share of the reflected light the band-limited lobe scatters (E), the share of it
+    the multiple-order terms returned to the band, and the two-scale albedo over F (micro α = 0)."""
     cases = (("Al default", "Al", surfaces.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)),
              ("Au, heavy tail", "Au", surfaces.PSDModel("abc", sigma=39e-9, B=3.7e-6, C=2.34)),
              ("Au, Gaussian", "Au", surfaces.PSDModel("gaussian", sigma=10e-9, T=1e-6)))
-    rows = ["| surface | λ (nm) | σ (nm) | σ_rel (nm) | σ² beyond the band | light withheld F (e^{−g_rel} − e^{−g}) |",
-            "|---|---|---|---|---|---|"]
+    rows = ["| surface | λ (nm) | σ (nm) | σ_rel (nm) | σ² beyond the band | full-σ exp(−g) would withhold | E | "
+            "returned to the band | albedo / F |",
+            "|---|---|---|---|---|---|---|---|---|"]
     s, c = 0.5, np.sqrt(0.75)
+    grid = DirectionGrid.hemisphere(128)
+    wi = direction_from_angles(30.0, 0.0)
     for name, mat_name, m in cases:
         mat = materials.get_material(mat_name)
         for lam in (380.0, 550.0, 700.0):
@@ -88,9 +97,12 @@ def band_table():
             k2 = (4 * np.pi * c / (lam * 1e-9)) ** 2
             F = float(np.ravel(mat.F(np.array([c]), lam))[0])
             lost = F * (np.exp(-k2 * rel) - np.exp(-k2 * m.sigma ** 2))
+            bs = scatter.band_series(m, lam)
+            L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0), twoscale.Nano(model=m), grid, kd=0)
             rows.append(f"| {name} {m.kind} σ={m.sigma * 1e9:g} nm | {lam:g} | {m.sigma * 1e9:.3g} | "
                         f"{np.sqrt(rel) * 1e9:.3g} | {scatter.beyond_band_fraction(m.sigma ** 2, rel):.3f} | "
-                        f"{lost:.4f} |")
+                        f"{lost:.4f} | {float(bs.scattered_albedo(30.0, material=mat)):.4f} | "
+                        f"{bs.redistributed_share(s, 2 * c):.4f} | {L.albedo()[0] / F:.5f} |")
     return "\n".join(rows)
 
 
@@ -149,19 +161,23 @@ K: the F = 1 microfacet lobe re-centred on the mirror direction, whose sum is th
 * The PSD route assumes Gaussian height statistics and converges for g ≲ 30; the Kirchhoff route is scalar and
   tangent-plane (no polarization, no multiple scattering at the nano scale, correlation lengths ≳ λ).
 * **Grazing incidence**: the tangent-plane factor of the Kirchhoff lobe grows as 1/cos θ_i, so towards grazing
-  incidence the diffracted lobe would hold more light than the coherent lobe gives up. A guard scales it down to
-  that light (`twoscale._cap_to_coherent_loss`; the factor is `Lobes.info["diffraction_energy_scale"]`); each
-  facet's nano lobe already carries the share 1 − A(θ_d) its own coherent lobe gives up, so below ~70° the guard
-  hardly acts. Measured factor (Gaussian height field σ = 24.6 nm, T = 1.65 µm, n = 1 + 6i, 550 nm, 96² grid):
+  incidence the lobe scatters more and more light (physics.md §9: beyond ~75° more than first-order Rayleigh-Rice
+  theory says). On the PSD route the coherent fraction is the complement of what the lobe scatters, so the halves
+  add up to F at every angle until the lobe alone would hold more than F; on the height-field route the coherent
+  fraction is |χ̂|². Where the diffracted lobe holds more than the coherent lobe gives up (by more than 1 %), a
+  guard scales it down to that light (`twoscale._cap_to_coherent_loss`; the factor is
+  `Lobes.info["diffraction_energy_scale"]`). Measured factor (n = 1 + 6i, 550 nm, 96² grid):
 
 {guard_table()}
 
   Other diffraction models (`--diffraction`, docs/wave-optics.md) have other factors; none is validated at grazing
   incidence yet.
 * **Roughness that cannot scatter** (physics.md §9): only surface frequencies inside the propagating band
-  |f + sinθ_i/λ| ≤ 1/λ send light into real directions, but the coherent reduction exp(−g) still uses the full σ.
-  The light it withholds for the frequencies beyond the band never reaches the diffracted lobe; `summary.json`
-  reports the share of σ² beyond the band per wavelength (`nano_band`). Measured at θ_i = 30°:
+  |f + sinθ_i/λ| ≤ 1/λ send light into real directions. The PSD route works with the surface band-limited to
+  them: the lobe is the Kirchhoff series of σ_rel, and the coherent fraction is the complement of the light that
+  lobe scatters (E), so nothing is withheld. A coherent reduction exp(−g) with the full σ would withhold the
+  light in the "full-σ" column (it did before). `summary.json` reports per wavelength the share of σ² beyond the
+  band, E and the share returned to the band (`nano_band`). Measured at θ_i = 30°, micro α = 0:
 
 {band_table()}
 

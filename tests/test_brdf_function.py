@@ -85,16 +85,26 @@ def test_no_nano_roughness_is_the_microfacet_model_exactly():
 
 
 def test_series_sum_equals_the_term_by_term_series():
+    """The classical series' (c, q) table and the band-limited series' (√g, q) and K tables against their own
+    term-by-term sums (Σ_m p_m(g) H_m, K = Σ p_m / Σ p_m B_m per point)."""
     rng = np.random.default_rng(5)
     wi, wo = _random_dirs(rng, 2000), _random_dirs(rng, 2000)
+    k = 2 * np.pi / 450e-9
+    q = k * np.hypot(wi[:, 0] + wo[:, 0], wi[:, 1] + wo[:, 1])
     for spec in ("abc:sigma=20nm,B=2um,C=2.6", "gaussian:sigma=60nm,T=1um"):
         model = make_nano(spec, [450.0]).model
-        ref = scatter.scattered_lobe(wi, wo, 450.0, model)
-        k = 2 * np.pi / 450e-9
-        q = k * np.hypot(wi[:, 0] + wo[:, 0], wi[:, 1] + wo[:, 1])
+        ref = scatter.scattered_lobe(wi, wo, 450.0, model, band_limited=False)
         got = scatter.series_sum(model, 450.0)(q, wi[:, 2] + wo[:, 2]) * scatter.obliquity(wi, wo, 450.0)
         big = ref > 1e-4 * ref.max()
         assert np.max(np.abs(got[big] - ref[big]) / ref[big]) < 2e-3
+        bs = scatter.band_series(model, 450.0)
+        s_i, s_o = np.hypot(wi[:, 0], wi[:, 1]), np.hypot(wo[:, 0], wo[:, 1])
+        s2 = 0.5 * (bs.sigma2_rel(s_i) + bs.sigma2_rel(s_o))
+        c = wi[:, 2] + wo[:, 2]
+        exact = bs.terms(q, c, s2, s_i, s_o, exact=True)
+        table = bs.terms(q, c, s2, s_i, s_o)
+        big = exact > 1e-4 * exact.max()
+        assert np.max(np.abs(table[big] - exact[big]) / exact[big]) < 2e-3
 
 
 @pytest.mark.parametrize("alpha,spec,theta", [(0.1, "abc:sigma=10nm,B=2um,C=2.6", 30),
@@ -196,7 +206,9 @@ TWO_SCALE_CASES = [(0.05, "abc:sigma=20nm,B=2um,C=2.6", 0), (0.05, "abc:sigma=20
 @pytest.mark.parametrize("alpha,spec,theta", TWO_SCALE_CASES)
 def test_two_scale_sampling_passes_chi2(alpha, spec, theta):
     b = TwoScaleBRDF("PMMA", Micro(alpha=alpha), nano=make_nano(spec, [550.0]), kd=0.3, nodes=64)
-    r = _chi2(b, theta, sample_count=50_000, res=41, ires=6, test_count=len(TWO_SCALE_CASES))
+    # 200k samples: at 50k the 80° case drew p = 0.0018 against the Šidák level 0.002, and 0.027 at 200k (more
+    # power, so the stronger test): a fluctuation, not a mismatch
+    r = _chi2(b, theta, sample_count=200_000, res=41, ires=6, test_count=len(TWO_SCALE_CASES))
     assert r.passed, r.message
     assert r.pdf_integral == pytest.approx(r.valid_fraction, abs=1e-2)
 

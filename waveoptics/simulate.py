@@ -266,22 +266,30 @@ def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_
     """How much of the nano roughness can scatter at the incident direction, per wavelength (docs/physics.md §9).
 
     Returns ``sigma_m`` (rms height), ``sigma_relevant_m`` (the rms height inside the propagating band) and
-    ``beyond_band_fraction`` ((σ² − σ_rel²)/σ²: the share of the variance in evanescent orders, which does not
-    scatter). The two-scale model still uses the full σ for the coherent reduction: this fraction says how much
-    of the light that reduction withholds can never reach the diffracted lobe.
+    ``beyond_band_fraction`` ((σ² − σ_rel²)/σ²: the share of the variance in evanescent orders, which neither
+    scatters nor reduces the specular light: the two-scale model leaves it out of both halves). For statistics
+    also ``scattered_share`` (E: the share of the reflected light the nano lobe scatters, whose complement is the
+    coherent fraction) and ``redistributed_share`` (the part of the scattered light that the multiple-order terms
+    of the Kirchhoff series send beyond the band and the model returns to it,
+    :meth:`waveoptics.scatter.BandSeries.redistributed_share`).
     """
     if nano is None:
         return {}
     s = math.sin(math.radians(theta_deg))
+    out = {}
     if nano.model is not None:
         var = nano.model.sigma ** 2
-        rel = [scatter.relevant_variance(nano.model, lam, s) for lam in wavelengths_nm]
+        rel = [float(scatter.relevant_sigma2(nano.model, lam, s)) for lam in wavelengths_nm]
+        series = [scatter.band_series(nano.model, lam) for lam in wavelengths_nm]
+        c = 2 * math.cos(math.radians(theta_deg))
+        out = {"scattered_share": [float(b.scattered_albedo(theta_deg)) for b in series],
+               "redistributed_share": [b.redistributed_share(s, c) for b in series]}
     else:
         var = float(np.var(nano.surface.heights[nano.surface.valid]))
         rel = [scatter.relevant_variance_of_field(nano.surface, lam, s, phi_deg) for lam in wavelengths_nm]
     return {"incident_deg": [theta_deg, phi_deg], "sigma_m": math.sqrt(var),
             "sigma_relevant_m": [math.sqrt(max(r, 0.0)) for r in rel],
-            "beyond_band_fraction": [scatter.beyond_band_fraction(var, r) for r in rel]}
+            "beyond_band_fraction": [scatter.beyond_band_fraction(var, r) for r in rel], **out}
 
 
 OUTPUT_FILES = ("brdf_spectral.exr", "brdf_rgb.exr", "brdf.png", "sphere_wave.png", "sphere_microfacet.png",

@@ -198,9 +198,8 @@ class TwoScaleBRDF(TwoScaleParts):
         cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
         F = self._F(lam)(cos_d)
         dm = scatter.get_model(self.diffraction)
-        k = 2 * np.pi / (lam * 1e-9)
-        q = k * np.hypot(wi[..., 0] + wo[..., 0], wi[..., 1] + wo[..., 1])
-        total = scatter.series_sum(self.nano.model, lam)(q, dm.cos_sum(wi, wo))
+        # the series of the roughness inside the propagating band, as the grid model's (docs/physics.md §9)
+        total = scatter.band_series(self.nano.model, lam)(wi, wo, dm.cos_sum(wi, wo))
         return np.where((wi[..., 2] > 0) & (wo[..., 2] > 0), F * dm.K(wi, wo, lam) * total, 0.0)
 
     def _facet_weight(self, wi, m, lam):

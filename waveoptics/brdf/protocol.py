@@ -362,7 +362,9 @@ class TwoScaleParts(MicrofacetBRDF):
         """Coherent fraction A(θ_d) of each facet (1 without nano-roughness)."""
         if not self._rough:
             return np.ones_like(np.asarray(cos_d, dtype=float))
-        return self.nano.coherent_amplitude2(cos_d, lam, self.diffraction)
+        # the lobe's light is weighted by the Fresnel factor this BRDF applies (none with fresnel="one")
+        return self.nano.coherent_amplitude2(cos_d, lam, self.diffraction,
+                                             self.material if self.fresnel == "exact" else None)
 
     def _smooth_parts(self, wi, wo, lam):
         """(coherent, diffuse) in 1/sr for flat arrays at one wavelength."""

@@ -222,7 +222,7 @@ def obliquity(wi, wo, wavelength_nm):
 
 
 def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int = M_MAX, return_captured=False,
-                   diffraction="kirchhoff"):
+                   diffraction="kirchhoff", band_limited: bool = True):
     """BRDF (1/sr) of the diffusely scattered part for the PSD *model* (the series of the module doc, with the
     factor K and the vertical phase of the *diffraction* model, :mod:`waveoptics.scatter.models`).
 
@@ -243,6 +243,12 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
         series holds (1 when converged).
     diffraction : str or DiffractionModel
         ``kirchhoff`` (default), ``ghs``, ``rghs``, ``ohs`` or ``rohs``.
+    band_limited : bool
+        True (default): the series of the roughness inside the propagating band, σ_rel
+        (:class:`waveoptics.scatter.band.BandSeries`, docs/physics.md §9), so that the lobe and the coherent
+        reduction exp(−g_rel) of :meth:`waveoptics.brdf.Nano.coherent_amplitude2` add up to the reflected light.
+        False: the classical series with the full σ (Beckmann & Spizzichino), whose coherent reduction also
+        removes the variance in evanescent frequencies, which cannot scatter.
 
     Returns
     -------
@@ -259,6 +265,29 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
     if model.sigma == 0:
         out = np.zeros(np.broadcast(q, g).shape)
         return (out, np.ones_like(out)) if return_captured else out
+    if band_limited:
+        from .band import band_series
+
+        c = dm.cos_sum(wi, wo)
+        lam_b, q_b, c_b = np.broadcast_arrays(lam, q, c)
+        wi_b = np.broadcast_to(wi, q_b.shape + (3,))
+        wo_b = np.broadcast_to(wo, q_b.shape + (3,))
+        total = np.empty(q_b.shape)
+        g_b = np.empty(q_b.shape)
+        for l_val in np.unique(lam_b):
+            sel = lam_b == l_val
+            bs = band_series(model, float(l_val), None if m_max == M_MAX else m_max)
+            total[sel] = bs(wi_b[sel], wo_b[sel], c_b[sel], q=q_b[sel])
+            sin_i = np.hypot(wi_b[sel][..., 0], wi_b[sel][..., 1])
+            sin_o = np.hypot(wo_b[sel][..., 0], wo_b[sel][..., 1])
+            g_b[sel] = bs.k ** 2 * 0.5 * (bs.sigma2_rel(sin_i) + bs.sigma2_rel(sin_o)) * c_b[sel] ** 2
+        val = np.asarray(F) * dm.K(wi, wo, lam) * total
+        if return_captured:
+            m_use = series_terms(float(np.max(g_b)) if g_b.size else 0.0, m_max)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                captured = np.where(g_b > 0, poisson_weights(g_b, m_use).sum(axis=0) / -np.expm1(-g_b), 1.0)
+            return val, captured
+        return val
     # round the table range up to a power of two so that one table serves a whole spectrum (cache hit)
     q_max = 2.0 ** math.ceil(math.log2(float(np.max(q)) * 1.001 + 1.0))
     tab = series_tables(model, q_max, m_max)
