@@ -323,8 +323,9 @@ class BandSeries:
         1/cosθ_o of the obliquity factor at the horizon (∝ 1/√(q_rim − q)) from the integrand."""
         k = self.k
         L = self.model.length_scale
-        n_psi = 48
-        psi = (np.arange(n_psi) + 0.5) * (2 * np.pi / n_psi)
+        # the lobe is symmetric about the plane of incidence (ψ ↔ −ψ): integrate over half the azimuths, twice
+        n_psi = 24
+        psi = (np.arange(n_psi) + 0.5) * (np.pi / n_psi)
         a = math.sin(theta)
         # distance from the mirror point (−a, 0) to the unit circle along (cos ψ, sin ψ), in direction cosines
         b = -a * np.cos(psi)
@@ -352,7 +353,7 @@ class BandSeries:
                 f = f * (material.F(cos_h, self.wavelength_nm)
                          / max(float(material.F(math.cos(theta), self.wavelength_nm)), 1e-300))
             # du dv = q dq dψ / k²; the second piece integrates over τ with dq = 2τ dτ
-            total += float(np.sum(_trapz(f * q * jac, var, axis=1))) * (2 * np.pi / n_psi) / k ** 2
+            total += 2.0 * float(np.sum(_trapz(f * q * jac, var, axis=1))) * (np.pi / n_psi) / k ** 2
         return total
 
     def redistributed_share(self, sin_theta_i, cos_sum) -> float:
@@ -397,7 +398,7 @@ def _poisson(g, m_use):
     return poisson_weights(g, m_use)
 
 
-def band_series(model: PSDModel, wavelength_nm: float, m_max: int | None = None, n_q: int = 1024) -> BandSeries:
+def band_series(model: PSDModel, wavelength_nm: float, m_max: int | None = None, n_q: int = 512) -> BandSeries:
     """:class:`BandSeries` of *model* at *wavelength_nm* (nm), built once per (model, λ, m_max, n_q) and cached
     (:func:`_band_series`)."""
     return _band_series(model, float(wavelength_nm), None if m_max is None else int(m_max), int(n_q))
