@@ -63,6 +63,10 @@ All NDFs are normalized, ∫ D(m)(n·m) dω_m = 1, and are 0 for m_z ≤ 0. α i
 | `abc` | A (1 + B(1 − n·m))^{−C}, B = 2/α², A normalizes | radial quadrature (below) | Löw et al. 2012 §5 |
 
 For anisotropic GGX and Beckmann, α² tan²θ in Λ is (α_x² ω_x² + α_y² ω_y²)/ω_z² (Heitz 2014 §5.2).
+EPD and SGD, defined isotropically by their papers, are made anisotropic by stretching the slopes of the law of
+ᾱ = √(α_x α_y) (Heitz 2014 §5.3): D(m) = D_ᾱ(m′)/(n⁴ k_x k_y) with m′ ∝ (m_x/k_x, m_y/k_y, m_z) of norm n, and Λ is
+the isotropic Λ at (k_x ω_x, k_y ω_y, ω_z); k = α/ᾱ for the EPD (slope scale α; p = 1 is anisotropic Beckmann)
+and √(α/ᾱ) for the SGD (tan²θ scale α). Sampling stretches the isotropic sample the same way.
 Blinn-Phong and ABC are isotropic (`alpha_y` is refused for them).
 
 **Roughness conventions.** `alpha_from_roughness(r)` = r² maps Burley's (2012) perceptual roughness to α

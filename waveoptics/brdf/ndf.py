@@ -24,7 +24,7 @@ from scipy import special
 from ..errors import WaveopticsError, unknown
 from .measured_ndf import D_tabulated, Lambda_tabulated, SlopeTable
 
-__all__ = ['ALPHA_MIN', 'ALPHA_MAX', 'COS_MIN', 'ABC_C_DEFAULT', 'LAMBDA_GL_ORDER', 'alpha_from_roughness', 'roughness_from_alpha', 'blinn_phong_exponent', 'alpha_from_blinn_phong', 'half_vector', 'reflect', 'D_ggx', 'Lambda_ggx', 'D_beckmann', 'Lambda_beckmann', 'D_blinn_phong', 'Lambda_blinn_phong', 'abc_normalization', 'D_abc', 'Lambda_radial', 'Lambda_abc', 'EPD_P_DEFAULT', 'epd_normalization', 'D_epd', 'Lambda_epd', 'SGD_P_DEFAULT', 'gamma_upper', 'sgd_normalization', 'D_sgd', 'Lambda_sgd', 'SHAPE_RANGE', 'NDF', 'NDFS', 'D', 'Lambda', 'G1']
+__all__ = ['ALPHA_MIN', 'ALPHA_MAX', 'COS_MIN', 'ABC_C_DEFAULT', 'LAMBDA_GL_ORDER', 'alpha_from_roughness', 'roughness_from_alpha', 'blinn_phong_exponent', 'alpha_from_blinn_phong', 'half_vector', 'reflect', 'D_ggx', 'Lambda_ggx', 'D_beckmann', 'Lambda_beckmann', 'D_blinn_phong', 'Lambda_blinn_phong', 'abc_normalization', 'D_abc', 'Lambda_radial', 'Lambda_abc', 'stretch_factors', 'D_stretched', 'Lambda_stretched', 'STRETCH_EXPONENT', 'EPD_P_DEFAULT', 'epd_normalization', 'D_epd', 'Lambda_epd', 'SGD_P_DEFAULT', 'gamma_upper', 'sgd_normalization', 'D_sgd', 'Lambda_sgd', 'SHAPE_RANGE', 'NDF', 'NDFS', 'D', 'Lambda', 'G1']
 
 #: roughness floor (guard): narrower lobes are not representable at sampled directions
 ALPHA_MIN = 1e-4
@@ -386,6 +386,63 @@ def Lambda_abc(w, ax, ay=None, c=None):
 
 
 # ----------------------------------------------------------------------------------------------------------
+# anisotropy by stretching (Heitz 2014, §5.3): for NDFs defined isotropically (EPD, SGD)
+
+
+def stretch_factors(ax, ay, exponent):
+    """(ᾱ, k_x, k_y) of the stretched form of an isotropic NDF: the base roughness ᾱ = √(α_x α_y) and the slope
+    stretches k = (α/ᾱ)^e, where e is how the NDF's slope scale grows with α (1 for a slope scale α, as EPD;
+    ½ for a tan²θ scale α, as SGD), so that along x the law has the slope scale of α_x and along y that of α_y.
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, §5.3 (stretch invariance of the slope distribution and of Λ).
+    """
+    ax = np.asarray(ax, dtype=float)
+    ay = ax if ay is None else np.asarray(ay, dtype=float)
+    base = np.sqrt(ax * ay)
+    return base, (ax / base) ** exponent, (ay / base) ** exponent
+
+
+def D_stretched(D_iso, m, ax, ay, c, exponent):
+    """D of the isotropic NDF *D_iso* stretched to (α_x, α_y), 1/sr.
+
+    The slopes of the stretched surface are (k_x x̃, k_y ỹ) with (x̃, ỹ) distributed as the isotropic law of
+    roughness ᾱ (:func:`stretch_factors`), so P22(x̃, ỹ) = P22_ᾱ(x̃/k_x, ỹ/k_y) / (k_x k_y); with D = P22 / cos⁴θ
+    and m' ∝ (m_x/k_x, m_y/k_y, m_z) of norm n this is D(m) = D_ᾱ(m') / (n⁴ k_x k_y). Equal α gives *D_iso*.
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, §5.3, eqs. (8) and (79).
+    """
+    if ay is None or np.all(np.asarray(ay) == np.asarray(ax)):
+        return D_iso(m, ax, None, c)
+    base, kx, ky = stretch_factors(ax, ay, exponent)
+    v = np.stack([m[..., 0] / kx, m[..., 1] / ky, m[..., 2]], axis=-1)
+    n = np.linalg.norm(v, axis=-1)
+    return D_iso(v / n[..., None], base, None, c) / (n ** 4 * kx * ky)
+
+
+def Lambda_stretched(Lambda_iso, w, ax, ay, c, exponent):
+    """Smith Λ of the stretched NDF: the isotropic Λ of roughness ᾱ at the stretched direction
+    (k_x w_x, k_y w_y, w_z) (its cot θ divided by the projected stretch √(k_x² cos²φ + k_y² sin²φ)).
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, §5.3, eq. (80).
+    """
+    if ay is None or np.all(np.asarray(ay) == np.asarray(ax)):
+        return Lambda_iso(w, ax, None, c)
+    base, kx, ky = stretch_factors(ax, ay, exponent)
+    v = np.stack([w[..., 0] * kx, w[..., 1] * ky, w[..., 2]], axis=-1)
+    return Lambda_iso(v / np.linalg.norm(v, axis=-1, keepdims=True), base, None, c)
+
+
+#: how each stretched NDF's slope scale grows with α (:func:`stretch_factors`)
+STRETCH_EXPONENT = {"epd": 1.0, "sgd": 0.5}
+
+
+# ----------------------------------------------------------------------------------------------------------
 # EPD: exponential power distribution of slopes (Holzschuch & Pacanowski 2017)
 
 #: default exponent p of the EPD (p = 1 is Beckmann)
@@ -412,7 +469,9 @@ def D_epd(m, ax, ay=None, c=None):
     """Exponential power NDF: D(m) = P22(tan θ_m) / cos⁴θ_m with the slope law P22(r) = N exp(−(r²/α²)^p).
 
     p = 1 is Beckmann; p < 1 has longer tails (closer to measured polished metals), p > 1 a flatter core and a
-    faster fall-off. Isotropic; α is the slope scale, p the ``ndf_shape`` (default :data:`EPD_P_DEFAULT`).
+    faster fall-off. α is the slope scale, p the ``ndf_shape`` (default :data:`EPD_P_DEFAULT`). With α_y ≠ α_x
+    the law is stretched (:func:`D_stretched`): P22 = N exp(−((x̃/α_x)² + (ỹ/α_y)²)^p) / (α_x α_y) with N of
+    α = 1, which is anisotropic Beckmann at p = 1.
 
     References
     ----------
@@ -420,6 +479,8 @@ def D_epd(m, ax, ay=None, c=None):
        diffraction", ACM TOG 36(4):66, 2017, §4.2 (EPD slope distribution).
     .. [2] E. Heitz, JCGT 3(2), 2014, eq. (8) (D from the slope distribution, D = P22 / cos⁴θ).
     """
+    if ay is not None and np.any(np.asarray(ay) != np.asarray(ax)):
+        return D_stretched(D_epd, m, ax, ay, c, STRETCH_EXPONENT["epd"])
     p = EPD_P_DEFAULT if c is None else c
     cz = m[..., 2]
     t2 = _tan2(m)
@@ -429,12 +490,15 @@ def D_epd(m, ax, ay=None, c=None):
 
 
 def Lambda_epd(w, ax, ay=None, c=None):
-    """Smith Λ of the EPD (no closed form for p ≠ 1): :func:`Lambda_radial` of its slope law.
+    """Smith Λ of the EPD (no closed form for p ≠ 1): :func:`Lambda_radial` of its slope law (anisotropic:
+    :func:`Lambda_stretched`).
 
     References
     ----------
     .. [1] E. Heitz, JCGT 3(2), 2014, eq. (72).
     """
+    if ay is not None and np.any(np.asarray(ay) != np.asarray(ax)):
+        return Lambda_stretched(Lambda_epd, w, ax, ay, c, STRETCH_EXPONENT["epd"])
     p = EPD_P_DEFAULT if c is None else c
     return Lambda_radial(w, lambda r: _P22_epd(r, ax, p), ax)
 
@@ -484,14 +548,18 @@ def D_sgd(m, ax, ay=None, c=None):
     """Shifted gamma NDF: D(m) = P22(tan²θ_m) / (π cos⁴θ_m), P22(x) = K e^{−(α² + x)/α} / (α² + x)^p.
 
     Fitted to the MERL measurements by Bagher et al., whose materials need tails between GGX's and Beckmann's:
-    the power law (α² + x)^{−p} sets the tail, the exponential cuts it at tan²θ ~ α. Isotropic; α is a scale of
-    tan²θ (the slope scale is about √α), p the ``ndf_shape`` (default :data:`SGD_P_DEFAULT`).
+    the power law (α² + x)^{−p} sets the tail, the exponential cuts it at tan²θ ~ α. α is a scale of tan²θ (the
+    slope scale is about √α), p the ``ndf_shape`` (default :data:`SGD_P_DEFAULT`). Bagher et al. fit isotropic
+    materials; with α_y ≠ α_x the law of ᾱ = √(α_x α_y) is stretched by √(α_x/ᾱ), √(α_y/ᾱ) in slope
+    (:func:`D_stretched`), so that tan²θ scales as α_x along x and as α_y along y.
 
     References
     ----------
     .. [1] M. M. Bagher, C. Soler, N. Holzschuch, "Accurate fitting of measured reflectances using a Shifted
        Gamma micro-facet distribution", Computer Graphics Forum 31(4), 2012, §4 (eqs. 9–11).
     """
+    if ay is not None and np.any(np.asarray(ay) != np.asarray(ax)):
+        return D_stretched(D_sgd, m, ax, ay, c, STRETCH_EXPONENT["sgd"])
     p = SGD_P_DEFAULT if c is None else c
     cz = m[..., 2]
     x = _tan2(m)
@@ -501,12 +569,15 @@ def D_sgd(m, ax, ay=None, c=None):
 
 
 def Lambda_sgd(w, ax, ay=None, c=None):
-    """Smith Λ of the SGD: :func:`Lambda_radial` of its slope law P22(r²)/π, nodes placed at the slope scale √α.
+    """Smith Λ of the SGD: :func:`Lambda_radial` of its slope law P22(r²)/π, nodes placed at the slope scale √α
+    (anisotropic: :func:`Lambda_stretched`).
 
     References
     ----------
     .. [1] E. Heitz, JCGT 3(2), 2014, eq. (72).
     """
+    if ay is not None and np.any(np.asarray(ay) != np.asarray(ax)):
+        return Lambda_stretched(Lambda_sgd, w, ax, ay, c, STRETCH_EXPONENT["sgd"])
     p = SGD_P_DEFAULT if c is None else c
     return Lambda_radial(w, lambda r: _P22x_sgd(r * r, ax, p) / np.pi, np.sqrt(ax))
 
@@ -541,8 +612,8 @@ NDFS: dict[str, NDF] = {
     "beckmann": NDF("beckmann", D_beckmann, Lambda_beckmann, True, 1, "Beckmann & Spizzichino 1963"),
     "blinn-phong": NDF("blinn-phong", D_blinn_phong, Lambda_blinn_phong, False, 2, "Blinn 1977; Walter 2007"),
     "abc": NDF("abc", D_abc, Lambda_abc, False, 3, "Löw et al. 2012", "C", ABC_C_DEFAULT),
-    "epd": NDF("epd", D_epd, Lambda_epd, False, None, "Holzschuch & Pacanowski 2017", "p", EPD_P_DEFAULT),
-    "sgd": NDF("sgd", D_sgd, Lambda_sgd, False, None, "Bagher, Soler & Holzschuch 2012", "p", SGD_P_DEFAULT),
+    "epd": NDF("epd", D_epd, Lambda_epd, True, None, "Holzschuch & Pacanowski 2017", "p", EPD_P_DEFAULT),
+    "sgd": NDF("sgd", D_sgd, Lambda_sgd, True, None, "Bagher, Soler & Holzschuch 2012", "p", SGD_P_DEFAULT),
     # the slopes of a micro-scale height field, tabulated (its ndf_shape is the SlopeTable; α is not used)
     "tabulated": NDF("tabulated", D_tabulated, Lambda_tabulated, True, None, "Heitz 2014 (measured slopes)",
                      "table", None),
@@ -604,7 +675,7 @@ def D(m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     alpha : float
         Slope scale α (α_x for anisotropic NDFs), dimensionless, in [0, 2]; floored at :data:`ALPHA_MIN`.
     alpha_y : float, optional
-        α_y for ``"ggx"`` and ``"beckmann"`` (default: isotropic).
+        α_y for the anisotropic NDFs ``"ggx"``, ``"beckmann"``, ``"epd"``, ``"sgd"`` (default: isotropic).
     ndf : str
         ``"ggx"``, ``"beckmann"``, ``"blinn-phong"``, ``"abc"``, ``"epd"`` or ``"sgd"``.
     ndf_shape : float, optional

@@ -9,7 +9,7 @@ density p(ω_o) = p(m) / (4 |ω_i·m|) (Walter et al. 2007, eq. 14). Samplers by
 * ``beckmann``: D(m) cos θ_m, sampled exactly from its Gaussian slope law (anisotropic).
 * ``blinn-phong``: D(m) cos θ_m, cos θ_m = (1 − u₁)^{1/(α_p + 2)} (Walter et al. 2007, eq. 35).
 * ``abc``: D(m) cos θ_m by inverting its closed-form radial CDF (bisection to double precision).
-* ``epd``: D(m) cos θ_m exactly: (r/α)^{2p} is gamma-distributed with shape 1/p.
+* ``epd``: D(m) cos θ_m exactly: (r/α)^{2p} is gamma-distributed with shape 1/p (anisotropic: stretched slopes).
 * ``sgd``: D(m) cos θ_m by inverting the incomplete gamma function of its shifted slope law (closed form for
   p < 1, Newton's method from a tabulated inverse for p ≥ 1).
 
@@ -38,7 +38,7 @@ from scipy import special
 
 from .measured_ndf import sample_dcos_tabulated
 
-from .ndf import (ABC_C_DEFAULT, EPD_P_DEFAULT, NDFS, SGD_P_DEFAULT, _abc_B, _dot, _expm1_over, abc_normalization,
+from .ndf import (STRETCH_EXPONENT, stretch_factors, ABC_C_DEFAULT, EPD_P_DEFAULT, NDFS, SGD_P_DEFAULT, _abc_B, _dot, _expm1_over, abc_normalization,
                   blinn_phong_exponent, gamma_upper, reflect)
 
 __all__ = ['NormalSampler', 'NORMAL_SAMPLERS', 'sample_normal', 'pdf_normal', 'pdf_reflected', 'sample_reflected']
@@ -146,7 +146,23 @@ def _from_slope(r, phi):
     return _from_cos(cos_t, phi)
 
 
-def sample_dcos_epd(wi, ax, ay, c, u):
+def _stretch_sample(sample_iso, name):
+    """The sampler of the stretched (anisotropic) form of an isotropic NDF sampler: draw the normal of the base
+    roughness ᾱ and stretch its slopes by (k_x, k_y), m ∝ (k_x m'_x, k_y m'_y, m'_z); slopes drawn from P22_ᾱ become
+    slopes drawn from the stretched P22, so the density stays D(m) cos θ_m (Heitz 2014, §5.3;
+    :func:`waveoptics.brdf.ndf.D_stretched`)."""
+    def sample(wi, ax, ay, c, u):
+        if ay is None or np.all(np.asarray(ay) == np.asarray(ax)):
+            return sample_iso(wi, ax, None, c, u)
+        base, kx, ky = stretch_factors(ax, ay, STRETCH_EXPONENT[name])
+        m = sample_iso(wi, float(base), None, c, u)
+        return _unit(np.stack([kx * m[..., 0], ky * m[..., 1], m[..., 2]], axis=-1))
+    sample.__name__ = sample_iso.__name__
+    sample.__doc__ = sample_iso.__doc__ + " Anisotropic α: the stretched form of the isotropic sample."
+    return sample
+
+
+def _sample_dcos_epd(wi, ax, ay, c, u):
     """EPD normal with density D(m) cos θ_m, exactly: the slope law N exp(−(r/α)^{2p}) makes g = (r/α)^{2p}
     Gamma(1/p)-distributed, so r = α g^{1/(2p)} with g = P⁻¹(1/p, u₁) (SciPy's ``gammaincinv``)."""
     p = EPD_P_DEFAULT if c is None else c
@@ -168,7 +184,7 @@ def _sgd_inverse_table(ax, p):
     return t, sgd_y_survival(np.exp(t), ax, p)
 
 
-def sample_dcos_sgd(wi, ax, ay, c, u):
+def _sample_dcos_sgd(wi, ax, ay, c, u):
     """SGD normal with density D(m) cos θ_m: Y = (α² + tan²θ)/α solves P(Y > y) = 1 − u₁ — in closed form with
     ``gammainccinv`` for p < 1; for p ≥ 1 by Newton's method in log y (the derivative of P(Y > y) is the density
     −y^{−p} e^{−y} / Γ(1 − p, α)) from a tabulated inverse, kept inside the table's bracket; then
@@ -191,6 +207,10 @@ def sample_dcos_sgd(wi, ax, ay, c, u):
         y = np.exp(t)
     x = np.maximum(ax * y - ax * ax, 0.0)
     return _from_slope(np.sqrt(x), 2.0 * np.pi * u[..., 1])
+
+
+sample_dcos_epd = _stretch_sample(_sample_dcos_epd, "epd")
+sample_dcos_sgd = _stretch_sample(_sample_dcos_sgd, "sgd")
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ def add_model(parser) -> None:
     g = parser.add_argument_group("two-scale BRDF")
     option(g, "--material", default="aluminium", note="a metal gets no diffuse term")
     option(g, "--micro-alpha", dest="alpha", default=0.1)
-    option(g, "--alpha-y", note="ggx and beckmann")
+    option(g, "--alpha-y", note="ggx, beckmann, epd and sgd")
     option(g, "--ndf", choices=sorted(PARAMETRIC_NDF_NAMES), default="ggx")
     option(g, "--nano", note=f"'none' for no nano-roughness (the microfacet model); default {DEFAULT_NANO}")
     add_surface(g, note="the nano-scale height field, instead of --nano statistics")

@@ -68,7 +68,7 @@ def _microfacet_arguments(g) -> None:
     option(g, "--micro-alpha", short="--alpha", dest="alpha",
            note="in [0, 2]; α_x if anisotropic; 0 = sharpest representable")
     g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
-    option(g, "--alpha-y", note="ggx and beckmann")
+    option(g, "--alpha-y", note="ggx, beckmann, epd and sgd")
     option(g, "--ndf-shape")
     renamed(g, "brdf", "--abc-c", dest="ndf_shape", type=float)
     option(g, "--material", note="or --ior")
