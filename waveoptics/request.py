@@ -31,6 +31,7 @@ waveoptics.errors.FieldError: micro_alpha -1 is not allowed; α must be finite a
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -193,6 +194,19 @@ def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None) -> t
     return twoscale.Nano(surface=surfaces.generate(model, size=size, samples=n, **_generator_args(model, p, seed)))
 
 
+@functools.lru_cache(maxsize=8)
+def _micro_of_file(path: str, shadowing: str) -> twoscale.Micro:
+    """The tabulated micro roughness of a height-field file (read once per process and path)."""
+    from .brdf import slope_table
+
+    try:
+        hf = surfaces.load(path)
+    except WaveopticsError as exc:
+        raise FieldError("{micro_surface} " + str(exc).replace("{", "{{").replace("}", "}}"),
+                         "micro_surface") from None
+    return twoscale.Micro.from_slopes(slope_table(hf), shadowing)
+
+
 def _finite_number(value, field: str) -> float:
     try:
         x = float(value)
@@ -246,6 +260,12 @@ class SimulationRequest:
     ndf_shape : float, optional
         Shape parameter of the micro NDF where it has one: ABC's tail exponent C, EPD's and SGD's exponent p
         (default: the NDF's own, :data:`waveoptics.brdf.NDFS`).
+    micro_surface : str or None
+        Path of a micro-scale height field whose slope law is the NDF (``tabulated``, Heitz 2014;
+        :meth:`waveoptics.brdf.Micro.from_slopes`); *micro_alpha*, *ndf* and *ndf_shape* are then not used.
+    multiple_scattering : bool
+        Add Kulla & Conty's (2017) compensation for light that bounces between micro facets, to both models
+        (off by default).
     """
 
     material: str = "Al"
@@ -267,6 +287,8 @@ class SimulationRequest:
     diffraction: str = "kirchhoff"
     polarization: str = "unpolarized"
     ndf_shape: float | None = None
+    micro_surface: str | None = None
+    multiple_scattering: bool = False
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalization
@@ -311,6 +333,18 @@ class SimulationRequest:
             except WaveopticsError as exc:
                 raise FieldError("{ndf_shape} " + str(exc).split(" ", 1)[1], "ndf_shape") from None
             set_("ndf_shape", shape)
+        if not isinstance(self.multiple_scattering, (bool, np.bool_)):
+            raise FieldError(f"{{multiple_scattering}} {self.multiple_scattering!r} is not allowed; use true or false",
+                             "multiple_scattering")
+        set_("multiple_scattering", bool(self.multiple_scattering))
+        if self.micro_surface is not None:
+            if self.ndf_shape is not None:
+                raise FieldError("{micro_surface} sets the NDF from the field's slopes; drop {ndf_shape}",
+                                 "micro_surface", "ndf_shape")
+            if self.split:
+                raise FieldError("{split} measures the micro roughness from {surface}; drop {micro_surface}",
+                                 "split", "micro_surface")
+            set_("micro_surface", str(self.micro_surface))
         if self.surface is None and self.nano is None:
             raise FieldError("a request needs nano roughness: {nano} MODEL:params or a height-field {surface}",
                              "nano", "surface")
@@ -339,7 +373,9 @@ class SimulationRequest:
         return dataclasses.replace(self, wavelengths_nm=tuple(float(x) for x in self.wavelengths()))
 
     def micro(self) -> twoscale.Micro:
-        """The micro-scale roughness of this request."""
+        """The micro-scale roughness of this request (the slope law of *micro_surface* when it is given)."""
+        if self.micro_surface is not None:
+            return _micro_of_file(self.micro_surface, self.shadowing)
         return twoscale.Micro(alpha=self.micro_alpha, ndf=self.ndf, shadowing=self.shadowing, ndf_shape=self.ndf_shape)
 
     def params(self) -> dict:

@@ -95,7 +95,7 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
              shadowing="smith-correlated", incident=(30.0, 0.0), illuminant="D65", wavelengths=None,
              accuracy_dE=1.0, resolution=128, solver="auto", kd=0.5, sphere=True, seed=0, device=None,
              precision="float32", progress=None, split=False, diffraction="kirchhoff",
-             polarization="unpolarized") -> Simulation:
+             polarization="unpolarized", micro_surface=None, multiple_scattering=False) -> Simulation:
     """Simulate a two-scale surface and the plain microfacet model (keyword form of :func:`run`).
 
     Parameters
@@ -140,6 +140,11 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
     polarization : {"unpolarized", "s", "p"}
         Of the incident light, relative to the plane of incidence (sphere renders take it in each pixel's local
         plane of incidence).
+    micro_surface : str or Path, optional
+        Micro-scale height field (a file) whose slope law is the micro NDF (``tabulated``); *micro_alpha* and
+        *ndf* are then not used.
+    multiple_scattering : bool
+        Add the Kulla-Conty compensation lobe of the micro NDF to both models (off by default).
 
     Returns
     -------
@@ -152,7 +157,8 @@ def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05
         micro_alpha=micro_alpha, ndf=ndf, shadowing=shadowing, incident_deg=tuple(incident), illuminant=illuminant,
         wavelengths_nm=None if wavelengths is None else tuple(np.atleast_1d(np.asarray(wavelengths, float))),
         accuracy_dE=accuracy_dE, resolution=resolution, solver=solver, kd=kd, precision=precision, seed=seed,
-        split=split, diffraction=diffraction, polarization=polarization)
+        split=split, diffraction=diffraction, polarization=polarization,
+        micro_surface=None if micro_surface is None else str(micro_surface), multiple_scattering=multiple_scattering)
     return run(req, surface=hf, material=None if isinstance(material, str) else material, sphere=sphere,
                device=device, progress=progress)
 
@@ -227,7 +233,7 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
     def lobes_at(th, ph):
         return twoscale.evaluate(direction_from_angles(th, ph), w, mat, micro, nano_obj, grid, solver=req.solver,
                                  kd=req.kd, device=device, precision=req.precision, diffraction=req.diffraction,
-                                 polarization=req.polarization)
+                                 polarization=req.polarization, multiple_scattering=req.multiple_scattering)
 
     t = time.perf_counter()
     lobes = lobes_at(theta, phi)
@@ -242,12 +248,14 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
         brdf_wave = TabulatedTwoScaleBRDF(
             material=mat, micro=micro, nano=nano_obj, kd=req.kd, wavelengths_nm=tuple(w), resolution=req.resolution,
             thetas_deg=thetas, n_phi=n_phi, solver=req.solver, diffraction=req.diffraction, device=device,
-            precision=req.precision, progress=progress)
-    brdf_mf = MicrofacetBRDF(mat, micro, kd=req.kd)
+            precision=req.precision, progress=progress, multiple_scattering=req.multiple_scattering)
+    brdf_mf = MicrofacetBRDF(mat, micro, kd=req.kd, multiple_scattering=req.multiple_scattering)
     timings["sphere_table"] = time.perf_counter() - t
     params = {"material": mat.name, "material_source": mat.source,
               "nano": None if req.surface is not None else req.nano,
-              "surface": req.surface if surface is None else None, "micro_alpha": req.micro_alpha, "ndf": req.ndf,
+              "surface": req.surface if surface is None else None,
+              "micro_alpha": None if req.micro_surface is not None else req.micro_alpha, "ndf": micro.ndf,
+              "micro_surface": req.micro_surface, "multiple_scattering": req.multiple_scattering,
               "shadowing": req.shadowing, "incident_deg": [theta, phi], "illuminant": spd.name,
               "resolution": req.resolution, "solver": lobes.info["solver"], "kd": 0.0 if mat.is_metal else req.kd,
               "precision": req.precision, "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": req.seed,

@@ -52,7 +52,7 @@ from .microfacet import specular
 from .ndf import ALPHA_MAX, ALPHA_MIN, NDFS
 from .quadrature import albedo, directional_albedo
 
-__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'evaluate', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
+__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
 
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
@@ -79,6 +79,16 @@ class Micro:
             from .ndf import _check_alpha, _ndf
 
             _check_alpha(min(self.alpha, ALPHA_MAX), None, _ndf(self.ndf), self.ndf_shape)
+
+    @classmethod
+    def from_slopes(cls, table, shadowing: str = "smith-correlated") -> "Micro":
+        """The micro roughness whose NDF is a measured slope law (:class:`waveoptics.brdf.SlopeTable`, from
+        :func:`waveoptics.brdf.slope_table` or :func:`waveoptics.brdf.footprint_ndf`): NDF ``tabulated``, its D and
+        Λ by quadrature of the table (Heitz 2014); α, α_y are the Beckmann-equivalent widths √2 × rms slope per
+        axis, which only place quadrature nodes and size the lobe for the planner."""
+        sx, sy = table.rms_slope()
+        return cls(alpha=float(np.sqrt(2) * sx), alpha_y=float(np.sqrt(2) * sy), ndf="tabulated",
+                   shadowing=shadowing, ndf_shape=table)
 
     def kw(self) -> dict:
         a = max(self.alpha, ALPHA_MIN)
@@ -165,8 +175,9 @@ class Lobes:
     """A two-scale evaluation for one incident direction on a direction grid.
 
     Arrays are (n_λ, n_v, n_u) in 1/sr: ``coherent`` (micro specular × A), ``diffraction`` (nano lobe convolved
-    with the micro kernel), ``diffuse`` (dielectrics), ``total``; ``microfacet`` is the plain microfacet model
-    (same micro roughness and material, no nano-roughness) for comparison.
+    with the micro kernel), ``diffuse`` (dielectrics), ``multiple`` (the multiple-scattering compensation lobe, or
+    None when it is off), ``total``; ``microfacet`` is the plain microfacet model (same micro roughness,
+    material, diffuse term and compensation lobe; no nano-roughness) for comparison.
     """
 
     grid: DirectionGrid
@@ -178,21 +189,31 @@ class Lobes:
     microfacet: np.ndarray
     info: dict = field(default_factory=dict)
     diffuse_albedo: np.ndarray | None = None
+    multiple: np.ndarray | None = None
+    multiple_albedo: np.ndarray | None = None
 
     @property
     def total(self) -> np.ndarray:
-        return self.coherent + self.diffraction + self.diffuse
+        t = self.coherent + self.diffraction + self.diffuse
+        return t if self.multiple is None else t + self.multiple
 
     def albedo(self, part: str = "total") -> np.ndarray:
-        """Directional albedo per wavelength of a part (``total``, ``coherent``, ``diffraction``, ...).
+        """Directional albedo per wavelength of a part (``total``, ``coherent``, ``diffraction``, ``multiple``,
+        ...).
 
-        The diffuse term's share is its exact albedo (``diffuse_albedo``, a quadrature of the closed form), not
-        the grid sum: cells straddling the rim of the projected disc are counted whole by the grid sum, which
-        over-counts a lobe that reaches the horizon (Lambert, kd = 1: 1.005 at 8² cells, 0.984 at 16², 0.961 at
-        128², against 0.9615 exactly). Sharp lobes are the grid's own (they are normalized on it)."""
+        The diffuse term's and the compensation lobe's shares are their exact albedos (``diffuse_albedo``, a
+        quadrature of the closed form; ``multiple_albedo`` = (1 − E(μ_i)) F_ms by construction), not the grid
+        sums: cells straddling the rim of the projected disc are counted whole by the grid sum, which over-counts
+        a lobe that reaches the horizon (Lambert, kd = 1: 1.005 at 8² cells, 0.984 at 16², 0.961 at 128²,
+        against 0.9615 exactly). Sharp lobes are the grid's own (they are normalized on it)."""
+        if part == "multiple" and self.multiple is None:
+            return np.zeros(self.wavelengths_nm.size)
         a = integrate(getattr(self, part), self.grid)
         if self.diffuse_albedo is not None and part in ("total", "microfacet", "diffuse"):
             a = a - integrate(self.diffuse, self.grid) + self.diffuse_albedo
+        if self.multiple is not None and self.multiple_albedo is not None and part in ("total", "microfacet",
+                                                                                      "multiple"):
+            a = a - integrate(self.multiple, self.grid) + self.multiple_albedo
         return a
 
     def coherent_specular_fraction(self) -> np.ndarray:
@@ -458,7 +479,7 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
 def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid: DirectionGrid, *,
              solver: str = "auto", kd=0.5, diffuse: str = "lambert", device=None, precision="float32",
              reference_grid: DirectionGrid | None = None, diffraction: str = "kirchhoff",
-             polarization: str = "unpolarized") -> Lobes:
+             polarization: str = "unpolarized", multiple_scattering: bool = False) -> Lobes:
     """Two-scale BRDF for one incident direction on *grid* at each wavelength, plus the plain microfacet BRDF.
 
     Parameters
@@ -488,6 +509,11 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         Of the incident light relative to the macro plane of incidence: every facet (micro and nano) reflects its
         own s/p split (:func:`waveoptics.materials.fresnel.F_facet_polarized`); the diffuse substrate is
         unpolarized.
+    multiple_scattering : bool
+        Add Kulla & Conty's (2017) compensation lobe of the micro NDF (:mod:`waveoptics.brdf.multiscatter`) to
+        both models, as :class:`waveoptics.brdf.TwoScaleBRDF` does: nano-roughness only redistributes singly
+        scattered light in direction, so the light lost to bounces between micro facets is the microfacet
+        model's. Its Fresnel average F_ms is of the unpolarized F (also for s or p light).
 
     Returns
     -------
@@ -575,14 +601,41 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
                         * diffuse_tradeoff(a, b, lambda c: mat.F(c, lam)))
             diff[i] = np.where(inside, f_d(wi[None, None, :], wo), 0.0)
             diff_albedo[i] = float(directional_albedo(f_d, wi, alpha=1.0))
+    # --- multiple scattering between micro facets (optional, both models) -----------------------------------
+    multiple = multiple_albedo = None
     mf_total = mf + diff
+    if multiple_scattering:
+        multiple, multiple_albedo = multiple_scattering_lobe(wi, wo, w, mat, micro)
+        multiple = np.where(inside, multiple, 0.0)
+        mf_total = mf_total + multiple
     return Lobes(grid=grid, wi=wi, wavelengths_nm=w, coherent=coherent, diffraction=diffraction, diffuse=diff,
                  diffuse_albedo=diff_albedo if reference_grid is None else None,
+                 multiple=multiple, multiple_albedo=multiple_albedo if reference_grid is None else None,
                  microfacet=mf_total,
                  info={"solver": used, "sigma_nano_m": sigma_nano, "micro": micro.__dict__,
                        "material": mat.name, "sharp_micro_lobe": _sharp(micro, grid),
                        "diffraction_energy_scale": energy_scale.tolist(), "diffraction_model": dm.name,
-                       "polarization": polarization})
+                       "polarization": polarization, "multiple_scattering": bool(multiple_scattering)})
+
+
+def multiple_scattering_lobe(wi, wo, wavelengths_nm, material, micro: Micro):
+    """(lobe (n_λ, ...) in 1/sr, albedo (n_λ,)) of Kulla & Conty's compensation for the micro NDF at the
+    directions *wo* (..., 3): f_ms(μ_i, μ_o) F_ms(λ) and its albedo (1 − E(μ_i)) F_ms(λ), from the same tables
+    as :class:`waveoptics.brdf.MicrofacetBRDF` (one code path; :mod:`waveoptics.brdf.multiscatter`).
+
+    References
+    ----------
+    .. [1] C. Kulla, A. Conty, "Revisiting Physically Based Shading at Imageworks", SIGGRAPH 2017 course.
+    """
+    from .protocol import MicrofacetBRDF
+
+    b = MicrofacetBRDF(material, micro, multiple_scattering=True)
+    wo = np.asarray(wo, dtype=float)
+    flat = wo.reshape(-1, 3)
+    wi_b = np.broadcast_to(np.asarray(wi, dtype=float), flat.shape)
+    lobe = np.stack([b._f_ms(wi_b, flat, lam).reshape(wo.shape[:-1]) for lam in wavelengths_nm])
+    albedo = np.array([(1.0 - float(b._ms_table()(wi[2]))) * b._F_ms(lam) for lam in wavelengths_nm])
+    return lobe, albedo
 
 
 #: default split: spatial periods longer than this many λ_max are micro-geometry (geometric optics)

@@ -43,6 +43,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--micro-alpha", "micro-scale NDF roughness α (slope scale; 0 = smooth)", "A", float, "1"),
     Option("--alpha-y", "micro-scale α_y of an anisotropic NDF (α_x is --micro-alpha)", "A", float, "1"),
     Option("--ndf", "microfacet normal distribution"),
+    Option("--micro-surface", "micro-scale height field whose slopes are the NDF (tabulated, Heitz 2014; "
+                              "replaces --ndf and the micro α)", "FILE"),
     Option("--diffuse", "diffuse term of a dielectric's substrate"),
     Option("--multiple-scattering", "add the light single scattering loses between micro facets (Kulla & Conty "
                                     "2017 energy compensation)"),

@@ -58,9 +58,7 @@ def _microfacet_arguments(g) -> None:
 
 
     option(g, "--ndf", choices=sorted(NDF_NAMES), default="ggx")
-    g.add_argument("--micro-surface", metavar="FILE",
-                   help="micro-scale height field whose slopes are the NDF (tabulated; sets --ndf tabulated; "
-                        "--spacing/--units/--channel describe it when no --surface is given)")
+    option(g, "--micro-surface", note="--spacing/--units/--channel describe it when no --surface is given")
     option(g, "--footprint", note="with --micro-surface: the NDF of that footprint only (a glint); a .npy "
                                   "file is memory-mapped")
     g.add_argument("--shadowing", choices=sorted(SHADOWING_NAMES), default="smith-correlated",
@@ -128,8 +126,6 @@ def _microfacet_params(args, wavelength_nm) -> dict:
 def _measured_ndf(args):
     """(ndf, slope table, α, α_y) from --micro-surface: the NDF is the height field's slope law; α and α_y are
     the Beckmann-equivalent widths √2 × rms slope, which place the albedo quadrature's nodes."""
-    import math
-
     from .. import brdf, surfaces
 
     if args.micro_surface is None:
@@ -153,8 +149,8 @@ def _measured_ndf(args):
         hf = surfaces.load(args.micro_surface, spacing=getattr(args, "spacing", None),
                            units=getattr(args, "units", None), channel=getattr(args, "channel", None))
         table = brdf.slope_table(hf)
-    sx, sy = table.rms_slope()
-    return "tabulated", table, math.sqrt(2) * sx, math.sqrt(2) * sy
+    micro = brdf.Micro.from_slopes(table)
+    return "tabulated", table, micro.alpha, micro.alpha_y
 
 
 def _spacing(args):
@@ -492,10 +488,14 @@ def _twoscale_build(args, wavelength_nm, wi):
     if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
         raise WaveopticsError(f"--diffuse-sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
                               "[0, 90] degrees")
-    micro = brdf.Micro(alpha=_alpha(args), alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing)
+    if args.micro_surface is not None or args.ndf == "tabulated":   # the NDF of a micro height field's slopes
+        _, table, _, _ = _measured_ndf(args)
+        micro = brdf.Micro.from_slopes(table, args.shadowing)
+    else:
+        micro = brdf.Micro(alpha=_alpha(args), alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing,
+                           ndf_shape=args.ndf_shape)
     common = dict(material=spec if spec is not None else "aluminium", micro=micro, kd=args.kd,
                   diffuse=args.diffuse, fresnel=args.fresnel,
-                  ndf_shape=args.ndf_shape,
                   diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction,
                   multiple_scattering=args.multiple_scattering)
     if args.surface:
@@ -515,6 +515,8 @@ def _twoscale_describe(args) -> dict:
         d["surface"] = args.surface
     else:
         d["nano"] = args.nano or _default_nano()
+    if args.micro_surface is not None:
+        d["micro_surface"] = args.micro_surface
     return d
 
 

@@ -17,9 +17,11 @@ def add_scene_options(p) -> None:
     add_surface(p, group=src, note="the nano height field (fft or direct solver)")
     option(p, "--nano", group=src, note=f"default {DEFAULT_NANO}; sigma=0 disables it; also "
                                          "exponential:sigma=5nm,T=1um, scratches:count=20,width=200nm,depth=30nm")
-    option(p, "--micro-alpha", default=0.05)
-    option(p, "--ndf", default="beckmann", choices=PARAMETRIC_NDF_NAMES)
+    option(p, "--micro-alpha", note="default 0.05")
+    option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note="default beckmann")
     option(p, "--ndf-shape")
+    option(p, "--micro-surface", note="its own file metadata gives the spacing")
+    option(p, "--multiple-scattering", action="store_true", default=False, note="added to both models")
     option(p, "--material", default="Al")
     option(p, "--incident", default="30")
     option(p, "--illuminant", default="D65")
@@ -44,9 +46,17 @@ def request_from_args(args):
     from ..request import DEFAULT_NANO
     from ..request import SimulationRequest
 
+    if args.micro_surface is not None:
+        given = [f for f, v in (("--micro-alpha", args.micro_alpha), ("--ndf", args.ndf),
+                                ("--ndf-shape", args.ndf_shape)) if v is not None]
+        if given:
+            raise FieldError(f"--micro-surface sets the NDF from the file's slopes; drop {', '.join(given)}",
+                             "micro_surface")
     return SimulationRequest(
-        material=args.material, nano=args.nano or DEFAULT_NANO, surface=args.surface, micro_alpha=args.micro_alpha,
-        ndf=args.ndf, incident_deg=parse_direction(args.incident), illuminant=args.illuminant,
+        material=args.material, nano=args.nano or DEFAULT_NANO, surface=args.surface,
+        micro_alpha=0.05 if args.micro_alpha is None else args.micro_alpha, ndf=args.ndf or "beckmann",
+        micro_surface=args.micro_surface, multiple_scattering=args.multiple_scattering,
+        incident_deg=parse_direction(args.incident), illuminant=args.illuminant,
         wavelengths_nm=None if args.wavelengths is None else tuple(parse_wavelengths(args.wavelengths)),
         accuracy_dE=args.accuracy, resolution=args.resolution, solver=args.solver, kd=args.kd,
         precision=args.precision, seed=args.seed, split=args.split, diffraction=args.diffraction,

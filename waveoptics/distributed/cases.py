@@ -47,7 +47,14 @@ def case_from_scene(sc, *, material: str | None = None, light: str | None = None
     kw = dict(material=mat.material, micro_alpha=mat.roughness, ndf=mat.ndf, ndf_shape=mat.ndf_shape,
               shadowing=mat.shadowing,
               kd=mat.diffuse_albedo, illuminant=li.spd, incident_deg=tuple(li.directions_deg[0]),
-              accuracy_dE=sc.delta_e, seed=sc.seed, nano=NO_NANO, surface=None)
+              accuracy_dE=sc.delta_e, seed=sc.seed, nano=NO_NANO, surface=None,
+              multiple_scattering=mat.multiple_scattering)
+    if mat.micro_surface is not None:
+        if mat.micro_surface.params:
+            raise WaveopticsError(f"{sc.path or sc.name}: material {mat.name!r} micro_surface: tables and sweeps "
+                                  "read it as a plain path; use a file that states its own spacing and units "
+                                  "(.npy with its sidecar, .x3p, ...)")
+        kw.update(micro_surface=str(mat.micro_surface.path), micro_alpha=0.05, ndf="beckmann", ndf_shape=None)
     if sc.output.resolution is not None:
         kw["resolution"] = sc.output.resolution
     hf = None

@@ -440,6 +440,22 @@ def _decide_diffuse(e: _Entry) -> None:
     e.kd = e.spec.diffuse_albedo if e.diffuse else 0.0
 
 
+def _decide_multiple_scattering(e: _Entry) -> None:
+    """The Kulla-Conty compensation lobe runs when the scene asks for it (``multiple_scattering = true``); the
+    reason states the share of the light single scattering loses at the light's directions, which it returns."""
+    if not e.spec.multiple_scattering:
+        e.decide("multiple scattering", "off", "not asked (multiple_scattering = true adds the light single "
+                                               "scattering loses between micro facets)")
+        return
+    from ..brdf import MicrofacetBRDF
+
+    table = MicrofacetBRDF(e.mat, e.micro, multiple_scattering=True)._ms_table()   # the table the run uses
+    lost = [1.0 - float(table(c)) for c in e.cos_i]
+    e.metrics["multiple_scattering_share"] = lost
+    e.decide("multiple scattering", "on", "set by the scene: returns the " + ", ".join(f"{x:.1%}" for x in lost)
+             + " of the light that single scattering loses at the light's direction(s) (Kulla & Conty 2017)")
+
+
 def _decide_diffraction(e: _Entry) -> None:
     """Diffraction runs when the nano surface scatters enough light to change the colour by a visible amount
     (a coarse estimate against the scene's ΔE target), or when almost no coherent reflection is left."""
@@ -568,8 +584,8 @@ def _decide_nano_route(e: _Entry) -> None:
 
 def _decide_resolution(e: _Entry) -> None:
     """The grid resolves the narrowest lobe within the colour target (or the height field's specular spike)."""
-    if e.spec.roughness > 0:
-        e.widths["micro lobe"] = lobe_width(e.spec.roughness, min(e.cos_i))
+    if e.micro.alpha > 0:
+        e.widths["micro lobe"] = lobe_width(min(e.micro.alpha, e.micro.alpha_y or e.micro.alpha), min(e.cos_i))
     if e.diffraction and e.nano is not None and e.nano.model is not None:
         e.widths["nano lobe"] = diffraction_lobe_width(e.nano.model, e.lam_min)
     hi = min(RESOLUTION_RANGE[1], e.max_resolution or RESOLUTION_RANGE[1])
@@ -662,7 +678,7 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
     for dname, grids in options.items():
         cells = [g.n_u * g.n_v for g in grids]
         base = n_eval * e.cm.evaluation(cells, n_w, diffuse=e.diffuse, psd_terms=terms, nano_lobe=hf_solvers)
-        if dname == "views" and e.spec.roughness >= 0.75 * 2.0 / N:  # a patch normalizes its micro lobe on the grid
+        if dname == "views" and e.micro.alpha >= 0.75 * 2.0 / N:  # a patch normalizes its micro lobe on the grid
             base += n_eval * len(grids) * N * N * e.cm.cell
         if not hf_solvers:
             costs[(dname, e.solver)] = base
@@ -752,7 +768,7 @@ def _decide_precision(e: _Entry) -> None:
 #: the decisions, in the order they are taken (each reads the outcomes of those before it)
 DECISIONS = (_decide_diffuse, _decide_diffraction, _decide_diffraction_model, _decide_wavelengths,
              _decide_nano_route, _decide_resolution, _refine_wavelengths_for_grating, _decide_directions,
-             _decide_precision)
+             _decide_precision, _decide_multiple_scattering)
 
 
 def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostModel, device,
@@ -761,7 +777,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
     e = _Entry(scene, spec, light, force, cm, device, max_resolution)
     e.mat = get_material(spec.material)
     e.spd = colour.illuminant(light.spd)
-    e.micro = twoscale.Micro(alpha=spec.roughness, ndf=spec.ndf, shadowing=spec.shadowing, ndf_shape=spec.ndf_shape)
+    e.micro = spec.micro()
     e.cos_i = [math.cos(math.radians(t)) for t, _ in light.directions_deg]
     e.cos_max = 1.0 if e.sphere else max(e.cos_i)
     e.w_colour = colour.simulation_wavelengths(e.spd, e.dE)
@@ -769,6 +785,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
     for decide in DECISIONS:
         decide(e)
     effects = {"specular": True, "diffraction": bool(e.diffraction), "diffuse": bool(e.diffuse),
+               "multiple_scattering": bool(e.spec.multiple_scattering),
                "spectral": not e.lam_independent, "sphere": e.sphere}
     return EntryPlan(spec=spec, light_name=light.name, spd=e.spd, material=e.mat,
                      light_directions_deg=light.directions_deg, micro=e.micro, nano=e.nano, effects=effects,

@@ -63,9 +63,13 @@ def _broadcast(L: twoscale.Lobes, w) -> twoscale.Lobes:
     """A λ-independent evaluation (one wavelength) copied onto the colour wavelengths *w*."""
     shape = (len(w),) + L.total.shape[1:]
     b = {k: np.broadcast_to(getattr(L, k), shape).copy() for k in ("coherent", "diffraction", "diffuse", "microfacet")}
-    da = None if L.diffuse_albedo is None else np.broadcast_to(L.diffuse_albedo, (len(w),)).copy()
+    if L.multiple is not None:
+        b["multiple"] = np.broadcast_to(L.multiple, shape).copy()
+
+    def per_w(a):
+        return None if a is None else np.broadcast_to(a, (len(w),)).copy()
     return twoscale.Lobes(grid=L.grid, wi=L.wi, wavelengths_nm=np.asarray(w, float), info=dict(L.info),
-                          diffuse_albedo=da, **b)
+                          diffuse_albedo=per_w(L.diffuse_albedo), multiple_albedo=per_w(L.multiple_albedo), **b)
 
 
 @dataclass
@@ -84,7 +88,8 @@ def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
     t0 = time.perf_counter()
     w = e.wavelengths_nm if e.wavelengths_nm.size else np.array([LAMBDA_REF_NM])
     kw = dict(solver=e.solver if e.nano is not None else "auto", kd=e.kd, diffuse="lambert" if e.kd > 0 else "none",
-              device=device, precision=e.precision, diffraction=e.diffraction)
+              device=device, precision=e.precision, diffraction=e.diffraction,
+              multiple_scattering=e.effects.get("multiple_scattering", False))
     nano = e.nano if e.effects["diffraction"] else None
     hemi = DirectionGrid.hemisphere(e.resolution)
 
@@ -106,8 +111,9 @@ def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
                                      diffuse="lambert" if e.kd > 0 else "none",
                                      wavelengths_nm=tuple(e.colour_wavelengths_nm), thetas_deg=thetas, n_phi=n_phi,
                                      diffraction=e.diffraction, lobes_at=lambda wi: ev(wi, hemi),
-                                     progress=progress)
-        brdfs = (wave, MicrofacetBRDF(e.material, e.micro, kd=e.kd, diffuse="lambert" if e.kd > 0 else "none"))
+                                     progress=progress, multiple_scattering=kw["multiple_scattering"])
+        brdfs = (wave, MicrofacetBRDF(e.material, e.micro, kd=e.kd, diffuse="lambert" if e.kd > 0 else "none",
+                                      multiple_scattering=kw["multiple_scattering"]))
     return EntryResult(e, lobes, brdfs, time.perf_counter() - t0)
 
 

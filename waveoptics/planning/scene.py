@@ -21,6 +21,9 @@ Schema (``examples/scenes/*.toml`` are worked examples)::
     roughness = 0.1                      # micro NDF alpha >= 0
     ndf = "ggx"                          # ggx | beckmann | blinn-phong | abc | epd | sgd
     # ndf_shape = 1.5                    # abc's C, epd's or sgd's p (default: the NDF's own)
+    # micro_surface = "micro.npy"        # or {path, spacing, units, channel}: the NDF is this height field's
+    #                                    #   slope law (tabulated; instead of roughness, ndf and ndf_shape)
+    multiple_scattering = false          # add the light lost between micro facets (Kulla & Conty 2017)
     shadowing = "smith-correlated"       # see waveoptics.brdf.SHADOWINGS
     diffuse_albedo = 0.5                 # dielectric substrate's diffuse albedo in [0, 1] (metals: none)
     diffraction = "auto"                 # nano-lobe model: auto (the planner picks) | kirchhoff | ghs | rghs | ohs | rohs
@@ -78,7 +81,7 @@ KEYS = {
     "": ("name", "description", "seed", "accuracy", "materials", "lights", "view", "output"),
     "accuracy": ("delta_e",),
     "materials": ("name", "material", "ior", "roughness", "ndf", "ndf_shape", "shadowing", "diffuse_albedo",
-                  "nano", "diffraction"),
+                  "nano", "diffraction", "micro_surface", "multiple_scattering"),
     "nano": ("statistics", "generator", "file"),
     "file": ("path", "spacing", "units", "channel"),
     "lights": ("name", "spd", "directions_deg"),
@@ -133,6 +136,15 @@ class MaterialSpec:
     nano: NanoSpec | None = None
     ndf_shape: float | None = None   # the NDF's shape parameter (ABC's C, EPD's/SGD's p); None: its default
     diffraction: str = "auto"        # a model of waveoptics.vocabulary.DIFFRACTION, or auto (the planner picks)
+    micro_surface: NanoSpec | None = None   # a height-field file whose slope law is the NDF (kind "file")
+    multiple_scattering: bool = False       # add the Kulla-Conty compensation lobe
+
+    def micro(self):
+        """The micro roughness (:class:`waveoptics.brdf.Micro`): the slope law of *micro_surface* when given, else
+        the parametric NDF."""
+        if self.micro_surface is not None:
+            return brdf.Micro.from_slopes(brdf.slope_table(self.micro_surface.height_field()), self.shadowing)
+        return brdf.Micro(alpha=self.roughness, ndf=self.ndf, shadowing=self.shadowing, ndf_shape=self.ndf_shape)
 
 
 @dataclass(frozen=True)
@@ -316,6 +328,12 @@ def _nano(ctx, value, key, base: Path) -> NanoSpec:
         if missing:
             raise ctx.err(k, f"lacks {missing[0]} (generator {model!r} needs {', '.join(missing)})")
         return NanoSpec("generator", params={"model": model, **g})
+    p, opts = _file(ctx, v, k, base)
+    return NanoSpec("file", path=p, params=opts)
+
+
+def _file(ctx, v, k, base: Path) -> tuple:
+    """(path, load options) of a height-field file given as a path or a {path, spacing, units, channel} table."""
     f = {"path": v} if isinstance(v, str) else dict(_table(ctx, v, k))
     _check_keys(ctx, f, "file", k)
     p = Path(_string(ctx, f.get("path"), k + ".path")).expanduser()
@@ -334,7 +352,7 @@ def _nano(ctx, value, key, base: Path) -> NanoSpec:
                 parse_length(v, name="spacing")
             except ValueError as exc:
                 raise ctx.err(k + ".spacing", f"= {v!r}: {str(exc).split(': ', 1)[-1]}") from None
-    return NanoSpec("file", path=p, params=opts)
+    return p, opts
 
 
 def _material(ctx, t, key, base) -> MaterialSpec:
@@ -355,8 +373,16 @@ def _material(ctx, t, key, base) -> MaterialSpec:
         get_material(spec)
     except WaveopticsError as exc:
         raise ctx.err(key + (".material" if "material" in t else ".ior"), f"= {spec!r}: {exc}") from None
+    micro_surface = None
+    if "micro_surface" in t:   # the NDF is the field's slope law: no parametric NDF keys beside it
+        clash = [q for q in ("roughness", "ndf", "ndf_shape") if q in t]
+        if clash:
+            raise ctx.err(key + ".micro_surface", f"sets the NDF from the field's slopes; drop {', '.join(clash)}")
+        path, opts = _file(ctx, t["micro_surface"], key + ".micro_surface", base)
+        micro_surface = NanoSpec("file", path=path, params=opts)
     return MaterialSpec(
-        name=name, material=spec,
+        name=name, material=spec, micro_surface=micro_surface,
+        multiple_scattering=_bool(ctx, t.get("multiple_scattering", False), key + ".multiple_scattering"),
         roughness=_number(ctx, t.get("roughness", 0.05), key + ".roughness", lo=0.0, hi=2.0),
         ndf=_choice(ctx, t.get("ndf", "ggx"), key + ".ndf", PARAMETRIC_NDF_NAMES),
         ndf_shape=_ndf_shape(ctx, t, key),
