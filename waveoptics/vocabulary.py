@@ -5,7 +5,7 @@ from __future__ import annotations
 
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
            "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO", "COST_TARGET_ERROR", "COST_BUDGET_S",
-           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS"]
+           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "GLINT_SHAPES"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -42,3 +42,5 @@ COST_BUDGET_S = 35.0
 #: renderer, and how the wave-optics BRDF enters Mitsuba 3 (its RGL export read by 'measured', or the plugin)
 RENDER_WAVELENGTH_STEP_NM = 20.0
 RENDER_BSDFS = ("measured", "plugin")
+#: what a glint render's height field textures (:data:`waveoptics.renderers.glints.SHAPES`)
+GLINT_SHAPES = ("plane", "sphere")

@@ -83,6 +83,17 @@ def load_surface(args, *, required: bool = True):
                          layout=getattr(args, "layout", None), nan_is_mask=getattr(args, "nan_is_mask", False))
 
 
+def add_workers(parser, *, group=None) -> None:
+    """``--workers N`` (a local Dask cluster of N single-threaded processes) and ``--scheduler ADDRESS`` (an existing
+    one), mutually exclusive; neither: run in this process."""
+    g = group if group is not None else parser
+    x = g.add_mutually_exclusive_group()
+    x.add_argument("--workers", type=int, metavar="N",
+                   help="start a local Dask cluster of N single-threaded worker processes on 127.0.0.1 "
+                        "(default: run in-process)")
+    x.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler")
+
+
 def add_output(parser, *, required: bool = True, note: str = "a directory", metavar: str = "OUTDIR",
                overwrite_note: str | None = None) -> None:
     """Add ``-o/--output`` and ``--overwrite``."""

@@ -2,7 +2,7 @@
 environment map, rendered by Mitsuba 3, side by side with their ΔE2000 (:mod:`waveoptics.renderers.scene`)."""
 from __future__ import annotations
 
-from ._common import add_common, add_output, emit, load_surface, progress
+from ._common import add_common, add_output, add_workers, emit, load_surface, progress
 from ._options import option
 from ._renderer import add_model, model_description, model_from_args, plugin_parameters
 
@@ -11,6 +11,7 @@ OUTPUTS = ("wave.exr", "reference.exr", "delta_e.exr", "render.png", "summary.js
 
 
 def register(sub):
+    from ..vocabulary import GLINT_SHAPES
     from ..vocabulary import RENDER_BSDFS as WAVE_BSDFS
 
     p = sub.add_parser(
@@ -41,13 +42,18 @@ def register(sub):
     gl.add_argument("--view", metavar="THETA[,PHI]",
                     help="the camera's direction from the field's centre, degrees (default 30,180)")
     option(gl, "--wavelengths", note="default 450:650:50")
+    gl.add_argument("--shape", choices=GLINT_SHAPES,
+                    help="what the height field textures: a plane, or a sphere (latitude-longitude map about the "
+                         "camera) (default plane)")
+    add_workers(p, group=gl)
     add_output(p)
     add_common(p, device=False)
     p.set_defaults(func=run)
 
 
 #: --glints options and their defaults
-_GLINT_DEFAULTS = {"incident": "30,0", "view": "30,180", "wavelengths": "450:650:50"}
+_GLINT_DEFAULTS = {"incident": "30,0", "view": "30,180", "wavelengths": "450:650:50", "shape": "plane",
+                   "workers": None, "scheduler": None}
 
 
 def run(args):
@@ -55,7 +61,7 @@ def run(args):
 
     if args.glints:
         return run_glints(args)
-    given = [k for k in _GLINT_DEFAULTS if getattr(args, k) is not None]
+    given = [k for k, v in _GLINT_DEFAULTS.items() if getattr(args, k) is not None and getattr(args, k) != v]
     if given:
         raise WaveopticsError(f"--{given[0]} belongs to --glints renders; the sphere render takes its light from "
                               "--environment")
@@ -68,6 +74,8 @@ _NOT_GLINTS = {"alpha": 0.1, "alpha_y": None, "nano": None, "kd": 0.0, "scene": 
 
 def run_glints(args):
     """``render --glints``: footprint BRDFs per pixel over a height field (:mod:`waveoptics.renderers.glints`)."""
+    import contextlib
+    import importlib
     from pathlib import Path
 
     import numpy as np
@@ -94,13 +102,24 @@ def run_glints(args):
     lt, lp = parse_direction(args.incident, name="--incident")
     vt, vp = parse_direction(args.view, name="--view")
     settings = glints.GlintSettings(size=args.sphere_size, view_deg=vt, view_azimuth_deg=vp, light_deg=lt,
-                                    light_azimuth_deg=lp, wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)))
+                                    light_azimuth_deg=lp, wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)),
+                                    shape=args.shape)
     if str(args.surface).lower().endswith(".npy") and args.channel is None:
         field = surfaces.open_large(args.surface, spacing=_spacing(args), units=args.units)
     else:
         field = load_surface(args)
     bar = progress(total=settings.size, desc="glints", args=args)
-    r = glints.render_glints(field, args.material, settings, progress=bar.update)
+    with contextlib.ExitStack() as stack:
+        executor = None
+        if args.workers is not None or args.scheduler is not None:   # pixel rows as Dask tasks
+            from ..distributed import dask_client
+
+            client = stack.enter_context(dask_client(args.workers, args.scheduler))
+            # each worker imports the renderer before the clock starts (seconds per process): the render's own
+            # wall time is then the pixels', the start-up is the command's
+            client.run(importlib.import_module, "waveoptics.renderers.glints")
+            executor = client.get_executor()
+        r = glints.render_glints(field, args.material, settings, progress=bar.update, executor=executor)
     bar.close()
     on = r.on_field
     de = np.where(on, colour.delta_e2000(r.wave, r.geometric), 0.0)
@@ -115,9 +134,11 @@ def run_glints(args):
                      [f"wave optics (footprint Kirchhoff)\n{args.material}, {Path(args.surface).name}",
                       "geometric optics (footprint NDF)"], stage / "glints.png", diff=de,
                      diff_title=f"ΔE2000 (mean {float(de[on].mean()):.1f})", exposure=exposure,
-                     caption=f"light at θ = {lt:g}°, φ = {lp:g}°; camera at θ = {vt:g}°, φ = {vp:g}°; footprint σ "
+                     caption=f"{settings.shape}; light at θ = {lt:g}°, φ = {lp:g}°; camera at θ = {vt:g}°, "
+                             f"φ = {vp:g}°; footprint σ "
                              f"≈ {r.footprint_sigma_m[0] * 1e6:.3g} × {r.footprint_sigma_m[1] * 1e6:.3g} µm")
         summary = {"surface": str(args.surface), "material": args.material, "size_px": settings.size,
+                   "shape": settings.shape, "workers": args.workers, "scheduler": args.scheduler,
                    "light_deg": [lt, lp], "view_deg": [vt, vp], "wavelengths_nm": list(settings.wavelengths_nm),
                    "footprint_sigma_m": list(r.footprint_sigma_m),
                    "pixels_on_field": int(on.sum()), "delta_e2000_mean": float(de[on].mean()),

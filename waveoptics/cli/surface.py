@@ -33,6 +33,8 @@ _FLOAT_PARAMS = {"A", "C", "orientation_deg", "phase_deg", "spread_deg", "variat
 #: what -o writes for the commands that write a height field
 HEIGHT_FIELD_OUTPUT = "a height-field file: .npz .npy .exr .txt .csv .xyz, or .x3p .gwy .nc through SurfaceTopography"
 MODELS = ("flat", "gaussian", "exponential", "abc", "sinusoid", "scratches", "flakes")
+#: example fields (:data:`waveoptics.surfaces.EXAMPLES`; kept here so parsing imports nothing numerical)
+EXAMPLES = ("brushed", "scratched", "flakes")
 
 
 def register(sub):
@@ -47,6 +49,9 @@ def register(sub):
                                   "(+ .json sidecar), .exr or a text grid, chosen by the extension of -o.")
     option(g, "--generator", choices=MODELS, note="its parameters follow as options")
     renamed(g, "surface generate", "--model", dest="generator")
+    g.add_argument("--example", choices=EXAMPLES,
+                   help="an example field for glint renders, with every generator parameter set (brushed, "
+                        "scratched, flakes: 1024² samples over 51.2 µm; docs/glints.md); --seed still applies")
     option(g, "--size", default="64um")
     option(g, "--samples", default="1024", note="or NXxNY, NX,NY")
     option(g, "--seed", note="default: drawn and recorded")
@@ -200,8 +205,15 @@ def run_generate(args):
 
     from .. import surfaces
 
-    params = _model_params(args)
-    hf = surfaces.generate(args.generator, **params)
+    if args.example is not None:
+        given = [flag for name, (flag, _) in _MODEL_OPTIONS.items() if getattr(args, f"m_{name}") is not None]
+        if args.generator is not None or given:
+            raise WaveopticsError(f"--example {args.example} sets the generator and its parameters; drop "
+                                  f"{(['--generator'] if args.generator is not None else given)[0]}")
+        hf = surfaces.example(args.example, seed=0 if args.seed is None else args.seed)
+        args.generator = surfaces.EXAMPLES[args.example].model
+    else:
+        hf = surfaces.generate(args.generator, **_model_params(args))
     path = surfaces.save(hf, args.output, overwrite=args.overwrite)
     st = surfaces.stats(hf)
     data = {"output": str(path), "model": args.generator, "meta": hf.meta, "stats": st}

@@ -10,7 +10,7 @@ from pathlib import Path
 from ..errors import WaveopticsError
 from ..units import parse_number_list, parse_wavelengths
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, PRECISIONS
-from ._common import SURFACE_FORMATS_HELP, add_common, emit, progress
+from ._common import SURFACE_FORMATS_HELP, add_common, add_workers, emit, progress
 from ._options import option
 
 SCENE_SUFFIXES = (".toml",)
@@ -47,11 +47,7 @@ def add_case_options(p, *, resolution: int) -> None:
 
 def add_cluster_options(p) -> None:
     """Where to run (embedded, local processes, existing scheduler) and the resume/overwrite rules."""
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=int, metavar="N",
-                   help="start a local Dask cluster of N single-threaded worker processes on 127.0.0.1 "
-                        "(default: run in-process)")
-    g.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use an existing Dask scheduler")
+    add_workers(p)
     p.add_argument("--resume", action="store_true",
                    help="continue OUT.partial left by an interrupted run (computes only the missing tasks)")
     option(p, "--overwrite", action="store_true", note="and discard OUT.partial")

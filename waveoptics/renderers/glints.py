@@ -2,14 +2,24 @@
 every pixel's footprint gives its own BRDF — in wave optics and in geometric optics, side by side (Yan et al. 2014,
 2016, 2018).
 
-Geometry (world = the surface's frame): the height field lies on the plane z = 0 with its first sample at the
-origin, x along the grid's axis 1 and y along axis 0. The camera looks at the field's centre from elevation
-θ_v (from the normal) and azimuth φ_v; the light is a point at elevation θ_l, azimuth φ_l and the same distance.
-For each pixel the ray through its centre meets the plane at c; the pixel filter (a Gaussian of ``filter_px``
-pixels) maps to the footprint Σ = J diag(s², s²) Jᵀ on the plane, with J the change of c per pixel (finite
-differences): an ellipse that stretches along the view direction at oblique views (Yan et al. 2014, §5).
+Geometry (:data:`SHAPES`, ``shape=``):
 
-Per pixel, with ω_i towards the light and ω_o towards the camera (both from c):
+* ``plane`` (world = the surface's frame): the height field lies on the plane z = 0 with its first sample at the
+  origin, x along the grid's axis 1 and y along axis 0. The camera looks at the field's centre from elevation
+  θ_v (from the normal) and azimuth φ_v; the light is a point at elevation θ_l, azimuth φ_l and the same
+  distance.
+* ``sphere``: a sphere of radius R = 0.9 min(W, H)/π at the origin, textured by the field through longitude γ
+  and latitude β about the camera (u = W/2 + Rγ, v = H/2 + Rβ; the visible half maps inside the field). The
+  shading frame at each point is (∂P/∂γ, ∂P/∂β, n) normalized; as with any latitude-longitude map the texture is
+  compressed along γ by cos β away from the equator (footprints are measured in texture space). θ_v, φ_v and
+  θ_l, φ_l are now directions from the sphere's centre in the world frame (z up).
+
+For each pixel the ray through its centre meets the surface at texture point c; the pixel filter (a Gaussian of
+``filter_px`` pixels) maps to the footprint Σ = J diag(s², s²) Jᵀ in texture space, with J the change of c per
+pixel (finite differences): an ellipse that stretches along the view direction at oblique views (Yan et al. 2014,
+§5). Pixels whose footprint box leaves the field, or whose ray misses the sphere, stay black.
+
+Per pixel, with ω_i towards the light and ω_o towards the camera (both from the hit point, in its shading frame):
 
 * wave optics: f = F(θ_d) K |Σ_j G_j e^{i k (ω_i + ω_o)·r_j} ΔxΔy|² / (λ² Σ_j G_j² ΔxΔy), the windowed
   Kirchhoff integral of the footprint (:mod:`waveoptics.scatter.footprint`) at this one direction pair;
@@ -21,6 +31,10 @@ Per pixel, with ω_i towards the light and ω_o towards the camera (both from c)
 The radiance is L = f cos θ_i I / d² for a light of intensity I (W/sr per unit spectrum) at distance d, summed to
 linear sRGB with the colour-matching functions (:func:`waveoptics.colour.reflectance_to_rgb_matrix`, the light's
 spectrum white). Wavelengths are few (the glint's colour comes from diffraction's λ dependence).
+
+Pixels are independent: rows of pixels are tasks, run in turn or by any ``concurrent.futures``-style executor
+(``executor.map``; the command line passes a Dask client's executor for ``--workers N``). A memory-mapped field
+travels to workers as its path, so each worker reads only its footprints' patches.
 
 References
 ----------
@@ -38,11 +52,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import colour
-from ..errors import FieldError
+from ..errors import FieldError, unknown
 from ..materials import get_material
 from ..surfaces.footprint import Footprint, footprint_patch
+from ..vocabulary import GLINT_SHAPES
 
-__all__ = ["GlintSettings", "GlintRender", "camera_rays", "render_glints"]
+__all__ = ["SHAPES", "GlintSettings", "GlintRender", "Geometry", "camera_rays", "geometry", "render_glints"]
 
 
 @dataclass(frozen=True)
@@ -65,6 +80,8 @@ class GlintSettings:
         rms slope per axis of each facet in the geometric NDF (Yan et al. 2016's intrinsic roughness).
     wavelengths_nm : tuple
         Wavelengths (nm) summed to RGB.
+    shape : str
+        What the field textures: ``plane`` or ``sphere`` (:data:`SHAPES`).
     """
 
     size: int = 64
@@ -76,8 +93,11 @@ class GlintSettings:
     filter_px: float = 0.5
     intrinsic_slope: float = 0.01
     wavelengths_nm: tuple = (450.0, 500.0, 550.0, 600.0, 650.0)
+    shape: str = "plane"
 
     def __post_init__(self):
+        if self.shape not in SHAPES:
+            raise unknown("glint shape", self.shape, SHAPES, field="shape")
         if not (isinstance(self.size, (int, np.integer)) and 4 <= self.size <= 2048):
             raise FieldError(f"{{sphere_size}} {self.size!r} px is not allowed; give 4 to 2048", "sphere_size")
         for name in ("view_deg", "light_deg"):
@@ -110,31 +130,133 @@ def _dir(theta_deg, phi_deg):
 
 def camera_rays(field, s: GlintSettings):
     """(camera position (3,), plane points c (size, size, 3), Jacobian dc/dpixel (size, size, 2, 2), distance) of
-    the pinhole camera of *s* looking at the centre of *field* (see the module doc)."""
+    the pinhole camera of *s* looking at the centre of the *field* plane (see the module doc)."""
     ny, nx = field.shape
     W, H = nx * field.dx, ny * field.dy
     centre = np.array([W / 2, H / 2, 0.0])
     dist = 1.5 * max(W, H)
     eye = centre + dist * _dir(s.view_deg, s.view_azimuth_deg)
-    fwd = (centre - eye) / np.linalg.norm(centre - eye)
+    fov = math.radians(s.fov_deg) if s.fov_deg else 2 * math.atan(0.5 * min(W, H) / dist)
+    ray = _pixel_rays(s, *_camera(eye, centre), math.tan(fov / 2))
+
+    def hit(px, py):
+        d = ray(px, py)
+        return eye + (-eye[2] / d[..., 2])[..., None] * d
+
+    px, py = _pixels(s)
+    return eye, hit(px, py), _jacobian(hit, px, py)[..., :2, :], dist
+
+
+@dataclass
+class Geometry:
+    """What the camera sees per pixel: ``hit`` (size, size) bool, texture points ``c`` (size, size, 2) in m from the
+    field's first sample, their Jacobian ``J`` (size, size, 2, 2) per pixel, hit points ``P`` (size, size, 3),
+    shading frames ``frame`` (size, size, 3, 3) whose rows are the tangent along texture x, along texture y and
+    the normal, the camera ``eye`` and the ``light`` positions (3,), and the camera distance ``dist``."""
+
+    hit: np.ndarray
+    c: np.ndarray
+    J: np.ndarray
+    P: np.ndarray
+    frame: np.ndarray
+    eye: np.ndarray
+    light: np.ndarray
+    dist: float
+
+    def take(self, rows) -> "Geometry":
+        """The pixel rows *rows* only (what one task needs)."""
+        r = np.asarray(list(rows))
+        return Geometry(self.hit[r], self.c[r], self.J[r], self.P[r], np.asarray(self.frame[r]), self.eye,
+                        self.light, self.dist)
+
+
+def _camera(eye, target):
+    """(forward, right, up) unit vectors of a camera at *eye* looking at *target* (z up)."""
+    fwd = (target - eye) / np.linalg.norm(target - eye)
     up0 = np.array([0.0, 0.0, 1.0]) if abs(fwd[2]) < 0.999 else np.array([0.0, 1.0, 0.0])
     right = np.cross(fwd, up0)
     right /= np.linalg.norm(right)
-    up = np.cross(right, fwd)
-    fov = math.radians(s.fov_deg) if s.fov_deg else 2 * math.atan(0.5 * min(W, H) / dist)
-    half = math.tan(fov / 2)
+    return fwd, right, np.cross(right, fwd)
 
-    def hit(px, py):
+
+def _pixel_rays(s: GlintSettings, fwd, right, up, half):
+    """Ray directions (unnormalized) through pixel positions: d(px, py) for arrays of pixel coordinates."""
+    def ray(px, py):
         x = ((px + 0.5) / s.size * 2 - 1) * half
         y = (1 - (py + 0.5) / s.size * 2) * half
-        d = fwd + x[..., None] * right + y[..., None] * up
-        t = -eye[2] / d[..., 2]
+        return fwd + x[..., None] * right + y[..., None] * up
+    return ray
+
+
+def _pixels(s: GlintSettings):
+    py, px = np.meshgrid(np.arange(s.size, dtype=float), np.arange(s.size, dtype=float), indexing="ij")
+    return px, py
+
+
+def _jacobian(tex, px, py):
+    """d(texture)/d(pixel) by central differences of *tex*(px, py) → (..., 2), as (..., 2, 2)."""
+    return np.stack([tex(px + 0.5, py) - tex(px - 0.5, py), tex(px, py + 0.5) - tex(px, py - 0.5)], axis=-1)
+
+
+def _plane_geometry(field, s: GlintSettings) -> Geometry:
+    eye, c, J, dist = camera_rays(field, s)
+    ny, nx = field.shape
+    light = np.array([nx * field.dx / 2, ny * field.dy / 2, 0.0]) + dist * _dir(s.light_deg, s.light_azimuth_deg)
+    frame = np.broadcast_to(np.eye(3), c.shape[:2] + (3, 3))
+    return Geometry(np.ones(c.shape[:2], bool), c[..., :2], J, c, frame, eye, light, dist)
+
+
+def _sphere_geometry(field, s: GlintSettings) -> Geometry:
+    ny, nx = field.shape
+    W, H = nx * field.dx, ny * field.dy
+    R = 0.9 * min(W, H) / math.pi
+    dist = 4.0 * R
+    eye = dist * _dir(s.view_deg, s.view_azimuth_deg)
+    light = dist * _dir(s.light_deg, s.light_azimuth_deg)
+    fwd, right, up = _camera(eye, np.zeros(3))
+    half = 1.05 * R / math.sqrt(dist * dist - R * R)      # the sphere's silhouette fills the image
+    ray = _pixel_rays(s, fwd, right, up, half)
+    back = -fwd
+
+    def point(px, py):
+        """Hit point on the sphere (nan where the ray misses): the nearer root of |eye + t d|² = R²."""
+        d = ray(px, py)
+        d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+        b = d @ eye
+        disc = b * b - (eye @ eye - R * R)
+        t = -b - np.sqrt(np.where(disc >= 0, disc, np.nan))
         return eye + t[..., None] * d
 
-    py, px = np.meshgrid(np.arange(s.size, dtype=float), np.arange(s.size, dtype=float), indexing="ij")
-    c = hit(px, py)
-    J = np.stack([hit(px + 0.5, py) - hit(px - 0.5, py), hit(px, py + 0.5) - hit(px, py - 0.5)], axis=-1)[..., :2, :]
-    return eye, c, J, dist
+    def lon_lat(P):
+        q = P / R
+        return np.arctan2(q @ right, q @ back), np.arcsin(np.clip(q @ up, -1.0, 1.0))
+
+    def tex(px, py):
+        g, b = lon_lat(point(px, py))
+        return np.stack([W / 2 + R * g, H / 2 + R * b], axis=-1)
+
+    px, py = _pixels(s)
+    P = point(px, py)
+    g, b = lon_lat(P)
+    hit = np.isfinite(P[..., 0])
+    J = _jacobian(tex, px, py)
+    hit &= np.all(np.isfinite(J), axis=(-1, -2))
+    t = np.cos(g)[..., None] * right - np.sin(g)[..., None] * back                       # ∂P/∂γ, normalized
+    n = np.where(hit[..., None], P / R, 0.0)
+    bt = np.cross(n, t)                                                                  # ∂P/∂β, normalized
+    frame = np.stack([t, bt, n], axis=-2)
+    c = np.stack([W / 2 + R * g, H / 2 + R * b], axis=-1)
+    return Geometry(hit, np.nan_to_num(c), np.nan_to_num(J), np.nan_to_num(P), frame, eye, light, dist)
+
+
+#: what a glint render's height field textures, by name (``shape=``; ``render --glints --shape``)
+SHAPES = {"plane": _plane_geometry, "sphere": _sphere_geometry}
+assert tuple(SHAPES) == GLINT_SHAPES   # the command line's choices (kept import-light in waveoptics.vocabulary)
+
+
+def geometry(field, s: GlintSettings) -> Geometry:
+    """The per-pixel :class:`Geometry` of settings *s* over *field* (:data:`SHAPES`)."""
+    return SHAPES[s.shape](field, s)
 
 
 def _footprint(c, J, filter_px):
@@ -179,51 +301,95 @@ def _geometric_f(patch, G, wi, wo, F, slope_sigma):
     return F * D / (4 * wi[2] * wo[2])
 
 
-def render_glints(field, material, settings: GlintSettings = GlintSettings(), *, progress=None) -> GlintRender:
-    """Render *field* (HeightField or memory-mapped LargeHeightField) of *material* as described in the module
-    doc; pixels whose footprint box leaves the field stay black (``on_field`` False)."""
+def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows) -> dict:
+    """Render the pixel rows *rows* (a range) whose geometry is *geo* (:meth:`Geometry.take` of those rows):
+    spectral radiance of both models, the mask of pixels shown, the footprint widths and the time of each model
+    (one task of :func:`render_glints`)."""
     mat = get_material(material)
-    lam = np.asarray(settings.wavelengths_nm, dtype=float)
-    M = colour.reflectance_to_rgb_matrix(lam)
-    eye, c, J, dist = camera_rays(field, settings)
-    light = np.array([field.shape[1] * field.dx / 2, field.shape[0] * field.dy / 2, 0.0]) \
-        + dist * _dir(settings.light_deg, settings.light_azimuth_deg)
-    n = settings.size
-    wave = np.zeros((n, n, len(lam)))
-    geo = np.zeros((n, n, len(lam)))
-    on = np.zeros((n, n), bool)
-    t_wave = t_geo = 0.0
-    sig = []
-    for j in range(n):
+    lam = np.asarray(s.wavelengths_nm, dtype=float)
+    n = s.size
+    out = {"rows": rows, "wave": np.zeros((len(rows), n, lam.size)), "geo": np.zeros((len(rows), n, lam.size)),
+           "on": np.zeros((len(rows), n), bool), "sig": [], "t_wave": 0.0, "t_geo": 0.0}
+    for r in range(len(rows)):
         for i in range(n):
+            if not geo.hit[r, i]:
+                continue
             try:
-                fp = _footprint(c[j, i], J[j, i], settings.filter_px)
+                fp = _footprint(geo.c[r, i], geo.J[r, i], s.filter_px)
                 patch, G = footprint_patch(field, fp)
             except FieldError:
                 continue
-            p = np.array([c[j, i, 0], c[j, i, 1], 0.0])
-            wi, wo = light - p, eye - p
+            p = geo.P[r, i]
+            wi, wo = geo.light - p, geo.eye - p
             r2 = float(wi @ wi)
-            wi, wo = wi / math.sqrt(r2), wo / np.linalg.norm(wo)
+            wi, wo = geo.frame[r, i] @ (wi / math.sqrt(r2)), geo.frame[r, i] @ (wo / np.linalg.norm(wo))
+            if wi[2] <= 0 or wo[2] <= 0:        # the light or the camera is below this point's horizon
+                out["on"][r, i] = True
+                continue
             cos_d = float(np.clip(wi @ ((wi + wo) / np.linalg.norm(wi + wo)), 0.0, 1.0))
             F = mat.F(cos_d, lam)
-            E = wi[2] / r2 * dist ** 2          # irradiance of a unit-intensity light, normalized at distance d
+            E = wi[2] / r2 * geo.dist ** 2       # irradiance of a unit-intensity light, normalized at distance d
             t0 = time.perf_counter()
-            wave[j, i] = _wave_f(patch, G, wi, wo, lam, F) * E
+            out["wave"][r, i] = _wave_f(patch, G, wi, wo, lam, F) * E
             t1 = time.perf_counter()
-            geo[j, i] = _geometric_f(patch, G, wi, wo, F, settings.intrinsic_slope) * E
-            t_wave += t1 - t0
-            t_geo += time.perf_counter() - t1
-            on[j, i] = True
-            sig.append((fp.sigma, fp.sigma_y or fp.sigma))
+            out["geo"][r, i] = _geometric_f(patch, G, wi, wo, F, s.intrinsic_slope) * E
+            out["t_wave"] += t1 - t0
+            out["t_geo"] += time.perf_counter() - t1
+            out["on"][r, i] = True
+            out["sig"].append((fp.sigma, fp.sigma_y or fp.sigma))
+    return out
+
+
+#: pixel rows per task (a task of a 256² render is 1024 pixels, about 0.2-2 s)
+ROWS_PER_TASK = 4
+
+
+def render_glints(field, material, settings: GlintSettings = GlintSettings(), *, progress=None,
+                  executor=None) -> GlintRender:
+    """Render *field* (HeightField or memory-mapped LargeHeightField) of *material* as described in the module
+    doc; pixels whose footprint box leaves the field stay black (``on_field`` False).
+
+    Parameters
+    ----------
+    progress : callable, optional
+        Called with the number of pixel rows done after each task.
+    executor : concurrent.futures.Executor, optional
+        Runs the row tasks (``executor.map``), e.g. a Dask client's ``get_executor()``; default: in turn here.
+    """
+    get_material(material)
+    lam = np.asarray(settings.wavelengths_nm, dtype=float)
+    M = colour.reflectance_to_rgb_matrix(lam)
+    geo = geometry(field, settings)
+    n = settings.size
+    wave = np.zeros((n, n, len(lam)))
+    geo_img = np.zeros((n, n, len(lam)))
+    on = np.zeros((n, n), bool)
+    t_wave = t_geo = 0.0
+    sig = []
+    tasks = [range(j, min(j + ROWS_PER_TASK, n)) for j in range(0, n, ROWS_PER_TASK)]
+    t_start = time.perf_counter()
+    parts = [geo.take(rows) for rows in tasks]
+    if executor is None:
+        results = (_render_rows(field, material, settings, g, rows) for g, rows in zip(parts, tasks))
+    else:
+        results = executor.map(_render_rows, [field] * len(tasks), [material] * len(tasks),
+                               [settings] * len(tasks), parts, tasks)
+    for res in results:
+        rows = list(res["rows"])
+        wave[rows], geo_img[rows], on[rows] = res["wave"], res["geo"], res["on"]
+        t_wave += res["t_wave"]
+        t_geo += res["t_geo"]
+        sig += res["sig"]
         if progress is not None:
-            progress(1)
-    if not on.any():
+            progress(len(rows))
+    wall = time.perf_counter() - t_start
+    if not sig:
         raise FieldError("no pixel's footprint lies inside the height field; use a larger field or image",
                          "surface")
     s = np.array(sig)
-    return GlintRender(wave=wave @ M, geometric=geo @ M, on_field=on,
-                       timings_s={"wave": t_wave, "geometric": t_geo, "pixels": int(on.sum()),
-                                  "wave_per_pixel": t_wave / on.sum(), "geometric_per_pixel": t_geo / on.sum()},
+    n_px = len(sig)
+    return GlintRender(wave=wave @ M, geometric=geo_img @ M, on_field=on,
+                       timings_s={"wave": t_wave, "geometric": t_geo, "pixels": n_px, "wall": wall,
+                                  "wave_per_pixel": t_wave / n_px, "geometric_per_pixel": t_geo / n_px},
                        footprint_sigma_m=(float(np.median(s[:, 0])), float(np.median(s[:, 1]))),
-                       wave_spectral=wave, geometric_spectral=geo)
+                       wave_spectral=wave, geometric_spectral=geo_img)

@@ -127,6 +127,11 @@ class LargeHeightField:
         if sp is None:
             raise FieldError(f"{str(p)!r} does not state its grid spacing; pass {{spacing}}, e.g. 50nm", "spacing")
         self.array, self.dx, self.dy, self.path = a, float(sp[0]), float(sp[1]), p
+        self._args = (str(p), spacing, units)
+
+    def __reduce__(self):
+        # pickled (e.g. sent to a Dask worker) as its file, not its samples: the worker maps the file itself
+        return (type(self), self._args)
 
     @property
     def shape(self) -> tuple[int, int]:
