@@ -17,8 +17,9 @@ PRECISIONS = ("float32", "float64")
 #: polarizations of the incident light (the scattered light is not analyzed)
 POLARIZATIONS = ("unpolarized", "s", "p")
 
-#: diffraction models of the nano lobe (:data:`waveoptics.scatter.DIFFRACTION_MODELS`)
-DIFFRACTION = ("kirchhoff", "ghs", "rghs", "ohs", "rohs")
+#: diffraction models of the nano lobe (:data:`waveoptics.scatter.DIFFRACTION_MODELS`); rayleigh-rice is a
+#: perturbation model the two-scale model takes, not the Kirchhoff field solvers
+DIFFRACTION = ("kirchhoff", "ghs", "rghs", "ohs", "rohs", "rayleigh-rice")
 
 #: microfacet terms by name (the keys of :data:`waveoptics.brdf.NDFS`, ``SHADOWINGS``, ``FRESNELS``, ``DIFFUSES``)
 NDF_NAMES = ("ggx", "beckmann", "blinn-phong", "abc", "epd", "sgd", "tabulated")

@@ -91,7 +91,9 @@ class NanoRadial:
         self.edges = np.concatenate([[0.0], np.geomspace(q_lo, q_hi, RADIAL_BINS)])
         mid = np.concatenate([[0.5 * q_lo], np.sqrt(self.edges[1:-1] * self.edges[2:])])
         area = np.pi * np.diff(self.edges ** 2)
-        dm = scatter.get_model(diffraction)
+        dm = scatter.get_model(diffraction, perturbative=True)
+        if dm.perturbative:   # a proposal only (its pdf is its own): the Kirchhoff series has the same lobe shape
+            dm = scatter.get_model("kirchhoff")
         self.cos_levels = np.linspace(0.0, 1.0, COS_LEVELS)
         g = scatter.roughness_g(model.sigma, dm.specular_cos_sum(self.cos_levels), wavelength_nm)
         m_use = scatter.series_terms(float(g.max()))
@@ -166,7 +168,7 @@ class TwoScaleBRDF(TwoScaleParts):
 
     def __post_init__(self):
         super().__post_init__()
-        scatter.get_model(self.diffraction)
+        scatter.get_model(self.diffraction, perturbative=True)
         if self.nano is not None and self.nano.model is None:
             raise FieldError("the two-scale BRDF function needs nano statistics (a PSD model); a nano height "
                              "field is evaluated on a direction grid by simulate", "nano")
@@ -196,8 +198,11 @@ class TwoScaleBRDF(TwoScaleParts):
         h = wi + wo
         h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
         cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
+        dm = scatter.get_model(self.diffraction, perturbative=True)
+        if dm.perturbative:   # Rayleigh-Rice: its own polarization factor Q in place of F (F = 1: a perfect conductor)
+            mat = self.material if self.fresnel == "exact" else None
+            return scatter.rayleigh_rice_lobe(wi, wo, lam, self.nano.model, mat)
         F = self._F(lam)(cos_d)
-        dm = scatter.get_model(self.diffraction)
         # the series of the roughness inside the propagating band, as the grid model's (docs/physics.md §9)
         total = scatter.band_series(self.nano.model, lam)(wi, wo, dm.cos_sum(wi, wo))
         return np.where((wi[..., 2] > 0) & (wo[..., 2] > 0), F * dm.K(wi, wo, lam) * total, 0.0)

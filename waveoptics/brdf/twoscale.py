@@ -135,7 +135,9 @@ class Nano:
         0 over six Gaussian patches without any rescaling). It equals exp(−g) for Gaussian heights on average.
         """
         c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
-        dm = scatter.get_model(diffraction)
+        dm = scatter.get_model(diffraction, perturbative=True)
+        if dm.perturbative and self.surface is not None:   # Rayleigh-Rice of the field's periodogram
+            return self._rayleigh_rice_coherent(c, wavelength_nm, material)
         if self.model is not None:   # 1 − E¹(θ_d): the light the band-limited lobe does not scatter
             lam = np.asarray(wavelength_nm, dtype=float)
             c_b, lam_b = np.broadcast_arrays(c, lam)
@@ -155,6 +157,33 @@ class Nano:
             tab = np.abs(np.exp(1j * vz[:, None] * h[None, :]) @ w2) ** 2
             sel = lam_b == l_val
             out[sel] = np.interp(c_b[sel], c_tab, tab)
+        return out if out.ndim else float(out)
+
+    def periodogram(self):
+        """The height field's :class:`~waveoptics.surfaces.PeriodogramPSD` (computed once): its PSD where a
+        perturbation model needs one."""
+        cache = self.__dict__.setdefault("_cache", {})
+        if "psd" not in cache:
+            cache["psd"] = surfaces.PeriodogramPSD(self.surface)
+        return cache["psd"]
+
+    def _rayleigh_rice_coherent(self, c, wavelength_nm, material):
+        """1 − E_RR(θ) of the height field's periodogram (:func:`waveoptics.scatter.rayleigh_rice_albedo`),
+        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and material."""
+        from ..scatter.band import RR_THETAS_DEG, rr_interp
+
+        cache = self.__dict__.setdefault("_cache", {})
+        lam = np.asarray(wavelength_nm, dtype=float)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        out = np.empty(c_b.shape)
+        for l_val in np.unique(lam_b):
+            key = ("rr", float(l_val), None if material is None else material.name)
+            if key not in cache:
+                cache[key] = np.array([scatter.rayleigh_rice_albedo(t, float(l_val), self.periodogram(), material)
+                                       for t in RR_THETAS_DEG])
+            sel = lam_b == l_val
+            E = rr_interp(np.degrees(np.arccos(c_b[sel])), cache[key])
+            out[sel] = np.clip(1.0 - E, 0.0, 1.0)   # guard: first-order TIS above R means σ far outside its domain
         return out if out.ndim else float(out)
 
     def _height_weights(self):
@@ -342,6 +371,16 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
     cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
     if solver == "auto":
         solver = "psd" if nano.model is not None else "fft"
+    dm = scatter.get_model(diffraction, perturbative=True)
+    if dm.perturbative:   # Rayleigh-Rice: the PSD's first-order lobe with its own polarization factor Q (no F)
+        psd = nano.model if nano.model is not None else nano.periodogram()
+        pol = getattr(F, "polarization", "unpolarized")
+        out = np.stack([np.where(grid.inside, scatter.rayleigh_rice_lobe(wi[None, None, :], wo, lam, psd, material,
+                                                                         pol), 0.0) for lam in w])
+        if nano.model is not None and (np.min(w) * 1e-9 / (np.pi * nano.model.length_scale)
+                                       < NARROW_CELLS * max(grid.du, grid.dv)):
+            out = _resample_narrow_lobe(out, wi, w, nano, grid, F, dm, material)
+        return out
     if solver == "psd":
         if nano.model is None:
             raise WaveopticsError("solver 'psd' needs nano statistics, not a height field; use fft or direct")
@@ -519,7 +558,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     -------
     Lobes
     """
-    dm = scatter.get_model(diffraction)
+    dm = scatter.get_model(diffraction, perturbative=True)
     mat: Material = get_material(material)
     w = check_wavelengths(wavelengths_nm)
     wi = np.asarray(wi, dtype=float)

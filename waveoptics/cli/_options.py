@@ -53,8 +53,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--nano", "nano-roughness MODEL:key=value,... with units, e.g. abc:sigma=10nm,B=2um,C=2.6, "
                      "gaussian:sigma=5nm,T=1um (T or corr_length), sinusoid:amplitude=40nm,period=2um",
            "MODEL:PARAMS"),
-    Option("--diffraction", "diffraction model of the nano lobe: kirchhoff, ghs, rghs, ohs or rohs "
-                            "(docs/physics.md §10)"),
+    Option("--diffraction", "diffraction model of the nano lobe: kirchhoff, ghs, rghs, ohs, rohs or rayleigh-rice "
+                            "(first-order perturbation, two-scale lobes only) (docs/physics.md §10)"),
     Option("--polarization", "polarization of the incident light relative to the plane of incidence: unpolarized, "
                              "s or p (the scattered light is not analyzed)"),
     Option("--precision", "OpenCL floating-point precision of the height-field solvers"),

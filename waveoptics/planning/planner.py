@@ -509,6 +509,9 @@ def _decide_diffraction(e: _Entry) -> None:
 #: (measured with the height-field route: the coherent-loss guard trims < 0.2 % below 60°, 40 % at 80°;
 #: waveoptics.brdf.twoscale._cap_to_coherent_loss)
 KIRCHHOFF_GRAZING_DEG = 75.0
+#: largest (4πσ/λ)² (the g of normal incidence and backscatter, the largest over all directions) at which the
+#: planner trusts first-order Rayleigh-Rice (its domain is g ≪ 1)
+RAYLEIGH_RICE_G_MAX = 0.05
 
 
 def _decide_diffraction_model(e: _Entry) -> None:
@@ -523,6 +526,18 @@ def _decide_diffraction_model(e: _Entry) -> None:
         return
     e.diffraction_model = "kirchhoff"
     theta_max = max(t for t, _ in e.light.directions_deg) if not e.sphere else 88.0
+    # first order holds in every direction while g at normal incidence and backscatter, (4πσ/λ)², is small
+    g_any = float(roughness_g(e.proxy.sigma, 2.0, e.lam_min))
+    if theta_max > KIRCHHOFF_GRAZING_DEG and e.spec.nano.kind == "statistics" and g_any <= RAYLEIGH_RICE_G_MAX:
+        e.diffraction_model = "rayleigh-rice"
+        e.decide("diffraction model", "rayleigh-rice",
+                 f"light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}° on a smooth surface ((4πσ/λ_min)² = "
+                 f"{g_any:.2g} ≤ {RAYLEIGH_RICE_G_MAX:g}, first-order perturbation theory's domain): "
+                 "Kirchhoff's tangent-plane factor over-scatters there (Al, ABC σ = 5 nm, 550 nm: 0.53 % of F "
+                 "scattered at 85° and 2.1 % at 89° against Rayleigh-Rice's 0.20 % and 0.053 %), while Rayleigh-Rice "
+                 "with its polarization factor Q conserves energy to its order and agrees with Kirchhoff within "
+                 "1 % up to 60°")
+        return
     why = ("tangent-plane Kirchhoff: the model held against the flat-patch, exp(−g), grating and Beckmann limits; "
            "RGHS differs from it by ~1 % on a rough surface, OHS/ROHS by 36 % at θ_i = 30°")
     if theta_max > KIRCHHOFF_GRAZING_DEG:

@@ -22,8 +22,9 @@ model; they part away from it. Kirchhoff (Beckmann & Spizzichino 1963) is the ta
 Harvey-Shack family (original OHS with the normal-incidence phase 2k, generalized GHS with the true v_z) comes from
 the linear-systems treatment of scatter (Harvey; Krywonos, Harvey & Choi 2011); ROHS and RGHS are their variants with
 the symmetric obliquity in the reference code of Yan et al. 2018. Measured differences on one surface: docs/
-wave-optics.md. Rayleigh-Rice, the smooth-surface perturbation model with the polarization factor Q, is in
-:mod:`waveoptics.scatter.perturbation`.
+wave-optics.md. Rayleigh-Rice (``rayleigh-rice``), the smooth-surface perturbation model with the polarization
+factor Q, is registered here too (``perturbative``): it has no K and no vertical phase, its lobe comes from the
+PSD (:mod:`waveoptics.scatter.perturbation`), and only the two-scale model takes it as a nano lobe.
 
 Where each breaks: OHS and ROHS freeze v_z at its normal-incidence value and fail away from normal incidence
 (the coherent reduction becomes exp(−(4πσ/λ)²) at every angle); Kirchhoff's factor grows as 1/cosθ_i and does not
@@ -46,7 +47,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import unknown
+from ..errors import FieldError, unknown
 from .grid import COS_I_MIN
 
 __all__ = ["DiffractionModel", "DIFFRACTION_MODELS", "get_model", "K_kirchhoff", "K_harvey_shack",
@@ -95,9 +96,10 @@ class DiffractionModel:
     """
 
     name: str
-    K: Callable
+    K: Callable | None
     frozen_cos_sum: float | None
     description: str
+    perturbative: bool = False   # not a |U|² model: first-order perturbation theory of PSD statistics (no K, no v_z)
 
     def cos_sum(self, wi, wo):
         """cosθ_i + cosθ_o as this model's vertical phase uses it (v_z = k · cos_sum)."""
@@ -120,13 +122,24 @@ DIFFRACTION_MODELS = {
     "rghs": DiffractionModel("rghs", K_symmetric, None, "GHS phase with the symmetric obliquity (Yan et al. 2018)"),
     "ohs": DiffractionModel("ohs", K_harvey_shack, 2.0, "original Harvey-Shack: normal-incidence phase 2k"),
     "rohs": DiffractionModel("rohs", K_symmetric, 2.0, "OHS phase with the symmetric obliquity (Yan et al. 2018)"),
+    "rayleigh-rice": DiffractionModel("rayleigh-rice", None, None, "first-order vector perturbation theory with the "
+                                      "polarization factor Q (Rice 1951; Elson & Bennett 1979)", perturbative=True),
 }
 
 
-def get_model(name) -> DiffractionModel:
-    """The :class:`DiffractionModel` *name* (a model object is returned as it is)."""
-    if isinstance(name, DiffractionModel):
-        return name
-    if name not in DIFFRACTION_MODELS:
-        raise unknown("diffraction model", name, DIFFRACTION_MODELS, field="diffraction")
-    return DIFFRACTION_MODELS[name]
+def get_model(name, *, perturbative: bool = False) -> DiffractionModel:
+    """The :class:`DiffractionModel` *name* (a model object is returned as it is).
+
+    *perturbative*: whether the caller can use a perturbation model (``rayleigh-rice``: a lobe from PSD statistics,
+    :mod:`waveoptics.scatter.perturbation`). The Kirchhoff field solvers cannot, and refuse it in one line.
+    """
+    dm = name if isinstance(name, DiffractionModel) else DIFFRACTION_MODELS.get(name)
+    if dm is None:   # the allowed names are those this caller can use
+        raise unknown("diffraction model", name, [k for k, v in DIFFRACTION_MODELS.items()
+                                                  if perturbative or not v.perturbative], field="diffraction")
+    if dm.perturbative and not perturbative:
+        raise FieldError(f"{{diffraction}} {dm.name!r} is first-order perturbation theory of a surface's PSD, not a "
+                         "Kirchhoff field; here use one of " + ", ".join(k for k, v in DIFFRACTION_MODELS.items()
+                                                                        if not v.perturbative)
+                         + " (rayleigh-rice is a nano lobe of the two-scale model only)", "diffraction")
+    return dm

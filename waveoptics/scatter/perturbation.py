@@ -38,13 +38,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import unknown
+from ..errors import FieldError, unknown
 from ..surfaces.psd import PSDModel
 from ..vocabulary import POLARIZATIONS
 from .series import rayleigh_rice
 
-__all__ = ["POLARIZATIONS", "COMPONENTS", "scattering_angles", "q_factors", "Q", "rayleigh_rice_components",
-           "rayleigh_rice_brdf"]
+__all__ = ["POLARIZATIONS", "COMPONENTS", "PEC_PERMITTIVITY", "scattering_angles", "q_factors", "Q",
+           "rayleigh_rice_components", "rayleigh_rice_brdf", "permittivity", "rayleigh_rice_lobe",
+           "rayleigh_rice_albedo"]
+
+#: relative permittivity standing for a perfect conductor (|ε| → ∞: every q tends to Rice's limit, reflectance 1)
+PEC_PERMITTIVITY = -1e12 + 0j
 
 
 #: incident → scattered polarization pairs of the Jones-matrix elements
@@ -121,3 +125,58 @@ def rayleigh_rice_brdf(wi, wo, wavelength_nm, model: PSDModel, eps, polarization
     polarization : {'unpolarized', 's', 'p'}
     """
     return rayleigh_rice(wi, wo, wavelength_nm, model, Q=Q(wi, wo, eps, polarization))
+
+
+def permittivity(material, wavelength_nm):
+    """Relative permittivity ε = (n + iκ)² of *material* at *wavelength_nm* (nm); None stands for a perfect
+    conductor (:data:`PEC_PERMITTIVITY`, reflectance 1: the F = 1 white furnace of the two-scale model)."""
+    if material is None:
+        return np.broadcast_to(PEC_PERMITTIVITY, np.shape(wavelength_nm))
+    if getattr(material, "schlick_only", False):
+        raise FieldError(f"{{material}} {material.name!r} gives only F0; rayleigh-rice needs a complex index "
+                         "(a preset, shelf/book/page or n+kj)", "material")
+    return np.asarray(material.eta(wavelength_nm), dtype=np.complex128) ** 2
+
+
+def rayleigh_rice_lobe(wi, wo, wavelength_nm, psd, material=None, polarization: str = "unpolarized"):
+    """The Rayleigh-Rice lobe (1/sr) of a PSD (:class:`~waveoptics.surfaces.PSDModel` or a height field's
+    :class:`~waveoptics.surfaces.PeriodogramPSD`) on *material* (None: a perfect conductor) as the two-scale
+    model's nano lobe: it carries its own polarization factor Q, which plays the part of the Kirchhoff lobe's
+    F(θ_d) (they agree at the mirror direction, to first order near it)."""
+    eps = permittivity(material, wavelength_nm)
+    return rayleigh_rice_brdf(wi, wo, wavelength_nm, psd, eps, polarization)
+
+
+def rayleigh_rice_albedo(theta_deg, wavelength_nm, psd, material=None, polarization: str = "unpolarized") -> float:
+    """E_RR(θ) = TIS(θ) / R(θ): the share of the specularly reflected light R (Fresnel, s, p or unpolarized; 1 for a
+    perfect conductor) that first-order roughness scatters, with TIS = ∫ f_RR cosθ_o dω_o over the hemisphere
+    (:func:`waveoptics.scatter.polar_albedo`). The coherent fraction of the two-scale model is 1 − E_RR (energy
+    conservation; to first order 1 − E_RR = exp(−g) for a paraxial lobe, Church, Jenkinson & Zavada 1979).
+
+    References
+    ----------
+    .. [1] E. L. Church, H. A. Jenkinson, J. M. Zavada, Opt. Eng. 18(2), 125–136, 1979 (TIS).
+    .. [2] J. C. Stover, *Optical Scattering*, 3rd ed., SPIE 2012, §4.4 (TIS of the Rayleigh-Rice BRDF).
+    """
+    import math
+
+    from ..materials.fresnel import F_facet_polarized
+    from .band import polar_albedo
+
+    lam = float(wavelength_nm)
+    t = math.radians(float(theta_deg))
+    eps = complex(np.ravel(permittivity(material, lam))[0])
+    k = 2 * math.pi / (lam * 1e-9)
+
+    def lobe(wi_b, wo, q):
+        return rayleigh_rice_brdf(wi_b, wo, lam, psd, eps, polarization)
+    tis = polar_albedo(t, k, psd.length_scale, lobe)
+    if material is None:
+        R = 1.0
+    else:
+        wi = np.array([math.sin(t), 0.0, math.cos(t)])
+        mirror = np.array([-wi[0], 0.0, wi[2]])
+        pol = polarization if polarization != "unpolarized" else None
+        R = (float(F_facet_polarized(wi, mirror, material.eta(lam), pol)) if pol
+             else float(material.F(math.cos(t), lam)))
+    return tis / max(R, 1e-300)
