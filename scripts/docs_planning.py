@@ -143,7 +143,11 @@ def build(tmp: Path) -> str:
           "the seconds per evaluation call, per direction cell, per cell and wavelength, per PSD series term, per "
           "chirp-z work unit and (OpenCL) per direct-sum term; the estimate multiplies them by the work the plan "
           "implies. A plan is kept in the same cache, keyed by the scene's bytes, the bytes of every file it names "
-          "and the options, so planning an unchanged scene again answers at once.", "",
+          "and the options, so planning an unchanged scene again answers at once. The band-limited series' tables "
+          "of a PSD are counted once per wavelength for an entry, not once per evaluation. The same model "
+          "estimates plain `simulate`, `compare` and `scatter` requests before they start "
+          "(`planning.simulation_time`, `planning.scatter_time`): beyond "
+          f"{planning.LONG_REQUEST_S:g} s they warn with the estimate and what to reduce.", "",
           *_plan_times(), "",
           "### Thresholds", "", "| constant | value | decision | meaning |", "|---|---|---|---|"]
     for name, (dec, meaning) in THRESHOLDS.items():

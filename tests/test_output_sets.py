@@ -14,6 +14,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from waveoptics.io import files
@@ -121,3 +122,31 @@ def test_simulate_killed_while_moving_its_set_into_place(tmp_path, k):
     assert set(new) == set(old) and not list(out.glob(".staging.*"))
     assert json.loads(new["summary.json"])["wavelengths_nm"] == [450.0, 650.0]
     assert all(new[n] != old[n] for n in new if n.endswith(".exr"))
+
+
+def test_npy_pair_interrupted_between_its_two_renames_is_refused(tmp_path):
+    """Issue 17: a .npy height field and its sidecar are renamed as two files; a kill between the renames would
+    leave a new sidecar beside the earlier heights. The sidecar records the heights' fingerprint, so that mix is
+    refused in one line, while the pair itself (and a copy of it) loads."""
+    import shutil
+
+    from waveoptics import surfaces
+    from waveoptics.errors import WaveopticsError
+
+    a = surfaces.generate("gaussian", sigma="5nm", corr_length="1um", size="8um", samples=64, seed=1)
+    b = surfaces.generate("gaussian", sigma="9nm", corr_length="1um", size="16um", samples=64, seed=2)
+    p = tmp_path / "h.npy"
+    surfaces.save(a, p)
+    surfaces.save(b, tmp_path / "new.npy")
+    np.testing.assert_array_equal(surfaces.load(p).heights, a.heights)
+    copy = tmp_path / "copy"
+    copy.mkdir()
+    shutil.copy(p, copy / "h.npy")
+    shutil.copy(tmp_path / "h.npy.json", copy / "h.npy.json")
+    assert surfaces.load(copy / "h.npy").dx == a.dx
+    # the new sidecar landed, the heights' rename did not
+    shutil.copy(tmp_path / "new.npy.json", tmp_path / "h.npy.json")
+    with pytest.raises(WaveopticsError, match="was written for other heights than 'h.npy'"):
+        surfaces.load(p)
+    with pytest.raises(WaveopticsError, match="was written for other heights"):
+        surfaces.open_large(p)

@@ -158,3 +158,25 @@ def test_planner_picks_rayleigh_rice_by_its_domain():
     assert forced.diffraction == "kirchhoff"                                                           # not grazing
     forced = plan_scene(parse(_scene("5nm", sphere=False, theta=85)), force={"diffraction": True}).entries[0]
     assert forced.diffraction == "rayleigh-rice"
+
+
+def test_simulate_writes_the_four_polarized_lobes(tmp_path):
+    """With the Rayleigh-Rice nano lobe simulate writes nano_polarized.exr (layers ss, sp, ps, pp, spectral channels)
+    and their albedos; half their sum is the unpolarized lobe, whose albedo is the TIS of the polar quadrature."""
+    from waveoptics import io as wio
+    from waveoptics.simulate import simulate, write_outputs
+
+    sim = simulate("Al", nano="abc:sigma=5nm,B=3um,C=2.8", micro_alpha=0.1, incident=(40.0, 0.0),
+                   wavelengths=[450.0, 650.0], resolution=64, diffraction="rayleigh-rice")
+    summary = write_outputs(sim, tmp_path / "o", sphere_size=32)
+    assert "nano_polarized.exr" in summary["files"] and (tmp_path / "o" / "nano_polarized.exr").is_file()
+    chans, header = wio.read_exr(tmp_path / "o" / "nano_polarized.exr")
+    assert {c.split(".")[0] for c in chans} == {"ss", "sp", "ps", "pp"} and len(chans) == 8
+    assert header["spectralLayoutVersion"] == "1.0"
+    alb = summary["nano_polarized_albedo"]
+    model = sim.nano.model
+    for i, lam in enumerate((450.0, 650.0)):
+        unpol = 0.5 * sum(alb[c][i] for c in ("ss", "sp", "ps", "pp"))
+        tis = scatter.rayleigh_rice_albedo(40.0, lam, model, AL) * float(AL.F(math.cos(math.radians(40)), lam))
+        assert unpol == pytest.approx(tis, rel=2e-2)
+        assert alb["ss"][i] > alb["sp"][i] and alb["pp"][i] > alb["ps"][i]   # cross terms live out of plane only

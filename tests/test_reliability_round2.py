@@ -340,3 +340,33 @@ def test_a_unitless_spacing_in_a_scene_file_is_refused(tmp_path):
         scene.load(tmp_path / "bad.toml")
     (tmp_path / "good.toml").write_text(text.replace("SPACING", '"5nm"'))
     scene.load(tmp_path / "good.toml")
+
+
+def test_long_requests_warn_with_their_estimate(tmp_path, monkeypatch):
+    """Issue 17: simulate, compare and scatter estimate their time with the cost model before any work and warn in
+    one line when it is long (here every request is 'long'); the run goes on, and --quiet silences it."""
+    from hard_cases import run_cli
+    from waveoptics import surfaces
+    from waveoptics.planning import estimate
+    from waveoptics.request import SimulationRequest
+
+    monkeypatch.setattr(estimate, "LONG_REQUEST_S", 0.0)
+    base = ["--resolution", "16", "--wavelengths", "550"]
+    rc, _, err, _ = run_cli(["simulate", *base, "--sphere-size", "16", "-o", str(tmp_path / "s")])
+    lines = [x for x in err.splitlines() if "will take about" in x]
+    assert rc == 0 and len(lines) == 1 and "lower --resolution or the number of --wavelengths" in lines[0]
+    assert lines[0].startswith("waveoptics simulate: warning: this request will take about ")
+    rc, _, err, _ = run_cli(["compare", *base, "--incident-angles", "0,40", "--quiet"])
+    assert rc == 0 and "will take about" not in err
+    hf = tmp_path / "h.npz"
+    surfaces.save(surfaces.generate("gaussian", sigma="5nm", corr_length="1um", size="8um", samples=64, seed=1), hf)
+    rc, _, err, _ = run_cli(["scatter", "--surface", str(hf), "--material", "Al", "--incident", "30", *base,
+                             "-o", str(tmp_path / "sc")])
+    assert rc == 0 and "will take about" in err and "--realizations" in err
+    # the estimate grows with the work: more cells, more wavelengths, the sphere table
+    small = estimate.simulation_time(SimulationRequest(resolution=32, wavelengths_nm=(550.0,)), sphere=False)
+    more_w = estimate.simulation_time(SimulationRequest(resolution=32, wavelengths_nm=(450.0, 550.0, 650.0)),
+                                      sphere=False)
+    more_cells = estimate.simulation_time(SimulationRequest(resolution=128, wavelengths_nm=(550.0,)), sphere=False)
+    sphere = estimate.simulation_time(SimulationRequest(resolution=32, wavelengths_nm=(550.0,)))
+    assert 0 < small < min(more_w, more_cells, sphere)

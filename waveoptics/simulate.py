@@ -23,7 +23,7 @@ from .io.figures import save_figure
 from .errors import FieldError
 from .materials import get_material
 from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano
-from .scatter.grid import DirectionGrid
+from .scatter.grid import DirectionGrid, integrate
 from .units import direction_from_angles
 
 __all__ = ['SPHERE_THETAS_DEG', 'memory_estimate', 'check_request_memory', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'SUMMARY_UNITS', 'output_files',
@@ -309,15 +309,36 @@ SUMMARY_UNITS = {
     "rgb_albedo": "1, linear RGB of the albedo spectrum under the illuminant, white-balanced to the space white",
     "microfacet_rgb_albedo": "1, as rgb_albedo", "delta_e2000": "CIEDE2000 colour difference (1 ≈ just noticeable)",
     "brdf images": "1/sr (BRDF, not multiplied by cos theta_o)", "sphere images": "radiance; irradiance pi",
+    "nano_polarized_albedo": "1 (albedo of each polarized Rayleigh-Rice nano lobe; a = incident, b = scattered)",
 }
 
 #: the extra files of an environment-lit render (:func:`write_outputs` with *environment*)
 ENVIRONMENT_FILES = ("sphere_env_wave.exr", "sphere_env_microfacet.exr", "sphere_env.png")
+#: the extra file of a Rayleigh-Rice nano lobe: its four polarized BRDFs (ss, sp, ps, pp) as spectral layers
+POLARIZED_FILES = ("nano_polarized.exr",)
 
 
-def output_files(environment: bool = False) -> tuple:
-    """Every file :func:`write_outputs` writes (with or without an environment-lit render)."""
-    return OUTPUT_FILES + (ENVIRONMENT_FILES if environment else ())
+def output_files(environment: bool = False, polarized: bool = False) -> tuple:
+    """Every file :func:`write_outputs` writes (with or without an environment-lit render, and with *polarized* the
+    Rayleigh-Rice nano lobe's polarized BRDFs)."""
+    return OUTPUT_FILES + (ENVIRONMENT_FILES if environment else ()) + (POLARIZED_FILES if polarized else ())
+
+
+def nano_polarized(sim: Simulation) -> dict:
+    """The Rayleigh-Rice nano lobe's four polarized BRDFs at the simulation's light, {ab: (n_λ, n_v, n_u)} in
+    1/sr (a incident, b scattered polarization, s or p relative to the planes of incidence and scattering;
+    :func:`waveoptics.scatter.rayleigh_rice_components`): the lobe before the micro facets spread it."""
+    nano = sim.nano
+    psd = nano.model if nano.model is not None else nano.periodogram()
+    wo = sim.grid.directions()
+    mat = sim.brdf_microfacet.material
+    out = {c: np.zeros((sim.wavelengths_nm.size,) + wo.shape[:2]) for c in scatter.COMPONENTS}
+    for i, lam in enumerate(sim.wavelengths_nm):
+        comps = scatter.rayleigh_rice_components(sim.lobes.wi[None, None, :], wo, lam, psd,
+                                                 scatter.permittivity(mat, lam))
+        for c in scatter.COMPONENTS:
+            out[c][i] = np.where(sim.grid.inside, comps[c], 0.0)
+    return out
 
 
 def render_spheres(sim: Simulation, size=256):
@@ -361,7 +382,8 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
     models' spheres lit by that map (*env_size* pixels, *spp* samples per technique and pixel, multiple importance
     sampling; :func:`waveoptics.render.render_sphere_environment`).
     """
-    files = output_files(environment is not None)
+    files = output_files(environment is not None, sim.params.get("diffraction") == "rayleigh-rice" and
+                         sim.nano is not None)
     final = io.prepare_outdir(outdir, overwrite=overwrite, expected=files)
     env = None if environment is None else lighting.environment(environment)
     # the set is written into a hidden staging directory beside the outputs and moved into place only when every
@@ -437,6 +459,18 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
         env_time = time.perf_counter() - t_env
     else:
         env_time = None
+    polarized = None
+    if "nano_polarized.exr" in files:   # Rayleigh-Rice: the four polarized lobes as layers ss, sp, ps, pp
+        lobes = nano_polarized(sim)
+        chans = {f"{c}.{io.spectral_channel_name(lam)}": g.to_image(lobes[c][i])
+                 for c in scatter.COMPONENTS for i, lam in enumerate(sim.wavelengths_nm)}
+        io.write_exr(out / "nano_polarized.exr", chans, {
+            **hdr, "spectralLayoutVersion": io.SPECTRAL_LAYOUT_VERSION,
+            "waveoptics_quantity": "Rayleigh-Rice nano lobe f_ab (1/sr) at the light, before the micro facets spread "
+                                   "it; layers ss, sp, ps, pp: a = incident, b = scattered polarization (s or p to "
+                                   "the planes of incidence and scattering); unpolarized light sees (ss+sp+ps+pp)/2"},
+            overwrite=True)
+        polarized = {c: integrate(lobes[c], g) for c in scatter.COMPONENTS}
     timings = dict(sim.timings_s)
     timings["outputs"] = time.perf_counter() - t0
     if env_time is not None:
@@ -454,6 +488,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
                         "max": float(dE[mask].max()) if mask.any() else 0.0},
         "solver": sim.params["solver"],
         "nano_band": sim.band,
+        **({"nano_polarized_albedo": polarized} if polarized is not None else {}),
         "timings_s": timings,
         "parameters": sim.params,
         "files": list(files),

@@ -109,6 +109,19 @@ def emit(args, data, text: str | None = None) -> None:
         print(text)
 
 
+def warn_if_long(seconds: float, reduce: str) -> None:
+    """Announce a request the cost model expects to run beyond :data:`waveoptics.planning.LONG_REQUEST_S`, with
+    its estimate and what to reduce (one warning line; ``--quiet`` silences it)."""
+    import warnings
+
+    from ..planning.estimate import LONG_REQUEST_S
+
+    if seconds > LONG_REQUEST_S:
+        when = f"{seconds / 60:.1f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+        warnings.warn(f"this request will take about {when} by this machine's cost model ('waveoptics plan "
+                      f"--recalibrate' re-times it); {reduce} to shorten it", UserWarning, stacklevel=2)
+
+
 class _HeldWarnings:
     """The warning lines of a command, held back until it either starts long work (a progress bar), or ends: on
     success they are printed, on an error dropped, so that a refused command prints its one error line and nothing

@@ -15,7 +15,7 @@ from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
 from ..vocabulary import DIFFRACTION, POLARIZATIONS
 from ..units import parse_direction, parse_wavelengths
-from ._common import add_common, add_output, add_surface, emit, load_surface, progress
+from ._common import add_common, add_output, add_surface, emit, load_surface, progress, warn_if_long
 from ._options import option
 
 
@@ -111,6 +111,12 @@ def run(args) -> int:
     hf = field if fp is None else None
     fresnel_function(args.material)      # refuse a bad material before computing
     scatter.check_request_memory(args.resolution, len(wl), field.shape if fp is None else (0, 0), args.max_memory)
+    if fp is None and (args.solver != "direct" or args.backend == "opencl"):
+        from ..planning.estimate import scatter_time
+
+        warn_if_long(scatter_time(hf, (theta, phi), wl, args.resolution, args.solver, realizations=args.realizations,
+                                  device=args.device, precision=args.precision),
+                     "lower --resolution, the number of --wavelengths or --realizations")
     prepare_outdir(args.output, overwrite=args.overwrite, expected=scatter.SCATTER_FILES)
     rt = get_runtime(args.device) if args.solver == "direct" and args.backend == "opencl" else None
     bar = progress(total=len(wl) * max(1, args.realizations), desc="scatter", args=args)

@@ -7,7 +7,7 @@ from ..errors import FieldError
 from ..io.files import prepare_outdir
 from ..vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
-from ._common import add_common, add_output, add_surface, emit, load_surface, progress
+from ._common import add_common, add_output, add_surface, emit, load_surface, progress, warn_if_long
 from ._options import option
 
 
@@ -69,12 +69,21 @@ def _surface(args):
 
 
 def simulation_from_args(args, bar=None, req=None):
-    """Run :func:`waveoptics.simulate.run` on the request of the scene options (or *req*, built from them)."""
+    """Run :func:`waveoptics.simulate.run` on the request of the scene options (or *req*, built from them), after
+    a warning when the cost model expects it to be long."""
     from .. import simulate as sim_mod
 
-    return sim_mod.run(req if req is not None else request_from_args(args), device=args.device,
-                       progress=None if bar is None else bar.update, surface=_surface(args),
+    req = req if req is not None else request_from_args(args)
+    surface = _surface(args)
+    _announce_if_long(req, surface)
+    return sim_mod.run(req, device=args.device, progress=None if bar is None else bar.update, surface=surface,
                        max_memory=getattr(args, "max_memory", None))
+
+
+def _announce_if_long(req, surface) -> None:
+    from ..planning.estimate import simulation_time
+
+    warn_if_long(simulation_time(req, surface=surface), "lower --resolution or the number of --wavelengths")
 
 
 def register(sub):
@@ -110,11 +119,14 @@ def run(args):
         env = lighting.environment(args.environment)   # a bad map fails here, before any computing
     req = request_from_args(args)
     sim_mod.check_request_memory(req, max_memory=args.max_memory)   # before anything is created
-    prepare_outdir(args.output, overwrite=args.overwrite, expected=sim_mod.output_files(env is not None))
+    prepare_outdir(args.output, overwrite=args.overwrite,
+                   expected=sim_mod.output_files(env is not None, req.diffraction == "rayleigh-rice"))
+    surface = _surface(args)
+    _announce_if_long(req, surface)                  # before the progress bar, which releases the warnings
     bar = progress(total=sim_mod.sphere_steps(req), desc="simulate", args=args)
     try:
         sim = sim_mod.run(req, device=args.device, progress=bar.update, max_memory=args.max_memory,
-                          surface=_surface(args))
+                          surface=surface)
     finally:
         bar.close()
     summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size,

@@ -19,7 +19,7 @@ from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g, series_terms
 from ..units import direction_from_angles
 
-__all__ = ['CostModel', 'fft_units', 'psd_terms', 'calibrate', 'calibrate_direct', 'calibration', 'direct_calibration']
+__all__ = ['CostModel', 'fft_units', 'fft_solver_units', 'psd_terms', 'calibrate', 'calibrate_direct', 'calibration', 'direct_calibration']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Cost model, calibrated on this machine once per process
@@ -45,9 +45,10 @@ class CostModel:
         """Seconds of one two-scale evaluation over grids with *cells* cells each (a list), *n_wl* wavelengths.
 
         *psd_terms*: the PSD series' number of terms (PSD route); *nano_lobe*: a height-field lobe is convolved
-        (its solver's own cost comes on top).
+        (its solver's own cost comes on top). The band tables of the PSD route are built once per wavelength for a
+        whole run, not per evaluation: :meth:`band_tables`.
         """
-        t = n_wl * self.band_wl if psd_terms is not None else 0.0   # once per wavelength (then cached)
+        t = 0.0
         for c in cells:
             t += self.call + c * (self.cell + n_wl * (self.cell_wl + (self.diffuse_cell_wl if diffuse else 0.0)))
             if psd_terms is not None:
@@ -55,6 +56,11 @@ class CostModel:
             elif nano_lobe:
                 t += n_wl * (self.psd_wl + c * self.psd_cell_wl)
         return t
+
+    def band_tables(self, n_wl: int) -> float:
+        """Seconds to build the band-limited series' tables of one PSD model at *n_wl* wavelengths (once per run;
+        every later evaluation at those wavelengths finds them cached)."""
+        return n_wl * self.band_wl
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -75,6 +81,14 @@ def fft_units(n_samples_xy, n_cells_uv) -> float:
     nu, nv = n_cells_uv
     lx, ly = nx + nu, ny + nv
     return ny * lx * math.log2(lx) + nu * ly * math.log2(ly)
+
+
+def fft_solver_units(smp, wi, grids, wavelengths_nm) -> float:
+    """Chirp-z work units (:func:`fft_units`) of the fft solver's incoherent lobe U − χ U_flat over *grids* at each
+    wavelength: the height field's transforms (one per expansion term, :func:`waveoptics.scatter.fft_plan`) plus
+    one for the flat patch."""
+    return sum((1 + sum(K + 1 for _, K, _ in scatter.fft_plan(smp, wi, g, float(lam), "auto")))
+               * fft_units((smp.nx, smp.ny), (g.n_u, g.n_v)) for g in grids for lam in wavelengths_nm)
 
 
 def psd_terms(sigma_m: float, wavelength_nm: float) -> int:

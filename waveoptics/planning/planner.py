@@ -80,7 +80,7 @@ from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g
 from ..simulate import sphere_evaluations
 from ..units import direction_from_angles, parse_length
-from .costmodel import CostModel, _best, calibration, direct_calibration, fft_units, psd_terms
+from .costmodel import CostModel, _best, calibration, direct_calibration, fft_solver_units, psd_terms
 from .decisions import (
     LAMBDA_REF_NM,
     ORDER_EFFICIENCY_MIN,
@@ -693,6 +693,8 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
     for dname, grids in options.items():
         cells = [g.n_u * g.n_v for g in grids]
         base = n_eval * e.cm.evaluation(cells, n_w, diffuse=e.diffuse, psd_terms=terms, nano_lobe=hf_solvers)
+        if terms is not None:   # the band tables, once per wavelength for the whole entry
+            base += e.cm.band_tables(n_w)
         if dname == "views" and e.micro.alpha >= 0.75 * 2.0 / N:  # a patch normalizes its micro lobe on the grid
             base += n_eval * len(grids) * N * N * e.cm.cell
         if not hf_solvers:
@@ -700,9 +702,7 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
             continue
         base += n_eval * len(grids) * n_w * t_char
         # the incoherent lobe is U − χ U_flat: the height field's transforms plus one for the flat patch
-        units = sum((1 + sum(K + 1 for _, K, _ in scatter.fft_plan(smp, wi0, g, float(lam), "auto")))
-                    * fft_units((smp.nx, smp.ny), (g.n_u, g.n_v)) for g in grids for lam in w_eval)
-        costs[(dname, "fft")] = base + n_eval * units * e.cm.fft_unit
+        costs[(dname, "fft")] = base + n_eval * fft_solver_units(smp, wi0, grids, w_eval) * e.cm.fft_unit
         if direct_term is not None:
             dirs = sum(int(g.inside.sum()) for g in grids)
             costs[(dname, "direct")] = base + n_eval * 2 * direct_term * smp.size * dirs * n_w

@@ -20,7 +20,7 @@ from .heightfield import HeightField
 from . import instruments
 from .instruments import INSTRUMENT_EXTS, WRITERS
 
-__all__ = ['TEXT_EXTS', 'FORMATS', 'READ_FORMATS', 'WRITE_FORMATS', 'load', 'save']
+__all__ = ['TEXT_EXTS', 'FORMATS', 'READ_FORMATS', 'WRITE_FORMATS', 'load', 'save', 'FINGERPRINT_BYTES', 'npy_fingerprint']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Files
@@ -249,6 +249,28 @@ def _load_npz(p, sp, units, nan_is_mask):
     return _finish(h * scale, sp, mask, meta, "the .npz archive")
 
 
+#: bytes read from each end of a .npy file for its fingerprint (a few ms, whatever the file's size)
+FINGERPRINT_BYTES = 1 << 20
+
+
+def npy_fingerprint(path) -> str:
+    """A fingerprint of a .npy file that its sidecar records: SHA-256 of its size and its first and last
+    :data:`FINGERPRINT_BYTES` bytes. The pair is renamed into place as two files; a run killed between the two
+    renames leaves a new sidecar beside the earlier heights, which this tells apart (unless both arrays have the same
+    size and agree in both ends), while copies of the pair keep it (unlike a time stamp)."""
+    import hashlib
+
+    p = Path(path)
+    size = p.stat().st_size
+    h = hashlib.sha256(str(size).encode())
+    with open(p, "rb") as fh:
+        h.update(fh.read(FINGERPRINT_BYTES))
+        if size > FINGERPRINT_BYTES:
+            fh.seek(max(size - FINGERPRINT_BYTES, FINGERPRINT_BYTES))
+            h.update(fh.read())
+    return h.hexdigest()
+
+
 def _npy_parts(p, sp, units, nan_is_mask, *, mmap: bool = False):
     """(array, scale to metres, spacing (dx, dy) m or None, meta, NaN allowed) of a .npy file and its sidecar; the
     array is memory-mapped (nothing read yet) with *mmap*."""
@@ -260,6 +282,9 @@ def _npy_parts(p, sp, units, nan_is_mask, *, mmap: bool = False):
     meta, allow_nan = {}, nan_is_mask
     if side.is_file():
         info = _json_meta(side.read_text(errors="replace"), f"sidecar {side.name!r}")
+        if "heights_fingerprint" in info and info["heights_fingerprint"] != npy_fingerprint(p):
+            raise WaveopticsError(f"sidecar {side.name!r} was written for other heights than {p.name!r} (a write of "
+                                  "the pair interrupted between its two renames?); write the field again")
         units = units or info.get("units", "m")
         scale = _unit_scale(units)
         meta = info.get("meta", {}) if isinstance(info.get("meta"), dict) else {}
@@ -524,11 +549,12 @@ def save(hf: HeightField, path, *, overwrite: bool = False):
                 "meta": json.loads(meta_json)}
         if masked:
             info["mask"] = "nan"
-        # both files are written to temporary names first and renamed together (sidecar, then heights): a
-        # failure in either leaves the earlier pair, never a new .npy beside an old or missing sidecar
+        # both files are written to temporary names first and renamed together (sidecar, then heights); the
+        # sidecar records the heights' fingerprint, so a kill between the two renames is refused on reading
         with atomic_path(p, overwrite=overwrite) as tmp, atomic_path(side, overwrite=True) as tmp_side:
             with open(tmp, "wb") as fh:
                 np.save(fh, h_nan)
+            info["heights_fingerprint"] = npy_fingerprint(tmp)
             tmp_side.write_text(to_json(info, indent=2))
     elif ext == ".exr":
         header = {"spacing_x": repr(hf.dx), "spacing_y": repr(hf.dy), "units": "m", "waveoptics_meta": meta_json}
