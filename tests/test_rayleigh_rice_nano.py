@@ -180,3 +180,22 @@ def test_simulate_writes_the_four_polarized_lobes(tmp_path):
         tis = scatter.rayleigh_rice_albedo(40.0, lam, model, AL) * float(AL.F(math.cos(math.radians(40)), lam))
         assert unpol == pytest.approx(tis, rel=2e-2)
         assert alb["ss"][i] > alb["sp"][i] and alb["pp"][i] > alb["ps"][i]   # cross terms live out of plane only
+
+
+@pytest.mark.parametrize("model", ["kirchhoff", "rayleigh-rice"])
+@pytest.mark.parametrize("pol", ["s", "p"])
+def test_polarized_light_keeps_its_fresnel_reflectance(model, pol):
+    """s or p light, no micro roughness: the coherent part and the polarized nano lobe add up to R_s or R_p
+    (the Fresnel equations written here) within 1e-3 with no guard acting — the coherent fraction weighs the
+    scattered light with the same polarized facet reflectance as the lobe."""
+    nano = make_nano("abc:sigma=10nm,B=1um,C=2.8", [LAM])
+    grid = DirectionGrid.hemisphere(128)
+    eta = complex(AL.eta(LAM))
+    for theta in (30.0, 60.0, 75.0):
+        c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
+        g = np.sqrt(eta ** 2 - s * s)
+        R = abs((c - g) / (c + g)) ** 2 if pol == "s" else abs((eta ** 2 * c - g) / (eta ** 2 * c + g)) ** 2
+        L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0), nano, grid, diffraction=model,
+                              polarization=pol)
+        assert float(L.albedo()[0]) == pytest.approx(R, rel=1e-3), theta
+        assert L.info["diffraction_energy_scale"] == [1.0]

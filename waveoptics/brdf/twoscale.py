@@ -119,7 +119,8 @@ class Nano:
         h = self.surface.heights
         return float(np.std(h[self.surface.mask] if self.surface.mask is not None else h))
 
-    def coherent_amplitude2(self, cos_theta_d, wavelength_nm, diffraction="kirchhoff", material=None):
+    def coherent_amplitude2(self, cos_theta_d, wavelength_nm, diffraction="kirchhoff", material=None,
+                            polarization: str = "unpolarized"):
         """A(λ, θ_d): fraction of the light a facet reflects coherently.
 
         For statistics, 1 − E(θ_d) with E the share of the reflected light the nano lobe scatters at that incidence
@@ -133,6 +134,8 @@ class Nano:
         the diffracted lobe subtracts (:func:`waveoptics.scatter.coherent_amplitude`, docs/physics.md §9): the two
         halves then share one estimate and add up to the reflected light (measured: albedo/F − 1 from −0.074 to
         0 over six Gaussian patches without any rescaling). It equals exp(−g) for Gaussian heights on average.
+        With *polarization* s or p (statistics) E weighs each direction by its facet's polarized reflectance, as the
+        polarized lobe does, so the two halves add up to R_s or R_p.
         """
         c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
         dm = scatter.get_model(diffraction, perturbative=True)
@@ -144,7 +147,8 @@ class Nano:
             out = np.empty(c_b.shape)
             for l_val in np.unique(lam_b):
                 sel = lam_b == l_val
-                out[sel] = scatter.band_series(self.model, float(l_val)).coherent_fraction(c_b[sel], dm, material)
+                out[sel] = scatter.band_series(self.model, float(l_val)).coherent_fraction(c_b[sel], dm, material,
+                                                                                            polarization)
             return out if out.ndim else float(out)
         h, w2 = self._height_weights()
         # A(cos θ_d) is smooth: evaluate the characteristic function on 513 cosines and interpolate
@@ -322,7 +326,7 @@ def kernel_cos_theta_d(wi, grid: DirectionGrid) -> np.ndarray:
 
 
 def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, diffraction="kirchhoff",
-                          material=None):
+                          material=None, polarization: str = "unpolarized"):
     """Per-facet share of scattered light relative to the macro incidence: (1 − A(θ_d)) / (1 − A(θ_i)) on the
     kernel grid, (n_λ, 2n_v − 1, 2n_u − 1).
 
@@ -336,10 +340,10 @@ def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, d
     cos_d = kernel_cos_theta_d(wi, grid)
     out = np.ones((len(wavelengths_nm),) + cos_d.shape)
     for i, lam in enumerate(wavelengths_nm):
-        lost_i = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material))
+        lost_i = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, polarization))
         # guard: a nano surface that scatters nothing at θ_i has no lobe to weight
         if lost_i > 1e-12:
-            out[i] = (1.0 - nano.coherent_amplitude2(cos_d, lam, diffraction, material)) / lost_i
+            out[i] = (1.0 - nano.coherent_amplitude2(cos_d, lam, diffraction, material, polarization)) / lost_i
     return out
 
 
@@ -422,8 +426,9 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
     deposited in the mirror cell (as a micro lobe narrower than a cell is, see :func:`evaluate`).
     """
     cell = _mirror_cell(grid, wi)
+    pol = getattr(F, "polarization", "unpolarized")
     for i, lam in enumerate(wavelengths_nm):
-        share = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material))
+        share = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, pol))
         Fi = float(np.ravel(_F_mirror(F, wi, lam))[0])
         got = float(integrate(out[i], grid))
         if got > 0:
@@ -588,7 +593,8 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         if cell is not None:
             Fi = np.array([float(np.ravel(_F_mirror(F, wi, lam))[0]) for lam in w])
             mf[:, cell[0], cell[1]] = Fi * rho / (grid.du * grid.dv)
-        A = np.array([float(nano.coherent_amplitude2(wi[2], lam, dm, mat)) if sigma_nano > 0 else 1.0 for lam in w])
+        A = np.array([float(nano.coherent_amplitude2(wi[2], lam, dm, mat, polarization)) if sigma_nano > 0 else 1.0
+                      for lam in w])
         coherent = mf * A[:, None, None]
     else:
         mf = np.empty(shape)
@@ -606,7 +612,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
             f1 = f1 * (rho / grid_rho)
         for i, lam in enumerate(w):
             mf[i] = f1 * (F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam))
-            A = nano.coherent_amplitude2(cos_d, lam, dm, mat) if sigma_nano > 0 else 1.0
+            A = nano.coherent_amplitude2(cos_d, lam, dm, mat, polarization) if sigma_nano > 0 else 1.0
             coherent[i] = mf[i] * A
         mf = np.where(inside, mf, 0.0)
         coherent = np.where(inside, coherent, 0.0)
@@ -615,7 +621,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     if sigma_nano > 0:
         fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision, diffraction=dm,
                        material=mat)
-        K = micro_kernel(wi, micro, grid)[None] * facet_scatter_weights(wi, w, nano, grid, dm, mat)
+        K = micro_kernel(wi, micro, grid)[None] * facet_scatter_weights(wi, w, nano, grid, dm, mat, polarization)
         diffraction = np.where(inside, _convolve(fn, K, grid), 0.0)
         if reference_grid is None:
             diffraction, energy_scale = _cap_to_coherent_loss(diffraction, mf - coherent, grid)

@@ -329,7 +329,8 @@ class BandSeries:
         sigma2 = 0.5 * (self.sigma2_rel(sin_i) + self.sigma2_rel(sin_o))
         return self.terms(q, cos_sum, sigma2, sin_i, sin_o)
 
-    def scattered_albedo(self, theta_deg, diffraction="kirchhoff", material=None) -> np.ndarray:
+    def scattered_albedo(self, theta_deg, diffraction="kirchhoff", material=None,
+                         polarization: str = "unpolarized") -> np.ndarray:
         """E(θ): the share of a facet's reflected light this lobe scatters, ∫ F(θ_h) f¹ cosθ_o dω_o / F(θ), under
         the *diffraction* model's factor K and vertical phase, at incidence θ (degrees; interpolated between
         :data:`ALBEDO_THETAS_DEG`). F is the *material*'s unpolarized Fresnel reflectance at the half-vector angle
@@ -339,25 +340,31 @@ class BandSeries:
         (geometric in |q| from far below the PSD's knee to 2k, 48 azimuths; measured against a 384² direction-cosine
         grid: within 3e-4 relative, tests/test_band.py). This is the light a facet's nano-roughness scatters at
         that incidence: the coherent fraction is its complement (:meth:`coherent_fraction`).
+
+        *polarization* ``s`` or ``p`` (of the incident light, relative to the plane of incidence): each direction is
+        weighted by its facet's polarized reflectance relative to the specular one,
+        F_pol(θ_h) / R_pol(θ) (:func:`waveoptics.materials.fresnel.F_facet_polarized`), as the lobe itself is.
         """
         from .models import get_model
         from .perturbation import rayleigh_rice_albedo
 
         dm = get_model(diffraction, perturbative=True)
-        key = (dm.name, None if material is None else getattr(material, "name", str(material)))
+        pol = polarization if material is not None else "unpolarized"   # F = 1 has no polarization
+        key = (dm.name, None if material is None else getattr(material, "name", str(material)), pol)
         tab = self._albedos.get(key)
         if tab is None:
             if dm.perturbative:   # Rayleigh-Rice: its TIS relative to the specular reflectance
-                tab = np.array([rayleigh_rice_albedo(t, self.wavelength_nm, self.model, material)
+                tab = np.array([rayleigh_rice_albedo(t, self.wavelength_nm, self.model, material, pol)
                                 for t in RR_THETAS_DEG])
             else:
-                tab = np.array([self._albedo_at(math.radians(t), dm, material) for t in ALBEDO_THETAS_DEG])
+                tab = np.array([self._albedo_at(math.radians(t), dm, material, pol) for t in ALBEDO_THETAS_DEG])
             self._albedos[key] = tab
         if dm.perturbative:
             return rr_interp(theta_deg, tab)
         return np.interp(np.asarray(theta_deg, dtype=float), ALBEDO_THETAS_DEG, tab)
 
-    def coherent_fraction(self, cos_theta, diffraction="kirchhoff", material=None) -> np.ndarray:
+    def coherent_fraction(self, cos_theta, diffraction="kirchhoff", material=None,
+                          polarization: str = "unpolarized") -> np.ndarray:
         """A(θ) = 1 − E¹(θ): the share of a facet's reflected light that stays specular, by energy conservation
         from the light its nano-roughness scatters (:meth:`scattered_albedo`).
 
@@ -372,20 +379,30 @@ class BandSeries:
         E¹ can exceed 1 there; A is then 0 (no specular light left), never negative.
         """
         c = np.clip(np.asarray(cos_theta, dtype=float), 0.0, 1.0)
-        E = self.scattered_albedo(np.degrees(np.arccos(c)), diffraction, material)
+        E = self.scattered_albedo(np.degrees(np.arccos(c)), diffraction, material, polarization)
         return np.clip(1.0 - E, 0.0, 1.0)
 
-    def _albedo_at(self, theta, dm, material=None) -> float:
-        """∫ f¹ du dv over the disc (:func:`polar_albedo`), each direction's Fresnel factor relative to F(θ)."""
+    def _albedo_at(self, theta, dm, material=None, polarization="unpolarized") -> float:
+        """∫ f¹ du dv over the disc (:func:`polar_albedo`), each direction's Fresnel factor relative to F(θ)
+        (for s or p light the facet's polarized reflectance relative to the specular one)."""
+        from ..materials.fresnel import F_facet_polarized
+
+        lam = self.wavelength_nm
+        wi0 = np.array([math.sin(theta), 0.0, math.cos(theta)])
+        mirror = np.array([-wi0[0], 0.0, wi0[2]])
+
         def lobe(wi_b, wo, q):
-            f = dm.K(wi_b, wo, self.wavelength_nm) * self(wi_b, wo, dm.cos_sum(wi_b, wo), q=q)
-            if material is not None:   # each direction reflected by its facet: F(θ_h) / F(θ)
-                h = wi_b + wo
-                h = h / np.linalg.norm(h, axis=-1, keepdims=True)
-                cos_h = np.clip(np.sum(h * wi_b, axis=-1), 0.0, 1.0)
-                f = f * (material.F(cos_h, self.wavelength_nm)
-                         / max(float(material.F(math.cos(theta), self.wavelength_nm)), 1e-300))
-            return f
+            f = dm.K(wi_b, wo, lam) * self(wi_b, wo, dm.cos_sum(wi_b, wo), q=q)
+            if material is None:
+                return f
+            if polarization != "unpolarized":   # each direction reflected by its facet, s/p to the macro plane
+                eta = material.eta(lam)
+                return f * (F_facet_polarized(wi_b, wo, eta, polarization)
+                            / max(float(F_facet_polarized(wi0, mirror, eta, polarization)), 1e-300))
+            h = wi_b + wo   # each direction reflected by its facet: F(θ_h) / F(θ)
+            h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+            cos_h = np.clip(np.sum(h * wi_b, axis=-1), 0.0, 1.0)
+            return f * (material.F(cos_h, lam) / max(float(material.F(math.cos(theta), lam)), 1e-300))
         return polar_albedo(theta, self.k, self.model.length_scale, lobe)
 
     def redistributed_share(self, sin_theta_i, cos_sum) -> float:
