@@ -237,7 +237,7 @@ def test_heavy_tailed_psd_keeps_the_reflected_light():
 def test_polarized_two_scale_mirror_reflects_rs_and_rp():
     """A mirror-like micro surface without nano roughness reflects R_s(θ_i) / R_p(θ_i) for s / p light and their
     mean unpolarized (Fresnel equations, Born & Wolf; issue 13); with nano roughness the s and p lobes average to
-    the unpolarized one."""
+    the unpolarized one (to 1e-5)."""
     from waveoptics.materials import fresnel
 
     mat = materials.get_material("1.5")
@@ -252,4 +252,9 @@ def test_polarized_two_scale_mirror_reflects_rs_and_rp():
     nano = twoscale.Nano(model=surfaces.PSDModel("gaussian", sigma=20e-9, T=1e-6))
     L = {p: twoscale.evaluate(wi, [550.0], "Au", twoscale.Micro(alpha=0.1), nano, grid, kd=0, polarization=p)
          for p in ("s", "p", "unpolarized")}
-    np.testing.assert_allclose(0.5 * (L["s"].total + L["p"].total), L["unpolarized"].total, rtol=1e-9, atol=1e-12)
+    # each polarization's coherent fraction weighs its scattered light by its own facet reflectance: exact at the
+    # macro incidence ((R_s A_s + R_p A_p)/2 = R A), to first order at tilted facets (measured 1.0e-6 of the peak,
+    # albedo 3e-6)
+    avg, unpol = 0.5 * (L["s"].total + L["p"].total), L["unpolarized"].total
+    assert np.max(np.abs(avg - unpol)) < 1e-5 * unpol.max()
+    assert 0.5 * (L["s"].albedo()[0] + L["p"].albedo()[0]) == pytest.approx(L["unpolarized"].albedo()[0], rel=1e-5)
