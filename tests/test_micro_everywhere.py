@@ -169,3 +169,17 @@ rgb_images = true
         np.cos(np.radians(30))))) * brdf.MicrofacetBRDF("Au", e.micro, multiple_scattering=True)._F_ms(x)
         for x in w])
     np.testing.assert_allclose(a - single.albedo("microfacet"), lost, rtol=1e-6, atol=1e-9)
+
+
+def test_compare_reuses_the_simulations_micro_roughness(micro_file, tmp_path):
+    """compare evaluates the lobes at other incidences with the simulation's own micro roughness (here a measured
+    slope table) and options: at the simulation's incidence it reproduces the simulation's albedo."""
+    from waveoptics import compare
+
+    sim = simulate("Au", micro_surface=micro_file, multiple_scattering=True, nano="gaussian:sigma=8nm,T=1um",
+                   incident=(30.0, 0.0), wavelengths=[550.0], resolution=32)
+    L = compare._lobes_at(sim, _dir(30.0))
+    np.testing.assert_allclose(L.albedo("total"), sim.lobes.albedo("total"), rtol=1e-12)
+    rc, _, err, _ = run_cli(["compare", "--micro-surface", str(micro_file), "--multiple-scattering", "--material",
+                             "Au", "--resolution", "32", "--wavelengths", "550", "--incident-angles", "0,40"])
+    assert rc == 0, err

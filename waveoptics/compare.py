@@ -116,12 +116,15 @@ def compare(sim, angles_deg, *, tail_deg=10.0, sphere_size=128):
 
 
 def _lobes_at(sim, wi):
+    """The simulation's lobes at another incidence: the same micro roughness object the simulation used (its NDF
+    shape, a measured slope table or the α a split measured), material, nano roughness and options."""
     p = sim.params
-    micro = twoscale.Micro(alpha=p["micro_alpha"], ndf=p["ndf"], shadowing=p["shadowing"])
+    mf = sim.brdf_microfacet
     solver = p["solver"] if p["solver"] != "none" else "auto"
-    return twoscale.evaluate(wi, sim.wavelengths_nm, p["material"], micro, sim.nano, sim.grid, solver=solver,
+    return twoscale.evaluate(wi, sim.wavelengths_nm, mf.material, mf.micro, sim.nano, sim.grid, solver=solver,
                              kd=p["kd"], precision=p["precision"], diffraction=p.get("diffraction", "kirchhoff"),
-                             polarization=p.get("polarization", "unpolarized"))
+                             polarization=p.get("polarization", "unpolarized"),
+                             multiple_scattering=p.get("multiple_scattering", False))
 
 
 def plot(rows, path, *, title="", tail_deg=10.0):
