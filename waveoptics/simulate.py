@@ -275,9 +275,10 @@ def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_
 
     Returns ``sigma_m`` (rms height), ``sigma_relevant_m`` (the rms height inside the propagating band) and
     ``beyond_band_fraction`` ((σ² − σ_rel²)/σ²: the share of the variance in evanescent orders, which neither
-    scatters nor reduces the specular light: the two-scale model leaves it out of both halves). For statistics
-    also ``scattered_share`` (E: the share of the reflected light the nano lobe scatters, whose complement is the
-    coherent fraction) and ``redistributed_share`` (the part of the scattered light that the multiple-order terms
+    scatters nor reduces the specular light: the two-scale model leaves it out of both halves) and
+    ``scattered_share`` (E: the share of the reflected light the nano lobe scatters with F = 1, Kirchhoff, whose
+    complement is the coherent fraction; for a height field its own lobe's, :func:`waveoptics.brdf.twoscale.
+    field_scattered_albedo`). For statistics also ``redistributed_share`` (the part of the scattered light that the multiple-order terms
     of the Kirchhoff series send beyond the band and the model returns to it,
     :meth:`waveoptics.scatter.BandSeries.redistributed_share`).
     """
@@ -295,6 +296,9 @@ def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_
     else:
         var = float(np.var(nano.surface.heights[nano.surface.valid]))
         rel = [scatter.relevant_variance_of_field(nano.surface, lam, s, phi_deg) for lam in wavelengths_nm]
+        c = math.cos(math.radians(theta_deg))
+        out = {"scattered_share": [1.0 - float(nano.coherent_amplitude2(c, lam, azimuth_deg=phi_deg))
+                                   for lam in wavelengths_nm]}
     return {"incident_deg": [theta_deg, phi_deg], "sigma_m": math.sqrt(var),
             "sigma_relevant_m": [math.sqrt(max(r, 0.0)) for r in rel],
             "beyond_band_fraction": [scatter.beyond_band_fraction(var, r) for r in rel], **out}

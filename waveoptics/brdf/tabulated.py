@@ -4,8 +4,9 @@ specular direction.
 :class:`TabulatedTwoScaleBRDF` evaluates the two-scale model (docs/physics.md §7) for *any* nano-roughness (PSD
 statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at the wavelengths it was built for:
 
-* the coherent part A(θ_d) f_mf and the diffuse substrate are closed forms, evaluated exactly per pair (A from
-  the nano statistics, or from the height field's own characteristic function);
+* the coherent part A(θ_d) f_mf and the diffuse substrate are closed forms, evaluated exactly per pair (A, what
+  the nano lobe leaves, from tables over θ_d of the nano statistics or of the height field's own lobe:
+  :meth:`waveoptics.brdf.Nano.coherent_amplitude2`);
 * the diffracted part is computed by :func:`waveoptics.brdf.evaluate` on a direction grid at incidence angles
   θ_k (azimuth 0) and interpolated between them *relative to the specular direction*: at θ_i between θ_a and
   θ_b, with Δ = (u_o, v_o) − (mirror point of θ_i), each node's lobe is read at its own mirror point + Δ and the

@@ -4,8 +4,10 @@ Structure (Holzschuch & Pacanowski 2017; docs/physics.md §7). Micro-geometry, m
 microfacet NDF D with roughness α; each microfacet carries nano-roughness of rms height σ_nano about λ or smaller.
 Per microfacet the light splits into
 
-* a coherent part, the fraction A(λ, θ_d) = exp(−(4π σ_nano cos θ_d / λ)²) of the Fresnel-reflected light, that
-  keeps the microfacet specular lobe:  f_c = A · F G D / (4 cosθ_i cosθ_o);
+* a coherent part, the fraction A(λ, θ_d) of the Fresnel-reflected light that keeps the microfacet specular
+  lobe, f_c = A · F G D / (4 cosθ_i cosθ_o): what the facet's nano lobe leaves, 1 − E(θ_d) (E the share of the
+  reflected light that lobe scatters; Davies' exp(−(4π σ_rel cos θ_d / λ)²) while it is paraxial, σ_rel the
+  roughness inside the propagating band; :meth:`Nano.coherent_amplitude2`, docs/physics.md §9);
 * a diffracted part, the nano-roughness scattering lobe f_n (PSD series or a Kirchhoff solver on a nano height
   field), carried by each microfacet, i.e. tilted with the facet normal and so convolved with the micro NDF;
 * for dielectrics, a diffuse term with the diffuse-specular trade-off (metals have none).
@@ -35,6 +37,7 @@ References
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -52,7 +55,7 @@ from .microfacet import specular
 from .ndf import ALPHA_MAX, ALPHA_MIN, NDFS
 from .quadrature import albedo, directional_albedo
 
-__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
+__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
 
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
@@ -120,7 +123,7 @@ class Nano:
         return float(np.std(h[self.surface.mask] if self.surface.mask is not None else h))
 
     def coherent_amplitude2(self, cos_theta_d, wavelength_nm, diffraction="kirchhoff", material=None,
-                            polarization: str = "unpolarized"):
+                            polarization: str = "unpolarized", azimuth_deg: float = 0.0):
         """A(λ, θ_d): fraction of the light a facet reflects coherently.
 
         For statistics, 1 − E(θ_d) with E the share of the reflected light the nano lobe scatters at that incidence
@@ -129,12 +132,19 @@ class Nano:
         :meth:`waveoptics.scatter.BandSeries.coherent_fraction`). The lobe is the Kirchhoff series of the roughness
         inside the propagating band (the relevant roughness, Krywonos, Harvey & Choi 2011; docs/physics.md §9), so
         variance in evanescent frequencies neither scatters nor reduces the specular light. While the lobe is
-        paraxial this is the Davies (1954) factor exp(−(4πσ_rel cosθ_d/λ)²); for a height field, |χ̂|² with χ̂ the
-        window-weighted characteristic function Σ w² exp(i 2k cosθ_d h) / Σ w² of the *same samples and window*
-        the diffracted lobe subtracts (:func:`waveoptics.scatter.coherent_amplitude`, docs/physics.md §9): the two
-        halves then share one estimate and add up to the reflected light (measured: albedo/F − 1 from −0.074 to
-        0 over six Gaussian patches without any rescaling). It equals exp(−g) for Gaussian heights on average.
-        With *polarization* s or p (statistics) E weighs each direction by its facet's polarized reflectance, as the
+        paraxial this is the Davies (1954) factor exp(−(4πσ_rel cosθ_d/λ)²). For a height field it is the same
+        complement, 1 − E_field(θ_d) (:func:`field_scattered_albedo`): E_field is the albedo of the field's own
+        diffracted lobe |U − χ̂ U_flat|² (the lobe :func:`kirchhoff_scattered_lobe` gives, same samples, window and
+        diffraction model) on a direction grid that samples the patch's spectrum at its own resolution λ/L, so
+        nothing between the two halves is lost: roughness in evanescent frequencies neither scatters nor reduces
+        the specular light (before, A = |χ̂|² took the whole variance and the albedo of heavy-tailed patches fell
+        up to 12 % short of F; tests/test_twoscale.py). One or two incidences asked at once (the macro incidence)
+        are evaluated exactly at the azimuth *azimuth_deg* (degrees); a spread of facet incidences is interpolated
+        by monotone cubics in a table over :data:`FIELD_THETAS_DEG` per wavelength, taken at azimuth 0 (the facets
+        of a micro lobe face every azimuth; for an anisotropic field this is the share of light scattered in the
+        x–z plane of incidence). Coherent and diffracted halves use the same values, so the energy balance does
+        not depend on this choice.
+        With *polarization* s or p E weighs each direction by its facet's polarized reflectance, as the
         polarized lobe does, so the two halves add up to R_s or R_p.
         """
         c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
@@ -150,18 +160,7 @@ class Nano:
                 out[sel] = scatter.band_series(self.model, float(l_val)).coherent_fraction(c_b[sel], dm, material,
                                                                                             polarization)
             return out if out.ndim else float(out)
-        h, w2 = self._height_weights()
-        # A(cos θ_d) is smooth: evaluate the characteristic function on 513 cosines and interpolate
-        c_tab = np.linspace(0.0, 1.0, 513)
-        lam = np.asarray(wavelength_nm, dtype=float)
-        out = np.empty(np.broadcast(c, lam).shape)
-        c_b, lam_b = np.broadcast_arrays(c, lam)
-        for l_val in np.unique(lam_b):
-            vz = (2 * np.pi / (l_val * 1e-9)) * dm.specular_cos_sum(c_tab)
-            tab = np.abs(np.exp(1j * vz[:, None] * h[None, :]) @ w2) ** 2
-            sel = lam_b == l_val
-            out[sel] = np.interp(c_b[sel], c_tab, tab)
-        return out if out.ndim else float(out)
+        return self._field_coherent(c, wavelength_nm, dm, material, polarization, azimuth_deg)
 
     def periodogram(self):
         """The height field's :class:`~waveoptics.surfaces.PeriodogramPSD` (computed once): its PSD where a
@@ -190,17 +189,43 @@ class Nano:
             out[sel] = np.clip(1.0 - E, 0.0, 1.0)   # guard: first-order TIS above R means σ far outside its domain
         return out if out.ndim else float(out)
 
-    def _height_weights(self):
-        """Heights (binned to 4096 levels, m) and their normalized w² weights from :func:`waveoptics.scatter.
-        samples` of the height field: the weights of the coherent-field estimate χ̂."""
-        smp = scatter.samples(self.surface)
-        w2 = smp.w ** 2
-        # binning the heights keeps the 513 × n table small; the bin width (range / 4096) moves the phase by
-        # < 2k · range / 8192 ≤ 1e-3 rad for heights up to 0.3 λ, far below the estimate's own scatter
-        hist, edges = np.histogram(smp.h, bins=4096, weights=w2)
-        centres = 0.5 * (edges[1:] + edges[:-1])
-        keep = hist > 0
-        return centres[keep], hist[keep] / hist.sum()
+    def _field_coherent(self, c, wavelength_nm, dm, material, polarization, azimuth_deg):
+        """1 − E_field(θ_d) of the height field per wavelength (see :meth:`coherent_amplitude2`)."""
+        from scipy.interpolate import PchipInterpolator
+
+        cache = self.__dict__.setdefault("_cache", {})
+        lam = np.asarray(wavelength_nm, dtype=float)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        theta = np.degrees(np.arccos(c_b))
+        out = np.empty(c_b.shape)
+        phi = round(float(azimuth_deg), 9)
+        for l_val in np.unique(lam_b):
+            sel = lam_b == l_val
+            key = (float(l_val), dm.name, None if material is None else material.name, polarization)
+            asked = np.unique(theta[sel])
+
+            def E_at(t, phi_deg, l_val=float(l_val)):
+                return field_scattered_albedo(self.surface, float(t), l_val, dm, material, polarization, phi_deg)
+
+            if asked.size <= 2:   # single incidences (the macro one): exactly, at their own azimuth
+                exact = cache.setdefault(("field-exact",) + key, {})
+                for t in asked:
+                    if (float(t), phi) not in exact:
+                        exact[(float(t), phi)] = E_at(t, phi)
+                E = np.array([exact[(float(t), phi)] for t in theta[sel]])
+            else:                 # a spread of facet incidences: the table's nodes that bracket it
+                nodes = cache.setdefault(("field-nodes",) + key, {})
+                lo = np.searchsorted(FIELD_THETAS_DEG, asked[0], side="right") - 1
+                hi = np.searchsorted(FIELD_THETAS_DEG, asked[-1], side="left")
+                for t in FIELD_THETAS_DEG[max(lo, 0):hi + 1]:
+                    if float(t) not in nodes:
+                        nodes[float(t)] = E_at(t, 0.0)
+                ts = np.array(sorted(nodes))
+                E = PchipInterpolator(ts, [nodes[t] for t in ts], extrapolate=True)(theta[sel])
+            # guard: near grazing incidence the tangent-plane lobe's albedo exceeds 1 (docs/two-scale.md): no
+            # specular light is left there, A = 0, never negative
+            out[sel] = np.clip(1.0 - E, 0.0, 1.0)
+        return out if out.ndim else float(out)
 
 
 @dataclass
@@ -326,7 +351,7 @@ def kernel_cos_theta_d(wi, grid: DirectionGrid) -> np.ndarray:
 
 
 def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, diffraction="kirchhoff",
-                          material=None, polarization: str = "unpolarized"):
+                          material=None, polarization: str = "unpolarized", kernel=None):
     """Per-facet share of scattered light relative to the macro incidence: (1 − A(θ_d)) / (1 − A(θ_i)) on the
     kernel grid, (n_λ, 2n_v − 1, 2n_u − 1).
 
@@ -339,12 +364,22 @@ def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, d
     """
     cos_d = kernel_cos_theta_d(wi, grid)
     out = np.ones((len(wavelengths_nm),) + cos_d.shape)
+    phi = _azimuth_deg(wi)
+    # cells the kernel does not weigh (its micro lobe below 1e-12 of its peak, or exactly 0 for a spike) keep
+    # weight 1: their light is below 1e-12 of the lobe's per cell, and their facet incidences need no evaluation
+    used = np.ones(cos_d.shape, bool) if kernel is None else kernel > 1e-12 * float(np.max(kernel, initial=0.0))
     for i, lam in enumerate(wavelengths_nm):
-        lost_i = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, polarization))
+        lost_i = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, polarization, phi))
         # guard: a nano surface that scatters nothing at θ_i has no lobe to weight
-        if lost_i > 1e-12:
-            out[i] = (1.0 - nano.coherent_amplitude2(cos_d, lam, diffraction, material, polarization)) / lost_i
+        if lost_i > 1e-12 and used.any():
+            out[i][used] = (1.0 - nano.coherent_amplitude2(cos_d[used], lam, diffraction, material, polarization,
+                                                          phi)) / lost_i
     return out
+
+
+def _azimuth_deg(wi) -> float:
+    """Azimuth (degrees) of a direction: the plane of incidence a height field's coherent fraction is taken in."""
+    return float(np.degrees(np.arctan2(wi[1], wi[0]))) if np.hypot(wi[0], wi[1]) > 0 else 0.0
 
 
 def _convolve(lobe, K, grid):
@@ -484,6 +519,60 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     return np.where(inside, np.maximum(out, 0.0), 0.0)
 
 
+#: facet incidences θ_d (degrees) at which a height field's scattered share E_field is tabulated per wavelength
+#: (:meth:`Nano.coherent_amplitude2`): denser towards grazing, where the tangent-plane lobe's albedo bends
+FIELD_THETAS_DEG = np.array([0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 68.0, 75.0, 80.0, 84.0, 87.0, 89.0])
+#: cells of the grid that integrates a height field's lobe are λ / (this × L) wide: |U|² varies on the scale
+#: λ/(2L) (the window's autocorrelation spans 2L), and 3 is where its integral settles (Gaussian patch at 60°:
+#: 1e-3 below at 2, within 2e-4 from 3 to 12; a heavy-tailed ABC C = 2.2 patch, whose speckle reaches the
+#: horizon and its 1/cosθ_o obliquity, keeps ±0.5 % of cell-quadrature scatter at any of them)
+FIELD_GRID_OVERSAMPLING = 3.0
+
+
+def field_scattered_albedo(surface: HeightField, theta_deg: float, wavelength_nm: float, diffraction="kirchhoff",
+                           material=None, polarization: str = "unpolarized", azimuth_deg: float = 0.0) -> float:
+    """E_field(θ): the share of the specularly reflected light that a height field's diffracted lobe scatters at
+    incidence (θ, φ) (degrees), relative to F(θ) (unitless; > 1 is possible near grazing incidence, where the
+    tangent-plane lobe's albedo grows without bound).
+
+    The lobe is :func:`kirchhoff_scattered_lobe` (fft solver, exact Kirchhoff to its tolerance; the direct solver
+    agrees to 1e-3) with each direction's Fresnel factor relative to the specular one
+    (:class:`waveoptics.materials.RelativeFacetFresnel`; 1 without a *material*), integrated over a direction grid
+    whose cells are λ/(3L) wide (L the patch's larger side, :data:`FIELD_GRID_OVERSAMPLING`), finer than the scale
+    λ/(2L) on which |U|² varies, so that for a lobe inside the disc Σ f du dv is Parseval's sum of
+    |U − χ̂ U_flat|², 1 − |χ̂|² when nothing is evanescent (measured 1e-4 on Gaussian patches). What the sum
+    misses is the light of surface frequencies outside the propagating band, which does not scatter (the
+    relevant roughness: Krywonos, Harvey & Choi 2011).
+
+    References
+    ----------
+    .. [1] A. Krywonos, J. E. Harvey, N. Choi, JOSA A 28(6), 1121–1138, 2011 (relevant roughness; only the
+       propagating band scatters or reduces the specular reflection).
+    .. [2] M. Parseval; Bracewell, *The Fourier Transform and its Applications*, 3rd ed., ch. 6 (Rayleigh's
+       theorem: the power of a sequence equals that of its DFT samples).
+    """
+    from ..materials import RelativeFacetFresnel
+    from ..units import direction_from_angles
+
+    smp = scatter.samples(surface)
+    n = int(np.ceil(FIELD_GRID_OVERSAMPLING * max(smp.extent) / (wavelength_nm * 1e-9)))
+    grid = DirectionGrid.hemisphere(n)
+    wi = direction_from_angles(theta_deg, azimuth_deg)
+    with warnings.catch_warnings():   # the lobe's own evaluation says what its sampling misses
+        warnings.simplefilter("ignore", scatter.DiffractionWarning)
+        lobe = kirchhoff_scattered_lobe(surface, wi, grid, [wavelength_nm],
+                                        RelativeFacetFresnel(material, polarization), solver="fft",
+                                        diffraction=diffraction)
+    return float(integrate(lobe, grid)[0])
+
+
+def field_albedo_evaluations(micro: Micro, grid: DirectionGrid, incidences: int) -> int:
+    """Lobes :func:`field_scattered_albedo` computes per wavelength for a height field's coherent fraction over
+    *incidences* macro incidences on *grid*: one each, plus the facet table's nodes under a micro lobe wider than a
+    cell (:meth:`Nano.coherent_amplitude2`)."""
+    return int(incidences) + (0 if _sharp(micro, grid) else FIELD_THETAS_DEG.size)
+
+
 #: the diffracted lobes may exceed the light the coherent lobe lost by this share before
 #: :func:`_cap_to_coherent_loss` acts: the two are integrated by different quadratures (the lobe on the evaluation
 #: grid, E¹ on a polar grid), which differ by < 2e-3 (measured, docs/two-scale.md)
@@ -593,8 +682,8 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         if cell is not None:
             Fi = np.array([float(np.ravel(_F_mirror(F, wi, lam))[0]) for lam in w])
             mf[:, cell[0], cell[1]] = Fi * rho / (grid.du * grid.dv)
-        A = np.array([float(nano.coherent_amplitude2(wi[2], lam, dm, mat, polarization)) if sigma_nano > 0 else 1.0
-                      for lam in w])
+        A = np.array([float(nano.coherent_amplitude2(wi[2], lam, dm, mat, polarization, _azimuth_deg(wi)))
+                      if sigma_nano > 0 else 1.0 for lam in w])
         coherent = mf * A[:, None, None]
     else:
         mf = np.empty(shape)
@@ -610,9 +699,13 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         rho = float(albedo(wi, fresnel="one", **micro.kw()))
         if grid_rho > 0:
             f1 = f1 * (rho / grid_rho)
+        # facets whose micro lobe is below 1e-12 of its peak keep A = 1: their light is below that share per cell
+        used = inside & (f1 > 1e-12 * float(np.max(f1, initial=0.0)))
         for i, lam in enumerate(w):
             mf[i] = f1 * (F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam))
-            A = nano.coherent_amplitude2(cos_d, lam, dm, mat, polarization) if sigma_nano > 0 else 1.0
+            A = np.ones(cos_d.shape)
+            if sigma_nano > 0 and used.any():
+                A[used] = nano.coherent_amplitude2(cos_d[used], lam, dm, mat, polarization, _azimuth_deg(wi))
             coherent[i] = mf[i] * A
         mf = np.where(inside, mf, 0.0)
         coherent = np.where(inside, coherent, 0.0)
@@ -621,8 +714,12 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     if sigma_nano > 0:
         fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision, diffraction=dm,
                        material=mat)
-        K = micro_kernel(wi, micro, grid)[None] * facet_scatter_weights(wi, w, nano, grid, dm, mat, polarization)
+        K0 = micro_kernel(wi, micro, grid)
+        K = K0[None] * facet_scatter_weights(wi, w, nano, grid, dm, mat, polarization, kernel=K0)
         diffraction = np.where(inside, _convolve(fn, K, grid), 0.0)
+        # the light each facet's lobe, shifted to that facet's mirror direction, puts beyond the horizon (the
+        # convolution's total is Σ f_n du dv × Σ K): lost, as shadowing would lose it
+        beyond = np.maximum(integrate(fn, grid) * K.sum(axis=(-2, -1)) - integrate(diffraction, grid), 0.0)
         if reference_grid is None:
             diffraction, energy_scale = _cap_to_coherent_loss(diffraction, mf - coherent, grid)
         else:
@@ -632,6 +729,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         diffraction = np.zeros(shape)
         used = "none"
         energy_scale = np.ones(w.size)
+        beyond = np.zeros(w.size)
 
     # --- diffuse (dielectrics only) ---------------------------------------------------------------------------
     diff_albedo = np.zeros(w.size)
@@ -659,7 +757,10 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
                  microfacet=mf_total,
                  info={"solver": used, "sigma_nano_m": sigma_nano, "micro": micro.__dict__,
                        "material": mat.name, "sharp_micro_lobe": _sharp(micro, grid),
-                       "diffraction_energy_scale": energy_scale.tolist(), "diffraction_model": dm.name,
+                       "diffraction_energy_scale": energy_scale.tolist(),
+                       "diffraction_beyond_horizon": (beyond if reference_grid is None
+                                                      else np.full(w.size, np.nan)).tolist(),
+                       "diffraction_model": dm.name,
                        "polarization": polarization, "multiple_scattering": bool(multiple_scattering)})
 
 

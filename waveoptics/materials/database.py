@@ -38,7 +38,7 @@ from ..errors import FieldError, WaveopticsError, unknown
 from ..materials import fresnel
 from ..units import check_wavelengths
 
-__all__ = ['PolarizedFresnel', 'MAX_CLAMP_NM', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'data_sets', 'VISIBLE_NM', 'search', 'fresnel_function']
+__all__ = ['PolarizedFresnel', 'RelativeFacetFresnel', 'MAX_CLAMP_NM', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'data_sets', 'VISIBLE_NM', 'search', 'fresnel_function']
 
 #: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
 MAX_CLAMP_NM = 100.0
@@ -397,6 +397,43 @@ class PolarizedFresnel:
     def __call__(self, cos_theta_d, wavelength_nm):
         raise FieldError("{polarization} " + repr(self.polarization) + " needs the facet's directions; this "
                          "computation has only its angle (use unpolarized here)", "polarization")
+
+
+class RelativeFacetFresnel:
+    """Each direction's facet reflectance relative to the specular one at the same incidence: F(θ_h)/F(θ_i)
+    (unpolarized) or F_pol(ω_i, ω_o)/F_pol(ω_i, mirror) for s or p light. It weighs a nano lobe when its albedo is
+    taken as a share E of the specularly reflected light (the coherent fraction is 1 − E); with *material* None the
+    weight is 1. Evaluated with :meth:`at`, as :class:`PolarizedFresnel`.
+
+    References
+    ----------
+    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5 (Fresnel equations); the facet frame:
+       docs/physics.md §10.
+    """
+
+    def __init__(self, material: "Material | None", polarization: str = "unpolarized"):
+        self.material = material
+        self.polarization = polarization
+
+    def at(self, wi, wo, wavelength_nm):
+        """F ratio (unitless) for directions (..., 3) (ω_i may be one vector) and wavelengths (nm) broadcast
+        against their leading shape."""
+        wi = np.asarray(wi, dtype=float)
+        wo = np.asarray(wo, dtype=float)
+        if self.material is None:
+            return np.ones(np.broadcast_shapes(wo.shape[:-1], np.shape(wavelength_nm)))
+        mirror = wi * np.array([-1.0, -1.0, 1.0])
+        if self.polarization != "unpolarized":
+            eta = self.material.eta(wavelength_nm)
+            num = fresnel.F_facet_polarized(wi, wo, eta, self.polarization)
+            den = fresnel.F_facet_polarized(wi, mirror, eta, self.polarization)
+        else:
+            h = wi + wo
+            h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
+            num = self.material.F(np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0), wavelength_nm)
+            den = self.material.F(wi[..., 2], wavelength_nm)
+        # guard: a reflectance of exactly 0 (never for a physical index) would divide by zero
+        return np.asarray(num, dtype=float) / np.maximum(np.asarray(den, dtype=float), 1e-300)
 
 
 def fresnel_function(material, polarization: str = "unpolarized"):

@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .. import scatter
+from ..brdf import twoscale
 from ..materials import get_material
 from ..request import SimulationRequest, make_nano
 from ..scatter.grid import DirectionGrid
@@ -41,7 +44,12 @@ def simulation_time(req: SimulationRequest, *, sphere: bool = True, surface=None
     base = n_eval * cm.evaluation(cells, w.size, diffuse=diffuse, nano_lobe=True)
     smp = scatter.samples(nano.surface)
     wi = direction_from_angles(*req.incident_deg)
-    return base + n_eval * fft_solver_units(smp, wi, [DirectionGrid.hemisphere(req.resolution)], w) * cm.fft_unit
+    grid = DirectionGrid.hemisphere(req.resolution)
+    # the coherent fraction: the field's lobe on a grid of λ/(3L) cells per wavelength and incidence
+    per_incidence = sum(fft_solver_units(smp, wi, [DirectionGrid.hemisphere(int(np.ceil(
+        twoscale.FIELD_GRID_OVERSAMPLING * max(smp.extent) / (lam * 1e-9))))], [lam]) for lam in w)
+    coherent = twoscale.field_albedo_evaluations(micro, grid, n_eval) * per_incidence
+    return base + (n_eval * fft_solver_units(smp, wi, [grid], w) + coherent) * cm.fft_unit
 
 
 def scatter_time(field, incident_deg, wavelengths_nm, resolution: int, solver: str = "fft", *, realizations=1,

@@ -682,7 +682,8 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
         smp = scatter.samples(e.hf)
         direct_term, no_direct = direct_calibration(e.device)
         wi0 = direction_from_angles(*e.light.directions_deg[0])
-        # the height field's own coherent fraction (a histogram of its heights) is computed per grid and λ
+        # the height field's coherent fraction is what its own lobe leaves: one fft lobe on a grid of λ/(3L) cells
+        # per wavelength and incidence (the macro ones, and the facet table's nodes under a micro lobe)
         probe = twoscale.Nano(surface=e.hf)
         t_char = _best(lambda: probe.coherent_amplitude2(e.cos_max, e.lam_min), 1)
         hf_info.update(smp=smp, direct_term=direct_term, no_direct=no_direct)
@@ -700,7 +701,7 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
         if not hf_solvers:
             costs[(dname, e.solver)] = base
             continue
-        base += n_eval * len(grids) * n_w * t_char
+        base += twoscale.field_albedo_evaluations(e.micro, grids[0], n_eval) * n_w * t_char
         # the incoherent lobe is U − χ U_flat: the height field's transforms plus one for the flat patch
         costs[(dname, "fft")] = base + n_eval * fft_solver_units(smp, wi0, grids, w_eval) * e.cm.fft_unit
         if direct_term is not None:

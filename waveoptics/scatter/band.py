@@ -385,24 +385,13 @@ class BandSeries:
     def _albedo_at(self, theta, dm, material=None, polarization="unpolarized") -> float:
         """∫ f¹ du dv over the disc (:func:`polar_albedo`), each direction's Fresnel factor relative to F(θ)
         (for s or p light the facet's polarized reflectance relative to the specular one)."""
-        from ..materials.fresnel import F_facet_polarized
+        from ..materials import RelativeFacetFresnel
 
         lam = self.wavelength_nm
-        wi0 = np.array([math.sin(theta), 0.0, math.cos(theta)])
-        mirror = np.array([-wi0[0], 0.0, wi0[2]])
+        ratio = RelativeFacetFresnel(material, polarization)   # each direction reflected by its own facet
 
         def lobe(wi_b, wo, q):
-            f = dm.K(wi_b, wo, lam) * self(wi_b, wo, dm.cos_sum(wi_b, wo), q=q)
-            if material is None:
-                return f
-            if polarization != "unpolarized":   # each direction reflected by its facet, s/p to the macro plane
-                eta = material.eta(lam)
-                return f * (F_facet_polarized(wi_b, wo, eta, polarization)
-                            / max(float(F_facet_polarized(wi0, mirror, eta, polarization)), 1e-300))
-            h = wi_b + wo   # each direction reflected by its facet: F(θ_h) / F(θ)
-            h = h / np.linalg.norm(h, axis=-1, keepdims=True)
-            cos_h = np.clip(np.sum(h * wi_b, axis=-1), 0.0, 1.0)
-            return f * (material.F(cos_h, lam) / max(float(material.F(math.cos(theta), lam)), 1e-300))
+            return dm.K(wi_b, wo, lam) * self(wi_b, wo, dm.cos_sum(wi_b, wo), q=q) * ratio.at(wi_b, wo, lam)
         return polar_albedo(theta, self.k, self.model.length_scale, lobe)
 
     def redistributed_share(self, sin_theta_i, cos_sum) -> float:
