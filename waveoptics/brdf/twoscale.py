@@ -135,7 +135,7 @@ class Nano:
         paraxial this is the Davies (1954) factor exp(−(4πσ_rel cosθ_d/λ)²). For a height field it is the same
         complement, 1 − E_field(θ_d) (:func:`field_scattered_albedo`): E_field is the albedo of the field's own
         diffracted lobe |U − χ̂ U_flat|² (the lobe :func:`kirchhoff_scattered_lobe` gives, same samples, window and
-        diffraction model) on a direction grid that samples the patch's spectrum at its own resolution λ/L, so
+        diffraction model) on a direction grid of λ/(3L) cells, finer than the patch's spectrum varies, so
         nothing between the two halves is lost: roughness in evanescent frequencies neither scatters nor reduces
         the specular light (before, A = |χ̂|² took the whole variance and the albedo of heavy-tailed patches fell
         up to 12 % short of F; tests/test_twoscale.py). One or two incidences asked at once (the macro incidence)
@@ -143,8 +143,7 @@ class Nano:
         by monotone cubics in a table over :data:`FIELD_THETAS_DEG` per wavelength, taken at azimuth 0 (the facets
         of a micro lobe face every azimuth; for an anisotropic field this is the share of light scattered in the
         x–z plane of incidence). Coherent and diffracted halves use the same values, so the energy balance does
-        not depend on this choice.
-        With *polarization* s or p E weighs each direction by its facet's polarized reflectance, as the
+        not depend on this choice. With *polarization* s or p E weighs each direction by its facet's polarized reflectance, as the
         polarized lobe does, so the two halves add up to R_s or R_p.
         """
         c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
