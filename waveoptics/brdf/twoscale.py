@@ -55,7 +55,7 @@ from .microfacet import specular
 from .ndf import ALPHA_MAX, ALPHA_MIN, NDFS
 from .quadrature import albedo, directional_albedo
 
-__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
+__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'FACET_TAIL_SHARE', 'facet_incidences_deg', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
 
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
@@ -214,9 +214,7 @@ class Nano:
                 E = np.array([exact[(float(t), phi)] for t in theta[sel]])
             else:                 # a spread of facet incidences: the table's nodes that bracket it
                 nodes = cache.setdefault(("field-nodes",) + key, {})
-                lo = np.searchsorted(FIELD_THETAS_DEG, asked[0], side="right") - 1
-                hi = np.searchsorted(FIELD_THETAS_DEG, asked[-1], side="left")
-                for t in FIELD_THETAS_DEG[max(lo, 0):hi + 1]:
+                for t in _bracketing_nodes(asked[0], asked[-1]):
                     if float(t) not in nodes:
                         nodes[float(t)] = E_at(t, 0.0)
                 ts = np.array(sorted(nodes))
@@ -364,9 +362,11 @@ def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, d
     cos_d = kernel_cos_theta_d(wi, grid)
     out = np.ones((len(wavelengths_nm),) + cos_d.shape)
     phi = _azimuth_deg(wi)
-    # cells the kernel does not weigh (its micro lobe below 1e-12 of its peak, or exactly 0 for a spike) keep
-    # weight 1: their light is below 1e-12 of the lobe's per cell, and their facet incidences need no evaluation
-    used = np.ones(cos_d.shape, bool) if kernel is None else kernel > 1e-12 * float(np.max(kernel, initial=0.0))
+    # a height field's facet shares cost a lobe per table node: only the facets holding all but
+    # FACET_TAIL_SHARE of the kernel's light get their own; the rest keep weight 1, the share of θ_i, as their
+    # coherent part does (evaluate), so the halves still balance
+    used = (np.ones(cos_d.shape, bool) if kernel is None or nano.surface is None
+            else _significant(kernel))
     for i, lam in enumerate(wavelengths_nm):
         lost_i = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, polarization, phi))
         # guard: a nano surface that scatters nothing at θ_i has no lobe to weight
@@ -565,11 +565,55 @@ def field_scattered_albedo(surface: HeightField, theta_deg: float, wavelength_nm
     return float(integrate(lobe, grid)[0])
 
 
-def field_albedo_evaluations(micro: Micro, grid: DirectionGrid, incidences: int) -> int:
-    """Lobes :func:`field_scattered_albedo` computes per wavelength for a height field's coherent fraction over
-    *incidences* macro incidences on *grid*: one each, plus the facet table's nodes under a micro lobe wider than a
-    cell (:meth:`Nano.coherent_amplitude2`)."""
-    return int(incidences) + (0 if _sharp(micro, grid) else FIELD_THETAS_DEG.size)
+#: a height field's facets that together hold less than this share of a micro lobe's light take the coherent
+#: fraction of the macro incidence instead of their own (both halves alike, so the energy balance is kept): their
+#: own would cost table nodes far from θ_i for a change in the coherent/diffracted split below this share
+FACET_TAIL_SHARE = 1e-3
+
+
+def _significant(weights) -> np.ndarray:
+    """Mask of the largest cells of *weights* (≥ 0) that hold all but :data:`FACET_TAIL_SHARE` of their sum."""
+    flat = np.ravel(weights)
+    order = np.argsort(flat)[::-1]
+    c = np.cumsum(flat[order])
+    keep = np.zeros(flat.size, bool)
+    if c.size and c[-1] > 0:
+        keep[order[:int(np.searchsorted(c, (1.0 - FACET_TAIL_SHARE) * c[-1])) + 1]] = True
+    return keep.reshape(np.shape(weights))
+
+
+def _bracketing_nodes(theta_lo: float, theta_hi: float) -> np.ndarray:
+    """The :data:`FIELD_THETAS_DEG` nodes that bracket the facet incidences [θ_lo, θ_hi] (degrees)."""
+    lo = np.searchsorted(FIELD_THETAS_DEG, theta_lo, side="right") - 1
+    hi = np.searchsorted(FIELD_THETAS_DEG, theta_hi, side="left")
+    return FIELD_THETAS_DEG[max(lo, 0):hi + 1]
+
+
+def facet_incidences_deg(wi, micro: Micro, grid: DirectionGrid) -> tuple[float, float] | None:
+    """Range (degrees) of the facet incidences θ_d whose own coherent fraction a height field's micro lobe at
+    incidence *wi* on *grid* needs (the cells of :func:`micro_kernel` that hold all but :data:`FACET_TAIL_SHARE` of
+    its light); None for a lobe narrower than a cell (only θ_i itself)."""
+    if _sharp(micro, grid):
+        return None
+    K = micro_kernel(wi, micro, grid)
+    th = np.degrees(np.arccos(kernel_cos_theta_d(wi, grid)[_significant(K)]))
+    return (float(th.min()), float(th.max())) if th.size else None
+
+
+def field_albedo_evaluations(micro: Micro, grid: DirectionGrid, incidences, extra: int = 0) -> int:
+    """Lobes :func:`field_scattered_albedo` computes per wavelength for a height field's coherent fraction at the
+    macro *incidences* (unit vectors (n, 3)) on *grid*: one each, plus the facet table's nodes that bracket the
+    facet incidences under their micro lobes (:meth:`Nano.coherent_amplitude2`). *extra* more incidences (a
+    sphere's table) are counted with every node (their pixels see every facet incidence)."""
+    wis = np.atleast_2d(np.asarray(incidences, dtype=float))
+    if extra:
+        return len(wis) + int(extra) + FIELD_THETAS_DEG.size
+    nodes = set()
+    for wi in wis:
+        rng = facet_incidences_deg(wi, micro, grid)
+        if rng is not None:
+            nodes.update(float(t) for t in _bracketing_nodes(*rng))
+    return len(wis) + len(nodes)
 
 
 #: the diffracted lobes may exceed the light the coherent lobe lost by this share before
@@ -698,13 +742,17 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         rho = float(albedo(wi, fresnel="one", **micro.kw()))
         if grid_rho > 0:
             f1 = f1 * (rho / grid_rho)
-        # facets whose micro lobe is below 1e-12 of its peak keep A = 1: their light is below that share per cell
-        used = inside & (f1 > 1e-12 * float(np.max(f1, initial=0.0)))
+        # a height field's facets beyond the lobe's main light keep the coherent fraction of θ_i, as their
+        # diffracted weights do (facet_scatter_weights)
+        used = inside if nano is None or nano.surface is None else inside & _significant(np.where(inside, f1, 0))
         for i, lam in enumerate(w):
             mf[i] = f1 * (F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam))
             A = np.ones(cos_d.shape)
-            if sigma_nano > 0 and used.any():
-                A[used] = nano.coherent_amplitude2(cos_d[used], lam, dm, mat, polarization, _azimuth_deg(wi))
+            if sigma_nano > 0:
+                phi = _azimuth_deg(wi)
+                A[:] = nano.coherent_amplitude2(wi[2], lam, dm, mat, polarization, phi)
+                if used.any():
+                    A[used] = nano.coherent_amplitude2(cos_d[used], lam, dm, mat, polarization, phi)
             coherent[i] = mf[i] * A
         mf = np.where(inside, mf, 0.0)
         coherent = np.where(inside, coherent, 0.0)

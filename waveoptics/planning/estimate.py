@@ -48,7 +48,7 @@ def simulation_time(req: SimulationRequest, *, sphere: bool = True, surface=None
     # the coherent fraction: the field's lobe on a grid of λ/(3L) cells per wavelength and incidence
     per_incidence = sum(fft_solver_units(smp, wi, [DirectionGrid.hemisphere(int(np.ceil(
         twoscale.FIELD_GRID_OVERSAMPLING * max(smp.extent) / (lam * 1e-9))))], [lam]) for lam in w)
-    coherent = twoscale.field_albedo_evaluations(micro, grid, n_eval) * per_incidence
+    coherent = twoscale.field_albedo_evaluations(micro, grid, wi, extra=n_eval - 1) * per_incidence
     return base + (n_eval * fft_solver_units(smp, wi, [grid], w) + coherent) * cm.fft_unit
 
 

@@ -684,8 +684,8 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
         wi0 = direction_from_angles(*e.light.directions_deg[0])
         # the height field's coherent fraction is what its own lobe leaves: one fft lobe on a grid of λ/(3L) cells
         # per wavelength and incidence (the macro ones, and the facet table's nodes under a micro lobe)
-        probe = twoscale.Nano(surface=e.hf)
-        t_char = _best(lambda: probe.coherent_amplitude2(e.cos_max, e.lam_min), 1)
+        theta0 = e.light.directions_deg[0][0]
+        t_char = _best(lambda: twoscale.field_scattered_albedo(e.hf, theta0, e.lam_min), 2)
         hf_info.update(smp=smp, direct_term=direct_term, no_direct=no_direct)
         e.metrics.update(height_field_samples=smp.size, opencl=direct_term is not None, direct_term_s=direct_term,
                          coherent_fraction_s=t_char)
@@ -701,7 +701,10 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
         if not hf_solvers:
             costs[(dname, e.solver)] = base
             continue
-        base += twoscale.field_albedo_evaluations(e.micro, grids[0], n_eval) * n_w * t_char
+        n_field = twoscale.field_albedo_evaluations(
+            e.micro, grids[0], direction_from_angles(*np.asarray(e.light.directions_deg, dtype=float).T),
+            extra=n_eval - len(e.light.directions_deg))
+        base += n_field * n_w * t_char
         # the incoherent lobe is U − χ U_flat: the height field's transforms plus one for the flat patch
         costs[(dname, "fft")] = base + n_eval * fft_solver_units(smp, wi0, grids, w_eval) * e.cm.fft_unit
         if direct_term is not None:
