@@ -330,3 +330,23 @@ def test_polarized_two_scale_mirror_reflects_rs_and_rp():
     avg, unpol = 0.5 * (L["s"].total + L["p"].total), L["unpolarized"].total
     assert np.max(np.abs(avg - unpol)) < 1e-5 * unpol.max()
     assert 0.5 * (L["s"].albedo()[0] + L["p"].albedo()[0]) == pytest.approx(L["unpolarized"].albedo()[0], rel=1e-5)
+
+
+@pytest.mark.parametrize("alpha", [0.0, 0.08, 0.3])
+def test_field_albedo_evaluations_counts_the_lobes_evaluate_computes(alpha, monkeypatch):
+    """The cost model's count of a height field's coherent-fraction lobes (planner, time estimates) is the number
+    :func:`twoscale.evaluate` computes per wavelength: the macro incidence plus the facet table's nodes under the
+    micro lobe's light."""
+    calls = []
+    real = twoscale.field_scattered_albedo
+    monkeypatch.setattr(twoscale, "field_scattered_albedo", lambda *a, **k: calls.append(a[2]) or real(*a, **k))
+    grid = DirectionGrid.hemisphere(64)
+    wi = direction_from_angles(40.0, 0.0)
+    micro = twoscale.Micro(alpha=alpha, ndf="beckmann")
+    hf = surfaces.gaussian(20e-9, 1.5e-6, 64 * 137.5e-9, 64, 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", scatter.DiffractionWarning)
+        twoscale.evaluate(wi, [450.0, 600.0], "Al", micro, twoscale.Nano(surface=hf), grid, solver="fft", kd=0)
+    expected = twoscale.field_albedo_evaluations(micro, grid, wi)
+    assert calls.count(450.0) == calls.count(600.0) == expected
+    assert expected == 1 if alpha == 0.0 else expected > 1
