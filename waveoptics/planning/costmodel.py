@@ -19,7 +19,7 @@ from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g, series_terms
 from ..units import direction_from_angles
 
-__all__ = ['CostModel', 'fft_units', 'fft_solver_units', 'psd_terms', 'calibrate', 'calibrate_direct', 'calibration', 'direct_calibration']
+__all__ = ['CostModel', 'fft_units', 'fft_solver_units', 'psd_terms', 'band_table_time', 'calibrate', 'calibrate_direct', 'calibration', 'direct_calibration']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Cost model, calibrated on this machine once per process
@@ -94,6 +94,19 @@ def fft_solver_units(smp, wi, grids, wavelengths_nm) -> float:
 def psd_terms(sigma_m: float, wavelength_nm: float) -> int:
     """Series terms :func:`waveoptics.scatter.scattered_lobe` sums at most: those of its largest g = (2kσ)²."""
     return series_terms(roughness_g(sigma_m, 2.0, wavelength_nm))
+
+
+def band_table_time(model, wavelength_nm: float, material=None, theta_deg: float = 30.0) -> float:
+    """Seconds to build the band-limited series of *model* at *wavelength_nm* (nm) with the albedo table its
+    coherent fraction needs, timed once past the cache on this machine. Its cost depends on the model (the radial
+    grid follows its length scale, the terms its σ) by 2× and more between the PSDs of the example scenes, which
+    the calibration's one model (:attr:`CostModel.band_wl`) cannot follow; the shortest wavelength is the dearest."""
+    from ..scatter.band import _band_series
+
+    def build():
+        _band_series.__wrapped__(model, float(wavelength_nm), None, 512).scattered_albedo(theta_deg,
+                                                                                            material=material)
+    return _best(build, 1)
 
 
 @functools.lru_cache(maxsize=1)

@@ -2,7 +2,7 @@
 timed once per machine) applied to a ``simulate``/``compare`` request or a ``scatter`` run, so that the command
 line can warn before a long wait (issue 17: "long ones warn with the estimate").
 
-The estimates use the same terms as the planner's (docs/planning.md measures them against run times: within 1.5×
+The estimates use the same terms as the planner's (docs/planning.md measures them against run times: within 3×, 1.1–1.2× on the scenes that diffract
 on this machine's example scenes); they cover the lobes and the sphere table, not the writing of images.
 """
 from __future__ import annotations

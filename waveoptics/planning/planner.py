@@ -80,7 +80,7 @@ from ..scatter.grid import DirectionGrid
 from ..scatter.series import roughness_g
 from ..simulate import sphere_evaluations
 from ..units import direction_from_angles, parse_length
-from .costmodel import CostModel, _best, calibration, direct_calibration, fft_solver_units, psd_terms
+from .costmodel import CostModel, _best, band_table_time, calibration, direct_calibration, fft_solver_units, psd_terms
 from .decisions import (
     LAMBDA_REF_NM,
     ORDER_EFFICIENCY_MIN,
@@ -676,6 +676,9 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
     n_w = max(e.w_sim.size, 1)
     w_eval = e.w_sim if e.w_sim.size else np.array([LAMBDA_REF_NM])
     terms = psd_terms(e.nano.model.sigma, e.lam_min) if e.solver == "psd" else None
+    if terms is not None:
+        t_band = band_table_time(e.nano.model, e.lam_min, e.mat, e.light.directions_deg[0][0])
+        e.metrics.update(band_table_s=t_band)
     hf_solvers = e.diffraction and e.solver in (None, "fft", "direct")
     hf_info = {"hf_solvers": hf_solvers}
     if hf_solvers:
@@ -694,8 +697,8 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
     for dname, grids in options.items():
         cells = [g.n_u * g.n_v for g in grids]
         base = n_eval * e.cm.evaluation(cells, n_w, diffuse=e.diffuse, psd_terms=terms, nano_lobe=hf_solvers)
-        if terms is not None:   # the band tables, once per wavelength for the whole entry
-            base += e.cm.band_tables(n_w)
+        if terms is not None:   # the band tables, once per wavelength for the whole entry, timed on this model
+            base += n_w * t_band
         if dname == "views" and e.micro.alpha >= 0.75 * 2.0 / N:  # a patch normalizes its micro lobe on the grid
             base += n_eval * len(grids) * N * N * e.cm.cell
         if not hf_solvers:
