@@ -251,7 +251,8 @@ def build(tmp: Path) -> str:
           "* Timings are this machine's; the calibration is timed once per machine (and after an upgrade), so "
           "estimates do not follow a machine's later load; `--recalibrate` re-times it. A calibration timed while "
           "the machine was busy inflates every later estimate: one kept here from a test run put the haze scene at "
-          "18 s for a 4.8 s run until it was re-timed.",
+          "18 s for a 4.8 s run until it was re-timed. A calibration timed while the load average exceeds the "
+          "CPU count is therefore used by its process only and not kept (`planning.machine_busy`).",
           "* The first plan of a scene in a process imports the numerical libraries (colour-science alone imports "
           "matplotlib and takes about 2 s here), which keeps it above 1 s; only a cached plan answers below it.", "",
           f"*Page generated in {time.perf_counter() - t_start:.0f} s.*", ""]

@@ -20,6 +20,7 @@ def cache_dir(tmp_path, monkeypatch):
 
 
 def test_calibration_is_timed_once_per_machine(cache_dir, monkeypatch):
+    monkeypatch.setattr(costmodel, "machine_busy", lambda: False)
     first = costmodel.calibration()
     assert list(cache_dir.glob("calibration-*.json"))
 
@@ -30,6 +31,19 @@ def test_calibration_is_timed_once_per_machine(cache_dir, monkeypatch):
     assert costmodel.calibration() == first
     with pytest.raises(AssertionError, match="calibrated again"):
         costmodel.calibration(recalibrate=True)
+
+
+def test_a_busy_machine_does_not_keep_its_timings(cache_dir, monkeypatch):
+    """A cost model timed while more work than CPUs ran serves that process only: a calibration kept from a test
+    run once put a 4.8 s scene at 18 s in every later plan."""
+    monkeypatch.setattr(costmodel.os, "getloadavg", lambda: (64.0 * (costmodel.os.cpu_count() or 1), 0.0, 0.0))
+    assert costmodel.machine_busy()
+    cm = costmodel.calibration()
+    assert cm.cell_wl >= 0 and not list(cache_dir.glob("calibration-*.json"))
+    monkeypatch.setattr(costmodel.os, "getloadavg", lambda: (0.0, 0.0, 0.0))
+    assert not costmodel.machine_busy()
+    assert costmodel.calibration() == cm          # the same process's timings, now kept
+    assert list(cache_dir.glob("calibration-*.json"))
 
 
 def test_machine_key_follows_what_timings_depend_on(monkeypatch):
