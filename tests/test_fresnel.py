@@ -119,3 +119,27 @@ def test_facet_polarized_reflectance_by_projecting_the_field():
             ref = float(rs) * float(field @ t_s) ** 2 + float(rp) * float(field @ t_p) ** 2
             got = float(fresnel.F_facet_polarized(wi, wo, eta, pol))
             assert got == pytest.approx(ref, rel=1e-12)
+
+
+def test_relative_facet_fresnel_is_the_facet_reflectance_over_the_specular_one():
+    """RelativeFacetFresnel (the weight of a nano lobe's light in the share it scatters): 1 in the mirror direction
+    for unpolarized, s and p light, and F(θ_h)/F(θ_i) elsewhere, with F from the Fresnel equations written here
+    (Born & Wolf §13.4) for n = 1.5 + 0.02i."""
+    from waveoptics.materials import RelativeFacetFresnel, get_material
+
+    mat = get_material("1.5+0.02j")
+    n = 1.5 + 0.02j
+
+    def F(c):
+        t = np.sqrt(n * n - (1 - c * c))
+        return 0.5 * (abs((c - t) / (c + t)) ** 2 + abs((n * n * c - t) / (n * n * c + t)) ** 2)
+
+    wi = np.array([np.sin(0.6), 0.0, np.cos(0.6)])
+    mirror = wi * np.array([-1.0, -1.0, 1.0])
+    for pol in ("unpolarized", "s", "p"):
+        assert float(RelativeFacetFresnel(mat, pol).at(wi, mirror, 550.0)) == pytest.approx(1.0, abs=1e-12)
+    wo = np.array([0.3, 0.4, np.sqrt(1 - 0.25)])
+    h = (wi + wo) / np.linalg.norm(wi + wo)
+    ratio = float(RelativeFacetFresnel(mat).at(wi, wo, 550.0))
+    assert ratio == pytest.approx(F(float(h @ wi)) / F(wi[2]), rel=1e-9)
+    assert float(RelativeFacetFresnel(None).at(wi, wo, 550.0)) == 1.0
