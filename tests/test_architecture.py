@@ -1,6 +1,6 @@
 """The shape of the package (as prysm's tests/test_no_direct_numpy_scipy.py guards its own): sub-packages import
 only downward in the documented layer order, no library error names a command-line flag, functions stay short,
-every physics citation resolves inside the repository, kernels live inside the package, public modules declare
+every physics citation resolves inside the repository, kernels live in the top-level ``kernels/`` folder, public modules declare
 ``__all__``, and the layer table here is the one docs/architecture.md shows.
 """
 from __future__ import annotations
@@ -105,9 +105,10 @@ def test_physics_citations_resolve_inside_the_repository():
     assert not outside, f"files pointing outside the repository: {outside}"
 
 
-def test_kernels_live_inside_the_package():
-    assert sorted(p.name for p in (PKG / "kernels").glob("*.cl")), "no kernels in waveoptics/kernels"
-    assert not (ROOT / "kernels").exists(), "a second kernel directory at the repository root"
+def test_kernels_live_in_the_top_level_kernels_folder():
+    """The design card: OpenCL sources in ``kernels/`` beside ``waveoptics/``, none inside the package tree."""
+    assert sorted(p.name for p in (ROOT / "kernels").glob("*.cl")), "no kernels in kernels/"
+    assert not (PKG / "kernels").exists(), "a second kernel directory inside the package"
 
 
 @pytest.mark.parametrize("path", [p for p in MODULES if not p.name.startswith("_") and "cli" not in p.parts],

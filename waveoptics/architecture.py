@@ -12,7 +12,7 @@ __all__ = ["LAYERS", "layer_of", "waveoptics_imports"]
 
 #: (layer name, modules or sub-packages of waveoptics in it), bottom first
 LAYERS = (
-    ("core", ("errors", "units", "vocabulary", "runtime", "io", "kernels", "architecture", "cache", "schemas")),
+    ("core", ("errors", "units", "vocabulary", "runtime", "io", "architecture", "cache", "schemas")),
     ("materials", ("materials",)),
     ("colour", ("colour",)),
     ("surfaces", ("surfaces",)),

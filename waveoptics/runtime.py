@@ -12,7 +12,8 @@ With no spec the first GPU wins, else the PoCL CPU device, else any device.
 
 Programs
 --------
-Kernel sources live inside the package, in ``waveoptics/kernels/*.cl`` and ``*.h``.
+Kernel sources live in the repository's top-level ``kernels/`` folder (``*.cl``, ``*.h``), shipped in the wheel as
+``waveoptics/kernels``.
 :func:`build_program` builds each (context, file, options) once and keeps it; the kernel directory is on the
 include path so kernels can ``#include "wo_common.h"``, and pyopencl adds its own include directory so
 ``#include <pyopencl-complex.h>`` works. A failed build raises with the kernel file name and the build log.
@@ -39,12 +40,20 @@ INSTALL_HINT = ("no OpenCL platform found; install a CPU runtime with 'apt-get i
 
 
 def kernel_dir() -> Path:
-    """Directory holding the ``.cl`` and ``.h`` sources: ``waveoptics/kernels`` inside the package (found with
-    :func:`importlib.resources.files`, as pyopencl and silx find theirs)."""
-    path = Path(str(resources.files("waveoptics") / "kernels"))
-    if not path.is_dir():
-        raise WaveopticsError(f"kernel sources not found: {path} is missing from the installed package")
-    return path
+    """Directory holding the ``.cl`` and ``.h`` sources.
+
+    They live in the repository's top-level ``kernels/`` folder; the wheel carries them inside the package as
+    ``waveoptics/kernels`` (hatch ``force-include``), found with :func:`importlib.resources.files` as pyopencl and
+    silx find theirs. A source checkout or an editable install reads ``kernels/`` beside the package directory.
+    """
+    packaged = Path(str(resources.files("waveoptics") / "kernels"))
+    if packaged.is_dir():
+        return packaged
+    checkout = Path(__file__).resolve().parent.parent / "kernels"
+    if checkout.is_dir():
+        return checkout
+    raise WaveopticsError(f"kernel sources not found: neither {packaged} (installed package) nor {checkout} "
+                          "(source checkout) exists")
 
 
 def kernel_source(filename: str) -> str:

@@ -1,4 +1,4 @@
-/* Fresnel reflectance, device functions (twin of waveoptics/fresnel.py).
+/* Fresnel reflectance, device functions (twin of waveoptics/materials/fresnel.py).
  * eta = n + i k is the complex index of the transmitting medium relative to the incident one
  * (exp(-i w t) convention, k >= 0 absorbs). References: Born & Wolf, Principles of Optics, sec. 1.5.2 and 14.2;
  * pbrt-v4 FrComplex.
