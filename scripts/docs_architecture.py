@@ -102,7 +102,9 @@ def main() -> None:
              "one module per physical idea. Every simulation is described by one request type "
              "(`waveoptics.request.SimulationRequest`) that the CLI, the Python API, scene files, the planner and "
              "the Dask tasks all build, so its defaults and validation live once. Library errors name the field "
-             "(`micro_alpha`); only the CLI writes them as its flags (`--micro-alpha`).", "",
+             "(`micro_alpha`); only the CLI writes them as its flags (`--micro-alpha`). The OpenCL sources live in the "
+             "top-level `kernels/` folder beside `waveoptics/` (the wheel carries them as `waveoptics/kernels`); each "
+             "kernel has a NumPy twin of the same name in the module that launches it.", "",
              "![layers](img/architecture.png)", "",
              "## Layers", "", "| layer | members | imports from |", "|---|---|---|"]
     for name, members in LAYERS:
