@@ -4,7 +4,10 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test setup clean docs bench
+.PHONY: demo test test-fast setup clean docs bench
+
+# pytest-xdist workers: one per core (2 on CI)
+JOBS ?= auto
 
 setup: $(STAMP)
 
@@ -23,7 +26,11 @@ demo: $(STAMP)
 	$(VENV)/bin/waveoptics render --material gold --micro-alpha 0.2 -o out/render --overwrite
 
 test: $(STAMP)
-	$(PY) -m pytest -q -ra
+	$(PY) -m pytest -q -ra -n $(JOBS)
+
+# the edit loop: everything but the tests marked slow (whole pipelines, the Dask cluster, wheel builds), <= 2 min
+test-fast: $(STAMP)
+	$(PY) -m pytest -q -ra -n $(JOBS) -m "not slow"
 
 docs: $(STAMP)
 	$(PY) scripts/make_docs.py

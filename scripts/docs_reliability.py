@@ -81,7 +81,7 @@ def run_bad_inputs():
 
 
 #: the round-two tests of issue 17: regressions per class, whole output sets under SIGKILL, the CLI fuzz test
-ROUND_TWO = ("test_reliability_round2.py", "test_output_sets.py", "test_cli_fuzz.py")
+ROUND_TWO = ("test_failure_classes.py", "test_output_sets.py", "test_cli_fuzz.py")
 
 
 def run_lost_tests(files=("test_bad_input.py",), k=LOST_TESTS):
@@ -218,7 +218,7 @@ def render(cases, props, bads, lost, device, round_two=()) -> str:
     FUZZ_EXAMPLES = fuzz.EXAMPLES
     draws = len(fuzz.BASE) * FUZZ_EXAMPLES
     L += ["## Round two: every class of failure, whole output sets, a fuzzed CLI", "",
-          "From `tests/test_reliability_round2.py` (one regression test per class of failure found by an adversarial "
+          "From `tests/test_failure_classes.py` (one regression test per class of failure found by an adversarial "
           "user), `tests/test_output_sets.py` (a child process kills itself with SIGKILL while staging and before "
           "each move of the commit; what is left is the whole earlier set, or a directory without its manifest "
           "whose journal the next run replays, never a mix) and `tests/test_cli_fuzz.py` (hypothesis, derandomized: "

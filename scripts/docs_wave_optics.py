@@ -481,7 +481,7 @@ ens = scatter.scatter(lambda s: surfaces.gaussian(500e-9, 3.3e-6, 32e-6, 256, se
 ```
 Low level: `samples(hf, window, detrend)`, `phase_coefficients`, `kirchhoff_U` (NumPy twin) /
 `kirchhoff_U_cl` (OpenCL), `kirchhoff_phase` / `kirchhoff_phase_cl`, `field_fft(smp, wi, grid, λ, order)`,
-`fft_plan`, `coherent_amplitude`, `kirchhoff_factor`, `brdf_from_field`, `integrate`, `split_patch`,
+`fft_plan`, `coherent_amplitude`, `brdf_from_field`, `integrate`, `split_patch`,
 `write_scatter`. Solvers are chosen by name from `scatter.SOLVERS`.
 
 ### Command line

@@ -19,7 +19,6 @@ CLI. Each case that failed before this catalogue existed says so in ``fixed`` (w
 """
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import io
 import re
@@ -43,6 +42,8 @@ from waveoptics.units import direction_from_angles
 from waveoptics.cli import build_parser, command_parser
 from waveoptics.cli._common import field_flags
 from waveoptics.errors import FieldError
+
+from cli_helpers import run_cli
 
 LAM = 500.0                       # nm
 L = LAM * 1e-9                    # m
@@ -1137,21 +1138,6 @@ def snapshot(root: Path) -> dict:
     """{relative path: sha1} of every file under *root* (to prove that nothing appeared or changed)."""
     return {str(p.relative_to(root)): hashlib.sha1(p.read_bytes()).hexdigest()
             for p in sorted(root.rglob("*")) if p.is_file()}
-
-
-def run_cli(argv) -> tuple[int, str, str, list]:
-    """Run ``waveoptics ARGV`` in-process: (exit code, stdout, stderr, Python warnings raised)."""
-    from waveoptics.cli import main
-
-    out, err = io.StringIO(), io.StringIO()
-    with warnings.catch_warnings(record=True) as caught, contextlib.redirect_stdout(out), \
-            contextlib.redirect_stderr(err):
-        warnings.simplefilter("always")
-        try:
-            rc = main(list(argv))
-        except SystemExit as exc:  # argparse errors
-            rc = exc.code if isinstance(exc.code, int) else 1
-    return rc, out.getvalue(), err.getvalue(), [str(w.message) for w in caught]
 
 
 def _prepare(bad: BadInput, tmp: Path) -> dict:

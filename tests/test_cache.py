@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from hard_cases import run_cli
+from cli_helpers import run_cli
 from waveoptics import cache
 from waveoptics.planning import costmodel
 

@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-from hard_cases import run_cli
+from cli_helpers import run_cli
 from waveoptics import brdf, scatter, surfaces
 from waveoptics.errors import WaveopticsError
 from waveoptics.units import direction_from_angles

@@ -11,7 +11,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
-from hard_cases import run_cli
+from cli_helpers import run_cli
 from waveoptics import surfaces
 from waveoptics.renderers import glints
 

@@ -11,7 +11,7 @@ pytest.importorskip("SurfaceTopography")
 from SurfaceTopography import Topography  # noqa: E402
 from SurfaceTopography.IO import readers  # noqa: E402
 
-from hard_cases import run_cli  # noqa: E402
+from cli_helpers import run_cli  # noqa: E402
 from waveoptics import surfaces  # noqa: E402
 from waveoptics.cli import build_parser, command_parser  # noqa: E402
 from waveoptics.surfaces.formats import FORMATS  # noqa: E402

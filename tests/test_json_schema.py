@@ -5,7 +5,7 @@ import pytest
 
 jsonschema = pytest.importorskip("jsonschema")
 
-from hard_cases import run_cli  # noqa: E402
+from cli_helpers import run_cli  # noqa: E402
 from waveoptics import surfaces  # noqa: E402
 from waveoptics.schemas import SCHEMAS, schema, validate  # noqa: E402
 

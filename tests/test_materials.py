@@ -116,7 +116,7 @@ def test_f0_of_a_constant_index_is_exact():
 def test_cli_f0_compare():
     import json
 
-    from hard_cases import run_cli
+    from cli_helpers import run_cli
 
     rc, out, err, _ = run_cli(["f0", "--compare", "Au", "Cu", "--json"])
     assert rc == 0, err

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from hard_cases import run_cli
+from cli_helpers import run_cli
 from waveoptics import brdf, surfaces
 from waveoptics.brdf import chi2_test
 

@@ -84,7 +84,7 @@ def test_cli_multiple_scattering_white_furnace_and_values():
     refused where it does not apply."""
     import json
 
-    from hard_cases import run_cli
+    from cli_helpers import run_cli
 
     for alpha in ("0.1", "0.5", "1.0"):
         rc, out, err, _ = run_cli(["brdf", "--model", "microfacet", "--fresnel", "one", "--alpha", alpha,
@@ -112,7 +112,7 @@ def test_cli_multiple_scattering_white_furnace_and_values():
 def test_cli_disney_diffuse_is_burley():
     import json
 
-    from hard_cases import run_cli
+    from cli_helpers import run_cli
 
     base = ["brdf", "--model", "microfacet", "--ior", "1.5", "--alpha", "0.3", "--incident", "30", "--outgoing",
             "40,180", "--kd", "0.5", "--diffuse-roughness", "0.7", "--json"]
@@ -160,7 +160,7 @@ def test_two_scale_multiple_scattering_sampling_passes_chi2():
 def test_cli_two_scale_multiple_scattering():
     import json
 
-    from hard_cases import run_cli
+    from cli_helpers import run_cli
 
     argv = ["brdf", "--model", "twoscale", "--material", "Au", "--micro-alpha", "0.8", "--nano",
             "abc:sigma=10nm,B=2um,C=2.6", "--incident", "40", "--albedo", "--wavelengths", "550", "--json"]

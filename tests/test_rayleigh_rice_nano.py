@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from hard_cases import run_cli
+from cli_helpers import run_cli
 from waveoptics import brdf, scatter, surfaces
 from waveoptics.brdf import twoscale
 from waveoptics.materials import get_material

@@ -249,7 +249,7 @@ def test_rgl_export_refuses_to_replace_without_overwrite(tmp_path):
 def _cli(argv):
     import sys
     sys.path.insert(0, os.path.dirname(__file__))
-    from hard_cases import run_cli
+    from cli_helpers import run_cli
 
     return run_cli(argv)
 

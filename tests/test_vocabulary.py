@@ -6,7 +6,7 @@ from collections import defaultdict
 
 import pytest
 
-from hard_cases import run_cli
+from cli_helpers import run_cli
 from waveoptics.cli import build_parser, command_parser
 from waveoptics.cli._options import OPTIONS, RENAMED
 

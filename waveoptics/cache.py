@@ -18,7 +18,7 @@ import platform
 import tempfile
 from pathlib import Path
 
-__all__ = ["cache_dir", "machine_key", "get", "put", "clear", "file_digest"]
+__all__ = ["cache_dir", "machine_key", "get", "put", "file_digest"]
 
 #: bump when the layout of an entry changes
 FORMAT = 1
@@ -106,17 +106,3 @@ def put(kind: str, key: str, value, *, keep: int = 64) -> None:
         os.replace(tmp, path)
     except OSError:
         pass   # a cache only saves time: an unwritable one is skipped
-
-
-def clear(kind: str | None = None) -> int:
-    """Remove this machine's cache files (of one *kind*, or all); the number removed."""
-    d = cache_dir()
-    pattern = f"{kind}-*.json" if kind else "*.json"
-    n = 0
-    for p in d.glob(pattern) if d.is_dir() else ():
-        try:
-            p.unlink()
-            n += 1
-        except OSError:
-            pass
-    return n

@@ -20,11 +20,11 @@ import numpy as np
 from colour import cctf_encoding  # colour-science (this package's own colour sub-package is imported below)
 
 from . import colour
-from .colour import reflectance_to_rgb_matrix as spectral_to_rgb_matrix
+from .colour import reflectance_to_rgb_matrix
 from .io import figures
 
 __all__ = ['sphere_geometry', 'tangent_frames', 'local_directions', 'PIXEL_CHUNK', 'render_sphere',
-           'spectral_to_rgb_matrix', 'render_sphere_environment', 'tonemap',
+           'render_sphere_environment', 'tonemap',
            'plot_spheres']
 
 def sphere_geometry(size: int):
@@ -120,7 +120,7 @@ def render_sphere_environment(brdf_fn, wavelengths_nm, env, *, size=128, spp=16,
     """
     w = np.asarray(wavelengths_nm, dtype=float)
     lam_s = float(w[np.argmin(np.abs(w - 555.0))]) if sample_wavelength_nm is None else float(sample_wavelength_nm)
-    M = spectral_to_rgb_matrix(w, illuminant)
+    M = reflectance_to_rgb_matrix(w, illuminant)
     n, on = sphere_geometry(size)
     n = n[on]
     t, b = tangent_frames(n)

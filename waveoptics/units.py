@@ -11,9 +11,9 @@ import re
 
 import numpy as np
 
-from .errors import FieldError, WaveopticsError
+from .errors import FieldError
 
-__all__ = ['LENGTH_UNITS', 'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'parse_direction', 'check_theta', 'direction_from_angles', 'angles_from_direction']
+__all__ = ['LENGTH_UNITS', 'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'parse_direction', 'check_theta', 'direction_from_angles']
 
 #: metres per unit
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "A": 1e-10}
@@ -193,11 +193,3 @@ def direction_from_angles(theta_deg, phi_deg=0.0) -> np.ndarray:
     p = np.radians(np.asarray(phi_deg, dtype=float))
     t, p = np.broadcast_arrays(t, p)
     return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
-
-
-def angles_from_direction(w) -> tuple[np.ndarray, np.ndarray]:
-    """Zenith and azimuth in degrees of unit vector(s) ``w[..., 3]``."""
-    w = np.asarray(w, dtype=float)
-    theta = np.degrees(np.arccos(np.clip(w[..., 2], -1.0, 1.0)))
-    phi = np.degrees(np.arctan2(w[..., 1], w[..., 0]))
-    return theta, phi

@@ -48,27 +48,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .models import K_kirchhoff, get_model
+from .models import get_model
 from .patch import Samples
 
-__all__ = ['kirchhoff_factor', 'cos_theta_d', 'brdf_from_field', 'coherent_amplitude']
+__all__ = ['cos_theta_d', 'brdf_from_field', 'coherent_amplitude']
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # The Kirchhoff factor and BRDF from a field
 # ----------------------------------------------------------------------------------------------------------------
-
-def kirchhoff_factor(wi, wo, wavelength_nm) -> np.ndarray:
-    """Obliquity and normalization |s|⁴ / (4 λ² cos θ_i cos θ_o (cos θ_i + cos θ_o)²), m⁻²: the ``kirchhoff``
-    entry of :data:`waveoptics.scatter.DIFFRACTION_MODELS` (f = F(θ_d) · factor · |U|² / A_w; zero at and below
-    the horizon).
-
-    References
-    ----------
-    .. [1] Beckmann & Spizzichino 1963; docs/physics.md §1 (checked there against the flat and σ ≫ λ limits).
-    """
-    return K_kirchhoff(np.asarray(wi, dtype=float), wo, wavelength_nm)
-
 
 def cos_theta_d(wi, wo) -> np.ndarray:
     """cos θ_d = ω_i · h = |ω_i + ω_o| / 2, the Fresnel angle of the half vector."""

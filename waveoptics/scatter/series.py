@@ -49,7 +49,7 @@ from scipy import special, stats
 from ..surfaces.psd import PSDModel
 from .models import K_kirchhoff, get_model
 
-__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'SeriesSum', 'series_sum', 'poisson_weights', 'roughness_g', 'series_terms', 'g_factor', 'coherent_fraction', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
+__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'SeriesSum', 'series_sum', 'poisson_weights', 'roughness_g', 'series_terms', 'coherent_fraction', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
 
 #: most terms of the series (:func:`scattered_lobe`)
 M_MAX = 48
@@ -198,11 +198,6 @@ def series_terms(g, m_max: int = M_MAX) -> int:
     < 1e-12 of the Poisson mass (at most *m_max*)."""
     g = float(g)
     return int(min(m_max, math.ceil(g + 8 * math.sqrt(g) + 10)))
-
-
-def g_factor(wi, wo, wavelength_nm, sigma):
-    """Roughness factor g = [kσ(cosθ_i + cosθ_o)]² of a direction pair (docs/physics.md §3); λ in nm, σ in m."""
-    return roughness_g(sigma, np.asarray(wi)[..., 2] + np.asarray(wo)[..., 2], wavelength_nm)
 
 
 def coherent_fraction(cos_theta_i, wavelength_nm, sigma):

@@ -1,4 +1,4 @@
-"""Issue 16: the tabulated NDF of a micro height field and the multiple-scattering compensation wherever a micro
+"""The tabulated NDF of a micro height field and the multiple-scattering compensation wherever a micro
 NDF is chosen — the grid model of ``simulate`` (library and command line), scene files and scene runs, and the
 two-scale point evaluation. References: the white furnace (F = 1), Beckmann's closed form for a Gaussian
 surface's slopes (α = 2σ/T, Beckmann & Spizzichino 1963), and Kulla & Conty's albedo (1 − E(μ_i)) F_ms."""
@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from hard_cases import run_cli
+from cli_helpers import run_cli
 from waveoptics import brdf, surfaces
 from waveoptics.brdf import twoscale
 from waveoptics.planning import load, plan_scene
