@@ -24,7 +24,8 @@ from .colour import reflectance_to_rgb_matrix
 from .io import figures
 
 __all__ = ['sphere_geometry', 'tangent_frames', 'local_directions', 'PIXEL_CHUNK', 'render_sphere',
-           'render_sphere_environment', 'tonemap',
+           'render_sphere_environment', 'KEY', 'EXPOSURE_MAX', 'key_exposure',
+           'percentile_exposure', 'tonemap',
            'plot_spheres']
 
 def sphere_geometry(size: int):
@@ -155,17 +156,51 @@ def render_sphere_environment(brdf_fn, wavelengths_nm, env, *, size=128, spp=16,
     return rgb, on
 
 
+#: the photographic key: the log-average luminance maps to this value (Reinhard et al. 2002)
+KEY = 0.18
+#: the largest automatic exposure, so that a nearly black image is not lifted into noise
+EXPOSURE_MAX = 4.0
+
+
+def key_exposure(rgb, mask=None, key: float = KEY) -> float:
+    """The automatic exposure of a linear RGB image: *key* over the log-average luminance of its lit pixels
+    (luminance > 1e-8, inside *mask* if given), at most :data:`EXPOSURE_MAX`; 1 for a black image. Every sphere
+    picture (simulate, its environment renders, ``render``) uses this one rule, so a pair of images shares it.
+
+    References
+    ----------
+    .. [1] E. Reinhard, M. Stark, P. Shirley, J. Ferwerda, "Photographic tone reproduction for digital images",
+       ACM TOG 21(3), 2002, eq. (1) (the log-average luminance and the key value 0.18).
+    """
+    Y = colour.luminance(np.maximum(np.asarray(rgb, dtype=float), 0.0))
+    if mask is not None:
+        Y = Y[np.asarray(mask, dtype=bool)]
+    lit = Y[Y > 1e-8]
+    if not lit.size:
+        return 1.0
+    return float(min(key / np.exp(np.mean(np.log(lit))), EXPOSURE_MAX))
+
+
+def percentile_exposure(images, mask=None, percentile: float = 99.0) -> float:
+    """One exposure for sparse images (glints): the brightest image's *percentile* of luminance (inside *mask*)
+    maps to 1. A log-average key would be set by the dark background and burn every glint out."""
+    peaks = []
+    for img in images:
+        Y = colour.luminance(np.maximum(np.asarray(img, dtype=float), 0.0))
+        peaks.append(float(np.percentile(Y[np.asarray(mask, dtype=bool)] if mask is not None else Y, percentile)))
+    peak = max(peaks)
+    return 1.0 / peak if peak > 0 else 1.0
+
+
 def tonemap(rgb, exposure: float | None = None):
     """Display sRGB in [0, 1] from linear RGB: Reinhard's global operator on luminance, then the sRGB curve.
 
-    *exposure* scales the input first (default: key 0.18 at the log-average luminance of the non-zero pixels).
+    *exposure* scales the input first (default: :func:`key_exposure` of the image).
     """
     rgb = np.maximum(np.asarray(rgb, dtype=float), 0.0)
     Y = colour.luminance(rgb)
     if exposure is None:
-        pos = Y[Y > 1e-8]
-        exposure = 0.18 / np.exp(np.mean(np.log(pos))) if pos.size else 1.0
-        exposure = min(exposure, 4.0)
+        exposure = key_exposure(rgb)
     Ys = Y * exposure
     scale = np.where(Y > 0, (Ys / (1 + Ys)) / np.maximum(Y, 1e-30), 0.0)
     out = rgb * scale[..., None]

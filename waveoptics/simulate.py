@@ -416,11 +416,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
                                                           f"{sim.params['illuminant']}"}, overwrite=True)
     _plot_hemispheres(rgb, rgb_mf, g, out / "brdf.png", sim)
     wave, mf, dE, mask = render_spheres(sim, sphere_size)
-    exposure = None
-    pos = (colour.luminance(wave))[mask]
-    pos = pos[pos > 1e-8]
-    if pos.size:
-        exposure = min(0.18 / float(np.exp(np.mean(np.log(pos)))), 4.0)
+    exposure = render.key_exposure(wave, mask)
     figures.save_png(out / "sphere_wave.png", render.tonemap(wave, exposure))
     figures.save_png(out / "sphere_microfacet.png", render.tonemap(mf, exposure))
     theta, phi = sim.params["incident_deg"]
@@ -454,9 +450,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
                                  "waveoptics_samples": f"{spp} BRDF + {spp} environment samples per pixel (MIS)"},
                          overwrite=True)
             imgs.append(img)
-        pos = colour.luminance(imgs[0])[on]
-        pos = pos[pos > 1e-8]
-        exp_env = min(0.18 / float(np.exp(np.mean(np.log(pos)))), 4.0) if pos.size else 1.0
+        exp_env = render.key_exposure(imgs[0], on)
         render.plot_spheres([render.tonemap(i, exp_env) for i in imgs],
                             ["two-scale (diffraction)", "microfacet only"], out / "sphere_env.png",
                             exposure=exp_env, light_deg=None)

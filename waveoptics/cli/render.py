@@ -83,7 +83,7 @@ def run_glints(args):
     from .. import colour, surfaces
     from ..errors import WaveopticsError
     from ..io import files
-    from ..render import plot_spheres, tonemap
+    from ..render import percentile_exposure, plot_spheres, tonemap
     from ..renderers import glints
     from ..units import parse_direction, parse_wavelengths
     from .brdf import _spacing
@@ -123,9 +123,7 @@ def run_glints(args):
     bar.close()
     on = r.on_field
     de = np.where(on, colour.delta_e2000(r.wave, r.geometric), 0.0)
-    # one exposure for both: the brighter image's 99th percentile of luminance on the field maps to 1 (glints are
-    # sparse, so a log-average key would be set by the dark background and burn every glint out)
-    exposure = 1.0 / max(float(np.percentile(colour.luminance(img[on]), 99)) for img in (r.wave, r.geometric))
+    exposure = percentile_exposure((r.wave, r.geometric), on)   # one exposure for both; glints are sparse
     with files.staged_outputs(outdir, out_names, last="summary.json") as stage:
         for name, img in (("glints_wave.exr", r.wave), ("glints_geometric.exr", r.geometric)):
             files.write_exr(stage / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
@@ -159,10 +157,10 @@ def run_render(args):
 
     import numpy as np
 
-    from .. import colour, lighting
+    from .. import lighting
     from ..errors import WaveopticsError
     from ..io import files
-    from ..render import plot_spheres, tonemap
+    from ..render import key_exposure, plot_spheres, tonemap
     from ..renderers import mitsuba as wm
     from ..renderers import rgl, scene
 
@@ -206,7 +204,7 @@ def run_render(args):
                             {"waveoptics": f"linear sRGB radiance, {args.variant}, {settings.spp} spp"})
         files.write_exr(stage / "delta_e.exr", {"Y": de}, {"waveoptics": "CIEDE2000 wave vs reference"})
         ref_name = ref["type"]
-        exposure = 0.18 / np.exp(np.mean(np.log(np.maximum(colour.luminance(images["reference"]), 1e-8))))
+        exposure = key_exposure(images["reference"], on)
         plot_spheres([tonemap(images["wave"], exposure), tonemap(images["reference"], exposure)],
                      [f"wave optics ({args.bsdf})\n{params['material']}, α = {params['alpha']:g}, "
                       f"{desc.get('nano') or 'surface'}", f"Mitsuba {ref_name}\nsame α and index"],
