@@ -59,6 +59,7 @@ from .io.figures import save_figure
 from .io.files import atomic_path, prepare_outdir, write_json
 from .runtime import get_runtime
 from .surfaces.heightfield import HeightField
+from .units import split_spec
 from .vocabulary import COST_BUDGET_S, COST_TARGET_ERROR
 
 __all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'REFERENCE_SOLVERS', 'DEFAULT_TARGET_ERROR', 'DEFAULT_BUDGET_S', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
@@ -142,19 +143,18 @@ def model_config(model: str, size="12.8um", samples=128, *, material=None, incid
 def parse_model(text: str) -> tuple[str, dict]:
     """``MODEL:key=value,...`` -> (model, {key: value}); values stay strings where they carry units. ``T`` is
     accepted for ``corr_length``, as in ``--nano`` text."""
-    kind, _, rest = str(text).strip().partition(":")
+    kind, items = split_spec(text)
     params = {}
-    for item in filter(None, (s.strip() for s in rest.split(","))):
-        key, eq, val = item.partition("=")
-        if not eq or not key.strip():
+    for key, val, item in items:
+        if not key:
             raise WaveopticsError(f"surface model parameter {item!r} is not allowed; write key=value, e.g. "
                                   "gaussian:sigma=20nm,corr_length=1um")
-        key = _GENERATOR_ALIASES.get(key.strip(), key.strip())
+        key = _GENERATOR_ALIASES.get(key, key)
         try:
             params[key] = float(val)
         except ValueError:
-            params[key] = val.strip()
-    return kind.strip().lower(), params
+            params[key] = val
+    return kind, params
 
 
 #: the --nano spelling of generator parameters (one vocabulary: T is the correlation length everywhere)

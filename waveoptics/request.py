@@ -42,7 +42,7 @@ from .brdf import NDFS, SHADOWINGS, twoscale
 from .errors import FieldError, WaveopticsError, unknown
 from .materials import get_material
 from .surfaces import HeightField
-from .units import check_theta, check_wavelengths, parse_length
+from .units import check_theta, check_wavelengths, parse_length, split_spec
 from .vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
@@ -91,16 +91,13 @@ def parse_nano(text: str) -> tuple[str, dict]:
     (str, dict)
         The model name and its parameters (lengths in m).
     """
-    s = str(text).strip()
-    model, _, rest = s.partition(":")
-    model = model.strip().lower()
+    model, items = split_spec(text)
     if model not in NANO_PARAMS:
         raise unknown("nano model", model, NANO_PARAMS, field="nano")
     params = {}
-    for item in filter(None, (p.strip() for p in rest.split(","))):
-        key, eq, val = item.partition("=")
-        key = _NANO_ALIASES.get(key.strip(), key.strip())
-        if not eq or key not in NANO_PARAMS[model]:
+    for key, val, item in items:
+        key = _NANO_ALIASES.get(key, key)
+        if not key or key not in NANO_PARAMS[model]:
             raise FieldError(f"{{nano}} {text!r}: parameter {item!r} is not allowed for {model}; "
                              f"use {', '.join(k + '=...' for k in NANO_PARAMS[model])}", "nano")
         if key in params:

@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import FieldError
 
-__all__ = ['LENGTH_UNITS', 'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'parse_direction', 'check_theta', 'direction_from_angles']
+__all__ = ['LENGTH_UNITS', 'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'parse_direction', 'check_theta', 'direction_from_angles', 'split_spec']
 
 #: metres per unit
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "A": 1e-10}
@@ -193,3 +193,16 @@ def direction_from_angles(theta_deg, phi_deg=0.0) -> np.ndarray:
     p = np.radians(np.asarray(phi_deg, dtype=float))
     t, p = np.broadcast_arrays(t, p)
     return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+
+
+def split_spec(text) -> tuple[str, list[tuple[str, str, str]]]:
+    """The ``MODEL:key=value,...`` grammar of every model option (``--nano``, a generator, a cost configuration):
+    (model name lower-cased, [(key, value, item), ...]) with *key* and *value* stripped and *item* the raw text of
+    the entry; an entry without ``=`` has an empty key and value and its own text as *item*, so each caller names
+    its own field in the error it raises."""
+    model, _, rest = str(text).strip().partition(":")
+    items = []
+    for item in filter(None, (p.strip() for p in rest.split(","))):
+        key, eq, val = item.partition("=")
+        items.append((key.strip(), val.strip(), item) if eq else ("", "", item))
+    return model.strip().lower(), items
