@@ -401,10 +401,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
     t0 = time.perf_counter()
     L = sim.lobes
     g = sim.grid
-    hdr = {k: str(v) for k, v in g.header().items()}
-    hdr.update({"waveoptics_incident_deg": " ".join(map(str, sim.params["incident_deg"])),
-                "waveoptics_material": sim.params["material"], "waveoptics_quantity": "BRDF f (1/sr), not x cos"})
-    hdr["waveoptics_unit"] = "1/sr (a BRDF, not multiplied by cos theta_o: values exceed 1 near sharp lobes)"
+    hdr = scatter.brdf_exr_header(g, sim.params["incident_deg"], sim.params["material"])
     io.write_spectral_exr(out / "brdf_spectral.exr", {float(lam): g.to_image(L.total[i]) for i, lam in
                                                       enumerate(sim.wavelengths_nm)}, header=hdr, overwrite=True)
     space = colour.space_name(space)

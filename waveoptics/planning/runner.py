@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import colour, io, render
+from .. import colour, io, render, scatter
 from ..brdf import twoscale
 from ..io import figures
 from ..scatter.grid import DirectionGrid
@@ -169,10 +169,7 @@ def execute(plan: Plan, outdir, *, overwrite: bool = False, device=None, progres
                 if e.directions == "hemisphere":
                     albedo[t] = {"light_deg": [th, ph], "albedo": L.albedo("total"),
                                  "rgb": colour.reflectance_to_rgb(L.albedo("total"), w, e.spd)}
-                    hdr = {k: str(v) for k, v in L.grid.header().items()}
-                    hdr.update(waveoptics_incident_deg=f"{th:g} {ph:g}", waveoptics_material=e.material.name,
-                               waveoptics_unit="1/sr (a BRDF, not multiplied by cos theta_o)",
-                               waveoptics_quantity="BRDF f (1/sr), not x cos", waveoptics_scene=sc.name)
+                    hdr = scatter.brdf_exr_header(L.grid, (th, ph), e.material.name, scene=sc.name)
                     if sc.output.spectral_brdf:
                         name = f"{p}_{t}_brdf_spectral.exr"
                         io.write_spectral_exr(stage / name, {float(lam): L.grid.to_image(L.total[i])

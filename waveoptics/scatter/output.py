@@ -11,7 +11,19 @@ from ..io.files import atomic_path, prepare_outdir, staged_outputs, write_json
 from ..io.spectral_exr import write_spectral_exr
 from .solvers import ScatterResult
 
-__all__ = ['plot_scatter', 'SCATTER_FILES', 'write_scatter']
+__all__ = ['plot_scatter', 'SCATTER_FILES', 'write_scatter', 'brdf_exr_header']
+
+
+def brdf_exr_header(grid, incident_deg, material: str, **extra) -> dict:
+    """The string attributes of every two-scale BRDF image (simulate's and a scene run's spectral and RGB BRDF
+    EXR): the direction grid's parametrization, the light's (θ, φ) in degrees, the material, the quantity and its
+    unit, plus *extra* attributes (``waveoptics_`` is prefixed to their names)."""
+    hdr = {k: str(v) for k, v in grid.header().items()}
+    hdr.update({"waveoptics_incident_deg": " ".join(f"{float(a):g}" for a in incident_deg),
+                "waveoptics_material": str(material), "waveoptics_quantity": "BRDF f (1/sr), not x cos",
+                "waveoptics_unit": "1/sr (a BRDF, not multiplied by cos theta_o: values exceed 1 near sharp lobes)"})
+    hdr.update({f"waveoptics_{k}": str(v) for k, v in extra.items()})
+    return hdr
 
 def plot_scatter(result: ScatterResult, path, *, overwrite: bool = True, max_lobes: int = 4):
     """PNG: the lobes at a few wavelengths (log scale, direction-cosine plane) and the fractions vs wavelength."""
