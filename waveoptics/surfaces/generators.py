@@ -116,15 +116,18 @@ def _rect_integral(psd, half_widths) -> float:
 
     if len(half_widths) == 1:
         a = half_widths[0]
-        return 2.0 * quad(lambda f: float(psd(np.array([f]))[0]), 0.0, a, limit=200, epsabs=0.0, epsrel=1e-10)[0]
+        return 2.0 * quad(lambda f: float(psd(np.array([f]))[0]), 0.0, a, limit=200, epsabs=0.0,
+                          epsrel=1e-10)[0]
     a, b = sorted(half_widths)
     corner = math.hypot(a, b)
 
     def integrand(f):
         arcs = math.pi / 2 - math.acos(min(1.0, a / f)) - math.acos(min(1.0, b / f)) if f > 0 else math.pi / 2
+        # guard: at the corner the two arcs meet; rounding must not make the length negative
         return float(psd(np.array([f]))[0]) * 4.0 * f * max(arcs, 0.0)
 
-    return sum(quad(integrand, lo, hi, limit=200, epsabs=0.0, epsrel=1e-10)[0] for lo, hi in ((0.0, a), (a, b), (b, corner)) if hi > lo)
+    return sum(quad(integrand, lo, hi, limit=200, epsabs=0.0, epsrel=1e-10)[0]
+               for lo, hi in ((0.0, a), (a, b), (b, corner)) if hi > lo)
 
 
 def _spectral(psd2d, psd1d, nx, ny, dx, dy, rng, sigma, *, renormalize: bool, exact_rms: bool):
