@@ -55,7 +55,7 @@ from .microfacet import specular
 from .ndf import ALPHA_MAX, ALPHA_MIN, NDFS
 from .quadrature import albedo, directional_albedo
 
-__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CORE_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'FACET_TAIL_SHARE', 'facet_incidences_deg', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
+__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'FACET_TAIL_SHARE', 'facet_incidences_deg', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
 
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
