@@ -106,15 +106,15 @@ def test_gaussian_profile_and_non_square_grids():
 
 
 def test_spectral_normalization_and_exact_rms():
-    """Ensemble mean square on the grid is σ² (default); without renormalization it is σ² × the resolved
-    fraction; exact_rms makes each realization exactly σ; every realization has zero mean."""
+    """Ensemble mean square on the grid is σ² × the resolved fraction (default: no rescale); renormalize=True
+    scales it to σ²; exact_rms makes each realization exactly σ; every realization has zero mean."""
     small = dict(sigma=SIG, corr_length=T, size=8 * T, samples=32)   # patch of only 8 T: 0.94 resolved
     frac = S.gaussian(**small, seed=0).meta["psd_variance_fraction"]
     assert 0.8 < frac < 0.99
     ms = np.mean([np.mean(S.gaussian(**small, seed=s).heights ** 2) for s in range(400)])
-    ms_raw = np.mean([np.mean(S.gaussian(**small, seed=s, renormalize=False).heights ** 2) for s in range(400)])
-    assert ms == pytest.approx(SIG**2, rel=0.05)
-    assert ms_raw == pytest.approx(frac * SIG**2, rel=0.05)
+    ms_re = np.mean([np.mean(S.gaussian(**small, seed=s, renormalize=True).heights ** 2) for s in range(400)])
+    assert ms == pytest.approx(frac * SIG**2, rel=0.05)
+    assert ms_re == pytest.approx(SIG**2, rel=0.05)
     hf = S.gaussian(SIG, T, N * DX, N, 7, exact_rms=True)
     assert np.sqrt(np.mean(hf.heights**2)) == pytest.approx(SIG, rel=1e-12)
     assert abs(hf.heights.mean()) < 1e-12 * SIG
@@ -258,10 +258,8 @@ def test_psd_matches_model_and_fits_recover_parameters():
 
     def one(seed):
         g = S.fit_psd(S.gaussian(SIG, T, N * DX, N, seed), "gaussian")
-        ehf = S.exponential(SIG, T, 1024 * DX, 1024, seed)
-        e = S.fit_psd(ehf, "exponential")
-        # the grid resolves only part of this slowly falling spectrum; renormalization scales S by 1/fraction
-        e["sigma_m"] *= math.sqrt(ehf.meta["psd_variance_fraction"])
+        # the grid resolves only part of this slowly falling spectrum, and holds S exactly where it does
+        e = S.fit_psd(S.exponential(SIG, T, 1024 * DX, 1024, seed), "exponential")
         p = S.fit_psd(S.gaussian(SIG, T, 8192 * DX, (8192, 1), seed), "gaussian")
         return [g["sigma_m"], g["corr_length_m"], g["beckmann_alpha"], e["sigma_m"], e["corr_length_m"],
                 p["sigma_m"], p["corr_length_m"]]

@@ -26,7 +26,7 @@ from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, ma
 from .scatter.grid import DirectionGrid, integrate
 from .units import direction_from_angles
 
-__all__ = ['SPHERE_THETAS_DEG', 'memory_estimate', 'check_request_memory', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'SUMMARY_UNITS', 'output_files',
+__all__ = ['SPHERE_THETAS_DEG', 'memory_estimate', 'check_request_memory', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'SUMMARY_UNITS', 'output_files', 'nano_field',
            'render_spheres',
            'plane_of_incidence', 'write_outputs']
 
@@ -270,6 +270,33 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
                       band=nano_band(nano_obj, w, theta, phi))
 
 
+def nano_field(nano: twoscale.Nano | None) -> dict | None:
+    """The nano height field's σ, asked and realized, and the share of the asked σ² its grid cannot hold.
+
+    ``sigma_realized_m`` is the rms of this realization's valid heights about their mean (what scatters);
+    ``sigma_requested_m`` the generator's σ (from the field's ``meta``; null for a measured field). A generated
+    field keeps S(f) exactly where its grid resolves it (docs/wave-optics.md § Height fields), so the rest of σ²
+    is missing from it: ``variance_below_grid_share`` at wavelengths longer than the patch,
+    ``variance_above_nyquist_share`` beyond the grid's Nyquist square (there, with spacing ≤ λ/4, it could not
+    scatter), ``variance_beyond_grid_share`` their sum, each a share of σ_requested² (all three null, with
+    σ_requested, for a measured field and for a cropped, split, summed or explicitly rescaled generated one). Heights
+    are reported as they are: no field, generated, loaded or measured, is rescaled on the way to the solvers.
+    None without a height field.
+    """
+    if nano is None or nano.surface is None:
+        return None
+    meta = nano.surface.meta
+    generated = (meta.get("model") in surfaces.PSD_MODELS and "variance_below_grid_share" in meta
+                 and not meta.get("renormalize") and not meta.get("exact_rms")
+                 and "cropped_from" not in meta and "cropped" not in meta and "split_cutoff_period_m" not in meta)
+    below = float(meta["variance_below_grid_share"]) if generated else None
+    above = float(meta["variance_above_nyquist_share"]) if generated else None
+    return {"sigma_requested_m": float(meta["sigma"]) if generated else None,
+            "sigma_realized_m": float(nano.sigma),
+            "variance_beyond_grid_share": None if below is None else below + above,
+            "variance_below_grid_share": below, "variance_above_nyquist_share": above}
+
+
 def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_deg: float = 0.0) -> dict:
     """How much of the nano roughness can scatter at the incident direction, per wavelength (docs/physics.md §9).
 
@@ -483,6 +510,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
                         "max": float(dE[mask].max()) if mask.any() else 0.0},
         "solver": sim.params["solver"],
         "nano_band": sim.band,
+        **({"nano_field": nano_field(sim.nano)} if sim.nano is not None and sim.nano.surface is not None else {}),
         **({"nano_polarized_albedo": polarized} if polarized is not None else {}),
         "timings_s": timings,
         "parameters": sim.params,

@@ -59,9 +59,10 @@ def register(sub):
     for name, (flag, text) in _MODEL_OPTIONS.items():
         g.add_argument(flag, dest=f"m_{name}", metavar="VALUE", help=text)
     g.add_argument("--exact-rms", action="store_true",
-                   help="rescale this realization to exactly σ (default: ensemble rms σ)")
-    g.add_argument("--no-renormalize", action="store_true",
-                   help="keep the PSD as given even where the grid resolves only part of σ²")
+                   help="rescale this realization to exactly σ (default: no rescale, the PSD exactly as given)")
+    g.add_argument("--renormalize", action="store_true",
+                   help="scale the spectrum so the ensemble rms on this grid is σ (moves the variance the grid "
+                        "cannot hold into resolved frequencies; default: the PSD exactly as given)")
     add_output(g, metavar="FILE", note=HEIGHT_FIELD_OUTPUT)
     add_common(g, device=False)
     g.set_defaults(func=run_generate, command="surface generate")
@@ -195,9 +196,9 @@ def _model_params(args) -> dict:
         raise WaveopticsError(f"--seed is not an option of generator {args.generator!r} (it is deterministic)")
     if "exact_rms" in accepted:
         params["exact_rms"] = args.exact_rms
-        params["renormalize"] = not args.no_renormalize
-    elif args.exact_rms or args.no_renormalize:
-        raise WaveopticsError(f"--exact-rms/--no-renormalize apply to random spectral models, not {args.generator!r}")
+        params["renormalize"] = args.renormalize
+    elif args.exact_rms or args.renormalize:
+        raise WaveopticsError(f"--exact-rms/--renormalize apply to random spectral models, not {args.generator!r}")
     return params
 
 

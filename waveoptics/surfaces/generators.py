@@ -104,18 +104,55 @@ def _rng_seed(seed):
     return np.random.default_rng(seed), seed
 
 
+def _rect_integral(psd, half_widths) -> float:
+    """∫ S(|f|) over the rectangle |f_x| < a, |f_y| < b (*half_widths* (a, b), 1/m), or ∫ S over |f| < a for a
+    profile (*half_widths* (a,)).
+
+    A radial S integrates over a rectangle as ∫ S(f) ℓ(f) df with ℓ(f) the length of the circle of radius f
+    inside it: 2πf up to min(a, b), 4f (π/2 − arccos(a/f) − arccos(b/f)) beyond (arccos of a ratio above 1 is 0),
+    0 beyond the corner (adaptive Gauss-Kronrod, scipy.integrate.quad, with the corners as break points).
+    """
+    from scipy.integrate import quad
+
+    if len(half_widths) == 1:
+        a = half_widths[0]
+        return 2.0 * quad(lambda f: float(psd(np.array([f]))[0]), 0.0, a, limit=200, epsabs=0.0,
+                          epsrel=1e-10)[0]
+    a, b = sorted(half_widths)
+    corner = math.hypot(a, b)
+
+    def integrand(f):
+        arcs = math.pi / 2 - math.acos(min(1.0, a / f)) - math.acos(min(1.0, b / f)) if f > 0 else math.pi / 2
+        # guard: at the corner the two arcs meet; rounding must not make the length negative
+        return float(psd(np.array([f]))[0]) * 4.0 * f * max(arcs, 0.0)
+
+    return sum(quad(integrand, lo, hi, limit=200, epsabs=0.0, epsrel=1e-10)[0]
+               for lo, hi in ((0.0, a), (a, b), (b, corner)) if hi > lo)
+
+
 def _spectral(psd2d, psd1d, nx, ny, dx, dy, rng, sigma, *, renormalize: bool, exact_rms: bool):
     """Gaussian random field with PSD *psd2d* (or *psd1d* for a single row/column) on a periodic grid.
 
     Real white noise w (unit variance) is filtered in Fourier space by a_k = √(S(f_k) / (dx dy)), which makes
-    E[h²] = Σ_k S(f_k) Δfx Δfy, the grid's share of σ² (the mean, k = 0, is set to zero). A 1×N or N×1 grid is
-    a straight profile of the 2-D surface and uses the profile PSD ∫ S dfy instead.
+    the periodogram's expectation E[|ĥ_k|² dx dy / (nx ny)] = S(f_k) at every grid frequency f_k ≠ 0 and
+    E[h²] = Σ_k S(f_k) Δfx Δfy, the grid's share of σ² (the mean, k = 0, is set to zero). No global rescale:
+    the variance the grid cannot hold (wavelengths longer than the patch, frequencies above Nyquist, where most
+    of it lies and where it could not scatter) is left out, not moved into the resolved band. A 1×N or N×1 grid
+    is a straight profile of the 2-D surface and uses the profile PSD ∫ S dfy instead.
 
     Returns
     -------
     h : ndarray (ny, nx), m
-    fraction : float
-        Σ_k S Δf² / σ²: the part of the variance the grid resolves (below 1 when L is not ≫ T or dx not ≪ T).
+    band : dict
+        ``psd_variance_fraction`` Σ_k S Δf² / σ², the part of σ² the grid resolves;
+        ``variance_below_grid_share`` ∫ S over the zero-frequency cell / σ² (wavelengths longer than the patch);
+        ``variance_above_nyquist_share`` 1 − ∫ S over the Nyquist square / σ² (frequencies beyond the grid).
+        The three add up to 1 up to the midpoint-rule error of the grid's sum.
+
+    References
+    ----------
+    .. [1] Ogilvy 1991, §2 (spectral synthesis); D. B. Percival, A. T. Walden, *Spectral Analysis for Physical
+       Applications*, Cambridge 1993, §6.3 (periodogram of a periodic Gaussian series).
     """
     if nx * ny < 2:
         raise WaveopticsError("a random surface needs at least 2 samples")
@@ -124,6 +161,8 @@ def _spectral(psd2d, psd1d, nx, ny, dx, dy, rng, sigma, *, renormalize: bool, ex
         S = psd1d(np.abs(np.fft.fftfreq(n, d)))
         S[0] = 0.0
         var = S.sum() / (n * d)
+        below = _rect_integral(psd1d, (0.5 / (n * d),))
+        grid_band = _rect_integral(psd1d, (0.5 / d,))
         amp = np.sqrt(psd1d(np.fft.rfftfreq(n, d)) / d)
         amp[0] = 0.0
         h = np.fft.irfft(np.fft.rfft(rng.standard_normal(n)) * amp, n)
@@ -133,6 +172,8 @@ def _spectral(psd2d, psd1d, nx, ny, dx, dy, rng, sigma, *, renormalize: bool, ex
         S = psd2d(np.hypot(fy, np.fft.fftfreq(nx, dx)[None, :]))
         S[0, 0] = 0.0
         var = S.sum() / (nx * dx * ny * dy)
+        below = _rect_integral(psd2d, (0.5 / (nx * dx), 0.5 / (ny * dy)))
+        grid_band = _rect_integral(psd2d, (0.5 / dx, 0.5 / dy))
         del S
         amp = np.sqrt(psd2d(np.hypot(fy, np.fft.rfftfreq(nx, dx)[None, :])) / (dx * dy))
         amp[0, 0] = 0.0
@@ -148,11 +189,14 @@ def _spectral(psd2d, psd1d, nx, ny, dx, dy, rng, sigma, *, renormalize: bool, ex
             h *= sigma / rms
     elif renormalize:
         h *= 1.0 / math.sqrt(fraction)
-    return h, fraction
+    band = {"psd_variance_fraction": float(fraction), "variance_below_grid_share": float(below / sigma**2),
+            # guard: quad's relative error (~1e-10) on a spectrum the grid holds entirely leaves no negative share
+            "variance_above_nyquist_share": max(0.0, float(1.0 - grid_band / sigma**2))}
+    return h, band
 
 
-def _random_meta(model, params, seed, fraction, renormalize, exact_rms):
-    return {"model": model, **params, "seed": seed, "periodic": True, "psd_variance_fraction": fraction,
+def _random_meta(model, params, seed, band, renormalize, exact_rms):
+    return {"model": model, **params, "seed": seed, "periodic": True, **band,
             "renormalize": renormalize, "exact_rms": exact_rms, "units": "m"}
 
 
@@ -163,9 +207,9 @@ def _correlated(model, sigma, corr_length, size, samples, seed, renormalize, exa
     nx, ny, dx, dy = _grid(size, samples)
     rng, seed = _rng_seed(seed)
     family = PSD_MODELS[model]
-    h, frac = _spectral(lambda f: family.S(f, sigma, T), lambda f: family.S1(f, sigma, T),
+    h, band = _spectral(lambda f: family.S(f, sigma, T), lambda f: family.S1(f, sigma, T),
                         nx, ny, dx, dy, rng, sigma, renormalize=renormalize, exact_rms=exact_rms)
-    meta = _random_meta(model, {"sigma": sigma, "corr_length": T}, seed, frac, renormalize, exact_rms)
+    meta = _random_meta(model, {"sigma": sigma, "corr_length": T}, seed, band, renormalize, exact_rms)
     return HeightField(h, dx, dy, meta=meta)
 
 
@@ -183,7 +227,7 @@ def flat(size, samples) -> HeightField:
     return HeightField(np.zeros((ny, nx)), dx, dy, meta={"model": "flat", "periodic": True, "units": "m"})
 
 
-def gaussian(sigma, corr_length, size, samples, seed=None, *, renormalize=True, exact_rms=False) -> HeightField:
+def gaussian(sigma, corr_length, size, samples, seed=None, *, renormalize=False, exact_rms=False) -> HeightField:
     """Gaussian random surface with Gaussian correlation C(r) = σ² exp(−r²/T²).
 
     Parameters
@@ -199,10 +243,14 @@ def gaussian(sigma, corr_length, size, samples, seed=None, *, renormalize=True, 
     seed : int, optional
         Seed for ``numpy.random.default_rng``; drawn and recorded in ``meta["seed"]`` when None.
     renormalize : bool
-        Scale the spectrum so that the *ensemble* mean square on this grid is σ² (default). The fraction of σ²
-        the grid resolves before that scaling is ``meta["psd_variance_fraction"]``; when it is well below 1
-        (patch not ≫ T or spacing not ≪ T) the surface is a band-limited version of the one asked for.
-        False keeps S(f) exactly as specified (ensemble rms σ·√fraction).
+        False (default) keeps S(f) exactly where the grid resolves it: the periodogram's expectation is S(f_k)
+        at every grid frequency and the ensemble rms is σ·√fraction, fraction = ``meta["psd_variance_fraction"]``
+        (the share of σ² the grid resolves; ``meta["variance_below_grid_share"]`` and
+        ``meta["variance_above_nyquist_share"]`` say where the rest lies). True scales the spectrum so that the
+        ensemble mean square on this grid is σ²: that puts the variance the grid cannot hold (mostly above
+        Nyquist, where it could not scatter) into the resolved frequencies, which scatter it, so the field then
+        scatters more than the surface asked for (ABC C = 2.2: 2.4× the in-band variance); for controlled
+        comparisons only.
     exact_rms : bool
         Rescale this realization so its own rms is exactly σ (not physical for an ensemble; off by default).
 
@@ -218,7 +266,7 @@ def gaussian(sigma, corr_length, size, samples, seed=None, *, renormalize=True, 
     return _correlated("gaussian", sigma, corr_length, size, samples, seed, renormalize, exact_rms)
 
 
-def exponential(sigma, corr_length, size, samples, seed=None, *, renormalize=True,
+def exponential(sigma, corr_length, size, samples, seed=None, *, renormalize=False,
                 exact_rms=False) -> HeightField:
     """Gaussian random surface with exponential correlation C(r) = σ² exp(−r/T).
 
@@ -232,7 +280,7 @@ def exponential(sigma, corr_length, size, samples, seed=None, *, renormalize=Tru
     return _correlated("exponential", sigma, corr_length, size, samples, seed, renormalize, exact_rms)
 
 
-def abc(B, C, size, samples, seed=None, *, A=None, sigma=None, renormalize=True, exact_rms=False) -> HeightField:
+def abc(B, C, size, samples, seed=None, *, A=None, sigma=None, renormalize=False, exact_rms=False) -> HeightField:
     """Gaussian random surface with the ABC (K-correlation, fractal-like) PSD A / (1 + (B f)²)^{C/2}.
 
     Parameters
@@ -264,9 +312,9 @@ def abc(B, C, size, samples, seed=None, *, A=None, sigma=None, renormalize=True,
         sigma = abc_sigma(A, B, C)
     nx, ny, dx, dy = _grid(size, samples)
     rng, seed = _rng_seed(seed)
-    h, frac = _spectral(lambda f: S_abc(f, sigma, B, C), lambda f: S1_abc(f, sigma, B, C),
+    h, band = _spectral(lambda f: S_abc(f, sigma, B, C), lambda f: S1_abc(f, sigma, B, C),
                         nx, ny, dx, dy, rng, sigma, renormalize=renormalize, exact_rms=exact_rms)
-    meta = _random_meta("abc", {"A": A, "B": B, "C": C, "sigma": sigma}, seed, frac, renormalize, exact_rms)
+    meta = _random_meta("abc", {"A": A, "B": B, "C": C, "sigma": sigma}, seed, band, renormalize, exact_rms)
     return HeightField(h, dx, dy, meta=meta)
 
 
