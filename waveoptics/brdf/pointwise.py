@@ -205,12 +205,15 @@ class TwoScaleBRDF(TwoScaleParts):
         F = self._F(lam)(cos_d)
         # the series of the roughness inside the propagating band, as the grid model's (docs/physics.md §9)
         total = scatter.band_series(self.nano.model, lam)(wi, wo, dm.cos_sum(wi, wo))
+        # beyond the tangent plane's validity the lobe carries the continued albedo (BandSeries.scattered_albedo)
+        total = total * self.nano.lobe_energy_scale(wi[..., 2], lam, dm,
+                                                    self.material if self.fresnel == "exact" else None)
         return np.where((wi[..., 2] > 0) & (wo[..., 2] > 0), F * dm.K(wi, wo, lam) * total, 0.0)
 
     def _facet_weight(self, wi, m, lam):
         """W = (1 − A(ω_i·m)) / (1 − A(θ_i)): a facet's scattered share relative to the macro incidence."""
-        lost_i = 1.0 - self._A(wi[..., 2], lam)
-        lost = 1.0 - self._A(np.clip(np.sum(wi * m, axis=-1), 0.0, 1.0), lam)
+        lost_i = self._share(wi[..., 2], lam)
+        lost = self._share(np.clip(np.sum(wi * m, axis=-1), 0.0, 1.0), lam)
         return np.where(lost_i > 1e-12, lost / np.where(lost_i > 1e-12, lost_i, 1.0), 1.0)
 
     def _micro_nodes(self, wi, lam):

@@ -150,16 +150,46 @@ class Nano:
         dm = scatter.get_model(diffraction, perturbative=True)
         if dm.perturbative and self.surface is not None:   # Rayleigh-Rice of the field's periodogram
             return self._rayleigh_rice_coherent(c, wavelength_nm, material)
-        if self.model is not None:   # 1 − E¹(θ_d): the light the band-limited lobe does not scatter
-            lam = np.asarray(wavelength_nm, dtype=float)
-            c_b, lam_b = np.broadcast_arrays(c, lam)
-            out = np.empty(c_b.shape)
-            for l_val in np.unique(lam_b):
-                sel = lam_b == l_val
-                out[sel] = scatter.band_series(self.model, float(l_val)).coherent_fraction(c_b[sel], dm, material,
-                                                                                            polarization)
-            return out if out.ndim else float(out)
+        if self.model is not None:   # conductor: 1 − E(θ_d); dielectric: exp(−g_rel(θ_d))
+            return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.coherent_fraction(cc, dm, material,
+                                                                                              polarization))
         return self._field_coherent(c, wavelength_nm, dm, material, polarization, azimuth_deg)
+
+    def scattered_share(self, cos_theta_d, wavelength_nm, diffraction="kirchhoff", material=None,
+                        polarization: str = "unpolarized", azimuth_deg: float = 0.0):
+        """The light a facet at local incidence θ_d scatters, up to a factor common to all θ_d (ratios of it weigh
+        tilted facets, :func:`facet_scatter_weights`): 1 − A(θ_d) on a conductor and for a height field; on a
+        dielectric with statistics the lobe's own absolute albedo (its coherent fraction is the Debye-Waller
+        factor, not the complement of its scatter: :meth:`waveoptics.scatter.BandSeries.coherent_fraction`)."""
+        c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
+        dm = scatter.get_model(diffraction, perturbative=True)
+        if self.model is None or scatter.is_conductor(material):
+            return 1.0 - np.asarray(self.coherent_amplitude2(c, wavelength_nm, dm, material, polarization,
+                                                             azimuth_deg), dtype=float)
+        return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.scattered_share(cc, dm, material,
+                                                                                         polarization))
+
+    def lobe_energy_scale(self, cos_theta_i, wavelength_nm, diffraction="kirchhoff", material=None,
+                          polarization: str = "unpolarized"):
+        """The factor that gives a statistics lobe at incidence θ_i its scattered albedo continued beyond the
+        tangent plane's validity (:meth:`waveoptics.scatter.BandSeries.lobe_energy_scale`; 1 up to
+        :data:`waveoptics.scatter.band.TANGENT_PLANE_MAX_DEG`, for Rayleigh-Rice and for height fields)."""
+        c = np.clip(np.asarray(cos_theta_i, dtype=float), 0.0, 1.0)
+        if self.model is None:
+            return np.ones(np.broadcast_shapes(c.shape, np.shape(wavelength_nm)))
+        dm = scatter.get_model(diffraction, perturbative=True)
+        return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.lobe_energy_scale(
+            np.degrees(np.arccos(cc)), dm, material, polarization))
+
+    def _per_wavelength(self, c, wavelength_nm, fn):
+        """fn(band_series(λ), cos) over broadcast (cos, λ) arrays, one band series per distinct λ."""
+        lam = np.asarray(wavelength_nm, dtype=float)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        out = np.empty(c_b.shape)
+        for l_val in np.unique(lam_b):
+            sel = lam_b == l_val
+            out[sel] = fn(scatter.band_series(self.model, float(l_val)), c_b[sel])
+        return out if out.ndim else float(out)
 
     def periodogram(self):
         """The height field's :class:`~waveoptics.surfaces.PeriodogramPSD` (computed once): its PSD where a
@@ -368,11 +398,11 @@ def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, d
     used = (np.ones(cos_d.shape, bool) if kernel is None or nano.surface is None
             else _significant(kernel))
     for i, lam in enumerate(wavelengths_nm):
-        lost_i = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, polarization, phi))
+        # the light each facet scatters (1 − A on a conductor, the lobe's own albedo on a dielectric)
+        lost_i = float(nano.scattered_share(wi[2], lam, diffraction, material, polarization, phi))
         # guard: a nano surface that scatters nothing at θ_i has no lobe to weight
         if lost_i > 1e-12 and used.any():
-            out[i][used] = (1.0 - nano.coherent_amplitude2(cos_d[used], lam, diffraction, material, polarization,
-                                                          phi)) / lost_i
+            out[i][used] = nano.scattered_share(cos_d[used], lam, diffraction, material, polarization, phi) / lost_i
     return out
 
 
@@ -427,6 +457,9 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
             Fi = F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam)
             out[i], cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True,
                                                  diffraction=diffraction)
+            # beyond the tangent plane's validity the lobe carries the continued albedo (BandSeries.scattered_albedo)
+            out[i] *= float(nano.lobe_energy_scale(wi[2], lam, diffraction, material,
+                                                   getattr(F, "polarization", "unpolarized")))
             # guard: the truncated series misses the light of its terms m > m_max once g = (kσ(cosθ_i + cosθ_o))²
             # ≳ 30 (σ ≳ λ/2): refuse rather than return a lobe that silently lacks that energy
             low = float(np.min(np.where(grid.inside, cap, 1.0)))
@@ -649,6 +682,11 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
     got = integrate(diffraction, grid)
     budget = np.maximum(integrate(lost, grid), 0.0)
     scale = np.where(got > budget * (1.0 + CAP_TOLERANCE), budget / np.where(got > 0, got, 1.0), 1.0)
+    if np.any(scale < 1.0):
+        i = int(np.argmin(scale))
+        warnings.warn(f"two-scale energy guard removed {100 * (1 - scale[i]):.3g}% of the diffracted light "
+                      f"({got[i] - budget[i]:.3g} of the incident light) at wavelength index {i}: the nano lobe "
+                      "held more than its energy budget", scatter.DiffractionWarning, stacklevel=3)
     return diffraction * scale[:, None, None], scale
 
 
@@ -722,9 +760,11 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         mf = np.zeros(shape)
         cell = _mirror_cell(grid, wi)
         rho = float(albedo(wi, fresnel="one", **micro.kw()))
+        mf_one = np.zeros(shape)   # the same lobe with F = 1: all the light the facets receive
         if cell is not None:
             Fi = np.array([float(np.ravel(_F_mirror(F, wi, lam))[0]) for lam in w])
             mf[:, cell[0], cell[1]] = Fi * rho / (grid.du * grid.dv)
+            mf_one[:, cell[0], cell[1]] = rho / (grid.du * grid.dv)
         A = np.array([float(nano.coherent_amplitude2(wi[2], lam, dm, mat, polarization, _azimuth_deg(wi)))
                       if sigma_nano > 0 else 1.0 for lam in w])
         coherent = mf * A[:, None, None]
@@ -755,6 +795,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
                     A[used] = nano.coherent_amplitude2(cos_d[used], lam, dm, mat, polarization, phi)
             coherent[i] = mf[i] * A
         mf = np.where(inside, mf, 0.0)
+        mf_one = np.broadcast_to(np.where(inside, f1, 0.0), shape)
         coherent = np.where(inside, coherent, 0.0)
 
     # --- diffraction: nano lobe carried by the facets --------------------------------------------------------
@@ -767,8 +808,10 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         # the light each facet's lobe, shifted to that facet's mirror direction, puts beyond the horizon (the
         # convolution's total is Σ f_n du dv × Σ K): lost, as shadowing would lose it
         beyond = np.maximum(integrate(fn, grid) * K.sum(axis=(-2, -1)) - integrate(diffraction, grid), 0.0)
-        if reference_grid is None:
-            diffraction, energy_scale = _cap_to_coherent_loss(diffraction, mf - coherent, grid)
+        if reference_grid is None:   # a conductor's lobe holds the coherent lobe's loss; a dielectric's at most
+            # all the light the facets receive and do not reflect coherently (it also draws on the transmitted beam)
+            budget = (mf if scatter.is_conductor(mat) else mf_one) - coherent
+            diffraction, energy_scale = _cap_to_coherent_loss(diffraction, budget, grid)
         else:
             energy_scale = np.ones(w.size)
         used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")
