@@ -5,9 +5,10 @@ microfacet NDF D with roughness α; each microfacet carries nano-roughness of rm
 Per microfacet the light splits into
 
 * a coherent part, the fraction A(λ, θ_d) of the Fresnel-reflected light that keeps the microfacet specular
-  lobe, f_c = A · F G D / (4 cosθ_i cosθ_o): what the facet's nano lobe leaves, 1 − E(θ_d) (E the share of the
-  reflected light that lobe scatters; Davies' exp(−(4π σ_rel cos θ_d / λ)²) while it is paraxial, σ_rel the
-  roughness inside the propagating band; :meth:`Nano.coherent_amplitude2`, docs/physics.md §9);
+  lobe, f_c = A · F G D / (4 cosθ_i cosθ_o): on a conductor what the facet's nano lobe leaves, 1 − E(θ_d) (E the
+  share of the reflected light that lobe scatters; Davies' exp(−(4π σ_rel cos θ_d / λ)²) while it is paraxial,
+  σ_rel the roughness inside the propagating band); on a dielectric that Debye-Waller factor itself, the scattered
+  light keeping its own albedo (:meth:`Nano.coherent_amplitude2`, docs/physics.md §9);
 * a diffracted part, the nano-roughness scattering lobe f_n (PSD series or a Kirchhoff solver on a nano height
   field), carried by each microfacet, i.e. tilted with the facet normal and so convolved with the micro NDF;
 * for dielectrics, a diffuse term with the diffuse-specular trade-off (metals have none).
@@ -658,15 +659,18 @@ CAP_TOLERANCE = 1e-2
 def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
     """Scale the diffracted lobes down where they hold more light than the coherent lobe gave up.
 
-    guard: the coherent fraction is the complement of the nano lobe's own albedo (energy conservation,
-    :meth:`waveoptics.brdf.Nano.coherent_amplitude2`), so the two halves agree to quadrature accuracy and this
-    step does not act (it lets through up to :data:`CAP_TOLERANCE`; measured at θ_i ≤ 70° on Gaussian, exponential
-    and ABC PSDs with C from 2.2 to 4, σ up to λ/10, micro α up to 0.3: the lobe exceeds its budget by ≤ 2e-3).
-    It acts only near grazing incidence, where the tangent-plane obliquity |s|⁴ / (4 λ² cosθ_i cosθ_o
-    (cosθ_i + cosθ_o)²) makes the Kirchhoff lobe's albedo grow without bound (PSD route, Gaussian σ = 100 nm,
-    T = 1 µm, λ = 500 nm, F = 1: 1.32 at θ_i = 89°, 11.9 at 89.9°, 1.2e3 at 89.999°) and no specular light is
-    left (E¹ ≥ 1): the lobe is then scaled to the reflected light F, its shape kept. The factor applied is
-    reported (``diffraction_energy_scale``); docs/two-scale.md tabulates where it acts.
+    guard: on a conductor the coherent fraction is the complement of the nano lobe's own albedo (energy
+    conservation, :meth:`waveoptics.brdf.Nano.coherent_amplitude2`), so the two halves agree to quadrature accuracy
+    and this step does not act (it lets through up to :data:`CAP_TOLERANCE`; measured at θ_i ≤ 70° on Gaussian,
+    exponential and ABC PSDs with C from 2.2 to 4, σ up to λ/10, micro α up to 0.3: the lobe exceeds its budget by
+    ≤ 2e-3; with no micro roughness up to 89.5°, tests/test_grazing.py). On a dielectric the budget is all the light
+    the facets receive and do not reflect coherently (the scattered light also draws on the transmitted beam), which
+    the lobe does not approach (tests/test_dielectric_energy.py: glass, s, p and unpolarized, 30–75° and Brewster's
+    angle). Beyond 75° the tangent-plane lobe carries an albedo continued with first-order perturbation theory
+    (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`; before, its obliquity made it grow without bound and
+    this step trimmed it). Where it does act (a grid too coarse for a wide lobe, micro roughness at grazing
+    incidence on a grid whose cells cannot resolve the facets' incidences) it warns in one line with the share it
+    removed, and reports the factor (``diffraction_energy_scale``).
 
     Parameters
     ----------
