@@ -159,11 +159,14 @@ class Nano:
     def scattered_share(self, cos_theta_d, wavelength_nm, diffraction="kirchhoff", material=None,
                         polarization: str = "unpolarized", azimuth_deg: float = 0.0):
         """The light a facet at local incidence θ_d scatters, up to a factor common to all θ_d (ratios of it weigh
-        tilted facets, :func:`facet_scatter_weights`): 1 − A(θ_d) on a conductor and for a height field; on a
-        dielectric with statistics the lobe's own absolute albedo (its coherent fraction is the Debye-Waller
-        factor, not the complement of its scatter: :meth:`waveoptics.scatter.BandSeries.coherent_fraction`)."""
+        tilted facets, :func:`facet_scatter_weights`): 1 − A(θ_d) on a conductor and for a height field's
+        Kirchhoff lobe; on a dielectric with statistics, or a height field's periodogram under Rayleigh-Rice, the
+        lobe's own absolute albedo (its coherent fraction is the Debye-Waller factor, not the complement of its
+        scatter: :meth:`waveoptics.scatter.BandSeries.coherent_fraction`)."""
         c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
         dm = scatter.get_model(diffraction, perturbative=True)
+        if self.surface is not None and dm.perturbative and not scatter.is_conductor(material):
+            return self._rayleigh_rice_tis(c, wavelength_nm, material, polarization)
         if self.model is None or scatter.is_conductor(material):
             return 1.0 - np.asarray(self.coherent_amplitude2(c, wavelength_nm, dm, material, polarization,
                                                              azimuth_deg), dtype=float)
@@ -202,9 +205,12 @@ class Nano:
 
     def _rayleigh_rice_coherent(self, c, wavelength_nm, material):
         """1 − E_RR(θ) of the height field's periodogram (:func:`waveoptics.scatter.rayleigh_rice_albedo`),
-        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and material."""
+        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and material, on a conductor; on a
+        dielectric the Debye-Waller factor of the periodogram's band (:meth:`_periodogram_debye_waller`)."""
         from ..scatter.band import RR_THETAS_DEG, rr_interp
 
+        if not scatter.is_conductor(material):   # a dielectric: the Debye-Waller factor of the periodogram's band
+            return self._periodogram_debye_waller(c, wavelength_nm)
         cache = self.__dict__.setdefault("_cache", {})
         lam = np.asarray(wavelength_nm, dtype=float)
         c_b, lam_b = np.broadcast_arrays(c, lam)
@@ -217,6 +223,51 @@ class Nano:
             sel = lam_b == l_val
             E = rr_interp(np.degrees(np.arccos(c_b[sel])), cache[key])
             out[sel] = np.clip(1.0 - E, 0.0, 1.0)   # guard: first-order TIS above R means σ far outside its domain
+        return out if out.ndim else float(out)
+
+    def _periodogram_debye_waller(self, c, wavelength_nm):
+        """exp(−(2k σ_rel cosθ)²), σ_rel² the height field's periodogram summed over the propagating disc of
+        incidence θ (azimuth 0, the plane of the Rayleigh-Rice albedo), tabulated on
+        :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and interpolated linearly in sinθ (Davies 1954;
+        Krywonos, Harvey & Choi 2011; docs/physics.md §9)."""
+        from ..scatter.band import RR_THETAS_DEG
+
+        cache = self.__dict__.setdefault("_cache", {})
+        psd = self.periodogram()
+        FX, FY = np.meshgrid(psd.fx, psd.fy)
+        cell = (psd.fx[1] - psd.fx[0]) * (psd.fy[1] - psd.fy[0]) if psd.fx.size > 1 and psd.fy.size > 1 else 0.0
+        sin_nodes = np.sin(np.radians(RR_THETAS_DEG))
+        lam = np.asarray(wavelength_nm, dtype=float)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        out = np.empty(c_b.shape)
+        for l_val in np.unique(lam_b):
+            key = ("rr-dw", float(l_val))
+            R = 1.0 / (float(l_val) * 1e-9)
+            if key not in cache:
+                cache[key] = np.array([float(np.sum(psd.P[np.hypot(FX + s_ * R, FY) <= R])) * cell
+                                       for s_ in sin_nodes])
+            sel = lam_b == l_val
+            cc = c_b[sel]
+            s2 = np.interp(np.sqrt(np.maximum(1.0 - cc * cc, 0.0)), sin_nodes, cache[key])
+            out[sel] = np.exp(-(2 * np.pi * R * 2 * cc) ** 2 * s2)
+        return out if out.ndim else float(out)
+
+    def _rayleigh_rice_tis(self, c, wavelength_nm, material, polarization):
+        """TIS(θ) of the height field's periodogram (absolute, :func:`waveoptics.scatter.rayleigh_rice_tis`),
+        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength, material and polarization."""
+        from ..scatter.band import RR_THETAS_DEG, rr_interp
+
+        cache = self.__dict__.setdefault("_cache", {})
+        lam = np.asarray(wavelength_nm, dtype=float)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        out = np.empty(c_b.shape)
+        for l_val in np.unique(lam_b):
+            key = ("rr-tis", float(l_val), None if material is None else material.name, polarization)
+            if key not in cache:
+                cache[key] = np.array([scatter.rayleigh_rice_tis(t, float(l_val), self.periodogram(), material,
+                                                                 polarization) for t in RR_THETAS_DEG])
+            sel = lam_b == l_val
+            out[sel] = rr_interp(np.degrees(np.arccos(c_b[sel])), cache[key])
         return out if out.ndim else float(out)
 
     def _field_coherent(self, c, wavelength_nm, dm, material, polarization, azimuth_deg):
