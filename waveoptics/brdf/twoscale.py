@@ -127,7 +127,12 @@ class Nano:
                             polarization: str = "unpolarized", azimuth_deg: float = 0.0):
         """A(λ, θ_d): fraction of the light a facet reflects coherently.
 
-        For statistics, 1 − E(θ_d) with E the share of the reflected light the nano lobe scatters at that incidence
+        On a dielectric (a *material* not of the metal category) with statistics, or with a height field's
+        periodogram under Rayleigh-Rice, A is the Debye-Waller factor exp(−g_rel(θ_d)) of the roughness in the
+        propagating band (Davies 1954), the same for s, p and unpolarized light, and the scattered light keeps
+        its own albedo: a dielectric's rough interface also draws on the transmitted beam (Elson & Bennett 1979;
+        :meth:`waveoptics.scatter.BandSeries.coherent_fraction`). On a conductor (a metal, or no material: F = 1),
+        for statistics, 1 − E(θ_d) with E the share of the reflected light the nano lobe scatters at that incidence
         (weighted by the *material*'s Fresnel factor at each direction's half-vector; F = 1 without one): the light
         the facet's nano-roughness scatters is the light its specular reflection loses (energy conservation;
         :meth:`waveoptics.scatter.BandSeries.coherent_fraction`). The lobe is the Kirchhoff series of the roughness
