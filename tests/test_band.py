@@ -135,8 +135,8 @@ def test_lobe_albedo_on_the_polar_grid_matches_a_fine_direction_grid():
 
 @pytest.mark.parametrize("mat", ["Al", "1.5"])
 def test_the_specular_loss_is_the_light_first_order_perturbation_theory_scatters(mat):
-    """Small roughness (σ = 5-10 nm at 550 nm): the coherent loss 1 − A is the light the lobe scatters, and that
-    agrees with the total integrated scatter of first-order Rayleigh-Rice theory with its full polarization factor
+    """Small roughness (σ = 5-10 nm at 550 nm): the light the lobe scatters (on a metal the coherent loss 1 − A; on
+    glass the lobe's own albedo, since a dielectric's coherent part is the Debye-Waller factor) agrees with the total integrated scatter of first-order Rayleigh-Rice theory with its full polarization factor
     Q (an independent theory, rigorous to that order): within 6 % on a metal up to θ_i = 60°, where exp(−g_rel)
     is off by up to a factor 5 for short correlation lengths; on glass within 25 % (the tangent-plane lobe weighs
     each direction by F(θ_h), Rayleigh-Rice by its Q: they part where the correlation length nears λ, 1.43× at
@@ -151,7 +151,11 @@ def test_the_specular_loss_is_the_light_first_order_perturbation_theory_scatters
             wi = direction_from_angles(th, 0.0)
             rr = np.where(grid.inside, perturbation.rayleigh_rice_brdf(wi, wo, 550.0, m, material.eta(550.0) ** 2), 0)
             tis = integrate(rr[None], grid)[0] / float(material.F(wi[2], 550.0))
-            loss = 1.0 - float(nano.coherent_amplitude2(wi[2], 550.0, material=material))
+            if mat == "1.5":   # a dielectric's specular loss is the Debye-Waller factor's: compare the lobe's own
+                # albedo (tests/test_dielectric_energy.py checks its coherent part)
+                loss = float(nano.scattered_share(wi[2], 550.0, material=material)) / float(material.F(wi[2], 550.0))
+            else:
+                loss = 1.0 - float(nano.coherent_amplitude2(wi[2], 550.0, material=material))
             if mat == "1.5" and m.length_scale < 1e-6 and th > 30.0:
                 continue   # glass, correlation length near λ, oblique: Kirchhoff 1.43× Rayleigh-Rice (docs/validity)
             assert loss == pytest.approx(tis, rel=0.25 if mat == "1.5" else 0.06), (m, th)
@@ -165,7 +169,9 @@ ENERGY_CASES = [("gaussian", dict(sigma=55e-9, T=1e-6)), ("exponential", dict(si
 @pytest.mark.parametrize("kind,kw", ENERGY_CASES)
 def test_two_scale_albedo_is_fresnel_on_the_psd_route_without_capping(kind, kw):
     """Issue 13's energy test: σ up to λ/10, C from 2.2 to 4, micro α = 0, θ_i ≤ 40°: albedo = F(θ_i) within 1e-2
-    for a metal and a dielectric, and the capping guard does not act."""
+    for a metal, and the capping guard does not act for a metal or a dielectric. (On a dielectric the coherent part
+    is R exp(−g_rel) and the scattered light has its own albedo, so the albedo is not F: issue 28,
+    tests/test_dielectric_energy.py.)"""
     m = surfaces.PSDModel(kind, **kw)
     grid = DirectionGrid.hemisphere(128)
     for mat in ("1+6j", "1.5"):
@@ -174,7 +180,8 @@ def test_two_scale_albedo_is_fresnel_on_the_psd_route_without_capping(kind, kw):
             wi = direction_from_angles(th, 0.0)
             L = twoscale.evaluate(wi, [550.0], material, twoscale.Micro(alpha=0.0), twoscale.Nano(model=m), grid,
                                   kd=0)
-            assert L.albedo()[0] / float(material.F(wi[2], 550.0)) == pytest.approx(1.0, abs=1e-2), (mat, th)
+            if mat != "1.5":
+                assert L.albedo()[0] / float(material.F(wi[2], 550.0)) == pytest.approx(1.0, abs=1e-2), (mat, th)
             assert L.info["diffraction_energy_scale"] == [1.0]
 
 

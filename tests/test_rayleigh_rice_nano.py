@@ -58,8 +58,9 @@ def test_albedo_table_interpolates_the_quadrature():
 @pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 80.0, 85.0, 89.0])
 def test_two_scale_with_rayleigh_rice_keeps_fresnel_up_to_grazing(theta):
     """No micro roughness: the coherent part and the Rayleigh-Rice lobe add up to F(θ_i) within 1e-3 (the lobe's
-    grid sum against its polar quadrature), and near grazing the lobe scatters less than the Kirchhoff lobe, which
-    over-scatters there (its tangent-plane factor grows as 1/cosθ_i)."""
+    grid sum against its polar quadrature). Near grazing the Kirchhoff lobe, whose tangent-plane factor grows as
+    1/cosθ_i, carries its albedo at 75° continued with Rayleigh-Rice's incidence dependence (issue 28): the two
+    scatter alike there (within 10 %; before, Kirchhoff scattered 2.6× as much at 85° and 40× at 89°)."""
     nano = make_nano("abc:sigma=5nm,B=3um,C=2.8", [LAM])
     grid = DirectionGrid.hemisphere(128)
     L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0), nano, grid, diffraction="rayleigh-rice")
@@ -68,7 +69,7 @@ def test_two_scale_with_rayleigh_rice_keeps_fresnel_up_to_grazing(theta):
     assert L.info["diffraction_energy_scale"] == [1.0]
     if theta >= 85:
         K = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0), nano, grid)
-        assert float(L.albedo("diffraction")[0]) < 0.5 * float(K.albedo("diffraction")[0])
+        assert float(K.albedo("diffraction")[0]) == pytest.approx(float(L.albedo("diffraction")[0]), rel=0.1)
 
 
 def test_first_order_agreement_with_kirchhoff_near_specular():

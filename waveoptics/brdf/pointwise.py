@@ -5,7 +5,9 @@
 
     f = A(θ_d) f_mf(ω_i, ω_o) + f_diff(ω_i, ω_o) + f_diffuse(ω_i, ω_o),
 
-* coherent part: the microfacet specular term with F, times A(θ_d) = exp(−g(θ_d)) of each facet (closed form);
+* coherent part: the microfacet specular term with F, times the coherent fraction A(θ_d) of each facet
+  (:meth:`waveoptics.brdf.Nano.coherent_amplitude2`: on a conductor 1 − E(θ_d), the complement of the light its
+  nano lobe scatters; on a dielectric the Debye-Waller factor exp(−g_rel(θ_d)); docs/physics.md §9);
 * diffuse substrate of dielectrics (closed form, as the microfacet model);
 * diffracted part: the nano lobe f_n (the PSD series, :func:`waveoptics.scatter.scattered_lobe`, with its own F)
   carried by every facet, i.e. the paraxial convolution on the direction-cosine plane (P the (u, v) of ω_o, m the
@@ -14,14 +16,16 @@
       f_diff(P) = ∫ f_mf¹(ω_i, m + s) W(s) f_n(ω_i, P − s) d²s,   W = (1 − A(θ_d(s))) / (1 − A(θ_i)),
 
   with f_mf¹ the F = 1 microfacet lobe and W each facet's own scattered share (:func:`waveoptics.brdf.
-  facet_scatter_weights`). The integral is a fixed quadrature on N points (:data:`QUADRATURE_NODES`, a Sobol
+  facet_scatter_weights`; 1 − A on a conductor, the lobe's own albedo on a dielectric). The integral is a fixed quadrature on N points (:data:`QUADRATURE_NODES`, a Sobol
   set): nodes s_k drawn through the micro lobe's own sampler (weights f cos θ / pdf) when it is the narrower
   lobe, else nodes t_k = P − s drawn through the nano lobe's radial sampler; each node carries an exact,
   analytic evaluation of the other lobe, so the result is a smooth function of ω_o at every ω_i.
 
-The grid model's guard that caps the diffracted light at the light the coherent lobe lost (near grazing
-incidence, :func:`waveoptics.brdf.twoscale._cap_to_coherent_loss`) needs the whole lobe and is not applied here:
-beyond θ_i ≈ 75° this function shows the tangent-plane model's own excess (docs/two-scale.md).
+Beyond the tangent plane's validity (θ_i > 75°) the nano lobe carries its albedo at 75° continued with first-order
+perturbation theory's incidence dependence (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`), as the grid
+model's does, so the white furnace (F = 1) holds up to grazing incidence without the grid model's energy guard
+(:func:`waveoptics.brdf.twoscale._cap_to_coherent_loss`, which needs the whole lobe and is not applied here):
+≤ 1.01 at θ_i up to 89.5° (tests/test_grazing.py; 1.149 at 89° before).
 
 Sampling is a mixture of the three parts in proportion F(θ_i)A(θ_i) : F(θ_i)(1 − A(θ_i)) : kd(1 − F(θ_i));
 the diffracted part picks one of the micro nodes s_k and adds a radial nano offset, so its density
@@ -205,12 +209,15 @@ class TwoScaleBRDF(TwoScaleParts):
         F = self._F(lam)(cos_d)
         # the series of the roughness inside the propagating band, as the grid model's (docs/physics.md §9)
         total = scatter.band_series(self.nano.model, lam)(wi, wo, dm.cos_sum(wi, wo))
+        # beyond the tangent plane's validity the lobe carries the continued albedo (BandSeries.scattered_albedo)
+        total = total * self.nano.lobe_energy_scale(wi[..., 2], lam, dm,
+                                                    self.material if self.fresnel == "exact" else None)
         return np.where((wi[..., 2] > 0) & (wo[..., 2] > 0), F * dm.K(wi, wo, lam) * total, 0.0)
 
     def _facet_weight(self, wi, m, lam):
         """W = (1 − A(ω_i·m)) / (1 − A(θ_i)): a facet's scattered share relative to the macro incidence."""
-        lost_i = 1.0 - self._A(wi[..., 2], lam)
-        lost = 1.0 - self._A(np.clip(np.sum(wi * m, axis=-1), 0.0, 1.0), lam)
+        lost_i = self._share(wi[..., 2], lam)
+        lost = self._share(np.clip(np.sum(wi * m, axis=-1), 0.0, 1.0), lam)
         return np.where(lost_i > 1e-12, lost / np.where(lost_i > 1e-12, lost_i, 1.0), 1.0)
 
     def _micro_nodes(self, wi, lam):

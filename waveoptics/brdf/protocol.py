@@ -366,6 +366,12 @@ class TwoScaleParts(MicrofacetBRDF):
         return self.nano.coherent_amplitude2(cos_d, lam, self.diffraction,
                                              self.material if self.fresnel == "exact" else None)
 
+    def _share(self, cos_d, lam):
+        """The light a facet at local incidence θ_d scatters, up to a common factor (:meth:`waveoptics.brdf.Nano.
+        scattered_share`): 1 − A on a conductor, the lobe's own albedo on a dielectric."""
+        return self.nano.scattered_share(cos_d, lam, self.diffraction,
+                                         self.material if self.fresnel == "exact" else None)
+
     def _smooth_parts(self, wi, wo, lam):
         """(coherent, diffuse) in 1/sr for flat arrays at one wavelength."""
         F_fn = self._F(lam)

@@ -5,9 +5,10 @@ microfacet NDF D with roughness α; each microfacet carries nano-roughness of rm
 Per microfacet the light splits into
 
 * a coherent part, the fraction A(λ, θ_d) of the Fresnel-reflected light that keeps the microfacet specular
-  lobe, f_c = A · F G D / (4 cosθ_i cosθ_o): what the facet's nano lobe leaves, 1 − E(θ_d) (E the share of the
-  reflected light that lobe scatters; Davies' exp(−(4π σ_rel cos θ_d / λ)²) while it is paraxial, σ_rel the
-  roughness inside the propagating band; :meth:`Nano.coherent_amplitude2`, docs/physics.md §9);
+  lobe, f_c = A · F G D / (4 cosθ_i cosθ_o): on a conductor what the facet's nano lobe leaves, 1 − E(θ_d) (E the
+  share of the reflected light that lobe scatters; Davies' exp(−(4π σ_rel cos θ_d / λ)²) while it is paraxial,
+  σ_rel the roughness inside the propagating band); on a dielectric that Debye-Waller factor itself, the scattered
+  light keeping its own albedo (:meth:`Nano.coherent_amplitude2`, docs/physics.md §9);
 * a diffracted part, the nano-roughness scattering lobe f_n (PSD series or a Kirchhoff solver on a nano height
   field), carried by each microfacet, i.e. tilted with the facet normal and so convolved with the micro NDF;
 * for dielectrics, a diffuse term with the diffuse-specular trade-off (metals have none).
@@ -126,7 +127,12 @@ class Nano:
                             polarization: str = "unpolarized", azimuth_deg: float = 0.0):
         """A(λ, θ_d): fraction of the light a facet reflects coherently.
 
-        For statistics, 1 − E(θ_d) with E the share of the reflected light the nano lobe scatters at that incidence
+        On a dielectric (a *material* not of the metal category) with statistics, or with a height field's
+        periodogram under Rayleigh-Rice, A is the Debye-Waller factor exp(−g_rel(θ_d)) of the roughness in the
+        propagating band (Davies 1954), the same for s, p and unpolarized light, and the scattered light keeps
+        its own albedo: a dielectric's rough interface also draws on the transmitted beam (Elson & Bennett 1979;
+        :meth:`waveoptics.scatter.BandSeries.coherent_fraction`). On a conductor (a metal, or no material: F = 1),
+        for statistics, 1 − E(θ_d) with E the share of the reflected light the nano lobe scatters at that incidence
         (weighted by the *material*'s Fresnel factor at each direction's half-vector; F = 1 without one): the light
         the facet's nano-roughness scatters is the light its specular reflection loses (energy conservation;
         :meth:`waveoptics.scatter.BandSeries.coherent_fraction`). The lobe is the Kirchhoff series of the roughness
@@ -150,16 +156,49 @@ class Nano:
         dm = scatter.get_model(diffraction, perturbative=True)
         if dm.perturbative and self.surface is not None:   # Rayleigh-Rice of the field's periodogram
             return self._rayleigh_rice_coherent(c, wavelength_nm, material)
-        if self.model is not None:   # 1 − E¹(θ_d): the light the band-limited lobe does not scatter
-            lam = np.asarray(wavelength_nm, dtype=float)
-            c_b, lam_b = np.broadcast_arrays(c, lam)
-            out = np.empty(c_b.shape)
-            for l_val in np.unique(lam_b):
-                sel = lam_b == l_val
-                out[sel] = scatter.band_series(self.model, float(l_val)).coherent_fraction(c_b[sel], dm, material,
-                                                                                            polarization)
-            return out if out.ndim else float(out)
+        if self.model is not None:   # conductor: 1 − E(θ_d); dielectric: exp(−g_rel(θ_d))
+            return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.coherent_fraction(cc, dm, material,
+                                                                                              polarization))
         return self._field_coherent(c, wavelength_nm, dm, material, polarization, azimuth_deg)
+
+    def scattered_share(self, cos_theta_d, wavelength_nm, diffraction="kirchhoff", material=None,
+                        polarization: str = "unpolarized", azimuth_deg: float = 0.0):
+        """The light a facet at local incidence θ_d scatters, up to a factor common to all θ_d (ratios of it weigh
+        tilted facets, :func:`facet_scatter_weights`): 1 − A(θ_d) on a conductor and for a height field's
+        Kirchhoff lobe; on a dielectric with statistics, or a height field's periodogram under Rayleigh-Rice, the
+        lobe's own absolute albedo (its coherent fraction is the Debye-Waller factor, not the complement of its
+        scatter: :meth:`waveoptics.scatter.BandSeries.coherent_fraction`)."""
+        c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
+        dm = scatter.get_model(diffraction, perturbative=True)
+        if self.surface is not None and dm.perturbative and not scatter.is_conductor(material):
+            return self._rayleigh_rice_tis(c, wavelength_nm, material, polarization)
+        if self.model is None or scatter.is_conductor(material):
+            return 1.0 - np.asarray(self.coherent_amplitude2(c, wavelength_nm, dm, material, polarization,
+                                                             azimuth_deg), dtype=float)
+        return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.scattered_share(cc, dm, material,
+                                                                                         polarization))
+
+    def lobe_energy_scale(self, cos_theta_i, wavelength_nm, diffraction="kirchhoff", material=None,
+                          polarization: str = "unpolarized"):
+        """The factor that gives a statistics lobe at incidence θ_i its scattered albedo continued beyond the
+        tangent plane's validity (:meth:`waveoptics.scatter.BandSeries.lobe_energy_scale`; 1 up to
+        :data:`waveoptics.scatter.band.TANGENT_PLANE_MAX_DEG`, for Rayleigh-Rice and for height fields)."""
+        c = np.clip(np.asarray(cos_theta_i, dtype=float), 0.0, 1.0)
+        if self.model is None:
+            return np.ones(np.broadcast_shapes(c.shape, np.shape(wavelength_nm)))
+        dm = scatter.get_model(diffraction, perturbative=True)
+        return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.lobe_energy_scale(
+            np.degrees(np.arccos(cc)), dm, material, polarization))
+
+    def _per_wavelength(self, c, wavelength_nm, fn):
+        """fn(band_series(λ), cos) over broadcast (cos, λ) arrays, one band series per distinct λ."""
+        lam = np.asarray(wavelength_nm, dtype=float)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        out = np.empty(c_b.shape)
+        for l_val in np.unique(lam_b):
+            sel = lam_b == l_val
+            out[sel] = fn(scatter.band_series(self.model, float(l_val)), c_b[sel])
+        return out if out.ndim else float(out)
 
     def periodogram(self):
         """The height field's :class:`~waveoptics.surfaces.PeriodogramPSD` (computed once): its PSD where a
@@ -171,9 +210,12 @@ class Nano:
 
     def _rayleigh_rice_coherent(self, c, wavelength_nm, material):
         """1 − E_RR(θ) of the height field's periodogram (:func:`waveoptics.scatter.rayleigh_rice_albedo`),
-        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and material."""
+        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and material, on a conductor; on a
+        dielectric the Debye-Waller factor of the periodogram's band (:meth:`_periodogram_debye_waller`)."""
         from ..scatter.band import RR_THETAS_DEG, rr_interp
 
+        if not scatter.is_conductor(material):   # a dielectric: the Debye-Waller factor of the periodogram's band
+            return self._periodogram_debye_waller(c, wavelength_nm)
         cache = self.__dict__.setdefault("_cache", {})
         lam = np.asarray(wavelength_nm, dtype=float)
         c_b, lam_b = np.broadcast_arrays(c, lam)
@@ -186,6 +228,51 @@ class Nano:
             sel = lam_b == l_val
             E = rr_interp(np.degrees(np.arccos(c_b[sel])), cache[key])
             out[sel] = np.clip(1.0 - E, 0.0, 1.0)   # guard: first-order TIS above R means σ far outside its domain
+        return out if out.ndim else float(out)
+
+    def _periodogram_debye_waller(self, c, wavelength_nm):
+        """exp(−(2k σ_rel cosθ)²), σ_rel² the height field's periodogram summed over the propagating disc of
+        incidence θ (azimuth 0, the plane of the Rayleigh-Rice albedo), tabulated on
+        :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and interpolated linearly in sinθ (Davies 1954;
+        Krywonos, Harvey & Choi 2011; docs/physics.md §9)."""
+        from ..scatter.band import RR_THETAS_DEG
+
+        cache = self.__dict__.setdefault("_cache", {})
+        psd = self.periodogram()
+        FX, FY = np.meshgrid(psd.fx, psd.fy)
+        cell = (psd.fx[1] - psd.fx[0]) * (psd.fy[1] - psd.fy[0]) if psd.fx.size > 1 and psd.fy.size > 1 else 0.0
+        sin_nodes = np.sin(np.radians(RR_THETAS_DEG))
+        lam = np.asarray(wavelength_nm, dtype=float)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        out = np.empty(c_b.shape)
+        for l_val in np.unique(lam_b):
+            key = ("rr-dw", float(l_val))
+            R = 1.0 / (float(l_val) * 1e-9)
+            if key not in cache:
+                cache[key] = np.array([float(np.sum(psd.P[np.hypot(FX + s_ * R, FY) <= R])) * cell
+                                       for s_ in sin_nodes])
+            sel = lam_b == l_val
+            cc = c_b[sel]
+            s2 = np.interp(np.sqrt(np.maximum(1.0 - cc * cc, 0.0)), sin_nodes, cache[key])
+            out[sel] = np.exp(-(2 * np.pi * R * 2 * cc) ** 2 * s2)
+        return out if out.ndim else float(out)
+
+    def _rayleigh_rice_tis(self, c, wavelength_nm, material, polarization):
+        """TIS(θ) of the height field's periodogram (absolute, :func:`waveoptics.scatter.rayleigh_rice_tis`),
+        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength, material and polarization."""
+        from ..scatter.band import RR_THETAS_DEG, rr_interp
+
+        cache = self.__dict__.setdefault("_cache", {})
+        lam = np.asarray(wavelength_nm, dtype=float)
+        c_b, lam_b = np.broadcast_arrays(c, lam)
+        out = np.empty(c_b.shape)
+        for l_val in np.unique(lam_b):
+            key = ("rr-tis", float(l_val), None if material is None else material.name, polarization)
+            if key not in cache:
+                cache[key] = np.array([scatter.rayleigh_rice_tis(t, float(l_val), self.periodogram(), material,
+                                                                 polarization) for t in RR_THETAS_DEG])
+            sel = lam_b == l_val
+            out[sel] = rr_interp(np.degrees(np.arccos(c_b[sel])), cache[key])
         return out if out.ndim else float(out)
 
     def _field_coherent(self, c, wavelength_nm, dm, material, polarization, azimuth_deg):
@@ -368,11 +455,11 @@ def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, d
     used = (np.ones(cos_d.shape, bool) if kernel is None or nano.surface is None
             else _significant(kernel))
     for i, lam in enumerate(wavelengths_nm):
-        lost_i = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, polarization, phi))
+        # the light each facet scatters (1 − A on a conductor, the lobe's own albedo on a dielectric)
+        lost_i = float(nano.scattered_share(wi[2], lam, diffraction, material, polarization, phi))
         # guard: a nano surface that scatters nothing at θ_i has no lobe to weight
         if lost_i > 1e-12 and used.any():
-            out[i][used] = (1.0 - nano.coherent_amplitude2(cos_d[used], lam, diffraction, material, polarization,
-                                                          phi)) / lost_i
+            out[i][used] = nano.scattered_share(cos_d[used], lam, diffraction, material, polarization, phi) / lost_i
     return out
 
 
@@ -427,6 +514,9 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
             Fi = F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam)
             out[i], cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True,
                                                  diffraction=diffraction)
+            # beyond the tangent plane's validity the lobe carries the continued albedo (BandSeries.scattered_albedo)
+            out[i] *= float(nano.lobe_energy_scale(wi[2], lam, diffraction, material,
+                                                   getattr(F, "polarization", "unpolarized")))
             # guard: the truncated series misses the light of its terms m > m_max once g = (kσ(cosθ_i + cosθ_o))²
             # ≳ 30 (σ ≳ λ/2): refuse rather than return a lobe that silently lacks that energy
             low = float(np.min(np.where(grid.inside, cap, 1.0)))
@@ -696,15 +786,18 @@ CAP_TOLERANCE = 1e-2
 def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
     """Scale the diffracted lobes down where they hold more light than the coherent lobe gave up.
 
-    guard: the coherent fraction is the complement of the nano lobe's own albedo (energy conservation,
-    :meth:`waveoptics.brdf.Nano.coherent_amplitude2`), so the two halves agree to quadrature accuracy and this
-    step does not act (it lets through up to :data:`CAP_TOLERANCE`; measured at θ_i ≤ 70° on Gaussian, exponential
-    and ABC PSDs with C from 2.2 to 4, σ up to λ/10, micro α up to 0.3: the lobe exceeds its budget by ≤ 2e-3).
-    It acts only near grazing incidence, where the tangent-plane obliquity |s|⁴ / (4 λ² cosθ_i cosθ_o
-    (cosθ_i + cosθ_o)²) makes the Kirchhoff lobe's albedo grow without bound (PSD route, Gaussian σ = 100 nm,
-    T = 1 µm, λ = 500 nm, F = 1: 1.32 at θ_i = 89°, 11.9 at 89.9°, 1.2e3 at 89.999°) and no specular light is
-    left (E¹ ≥ 1): the lobe is then scaled to the reflected light F, its shape kept. The factor applied is
-    reported (``diffraction_energy_scale``); docs/two-scale.md tabulates where it acts.
+    guard: on a conductor the coherent fraction is the complement of the nano lobe's own albedo (energy
+    conservation, :meth:`waveoptics.brdf.Nano.coherent_amplitude2`), so the two halves agree to quadrature accuracy
+    and this step does not act (it lets through up to :data:`CAP_TOLERANCE`; measured at θ_i ≤ 70° on Gaussian,
+    exponential and ABC PSDs with C from 2.2 to 4, σ up to λ/10, micro α up to 0.3: the lobe exceeds its budget by
+    ≤ 2e-3; with no micro roughness up to 89.5°, tests/test_grazing.py). On a dielectric the budget is all the light
+    the facets receive and do not reflect coherently (the scattered light also draws on the transmitted beam), which
+    the lobe does not approach (tests/test_dielectric_energy.py: glass, s, p and unpolarized, 30–75° and Brewster's
+    angle). Beyond 75° the tangent-plane lobe carries an albedo continued with first-order perturbation theory
+    (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`; before, its obliquity made it grow without bound and
+    this step trimmed it). Where it does act (a grid too coarse for a wide lobe, micro roughness at grazing
+    incidence on a grid whose cells cannot resolve the facets' incidences) it warns in one line with the share it
+    removed, and reports the factor (``diffraction_energy_scale``).
 
     Parameters
     ----------
@@ -720,6 +813,11 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid):
     got = integrate(diffraction, grid)
     budget = np.maximum(integrate(lost, grid), 0.0)
     scale = np.where(got > budget * (1.0 + CAP_TOLERANCE), budget / np.where(got > 0, got, 1.0), 1.0)
+    if np.any(scale < 1.0):
+        i = int(np.argmin(scale))
+        warnings.warn(f"two-scale energy guard removed {100 * (1 - scale[i]):.3g}% of the diffracted light "
+                      f"({got[i] - budget[i]:.3g} of the incident light) at wavelength index {i}: the nano lobe "
+                      "held more than its energy budget", scatter.DiffractionWarning, stacklevel=3)
     return diffraction * scale[:, None, None], scale
 
 
@@ -793,9 +891,11 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         mf = np.zeros(shape)
         cell = _mirror_cell(grid, wi)
         rho = float(albedo(wi, fresnel="one", **micro.kw()))
+        mf_one = np.zeros(shape)   # the same lobe with F = 1: all the light the facets receive
         if cell is not None:
             Fi = np.array([float(np.ravel(_F_mirror(F, wi, lam))[0]) for lam in w])
             mf[:, cell[0], cell[1]] = Fi * rho / (grid.du * grid.dv)
+            mf_one[:, cell[0], cell[1]] = rho / (grid.du * grid.dv)
         A = np.array([float(nano.coherent_amplitude2(wi[2], lam, dm, mat, polarization, _azimuth_deg(wi)))
                       if sigma_nano > 0 else 1.0 for lam in w])
         coherent = mf * A[:, None, None]
@@ -826,6 +926,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
                     A[used] = nano.coherent_amplitude2(cos_d[used], lam, dm, mat, polarization, phi)
             coherent[i] = mf[i] * A
         mf = np.where(inside, mf, 0.0)
+        mf_one = np.broadcast_to(np.where(inside, f1, 0.0), shape)
         coherent = np.where(inside, coherent, 0.0)
 
     # --- diffraction: nano lobe carried by the facets --------------------------------------------------------
@@ -838,8 +939,10 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         # the light each facet's lobe, shifted to that facet's mirror direction, puts beyond the horizon (the
         # convolution's total is Σ f_n du dv × Σ K): lost, as shadowing would lose it
         beyond = np.maximum(integrate(fn, grid) * K.sum(axis=(-2, -1)) - integrate(diffraction, grid), 0.0)
-        if reference_grid is None:
-            diffraction, energy_scale = _cap_to_coherent_loss(diffraction, mf - coherent, grid)
+        if reference_grid is None:   # a conductor's lobe holds the coherent lobe's loss; a dielectric's at most
+            # all the light the facets receive and do not reflect coherently (it also draws on the transmitted beam)
+            budget = (mf if scatter.is_conductor(mat) else mf_one) - coherent
+            diffraction, energy_scale = _cap_to_coherent_loss(diffraction, budget, grid)
         else:
             energy_scale = np.ones(w.size)
         used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")

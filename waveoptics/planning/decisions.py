@@ -10,7 +10,7 @@ from scipy.special import jv
 from .. import surfaces
 from ..brdf import twoscale
 
-__all__ = ['DE_PER_RELATIVE_Y', 'LSTAR_SLOPE_BLACK', 'LAMBDA_REF_NM', 'EPS32', 'scattered_fraction', 'lobe_width', 'diffraction_lobe_width', 'grid_step', 'float32_floor', 'weakest_level', 'grating_orders', 'ORDER_EFFICIENCY_MIN']
+__all__ = ['DE_PER_RELATIVE_Y', 'LSTAR_SLOPE_BLACK', 'LAMBDA_REF_NM', 'EPS32', 'scattered_fraction', 'lobe_width', 'diffraction_lobe_width', 'grid_step', 'float32_floor', 'weakest_level', 'grating_orders', 'ORDER_EFFICIENCY_MIN', 'first_order_g']
 
 #: CIE L* slope dL*/dln Y at L* = 50 (Y = 0.1842): 116/3 · Y^(1/3) = 22.0 ΔE per unit relative luminance
 DE_PER_RELATIVE_Y = 116.0 / 3.0 * ((50.0 + 16.0) / 116.0)
@@ -90,3 +90,22 @@ def grating_orders(amplitude_m: float, period_m: float, wavelength_nm: float) ->
 
 #: diffraction orders with efficiency below this are ignored for the wavelength step of gratings
 ORDER_EFFICIENCY_MIN = 1e-3
+
+
+def first_order_g(model: surfaces.PSDModel, theta_deg, wavelength_nm: float) -> float:
+    """The largest g = (k σ_rel (cosθ_i + cosθ_o))² over the outgoing directions (cosθ_o = 1) at each incidence
+    *theta_deg* (degrees; the largest over them), σ_rel the roughness in the propagating band of that incidence:
+    first-order perturbation theory (Rayleigh-Rice) holds where it is ≪ 1. Towards grazing incidence it falls to
+    (k σ_rel)², a quarter of its normal-incidence value.
+
+    References
+    ----------
+    .. [1] E. I. Thorsos, D. R. Jackson, JASA 86(1), 261–277, 1989 (domain of the perturbation approximation).
+    .. [2] A. Krywonos, J. E. Harvey, N. Choi, JOSA A 28(6), 2011 (relevant roughness).
+    """
+    from ..scatter.band import relevant_sigma2
+
+    t = np.radians(np.atleast_1d(np.asarray(theta_deg, dtype=float)))
+    k = 2 * np.pi / (wavelength_nm * 1e-9)
+    s2 = relevant_sigma2(model, wavelength_nm, np.sin(t))
+    return float(np.max(k ** 2 * s2 * (np.cos(t) + 1.0) ** 2))

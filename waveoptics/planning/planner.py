@@ -85,6 +85,7 @@ from .decisions import (
     LAMBDA_REF_NM,
     ORDER_EFFICIENCY_MIN,
     diffraction_lobe_width,
+    first_order_g,
     float32_floor,
     grating_orders,
     grid_step,
@@ -525,24 +526,28 @@ def _decide_diffraction_model(e: _Entry) -> None:
         e.decide("diffraction model", e.spec.diffraction, "set by the scene")
         return
     e.diffraction_model = "kirchhoff"
-    theta_max = max(t for t, _ in e.light.directions_deg) if not e.sphere else 88.0
-    # first order holds in every direction while g at normal incidence and backscatter, (4πσ/λ)², is small
-    g_any = float(roughness_g(e.proxy.sigma, 2.0, e.lam_min))
+    thetas = [t for t, _ in e.light.directions_deg] if not e.sphere else list(np.linspace(0.0, 88.0, 45))
+    theta_max = max(thetas)
+    # first order holds at an incidence while g = (k σ_rel (cosθ_i + 1))², the largest over its outgoing directions,
+    # is small: the sphere's facets see every incidence (normal included), a grazing light only its own
+    g_any = (first_order_g(e.proxy, thetas, e.lam_min) if e.spec.nano.kind == "statistics"
+             else float(roughness_g(e.proxy.sigma, 2.0, e.lam_min)))
     if theta_max > KIRCHHOFF_GRAZING_DEG and e.spec.nano.kind == "statistics" and g_any <= RAYLEIGH_RICE_G_MAX:
         e.diffraction_model = "rayleigh-rice"
         e.decide("diffraction model", "rayleigh-rice",
-                 f"light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}° on a smooth surface ((4πσ/λ_min)² = "
-                 f"{g_any:.2g} ≤ {RAYLEIGH_RICE_G_MAX:g}, first-order perturbation theory's domain): "
-                 "Kirchhoff's tangent-plane factor over-scatters there (Al, ABC σ = 5 nm, 550 nm: 0.53 % of F "
-                 "scattered at 85° and 2.1 % at 89° against Rayleigh-Rice's 0.20 % and 0.053 %), while Rayleigh-Rice "
-                 "with its polarization factor Q conserves energy to its order and agrees with Kirchhoff within "
-                 "1 % up to 60°")
+                 f"light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}° on a surface smooth at these "
+                 f"incidences (g = (kσ_rel(cosθ_i + 1))² ≤ {g_any:.2g} ≤ {RAYLEIGH_RICE_G_MAX:g}, first-order "
+                 "perturbation theory's domain): beyond 75° the tangent-plane lobe is outside its validity and "
+                 "only carries an albedo continued with Rayleigh-Rice's incidence dependence (docs/physics.md §9), "
+                 "while Rayleigh-Rice with its polarization factor Q gives the lobe's shape there too and agrees "
+                 "with Kirchhoff within 1 % up to 60°")
         return
     why = ("tangent-plane Kirchhoff: the model held against the flat-patch, exp(−g), grating and Beckmann limits; "
            "RGHS differs from it by ~1 % on a rough surface, OHS/ROHS by 36 % at θ_i = 30°")
     if theta_max > KIRCHHOFF_GRAZING_DEG:
-        why += (f"; light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}°, where its factor exceeds the "
-                "light the coherent lobe gives up and the two-scale guard trims the diffracted lobe")
+        why += (f"; light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}°, beyond the tangent plane's "
+                "validity: there its lobe carries its 75° albedo continued with first-order perturbation theory's "
+                "incidence dependence (docs/physics.md §9)")
     e.decide("diffraction model", "kirchhoff", why)
 
 

@@ -19,9 +19,12 @@ rohs          (cosθ_i + cosθ_o)² / (4 λ² cosθ_i cosθ_o)                2 
 
 (s = ω_i + ω_o, k = 2π/λ.) All K equal 1/λ² at the mirror direction, so a flat patch reflects F(θ_i) in every
 model; they part away from it. Kirchhoff (Beckmann & Spizzichino 1963) is the tangent-plane result; the
-Harvey-Shack family (original OHS with the normal-incidence phase 2k, generalized GHS with the true v_z) comes from
-the linear-systems treatment of scatter (Harvey; Krywonos, Harvey & Choi 2011); ROHS and RGHS are their variants with
-the symmetric obliquity in the reference code of Yan et al. 2018. Measured differences on one surface: docs/
+Harvey-Shack family (original OHS with the normal-incidence phase 2k, and ``ghs`` with the true v_z) comes from the
+linear-systems treatment of scatter (Harvey 1976; Krywonos, Harvey & Choi 2011). ``ghs`` here is the form in the
+reference code of Yan et al. 2018: the GHS phase and obliquity cosθ_o/cosθ_i *without* the renormalization
+constant K of Krywonos, Harvey & Choi 2011, which rescales the scattered light to what the propagating directions
+can carry; without it the F = 1 lobe does not conserve energy (albedo 0.953 at normal incidence, measured in
+issue 28). ROHS and RGHS are the variants with the symmetric obliquity in the same code. Measured differences on one surface: docs/
 wave-optics.md. Rayleigh-Rice (``rayleigh-rice``), the smooth-surface perturbation model with the polarization
 factor Q, is registered here too (``perturbative``): it has no K and no vertical phase, its lobe comes from the
 PSD (:mod:`waveoptics.scatter.perturbation`), and only the two-scale model takes it as a nano lobe.
@@ -118,7 +121,8 @@ class DiffractionModel:
 DIFFRACTION_MODELS = {
     "kirchhoff": DiffractionModel("kirchhoff", K_kirchhoff, None,
                                   "tangent-plane Kirchhoff (Beckmann & Spizzichino 1963)"),
-    "ghs": DiffractionModel("ghs", K_harvey_shack, None, "generalized Harvey-Shack (Krywonos, Harvey & Choi 2011)"),
+    "ghs": DiffractionModel("ghs", K_harvey_shack, None, "generalized Harvey-Shack phase and obliquity as in Yan et "
+                            "al. 2018, without the renormalization K of Krywonos, Harvey & Choi 2011"),
     "rghs": DiffractionModel("rghs", K_symmetric, None, "GHS phase with the symmetric obliquity (Yan et al. 2018)"),
     "ohs": DiffractionModel("ohs", K_harvey_shack, 2.0, "original Harvey-Shack: normal-incidence phase 2k"),
     "rohs": DiffractionModel("rohs", K_symmetric, 2.0, "OHS phase with the symmetric obliquity (Yan et al. 2018)"),

@@ -45,7 +45,7 @@ from .series import rayleigh_rice
 
 __all__ = ["POLARIZATIONS", "COMPONENTS", "PEC_PERMITTIVITY", "scattering_angles", "q_factors", "Q",
            "rayleigh_rice_components", "rayleigh_rice_brdf", "permittivity", "rayleigh_rice_lobe",
-           "rayleigh_rice_albedo"]
+           "rayleigh_rice_albedo", "rayleigh_rice_tis"]
 
 #: relative permittivity standing for a perfect conductor (|ε| → ∞: every q tends to Rice's limit, reflectance 1)
 PEC_PERMITTIVITY = -1e12 + 0j
@@ -147,11 +147,62 @@ def rayleigh_rice_lobe(wi, wo, wavelength_nm, psd, material=None, polarization: 
     return rayleigh_rice_brdf(wi, wo, wavelength_nm, psd, eps, polarization)
 
 
+def _specular_reflectance(theta, wavelength_nm, material, polarization):
+    """R(θ) of a flat *material* (s, p or unpolarized; 1 without one)."""
+    import math
+
+    from ..materials.fresnel import F_facet_polarized
+
+    if material is None:
+        return 1.0
+    wi = np.array([math.sin(theta), 0.0, math.cos(theta)])
+    mirror = np.array([-wi[0], 0.0, wi[2]])
+    if polarization != "unpolarized":
+        return float(F_facet_polarized(wi, mirror, material.eta(wavelength_nm), polarization))
+    return float(material.F(math.cos(theta), wavelength_nm))
+
+
+def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization: str = "unpolarized",
+                      scalar: bool = False) -> float:
+    """TIS(θ) = ∫ f_RR cosθ_o dω_o (unitless, a share of the incident light) over the hemisphere
+    (:func:`waveoptics.scatter.polar_albedo`): the light first-order roughness scatters into reflection.
+
+    *scalar*: the first order of the scalar problem with a reflection coefficient of modulus 1 (the Dirichlet
+    problem, Q = 1; the Kirchhoff lobe with F = 1 is the tangent-plane approximation of that problem) in place of
+    the vector Q of the *material*.
+
+    References
+    ----------
+    .. [1] J. C. Stover, *Optical Scattering*, 3rd ed., SPIE 2012, §4.4 (TIS of the Rayleigh-Rice BRDF).
+    .. [2] E. I. Thorsos, D. R. Jackson, "The validity of the perturbation approximation for rough surface
+       scattering using a Gaussian roughness spectrum", JASA 86(1), 261–277, 1989 (scalar Dirichlet first order,
+       Q = 1).
+    """
+    import math
+
+    from .band import polar_albedo
+    from .series import rayleigh_rice
+
+    lam = float(wavelength_nm)
+    t = math.radians(float(theta_deg))
+    k = 2 * math.pi / (lam * 1e-9)
+    if scalar:
+        def lobe(wi_b, wo, q):
+            return rayleigh_rice(wi_b, wo, lam, psd)
+    else:
+        eps = complex(np.ravel(permittivity(material, lam))[0])
+
+        def lobe(wi_b, wo, q):
+            return rayleigh_rice_brdf(wi_b, wo, lam, psd, eps, polarization)
+    return polar_albedo(t, k, psd.length_scale, lobe)
+
+
 def rayleigh_rice_albedo(theta_deg, wavelength_nm, psd, material=None, polarization: str = "unpolarized") -> float:
     """E_RR(θ) = TIS(θ) / R(θ): the share of the specularly reflected light R (Fresnel, s, p or unpolarized; 1 for a
     perfect conductor) that first-order roughness scatters, with TIS = ∫ f_RR cosθ_o dω_o over the hemisphere
-    (:func:`waveoptics.scatter.polar_albedo`). The coherent fraction of the two-scale model is 1 − E_RR (energy
-    conservation; to first order 1 − E_RR = exp(−g) for a paraxial lobe, Church, Jenkinson & Zavada 1979).
+    (:func:`rayleigh_rice_tis`). On a conductor the coherent fraction of the two-scale model is 1 − E_RR (energy
+    conservation; to first order 1 − E_RR = exp(−g) for a paraxial lobe, Church, Jenkinson & Zavada 1979); on a
+    dielectric it is not (docs/physics.md §9).
 
     References
     ----------
@@ -160,23 +211,6 @@ def rayleigh_rice_albedo(theta_deg, wavelength_nm, psd, material=None, polarizat
     """
     import math
 
-    from ..materials.fresnel import F_facet_polarized
-    from .band import polar_albedo
-
-    lam = float(wavelength_nm)
-    t = math.radians(float(theta_deg))
-    eps = complex(np.ravel(permittivity(material, lam))[0])
-    k = 2 * math.pi / (lam * 1e-9)
-
-    def lobe(wi_b, wo, q):
-        return rayleigh_rice_brdf(wi_b, wo, lam, psd, eps, polarization)
-    tis = polar_albedo(t, k, psd.length_scale, lobe)
-    if material is None:
-        R = 1.0
-    else:
-        wi = np.array([math.sin(t), 0.0, math.cos(t)])
-        mirror = np.array([-wi[0], 0.0, wi[2]])
-        pol = polarization if polarization != "unpolarized" else None
-        R = (float(F_facet_polarized(wi, mirror, material.eta(lam), pol)) if pol
-             else float(material.F(math.cos(t), lam)))
+    tis = rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material, polarization)
+    R = _specular_reflectance(math.radians(float(theta_deg)), float(wavelength_nm), material, polarization)
     return tis / max(R, 1e-300)
