@@ -123,9 +123,9 @@ def _spectral_adapter(mi, extra, wi, lam):
 
 
 @needs_llvm
-@pytest.mark.parametrize("variant", ["llvm_ad_rgb", "llvm_ad_spectral"])
-@pytest.mark.parametrize("case,theta_deg", [(GOLD, 30.0), (ANISO, 60.0), (PLASTIC, 0.0), (GOLD, 75.0)])
-def test_plugin_passes_mitsubas_chi2(variant, case, theta_deg):
+@pytest.mark.parametrize("case,theta_deg,variant", [(GOLD, 30.0, "llvm_ad_rgb"), (ANISO, 60.0, "llvm_ad_spectral"),
+                                                    (PLASTIC, 0.0, "llvm_ad_rgb"), (GOLD, 75.0, "llvm_ad_spectral")])
+def test_plugin_passes_mitsubas_chi2(variant, case, theta_deg):   # each case once, both variants covered
     mi = wm.register(variant)
     from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 

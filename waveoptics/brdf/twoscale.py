@@ -600,15 +600,16 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
     or over-counted (measured: Au, σ = 20 nm, T = 30 µm, 128² grid: 18 % of the light at 450 nm lost). The cells
     near the mirror direction (the core, :data:`CORE_CELLS`) take the lobe's average over each cell instead of its
     centre value (:func:`_core_cell_averages`); the tail beyond keeps its point samples, which a heavy ABC tail's
-    slow variation leaves accurate. The lobe's energy is then made F(θ_i) · E, E = 1 − A the share of the reflected
-    light the nano lobe scatters (:meth:`Nano.coherent_amplitude2`, the complement of the coherent fraction the
-    specular lobe keeps, so the two add up to the reflected light; while the lobe is paraxial E ≈ 1 − exp(−g_i),
-    g_i = (4πσ_rel cosθ_i / λ)², docs/physics.md §3, §9) by scaling the core cells alone: the cell averages
-    leave them within about 1 % of it, and the tail, which the grid samples well, is never scaled. When no core
-    cell holds any of the lobe, that energy is deposited in the mirror cell (as a micro lobe narrower than a cell
-    is, see :func:`evaluate`). Before, the whole lobe was scaled, tail included: ABC σ = 10 nm, B = 200 µm, C = 3,
-    450 nm, 30°, 128² grid: ×2.7, the tail beyond 0.1 direction-cosine units 2.7× a 1024² grid's
-    (tests/test_narrow_lobes.py).
+    slow variation leaves accurate. The lobe's energy is then made its scattered albedo: on a conductor F(θ_i) · E,
+    E = 1 − A the share of the reflected light the nano lobe scatters (:meth:`Nano.coherent_amplitude2`, the
+    complement of the coherent fraction the specular lobe keeps, so the two add up to the reflected light; while
+    the lobe is paraxial E ≈ 1 − exp(−g_i), g_i = (4πσ_rel cosθ_i / λ)², docs/physics.md §3, §9); on a dielectric
+    the lobe's own absolute albedo (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`), since there the coherent
+    part is the Debye-Waller factor and not the complement of the scattered light. Only the core cells are scaled
+    to reach it (the cell averages leave them within about 1 % of it); the tail, which the grid samples well, is
+    never scaled: ABC σ = 10 nm, B = 200 µm, C = 3, 450 nm, 30°, 128² grid: the energy beyond 0.1 direction-cosine
+    units within 2 % of a 1024² grid's (tests/test_narrow_lobes.py). When no core cell holds any of the lobe, that
+    energy is deposited in the mirror cell (as a micro lobe narrower than a cell is, see :func:`evaluate`).
 
     References
     ----------
@@ -617,15 +618,20 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
     """
     cell = _mirror_cell(grid, wi)
     pol = getattr(F, "polarization", "unpolarized")
+    theta_i = float(np.degrees(np.arccos(np.clip(wi[2], 0.0, 1.0))))
     for i, lam in enumerate(wavelengths_nm):
-        share = 1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, pol))
         Fi = float(np.ravel(_F_mirror(F, wi, lam))[0])
+        if scatter.is_conductor(material):   # the light the coherent lobe gives up, F(θ_i)(1 − A)
+            energy = Fi * (1.0 - float(nano.coherent_amplitude2(wi[2], lam, diffraction, material, pol)))
+        else:   # a dielectric's lobe keeps its own albedo (the coherent part is the Debye-Waller factor)
+            energy = float(scatter.band_series(nano.model, float(lam)).scattered_albedo(
+                theta_i, diffraction, material, pol, absolute=True))
         width = float(lam) * 1e-9 / (np.pi * nano.model.length_scale)
         core, avg = _core_cell_averages(wi, float(lam), nano, grid, F, diffraction, material, width)
         out[i][core] = avg
         tail = float(integrate(np.where(core, 0.0, out[i]), grid))
         in_core = float(np.sum(avg)) * grid.du * grid.dv
-        rest = Fi * share - tail
+        rest = energy - tail
         if in_core > 0 and rest > 0:
             out[i][core] *= rest / in_core
         elif cell is not None and grid.inside[cell] and rest > 0:
