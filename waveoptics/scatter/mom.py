@@ -383,7 +383,8 @@ class MomResult:
     sigma, sigma_se : (n_i, n_s)
         Mean scattering coefficient ⟨σ(θₛ)⟩ (per radian; module doc) and its standard error over realizations.
     sigma_incoherent : (n_i, n_s)
-        (M/(M−1)) (⟨|A|²⟩ − |⟨A⟩|²)/(8πkP_inc) for M realizations (unbiased; equal to sigma when M = 1).
+        (M/(M−1)) (⟨|A|²⟩ − |⟨A⟩|²)/(8πkP_inc) for M realizations (unbiased; equal to sigma when M = 1);
+        sigma_incoherent_se its standard error (the spread of the M terms (M/(M−1))|A_j − ⟨A⟩|² over √M).
     albedo, albedo_se : (n_i,)
         Mean reflectance ∫σ dθₛ and its standard error; albedo_incoherent: the same of sigma_incoherent.
     seconds_per_realization : float, s (fill, solve and far field).
@@ -397,6 +398,7 @@ class MomResult:
     sigma: np.ndarray
     sigma_se: np.ndarray
     sigma_incoherent: np.ndarray
+    sigma_incoherent_se: np.ndarray
     albedo: np.ndarray
     albedo_se: np.ndarray
     albedo_incoherent: np.ndarray
@@ -406,10 +408,11 @@ class MomResult:
 
 
 def _incoherent(amps, m):
-    """Unbiased (M/(M−1))(⟨|A|²⟩ − |⟨A⟩|²) over the first axis."""
+    """Per-realization terms (M/(M−1))|A_j − ⟨A⟩|² (first axis) whose mean is the unbiased incoherent
+    (M/(M−1))(⟨|A|²⟩ − |⟨A⟩|²); |A_j|² when M = 1."""
     if m == 1:
-        return np.abs(amps[0]) ** 2
-    return m / (m - 1) * (np.mean(np.abs(amps) ** 2, axis=0) - np.abs(np.mean(amps, axis=0)) ** 2)
+        return np.abs(amps) ** 2
+    return m / (m - 1) * np.abs(amps - np.mean(amps, axis=0)) ** 2
 
 
 def mom_scatter(request: MomRequest) -> MomResult:
@@ -442,8 +445,8 @@ def mom_scatter(request: MomRequest) -> MomResult:
     sig, alb = np.array(sig), np.array(alb)
     norm = 8 * math.pi * K * sol.incident_power[:, None]
     se = (lambda a: np.std(a, axis=0, ddof=1) / math.sqrt(m) if m > 1 else np.full(a.shape[1:], np.nan))
-    inc_gl = _incoherent(np.array(gl_amps), m) / norm
-    return MomResult(r, sol.theta_deg, sol.scatter_deg, sig.mean(axis=0), se(sig),
-                     _incoherent(np.array(amps), m) / norm, alb.mean(axis=0), se(alb), inc_gl @ sol.gl_weights,
-                     seconds, n * (1 if r.refractive_index is None else 2),
-                     K * g * np.cos(np.radians(sol.theta_deg)) ** 2)
+    inc = _incoherent(np.array(amps), m) / norm
+    inc_gl = _incoherent(np.array(gl_amps), m).mean(axis=0) / norm
+    return MomResult(r, sol.theta_deg, sol.scatter_deg, sig.mean(axis=0), se(sig), inc.mean(axis=0), se(inc),
+                     alb.mean(axis=0), se(alb), inc_gl @ sol.gl_weights, seconds,
+                     n * (1 if r.refractive_index is None else 2), K * g * np.cos(np.radians(sol.theta_deg)) ** 2)
