@@ -31,7 +31,7 @@ def _nodes(length, ppw=10):
 
 
 def _beam(x, theta_deg, g):
-    """Thorsos 1988 eq. 14 on z = 0: exp{ikx sinθ (1 + w)} exp(−x²/g²), w = (2x²/g² − 1)/(kg cosθ)²."""
+    """Thorsos 1988 on z = 0: exp{ikx sinθ (1 + w)} exp(−x²/g²), w = (2x²/g² − 1)/(kg cosθ)²."""
     t = math.radians(theta_deg)
     w = (2 * x ** 2 / g ** 2 - 1) / (K * g * math.cos(t)) ** 2
     return np.exp(1j * K * x * math.sin(t) * (1 + w) - x ** 2 / g ** 2)
@@ -151,7 +151,7 @@ def test_shallow_sinusoid_agrees_with_rayleigh_fourier(n, pol):
 
 def test_slightly_rough_dirichlet_surface_follows_first_order_perturbation():
     """kσ = 0.1, kℓ = 3: the incoherent reflectance ∫σ dθₛ against 4k³ cosθᵢ cos²θₛ W(k(sinθₛ − sinθᵢ)),
-    W(K) = σ²ℓ/(2√π) e^{−K²ℓ²/4} (Thorsos & Jackson 1989 eq. 2 in 1-D), whose error is O((kσ)²); 10
+    W(K) = σ²ℓ/(2√π) e^{−K²ℓ²/4} (Thorsos & Jackson 1989, in 1-D), whose error is O((kσ)²); 10
     realizations of 24 λ leave a sampling error of about 5 % (measured +4 % at 0°, +7 % at 40°)."""
     ks, kl = 0.1, 3.0
     res = mom_scatter(MomRequest(ks / K, kl / K, (0.0, 40.0), "s", None, 24.0, 6.0, 10.0, 10, 5))

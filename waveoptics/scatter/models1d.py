@@ -12,7 +12,7 @@ incident power: ∫σ dθₛ is the diffuse reflectance) and the coherent (specu
       σ_KA = kℓ |r|² F² / (2√π cosθᵢ) · e^{−g} Σ_{m≥1} g^m/(m! √m) e^{−vₓ²ℓ²/(4m)},   g = v_z²σ²,
       coherent reflectance |r(θᵢ)|² e^{−(2kσ cosθᵢ)²}.
 
-  (Thorsos 1988 eqs. 30–33 for the perfect conductor, where |r| = 1; the Fresnel factor at the specular-facet
+  (Thorsos 1988 for the perfect conductor, where |r| = 1; the Fresnel factor at the specular-facet
   angle is Beckmann & Spizzichino's.)
 * First-order perturbation (Rayleigh-Rice, 1-D): σ_SPM = 4k³ cosθᵢ cos²θₛ |α|² W(vₓ), with
   α_s = (ε − 1)/((cosθᵢ + qᵢ)(cosθₛ + qₛ)), α_p = (ε − 1)(ε sinθᵢ sinθₛ − qᵢqₛ)/((ε cosθᵢ + qᵢ)(ε cosθₛ + qₛ)),
@@ -66,7 +66,7 @@ def kirchhoff_1d(theta_i_deg, theta_s_deg, k_sigma, k_ell, polarization="s", ref
 
     References
     ----------
-    .. [1] E. I. Thorsos, J. Acoust. Soc. Am. 83(1), 78–92, 1988, eqs. 30–33.
+    .. [1] E. I. Thorsos, J. Acoust. Soc. Am. 83(1), 78–92, 1988.
     .. [2] P. Beckmann, A. Spizzichino, 1963, ch. 5.
     """
     ti, ts = math.radians(theta_i_deg), np.radians(np.asarray(theta_s_deg, float))

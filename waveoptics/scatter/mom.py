@@ -4,8 +4,7 @@ The surface z = h(x) (ridges along y) separates vacuum (above, wavenumber k) fro
 (below, k₂ = n k), or bounds a perfect conductor. ψ is E_y (s, TE) or H_y (p, TM); the time factor is e^{−iωt} and
 the incident wave comes from above towards +x, as in :mod:`waveoptics.scatter.rigorous`. All lengths are in
 wavelengths (λ = 1, k = 2π). With the unnormalized normal N = (−h′, 1), φ(x) = ∂ψ/∂N = (−h′∂ₓ + ∂_z)ψ on the
-surface and G_j = (i/4) H₀⁽¹⁾(k_j r), Green's theorem in each medium, taken to the surface (Maradudin et al. 1990,
-eqs. 2.10–2.11), gives
+surface and G_j = (i/4) H₀⁽¹⁾(k_j r), Green's theorem in each medium, taken to the surface (Maradudin et al. 1990), gives
 
     ½ ψ(x) − P∫ dx′ [ψ(x′) ∂_{N′}G₁ − G₁ φ(x′)] = ψ_inc(x, h(x))
     ½ ψ(x) + P∫ dx′ [ψ(x′) ∂_{N′}G₂ − κ G₂ φ(x′)] = 0,              κ = 1 (s) or n² (p),
@@ -20,14 +19,14 @@ Discretization (Nyström on N equally spaced points, Δx = λ / points_per_wavel
   trapezoidal rule misses Δx ln(Δx/2π) a(0)φ(0) (Navot 1961) and −ζ′(−2)Δx³(aφ)″(0), removed by the diagonal
   weight Δx [b(0) − ln(Δx/2π)/2π] and the Kapur-Rokhlin-type weights ζ′(−2)Δx at the two neighbours (the same
   correction is applied to the log part (k/2π) J₁(kR) N/R of ∂_{N′}G). The diagonal of the double layer is its
-  limit Δx h″/(4π(1 + h′²)) (Maradudin et al. 1990, eq. 2.20);
+  limit Δx h″/(4π(1 + h′²)) (Maradudin et al. 1990);
 * a strongly absorbing medium 2 (a metal: Im k₂ Δx ≥ 1, where G₂ decays within a cell and the correction above
   does not hold): product integration: ψ and φ are interpolated quadratically through three neighbouring nodes,
   the surface is its local Taylor parabola, and each cell's integral of G₂ and ∂_{N′}G₂ against 1, u, u² is done
   by Gauss-Legendre quadrature (the self cell with u = s³ to absorb the logarithm), over the band of cells where
   |G₂| > 10⁻¹⁰ of its value at one cell (beyond: e^{−Im k₂ r} < 10⁻¹⁰, left out).
 
-Incident field: Thorsos' tapered plane wave (Thorsos 1988, eq. 14)
+Incident field: Thorsos' tapered plane wave (Thorsos 1988)
 
     ψ_inc = exp{ik(x sinθᵢ − z cosθᵢ)(1 + w)} exp{−(x + z tanθᵢ)²/g²},  w = [2(x + z tanθᵢ)²/g² − 1]/(kg cosθᵢ)²,
 
@@ -37,7 +36,7 @@ kg cos²θᵢ ≫ 1 (checked: at least :data:`MIN_TAPER_PARAMETER`) and a surfac
 
 Far field: ψ_sc → (i/4) √(2/(πkr)) e^{i(kr − π/4)} A(θₛ) with
 A(θₛ) = ∫ dx e^{−ik(x sinθₛ + h cosθₛ)} [−ik(cosθₛ − h′ sinθₛ) ψ − φ]. The **scattering coefficient** (the 1-D
-bistatic coefficient of Thorsos 1988, eq. 25; the in-plane BRDF times cosθₛ, per radian)
+bistatic coefficient of Thorsos 1988; the in-plane BRDF times cosθₛ, per radian)
 
     σ(θₛ) = |A(θₛ)|² / (8π k P_inc)                       (dimensionless, per radian of θₛ)
 
@@ -55,8 +54,8 @@ References
    roughness spectrum", J. Acoust. Soc. Am. 83(1), 78–92, 1988.
 .. [2] A. A. Maradudin, T. Michel, A. R. McGurn, E. R. Méndez, "Enhanced backscattering of light from a random
    grating", Ann. Phys. 203, 255–307, 1990.
-.. [3] T. A. Leskova, A. A. Maradudin, I. Simonsen / I. Chaikina et al., "Speckle correlations in the light
-   scattered from ... metal surfaces" (Chaikina, Navarrete, Méndez, Martínez, Maradudin, Appl. Opt. 37, 1998).
+.. [3] E. I. Chaikina, A. G. Navarrete, E. R. Méndez, A. Martínez, A. A. Maradudin, "Coherent scattering by
+   one-dimensional randomly rough metallic surfaces", Appl. Opt. 37(6), 1110–1121, 1998.
 .. [4] J. Navot, "An extension of the Euler-Maclaurin summation formula to functions with a branch singularity",
    J. Math. Phys. 40, 271–276, 1961.
 .. [5] S. Kapur, V. Rokhlin, "High-order corrected trapezoidal quadrature rules for singular functions",
@@ -86,11 +85,11 @@ _GL = np.polynomial.legendre.leggauss(12)
 
 
 def thorsos_beam(x, z, theta_deg: float, beam_width_wl: float):
-    """Thorsos' tapered incident wave ψ_inc(x, z) (module doc; Thorsos 1988 eq. 14), x, z in wavelengths.
+    """Thorsos' tapered incident wave ψ_inc(x, z) (module doc; Thorsos 1988), x, z in wavelengths.
 
     References
     ----------
-    .. [1] E. I. Thorsos, J. Acoust. Soc. Am. 83(1), 78–92, 1988, eqs. 14–16.
+    .. [1] E. I. Thorsos, J. Acoust. Soc. Am. 83(1), 78–92, 1988.
     """
     t = math.radians(theta_deg)
     g = beam_width_wl
@@ -106,7 +105,7 @@ def thorsos_incident_power(theta_deg: float, beam_width_wl: float) -> float:
 
     References
     ----------
-    .. [1] E. I. Thorsos, J. Acoust. Soc. Am. 83(1), 78–92, 1988, eq. 20.
+    .. [1] E. I. Thorsos, J. Acoust. Soc. Am. 83(1), 78–92, 1988.
     """
     t = math.radians(theta_deg)
     g = beam_width_wl
@@ -122,7 +121,7 @@ def gaussian_profile(n: int, dx_wl: float, rms_wl: float, corr_wl: float, rng):
 
     References
     ----------
-    .. [1] E. I. Thorsos, J. Acoust. Soc. Am. 83(1), 78–92, 1988, eqs. 4 and 26–27.
+    .. [1] E. I. Thorsos, J. Acoust. Soc. Am. 83(1), 78–92, 1988.
     """
     kk = 2 * math.pi * np.fft.fftfreq(n, dx_wl)
     w = rms_wl ** 2 * corr_wl / (2 * math.sqrt(math.pi)) * np.exp(-(kk * corr_wl) ** 2 / 4)
@@ -384,7 +383,8 @@ class MomResult:
         Mean scattering coefficient ⟨σ(θₛ)⟩ (per radian; module doc) and its standard error over realizations.
     sigma_incoherent : (n_i, n_s)
         (M/(M−1)) (⟨|A|²⟩ − |⟨A⟩|²)/(8πkP_inc) for M realizations (unbiased; equal to sigma when M = 1);
-        sigma_incoherent_se its standard error (the spread of the M terms (M/(M−1))|A_j − ⟨A⟩|² over √M).
+        sigma_incoherent_se its standard error (the spread of the M terms (M/(M−1))|A_j − ⟨A⟩|² over √M);
+        sigma_incoherent_samples (M, n_i, n_s) those terms (their mean is sigma_incoherent), for binned statistics.
     albedo, albedo_se : (n_i,)
         Mean reflectance ∫σ dθₛ and its standard error; albedo_incoherent: the same of sigma_incoherent.
     seconds_per_realization : float, s (fill, solve and far field).
@@ -399,6 +399,7 @@ class MomResult:
     sigma_se: np.ndarray
     sigma_incoherent: np.ndarray
     sigma_incoherent_se: np.ndarray
+    sigma_incoherent_samples: np.ndarray
     albedo: np.ndarray
     albedo_se: np.ndarray
     albedo_incoherent: np.ndarray
@@ -447,6 +448,6 @@ def mom_scatter(request: MomRequest) -> MomResult:
     se = (lambda a: np.std(a, axis=0, ddof=1) / math.sqrt(m) if m > 1 else np.full(a.shape[1:], np.nan))
     inc = _incoherent(np.array(amps), m) / norm
     inc_gl = _incoherent(np.array(gl_amps), m).mean(axis=0) / norm
-    return MomResult(r, sol.theta_deg, sol.scatter_deg, sig.mean(axis=0), se(sig), inc.mean(axis=0), se(inc),
+    return MomResult(r, sol.theta_deg, sol.scatter_deg, sig.mean(axis=0), se(sig), inc.mean(axis=0), se(inc), inc,
                      alb.mean(axis=0), se(alb), inc_gl @ sol.gl_weights, seconds,
                      n * (1 if r.refractive_index is None else 2), K * g * np.cos(np.radians(sol.theta_deg)) ** 2)
