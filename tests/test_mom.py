@@ -183,13 +183,19 @@ def test_bad_requests_name_the_field():
 
 
 def test_quick_validity_map_runs(tmp_path):
-    """The reduced map (scripts/docs_validity_map.py --quick) builds, and on its grid first-order perturbation
-    holds within 20 % of the rigorous mean where kσ is smallest and the Kirchhoff error grows as kℓ drops."""
+    """The reduced map (scripts/docs_validity_map.py --quick) builds its page and data; on its grid the conducting
+    Dirichlet surfaces reflect all the light (its 3 realizations are too few to grade the models: the page says
+    so through its noise floors)."""
     subprocess.run([sys.executable, str(ROOT / "scripts" / "docs_validity_map.py"), "--quick", "--out",
                     str(tmp_path)], check=True, cwd=ROOT, capture_output=True, text=True)
     data = json.loads((tmp_path / "validity_map.json").read_text())
-    assert (tmp_path / "validity-map.md").read_text().startswith("<!-- generated")
+    page = (tmp_path / "validity-map.md").read_text()
+    assert page.startswith("<!-- generated") and "## Where each model holds" in page
     rows = data["rows"]
-    assert rows
+    assert len(rows) == 2 * 1 * 2 * 1 * 2                       # kσ × kℓ × media × polarizations × θᵢ
     for r in rows:
-        assert np.isfinite(r["mom_albedo"])
+        if r["medium"] == "conductor":
+            assert r["mom_albedo"] == pytest.approx(1.0, abs=2e-3)
+        else:
+            assert 0.0 < r["mom_albedo"] < 0.1                  # glass: Fresnel 4 % at normal incidence
+        assert all(np.isfinite(r[k]) for k in ("kirchhoff_l2", "spm1_l2", "noise_floor"))
