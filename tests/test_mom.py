@@ -199,3 +199,18 @@ def test_quick_validity_map_runs(tmp_path):
         else:
             assert 0.0 < r["mom_albedo"] < 0.1                  # glass: Fresnel 4 % at normal incidence
         assert all(np.isfinite(r[k]) for k in ("kirchhoff_l2", "spm1_l2", "noise_floor"))
+
+
+def test_shipped_validity_table_answers_from_the_map():
+    """waveoptics/planning/validity_map.json is the map's rows (docs/data/validity_map.json) in compact form."""
+    from waveoptics.planning.validity import load_validity_map, model_error
+
+    table = load_validity_map()
+    full = json.loads((ROOT / "docs" / "data" / "validity_map.json").read_text())
+    row = full["rows"][0]
+    e = model_error("kirchhoff", row["medium"], row["polarization"], row["theta_deg"], row["k_sigma"], row["k_ell"])
+    assert (e["k_sigma"], e["k_ell"], e["theta_deg"]) == (row["k_sigma"], row["k_ell"], row["theta_deg"])
+    assert e["l2"] == pytest.approx(row["kirchhoff_l2"], abs=1e-4)
+    assert len(table["entries"]) == 2 * len(full["rows"])
+    with pytest.raises(KeyError):
+        model_error("ghs", "glass", "s", 0.0, 0.1, 4.0)
