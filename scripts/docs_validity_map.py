@@ -164,6 +164,24 @@ def corrected(err, noise):
     return math.sqrt(max(err ** 2 - noise ** 2, 0.0))
 
 
+def beam_table(quick):
+    """The mean incoherent reflectance (kσ = 0.3, kℓ = 4) against the beam width g (surface 4g long): it should
+    not depend on g beyond the sampling error once the beam is wide enough."""
+    rows = []
+    widths = (6.0, 10.0) if quick else (6.0, 10.0, 14.0)
+    for medium, pol in ((("conductor", "s"),) if quick else (("conductor", "s"), ("glass", "p"))):
+        for g in widths:
+            res = mom_scatter(MomRequest(0.3 / K, 4.0 / K, (0.0, 40.0, 70.0), pol, MEDIA[medium], 4 * g, g, 10.0,
+                                         4 if quick else 16, seed=5, scatter_deg=tuple(np.arange(-89.5, 90, 1.0))))
+            per = np.trapezoid(res.sigma_incoherent_samples, np.radians(res.scatter_deg), axis=-1)   # (M, n_i)
+            rows.append(dict(medium=medium, polarization=pol, beam_width_wl=g, length_wl=4 * g,
+                             realizations=per.shape[0],
+                             incoherent=[float(v) for v in per.mean(axis=0)],
+                             incoherent_se=[float(v) for v in per.std(axis=0, ddof=1) / math.sqrt(per.shape[0])],
+                             albedo=[float(v) for v in res.albedo], theta_deg=[float(t) for t in res.theta_deg]))
+    return rows
+
+
 def _grade(c, n):
     """'5', '20' (within that tolerance, resolved: noise floor below it too), 'unresolved' (within 20 % but the
     noise floor above 20 %) or 'beyond', for the noise-corrected error c and the noise floor n."""
@@ -262,7 +280,8 @@ def write_markdown(data, path):
          "and first-order perturbation (1-D Rayleigh-Rice, `spm1`). Normalization of σ: docs/physics.md § 13.", "",
          "Each cell: ✓ within 5 %, ○ within 20 %, ✗ beyond, judged on the noise-corrected error √(e² − n²) shown "
          "first, and only where the noise floor n is itself below the tolerance (· marks a model within 20 % of a "
-         "rigorous mean too noisy to tell); in parentheses e ± n: e the relative L2 error of the incoherent scattering coefficient over θₛ in "
+         "rigorous mean too noisy to tell); in parentheses e ± n: e the relative L2 error of the incoherent "
+         "scattering coefficient over θₛ in "
          f"{BIN_DEG:g}° bins, ‖σ_model − σ_MoM‖ / ‖σ_MoM‖, and n the sampling noise floor of the rigorous mean "
          "(the standard error of the binned mean over realizations, same norm; were the model exact, e would "
          "average to n). Last the albedo error (model − MoM total reflectance, the model's "
@@ -300,6 +319,17 @@ def write_markdown(data, path):
           "that run along the truncated surface (slowly, as about 1/L). The same holds for p on aluminium, where "
           "roughness also launches surface plasmons that reach the ends; the map's p results carry this error "
           "(order 1 % of the albedo at kℓ ≤ 4).", ""]
+    if "beam" in data:
+        L += ["## The beam width", "",
+              f"Mean incoherent reflectance ∫σ_incoh dθₛ ± its standard error ({data['beam'][0]['realizations']} "
+              "realizations, kσ = 0.3, kℓ = 4, "
+              "surface 4 g long) against the beam width g, at θᵢ = 0°, 40°, 70°: independent of g within the "
+              "sampling error once k g cos²θᵢ is large enough.", "",
+              "| medium | pol. | g (λ) | 0° | 40° | 70° |", "|---|---|---|---|---|---|"]
+        for r in data["beam"]:
+            vals = " | ".join(f"{v:.4f} ± {e:.4f}" for v, e in zip(r["incoherent"], r["incoherent_se"]))
+            L.append(f"| {r['medium']} | {r['polarization']} | {r['beam_width_wl']:g} | {vals} |")
+        L.append("")
     L += ["## Convergence of the reference", "",
           "One realization, kσ = 0.6, kℓ = 4, θᵢ = 40°; the change of σ from the finest grid (relative L2) and "
           "the albedo; seconds on this machine (shared).", "",
@@ -343,10 +373,16 @@ def main(argv=None) -> None:
     ap.add_argument("--out", type=Path, help="write both files into this folder")
     ap.add_argument("--processes", type=int, default=2)
     ap.add_argument("--from-json", type=Path, help="only rewrite the page from this validity_map.json")
+    ap.add_argument("--update-tables", action="store_true",
+                    help="with --from-json: recompute the convergence, truncation and beam tables into that file")
     ap.add_argument("--realizations", type=int, help="realizations per configuration (full map: 64)")
     a = ap.parse_args(argv if argv is not None else sys.argv[1:] if __name__ == "__main__" else [])
     if a.from_json:
         data = json.loads(a.from_json.read_text())
+        if a.update_tables:
+            data.update(convergence=convergence(data["quick"]), taper=taper_table(data["quick"]),
+                        beam=beam_table(data["quick"]))
+            a.from_json.write_text(json.dumps(data, indent=1) + "\n")
         write_markdown(data, (a.out or ROOT / "docs") / "validity-map.md")
         if not data["quick"]:
             _planning_path(a.out).write_text(json.dumps(planning_table(data), indent=0) + "\n")
@@ -366,7 +402,8 @@ def main(argv=None) -> None:
     json_path = (a.out / "validity_map.json") if a.out else ROOT / "docs" / "data" / "validity_map.json"
     md_path = (a.out / "validity-map.md") if a.out else ROOT / "docs" / "validity-map.md"
     json_path.write_text(json.dumps(data, indent=1) + "\n")          # the map first: the tables below take minutes
-    data.update(convergence=convergence(a.quick), taper=taper_table(a.quick), seconds=time.perf_counter() - t0)
+    data.update(convergence=convergence(a.quick), taper=taper_table(a.quick), beam=beam_table(a.quick),
+                seconds=time.perf_counter() - t0)
     json_path.write_text(json.dumps(data, indent=1) + "\n")
     write_markdown(data, md_path)
     if not a.quick:
