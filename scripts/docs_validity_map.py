@@ -316,9 +316,10 @@ def write_markdown(data, path):
     L += ["", "Flat 70°: the specular ratio σ(θᵢ)/(k cos²θᵢ |â|²/2πP) − |r|², exact on an infinite surface. "
           "Energy: ∫σ dθₛ − 1 on one conducting realization (kσ = 0.63, kℓ = 3.1), the same surface cut to each "
           "length: Dirichlet (s) conserves energy to 1e-4; Neumann (p) loses the waves scattered towards grazing "
-          "that run along the truncated surface (slowly, as about 1/L). The same holds for p on aluminium, where "
-          "roughness also launches surface plasmons that reach the ends; the map's p results carry this error "
-          "(order 1 % of the albedo at kℓ ≤ 4).", ""]
+          "that run along the truncated surface (slowly, as about 1/L). The same is expected for p on aluminium, "
+          "where roughness also launches surface plasmons (decay length about 23 λ at 550 nm) that reach the ends; "
+          "not measured separately here. The map's p cells carry an error of this size in the albedo, well below "
+          "their noise floors in σ.", ""]
     if "beam" in data:
         L += ["## The beam width", "",
               f"Mean incoherent reflectance ∫σ_incoh dθₛ ± its standard error ({data['beam'][0]['realizations']} "
