@@ -10,7 +10,7 @@ from scipy import integrate
 from cli_helpers import run_cli
 from waveoptics import brdf
 from waveoptics.brdf import Micro, MicrofacetBRDF, chi2_test
-from waveoptics.brdf.ndf import gamma_upper
+from waveoptics.brdf.ndf_shaped import gamma_upper
 
 
 def _dir(theta_deg, phi_deg=0.0):

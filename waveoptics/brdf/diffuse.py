@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import WaveopticsError
 from .fresnel_terms import F_mean
-from .ndf import _as_dirs
+from .directions import _as_dirs
 
 __all__ = ['lambert', 'oren_nayar', 'burley', 'diffuse_tradeoff', 'DIFFUSES']
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import WaveopticsError, unknown
 from ..materials import fresnel as _fresnel
-from .ndf import _gl01
+from .smith import _gl01
 
 __all__ = ['FRESNELS', 'F_mean']
 

@@ -54,7 +54,8 @@ from ..materials.database import get_material
 from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .fresnel_terms import FRESNELS, _fresnel_fn
-from .ndf import COS_MIN, _as_dirs, _check_alpha, _dot, _ndf, half_vector
+from .directions import _as_dirs, _dot, half_vector
+from .ndf import COS_MIN, _check_alpha, _ndf
 from .shadowing import _shadowing
 
 __all__ = ['specular', 'brdf', 'fresnel_inputs', 'spectral_brdf']

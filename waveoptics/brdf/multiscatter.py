@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .microfacet import specular
-from .ndf import _gl01
+from .smith import _gl01
 from .quadrature import directional_albedo
 
 __all__ = ['MS_NODES', 'AlbedoTable', 'albedo_table', 'f_ms', 'F_ms']

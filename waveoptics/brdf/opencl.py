@@ -12,7 +12,8 @@ from ..runtime import build_options, build_program, get_runtime
 from .diffuse import DIFFUSES
 from .fresnel_terms import F_mean
 from .microfacet import FRESNELS, _fresnel_fn
-from .ndf import NDFS, _as_dirs, _check_alpha, _ndf
+from .directions import _as_dirs
+from .ndf import NDFS, _check_alpha, _ndf
 
 
 def _shape(spec, ndf_shape) -> float:

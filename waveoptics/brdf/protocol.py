@@ -37,7 +37,8 @@ from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .fresnel_terms import FRESNELS
 from .microfacet import _specular
-from .ndf import ALPHA_MAX, _as_dirs, _check_alpha, _ndf
+from .directions import _as_dirs
+from .ndf import ALPHA_MAX, _check_alpha, _ndf
 from .quadrature import directional_albedo
 from .sampling import pdf_reflected, sample_reflected
 from .shadowing import _shadowing

@@ -8,7 +8,9 @@ from typing import Callable
 import numpy as np
 
 from .microfacet import brdf
-from .ndf import ALPHA_MIN, _as_dirs, _gl01, reflect
+from .directions import _as_dirs, reflect
+from .ndf import ALPHA_MIN
+from .smith import _gl01
 
 __all__ = ['NODE_BLOCK', 'normal_quadrature', 'directional_albedo', 'albedo']
 

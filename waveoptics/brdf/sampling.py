@@ -38,8 +38,12 @@ from scipy import special
 
 from .measured_ndf import sample_dcos_tabulated
 
-from .ndf import (STRETCH_EXPONENT, stretch_factors, ABC_C_DEFAULT, EPD_P_DEFAULT, NDFS, SGD_P_DEFAULT, _abc_B, _dot, _expm1_over, abc_normalization,
-                  blinn_phong_exponent, gamma_upper, reflect)
+from .anisotropy import STRETCH_EXPONENT, stretch_factors
+from .directions import _dot, reflect
+from .ndf import NDFS
+from .ndf_shaped import (ABC_C_DEFAULT, EPD_P_DEFAULT, SGD_P_DEFAULT, _abc_B, _expm1_over, abc_normalization,
+                         gamma_upper)
+from .roughness import blinn_phong_exponent
 
 __all__ = ['NormalSampler', 'NORMAL_SAMPLERS', 'sample_normal', 'pdf_normal', 'pdf_reflected', 'sample_reflected']
 
@@ -150,7 +154,7 @@ def _stretch_sample(sample_iso, name):
     """The sampler of the stretched (anisotropic) form of an isotropic NDF sampler: draw the normal of the base
     roughness ᾱ and stretch its slopes by (k_x, k_y), m ∝ (k_x m'_x, k_y m'_y, m'_z); slopes drawn from P22_ᾱ become
     slopes drawn from the stretched P22, so the density stays D(m) cos θ_m (Heitz 2014, §5.3;
-    :func:`waveoptics.brdf.ndf.D_stretched`)."""
+    :func:`waveoptics.brdf.anisotropy.D_stretched`)."""
     def sample(wi, ax, ay, c, u):
         if ay is None or np.all(np.asarray(ay) == np.asarray(ax)):
             return sample_iso(wi, ax, None, c, u)

@@ -12,7 +12,9 @@ from typing import Callable
 import numpy as np
 
 from ..errors import unknown
-from .ndf import _G1, _as_dirs, _check_alpha, _dot, _ndf
+from .directions import _as_dirs, _dot
+from .ndf import _check_alpha, _ndf
+from .smith import _G1
 
 __all__ = ['G_smith', 'G_smith_correlated', 'G_cook_torrance', 'G_implicit', 'SHADOWINGS', 'G']
 

@@ -33,7 +33,7 @@ import numpy as np
 from .. import colour
 from ..errors import FieldError
 from .protocol import BRDF, BRDFSample, _broadcast, check_uniform, lobe_choice
-from .ndf import _as_dirs
+from .directions import _as_dirs
 
 __all__ = ['SpectralNodes']
 

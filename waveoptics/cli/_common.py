@@ -18,6 +18,7 @@ FIELD_DESTS = {
     "phi_deg": ("phi",),
     "angles_deg": ("incident_angles",),
     "vary": ("vary",),
+    "diffuse_sigma_deg": ("sigma",),
 }
 
 

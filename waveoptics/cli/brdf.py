@@ -1,9 +1,11 @@
 """``waveoptics brdf``: evaluate a BRDF model at given directions and wavelengths, or its directional albedo.
 
 The command is shared by all BRDF models. Each model is one entry of :data:`MODELS`: a function adding its
-options (in its own argument group) and evaluator functions; direction and wavelength parsing, looping and the
-text/JSON output live here once. Adding a model (e.g. ``kirchhoff`` with ``--surface FILE --solver ...``)
-means adding one :class:`Model` entry.
+options (in its own argument group), a function turning the parsed options into the model's keyword arguments
+and calling its factory in :data:`waveoptics.brdf.BRDF_MODELS` (the library part: validation and evaluation), and
+a description of its parameters; direction and wavelength parsing, looping and the text/JSON output live here
+once. Adding a model (e.g. ``kirchhoff`` with ``--surface FILE --solver ...``) means adding one :class:`Model`
+entry.
 
 JSON output: ``{"model": ..., "values": [{"incident": [θ, φ], "outgoing": [θ, φ], "wavelength_nm": λ,
 "brdf": f}, ...]}`` with f in 1/sr (not multiplied by cos θ_o), or with ``--albedo``
@@ -31,24 +33,31 @@ class Model:
     ----------
     add_arguments : callable(group)
         Adds the model's options to an argparse argument group.
-    evaluate : callable(args, wi, wo, wavelength_nm) -> ndarray (n_λ, n_in, n_out)
-        BRDF in 1/sr for unit directions wi (n_in, 3) and wo (n_out, 3).
-    albedo : callable(args, wi, wavelength_nm) -> ndarray (n_λ, n_in)
-        Directional albedo ∫ f cos θ_o dω_o.
+    build : callable(args, wavelength_nm) -> waveoptics.brdf.ModelEvaluation
+        The model set up from the options at these wavelengths (its evaluation, albedo and named parts).
     describe : callable(args) -> dict
         Model parameters echoed in the JSON output.
     help : str
-    components : callable(args, wi, wo, wavelength_nm) -> dict, optional
-        Named parts of the BRDF (e.g. the polarized ss, sp, ps, pp BRDFs), listed per value in the JSON output.
     """
 
     add_arguments: Callable
-    evaluate: Callable
-    albedo: Callable
+    build: Callable
     describe: Callable
     help: str
-    components: Callable | None = None   # (args, wi, wo, wavelength_nm) -> {name: ndarray (n_λ, n_in, n_out)}
 
+
+def _bar(args):
+    """The progress wrapper of the library's loops over incident directions."""
+    return lambda iterable, desc: progress(iterable, desc=desc, args=args)
+
+
+def _index(args, wavelength_nm, note: bool = True) -> None:
+    """Refuse --material with --ior, and (with *note*) say where a material's index data are clamped."""
+    if args.material is not None and args.ior is not None:
+        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
+    spec = args.material if args.material is not None else args.ior
+    if spec is not None and note:
+        _report_clamped(spec, wavelength_nm, args)
 
 # ----------------------------------------------------------------------------------------------------------
 # microfacet
@@ -90,42 +99,27 @@ def _microfacet_arguments(g) -> None:
     option(g, "--precision", choices=["float32", "float64"], default="float32")
 
 
-def _microfacet_params(args, wavelength_nm) -> dict:
-    """Keyword arguments of microfacet.brdf for these options; Fresnel inputs per wavelength (n_λ,)."""
+def _microfacet_build(args, wavelength_nm):
+    """:func:`waveoptics.brdf.microfacet_model` of the options."""
     from .. import brdf
-    import numpy as np
 
-
-    ndf, ndf_shape, alpha_y = args.ndf, args.ndf_shape, args.alpha_y
+    table = None
     if args.micro_surface is not None or args.ndf == "tabulated":
-        ndf, ndf_shape, alpha, alpha_y = _measured_ndf(args)
-    else:
-        alpha = _alpha(args)
-    if args.material is not None and args.ior is not None:
-        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
-    spec = args.material if args.material is not None else args.ior
-    if spec is None:
-        if args.fresnel != "one":
-            raise WaveopticsError("the microfacet model needs --material NAME or --ior N+Kj "
-                                  "(or --fresnel one for a white furnace)")
-        fi = {"fresnel": "one", "eta": None, "F0": None}
-    else:
-        fi = brdf.fresnel_inputs(spec, wavelength_nm, args.fresnel)
-        _report_clamped(spec, wavelength_nm, args)
-    if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
-        raise WaveopticsError(f"--diffuse-sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
-                              "[0, 90] degrees")
-    if args.diffuse == "burley" and not 0 <= args.diffuse_roughness <= 1:
-        raise WaveopticsError(f"--diffuse-roughness {args.diffuse_roughness!r} is not allowed; it must be in [0, 1]")
-    sigma = args.diffuse_roughness if args.diffuse == "burley" else float(np.radians(args.sigma))
-    return dict(alpha=alpha, alpha_y=alpha_y, ndf=ndf, shadowing=args.shadowing, ndf_shape=ndf_shape,
-                diffuse=args.diffuse, kd=args.kd, sigma=sigma,
-                tradeoff=not args.no_tradeoff, **fi)
+        table = _measured_ndf(args)
+    _index(args, wavelength_nm)
+    return brdf.microfacet_model(wavelengths_nm=wavelength_nm, alpha=args.alpha, roughness=args.roughness,
+                                 alpha_y=args.alpha_y, ndf=args.ndf, ndf_shape=args.ndf_shape, slope_table=table,
+                                 shadowing=args.shadowing, material=args.material, ior=args.ior,
+                                 fresnel=args.fresnel, diffuse=args.diffuse, kd=args.kd,
+                                 diffuse_sigma_deg=args.sigma, diffuse_roughness=args.diffuse_roughness,
+                                 tradeoff=not args.no_tradeoff, multiple_scattering=args.multiple_scattering,
+                                 backend=args.backend, precision=args.precision, device=args.device)
 
 
 def _measured_ndf(args):
-    """(ndf, slope table, α, α_y) from --micro-surface: the NDF is the height field's slope law; α and α_y are
-    the Beckmann-equivalent widths √2 × rms slope, which place the albedo quadrature's nodes."""
+    """The slope table of --micro-surface (or of its --footprint): the NDF is the height field's slope law (the
+    model takes its Beckmann-equivalent widths √2 × rms slope as α, α_y, which place the albedo quadrature's
+    nodes)."""
     from .. import brdf, surfaces
 
     if args.micro_surface is None:
@@ -149,8 +143,7 @@ def _measured_ndf(args):
         hf = surfaces.load(args.micro_surface, spacing=getattr(args, "spacing", None),
                            units=getattr(args, "units", None), channel=getattr(args, "channel", None))
         table = brdf.slope_table(hf)
-    micro = brdf.Micro.from_slopes(table)
-    return "tabulated", table, micro.alpha, micro.alpha_y
+    return table
 
 
 def _spacing(args):
@@ -162,15 +155,6 @@ def _spacing(args):
         return None
     parts = [parse_length(x, name="spacing") for x in str(sp).split(",")]
     return parts[0], parts[-1]
-
-
-def _alpha(args) -> float:
-    """α from --alpha or --roughness (exactly one)."""
-    from .. import brdf
-
-    if (args.alpha is None) == (args.roughness is None):
-        raise WaveopticsError(f"give exactly one of --alpha A or --roughness R for --model {args.model}")
-    return args.alpha if args.alpha is not None else float(brdf.alpha_from_roughness(args.roughness))
 
 
 def _report_clamped(spec, wavelength_nm, args) -> None:
@@ -186,74 +170,6 @@ def _report_clamped(spec, wavelength_nm, args) -> None:
         lo, hi = mat.wavelength_range_nm
         print(f"waveoptics brdf: note: {mat.name} index clamped at {', '.join(f'{b:g}' for b in bad)} nm "
               f"(data range {lo:g}-{hi:g} nm)", file=sys.stderr)
-
-
-def _per_wavelength(kw: dict, n_axes: int) -> dict:
-    """Reshape the per-wavelength arrays of *kw* to (n_λ, 1, ..., 1) for NumPy broadcasting."""
-    import numpy as np
-
-    out = dict(kw)
-    for key in ("eta", "F0"):
-        if out.get(key) is not None:
-            out[key] = np.asarray(out[key]).reshape((-1,) + (1,) * n_axes)
-    return out
-
-
-def _ms_brdf(args, kw):
-    """The microfacet BRDF function with multiple-scattering compensation (:class:`waveoptics.MicrofacetBRDF`)."""
-    from .. import brdf
-
-    if args.backend == "opencl":
-        raise WaveopticsError("--multiple-scattering is evaluated with NumPy; drop --backend opencl")
-    if args.fresnel not in ("exact", "one"):
-        raise WaveopticsError(f"--multiple-scattering needs --fresnel exact or one, not {args.fresnel!r}")
-    spec = args.material if args.material is not None else args.ior
-    micro = brdf.Micro(alpha=kw["alpha"], alpha_y=kw["alpha_y"], ndf=kw["ndf"], shadowing=kw["shadowing"],
-                       ndf_shape=kw["ndf_shape"])
-    # with --fresnel one and no material the index is never used (F = 1); a dielectric keeps the diffuse term
-    return brdf.MicrofacetBRDF(spec if spec is not None else "1.5", micro, kd=kw["kd"], diffuse=kw["diffuse"],
-                               fresnel=args.fresnel, diffuse_sigma=kw["sigma"], multiple_scattering=True)
-
-
-def _microfacet_evaluate(args, wi, wo, wavelength_nm):
-
-    from .. import brdf
-    from ..runtime import get_runtime
-    import numpy as np
-
-    kw = _microfacet_params(args, wavelength_nm)
-    n_w = len(wavelength_nm)
-    if args.multiple_scattering:
-        lam = np.asarray(wavelength_nm, dtype=float)
-        return _ms_brdf(args, kw).eval(wi[None, :, None, :], wo[None, None, :, :], lam[:, None, None])
-    if args.backend == "opencl":
-
-        a = np.repeat(wi, len(wo), axis=0)
-        b = np.tile(wo, (len(wi), 1))
-        fk = dict(kw)
-        for key in ("eta", "F0"):
-            if fk.get(key) is None:
-                fk.pop(key)
-        f = brdf.brdf_cl(a, b, runtime=get_runtime(args.device), precision=args.precision, **fk)
-        return np.broadcast_to(f, (n_w, a.shape[0])).reshape(n_w, len(wi), len(wo))
-    f = brdf.brdf(wi[None, :, None, :], wo[None, None, :, :], **_per_wavelength(kw, 2))
-    return np.broadcast_to(f, (n_w, len(wi), len(wo)))
-
-
-def _microfacet_albedo(args, wi, wavelength_nm):
-
-    from .. import brdf
-    import numpy as np
-
-    kw = _microfacet_params(args, wavelength_nm)
-    if args.multiple_scattering:
-        b = _ms_brdf(args, kw)
-        lam = np.asarray(wavelength_nm, dtype=float)
-        out = [b.albedo(w[None, :], lam) for w in progress(wi, desc="albedo", args=args)]
-        return np.stack(out, axis=-1)
-    kw = _per_wavelength(kw, 1)
-    out = [brdf.albedo(w, **kw) for w in progress(wi, desc="albedo", args=args)]
-    return np.broadcast_to(np.stack(out, axis=-1), (len(wavelength_nm), len(wi)))
 
 
 def _microfacet_describe(args) -> dict:
@@ -291,66 +207,18 @@ def _kirchhoff_arguments(g) -> None:
     option(g, "--diffraction", default="kirchhoff", choices=DIFFRACTION)
 
 
-def _kirchhoff_setup(args, wavelength_nm):
-
-    from ..materials.database import get_material
-    from ..materials.fresnel import F_schlick
-    from ..runtime import get_runtime
+def _kirchhoff_build(args, wavelength_nm):
+    """:func:`waveoptics.brdf.kirchhoff_model` of the options."""
+    from .. import brdf
 
     if not args.surface:
         raise WaveopticsError("--model kirchhoff needs --surface FILE")
-    if args.material is not None and args.ior is not None:
-        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
-    spec = args.material if args.material is not None else args.ior
-    if args.fresnel == "one" or spec is None:
-        if args.fresnel != "one":
-            raise WaveopticsError("the kirchhoff model needs --material NAME or --ior N+Kj (or --fresnel one)")
-        F = None
-    else:
-
-        mat = get_material(spec)
-        _report_clamped(spec, wavelength_nm, args)
-        if args.fresnel == "schlick":
-
-            def F(c, w, _m=mat):
-                return F_schlick(c, _m.F0(w))
-        else:
-            F = mat
-    hf = load_surface(args)
-    rt = None
-    if args.backend == "opencl" and args.solver == "direct":
-
-        rt = get_runtime(args.device)
-    return hf, F, rt
-
-
-def _kirchhoff_evaluate(args, wi, wo, wavelength_nm):
-
-    from .. import scatter
-    import numpy as np
-
-    hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
-    out = [scatter.brdf(hf, w, wo, wavelength_nm, F, solver=args.solver, backend=args.backend,
-                            precision=args.precision, window_name=args.window, resolution=args.resolution,
-                            realizations=args.realizations, runtime=rt, diffraction=args.diffraction,
-                            polarization=args.polarization)
-           for w in progress(wi, desc="kirchhoff", args=args)]
-    return np.stack(out, axis=1)
-
-
-def _kirchhoff_albedo(args, wi, wavelength_nm):
-
-    from .. import scatter
-    import numpy as np
-
-    hf, F, rt = _kirchhoff_setup(args, wavelength_nm)
-    out = [scatter.scatter(hf, w, wavelength_nm, F, solver=args.solver, backend=args.backend,
-                               precision=args.precision, window_name=args.window,
-                               resolution=args.resolution or 256, realizations=args.realizations,
-                               runtime=rt, diffraction=args.diffraction,
-                               polarization=args.polarization).albedo
-           for w in progress(wi, desc="albedo", args=args)]
-    return np.stack(out, axis=1)
+    _index(args, wavelength_nm, note=args.fresnel != "one")
+    return brdf.kirchhoff_model(wavelengths_nm=wavelength_nm, surface=load_surface(args), material=args.material,
+                                ior=args.ior, fresnel=args.fresnel, solver=args.solver, backend=args.backend,
+                                precision=args.precision, window=args.window, resolution=args.resolution,
+                                realizations=args.realizations, diffraction=args.diffraction,
+                                polarization=args.polarization, device=args.device)
 
 
 def _kirchhoff_describe(args) -> dict:
@@ -368,10 +236,10 @@ def _rayleigh_rice_arguments(g) -> None:
     option(g, "--polarization", choices=POLARIZATIONS, default="unpolarized", note="rayleigh-rice and kirchhoff")
 
 
-def _rayleigh_rice_setup(args, wavelength_nm):
-    """(PSD: a model from --nano statistics or a height field's periodogram from --surface, permittivity ε (n_λ,))."""
-    from .. import surfaces
-    from ..materials.database import get_material
+def _rayleigh_rice_build(args, wavelength_nm):
+    """:func:`waveoptics.brdf.rayleigh_rice_model` of the options: the PSD is a model from --nano statistics or a
+    height field's periodogram from --surface."""
+    from .. import brdf, surfaces
     from ..request import parse_nano
 
     if bool(args.nano) == bool(args.surface):
@@ -385,49 +253,9 @@ def _rayleigh_rice_setup(args, wavelength_nm):
             raise WaveopticsError(f"--nano {args.nano!r}: rayleigh-rice needs height statistics "
                                   f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
         psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"), C=p.get("C"))
-    if args.material is not None and args.ior is not None:
-        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
-    spec = args.material if args.material is not None else args.ior
-    if spec is None:
-        raise WaveopticsError("--model rayleigh-rice needs --material NAME or --ior N+Kj (the substrate's index)")
-    mat = get_material(spec)
-    if mat.schlick_only:
-        raise WaveopticsError(f"--material {spec!r} gives only F0; rayleigh-rice needs a complex index "
-                              "(a preset, shelf/book/page or --ior)")
-    _report_clamped(spec, wavelength_nm, args)
-    return psd, mat.eta(wavelength_nm) ** 2
-
-
-def _rayleigh_rice_evaluate(args, wi, wo, wavelength_nm):
-    from .. import scatter
-
-    psd, eps = _rayleigh_rice_setup(args, wavelength_nm)
-    return scatter.rayleigh_rice_brdf(wi[None, :, None, :], wo[None, None, :, :],
-                                      wavelength_nm[:, None, None], psd, eps[:, None, None], args.polarization)
-
-
-def _rayleigh_rice_components(args, wi, wo, wavelength_nm) -> dict:
-    from .. import scatter
-
-    psd, eps = _rayleigh_rice_setup(args, wavelength_nm)
-    return scatter.rayleigh_rice_components(wi[None, :, None, :], wo[None, None, :, :],
-                                            wavelength_nm[:, None, None], psd, eps[:, None, None])
-
-
-def _rayleigh_rice_albedo(args, wi, wavelength_nm):
-    import numpy as np
-
-    from .. import scatter
-
-    psd, eps = _rayleigh_rice_setup(args, wavelength_nm)
-    grid = scatter.DirectionGrid.hemisphere(args.resolution or 512)
-    wo = grid.directions()
-    out = np.empty((len(wavelength_nm), len(wi)))
-    for i, w in enumerate(wi):
-        f = scatter.rayleigh_rice_brdf(w, wo[None], wavelength_nm[:, None, None], psd, eps[:, None, None],
-                                       args.polarization)
-        out[:, i] = scatter.integrate(np.where(grid.inside, f, 0.0), grid)
-    return out
+    _index(args, wavelength_nm)
+    return brdf.rayleigh_rice_model(wavelengths_nm=wavelength_nm, psd=psd, material=args.material, ior=args.ior,
+                                    polarization=args.polarization, resolution=args.resolution)
 
 
 def _rayleigh_rice_describe(args) -> dict:
@@ -449,25 +277,9 @@ def _twoscale_arguments(g) -> None:
     --diffraction; nothing of its own."""
 
 
-def _twoscale_setup(args, wavelength_nm, wi=None):
-    """The two-scale BRDF function of the options, built once per command (evaluation, parts and albedo share it).
-
-    With ``--nano`` statistics it is :class:`waveoptics.brdf.TwoScaleBRDF` (exact at any direction pair); with a
-    ``--surface`` height field, :class:`waveoptics.brdf.TabulatedTwoScaleBRDF` with its incidence nodes at the
-    requested incident angles (so nothing is interpolated in θ_i) and 4 light azimuths."""
-    import numpy as np
-
-    key = (tuple(np.asarray(wavelength_nm, dtype=float).tolist()),
-           None if wi is None else tuple(np.round(np.degrees(np.arccos(np.clip(wi[:, 2], -1, 1))), 9)))
-    cache = args.__dict__.setdefault("_brdf_functions", {})
-    if key not in cache:
-        cache[key] = _twoscale_build(args, wavelength_nm, wi)
-    return cache[key]
-
-
-def _twoscale_build(args, wavelength_nm, wi):
-    import numpy as np
-
+def _twoscale_build(args, wavelength_nm):
+    """:func:`waveoptics.brdf.twoscale_model` of the options, built once per command (evaluation, parts and albedo
+    share it)."""
     from .. import brdf
     from ..request import make_nano
 
@@ -476,36 +288,18 @@ def _twoscale_build(args, wavelength_nm, wi):
     if args.polarization != "unpolarized":
         raise WaveopticsError(f"--polarization {args.polarization} is not available for --model twoscale "
                               "(unpolarized only; polarized two-scale lobes: 'waveoptics simulate --polarization')")
-    if args.material is not None and args.ior is not None:
-        raise WaveopticsError("give only one of --material NAME and --ior N+Kj")
-    spec = args.material if args.material is not None else args.ior
-    if spec is None and args.fresnel != "one":
-        raise WaveopticsError("the twoscale model needs --material NAME or --ior N+Kj (or --fresnel one)")
-    if args.fresnel == "schlick":
-        raise WaveopticsError("--fresnel schlick is not available for --model twoscale; use exact or one")
-    if spec is not None:
-        _report_clamped(spec, wavelength_nm, args)
-    if not np.isfinite(args.sigma) or not 0 <= args.sigma <= 90:
-        raise WaveopticsError(f"--diffuse-sigma {args.sigma!r} is not allowed; the Oren-Nayar roughness must be in "
-                              "[0, 90] degrees")
+    table = None
     if args.micro_surface is not None or args.ndf == "tabulated":   # the NDF of a micro height field's slopes
-        _, table, _, _ = _measured_ndf(args)
-        micro = brdf.Micro.from_slopes(table, args.shadowing)
-    else:
-        micro = brdf.Micro(alpha=_alpha(args), alpha_y=args.alpha_y, ndf=args.ndf, shadowing=args.shadowing,
-                           ndf_shape=args.ndf_shape)
-    common = dict(material=spec if spec is not None else "aluminium", micro=micro, kd=args.kd,
-                  diffuse=args.diffuse, fresnel=args.fresnel,
-                  diffuse_sigma=float(np.radians(args.sigma)), diffraction=args.diffraction,
-                  multiple_scattering=args.multiple_scattering)
-    if args.surface:
-        nano = brdf.Nano(surface=load_surface(args))
-        thetas = (0.0,) if wi is None else tuple(sorted(set(
-            float(t) for t in np.round(np.degrees(np.arccos(np.clip(wi[:, 2], -1, 1))), 9))))
-        return brdf.TabulatedTwoScaleBRDF(nano=nano, wavelengths_nm=tuple(np.asarray(wavelength_nm, dtype=float)),
-                                          resolution=args.resolution or 128, thetas_deg=thetas, solver="fft",
-                                          **common)
-    return brdf.TwoScaleBRDF(nano=make_nano(args.nano or _default_nano(), wavelength_nm), **common)
+        table = _measured_ndf(args)
+    _index(args, wavelength_nm)
+    surface = load_surface(args) if args.surface else None
+    nano = None if surface is not None else make_nano(args.nano or _default_nano(), wavelength_nm)
+    return brdf.twoscale_model(wavelengths_nm=wavelength_nm, nano=nano, surface=surface, alpha=args.alpha,
+                               roughness=args.roughness, alpha_y=args.alpha_y, ndf=args.ndf,
+                               ndf_shape=args.ndf_shape, slope_table=table, shadowing=args.shadowing,
+                               material=args.material, ior=args.ior, fresnel=args.fresnel, diffuse=args.diffuse,
+                               kd=args.kd, diffuse_sigma_deg=args.sigma, diffraction=args.diffraction,
+                               multiple_scattering=args.multiple_scattering, resolution=args.resolution)
 
 
 def _twoscale_describe(args) -> dict:
@@ -528,59 +322,38 @@ def _table_arguments(g) -> None:
     g.add_argument("--table", metavar="FILE", help="BRDF table written by 'waveoptics table' (.h5)")
 
 
-def _table_setup(args, wavelength_nm, wi=None):
+def _table_build(args, wavelength_nm):
+    """A BRDF table file as a function (:func:`waveoptics.distributed.table.open_table`)."""
+    from .. import brdf
     from ..distributed.table import open_table
 
     if not args.table:
         raise WaveopticsError("--model table needs --table FILE (a table written by 'waveoptics table')")
-    return open_table(args.table)
+    table = open_table(args.table)
+    return brdf.function_evaluation(lambda wi: table, wavelength_nm)
 
 
 def _table_describe(args) -> dict:
     return {"table": args.table}
 
 
-# ----------------------------------------------------------------------------------------------------------
-# models that are BRDF functions (waveoptics.brdf.protocol): evaluation, parts and albedo come from the object
-
-
-def _function_model(add_arguments, setup, describe, help_text) -> Model:
-    """A :class:`Model` whose *setup(args, wavelength_nm, wi)* returns a BRDF function with ``eval``, ``eval_parts``
-    and ``albedo`` (directions (n, 3), wavelengths (n_λ,); results (n_λ, n_in, n_out) and (n_λ, n_in))."""
-
-    def evaluate(args, wi, wo, wavelength_nm):
-        return setup(args, wavelength_nm, wi).eval(wi[None, :, None, :], wo[None, None, :, :],
-                                                   wavelength_nm[:, None, None])
-
-    def components(args, wi, wo, wavelength_nm):
-        return setup(args, wavelength_nm, wi).eval_parts(wi[None, :, None, :], wo[None, None, :, :],
-                                                         wavelength_nm[:, None, None])
-
-    def albedo(args, wi, wavelength_nm):
-        return setup(args, wavelength_nm, wi).albedo(wi[None, :, :], wavelength_nm[:, None])
-
-    return Model(add_arguments, evaluate, albedo, describe, help_text, components=components)
-
-
 #: BRDF models offered by ``waveoptics brdf --model``
 MODELS: dict[str, Model] = {
-    "microfacet": Model(_microfacet_arguments, _microfacet_evaluate, _microfacet_albedo, _microfacet_describe,
+    "microfacet": Model(_microfacet_arguments, _microfacet_build, _microfacet_describe,
                         "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term"),
-    "kirchhoff": Model(_kirchhoff_arguments, _kirchhoff_evaluate, _kirchhoff_albedo, _kirchhoff_describe,
+    "kirchhoff": Model(_kirchhoff_arguments, _kirchhoff_build, _kirchhoff_describe,
                        "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.scatter)"),
-    "rayleigh-rice": Model(_rayleigh_rice_arguments, _rayleigh_rice_evaluate, _rayleigh_rice_albedo,
-                           _rayleigh_rice_describe,
+    "rayleigh-rice": Model(_rayleigh_rice_arguments, _rayleigh_rice_build, _rayleigh_rice_describe,
                            "first-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the "
-                           "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)",
-                           components=_rayleigh_rice_components),
-    "twoscale": _function_model(_twoscale_arguments, _twoscale_setup, _twoscale_describe,
-                                "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski "
-                                "2017), evaluated at the given directions; JSON also gives its coherent, diffraction "
-                                "and diffuse parts"),
-    "table": _function_model(_table_arguments, _table_setup, _table_describe,
-                             "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated "
-                             "between incidences relative to the specular direction, coherent and diffuse parts "
-                             "exact; at the table's wavelengths"),
+                           "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)"),
+    "twoscale": Model(_twoscale_arguments, _twoscale_build, _twoscale_describe,
+                      "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski "
+                      "2017), evaluated at the given directions; JSON also gives its coherent, diffraction "
+                      "and diffuse parts"),
+    "table": Model(_table_arguments, _table_build, _table_describe,
+                   "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated "
+                   "between incidences relative to the specular direction, coherent and diffuse parts "
+                   "exact; at the table's wavelengths"),
 }
 
 
@@ -623,7 +396,7 @@ def run(args) -> int:
     head = {"model": args.model, "parameters": model.describe(args),
             "units": {"brdf": "1/sr", "albedo": "1", "wavelength_nm": "nm", "incident": "deg", "outgoing": "deg"}}
     if args.albedo:
-        E = np.asarray(model.albedo(args, wi, wl))
+        E = np.asarray(model.build(args, wl).albedo(wi, progress=_bar(args)))
         rows = [{"incident": list(inc[i]), "wavelength_nm": float(wl[j]), "albedo": float(E[j, i])}
                 for i in range(len(inc)) for j in range(len(wl))]
         text = "\n".join(f"incident θ={r['incident'][0]:g}° φ={r['incident'][1]:g}°  λ={r['wavelength_nm']:g} nm  "
@@ -634,8 +407,9 @@ def run(args) -> int:
         raise WaveopticsError("give at least one --outgoing THETA,PHI (or --albedo)")
     out = [parse_direction(t, name="--outgoing", need_phi=True) for t in args.outgoing]
     wo = direction_from_angles([t for t, _ in out], [p for _, p in out])
-    f = np.asarray(model.evaluate(args, wi, wo, wl))
-    parts = model.components(args, wi, wo, wl) if model.components is not None else {}
+    m = model.build(args, wl)
+    f = np.asarray(m.evaluate(wi, wo, progress=_bar(args)))
+    parts = m.components(wi, wo) if m.components is not None else {}
     rows = [{"incident": list(inc[i]), "outgoing": list(out[k]), "wavelength_nm": float(wl[j]),
              "brdf": float(f[j, i, k]),
              **({"components": {c: float(v[j, i, k]) for c, v in parts.items()}} if parts else {})}

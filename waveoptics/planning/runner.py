@@ -18,7 +18,7 @@ from ..brdf import MicrofacetBRDF, TabulatedTwoScaleBRDF
 from ..simulate import Simulation, render_spheres, sphere_nodes
 from ..units import direction_from_angles
 from .decisions import LAMBDA_REF_NM
-from .planner import EntryPlan, Plan
+from .plan import EntryPlan, Plan
 
 __all__ = ['entry_prefix', 'output_files', 'EntryResult', 'run_entry', 'view_values', 'execute']
 

@@ -1,0 +1,83 @@
+"""The benchmark results as Markdown tables: the text of ``waveoptics bench`` and of docs/performance.md.
+"""
+from __future__ import annotations
+
+from .measures import MATH_FUNCTIONS
+
+__all__ = ['report']
+
+
+def _g(v, fmt=".3g"):
+    return "—" if v is None else format(v, fmt)
+
+
+def report(res: dict) -> str:
+    """The benchmark results as Markdown tables (the text of ``waveoptics bench`` and docs/performance.md)."""
+    m = res["machine"]
+    lines = [f"Machine: {m['cpu']}, {m['cores']} cores; OpenCL device {m.get('device')} ({m.get('platform')}); "
+             f"1-min load average {m.get('load_average_1min', float('nan')):.2f} before, "
+             f"{_g(m.get('load_average_1min_after'), '.2f')} after.", ""]
+    d = res["direct"]
+    lines += [f"### Direct Kirchhoff sum: {d['samples']} samples × {d['directions']} directions "
+              f"(NumPy rows: {d['numpy_directions']} directions)", "",
+              "| implementation | time (s) | G terms/s | × naive kernel | × NumPy direct sum | max error / Σw |",
+              "|---|---|---|---|---|---|"]
+    for r in d["rows"]:
+        lines.append(f"| {r['name']} | {r['time_s']:.3g} | {r['terms_per_s'] / 1e9:.3g} | {r['vs_naive']:.3g} "
+                     f"| {r['vs_numpy']:.3g} | {r['error']:.2e} |")
+    s = res["direct_scaling"]
+    for key, title in (("by_samples", "samples (directions fixed)"), ("by_directions", "directions (samples fixed)")):
+        lines += ["", f"### Direct sum: time (s) against {title}", "",
+                  "| samples | directions | terms | kernel float32 | kernel float64 | naive float32 | NumPy "
+                  "| G terms/s float32 |", "|---|---|---|---|---|---|---|---|"]
+        for r in s[key]:
+            lines.append(f"| {r['samples']} | {r['directions']} | {r['terms']:.3g} | {_g(r['opencl_float32_s'])} "
+                         f"| {_g(r['opencl_float64_s'])} | {_g(r['naive_float32_s'])} | {_g(r['numpy_s'])} "
+                         f"| {r['terms'] / r['opencl_float32_s'] / 1e9:.3g} |")
+    f = res["fft_backends"]
+    names = [k for k in f["rows"][0] if k not in ("n", "points")]
+    lines += ["", "### 2-D complex FFT: M points/s", "", "| n × n | " + " | ".join(names) + " |",
+              "|---|" + "---|" * len(names)]
+    for r in f["rows"]:
+        lines.append(f"| {r['n']} | " + " | ".join(_g(r.get(k) and r[k] / 1e6) for k in names) + " |")
+    for k, why in f["missing"].items():
+        lines.append(f"\n{k}: {why}")
+    sb = f.get("solver") or []
+    if sb:
+        names = [k for k in sb[0] if k not in ("n", "transforms")]
+        lines += ["", "### fft solver (order auto, n × n patch onto an n × n grid): time (s) per FFT backend", "",
+                  "| n | 2-D chirp-z transforms | " + " | ".join(names) + " |", "|---|---|" + "---|" * len(names)]
+        for r in sb:
+            lines.append(f"| {r['n']} | {r['transforms']} | " + " | ".join(_g(r[k]) for k in names) + " |")
+    p = res["fft_pipeline"]
+    keys = ["fft solver order 0", "fft solver order auto", "numpy fft2 + interpolation"]
+    lines += ["", "### fft solver vs a NumPy FFT pipeline (n × n patch onto an n × n direction grid)", "",
+              "| n | " + " | ".join(f"{k}: time (s) | error" for k in keys) + " |", "|---|" + "---|---|" * len(keys)]
+    for r in p["rows"]:
+        lines.append(f"| {r['n']} | " + " | ".join(f"{r[k]['time_s']:.3g} | {r[k]['error']:.1e}" for k in keys)
+                     + " |")
+    if "brdf_eval" in res:
+        lines += ["", "### BRDF eval(): (ω_i, ω_o, λ) evaluations per second (NumPy, one process)", "",
+                  "| model | pairs | batch, one ω_i | batch, own ω_i per pair | Python loop | batch ÷ loop |",
+                  "|---|---|---|---|---|---|"]
+        for r in res["brdf_eval"]["rows"]:
+            lines.append(f"| {r['model']} | {r['pairs']} | {r['shared_wi_per_s']:.3g} | {r['own_wi_per_s']:.3g} "
+                         f"| {r['loop_per_s']:.3g} | {r['batch_vs_loop']:.3g} |")
+    if "fft_threads" in res:
+        ft = res["fft_threads"]
+        lines += ["", f"### fft solver on 1 and {ft['cores']} cores ({ft['n']}² patch and grid, "
+                  f"{ft['wavelengths']} wavelengths in parallel threads)", "",
+                  "| threads | wall (s) | CPU (s) | speed-up |", "|---|---|---|---|"]
+        for r in ft["rows"]:
+            lines.append(f"| {r['threads']} | {r['wall_s']:.3g} | {r['cpu_s']:.3g} | {r['speedup']:.3g} |")
+    me = res["math_errors"]
+    lines += ["", "### Math built-ins: largest absolute error against float64 NumPy", "",
+              "| function | " + " | ".join(f"{p} {lab}" for p in me for lab in next(iter(me[p].values()))) + " |",
+              "|---|" + "---|" * sum(len(next(iter(me[p].values()))) for p in me)]
+    for name in MATH_FUNCTIONS:
+        cells = []
+        for p in me:
+            for lab in next(iter(me[p].values())):
+                cells.append(_g(me[p].get(name, {}).get(lab), ".2e"))
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)

@@ -1,0 +1,36 @@
+"""The planner's thresholds: the numbers each decision compares against (docs/planning.md lists them with the
+decisions they drive; :mod:`waveoptics.planning.planner` says why each has its value).
+"""
+from __future__ import annotations
+
+__all__ = ['ESTIMATE_RESOLUTION', 'ESTIMATE_STEP_NM', 'ESTIMATE_SPHERE_THETAS', 'ESTIMATE_SHARE', 'PSD_G_MAX',
+           'FLAT_SCATTER', 'RESOLUTION_RANGE', 'PATCH_SIGMAS', 'F_FLAT_TOL', 'FLOOR_MARGIN', 'KIRCHHOFF_GRAZING_DEG',
+           'RAYLEIGH_RICE_G_MAX']
+
+#: cells per side of the coarse grid on which the colour shift of diffraction is estimated
+ESTIMATE_RESOLUTION = 32
+#: wavelength step (nm) of the coarse estimate (line sources use their lines)
+ESTIMATE_STEP_NM = 40.0
+#: extra incidence angles (degrees) probed when a sphere camera sees every incidence
+ESTIMATE_SPHERE_THETAS = (0.0, 45.0, 75.0)
+#: diffraction runs when the estimated ΔE2000 exceeds this share of the target
+ESTIMATE_SHARE = 0.5
+#: largest g = (4πσ cosθ/λ)² for which the PSD series is trusted (scatter/series.py: truncation loses energy beyond)
+PSD_G_MAX = 30.0
+#: scattered fractions below this are "flat" (no estimate is run)
+FLAT_SCATTER = 1e-9
+#: smallest and largest direction grid (cells per side) the planner picks
+RESOLUTION_RANGE = (32, 256)
+#: view patches span this many lobe standard deviations around each view direction
+PATCH_SIGMAS = 3.0
+#: relative spread of F over the spectrum below which a material counts as wavelength-independent
+F_FLAT_TOL = 1e-9
+#: float32 is fine while its noise floor stays below this share of the weakest light the target resolves
+FLOOR_MARGIN = 0.1
+#: incidence beyond which the tangent-plane factor's excess over the light the coherent lobe gives up is large
+#: (measured with the height-field route: the coherent-loss guard trims < 0.2 % below 60°, 40 % at 80°;
+#: waveoptics.brdf.twoscale._cap_to_coherent_loss)
+KIRCHHOFF_GRAZING_DEG = 75.0
+#: largest (4πσ/λ)² (the g of normal incidence and backscatter, the largest over all directions) at which the
+#: planner trusts first-order Rayleigh-Rice (its domain is g ≪ 1)
+RAYLEIGH_RICE_G_MAX = 0.05
