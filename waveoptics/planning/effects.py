@@ -218,11 +218,33 @@ def _decide_diffraction_model(e: _Entry) -> None:
         return
     why = ("tangent-plane Kirchhoff: the model held against the flat-patch, exp(−g), grating and Beckmann limits; "
            "RGHS differs from it by ~1 % on a rough surface, OHS/ROHS by 36 % at θ_i = 30°")
+    if e.spec.nano.kind == "statistics":
+        choice = _map_choice(e, thetas)
+        if choice.model == "rayleigh-rice" and g_any <= RAYLEIGH_RICE_G_MAX:
+            e.diffraction_model = "rayleigh-rice"
+            e.decide("diffraction model", "rayleigh-rice",
+                     "first-order perturbation theory measured closer to the rigorous solution than Kirchhoff by more "
+                     f"than the map's noise, and the surface is smooth at these incidences (g ≤ {g_any:.2g}): "
+                     + choice.note())
+            return
+        why += "; " + choice.note()
     if theta_max > KIRCHHOFF_GRAZING_DEG:
         why += (f"; light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}°, beyond the tangent plane's "
                 "validity: there its lobe carries its 75° albedo continued with first-order perturbation theory's "
                 "incidence dependence (docs/physics.md §9)")
     e.decide("diffraction model", "kirchhoff", why)
+
+
+def _map_choice(e: _Entry, thetas):
+    """The validity map's verdict (:func:`waveoptics.planning.validity.choose_model`) for the entry's nano statistics
+    at its shortest wavelength: k σ_rel (the relevant roughness, largest over the incidences) and k ℓ (the PSD's
+    length scale standing in for the Gaussian correlation length of the map's surfaces)."""
+    from ..scatter.band import relevant_sigma2
+    from .validity import choose_model
+
+    k = 2 * np.pi / (e.lam_min * 1e-9)
+    s2 = relevant_sigma2(e.proxy, e.lam_min, np.sin(np.radians(np.asarray(thetas, dtype=float))))
+    return choose_model(e.mat, k * float(np.sqrt(np.max(s2))), k * float(e.proxy.length_scale), thetas)
 
 
 def _decide_wavelengths(e: _Entry) -> None:
