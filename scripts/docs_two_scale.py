@@ -201,23 +201,31 @@ light a facet reflects splits into
   1 − E(θ_d) with E the share of the reflected light that lobe scatters (physics.md §9): while the lobe is
   paraxial this is Davies' exp(−(4πσ_rel cos θ_d / λ)²) (1954) of the roughness inside the propagating band. On
   both routes (PSD statistics and height fields) the two halves therefore add up to the reflected light;
-* a **diffracted** part: the nano lobe f_n carried by every facet, i.e. tilted with the facet normal and therefore
-  convolved with the micro NDF (with masking-shadowing). f_n comes from the PSD (`--solver psd`, the
+* a **diffracted** part: the nano lobe f_n carried by every facet in the facet's own frame (Walter et al. 2007's
+  integral of a facet BRDF over the micro NDF, with masking-shadowing; physics.md §7). f_n comes from the PSD (`--solver psd`, the
   Beckmann-Spizzichino series generalized to any isotropic PSD, `waveoptics/scatter/series.py`) or from a Kirchhoff solver on a
   nano height field (`fft` or `direct`), keeping only the incoherent field δU = U − ⟨χ⟩ U_flat;
 * for dielectrics, a **diffuse** term with the diffuse-specular trade-off (metals have none).
 
-Lobes live on the direction-cosine plane (u, v) = (sin θ cos φ, sin θ sin φ), where cos θ dω = du dv. A facet's
-tilt moves the mirror direction, so the per-facet tilting is a 2-D convolution (FFT) of f_n with the micro kernel
-K: the F = 1 microfacet lobe re-centred on the mirror direction, whose sum is the F = 1 micro albedo.
+Lobes live on the direction-cosine plane (u, v) = (sin θ cos φ, sin θ sin φ), where cos θ dω = du dv. For PSD
+statistics each cell is a quadrature over facet normals (drawn from the micro NDF and about the cell's
+half-vector, balance heuristic), each facet's lobe read from tables of f_n over local incidence in its own frame;
+`waveoptics.brdf.TwoScaleBRDF` evaluates the same integral with f_n exact. A nano height field's lobe (and a PSD
+lobe narrower than two cells) is still shifted paraxially: a 2-D convolution (FFT) of f_n at the macro incidence
+with the micro kernel K, the F = 1 microfacet lobe re-centred on the mirror direction.
 
 ## Limits, measured
 
 {limits_table()}
 
 ## Where it breaks
-* The convolution **shifts** the nano lobe in (u, v) instead of rotating it with each facet: accurate for micro
-  slopes up to ~0.3 and away from grazing; near the horizon energy pushed off the disc is lost (as shadowing).
+* **The facet frame against the paraxial shift.** The diffracted part against an independent Monte-Carlo facet
+  integral (`scripts/facet_frame_sweep.py`; Al, ABC σ = 10 nm, B = 2 µm, C = 2.6, 550 nm, Beckmann; θ_o 15-85°
+  forward in the plane and 40°, 70° across it). The paraxial shift, still used for nano height fields, is the
+  former default for PSDs:
+
+<!-- facet-frame sweep -->
+<!-- /facet-frame sweep -->
 * Single scattering only: like every single-scattering microfacet model it loses energy at large α
   (see docs/microfacet.md); inter-reflections between facets are not diffracted.
 * The PSD route assumes Gaussian height statistics and converges for g ≲ 30; the Kirchhoff route is scalar and
@@ -251,9 +259,9 @@ K: the F = 1 microfacet lobe re-centred on the mirror direction, whose sum is th
 
 {field_table()}
 
-* **Micro roughness and the horizon**: each facet's lobe is shifted to its facet's mirror direction; the part
-  of a wide lobe shifted beyond the horizon is lost (as shadowing loses it), so the two-scale albedo falls below
-  the microfacet albedo by that light and by no more (`Lobes.info["diffraction_beyond_horizon"]`; the tests
+* **Micro roughness and the horizon**: each facet's lobe (in its own frame for PSDs, shifted to its facet's
+  mirror direction for height fields) is masked on its way out and sends part of its light below the horizon, so
+  the two-scale albedo falls below the microfacet albedo by that light and by no more (`Lobes.info["diffraction_beyond_horizon"]`; the tests
   allow 1e-3 above, and below that light by 1e-3 for PSDs and 5e-3 for height fields, whose speckle lobes the
   evaluation grid and the coherent fraction's grid sample differently). n = 1 + 6i, 450 nm, 128² grid:
 
@@ -301,6 +309,12 @@ Hemisphere previews (colour from the RGB lobe, brightness log-scaled):
 - E. L. Church, P. Z. Takacs, T. A. Leonard, The prediction of BRDFs from surface profile measurements,
   Proc. SPIE 1165, 1989.
 """
+    # the facet-frame sweep's table is written by scripts/facet_frame_sweep.py --write: keep it
+    mark = ("<!-- facet-frame sweep -->", "<!-- /facet-frame sweep -->")
+    old = DOC.read_text() if DOC.exists() else ""
+    if mark[0] in old and mark[1] in old:
+        kept = old[old.index(mark[0]):old.index(mark[1]) + len(mark[1])]
+        text = text.replace(f"{mark[0]}\n{mark[1]}", kept)
     DOC.write_text(text)
     print(f"wrote {DOC}")
 

@@ -7,25 +7,27 @@
 
 * coherent part: the microfacet specular term with F, times A(θ_d) = exp(−g(θ_d)) of each facet (closed form);
 * diffuse substrate of dielectrics (closed form, as the microfacet model);
-* diffracted part: the nano lobe f_n (the PSD series, :func:`waveoptics.scatter.scattered_lobe`, with its own F)
-  carried by every facet, i.e. the paraxial convolution on the direction-cosine plane (P the (u, v) of ω_o, m the
-  mirror point −ω_i,xy)
+* diffracted part: Walter et al.'s integral of the nano lobe carried by every facet in the facet's own frame,
 
-      f_diff(P) = ∫ f_mf¹(ω_i, m + s) W(s) f_n(ω_i, P − s) d²s,   W = (1 − A(θ_d(s))) / (1 − A(θ_i)),
+      f_diff(ω_i, ω_o) = ∫ |ω_i·m| |ω_o·m| / (|ω_i·n| |ω_o·n|) f_n(ω_i^m, ω_o^m) G(ω_i, ω_o, m) D(m) dm,
 
-  with f_mf¹ the F = 1 microfacet lobe and W each facet's own scattered share (:func:`waveoptics.brdf.
-  facet_scatter_weights`). The integral is a fixed quadrature on N points (:data:`QUADRATURE_NODES`, a Sobol
-  set): nodes s_k drawn through the micro lobe's own sampler (weights f cos θ / pdf) when it is the narrower
-  lobe, else nodes t_k = P − s drawn through the nano lobe's radial sampler; each node carries an exact,
-  analytic evaluation of the other lobe, so the result is a smooth function of ω_o at every ω_i.
+  f_n the PSD series (:mod:`waveoptics.scatter.band`, or Rayleigh-Rice) with its own F(θ_d) at the facet's local
+  directions (:meth:`TwoScaleBRDF.facet_nano_brdf`), whose albedo at local incidence θ is F(θ)(1 − A(θ)): each facet
+  scatters what its coherent part gives up. The integral is a fixed quadrature over facet normals, the balance
+  heuristic of N/2 normals drawn from the micro NDF's sampler at fixed Sobol points (:data:`QUADRATURE_NODES`; good
+  where the micro lobe is the narrower) and N/2 normals about the half-vector h drawn through the nano lobe's radial
+  law (:class:`NanoRadial`: a tilt s from h moves the lobe's grating vector by q = 2k cosθ_d |s|; good where the
+  nano lobe is the narrower, and it reaches a heavy-tailed NDF's far facets). The nodes move smoothly with ω_o, so
+  the result is a smooth function of ω_o at every ω_i.
 
-The grid model's guard that caps the diffracted light at the light the coherent lobe lost (near grazing
-incidence, :func:`waveoptics.brdf.twoscale._cap_to_coherent_loss`) needs the whole lobe and is not applied here:
-beyond θ_i ≈ 75° this function shows the tangent-plane model's own excess (docs/two-scale.md).
+The grid model's guard that caps the diffracted light at the light the facets scatter (near grazing incidence,
+:func:`waveoptics.brdf.twoscale._cap_to_coherent_loss`) needs the whole lobe and is not applied here: beyond
+θ_i ≈ 75° this function shows the tangent-plane model's own excess (docs/two-scale.md).
 
 Sampling is a mixture of the three parts in proportion F(θ_i)A(θ_i) : F(θ_i)(1 − A(θ_i)) : kd(1 − F(θ_i));
-the diffracted part picks one of the micro nodes s_k and adds a radial nano offset, so its density
-(1/N) Σ_k p_n(P − m − s_k) cos θ_o is exact.
+the diffracted part picks one of the NDF's quadrature normals m_k and draws ω_o in that facet's frame (its local
+mirror direction plus a radial nano offset at its local incidence), so its density
+(1/N) Σ_k p_n(t_k(ω_o)) (ω_o·m_k) is exact, t_k the offset of ω_o from facet k's local mirror direction.
 
 References
 ----------
@@ -33,7 +35,8 @@ References
 .. [2] P. Beckmann, A. Spizzichino, 1963, ch. 5 (the series of the nano lobe).
 .. [3] B. Walter et al., EGSR 2007, eq. (14) (the microfacet BRDF of facets carrying a BRDF).
 .. [4] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967 (the quadrature points).
-.. [5] E. Veach, PhD thesis, 1997, §9.2 (mixture sampling).
+.. [5] E. Veach, PhD thesis, 1997, §9.2 (mixture sampling, balance heuristic).
+.. [6] T. Duff et al., JCGT 6(1), 2017 (the facet frame).
 """
 from __future__ import annotations
 

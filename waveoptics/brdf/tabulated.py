@@ -8,15 +8,18 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   the nano lobe leaves, from tables over θ_d of the nano statistics or of the height field's own lobe:
   :meth:`waveoptics.brdf.Nano.coherent_amplitude2`);
 * the diffracted part is computed by :func:`waveoptics.brdf.evaluate` on a direction grid at incidence angles
-  θ_k (azimuth 0) and interpolated between them *relative to the specular direction*: at θ_i between θ_a and
-  θ_b, with Δ = (u_o, v_o) − (mirror point of θ_i), each node's lobe is read at its own mirror point + Δ and the
-  two values are blended linearly in θ_i. Diffraction lobes are nearly shift-invariant in direction cosines (the
-  Harvey-Shack picture; docs/physics.md §11), so the blend moves the lobe with the incidence instead of
-  cross-fading two lobes at different places (the seam of the old sphere renders).
+  θ_k (azimuth 0; each facet's nano lobe in its own frame for PSD statistics, docs/physics.md §7) and
+  interpolated between them *relative to the specular direction*: at θ_i between θ_a and θ_b, an isotropic table
+  reads each node at ω_o turned about the axis normal to the plane of incidence by θ_i − θ_k (which takes ω_i's
+  mirror direction to θ_k's, as a tilted facet turns its lobe), and the two values are blended linearly in θ_i;
+  the blend moves the lobe with the incidence instead of cross-fading two lobes at different places. Reads within
+  a cell of the horizon take the cells beyond the rim as the mean of their neighbours inside it (the lobe rises
+  towards the horizon, where zeros would pull it down).
 * Surfaces whose nano lobe depends on the light's azimuth (height fields, gratings, anisotropic micro NDFs) are
-  tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`), with the same
-  specular-relative blend in φ_i (never rotated: a grating's orders stay where the grating puts them); isotropic
-  ones are rotated to the table's azimuth and need θ nodes only.
+  tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`) and read at each node's
+  mirror point plus the offset Δ = (u_o, v_o) − (mirror point of ω_i) in direction cosines, blended in θ_i and
+  φ_i (never rotated: a grating's orders stay where the grating puts them, and they shift in direction cosines,
+  the Harvey-Shack picture, docs/physics.md §11).
 
 Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes; between 10° nodes the
 diffracted part's peak is within 1 % and its energy within 2 % of a direct evaluation at that incidence.

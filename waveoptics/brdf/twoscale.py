@@ -9,19 +9,24 @@ Per microfacet the light splits into
   reflected light that lobe scatters; Davies' exp(−(4π σ_rel cos θ_d / λ)²) while it is paraxial, σ_rel the
   roughness inside the propagating band; :meth:`Nano.coherent_amplitude2`, docs/physics.md §9);
 * a diffracted part, the nano-roughness scattering lobe f_n (PSD series or a Kirchhoff solver on a nano height
-  field), carried by each microfacet, i.e. tilted with the facet normal and so convolved with the micro NDF;
+  field) carried by each microfacet in the facet's own frame: Walter et al.'s integral of a facet BRDF,
+  f_diff = ∫ |ω_i·m||ω_o·m| / (|ω_i·n||ω_o·n|) f_n(ω_i^m, ω_o^m) G D(m) dm (docs/physics.md §7);
 * for dielectrics, a diffuse term with the diffuse-specular trade-off (metals have none).
 
 Evaluation on the direction-cosine plane
 ----------------------------------------
 Lobes live on a :class:`waveoptics.scatter.DirectionGrid` over (u, v) = (sinθ cosφ, sinθ sinφ), where
-cosθ_o dω_o = du dv. A facet tilted by a small slope moves the mirror direction by a shift in (u, v), so the
-per-facet tilt of the nano lobe is a 2-D convolution of f_n (an energy density on the (u, v) plane) with the
-*micro kernel* K: the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the mirror direction, whose sum is the F = 1 micro albedo
-(masking and shadowing included). Both limits hold exactly on the grid: σ_nano → 0 gives A = 1 and f_n = 0
-(the microfacet model), and α → 0 makes K a unit impulse (the pure nano lobe). The convolution is paraxial: it
-shifts the nano lobe instead of rotating it, which is accurate for micro slopes up to ~0.3 and away from the
-horizon; energy pushed beyond the horizon is lost, as shadowing would do.
+cosθ_o dω_o = du dv. For PSD statistics the diffracted part is the facet integral itself
+(:func:`facet_frame_diffraction`): per cell, a balance-heuristic quadrature over facet normals drawn from the micro
+NDF and about the cell's half-vector, each facet's nano lobe read from tables over local incidence
+(:data:`FACET_THETAS_DEG`) in that facet's frame. For a nano height field, and for a PSD lobe narrower than the
+cells, it is the paraxial form (:func:`facet_route`; ``facet="paraxial"`` by name): the nano lobe at the macro
+incidence is convolved with the *micro kernel* K, the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the
+mirror direction, i.e. shifted to each facet's mirror direction instead of being turned with the facet (accurate
+where each facet's lobe is narrow; docs/physics.md §7 gives its error on wide lobes). Both limits hold on the grid:
+σ_nano → 0 gives A = 1 and f_n = 0 (the microfacet model), and α → 0 gives the pure nano lobe. Light a facet's lobe
+sends below the macro horizon, or that is masked on its way out, is reported
+(``info["diffraction_beyond_horizon"]``).
 
 A specular lobe narrower than the grid (α ≲ du) cannot be sampled: its energy F·A·ρ_mf is deposited in the
 mirror cell as a spike of height E/(du dv), which keeps albedo and colour exact on the grid.
@@ -33,6 +38,7 @@ References
 .. [2] B. Walter, S. Marschner, H. Li, K. Torrance, "Microfacet models for refraction through rough surfaces",
    EGSR 2007 (microfacet BRDF of a general facet BRDF, eq. 14).
 .. [3] H. Davies, Proc. IEE 101, 209 (1954) (coherent fraction).
+.. [4] E. Veach, PhD thesis, Stanford 1997, §9.2 (balance heuristic).
 """
 from __future__ import annotations
 
@@ -57,7 +63,7 @@ from .microfacet import specular
 from .ndf import ALPHA_MAX, ALPHA_MIN, NDFS
 from .quadrature import albedo, directional_albedo
 
-__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FACET_THETAS_DEG', 'FACET_NDF_NODES', 'FACET_HALF_NODES', 'FACET_ROUTES', 'facet_route', 'facet_frame_diffraction', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'FACET_TAIL_SHARE', 'facet_incidences_deg', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
+__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FACET_THETAS_DEG', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM', 'FACET_ROUTES', 'facet_nodes', 'facet_route', 'facet_frame_diffraction', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'FACET_TAIL_SHARE', 'facet_incidences_deg', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
 
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
@@ -231,8 +237,8 @@ class Nano:
 class Lobes:
     """A two-scale evaluation for one incident direction on a direction grid.
 
-    Arrays are (n_λ, n_v, n_u) in 1/sr: ``coherent`` (micro specular × A), ``diffraction`` (nano lobe convolved
-    with the micro kernel), ``diffuse`` (dielectrics), ``multiple`` (the multiple-scattering compensation lobe, or
+    Arrays are (n_λ, n_v, n_u) in 1/sr: ``coherent`` (micro specular × A), ``diffraction`` (the nano lobe carried
+    by the micro facets), ``diffuse`` (dielectrics), ``multiple`` (the multiple-scattering compensation lobe, or
     None when it is off), ``total``; ``microfacet`` is the plain microfacet model (same micro roughness,
     material, diffuse term and compensation lobe; no nano-roughness) for comparison.
     """
@@ -621,13 +627,18 @@ def field_albedo_evaluations(micro: Micro, grid: DirectionGrid, incidences, extr
 #: local incidences θ' (degrees) at which the facet-frame route tabulates the nano lobe on the direction grid: the
 #: nano lobe of a facet at any incidence is read between the two nodes around it, relative to the mirror direction
 FACET_THETAS_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 78, 81, 84, 86, 88])
-#: facet normals of the grid route's quadrature drawn through the micro NDF's sampler (shared by all cells), and
-#: normals about each cell's half-vector drawn through the nano lobe's radial law (:func:`facet_frame_diffraction`).
-#: Measured against the pointwise form (L1 over the lobe, 128² grid, 550 nm): ABC σ = 10 nm, B = 2 µm, C = 2.6 with
-#: Beckmann α = 0.05 / 0.3 at 30°: 1.6 % / 2.4 %; Gaussian σ = 20 nm, T = 1 µm, GGX α = 0.02 at 20°: 1.9 %; ABC
-#: B = 4 µm, C = 2.3, GGX α = 0.3 at 45°: 2.3 %; Gaussian T = 8 µm (nano lobe narrower than the micro lobe), GGX
-#: α = 0.3 at 10°: 2.5 %. 16 + 16 nodes: up to 7.7 %; 64 + 64: ≤ 0.9 %
-FACET_NDF_NODES, FACET_HALF_NODES = 64, 16
+#: facet normals of the grid route's quadrature (:func:`facet_nodes`): (drawn through the micro NDF's sampler,
+#: shared by all cells; drawn about each cell's half-vector through the nano lobe's radial law), for a micro lobe
+#: narrower than :data:`FACET_NODE_SPLIT` nano lobe widths, and for a wider one. Measured per cell against the
+#: pointwise form (ABC σ = 10 nm, B = 2 µm, C = 2.6, 550 nm, Beckmann, 96²-128² grids): α = 0.05 at 30° with
+#: (64, 16) ≤ 2.7 % (32 + 16: 4.8 %); α = 0.3 at 60° with (64, 64) ≤ 2.1 % (64 + 16: 6.8 %, 32 + 64: 4.5 %)
+FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (64, 64)
+#: ratio 2α / w_n (the micro lobe's spread of mirror directions over the nano lobe's width λ/(π ℓ)) below which
+#: the grid route takes :data:`FACET_NODES_NARROW`
+FACET_NODE_SPLIT = 0.5
+#: wavelength (nm) of the nano lobe's radial law that places the grid route's half-vector normals and of w_n in
+#: :func:`facet_nodes`: one for every wavelength, so that each wavelength's lobe does not depend on the others asked
+FACET_REFERENCE_NM = 550.0
 #: evaluate's facet integration: ``frame`` (Walter's integral, each facet's nano lobe in its own frame),
 #: ``paraxial`` (the nano lobe at the macro incidence shifted to every facet's mirror direction: an FFT
 #: convolution), ``auto`` (frame where :func:`facet_route` allows it)
@@ -639,8 +650,9 @@ def facet_route(micro: Micro, nano: Nano | None, grid: DirectionGrid, wavelength
 
     ``auto`` takes ``frame`` for PSD statistics whose nano lobe (width λ_min/(π ℓ)) is wider than
     :data:`NARROW_CELLS` grid cells; else ``paraxial``: height fields (their lobe is not tabulated over local
-    incidence) and nano lobes the grid cannot resolve, which :func:`nano_lobe` deposits with their energy, where
-    a facet's lobe lies within a cell or two of its mirror direction and its shift and rotation differ by less.
+    incidence); a micro lobe narrower than a cell (its facets tilt by less than a cell, where the shift and the
+    turn of their lobes agree); nano lobes the grid cannot resolve, which :func:`nano_lobe` deposits with their
+    energy, where a facet's lobe lies within a cell or two of its mirror direction.
     """
     if facet not in FACET_ROUTES:
         raise unknown("facet", facet, FACET_ROUTES)
@@ -651,8 +663,21 @@ def facet_route(micro: Micro, nano: Nano | None, grid: DirectionGrid, wavelength
         return "paraxial"
     if facet != "auto":
         return facet
+    if _sharp(micro, grid):
+        return "paraxial"
     wn = float(np.min(wavelengths_nm)) * 1e-9 / (np.pi * nano.model.length_scale)
     return "paraxial" if wn < NARROW_CELLS * max(grid.du, grid.dv) else "frame"
+
+
+def facet_nodes(micro: Micro, nano: Nano, wavelengths_nm) -> tuple[int, int]:
+    """(NDF normals, half-vector normals per cell) of the grid route's quadrature: :data:`FACET_NODES_NARROW` when
+    the micro lobe's mirror directions spread over less than :data:`FACET_NODE_SPLIT` nano lobe widths (2α < 0.5
+    λ/(π ℓ) at λ = :data:`FACET_REFERENCE_NM`), where the NDF's normals carry the integral, else
+    :data:`FACET_NODES_WIDE` (*wavelengths_nm* is not used: every wavelength gets the same nodes)."""
+    kw = micro.kw()
+    a = max(kw["alpha"], kw["alpha_y"] or 0.0)
+    wn = FACET_REFERENCE_NM * 1e-9 / (np.pi * nano.model.length_scale)
+    return FACET_NODES_NARROW if 2 * a < FACET_NODE_SPLIT * wn else FACET_NODES_WIDE
 
 
 class _One:
@@ -681,25 +706,42 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
         th = np.radians(FACET_THETAS_DEG[k])
         wi = np.array([np.sin(th), 0.0, np.cos(th)])
         u, v = _centres(grid)
+        # the lobe of an isotropic PSD is even in v: rows from the middle up, mirrored onto the rows below
+        half = slice(grid.n_v // 2 - 1, grid.n_v) if _v_symmetric(grid) else slice(0, grid.n_v)
+        u, v = u[half], v[half]
         r = np.hypot(u, v)
         shrink = np.where(r > RIM_RADIUS, RIM_RADIUS / np.where(r > 0, r, 1.0), 1.0)
         u, v = u * shrink, v * shrink
         wo = np.stack([u, v, np.sqrt(np.maximum(1.0 - u * u - v * v, 0.0))], axis=-1)
-        out = np.empty(wo.shape[:2] + (len(w),), dtype=np.float32)
+        out = np.empty((grid.n_v, grid.n_u, len(w)), dtype=np.float32)
         for i, lam in enumerate(w):
             if dm.perturbative:
                 f = scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization)
             else:
-                f, cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, return_captured=True,
-                                                diffraction=dm)
-                if float(np.min(cap)) < SERIES_MIN_CAPTURED:
-                    raise WaveopticsError(
-                        f"nano-roughness sigma = {nano.model.sigma * 1e9:.4g} nm is too rough for the PSD series "
-                        f"at {lam:g} nm (it holds only {100 * float(np.min(cap)):.3g}% of the scattered light in "
-                        "some directions); describe roughness this large by the micro NDF (alpha)")
-            out[..., i] = f * wo[..., 2]
+                _check_series(nano.model, lam)
+                f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
+            out[half, :, i] = f * wo[..., 2]
+        if half.start > 0:
+            out[:half.start] = out[grid.n_v - 1:grid.n_v - 1 - half.start:-1]
         cache[key] = out
     return cache[key]
+
+
+def _v_symmetric(grid: DirectionGrid) -> bool:
+    """Whether the rows of *grid* are symmetric about v = 0 (row i and n_v − 1 − i at opposite v)."""
+    return grid.n_v % 2 == 0 and np.isclose(grid.v_range[0], -grid.v_range[1])
+
+
+def _check_series(model, lam):
+    """Refuse nano-roughness the truncated PSD series cannot hold (its largest g, at cos θ_i + cos θ_o = 2)."""
+    g = scatter.roughness_g(model.sigma, 2.0, lam)
+    m_use = scatter.series_terms(g)
+    captured = float(scatter.poisson_weights(g, m_use).sum() / -np.expm1(-g)) if g > 0 else 1.0
+    if captured < SERIES_MIN_CAPTURED:
+        raise WaveopticsError(
+            f"nano-roughness sigma = {model.sigma * 1e9:.4g} nm is too rough for the PSD series at {lam:g} nm (it "
+            f"holds only {100 * captured:.3g}% of the scattered light); describe roughness this large by the "
+            "micro NDF (alpha)")
 
 
 def _centres(grid: DirectionGrid):
@@ -763,18 +805,18 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
 
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
                             diffraction="kirchhoff", polarization: str = "unpolarized",
-                            table_grid: DirectionGrid | None = None, nodes: int | None = None):
+                            table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None):
     """The diffracted part on *grid*: Walter's integral over facet normals m of the nano lobe in each facet's
     frame (docs/physics.md §7),
 
         f_diff(ω_i, ω_o) = ∫ |ω_i·m| |ω_o·m| / (|ω_i·n| |ω_o·n|) f_nano(ω_i^m, ω_o^m) G(ω_i, ω_o, m) D(m) dm,
 
     by the balance heuristic of two fixed node sets, as :class:`waveoptics.brdf.TwoScaleBRDF` does: N_a Sobol
-    normals through the micro NDF's sampler (shared by all cells; N_a = :data:`FACET_NDF_NODES`) and, per cell,
-    :data:`FACET_HALF_NODES` normals about its half-vector drawn through the nano lobe's radial law (they hold a
-    heavy-tailed NDF's far facets and a nano lobe narrower than the micro lobe). Each facet's nano lobe is read
-    from tables over local incidence (:data:`FACET_THETAS_DEG`, :func:`_facet_read`) on *table_grid* (default
-    *grid*, a hemisphere); F(θ_d), the same in every facet's frame, multiplies the sum.
+    normals through the micro NDF's sampler (shared by all cells) and, per cell, N_b normals about its half-vector
+    drawn through the nano lobe's radial law (they hold a heavy-tailed NDF's far facets and a nano lobe narrower
+    than the micro lobe); (N_a, N_b) = *nodes* or :func:`facet_nodes`. Each facet's nano lobe is read from tables
+    over local incidence (:data:`FACET_THETAS_DEG`, :func:`_facet_read`) on *table_grid* (default *grid*, a
+    hemisphere); F(θ_d), the same in every facet's frame, multiplies the sum.
 
     Returns
     -------
@@ -800,14 +842,14 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     ndf, ax = kw["ndf"], kw["alpha"]
     ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
     c, spec = kw["ndf_shape"], _ndf(kw["ndf"])
-    na, nb = int(nodes or FACET_NDF_NODES), FACET_HALF_NODES
+    na, nb = nodes or facet_nodes(micro, nano, w)
     m_a = sample_normal(np.broadcast_to(wi, (na, 3)), unit_nodes(na), ndf=ndf, ax=ax, ay=ay, c=c)
     inside = grid.inside
     wo = grid.directions()[inside]
     h = wi + wo
     h = h / np.linalg.norm(h, axis=-1, keepdims=True)
     cos_d = np.maximum(h @ wi, 1e-6)
-    rad = NanoRadial(nano.model, float(np.min(w)), dm, nb)
+    rad = NanoRadial(nano.model, FACET_REFERENCE_NM, dm, nb)
     level = rad.level(cos_d)
     Li, Lo = float(spec.Lambda(wi, ax, ay, c)), spec.Lambda(wo, ax, ay, c)
     gfn, _ = _shadowing(micro.shadowing)
@@ -815,34 +857,39 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     stack = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
     out = np.zeros((wo.shape[0], w.size))
 
+    tgrid = table_grid or grid
+
     def add(m, valid):
-        """Add the nodes m (n_cells, 3) of one index of both sets, weighted by the balance heuristic."""
-        im, om = m @ wi, np.sum(wo * m, axis=-1)
+        """Add the nodes m (3,) (an NDF node, shared by all cells) or (n_cells, 3) (one half-vector node per
+        cell), weighted by the balance heuristic."""
+        om = wo @ m if m.ndim == 1 else np.sum(wo * m, axis=-1)
+        im = m @ wi
         D = spec.D(m, ax, ay, c)
-        pa = np.where(im > 0, D * im / (1.0 + Li), 0.0) / wi[2] if visible else D * m[:, 2]
-        mh = np.clip(np.sum(m * h, axis=-1), 0.0, 1.0)
+        pa = np.where(im > 0, D * im / (1.0 + Li), 0.0) / wi[2] if visible else D * m[..., 2]
+        mh = np.clip(h @ m if m.ndim == 1 else np.sum(m * h, axis=-1), 0.0, 1.0)
         pb = np.where(mh > 0, rad.pdf_r(level, 2 * cos_d * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
                       * 4 * cos_d ** 2 * mh, 0.0)
         den = na * pa + nb * pb
         ok = valid & (im > 0) & (om > 0) & (den > 0) & (D > 0)
         if not ok.any():
             return
-        m, im, wok = m[ok], im[ok], wo[ok]
+        wok = wo[ok]
         Lok = Lo[ok]
         Lik = np.full(Lok.shape, Li)
-        wik = np.broadcast_to(wi, wok.shape)
-        G = gfn(wik, wok, m, lambda d: Lok if d is wok else Lik)
-        weight = im * D[ok] * G / (wi[2] * wok[:, 2] * den[ok])     # × |ω_o·m| f_nano = g, the table's value
-        t, b = facet_basis(m)
-        lx, ly = t @ wi, b @ wi
+        mk = np.broadcast_to(m, wok.shape) if m.ndim == 1 else m[ok]
+        G = gfn(np.broadcast_to(wi, wok.shape), wok, mk, lambda d: Lok if d is wok else Lik)
+        weight = (im * D if m.ndim == 1 else (im * D)[ok]) * G / (wi[2] * wok[:, 2] * den[ok])   # × |ω_o·m| f_nano
+        t, b = facet_basis(mk if m.ndim > 1 else m)
+        lx, ly = np.sum(t * wi, axis=-1), np.sum(b * wi, axis=-1)
         r = np.hypot(lx, ly)
         cp, sp = np.where(r > 0, lx / np.where(r > 0, r, 1), 1.0), np.where(r > 0, ly / np.where(r > 0, r, 1), 0.0)
         ux, uy = np.sum(wok * t, axis=-1), np.sum(wok * b, axis=-1)   # turned so that ω_i^m lies in x–z
-        lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, np.sum(wok * m, axis=-1)], axis=-1)
-        out[ok] += weight[:, None] * _facet_read(stack, table_grid or grid, np.arccos(np.clip(im, 0, 1)), lo)
+        lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, om[ok]], axis=-1)
+        theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
+        out[ok] += weight[:, None] * _facet_read(stack, tgrid, theta, lo)
 
     for j in range(na):
-        add(np.broadcast_to(m_a[j], wo.shape), np.ones(wo.shape[0], bool))
+        add(m_a[j], np.ones(wo.shape[0], bool))
     radii = rad.node_radii[level]                        # (n_cells, n_b)
     phis = 2 * np.pi * unit_nodes(nb)[:, 1]
     e1, e2 = facet_basis(h)
@@ -912,6 +959,39 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None):
     budget = np.maximum(integrate(lost, grid) if budget is None else np.asarray(budget, dtype=float), 0.0)
     scale = np.where(got > budget * (1.0 + CAP_TOLERANCE), budget / np.where(got > 0, got, 1.0), 1.0)
     return diffraction * scale[:, None, None], scale
+
+
+def _diffracted_part(route, wi, w, mat, micro, nano, grid, F, dm, polarization, reference_grid, lost, *, solver,
+                     device, precision):
+    """:func:`evaluate`'s diffracted lobes by *route* (``frame``, ``paraxial`` or ``none``), the solver used, the
+    guard's factor per wavelength and the light masked or sent beyond the horizon (see :func:`evaluate`)."""
+    inside = grid.inside
+    if route == "none":
+        z = np.zeros(w.size)
+        return np.zeros((w.size, grid.n_v, grid.n_u)), "none", np.ones(w.size), z
+    if route == "frame":   # Walter's integral: each facet's nano lobe in its own frame
+        diffraction, scattered = facet_frame_diffraction(wi, w, mat, micro, nano, grid, F, diffraction=dm,
+                                                         polarization=polarization, table_grid=reference_grid)
+        diffraction = np.where(inside, diffraction, 0.0)
+        # the light the facets scatter that is masked on its way out or leaves below the macro horizon
+        beyond = np.maximum(scattered - integrate(diffraction, grid), 0.0)
+        budget = scattered
+    else:
+        fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision, diffraction=dm,
+                       material=mat)
+        K0 = micro_kernel(wi, micro, grid)
+        K = K0[None] * facet_scatter_weights(wi, w, nano, grid, dm, mat, polarization, kernel=K0)
+        diffraction = np.where(inside, _convolve(fn, K, grid), 0.0)
+        # the light each facet's lobe, shifted to that facet's mirror direction, puts beyond the horizon (the
+        # convolution's total is Σ f_n du dv × Σ K): lost, as shadowing would lose it
+        beyond = np.maximum(integrate(fn, grid) * K.sum(axis=(-2, -1)) - integrate(diffraction, grid), 0.0)
+        budget = None
+    if reference_grid is None:
+        diffraction, energy_scale = _cap_to_coherent_loss(diffraction, lost, grid, budget)
+    else:
+        energy_scale = np.ones(w.size)
+    used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")
+    return diffraction, used, energy_scale, beyond
 
 
 def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid: DirectionGrid, *,
@@ -1026,34 +1106,9 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
 
     # --- diffraction: nano lobe carried by the facets --------------------------------------------------------
     route = facet_route(micro, nano, grid, w, facet) if sigma_nano > 0 else "none"
-    if route == "frame":   # Walter's integral: each facet's nano lobe in its own frame
-        diffraction, scattered = facet_frame_diffraction(wi, w, mat, micro, nano, grid, F, diffraction=dm,
-                                                         polarization=polarization, table_grid=reference_grid)
-        diffraction = np.where(inside, diffraction, 0.0)
-        # the light the facets scatter that is masked on its way out or leaves below the macro horizon
-        beyond = np.maximum(scattered - integrate(diffraction, grid), 0.0)
-        budget = scattered
-    elif route == "paraxial":
-        fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision, diffraction=dm,
-                       material=mat)
-        K0 = micro_kernel(wi, micro, grid)
-        K = K0[None] * facet_scatter_weights(wi, w, nano, grid, dm, mat, polarization, kernel=K0)
-        diffraction = np.where(inside, _convolve(fn, K, grid), 0.0)
-        # the light each facet's lobe, shifted to that facet's mirror direction, puts beyond the horizon (the
-        # convolution's total is Σ f_n du dv × Σ K): lost, as shadowing would lose it
-        beyond = np.maximum(integrate(fn, grid) * K.sum(axis=(-2, -1)) - integrate(diffraction, grid), 0.0)
-        budget = None
-    if sigma_nano > 0:
-        if reference_grid is None:
-            diffraction, energy_scale = _cap_to_coherent_loss(diffraction, mf - coherent, grid, budget)
-        else:
-            energy_scale = np.ones(w.size)
-        used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")
-    else:
-        diffraction = np.zeros(shape)
-        used = "none"
-        energy_scale = np.ones(w.size)
-        beyond = np.zeros(w.size)
+    diffraction, used, energy_scale, beyond = _diffracted_part(
+        route, wi, w, mat, micro, nano, grid, F, dm, polarization, reference_grid, mf - coherent,
+        solver=solver, device=device, precision=precision)
 
     # --- diffuse (dielectrics only) ---------------------------------------------------------------------------
     diff_albedo = np.zeros(w.size)
