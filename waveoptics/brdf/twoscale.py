@@ -693,7 +693,9 @@ class _One:
 def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
     """g = f_nano cos θ_o of the nano lobe at local incidence :data:`FACET_THETAS_DEG` [k] (azimuth 0) at the cell
     centres of *grid*, (n_v, n_u, n_λ) float32: F = 1 for the Kirchhoff family (its F(θ_d) is frame-independent
-    and applied afterwards), the Rayleigh-Rice lobe with its own factor Q of *material* and *polarization*.
+    and applied afterwards), the Rayleigh-Rice lobe with its own factor Q of *material* and *polarization* (for s or
+    p light Q is taken relative to the facet's own plane of incidence, not the macro one: exact for unpolarized
+    light and for facets tilted in the plane of incidence).
 
     g is finite up to the horizon (f grows like 1/cos θ_o there); cells beyond the rim of the disc hold g of the
     rim direction on their radius, so that bilinear reads within a cell of the rim are not pulled towards 0.
