@@ -143,8 +143,8 @@ def field_table():
 
 
 def horizon_table():
-    """Two-scale albedo against the microfacet albedo with micro roughness, and the light the facets' shifted lobes
-    put beyond the horizon (θ_i = 0° and 40°, 450 nm, Beckmann micro NDF)."""
+    """Two-scale albedo against the microfacet albedo with micro roughness, and the light the facets' lobes lose to
+    masking on the way out and below the horizon (θ_i = 0° and 40°, 450 nm, Beckmann micro NDF)."""
     mat = materials.get_material("1+6j")
     grid = DirectionGrid.hemisphere(128)
     cases = [("PSD ABC σ = 40 nm, B = 3.7 µm, C = 2.2",
@@ -226,6 +226,10 @@ with the micro kernel K, the F = 1 microfacet lobe re-centred on the mirror dire
 
 <!-- facet-frame sweep -->
 <!-- /facet-frame sweep -->
+
+  The grid form's deviation is its per-cell quadrature (64 NDF + 16 half-vector normals, 64 + 64 for micro lobes
+  wider than half the nano lobe) and, within two cells of the horizon, its tables' bilinear reads (θ_o ≤ 70° in
+  the column; at θ_i = 80° the grazing-incidence guard below may also act).
 * Single scattering only: like every single-scattering microfacet model it loses energy at large α
   (see docs/microfacet.md); inter-reflections between facets are not diffracted.
 * The PSD route assumes Gaussian height statistics and converges for g ≲ 30; the Kirchhoff route is scalar and
