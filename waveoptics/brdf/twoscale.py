@@ -824,9 +824,13 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     -------
     diffraction : ndarray (n_λ, n_v, n_u), 1/sr
     scattered : ndarray (n_λ,)
-        The light the facets' lobes scatter, F(θ_m) (1 − A(θ_m)) per facet weighted by its share of the incident
-        light (G1 masking on the way in; the NDF nodes): the diffracted part's albedo falls short of it by the
-        light masked on the way out or sent below the macro horizon.
+        The light the facets' lobes scatter, F(θ_m) (1 − A(θ_m)) per facet averaged over the facets the light
+        sees (the NDF nodes, weights D (ω_i·m) G1 / p, normalized by their sum, which is 1 in expectation): the
+        diffracted part's albedo falls short of it by the light masked on the way out or sent below the macro
+        horizon.
+    reflected : ndarray (n_λ,)
+        F(θ_m) averaged the same way: the light the facets reflect, coherent and diffracted together, before
+        masking on the way out.
 
     References
     ----------
@@ -908,7 +912,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     node_w = np.where((im_a > 0) & (p_a > 0), im_a * spec.D(m_a, ax, ay, c)
                       / (wi[2] * na * np.where(p_a > 0, p_a, 1.0)), 0.0)
     mirror = 2 * im_a[:, None] * m_a - wi
-    scattered = np.zeros(w.size)
+    scattered, reflected = np.zeros(w.size), np.zeros(w.size)
     for i, lam in enumerate(w):
         if dm.perturbative:
             Fc = np.ones(wo.shape[0])
@@ -918,8 +922,12 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         Fm = (F.at(np.broadcast_to(wi, (na, 3)), mirror, lam) if hasattr(F, "at")
               else F(np.clip(im_a, 0.0, 1.0), lam)) * np.ones(na)
         E = 1.0 - np.asarray(nano.coherent_amplitude2(np.clip(im_a, 0.0, 1.0), lam, dm, material, polarization))
-        scattered[i] = float(np.sum(node_w * Fm * E) / (1.0 + Li))
-    return diffraction, scattered
+        # Σ node_w G1 estimates ∫ G1 (ω_i·m) D dm / cos θ_i = 1 (Smith); normalized by it, so that near grazing
+        # incidence, where few NDF nodes face the light, the facets' share is not over-counted
+        total_w = float(np.sum(node_w))
+        scattered[i] = float(np.sum(node_w * Fm * E) / total_w) if total_w > 0 else 0.0
+        reflected[i] = float(np.sum(node_w * Fm) / total_w) if total_w > 0 else 0.0
+    return diffraction, scattered, reflected
 
 
 #: the diffracted lobes may exceed the light the coherent lobe lost by this share before
@@ -963,8 +971,8 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None):
     return diffraction * scale[:, None, None], scale
 
 
-def _diffracted_part(route, wi, w, mat, micro, nano, grid, F, dm, polarization, reference_grid, lost, *, solver,
-                     device, precision):
+def _diffracted_part(route, wi, w, mat, micro, nano, grid, F, dm, polarization, reference_grid, lost, coherent, *,
+                     solver, device, precision):
     """:func:`evaluate`'s diffracted lobes by *route* (``frame``, ``paraxial`` or ``none``), the solver used, the
     guard's factor per wavelength and the light masked or sent beyond the horizon (see :func:`evaluate`)."""
     inside = grid.inside
@@ -972,12 +980,13 @@ def _diffracted_part(route, wi, w, mat, micro, nano, grid, F, dm, polarization, 
         z = np.zeros(w.size)
         return np.zeros((w.size, grid.n_v, grid.n_u)), "none", np.ones(w.size), z
     if route == "frame":   # Walter's integral: each facet's nano lobe in its own frame
-        diffraction, scattered = facet_frame_diffraction(wi, w, mat, micro, nano, grid, F, diffraction=dm,
-                                                         polarization=polarization, table_grid=reference_grid)
+        diffraction, scattered, reflected = facet_frame_diffraction(
+            wi, w, mat, micro, nano, grid, F, diffraction=dm, polarization=polarization, table_grid=reference_grid)
         diffraction = np.where(inside, diffraction, 0.0)
         # the light the facets scatter that is masked on its way out or leaves below the macro horizon
         beyond = np.maximum(scattered - integrate(diffraction, grid), 0.0)
-        budget = scattered
+        # guard: neither more than the facets scatter nor, with the coherent part, more than they reflect
+        budget = np.minimum(scattered, reflected - integrate(coherent, grid))
     else:
         fn = nano_lobe(wi, w, nano, grid, F, solver=solver, device=device, precision=precision, diffraction=dm,
                        material=mat)
@@ -1109,7 +1118,7 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
     # --- diffraction: nano lobe carried by the facets --------------------------------------------------------
     route = facet_route(micro, nano, grid, w, facet) if sigma_nano > 0 else "none"
     diffraction, used, energy_scale, beyond = _diffracted_part(
-        route, wi, w, mat, micro, nano, grid, F, dm, polarization, reference_grid, mf - coherent,
+        route, wi, w, mat, micro, nano, grid, F, dm, polarization, reference_grid, mf - coherent, coherent,
         solver=solver, device=device, precision=precision)
 
     # --- diffuse (dielectrics only) ---------------------------------------------------------------------------
