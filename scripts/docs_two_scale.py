@@ -239,7 +239,8 @@ with the micro kernel K, the F = 1 microfacet lobe re-centred on the mirror dire
   incidence the lobe scatters more and more light (physics.md §9: beyond ~75° more than first-order Rayleigh-Rice
   theory says). The coherent fraction is the complement of what the lobe scatters (both routes), so the halves
   add up to F at every angle until the lobe alone would hold more than F. Where the diffracted lobe holds more
-  than the coherent lobe gives up (by more than 1 %), a
+  than the coherent lobe gives up (for PSD statistics in the facet frame: than the facets scatter, or with the
+  coherent part than they reflect; by more than 1 %), a
   guard scales it down to that light (`twoscale._cap_to_coherent_loss`; the factor is
   `Lobes.info["diffraction_energy_scale"]`). Measured factor (n = 1 + 6i, 550 nm, 96² grid):
 
