@@ -143,8 +143,8 @@ def field_table():
 
 
 def horizon_table():
-    """Two-scale albedo against the microfacet albedo with micro roughness, and the light the facets' shifted lobes
-    put beyond the horizon (θ_i = 0° and 40°, 450 nm, Beckmann micro NDF)."""
+    """Two-scale albedo against the microfacet albedo with micro roughness, and the light the facets' lobes lose to
+    masking on the way out and below the horizon (θ_i = 0° and 40°, 450 nm, Beckmann micro NDF)."""
     mat = materials.get_material("1+6j")
     grid = DirectionGrid.hemisphere(128)
     cases = [("PSD ABC σ = 40 nm, B = 3.7 µm, C = 2.2",
@@ -201,23 +201,35 @@ light a facet reflects splits into
   1 − E(θ_d) with E the share of the reflected light that lobe scatters (physics.md §9): while the lobe is
   paraxial this is Davies' exp(−(4πσ_rel cos θ_d / λ)²) (1954) of the roughness inside the propagating band. On
   both routes (PSD statistics and height fields) the two halves therefore add up to the reflected light;
-* a **diffracted** part: the nano lobe f_n carried by every facet, i.e. tilted with the facet normal and therefore
-  convolved with the micro NDF (with masking-shadowing). f_n comes from the PSD (`--solver psd`, the
+* a **diffracted** part: the nano lobe f_n carried by every facet in the facet's own frame (Walter et al. 2007's
+  integral of a facet BRDF over the micro NDF, with masking-shadowing; physics.md §7). f_n comes from the PSD (`--solver psd`, the
   Beckmann-Spizzichino series generalized to any isotropic PSD, `waveoptics/scatter/series.py`) or from a Kirchhoff solver on a
   nano height field (`fft` or `direct`), keeping only the incoherent field δU = U − ⟨χ⟩ U_flat;
 * for dielectrics, a **diffuse** term with the diffuse-specular trade-off (metals have none).
 
-Lobes live on the direction-cosine plane (u, v) = (sin θ cos φ, sin θ sin φ), where cos θ dω = du dv. A facet's
-tilt moves the mirror direction, so the per-facet tilting is a 2-D convolution (FFT) of f_n with the micro kernel
-K: the F = 1 microfacet lobe re-centred on the mirror direction, whose sum is the F = 1 micro albedo.
+Lobes live on the direction-cosine plane (u, v) = (sin θ cos φ, sin θ sin φ), where cos θ dω = du dv. For PSD
+statistics each cell is a quadrature over facet normals (drawn from the micro NDF and about the cell's
+half-vector, balance heuristic), each facet's lobe read from tables of f_n over local incidence in its own frame;
+`waveoptics.brdf.TwoScaleBRDF` evaluates the same integral with f_n exact. A nano height field's lobe (and a PSD
+lobe narrower than two cells) is still shifted paraxially: a 2-D convolution (FFT) of f_n at the macro incidence
+with the micro kernel K, the F = 1 microfacet lobe re-centred on the mirror direction.
 
 ## Limits, measured
 
 {limits_table()}
 
 ## Where it breaks
-* The convolution **shifts** the nano lobe in (u, v) instead of rotating it with each facet: accurate for micro
-  slopes up to ~0.3 and away from grazing; near the horizon energy pushed off the disc is lost (as shadowing).
+* **The facet frame against the paraxial shift.** The diffracted part against an independent Monte-Carlo facet
+  integral (`scripts/facet_frame_sweep.py`; Al, ABC σ = 10 nm, B = 2 µm, C = 2.6, 550 nm, Beckmann; θ_o 15-85°
+  forward in the plane and 40°, 70° across it). The paraxial shift, still used for nano height fields, is the
+  former default for PSDs:
+
+<!-- facet-frame sweep -->
+<!-- /facet-frame sweep -->
+
+  The grid form's deviation is its per-cell quadrature (64 NDF + 16 half-vector normals, 64 + 64 for micro lobes
+  wider than half the nano lobe) and, within two cells of the horizon, its tables' bilinear reads (θ_o ≤ 70° in
+  the column; at θ_i = 80° the grazing-incidence guard below may also act).
 * Single scattering only: like every single-scattering microfacet model it loses energy at large α
   (see docs/microfacet.md); inter-reflections between facets are not diffracted.
 * The PSD route assumes Gaussian height statistics and converges for g ≲ 30; the Kirchhoff route is scalar and
@@ -227,7 +239,8 @@ K: the F = 1 microfacet lobe re-centred on the mirror direction, whose sum is th
   incidence the lobe scatters more and more light (physics.md §9: beyond ~75° more than first-order Rayleigh-Rice
   theory says). The coherent fraction is the complement of what the lobe scatters (both routes), so the halves
   add up to F at every angle until the lobe alone would hold more than F. Where the diffracted lobe holds more
-  than the coherent lobe gives up (by more than 1 %), a
+  than the coherent lobe gives up (for PSD statistics in the facet frame: than the facets scatter, or with the
+  coherent part than they reflect; by more than 1 %), a
   guard scales it down to that light (`twoscale._cap_to_coherent_loss`; the factor is
   `Lobes.info["diffraction_energy_scale"]`). Measured factor (n = 1 + 6i, 550 nm, 96² grid):
 
@@ -251,9 +264,9 @@ K: the F = 1 microfacet lobe re-centred on the mirror direction, whose sum is th
 
 {field_table()}
 
-* **Micro roughness and the horizon**: each facet's lobe is shifted to its facet's mirror direction; the part
-  of a wide lobe shifted beyond the horizon is lost (as shadowing loses it), so the two-scale albedo falls below
-  the microfacet albedo by that light and by no more (`Lobes.info["diffraction_beyond_horizon"]`; the tests
+* **Micro roughness and the horizon**: each facet's lobe (in its own frame for PSDs, shifted to its facet's
+  mirror direction for height fields) is masked on its way out and sends part of its light below the horizon, so
+  the two-scale albedo falls below the microfacet albedo by that light and by no more (`Lobes.info["diffraction_beyond_horizon"]`; the tests
   allow 1e-3 above, and below that light by 1e-3 for PSDs and 5e-3 for height fields, whose speckle lobes the
   evaluation grid and the coherent fraction's grid sample differently). n = 1 + 6i, 450 nm, 128² grid:
 
@@ -309,6 +322,12 @@ Hemisphere previews (colour from the RGB lobe, brightness log-scaled):
 - E. L. Church, P. Z. Takacs, T. A. Leonard, The prediction of BRDFs from surface profile measurements,
   Proc. SPIE 1165, 1989.
 """
+    # the facet-frame sweep's table is written by scripts/facet_frame_sweep.py --write: keep it
+    mark = ("<!-- facet-frame sweep -->", "<!-- /facet-frame sweep -->")
+    old = DOC.read_text() if DOC.exists() else ""
+    if mark[0] in old and mark[1] in old:
+        kept = old[old.index(mark[0]):old.index(mark[1]) + len(mark[1])]
+        text = text.replace(f"{mark[0]}\n{mark[1]}", kept)
     DOC.write_text(text)
     print(f"wrote {DOC}")
 

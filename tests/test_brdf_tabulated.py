@@ -39,10 +39,12 @@ def _direct(theta, phi=0.0, nano=NANO, micro=MICRO):
 
 
 def test_on_the_nodes_it_is_the_grid_model(table):
+    """At a node the table returns the grid model's lobe (to the float32 rounding of the facet route's nano
+    tables, whose sums depend on how many wavelengths are evaluated together: 4e-8 measured)."""
     wi, L = _direct(30.0)
     wo = GRID.directions()[GRID.inside]
     parts = table.eval_parts(wi, wo, 550.0)
-    np.testing.assert_allclose(parts["diffraction"], L.diffraction[0][GRID.inside], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(parts["diffraction"], L.diffraction[0][GRID.inside], rtol=1e-6, atol=1e-15)
     c_ref = L.coherent[0][GRID.inside]
     assert np.max(np.abs(parts["coherent"] - c_ref)) < 1e-3 * c_ref.max()
 

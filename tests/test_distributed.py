@@ -111,8 +111,11 @@ def test_table_layout_and_values(reference):
     np.testing.assert_allclose(t.albedo[1], L.albedo(), rtol=1e-12)
     # RGB of the albedo spectrum is the colour pipeline's, per incident angle
     np.testing.assert_allclose(t.albedo_rgb, colour.reflectance_to_rgb(t.albedo, t.wavelengths_nm), rtol=1e-12)
-    # physics: nano-roughness only removes energy from the microfacet lobe (albedo <= microfacet, metals)
-    assert np.all(t.albedo <= t.microfacet_albedo * (1 + 1e-9))
+    # physics: nano-roughness redistributes the light the facets reflect; it adds none. Not ≤ the microfacet albedo
+    # exactly: a facet whose mirror direction is masked still sends part of its diffracted lobe out, unmasked
+    # (Walter's facet integral, docs/physics.md §7; measured +2.5e-4 at 60° on these 32² cells), as the two-scale
+    # tests allow (1e-3, tests/test_twoscale.py)
+    assert np.all(t.albedo <= t.microfacet_albedo * (1 + 1e-3))
     assert t.grid.n_u == 32 and t.grid.u_range == (-1.0, 1.0)
 
 

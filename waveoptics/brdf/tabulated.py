@@ -8,15 +8,18 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   the nano lobe leaves, from tables over θ_d of the nano statistics or of the height field's own lobe:
   :meth:`waveoptics.brdf.Nano.coherent_amplitude2`);
 * the diffracted part is computed by :func:`waveoptics.brdf.evaluate` on a direction grid at incidence angles
-  θ_k (azimuth 0) and interpolated between them *relative to the specular direction*: at θ_i between θ_a and
-  θ_b, with Δ = (u_o, v_o) − (mirror point of θ_i), each node's lobe is read at its own mirror point + Δ and the
-  two values are blended linearly in θ_i. Diffraction lobes are nearly shift-invariant in direction cosines (the
-  Harvey-Shack picture; docs/physics.md §11), so the blend moves the lobe with the incidence instead of
-  cross-fading two lobes at different places (the seam of the old sphere renders).
+  θ_k (azimuth 0; each facet's nano lobe in its own frame for PSD statistics, docs/physics.md §7) and
+  interpolated between them *relative to the specular direction*: at θ_i between θ_a and θ_b, an isotropic table
+  reads each node at ω_o turned about the axis normal to the plane of incidence by θ_i − θ_k (which takes ω_i's
+  mirror direction to θ_k's, as a tilted facet turns its lobe), and the two values are blended linearly in θ_i;
+  the blend moves the lobe with the incidence instead of cross-fading two lobes at different places. Reads within
+  a cell of the horizon take the cells beyond the rim as the mean of their neighbours inside it (the lobe rises
+  towards the horizon, where zeros would pull it down).
 * Surfaces whose nano lobe depends on the light's azimuth (height fields, gratings, anisotropic micro NDFs) are
-  tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`), with the same
-  specular-relative blend in φ_i (never rotated: a grating's orders stay where the grating puts them); isotropic
-  ones are rotated to the table's azimuth and need θ nodes only.
+  tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`) and read at each node's
+  mirror point plus the offset Δ = (u_o, v_o) − (mirror point of ω_i) in direction cosines, blended in θ_i and
+  φ_i (never rotated: a grating's orders stay where the grating puts them, and they shift in direction cosines,
+  the Harvey-Shack picture, docs/physics.md §11).
 
 Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes; between 10° nodes the
 diffracted part's peak is within 1 % and its energy within 2 % of a direct evaluation at that incidence.
@@ -218,26 +221,56 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     def _f_diffraction(self, wi, wo, lam):
         j = self._wavelength_index(lam)
         thetas = self._table["thetas"]
-        a, b, t = _bracket(thetas, np.arccos(np.clip(wi[:, 2], -1.0, 1.0)))
+        theta_i = np.arccos(np.clip(wi[:, 2], -1.0, 1.0))
+        a, b, t = _bracket(thetas, theta_i)
         _, phi_nodes = self._frame(wi)
         rot = self._table_rotation(wi)
-        delta = _rotate(wo, rot)[:, :2] + _rotate(wi, rot)[:, :2]   # (u, v) − mirror point of ω_i
+        wo_r, wi_r = _rotate(wo, rot), _rotate(wi, rot)
+        delta = wo_r[:, :2] + wi_r[:, :2]   # (u, v) − mirror point of ω_i
+        rotate = self._table["phis"].size == 1 and self.isotropic
         num = np.zeros(wi.shape[0])
         den = np.zeros(wi.shape[0])
         for p_idx, w_p in phi_nodes:
             for k, w_k in ((a, 1 - t), (b, t)):
-                mu, mv = self._node_mirror(p_idx, k)
-                uu, vv = mu + delta[:, 0], mv + delta[:, 1]
-                # a node whose offset point lies beyond its horizon holds no data there: it drops out of the blend
-                inside = uu * uu + vv * vv < 1.0
+                if rotate:   # ω_o turned about the table's y axis by θ_i − θ_k: ω_i's mirror onto θ_k's
+                    beta = theta_i - thetas[k]
+                    cb, sb = np.cos(beta), np.sin(beta)
+                    uu = wo_r[:, 0] * cb + wo_r[:, 2] * sb
+                    vv = wo_r[:, 1]
+                    inside = -wo_r[:, 0] * sb + wo_r[:, 2] * cb > 0
+                else:        # shifted with the specular direction in the direction-cosine plane
+                    mu, mv = self._node_mirror(p_idx, k)
+                    uu, vv = mu + delta[:, 0], mv + delta[:, 1]
+                    inside = uu * uu + vv * vv < 1.0
+                # a node whose point lies beyond its horizon holds no data there: it drops out of the blend
                 num += w_p * w_k * np.where(inside, self._lookup(p_idx, k, j, uu, vv), 0.0)
                 den += w_p * w_k * inside
         out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
         return np.where((wi[:, 2] > 0) & (wo[:, 2] > 0), out, 0.0)
 
+    def _lookup_table(self):
+        """The tabulated lobes with each cell beyond the rim of the disc given the mean of its neighbours inside
+        it (two passes), for bilinear reads within a cell of the horizon, which would otherwise blend in zeros;
+        sampling and its density keep the lobes as computed."""
+        if "lookup" not in self._table:
+            lob = self._table["diffraction"]
+            inside = self._table["grid"].inside
+            filled, known = lob.copy(), inside.copy()
+            for _ in range(2):
+                total = np.zeros_like(filled)
+                count = np.zeros(known.shape)
+                for axis, shift in ((-1, 1), (-1, -1), (-2, 1), (-2, -1)):
+                    total += np.roll(np.where(known, filled, 0.0), shift, axis=axis)
+                    count += np.roll(known, shift, axis=axis)
+                new = ~known & (count > 0)
+                filled = np.where(new, total / np.maximum(count, 1), filled)
+                known = known | new
+            self._table["lookup"] = filled
+        return self._table["lookup"]
+
     def _lookup(self, p, k, j, u, v):
         """Bilinear value at (u, v) (n,) of the lobes of φ nodes p and θ nodes k (per point), wavelength j."""
-        lob = self._table["diffraction"]
+        lob = self._lookup_table()
         k0, j0, av, au, ok = self._table["grid"].bilinear(u, v)
         p = np.broadcast_to(p, u.shape)
         k = np.broadcast_to(k, u.shape)

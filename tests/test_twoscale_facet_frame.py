@@ -1,0 +1,161 @@
+"""Issue 28: every micro facet carries its nano lobe in its own frame (Walter et al. 2007's integral).
+
+Reference: tests/twoscale_reference.py (written from the papers, not from the package): a Monte-Carlo facet-frame
+integral with its own Beckmann/GGX sampling, Smith G2 and balance-heuristic mixture, fed the package's facet nano
+BRDF (:meth:`TwoScaleBRDF.facet_nano_brdf`) or, for Rayleigh-Rice, the reference's own first-order lobe; its own
+deterministic disc quadrature for albedos. Before this change the package shifted the macro-incidence nano lobe in
+the direction-cosine plane: 0.92 / 0.72 of the reference at 30 → 60° (α 0.1 / 0.3), 0.69 / 0.55 at 60 → 80°.
+"""
+import numpy as np
+import pytest
+
+import twoscale_reference as R
+from waveoptics import brdf, scatter, surfaces
+from waveoptics.brdf import Micro, Nano, TabulatedTwoScaleBRDF, TwoScaleBRDF
+from waveoptics.materials import get_material
+from waveoptics.scatter.grid import DirectionGrid
+
+LAM = 550.0
+PSD = surfaces.PSDModel("abc", 10e-9, B=2e-6, C=2.6)
+NANO = Nano(model=PSD)
+#: the nano lobe's width in direction cosines (λ / B) for the reference's half-vector technique
+WIDTH = LAM / 2000.0
+#: |package − reference| ≤ TOL × reference + K_SE standard errors of the reference
+TOL, K_SE = 0.03, 3.0
+#: (θ_i, θ_o, φ_o) in degrees: in the plane of incidence (forward φ_o = 180°, backward 0°) and out of it
+PAIRS = [(0, 40, 0), (30, 60, 180), (30, 85, 180), (30, 50, 90), (60, 80, 180), (60, 30, 180), (80, 60, 180),
+         (80, 85, 150), (60, 70, 40)]
+
+
+def _pairs(pairs):
+    wi = R.direction([p[0] for p in pairs])
+    wo = R.direction([p[1] for p in pairs], [p[2] for p in pairs])
+    return wi, wo
+
+
+def _reference(b, wi, wo, alpha, ndf="beckmann", n=24000, seed=3, f_nano=None):
+    return R.facet_integral(f_nano or b.facet_nano_brdf, wi, wo, LAM, alpha, ndf, nano_width=WIDTH,
+                            n_samples=n, seed=seed)
+
+
+def _assert_close(got, ref, se, what):
+    bad = np.abs(got - ref) > TOL * ref + K_SE * se
+    assert not bad.any(), f"{what}: package/reference {np.round(got / ref, 4)} (s.e. {np.round(se / ref, 4)})"
+
+
+@pytest.mark.parametrize("alpha", [0.05, 0.1, 0.3, 0.5])
+def test_pointwise_diffracted_part_is_the_facet_frame_integral(alpha):
+    """TwoScaleBRDF's diffracted part within 3 % of the reference at θ_i 0-80°, θ_o up to 85°, in and out of the
+    plane (measured ≤ 1.5 %; the shifted lobe was 8-45 % low at these geometries)."""
+    b = TwoScaleBRDF("aluminium", Micro(alpha=alpha, ndf="beckmann"), nano=NANO)
+    wi, wo = _pairs(PAIRS)
+    got = b.eval_parts(wi, wo, LAM)["diffraction"]
+    ref, se = _reference(b, wi, wo, alpha)
+    _assert_close(got, ref, se, f"α = {alpha}")
+
+
+def test_pointwise_ggx_and_rayleigh_rice_against_the_reference_lobe():
+    """GGX micro NDF; and the Rayleigh-Rice nano lobe written in the reference from Elson & Bennett (not the
+    package's): the package's integral over its own facets equals the reference's integral of its own lobe."""
+    wi, wo = _pairs(PAIRS[1:6])
+    b = TwoScaleBRDF("aluminium", Micro(alpha=0.2, ndf="ggx"), nano=NANO)
+    ref, se = _reference(b, wi, wo, 0.2, "ggx")
+    _assert_close(b.eval_parts(wi, wo, LAM)["diffraction"], ref, se, "ggx")
+    eps = complex(scatter.permittivity(get_material("aluminium"), LAM))
+    lobe = R.rayleigh_rice_nano(R.abc_psd(10.0, 2000.0, 2.6), eps)
+    rr = TwoScaleBRDF("aluminium", Micro(alpha=0.3, ndf="beckmann"), nano=NANO, diffraction="rayleigh-rice")
+    ref, se = _reference(rr, wi, wo, 0.3, f_nano=lobe)
+    _assert_close(rr.eval_parts(wi, wo, LAM)["diffraction"], ref, se, "rayleigh-rice")
+
+
+def test_facet_nano_brdf_interface():
+    """(N, 3) paired local directions → (N,) in 1/sr, 0 where either z ≤ 0; reciprocal; 0 without roughness."""
+    b = TwoScaleBRDF("aluminium", Micro(alpha=0.1), nano=NANO)
+    wi = R.direction([20.0, 50.0, 95.0, 30.0], [0.0, 10.0, 0.0, 0.0])
+    wo = R.direction([40.0, 70.0, 20.0, 100.0], [180.0, 200.0, 0.0, 0.0])
+    f = b.facet_nano_brdf(wi, wo, LAM)
+    assert f.shape == (4,) and np.all(f[:2] > 0) and np.all(f[2:] == 0)
+    np.testing.assert_allclose(b.facet_nano_brdf(wo[:2], wi[:2], [LAM, LAM]), f[:2], rtol=1e-9)
+    assert np.all(TwoScaleBRDF("aluminium", Micro(alpha=0.1)).facet_nano_brdf(wi, wo, LAM) == 0)
+
+
+@pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 70.0])
+def test_each_facet_scatters_the_light_its_coherent_part_gives_up(theta):
+    """Energy facet by facet: the facet lobe's albedo at local incidence θ (the reference's disc quadrature) is
+    F(θ) (1 − A(θ)), F from the reference's Fresnel equations, A the coherent fraction the coherent part uses;
+    within 1 % (measured ≤ 0.3 %)."""
+    b = TwoScaleBRDF("aluminium", Micro(alpha=0.1), nano=NANO)
+    wi = R.direction(theta)
+    E, err = R.albedo_quadrature(lambda a, c: b.facet_nano_brdf(a, c, LAM), wi)
+    eps = complex(scatter.permittivity(get_material("aluminium"), LAM))
+    lost = float(R.fresnel_R(np.cos(np.radians(theta)), eps)) * (1.0 - float(b._A(np.cos(np.radians(theta)), LAM)))
+    assert E == pytest.approx(lost, rel=1e-2, abs=err)
+
+
+def test_reciprocity_of_the_whole_two_scale_brdf():
+    """f(ω_i, ω_o) = f(ω_o, ω_i): pointwise within 2 % at θ ≤ 80° (measured ≤ 1.6 %); tabulated within 3 % at
+    θ ≤ 70° (measured 2.5 %: the grid route's per-cell quadrature noise, ~2 % with 64 + 16 normals; 3.5 % at 75-80°,
+    where its lobes are read within two cells of the horizon). The shifted lobe changed by 10-35 % at θ ≥ 60°,
+    even at α = 0.05."""
+    pairs = [(30, 60, 180), (30, 75, 180), (60, 80, 180), (20, 80, 120), (45, 70, 60), (10, 65, 90)]
+    wi, wo = _pairs(pairs)
+    for alpha in (0.05, 0.3):
+        b = TwoScaleBRDF("aluminium", Micro(alpha=alpha, ndf="beckmann"), nano=NANO)
+        np.testing.assert_allclose(b.eval(wi, wo, LAM), b.eval(wo, wi, LAM), rtol=0.02)
+    t = TabulatedTwoScaleBRDF("aluminium", Micro(alpha=0.1, ndf="beckmann"), nano=NANO, wavelengths_nm=(LAM,),
+                              resolution=96)
+    wi, wo = _pairs([p for p in pairs if max(p[:2]) <= 70])
+    np.testing.assert_allclose(t.eval(wi, wo, LAM), t.eval(wo, wi, LAM), rtol=0.03)
+
+
+@pytest.mark.parametrize("alpha,theta", [(0.05, 30.0), (0.3, 60.0)])
+def test_grid_lobes_are_the_facet_frame_integral(alpha, theta):
+    """evaluate's diffracted lobe at 12 cell centres (θ_o ≤ 70°, where the lobe holds > 5 % of its peak) within 3 %
+    of the reference (the facet route, not the paraxial shift; measured ≤ 3.9 % with the reference's 0.6 % standard
+    error). Within two cells of the horizon the tables' bilinear reads are inexact (θ_i = 60° → θ_o = 78°: +11 % on
+    96² cells, +4.6 % on 192²)."""
+    grid = DirectionGrid.hemisphere(96)
+    wi = R.direction(theta)
+    L = brdf.evaluate(wi, [LAM], "aluminium", Micro(alpha=alpha, ndf="beckmann"), NANO, grid)
+    assert L.info["facet_integration"] == "frame"
+    wo_all = grid.directions()[grid.inside]
+    vals = L.diffraction[0][grid.inside]
+    ok = (wo_all[:, 2] > np.cos(np.radians(70))) & (vals > 0.05 * vals.max())
+    pick = np.random.default_rng(5).choice(np.nonzero(ok)[0], 12, replace=False)
+    b = TwoScaleBRDF("aluminium", Micro(alpha=alpha, ndf="beckmann"), nano=NANO)
+    ref, se = _reference(b, np.broadcast_to(wi, (12, 3)), wo_all[pick], alpha, n=12000)
+    _assert_close(vals[pick], ref, se, "grid")
+
+
+def test_tabulated_form_between_nodes_is_the_facet_frame_integral():
+    """TabulatedTwoScaleBRDF (lobes of the facet route tabulated over incidence) at θ_i = 32° and 57°, between its
+    nodes, within 3 % of the reference (θ_o ≤ 70°, as the grid lobes it tabulates)."""
+    t = TabulatedTwoScaleBRDF("aluminium", Micro(alpha=0.1, ndf="beckmann"), nano=NANO, wavelengths_nm=(LAM,),
+                              resolution=96, thetas_deg=(25.0, 35.0, 50.0, 60.0))
+    b = TwoScaleBRDF("aluminium", Micro(alpha=0.1, ndf="beckmann"), nano=NANO)
+    wi, wo = _pairs([(32, 20, 180), (32, 50, 180), (32, 70, 150), (32, 40, 90), (57, 45, 180), (57, 68, 180),
+                     (57, 60, 120)])
+    ref, se = _reference(b, wi, wo, 0.1, n=12000)
+    _assert_close(t.eval_parts(wi, wo, LAM)["diffraction"], ref, se, "tabulated")
+
+
+@pytest.mark.parametrize("alpha,theta,short", [(0.1, 30.0, 0.01), (0.3, 0.0, 0.035)])
+def test_diffracted_light_is_what_the_facets_scatter_less_masking(alpha, theta, short):
+    """Energy over the whole surface: S0 = (1/cos θ_i) ∫ D(m) (ω_i·m) G1(ω_i, m) F(θ_m) (1 − A(θ_m)) dm, the light
+    the facets' lobes scatter (the reference's NDF sampling and G1; F (1 − A) is each facet lobe's albedo, tested
+    above). The coherent part gives up S0 less what G masks at the mirror directions (within 1 % here); the
+    diffracted part's albedo (the reference's quadrature) is S0 less what its lobes lose to masking on the way
+    out and below the horizon: measured 0.6 % (α 0.1, 30°) and 2.7 % (α 0.3, 0°), never more than S0 (the
+    shifted lobe held 15 % less than the coherent loss at α 0.3, 30°)."""
+    b = TwoScaleBRDF("aluminium", Micro(alpha=alpha, ndf="beckmann"), nano=NANO)
+    wi = R.direction(theta)
+    D, _ = R.albedo_quadrature(lambda a, c: b.eval_parts(a, c, LAM)["diffraction"], wi, n_angle=32, n_gauss=4)
+    C, _ = R.albedo_quadrature(lambda a, c: b.eval_parts(a, c, LAM)["coherent"], wi, n_angle=32, n_gauss=4)
+    M, _ = R.albedo_quadrature(lambda a, c: b._f_specular(a, c, b._F(LAM)), wi, n_angle=32, n_gauss=4)
+    m = R.sample_ndf(alpha, 100000, np.random.default_rng(2), "beckmann")
+    im = np.clip(m @ wi, 0.0, 1.0)
+    eps = complex(scatter.permittivity(get_material("aluminium"), LAM))
+    fe = R.fresnel_R(im, eps) * (1.0 - b._A(im, LAM))
+    S0 = float(np.mean(im * R.G1(np.broadcast_to(wi, m.shape), m, alpha, "beckmann") * fe / m[:, 2]) / wi[2])
+    assert M - C == pytest.approx(S0, rel=0.01)
+    assert 0.0 <= (S0 - D) / S0 <= short

@@ -1,0 +1,152 @@
+"""Facet frames: the local frame of a micro facet and the fixed quadrature points over facet normals.
+
+Each micro facet carries the nano-roughness in its own frame (z = the facet normal m): the two-scale model's
+diffracted part is Walter et al.'s (2007) integral of the nano BRDF evaluated at the facet's local incidence and
+exitance (docs/physics.md §7). These helpers give that frame (Duff et al. 2017's branch-free basis), the
+invariants of a direction pair in it, and the deterministic Sobol points the quadratures use.
+
+References
+----------
+.. [1] T. Duff, J. Burgess, P. Christensen, C. Hery, A. Kensler, M. Liani, R. Villemin, "Building an
+   Orthonormal Basis, Revisited", JCGT 6(1), 2017.
+.. [2] B. Walter, S. Marschner, H. Li, K. Torrance, EGSR 2007, eq. (14) (a BRDF carried by each facet).
+.. [3] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
+"""
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+from scipy.stats import qmc
+
+from .. import scatter
+
+__all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'to_facet', 'from_facet']
+
+#: radial bins of the nano-lobe sampler (geometric in spatial frequency)
+RADIAL_BINS = 384
+#: levels of cos θ_i at which the nano-lobe sampler is tabulated (its Poisson weights depend on θ_i)
+COS_LEVELS = 65
+
+
+@functools.lru_cache(maxsize=8)
+def unit_nodes(n: int) -> np.ndarray:
+    """n points (n a power of two) of the unscrambled 2-D Sobol sequence, centred in their dyadic cells: (n, 2)
+    in (0, 1)² (deterministic; Sobol' 1967)."""
+    m = int(round(math.log2(n)))
+    pts = qmc.Sobol(d=2, scramble=False).random_base2(m)
+    return pts + 0.5 / n
+
+
+class NanoRadial:
+    """Radial sampler of the nano lobe about the mirror direction, for one PSD model and wavelength.
+
+    Proposal density on the offset t = (ω_o − mirror)_xy of the direction-cosine plane: p(t) = k² ρ(k|t|) with
+    ρ(q) ∝ Σ_m p_m(g_i) H_m(q) (per unit area of q), the series of :mod:`waveoptics.scatter.series` at the mirror
+    roughness g_i = g(θ_i) without the obliquity and Fresnel factors, piecewise constant on :data:`RADIAL_BINS`
+    annuli geometric in q and tabulated at :data:`COS_LEVELS` values of cos θ_i (nearest level used). Sampling and
+    density use the same table, so they agree exactly.
+    """
+
+    def __init__(self, model, wavelength_nm: float, diffraction, n_nodes: int = 128):
+        self._n_nodes = int(n_nodes)
+        self.k = 2 * np.pi / (wavelength_nm * 1e-9)
+        q_hi = 2.0 * self.k
+        q_max = 2.0 ** math.ceil(math.log2(q_hi * 1.001 + 1.0))
+        tab = scatter.series_tables(model, q_max)
+        q_lo = min(1e-2 / model.length_scale, 1e-3 * q_hi)
+        self.edges = np.concatenate([[0.0], np.geomspace(q_lo, q_hi, RADIAL_BINS)])
+        mid = np.concatenate([[0.5 * q_lo], np.sqrt(self.edges[1:-1] * self.edges[2:])])
+        area = np.pi * np.diff(self.edges ** 2)
+        dm = scatter.get_model(diffraction, perturbative=True)
+        if dm.perturbative:   # a proposal only (its pdf is its own): the Kirchhoff series has the same lobe shape
+            dm = scatter.get_model("kirchhoff")
+        self.cos_levels = np.linspace(0.0, 1.0, COS_LEVELS)
+        g = scatter.roughness_g(model.sigma, dm.specular_cos_sum(self.cos_levels), wavelength_nm)
+        m_use = scatter.series_terms(float(g.max()))
+        Hm = tab.Hm(mid)[:m_use]                                  # (M, bins)
+        p = scatter.poisson_weights(g, m_use)                     # (M, levels)
+        mass = (p.T @ Hm) * area[None, :]                         # (levels, bins)
+        total = mass.sum(axis=1, keepdims=True)
+        # a level with no scattered light (g = 0 at cos θ_i = 0 for the Kirchhoff phase) falls back to the m = 1
+        # shape: it is only a proposal, and its density below stays consistent with it
+        fallback = Hm[0] * area
+        mass = np.where(total > 0, mass, fallback[None, :])
+        self.cdf = np.cumsum(mass, axis=1)
+        self.cdf /= self.cdf[:, -1:]
+        self.density = (mass / mass.sum(axis=1, keepdims=True)) / area[None, :]   # per unit q area
+
+    @functools.cached_property
+    def node_radii(self):
+        """Offset radii of the quadrature nodes' first coordinates at every cos θ_i level (levels, N)."""
+        u = unit_nodes(self._n_nodes)[:, 0]
+        return self.radius(np.arange(COS_LEVELS)[:, None], np.broadcast_to(u, (COS_LEVELS, u.size)))
+
+    def level(self, cos_theta_i):
+        return np.clip(np.rint(np.asarray(cos_theta_i) * (COS_LEVELS - 1)).astype(int), 0, COS_LEVELS - 1)
+
+    def radius(self, level, u):
+        """Offset radius |t| (direction-cosine units) for uniform u at each cos θ_i level (arrays broadcast)."""
+        rows = self.cdf[level]
+        b = np.sum(rows < u[..., None], axis=-1)
+        b = np.minimum(b, RADIAL_BINS - 1)
+        lo = np.where(b > 0, np.take_along_axis(rows, np.maximum(b - 1, 0)[..., None], -1)[..., 0], 0.0)
+        hi = np.take_along_axis(rows, b[..., None], -1)[..., 0]
+        frac = np.where(hi > lo, (u - lo) / np.where(hi > lo, hi - lo, 1.0), 0.5)
+        q2 = self.edges[b] ** 2 + frac * (self.edges[b + 1] ** 2 - self.edges[b] ** 2)   # uniform over the annulus
+        return np.sqrt(q2) / self.k
+
+    def pdf_r(self, level, r):
+        """Density per unit area of the direction-cosine plane at offsets of length *r* (arrays broadcast)."""
+        q = self.k * np.asarray(r, dtype=float)
+        b = np.searchsorted(self.edges, q, side="right") - 1
+        ok = (b >= 0) & (b < RADIAL_BINS)
+        return np.where(ok, self.density[level, np.clip(b, 0, RADIAL_BINS - 1)] * self.k ** 2, 0.0)
+
+    def pdf_t(self, level, t):
+        """Density per unit area of the direction-cosine plane of offsets t (..., 2)."""
+        q = self.k * np.hypot(t[..., 0], t[..., 1])
+        b = np.searchsorted(self.edges, q, side="right") - 1
+        ok = (b >= 0) & (b < RADIAL_BINS)
+        val = self.density[level, np.clip(b, 0, RADIAL_BINS - 1)]
+        return np.where(ok, val * self.k ** 2, 0.0)
+
+
+def facet_basis(m):
+    """Tangent vectors (t, b) completing the unit normals *m* (..., 3) to a right-handed frame (t, b, m),
+    continuous for m_z > −1 (Duff et al. 2017)."""
+    m = np.asarray(m, dtype=float)
+    sign = np.where(m[..., 2] >= 0.0, 1.0, -1.0)
+    a = -1.0 / (sign + m[..., 2])
+    c = m[..., 0] * m[..., 1] * a
+    t = np.stack([1.0 + sign * m[..., 0] ** 2 * a, sign * c, -sign * m[..., 0]], axis=-1)
+    b = np.stack([c, sign + m[..., 1] ** 2 * a, -m[..., 1]], axis=-1)
+    return t, b
+
+
+def to_facet(v, m):
+    """Directions *v* (..., 3) (macro frame) in the frame (t, b, m) of :func:`facet_basis`: z = v·m."""
+    t, b = facet_basis(m)
+    return np.stack([np.sum(v * t, axis=-1), np.sum(v * b, axis=-1), np.sum(v * m, axis=-1)], axis=-1)
+
+
+def from_facet(v_local, m):
+    """Inverse of :func:`to_facet`: local directions (..., 3) of the facet *m* back to the macro frame."""
+    t, b = facet_basis(m)
+    return v_local[..., :1] * t + v_local[..., 1:2] * b + v_local[..., 2:3] * m
+
+
+def _local_pair(cos_i, cos_o, cos_io):
+    """A pair of directions with the facet-frame cosines *cos_i*, *cos_o* (to the facet normal) and the mutual
+    cosine *cos_io* = ω_i·ω_o, ω_i in the local x–z plane: every invariant of the pair in that frame (elevations,
+    relative azimuth, |ω_i + ω_o|) without building the frame."""
+    ci, co = np.broadcast_arrays(np.clip(cos_i, -1.0, 1.0), np.clip(cos_o, -1.0, 1.0))
+    si = np.sqrt(np.maximum(1.0 - ci * ci, 0.0))
+    so = np.sqrt(np.maximum(1.0 - co * co, 0.0))
+    x = np.where(si > 1e-12, (cos_io - ci * co) / np.where(si > 1e-12, si, 1.0), 0.0)
+    x = np.clip(x, -so, so)
+    y = np.sqrt(np.maximum(so * so - x * x, 0.0))
+    return (np.stack([si, np.zeros_like(si), ci], axis=-1), np.stack([x, y, co], axis=-1))
+
+
