@@ -1100,10 +1100,11 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     return diffraction, scattered, reflected
 
 
-#: the diffracted lobes may exceed the light the coherent lobe lost by this share before
-#: :func:`_cap_to_coherent_loss` acts: the two are integrated by different quadratures (the lobe on the evaluation
-#: grid, E¹ on a polar grid), which differ by < 2e-3 (measured, docs/two-scale.md)
-CAP_TOLERANCE = 1e-2
+#: the diffracted lobes may exceed their budget by this share before :func:`_cap_to_coherent_loss` acts: the two
+#: are integrated by different quadratures (the paraxial lobe on the evaluation grid against E¹ on a polar grid:
+#: < 2e-3; the facet-frame lobe's per-cell quadrature of 64 + 16 normals against the budget's average over the NDF
+#: nodes: up to 2 %, measured on glass at α = 0.1, tests/test_dielectric_energy.py)
+CAP_TOLERANCE = 3e-2
 
 
 def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None):
