@@ -50,13 +50,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import scatter
-from ..errors import FieldError, WaveopticsError
+from ..errors import FieldError
 from .protocol import TwoScaleParts
 from .sampling import _sampler, sample_normal
 from .ndf import _ndf
 from .shadowing import _shadowing
 from .facet import COS_LEVELS, RADIAL_BINS, NanoRadial, _local_pair, facet_basis, from_facet, to_facet, unit_nodes
-from .twoscale import SERIES_MIN_CAPTURED
+from .twoscale import check_series
 
 __all__ = ['QUADRATURE_NODES', 'RADIAL_BINS', 'COS_LEVELS', 'TwoScaleBRDF', 'unit_nodes', 'NanoRadial', 'facet_basis',
            'to_facet', 'from_facet']
@@ -117,15 +117,8 @@ class TwoScaleBRDF(TwoScaleParts):
                                                                              self.nodes // 2))
 
     def _check_series(self, lam):
-        """Refuse nano-roughness the truncated series cannot hold (as :func:`waveoptics.brdf.nano_lobe`)."""
-        g = scatter.roughness_g(self.nano.model.sigma, 2.0, lam)
-        m_use = scatter.series_terms(g)
-        captured = float(scatter.poisson_weights(g, m_use).sum() / -np.expm1(-g)) if g > 0 else 1.0
-        if captured < SERIES_MIN_CAPTURED:
-            raise WaveopticsError(
-                f"nano-roughness sigma = {self.nano.model.sigma * 1e9:.4g} nm is too rough for the PSD series at "
-                f"{lam:g} nm (it holds only {100 * captured:.3g}% of the scattered light); describe roughness this "
-                "large by the micro NDF (alpha)")
+        """Refuse nano-roughness the truncated series cannot hold (:func:`waveoptics.brdf.twoscale.check_series`)."""
+        check_series(self.nano.model, lam)
 
     def _f_nano(self, wi, wo, lam):
         """The nano lobe f_n (1/sr) of directions given in the nano surface's own frame, with its own Fresnel

@@ -63,7 +63,7 @@ from .microfacet import specular
 from .ndf import ALPHA_MAX, ALPHA_MIN, NDFS
 from .quadrature import albedo, directional_albedo
 
-__all__ = ['SERIES_MIN_CAPTURED', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FACET_THETAS_DEG', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM', 'FACET_ROUTES', 'facet_nodes', 'facet_route', 'facet_frame_diffraction', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'FACET_TAIL_SHARE', 'facet_incidences_deg', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
+__all__ = ['SERIES_MIN_CAPTURED', 'check_series', 'NARROW_CELLS', 'CAP_TOLERANCE', 'Micro', 'Nano', 'Lobes', 'micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'nano_lobe', 'kirchhoff_scattered_lobe', 'FACET_THETAS_DEG', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM', 'FACET_ROUTES', 'facet_nodes', 'facet_route', 'facet_frame_diffraction', 'FIELD_THETAS_DEG', 'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'FACET_TAIL_SHARE', 'facet_incidences_deg', 'field_albedo_evaluations', 'evaluate', 'multiple_scattering_lobe', 'SPLIT_PERIODS_OF_LAMBDA', 'split_scales']
 
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
@@ -885,7 +885,7 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
             if dm.perturbative:
                 f = scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization)
             else:
-                _check_series(nano.model, lam)
+                check_series(nano.model, lam)
                 f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
                 # beyond the tangent plane's validity the lobe carries its continued albedo (docs/physics.md §9)
                 f = f * float(np.ravel(nano.lobe_energy_scale(wi[2], lam, dm, material, polarization))[0])
@@ -901,8 +901,9 @@ def _v_symmetric(grid: DirectionGrid) -> bool:
     return grid.n_v % 2 == 0 and np.isclose(grid.v_range[0], -grid.v_range[1])
 
 
-def _check_series(model, lam):
-    """Refuse nano-roughness the truncated PSD series cannot hold (its largest g, at cos θ_i + cos θ_o = 2)."""
+def check_series(model, lam):
+    """Refuse nano-roughness the truncated PSD series cannot hold (its largest g, at cos θ_i + cos θ_o = 2; λ in
+    nm): its terms must hold :data:`SERIES_MIN_CAPTURED` of the scattered light."""
     g = scatter.roughness_g(model.sigma, 2.0, lam)
     m_use = scatter.series_terms(g)
     captured = float(scatter.poisson_weights(g, m_use).sum() / -np.expm1(-g)) if g > 0 else 1.0
