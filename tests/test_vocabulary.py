@@ -89,3 +89,13 @@ def test_cost_generator_takes_the_nano_spelling_of_the_correlation_length():
     assert parse_model("gaussian:sigma=5nm,T=1um") == parse_model("gaussian:sigma=5nm,corr_length=1um")
     assert parse_nano("gaussian:sigma=5nm,corr_length=1um") == parse_nano("gaussian:sigma=5nm,T=1um")
 
+
+
+def test_no_renormalize_is_accepted_with_one_deprecation_line(tmp_path):
+    """--no-renormalize (the old way to keep the PSD as given) is now the default: accepted, one warning line."""
+    rc, out, err, caught = run_cli(["surface", "generate", "--generator", "gaussian", "--sigma", "5nm",
+                                    "--corr-length", "1um", "--size", "8um", "--samples", "32", "--no-renormalize",
+                                    "-o", str(tmp_path / "h.npz")])
+    assert rc == 0 and (tmp_path / "h.npz").is_file()
+    notes = [w for w in caught + err.splitlines() if "--no-renormalize" in w]
+    assert notes and all("\n" not in n.strip() for n in notes) and "--renormalize" in notes[0]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass
 
-__all__ = ["Option", "OPTIONS", "RENAMED", "REMOVED_IN", "option", "renamed", "deprecations"]
+__all__ = ["Option", "OPTIONS", "RENAMED", "REMOVED_IN", "option", "renamed", "now_default", "deprecations"]
 
 #: the release that drops the aliases of :data:`RENAMED`
 REMOVED_IN = "0.3"
@@ -160,6 +160,26 @@ def renamed(parser, command: str, old: str, *, dest: str, type=None, append: boo
         type = target.type
     parser.add_argument(old, dest=dest, action=_Renamed, new_flag=new, type=type, default=argparse.SUPPRESS,
                         store="append" if append else None, help=argparse.SUPPRESS, choices=choices)
+
+
+class _NowDefault(argparse.Action):
+    """A switch whose behaviour became the default: accepted, changes nothing, records a deprecation line."""
+
+    def __init__(self, option_strings, dest, hint=None, **kwargs):
+        self.hint = hint
+        super().__init__(option_strings, dest, nargs=0, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        notes = list(getattr(namespace, "_deprecations", []))
+        notes.append(f"{option_string} is deprecated and will be removed in waveoptics {REMOVED_IN}: it is the "
+                     f"default now; {self.hint}")
+        namespace._deprecations = notes
+
+
+def now_default(parser, old: str, hint: str) -> None:
+    """Accept the switch *old*, whose behaviour is now the default, as a hidden no-op with a deprecation line."""
+    parser.add_argument(old, dest="_now_default_" + old.strip("-").replace("-", "_"), action=_NowDefault,
+                        hint=hint, default=argparse.SUPPRESS, help=argparse.SUPPRESS)
 
 
 def deprecations(args) -> list[str]:

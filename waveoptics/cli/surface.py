@@ -6,7 +6,7 @@ import inspect
 
 from ..errors import WaveopticsError
 from ._common import add_common, add_output, add_surface, emit, load_surface
-from ._options import option, renamed
+from ._options import now_default, option, renamed
 
 #: CLI option -> generator parameter (lengths stay strings with units; the generators parse them)
 _MODEL_OPTIONS = {
@@ -63,6 +63,7 @@ def register(sub):
     g.add_argument("--renormalize", action="store_true",
                    help="scale the spectrum so the ensemble rms on this grid is σ (moves the variance the grid "
                         "cannot hold into resolved frequencies; default: the PSD exactly as given)")
+    now_default(g, "--no-renormalize", "use --renormalize for the old rescale to σ")
     add_output(g, metavar="FILE", note=HEIGHT_FIELD_OUTPUT)
     add_common(g, device=False)
     g.set_defaults(func=run_generate, command="surface generate")
