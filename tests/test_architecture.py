@@ -163,3 +163,11 @@ def test_parsing_the_command_line_does_not_load_the_numerical_library():
             "print(sorted(m for m in ('colour', 'scipy', 'pyopencl', 'dask', 'matplotlib') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+@pytest.mark.parametrize("path", MODULES, ids=_rel)
+def test_namespaces_are_explicit(path):
+    """A reader can tell where every name of a sub-package index lives: no ``from x import *`` anywhere."""
+    stars = [n.lineno for n in ast.walk(ast.parse(path.read_text()))
+             if isinstance(n, ast.ImportFrom) and any(a.name == "*" for a in n.names)]
+    assert not stars, f"{_rel(path)}: star imports on lines {stars}"

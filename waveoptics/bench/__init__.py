@@ -33,10 +33,11 @@ References
 .. [1] docs/physics.md §1 (direct sum and its cost O(samples × directions)); Rabiner, Schafer & Rader 1969 (chirp-z).
 .. [2] M. Frigo, S. G. Johnson, "The design and implementation of FFTW3", Proc. IEEE 93(2), 2005.
 """
-from .common import *  # noqa: F401,F403
-from .baselines import *  # noqa: F401,F403
-from .measures import *  # noqa: F401,F403
-from .tables import *  # noqa: F401,F403
+from .common import (WAVELENGTH_NM, best_time, machine)
+from .baselines import (numpy_direct_sum, NAIVE, kirchhoff_U_sinpi_cl, kirchhoff_U_naive_cl, numpy_fft_pipeline)
+from .measures import (MATH_FUNCTIONS, large_patch_errors, direct_kernels, direct_scaling, fft_backends,
+    fft_pipeline, math_errors, brdf_eval_rates, fft_threads, run_all)
+from .tables import (report)
 from . import common, baselines, measures, tables  # noqa: F401
 
 __all__ = common.__all__ + baselines.__all__ + measures.__all__ + tables.__all__

@@ -10,30 +10,39 @@ microfacet model), pointwise (the two-scale model as a function), tabulated (the
 incidence, any nano-roughness), measured_ndf (an NDF tabulated from a height field's slopes), chi2 (goodness-of-fit test of samplers), multiscatter (Kulla-Conty energy compensation), spectral (a BRDF known at wavelength nodes, evaluated at any λ and in RGB), ndf_fit (the α of any NDF that matches a surface's slopes), models (the BRDF models by name, from keyword arguments:
 BRDF_MODELS).
 """
-from .measured_ndf import *  # noqa: F401,F403
-from .roughness import *  # noqa: F401,F403
-from .directions import *  # noqa: F401,F403
-from .smith import *  # noqa: F401,F403
-from .anisotropy import *  # noqa: F401,F403
-from .ndf_closed import *  # noqa: F401,F403
-from .ndf_shaped import *  # noqa: F401,F403
-from .ndf import *  # noqa: F401,F403
-from .shadowing import *  # noqa: F401,F403
-from .fresnel_terms import *  # noqa: F401,F403
-from .diffuse import *  # noqa: F401,F403
-from .microfacet import *  # noqa: F401,F403
-from .quadrature import *  # noqa: F401,F403
-from .opencl import *  # noqa: F401,F403
-from .twoscale import *  # noqa: F401,F403
-from .sampling import *  # noqa: F401,F403
-from .protocol import *  # noqa: F401,F403
-from .pointwise import *  # noqa: F401,F403
-from .tabulated import *  # noqa: F401,F403
-from .spectral import *  # noqa: F401,F403
-from .ndf_fit import *  # noqa: F401,F403
-from .chi2 import *  # noqa: F401,F403
-from .multiscatter import *  # noqa: F401,F403
-from .models import *  # noqa: F401,F403
+from .measured_ndf import (SlopeTable, slope_table, footprint_ndf, D_tabulated, Lambda_tabulated)
+from .roughness import (alpha_from_roughness, roughness_from_alpha, blinn_phong_exponent, alpha_from_blinn_phong)
+from .directions import (half_vector, reflect)
+from .smith import (LAMBDA_GL_ORDER, Lambda_radial)
+from .anisotropy import (stretch_factors, D_stretched, Lambda_stretched, STRETCH_EXPONENT)
+from .ndf_closed import (D_ggx, Lambda_ggx, D_beckmann, Lambda_beckmann, D_blinn_phong, Lambda_blinn_phong)
+from .ndf_shaped import (ABC_C_DEFAULT, abc_normalization, D_abc, Lambda_abc, EPD_P_DEFAULT, epd_normalization,
+    D_epd, Lambda_epd, SGD_P_DEFAULT, gamma_upper, sgd_normalization, D_sgd, Lambda_sgd)
+from .ndf import (ALPHA_MIN, ALPHA_MAX, COS_MIN, SHAPE_RANGE, NDF, NDFS, D, Lambda, G1)
+from .shadowing import (G_smith, G_smith_correlated, G_cook_torrance, G_implicit, SHADOWINGS, G)
+from .fresnel_terms import (FRESNELS, F_mean)
+from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES)
+from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
+from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albedo)
+from .opencl import (D_cl, Lambda_cl, brdf_cl)
+from .twoscale import (SERIES_MIN_CAPTURED, check_series, NARROW_CELLS, CAP_TOLERANCE, Micro, Nano, Lobes,
+    micro_kernel, kernel_cos_theta_d, facet_scatter_weights, nano_lobe, kirchhoff_scattered_lobe, FACET_THETAS_DEG,
+    FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODE_SPLIT, FACET_REFERENCE_NM, FACET_ROUTES, facet_nodes,
+    facet_route, facet_frame_diffraction, FIELD_THETAS_DEG, FIELD_GRID_OVERSAMPLING, field_scattered_albedo,
+    FACET_TAIL_SHARE, facet_incidences_deg, field_albedo_evaluations, evaluate, multiple_scattering_lobe,
+    SPLIT_PERIODS_OF_LAMBDA, split_scales)
+from .sampling import (NormalSampler, NORMAL_SAMPLERS, sample_normal, pdf_normal, pdf_reflected, sample_reflected)
+from .protocol import (BRDFSample, BRDF, MicrofacetBRDF, TwoScaleParts, sample_cosine, pdf_cosine, lobe_choice,
+    check_uniform)
+from .pointwise import (QUADRATURE_NODES, RADIAL_BINS, COS_LEVELS, TwoScaleBRDF, unit_nodes, NanoRadial, facet_basis,
+    to_facet, from_facet)
+from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, TabulatedTwoScaleBRDF)
+from .spectral import (SpectralNodes)
+from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
+from .chi2 import (Chi2Result, chi2_test)
+from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
+from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,
+    twoscale_model, BRDF_MODELS)
 from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, spectral, ndf_fit, models  # noqa: F401
 
 __all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__

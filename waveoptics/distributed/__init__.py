@@ -3,11 +3,14 @@
 Files: cases (a simulation request as a task), cluster (Dask client and job loop), store (resumable partial
 results), table (HDF5 BRDF tables), sweep (parameter sweeps to CSV).
 """
-from .cases import *  # noqa: F401,F403
-from .cluster import *  # noqa: F401,F403
-from .store import *  # noqa: F401,F403
-from .table import *  # noqa: F401,F403
-from .sweep import *  # noqa: F401,F403
+from .cases import (case_from_scene, surface_digest)
+from .cluster import (LOOPBACK, dask_client, local_cluster, WarmWorker, DEFAULT_RETRIES)
+from .store import (partial_path)
+from .table import (TABLE_FORMAT, TABLE_VERSION, DEFAULT_BATCH, TABLE_LAYOUT, TableSpec, TableTask, table_tasks,
+    compute_block, table_size, check_table_size, run_table, table_plan, BRDFTable, table_info, read_table,
+    open_table)
+from .sweep import (MAX_SWEEP_POINTS, parse_length_list, VARY, parse_vary, apply_vary, sweep_points, sweep_point,
+    SWEEP_COLUMNS, value_text, run_sweep, read_sweep)
 from . import cases, cluster, store, table, sweep  # noqa: F401
 
 __all__ = cases.__all__ + cluster.__all__ + store.__all__ + table.__all__ + sweep.__all__

@@ -3,8 +3,9 @@
 Files: fresnel (exact s/p/unpolarized and Schlick reflectance, OpenCL twins), database (presets from the
 refractiveindex.info database, constant indices, F0 colours; :func:`get_material`).
 """
-from .fresnel import *  # noqa: F401,F403
-from .database import *  # noqa: F401,F403
+from .fresnel import (F_sp, F_facet_polarized, F, F0, F_schlick, brewster_angle, F_sp_cl, F_schlick_cl)
+from .database import (PolarizedFresnel, RelativeFacetFresnel, MAX_CLAMP_NM, IOR_MODULUS, Preset, PRESETS, Material,
+    parse_ior, category_from_f0, get_material, data_sets, VISIBLE_NM, search, fresnel_function)
 from . import fresnel, database  # noqa: F401
 
 __all__ = fresnel.__all__ + database.__all__

@@ -7,19 +7,23 @@ numerics (grid, directions, solver, precision), plan (the plan's data types), re
 (:func:`plan_scene`), runner (executing a plan), estimate (the time of a simulate or scatter request
 before it runs).
 """
-from .scene import *  # noqa: F401,F403
-from .decisions import *  # noqa: F401,F403
-from .costmodel import *  # noqa: F401,F403
-from .thresholds import *  # noqa: F401,F403
-from .force import *  # noqa: F401,F403
-from .colour_estimate import *  # noqa: F401,F403
-from .effects import *  # noqa: F401,F403
-from .numerics import *  # noqa: F401,F403
-from .report import *  # noqa: F401,F403
-from .plan import *  # noqa: F401,F403
-from .planner import *  # noqa: F401,F403
-from .runner import *  # noqa: F401,F403
-from .estimate import *  # noqa: F401,F403
+from .scene import (KEYS, CAMERAS, DEFAULT_DELTA_E, DEFAULT_LIGHT_DIRECTIONS, NanoSpec, MaterialSpec, LightSpec,
+    ViewSpec, OutputSpec, Scene, parse, load)
+from .decisions import (DE_PER_RELATIVE_Y, LSTAR_SLOPE_BLACK, LAMBDA_REF_NM, EPS32, scattered_fraction, lobe_width,
+    diffraction_lobe_width, grid_step, float32_floor, weakest_level, grating_orders, ORDER_EFFICIENCY_MIN,
+    first_order_g)
+from .costmodel import (CostModel, fft_units, fft_solver_units, psd_terms, band_table_time, calibrate,
+    calibrate_direct, machine_busy, calibration, direct_calibration)
+from .thresholds import (ESTIMATE_RESOLUTION, ESTIMATE_STEP_NM, ESTIMATE_SPHERE_THETAS, ESTIMATE_SHARE, PSD_G_MAX,
+    FLAT_SCATTER, RESOLUTION_RANGE, PATCH_SIGMAS, F_FLAT_TOL, FLOOR_MARGIN, KIRCHHOFF_GRAZING_DEG,
+    RAYLEIGH_RICE_G_MAX)
+from .force import (FORCEABLE, parse_force)
+from .colour_estimate import (colour_shift)
+from .report import (plan_table)
+from .plan import (EntryPlan, Plan)
+from .planner import (plan_scene)
+from .runner import (entry_prefix, output_files, EntryResult, run_entry, view_values, execute)
+from .estimate import (LONG_REQUEST_S, simulation_time, scatter_time)
 from . import scene, decisions, costmodel, thresholds, force, colour_estimate, effects, numerics, report, plan, planner, runner, estimate  # noqa: F401
 
 __all__ = scene.__all__ + decisions.__all__ + costmodel.__all__ + thresholds.__all__ + force.__all__ + colour_estimate.__all__ + effects.__all__ + numerics.__all__ + report.__all__ + plan.__all__ + planner.__all__ + runner.__all__ + estimate.__all__

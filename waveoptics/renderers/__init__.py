@@ -5,7 +5,8 @@ Modules: model (the BRDF a renderer receives), mitsuba (loading Mitsuba 3 and th
 (export to the RGL ``.bsdf`` tensor format). Mitsuba 3 is the optional extra ``render``; nothing here imports it
 until it is used.
 """
-from .model import *  # noqa: F401,F403
+from .model import (SPECTRAL_RANGE_NM, DEFAULT_WAVELENGTH_STEP_NM, wavelength_nodes, renderer_brdf,
+    cached_renderer_brdf)
 from . import model  # noqa: F401
 
 __all__ = model.__all__

@@ -9,20 +9,29 @@ with the polarization factor Q), mom (the rigorous method-of-moments reference f
 Rayleigh-Rice for 1-D Gaussian surfaces), solvers (the :data:`SOLVERS` registry, :func:`brdf`,
 :func:`scatter`), footprint (the BRDF of a pixel footprint on a large field), output (the files of a scatter run).
 """
-from .grid import *  # noqa: F401,F403
-from .patch import *  # noqa: F401,F403
-from .models import *  # noqa: F401,F403
-from .kirchhoff import *  # noqa: F401,F403
-from .direct import *  # noqa: F401,F403
-from .fft import *  # noqa: F401,F403
-from .series import *  # noqa: F401,F403
-from .band import *  # noqa: F401,F403
-from .perturbation import *  # noqa: F401,F403
-from .mom import *  # noqa: F401,F403
-from .models1d import *  # noqa: F401,F403
-from .solvers import *  # noqa: F401,F403
-from .footprint import *  # noqa: F401,F403
-from .output import *  # noqa: F401,F403
+from .grid import (HORIZON_SIN, DirectionGrid, integrate, COS_I_MIN)
+from .patch import (DEFAULT_WINDOW, window, window_area, Samples, samples)
+from .models import (DiffractionModel, DIFFRACTION_MODELS, get_model, K_kirchhoff, K_harvey_shack, K_symmetric)
+from .kirchhoff import (cos_theta_d, brdf_from_field, coherent_amplitude)
+from .direct import (VECTOR_WIDTH, TERMS_PER_LAUNCH, PhaseCoefficients, phase_coefficients, kirchhoff_phase,
+    kirchhoff_U, PAIRS_PER_ITEM, SINCOS_TERMS, sincos_poly, sincos_2pi, kirchhoff_phase_cl, sincos_2pi_cl,
+    launch_pairs, exact_phase_args, kirchhoff_U_cl)
+from .fft import (FFT_TOL, FFT_BAND_X, FFT_MAX_ORDER, fft_plan, field_fft)
+from .series import (M_MAX, SeriesTables, series_tables, SeriesSum, series_sum, poisson_weights, roughness_g,
+    series_terms, coherent_fraction, obliquity, scattered_lobe, rayleigh_rice)
+from .band import (band_arc, relevant_variance, relevant_variance_of_field, beyond_band_fraction, SIN_NODES,
+    TANGENT_PLANE_MAX_DEG, is_conductor, ALBEDO_THETAS_DEG, RR_THETAS_DEG, rr_interp, polar_albedo,
+    relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series)
+from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, scattering_angles, q_factors, Q,
+    rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
+    rayleigh_rice_tis)
+from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,
+    solve_profile, thorsos_beam, thorsos_incident_power)
+from .models1d import (fresnel_amplitude_1d, kirchhoff_1d, spm1_1d)
+from .solvers import (ENERGY_TOL, DiffractionWarning, Solver, SOLVERS, BACKENDS, get_solver, split_patch,
+    sampling_warnings, brdf, ScatterResult, memory_estimate, check_request_memory, scatter)
+from .footprint import (footprint_scatter, coherence_centres, incoherent_sum)
+from .output import (plot_scatter, SCATTER_FILES, write_scatter, brdf_exr_header)
 from . import grid, patch, models, kirchhoff, direct, fft, series, band, perturbation, mom, models1d, solvers, footprint, output  # noqa: F401
 
 __all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + band.__all__ + perturbation.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + output.__all__

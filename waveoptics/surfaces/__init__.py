@@ -5,15 +5,19 @@ statistics (rms height and slope, autocorrelation, radial PSD, fits), preparatio
 formats (reading and writing files; instrument formats in instruments), footprint (Gaussian pixel footprints and
 memory-mapped large fields), plots, examples (example fields for glint renders).
 """
-from .heightfield import *  # noqa: F401,F403
-from .psd import *  # noqa: F401,F403
-from .generators import *  # noqa: F401,F403
-from .statistics import *  # noqa: F401,F403
-from .preparation import *  # noqa: F401,F403
-from .formats import *  # noqa: F401,F403
-from .footprint import *  # noqa: F401,F403
-from .plots import *  # noqa: F401,F403
-from .examples import *  # noqa: F401,F403
+from .heightfield import (HeightField)
+from .psd import (S_gaussian, S1_gaussian, c_gaussian, S_exponential, S1_exponential, c_exponential, abc_A,
+    abc_sigma, S_abc, S1_abc, c_abc, PSDModel, PSDFamily, PSD_MODELS)
+from .generators import (flat, gaussian, exponential, abc, sinusoid, MAX_SCRATCHES, scratches, flakes, GENERATORS,
+    generate)
+from .statistics import (PeriodogramPSD, DETRENDS, detrended, rms_height, rms_slopes, rms_slope,
+    autocorrelation_radial, correlation_length, psd_radial, fit_psd, stats)
+from .preparation import (level, crop_region, parse_region, transform)
+from .formats import (TEXT_EXTS, FORMATS, READ_FORMATS, WRITE_FORMATS, load, save, FINGERPRINT_BYTES,
+    npy_fingerprint)
+from .footprint import (N_SIGMA, Footprint, LargeHeightField, open_large, footprint_patch)
+from .plots import (plot)
+from .examples import (Example, EXAMPLES, example)
 from . import heightfield, psd, generators, statistics, preparation, formats, footprint, instruments, plots, examples  # noqa: F401
 
 __all__ = heightfield.__all__ + psd.__all__ + generators.__all__ + statistics.__all__ + preparation.__all__ + formats.__all__ + footprint.__all__ + plots.__all__ + examples.__all__
