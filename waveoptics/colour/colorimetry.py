@@ -72,7 +72,7 @@ from scipy.interpolate import CubicSpline
 
 from ..errors import WaveopticsError, unknown
 from ..units import check_wavelengths
-from .illuminants import SPD, _as_spd
+from .illuminants import SPD, as_spd
 from .observers import DEFAULT_OBSERVER, cmf_at, cmfs, observer_name
 
 __all__ = ['SPACES', 'CAT', 'VISIBLE_NM', 'spd_to_XYZ', 'TRISTIMULUS_METHODS', 'tristimulus_weights', 'reflectance_to_XYZ', 'white_XYZ', 'space_name', 'XYZ_to_rgb', 'reflectance_to_rgb', 'reflectance_to_rgb_matrix', 'rgb_to_srgb8', 'delta_e2000', 'luminance']
@@ -95,7 +95,7 @@ VISIBLE_NM = (380.0, 780.0)
 # ------------------------------------------------------------------------------------------- observers
 
 
-def _measure(spd: SPD, observer) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def spd_tristimulus(spd: SPD, observer) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The illuminant as a discrete measure: wavelengths λ_k (nm), weights m_k (power), x̄ȳz̄(λ_k) (k, 3).
 
     Continuous: the CMF's 1 nm grid with m_k = S(λ_k)·1 nm (CIE 015 summation). Lines: the lines and their powers.
@@ -109,8 +109,8 @@ def _measure(spd: SPD, observer) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def spd_to_XYZ(spd, observer=DEFAULT_OBSERVER) -> np.ndarray:
     """Absolute (un-normalized) tristimulus values Σ S x̄ȳz̄ Δλ of a light source, in its power units × nm."""
-    spd = _as_spd(spd)
-    _, m, c = _measure(spd, observer)
+    spd = as_spd(spd)
+    _, m, c = spd_tristimulus(spd, observer)
     return m @ c
 
 
@@ -127,7 +127,7 @@ def _check_grid(wavelengths_nm) -> np.ndarray:
 
 def _weights_linear(grid: np.ndarray, spd: SPD, observer) -> np.ndarray:
     """Weights Σ_k m_k x̄ȳz̄_k φ_j(λ_k) for R linearly interpolated on *grid* (sorted), constant beyond."""
-    lam, m, c = _measure(spd, observer)
+    lam, m, c = spd_tristimulus(spd, observer)
     mc = m[:, None] * c
     n = grid.size
     W = np.zeros((n, 3))
@@ -147,7 +147,7 @@ def _weights_spline(grid: np.ndarray, spd: SPD, observer) -> np.ndarray:
     """Weights Σ_k m_k x̄ȳz̄_k φ_j(λ_k) with φ_j the cardinal functions of a not-a-knot cubic spline on *grid*
     (scipy ``CubicSpline`` through the unit vectors), R held constant beyond the ends."""
 
-    lam, m, c = _measure(spd, observer)
+    lam, m, c = spd_tristimulus(spd, observer)
     mc = m[:, None] * c
     if grid.size == 1:
         return mc.sum(axis=0, keepdims=True)
@@ -210,7 +210,7 @@ def tristimulus_weights(wavelengths_nm, illuminant="D65", observer=DEFAULT_OBSER
     .. [1] CIE 015:2018 §7.1; ASTM E2022-11; ASTM E308-15 §7.
     """
     grid = _check_grid(wavelengths_nm)
-    spd = _as_spd(illuminant)
+    spd = as_spd(illuminant)
     if method not in TRISTIMULUS_METHODS:
         raise unknown("tristimulus method", method, TRISTIMULUS_METHODS)
     order = np.argsort(grid)
@@ -261,9 +261,9 @@ def reflectance_to_XYZ(R, wavelengths_nm, illuminant="D65", observer=DEFAULT_OBS
 
 def white_XYZ(illuminant="D65", observer=DEFAULT_OBSERVER) -> np.ndarray:
     """XYZ of the perfect white reflector under the illuminant (Y = 1): the adaptation white."""
-    XYZ = spd_to_XYZ(_as_spd(illuminant), observer)
+    XYZ = spd_to_XYZ(as_spd(illuminant), observer)
     if not XYZ[1] > 0:
-        raise WaveopticsError(f"illuminant {_as_spd(illuminant).name!r} has no visible power")
+        raise WaveopticsError(f"illuminant {as_spd(illuminant).name!r} has no visible power")
     return XYZ / XYZ[1]
 
 
@@ -343,7 +343,7 @@ def rgb_to_srgb8(rgb) -> np.ndarray:
     return np.rint(np.asarray(enc) * 255.0).astype(int)
 
 
-def _delta_e2000_XYZ(XYZ1, XYZ2, white) -> np.ndarray:
+def delta_e2000_XYZ(XYZ1, XYZ2, white) -> np.ndarray:
 
     xy = colour.XYZ_to_xy(np.asarray(white, dtype=float))
     return colour.delta_E(colour.XYZ_to_Lab(XYZ1, xy), colour.XYZ_to_Lab(XYZ2, xy), method="CIE 2000")
@@ -361,4 +361,4 @@ def delta_e2000(rgb1, rgb2, colourspace="sRGB") -> np.ndarray:
     to_XYZ = functools.partial(colour.RGB_to_XYZ, colourspace=cs, illuminant=cs.whitepoint,
                                chromatic_adaptation_transform=None)
     white = colour.xy_to_XYZ(cs.whitepoint)
-    return _delta_e2000_XYZ(to_XYZ(np.asarray(rgb1, float)), to_XYZ(np.asarray(rgb2, float)), white)
+    return delta_e2000_XYZ(to_XYZ(np.asarray(rgb1, float)), to_XYZ(np.asarray(rgb2, float)), white)

@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import WaveopticsError
 from ..materials.database import category_from_f0
 from .colorimetry import DEFAULT_OBSERVER, XYZ_to_rgb, reflectance_to_XYZ, rgb_to_srgb8, white_XYZ
-from .illuminants import _as_spd
+from .illuminants import as_spd
 from .sampling import spectral_grid
 
 __all__ = ['classify_f0', 'f0_colour']
@@ -70,7 +70,7 @@ def f0_colour(material, illuminant="D65", observer=DEFAULT_OBSERVER, *, step_nm:
     .. [1] N. Hoffman, "Physics and Math of Shading", SIGGRAPH 2015 PBS course notes (F0 table computed
        the same way from measured optical constants).
     """
-    spd = _as_spd(illuminant)
+    spd = as_spd(illuminant)
     grid = spectral_grid(spd, step_nm, observer)
     F0 = np.asarray(material.F0(grid), dtype=float)
     XYZ = reflectance_to_XYZ(F0, grid, spd, observer)

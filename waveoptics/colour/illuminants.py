@@ -187,10 +187,6 @@ def illuminant(spec) -> SPD:
         if not m:
             raise WaveopticsError(f"illuminant {s!r}: write blackbody:TEMPERATUREK, e.g. blackbody:5500K")
         return blackbody(float(m.group(1)))
-    # deferred: the RGB laser projector is defined by metamerism (metamers.py), which needs the colorimetry that is
-    # built on this module's SPD
-    from .metamers import rgb_laser_projector
-
     if low.startswith("laser:") or low.startswith("rgb-laser:"):
         text = s.split(":", 1)[1].replace("nm", "")
         try:
@@ -198,14 +194,24 @@ def illuminant(spec) -> SPD:
         except ValueError:
             raise WaveopticsError(f"illuminant {s!r}: write laser:NM[,NM...], e.g. laser:465,532,638") from None
         if low.startswith("rgb-laser:"):
-            return rgb_laser_projector(lines)
+            return _registered("rgb-laser")(lines)
         return laser(lines)
     if low == "rgb-laser":
-        return rgb_laser_projector()
+        return _registered("rgb-laser")()
     path, _, column = s.partition(".csv:")
     if column or low.endswith(".csv"):
         return spd_from_csv(path + ".csv" if column else s, column or None)
     return standard_illuminant(s)
 
 
-_as_spd = illuminant  # for functions whose parameter is called 'illuminant'
+as_spd = illuminant  # for functions whose parameter is called 'illuminant'
+
+#: Illuminants built by a higher module, by name: the RGB laser projector is defined by metamerism
+#: (:mod:`waveoptics.colour.metamers` registers it), which needs the colorimetry built on this module's SPD.
+SPD_FACTORIES: dict = {}
+
+
+def _registered(name: str):
+    if name not in SPD_FACTORIES:  # only when waveoptics.colour.metamers was never imported
+        raise WaveopticsError(f"illuminant {name!r} is defined in waveoptics.colour.metamers; import it first")
+    return SPD_FACTORIES[name]

@@ -14,7 +14,7 @@ from ..errors import WaveopticsError
 from ..io.files import atomic_path
 from ..units import check_wavelengths
 from .colorimetry import DEFAULT_OBSERVER, XYZ_to_rgb, cmf_at, cmfs, observer_name, spd_to_XYZ
-from .illuminants import SPD, _as_spd, laser
+from .illuminants import SPD, SPD_FACTORIES, as_spd, laser
 
 __all__ = ['metamer_laser_weights', 'metamer_summary', 'plot_metamers', 'RGB_LASER_NM', 'rgb_laser_projector']
 
@@ -43,7 +43,7 @@ def metamer_laser_weights(target_spd, lines_nm, observer=DEFAULT_OBSERVER) -> np
         Not three distinct visible lines, or a match needs negative power (the target lies outside the
         lines' chromaticity triangle).
     """
-    target = _as_spd(target_spd)
+    target = as_spd(target_spd)
     lines = check_wavelengths(lines_nm, name="laser line")
     if lines.size != 3 or np.unique(lines).size != 3:
         raise WaveopticsError(f"metamer needs exactly 3 distinct laser lines, got {lines.tolist()} nm")
@@ -71,7 +71,7 @@ def metamer_summary(target_spd, lines_nm, observer=DEFAULT_OBSERVER) -> dict:
         target's Y = 1) and ``xy`` (chromaticity of the target).
     """
 
-    target = _as_spd(target_spd)
+    target = as_spd(target_spd)
     lines = check_wavelengths(lines_nm, name="laser line")
     P = metamer_laser_weights(target, lines, observer)
     XYZ_t = spd_to_XYZ(target, observer)
@@ -96,7 +96,7 @@ def plot_metamers(target_spd, lines_nm, powers, path, *, observer=DEFAULT_OBSERV
     """
 
 
-    target = _as_spd(target_spd)
+    target = as_spd(target_spd)
     mix = laser(lines_nm, powers)
     xy_t = colour.XYZ_to_xy(spd_to_XYZ(target, observer))
     xy_m = colour.XYZ_to_xy(spd_to_XYZ(mix, observer))
@@ -158,7 +158,10 @@ def rgb_laser_projector(lines_nm=RGB_LASER_NM, white="D65", observer=DEFAULT_OBS
     ----------
     .. [1] ITU-R BT.2020-2 (2015), Table 3 (primaries on the spectral locus, D65 white).
     """
-    target = _as_spd(white)
+    target = as_spd(white)
     powers = metamer_laser_weights(target, lines_nm, observer=observer)
     label = ",".join(f"{x:g}" for x in np.asarray(lines_nm, dtype=float))
     return laser(lines_nm, powers, name=f"rgb-laser {label} nm ({target.name} white)")
+
+
+SPD_FACTORIES["rgb-laser"] = rgb_laser_projector

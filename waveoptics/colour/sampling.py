@@ -15,8 +15,8 @@ import colour
 import numpy as np
 
 from ..errors import WaveopticsError
-from .colorimetry import DEFAULT_OBSERVER, VISIBLE_NM, _delta_e2000_XYZ, _measure, cmf_at, reflectance_to_XYZ, white_XYZ
-from .illuminants import _as_spd
+from .colorimetry import DEFAULT_OBSERVER, VISIBLE_NM, delta_e2000_XYZ, spd_tristimulus, cmf_at, reflectance_to_XYZ, white_XYZ
+from .illuminants import as_spd
 
 __all__ = ['STEPS_NM', 'spectral_grid', 'reference_reflectances', 'step_errors', 'simulation_wavelengths']
 
@@ -32,7 +32,7 @@ def spectral_grid(illuminant, step_nm: float = 5.0, observer=DEFAULT_OBSERVER) -
     Line SPD: its visible lines (x̄ȳz̄ not all zero). Continuous SPD: a uniform grid of *step_nm* on multiples of
     the step from 380 nm, covering where S·(x̄+ȳ+z̄) exceeds 1e-4 of its peak within 380–780 nm.
     """
-    spd = _as_spd(illuminant)
+    spd = as_spd(illuminant)
     if spd.lines:
         c = cmf_at(spd.wavelengths_nm, observer)
         keep = (c.sum(axis=-1) > 0) & (spd.values > 0)
@@ -42,7 +42,7 @@ def spectral_grid(illuminant, step_nm: float = 5.0, observer=DEFAULT_OBSERVER) -
     step = float(step_nm)
     if not (math.isfinite(step) and step > 0):
         raise WaveopticsError(f"wavelength step {step_nm!r} nm is not allowed; it must be > 0")
-    lam, m, c = _measure(spd, observer)
+    lam, m, c = spd_tristimulus(spd, observer)
     lo, hi = VISIBLE_NM
     sig = m * c.sum(axis=1)
     inside = (lam >= lo) & (lam <= hi)
@@ -88,7 +88,7 @@ def step_errors(illuminant, steps_nm=STEPS_NM, observer=DEFAULT_OBSERVER, reflec
     dict
         step_nm -> (max ΔE2000, number of wavelengths).
     """
-    spd = _as_spd(illuminant)
+    spd = as_spd(illuminant)
     w_ref, R_ref = reflectances if reflectances is not None else reference_reflectances()
     w_ref, R_ref = np.asarray(w_ref, float), np.atleast_2d(np.asarray(R_ref, float))
     XYZ_ref = reflectance_to_XYZ(R_ref, w_ref, spd, observer)
@@ -97,7 +97,7 @@ def step_errors(illuminant, steps_nm=STEPS_NM, observer=DEFAULT_OBSERVER, reflec
     for step in steps_nm:
         grid = spectral_grid(spd, step, observer)
         R = np.stack([np.interp(grid, w_ref, r) for r in R_ref])
-        dE = _delta_e2000_XYZ(reflectance_to_XYZ(R, grid, spd, observer, method), XYZ_ref, white)
+        dE = delta_e2000_XYZ(reflectance_to_XYZ(R, grid, spd, observer, method), XYZ_ref, white)
         out[float(step)] = (float(np.max(dE)), int(grid.size))
     return out
 
@@ -116,7 +116,7 @@ def simulation_wavelengths(illuminant, accuracy_dE: float = 0.5, observer=DEFAUL
     The default test set is smooth (ColorChecker patches and metal absorption edges). Iridescent spectra with
     peaks narrower than the chosen step are under-sampled: pass representative *reflectances* for those.
     """
-    spd = _as_spd(illuminant)
+    spd = as_spd(illuminant)
     if spd.lines:
         return spectral_grid(spd, observer=observer)
     if not (math.isfinite(accuracy_dE) and accuracy_dE > 0):
