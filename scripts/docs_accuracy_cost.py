@@ -1,4 +1,4 @@
-"""Write docs/accuracy-cost.md: the accuracy–cost study (waveoptics.cost) on three representative surfaces, with
+"""Write docs/accuracy-cost.md: the accuracy–cost study (waveoptics.study.accuracy_cost) on three representative surfaces, with
 its tables, Pareto fronts, recommendations and error-vs-time plots, all from one run of the code. Raw results go to
 docs/data/accuracy_cost.json."""
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from waveoptics import cost
+from waveoptics.study import accuracy_cost as cost
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "accuracy-cost.md"
@@ -53,7 +53,7 @@ denser spectrum (@wl_ref@); for random surfaces one run per realization, @n_ref@
 default reference is the fft solver in float64 (exact Kirchhoff to 1e-8), with a 35 s budget for the ladder:
 [cost-defaults.md](cost-defaults.md) runs both and compares their recommendations.
 
-**Errors** (`waveoptics.cost`): `rel. L2` — ‖E − E_ref‖₂/‖E_ref‖₂ of the reflected energy per direction cell
+**Errors** (`waveoptics.study.accuracy_cost`): `rel. L2` — ‖E − E_ref‖₂/‖E_ref‖₂ of the reflected energy per direction cell
 E = f du dv over all reference wavelengths and cells (the reference summed onto the setting's coarser grid, the
 setting interpolated linearly in λ); `albedo err.` — the largest |ρ − ρ_ref| of the directional albedo over λ;
 `ΔE2000` — between the sRGB colours of the albedo spectra under D65. For random surfaces a setting with n

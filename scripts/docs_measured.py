@@ -87,7 +87,8 @@ STEPS = [
 
 def _sphere_figure(run: Path, path: Path) -> None:
     """The run's two sphere renders side by side with their ΔE2000, titled, with the light direction."""
-    from waveoptics import colour, render
+    from waveoptics import colour
+    from waveoptics.renderers import sphere as render
     from waveoptics.io.files import read_exr
 
     imgs = []

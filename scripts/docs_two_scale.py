@@ -15,7 +15,8 @@ from waveoptics import materials
 from waveoptics.brdf import twoscale
 from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.units import direction_from_angles
-from waveoptics import colour, render
+from waveoptics import colour
+from waveoptics.renderers import sphere as render
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "two-scale.md"

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 import waveoptics
-from waveoptics.architecture import LAYERS, layer_of, waveoptics_imports
+from architecture_layers import LAYERS, layer_of, waveoptics_imports
 
 PKG = Path(waveoptics.__file__).resolve().parent
 ROOT = PKG.parent

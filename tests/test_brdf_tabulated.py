@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 from scipy import special
 
-from waveoptics import brdf, colour, render
+from waveoptics import brdf, colour
+from waveoptics.renderers import sphere as render
 from waveoptics.brdf import Micro, MicrofacetBRDF, TabulatedTwoScaleBRDF, chi2_test
 from waveoptics.request import make_nano
 from waveoptics.scatter.grid import DirectionGrid

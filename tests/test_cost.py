@@ -1,4 +1,4 @@
-"""The accuracy–cost study machinery (waveoptics.cost): Pareto dominance, the recommendation, the error measures
+"""The accuracy–cost study machinery (waveoptics.study.accuracy_cost): Pareto dominance, the recommendation, the error measures
 (pooling onto coarser grids, spectral interpolation), the reference (the exact fft solver agrees with the direct
 float64 sum, docs/physics.md §1), the budget, the JSON layout and the CLI. Nothing here checks a timing.
 """
@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from waveoptics import cost
+from waveoptics.study import accuracy_cost as cost
 from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.errors import WaveopticsError
 

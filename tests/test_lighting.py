@@ -7,7 +7,7 @@ map of radiance 1 is 1 everywhere); a microfacet sphere in a constant map shows 
 import numpy as np
 import pytest
 
-from waveoptics import lighting, render
+from waveoptics.renderers import lighting, sphere as render
 from waveoptics.brdf import BRDF, Micro, MicrofacetBRDF, chi2_test
 from waveoptics.brdf.protocol import pdf_cosine, sample_cosine
 from waveoptics.cli import main as cli_main

@@ -83,7 +83,7 @@ def test_surface_generate_old_model_flag(tmp_path):
 
 
 def test_cost_generator_takes_the_nano_spelling_of_the_correlation_length():
-    from waveoptics.cost import parse_model
+    from waveoptics.study.accuracy_cost import parse_model
     from waveoptics.request import parse_nano
 
     assert parse_model("gaussian:sigma=5nm,T=1um") == parse_model("gaussian:sigma=5nm,corr_length=1um")

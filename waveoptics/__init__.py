@@ -6,8 +6,8 @@ and integrated over the spectrum to colour. See the README for a tour and docs/a
 
 Sub-packages (bottom to top): ``materials`` (optical constants, Fresnel), ``colour`` (spectra to colour),
 ``surfaces`` (height fields, PSDs), ``scatter`` (Kirchhoff diffraction solvers, PSD series), ``brdf`` (microfacet
-and two-scale BRDFs), then ``request`` (one simulation request), the jobs ``simulate``, ``compare``, ``cost``,
-``bench``, ``planning`` (scene files, the effect planner) and ``distributed`` (tables and sweeps on Dask).
+and two-scale BRDFs), then ``request`` (one simulation request), the jobs ``simulate``, ``compare``, ``study``,
+``bench``, ``renderers``, ``planning`` (scene files, the effect planner) and ``distributed`` (tables and sweeps on Dask).
 
 The main entry points are attributes of the package, loaded on first use (PEP 562), so that ``import waveoptics``
 and the command line's parsers stay quick.

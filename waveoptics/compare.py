@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import colour, render
+from . import colour
+from .renderers import sphere as render
 from .brdf import twoscale
 from .errors import FieldError
 from .io import figures

@@ -15,7 +15,8 @@ import numpy as np
 from matplotlib import colors
 from scipy.ndimage import map_coordinates
 
-from . import colour, io, lighting, render, scatter, surfaces
+from . import colour, io, scatter, surfaces
+from .renderers import lighting, sphere as render
 from .brdf import MicrofacetBRDF, TabulatedTwoScaleBRDF, twoscale
 from .brdf.tabulated import PHI_NODES_ANISOTROPIC, THETA_NODES_DEG
 from .io import figures
@@ -409,9 +410,9 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
 
     *space* (``"sRGB"``, ``"ACEScg"``, ``"Display P3"``) is the linear RGB space of ``brdf_rgb.exr`` and of the
     summary's RGB albedos; PNG previews and sphere renders are always sRGB. *environment* (a name in
-    :data:`waveoptics.lighting.PROCEDURAL`, an .exr map or a :class:`waveoptics.lighting.Environment`) adds both
+    :data:`waveoptics.renderers.lighting.PROCEDURAL`, an .exr map or a :class:`waveoptics.renderers.lighting.Environment`) adds both
     models' spheres lit by that map (*env_size* pixels, *spp* samples per technique and pixel, multiple importance
-    sampling; :func:`waveoptics.render.render_sphere_environment`).
+    sampling; :func:`waveoptics.renderers.sphere.render_sphere_environment`).
     """
     files = output_files(environment is not None, sim.params.get("diffraction") == "rayleigh-rice" and
                          sim.nano is not None)

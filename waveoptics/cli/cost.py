@@ -1,6 +1,6 @@
 """``waveoptics cost``: what accuracy costs in time — one configuration at a ladder of settings (solver, grid
 resolution, wavelengths, realizations, precision) against a reference computed once; errors, wall times, the
-Pareto front and the cheapest setting meeting ``--target-error`` (logic in :mod:`waveoptics.cost`).
+Pareto front and the cheapest setting meeting ``--target-error`` (logic in :mod:`waveoptics.study.accuracy_cost`).
 """
 from __future__ import annotations
 
@@ -81,7 +81,7 @@ def _budget(text):
 
 def run(args) -> int:
 
-    from .. import cost
+    from ..study import accuracy_cost as cost
     from ..materials import fresnel_function
     from ..runtime import get_runtime
 

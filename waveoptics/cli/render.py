@@ -157,7 +157,7 @@ def run_render(args):
 
     import numpy as np
 
-    from .. import lighting
+    from ..renderers import lighting
     from ..errors import WaveopticsError
     from ..io import files
     from ..render import key_exposure, plot_spheres, tonemap

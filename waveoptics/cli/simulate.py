@@ -115,7 +115,7 @@ def run(args):
         raise FieldError(f"{{spp}} {args.spp} is not allowed; use 1..4096 samples", "spp")
     env = None
     if args.environment is not None:
-        from .. import lighting
+        from ..renderers import lighting
         env = lighting.environment(args.environment)   # a bad map fails here, before any computing
     req = request_from_args(args)
     sim_mod.check_request_memory(req, max_memory=args.max_memory)   # before anything is created

@@ -10,7 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import colour, io, render, scatter
+from .. import colour, io, scatter
+from ..renderers import sphere as render
 from ..brdf import twoscale
 from ..io import figures
 from ..scatter.grid import DirectionGrid

@@ -2,7 +2,7 @@
 with the two-scale wave-optics BRDF and with Mitsuba's own rough microfacet model of the same micro roughness and
 index, side by side.
 
-World space (as :mod:`waveoptics.lighting`): camera looking down −z, x right, y up; Mitsuba 3's ``envmap`` uses
+World space (as :mod:`waveoptics.renderers.lighting`): camera looking down −z, x right, y up; Mitsuba 3's ``envmap`` uses
 the same equirectangular convention, so a map shows the same light in both renderers. The sphere has radius 1 at
 the origin, the ground (grey Lambertian, reflectance 0.4) is the plane y = −1.
 

@@ -1,5 +1,5 @@
 """Environment light: an equirectangular radiance map (a user's EXR, or a procedural sky or studio built here),
-importance-sampled by its luminance, for sphere renders with multiple importance sampling (:mod:`waveoptics.render`).
+importance-sampled by its luminance, for sphere renders with multiple importance sampling (:mod:`waveoptics.renderers.sphere`).
 
 Conventions (world space of the renders: camera looking down −z, x right, y up): the map's rows run from the
 zenith (+y, row 0) to the nadir (−y), its columns over the azimuth φ measured about +y from −z (column 0, the
@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import colour, io
-from .errors import FieldError
+from .. import colour, io
+from ..errors import FieldError
 
 __all__ = ['PROCEDURAL', 'Environment', 'procedural_environment', 'load_environment', 'environment']
 

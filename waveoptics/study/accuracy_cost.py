@@ -52,15 +52,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import colour, scatter, surfaces
-from .errors import WaveopticsError, unknown
-from .io import figures
-from .io.figures import save_figure
-from .io.files import atomic_path, prepare_outdir, write_json
-from .runtime import get_runtime
-from .surfaces.heightfield import HeightField
-from .units import split_spec
-from .vocabulary import COST_BUDGET_S, COST_TARGET_ERROR
+from .. import colour, scatter, surfaces
+from ..errors import WaveopticsError, unknown
+from ..io import figures
+from ..io.figures import save_figure
+from ..io.files import atomic_path, prepare_outdir, write_json
+from ..runtime import get_runtime
+from ..surfaces.heightfield import HeightField
+from ..units import split_spec
+from ..vocabulary import COST_BUDGET_S, COST_TARGET_ERROR
 
 __all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'REFERENCE_SOLVERS', 'DEFAULT_TARGET_ERROR', 'DEFAULT_BUDGET_S', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
 

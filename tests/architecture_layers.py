@@ -12,14 +12,14 @@ __all__ = ["LAYERS", "layer_of", "waveoptics_imports"]
 
 #: (layer name, modules or sub-packages of waveoptics in it), bottom first
 LAYERS = (
-    ("core", ("errors", "units", "vocabulary", "runtime", "io", "architecture", "cache", "schemas")),
+    ("core", ("errors", "units", "vocabulary", "runtime", "io", "cache", "schemas")),
     ("materials", ("materials",)),
     ("colour", ("colour",)),
     ("surfaces", ("surfaces",)),
     ("scatter", ("scatter",)),
     ("brdf", ("brdf",)),
     ("request", ("request",)),
-    ("jobs", ("simulate", "render", "lighting", "compare", "cost", "bench", "renderers")),
+    ("jobs", ("simulate", "compare", "study", "bench", "renderers")),
     ("planning", ("planning",)),
     ("distributed", ("distributed",)),
     ("interface", ("cli", "__main__", "")),
@@ -40,7 +40,7 @@ def waveoptics_imports(path: Path) -> list[tuple[str, int]]:
     """(module relative to the package, line) of every waveoptics import in the file *path* (inside functions
     too), with relative imports resolved; ``from . import x`` names ``x``."""
     path = Path(path)
-    pkg_root = Path(__file__).resolve().parent
+    pkg_root = Path(__file__).resolve().parent.parent / "waveoptics"
     here = path.resolve().relative_to(pkg_root).with_suffix("").parts
     package = list(here[:-1])  # the package the file lives in (its own name for __init__ is dropped too)
     out = []

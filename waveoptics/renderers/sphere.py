@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 from colour import cctf_encoding  # colour-science (this package's own colour sub-package is imported below)
 
-from . import colour
-from .colour import reflectance_to_rgb_matrix
-from .io import figures
+from .. import colour
+from ..colour import reflectance_to_rgb_matrix
+from ..io import figures
 
 __all__ = ['sphere_geometry', 'tangent_frames', 'local_directions', 'PIXEL_CHUNK', 'render_sphere',
            'render_sphere_environment', 'KEY', 'EXPOSURE_MAX', 'key_exposure',
@@ -109,7 +109,7 @@ def render_sphere_environment(brdf_fn, wavelengths_nm, env, *, size=128, spp=16,
     Reflected radiance ∫ f(ω_i, ω_o) L(ω_i) cos θ_i dω_i per pixel by multiple importance sampling (balance
     heuristic, Veach & Guibas 1995): *spp* directions from the BRDF's own sampler (``sample`` with the view as its
     first direction, at *sample_wavelength_nm*, default the wavelength nearest 555 nm) and *spp* from the map's
-    luminance (:class:`waveoptics.lighting.Environment`). The BRDF spectrum of every sample becomes RGB through
+    luminance (:class:`waveoptics.renderers.lighting.Environment`). The BRDF spectrum of every sample becomes RGB through
     :func:`waveoptics.colour.reflectance_to_rgb_matrix` and multiplies the map's RGB radiance (the usual RGB product: exact for a
     spectrally flat map). A white Lambertian sphere in a constant map of radiance 1 is 1.
 
