@@ -79,6 +79,26 @@ class Stack(Material):
         :meth:`Material.eta`)."""
         return self.substrate.eta(wavelength_nm), [m.eta(wavelength_nm) for m, _ in self.films]
 
+    def optical_thickness_nm(self, wavelength_nm) -> np.ndarray:
+        """Σ_j Re(n_j) d_j (nm) of the films at *wavelength_nm* (nm): the normal-incidence path that sets the fringes."""
+        return sum(np.real(m.eta(wavelength_nm)) * d for m, d in self.films)
+
+    def fringe_spacing_nm(self, wavelength_nm) -> np.ndarray:
+        """Spacing Δλ ≈ λ²/(2 Σ n_j d_j cos θ_j) (nm) of the interference fringes of R(λ) near *wavelength_nm*,
+        at normal incidence (cos θ_j = 1: the closest fringes of any angle, as n d cos θ_j ≤ n d); inf without
+        film.
+
+        References
+        ----------
+        .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §7.5.1 (fringes of equal inclination: successive
+           orders m of 2 n d cos θ = m λ, whence Δλ = λ²/(2 n d cos θ)).
+        .. [2] H. A. Macleod, *Thin-Film Optical Filters*, 4th ed., 2010, §2.7 (the spectral period of a film).
+        """
+        w = np.asarray(wavelength_nm, dtype=float)
+        opd = self.optical_thickness_nm(w)
+        with np.errstate(divide="ignore"):
+            return np.where(opd > 0, w * w / (2.0 * np.maximum(opd, 1e-300)), np.inf)
+
     def out_of_range(self, wavelength_nm) -> np.ndarray:
         """Wavelengths outside the data range of any layer (clamped there)."""
         out = self.substrate.out_of_range(wavelength_nm)
