@@ -297,6 +297,9 @@ def test_microfacet_brdf_of_a_stack_uses_the_stack_reflectance_at_the_half_angle
     f_one = models.microfacet_model(fresnel="one", **kw).evaluate(wi, wo)
     F = get_material("Al|Al2O3:300nm").F(math.cos(0.5), lam)
     np.testing.assert_allclose(f_stack[:, 0, 0], f_one[:, 0, 0] * F, rtol=1e-12)
+    from waveoptics.brdf import spectral_brdf
+    f = spectral_brdf(wi, wo, lam, "Al|Al2O3:300nm", alpha=0.2, kd=0.0)
+    np.testing.assert_allclose(f[:, 0], f_one[:, 0, 0] * F, rtol=1e-12)
 
 
 # ------------------------------------------------------------------------------------- the planner's nodes

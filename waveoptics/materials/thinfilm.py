@@ -185,7 +185,7 @@ def parse_stack(spec: str) -> Stack:
         raise FieldError(f"{{material}} {s!r} has no film after '|'; write {GRAMMAR}", "material")
     los = [substrate.wavelength_range_nm[0]] + [m.wavelength_range_nm[0] for m, _ in films]
     his = [substrate.wavelength_range_nm[1]] + [m.wavelength_range_nm[1] for m, _ in films]
-    name = "|".join([substrate.name] + [f"{m.name}:{d:g}nm" for m, d in films])
+    name = "|".join([substrate.name] + [f"{m.name}:{d:.10g}nm" for m, d in films])   # exact enough to key caches
     source = "thin-film stack (transfer matrix) of " + "; ".join(
         [f"substrate {substrate.name}: {substrate.source}"] + [f"{d:g} nm {m.name}: {m.source}" for m, d in films])
     return Stack(name=name, source=source, category=substrate.category,
