@@ -16,7 +16,7 @@ from ..errors import WaveopticsError, unknown
 from ..materials import fresnel as _fresnel
 from .smith import _gl01
 
-__all__ = ['FRESNELS', 'F_mean']
+__all__ = ['FRESNELS', 'F_mean', 'MaterialFresnel']
 
 
 def _F_exact(cos_theta, eta, F0):
@@ -40,7 +40,26 @@ FRESNELS: dict[str, tuple[Callable, int]] = {
 }
 
 
+class MaterialFresnel:
+    """The Fresnel factor F(cos θ) of a material with no single interface index (a thin-film stack,
+    :class:`waveoptics.materials.Stack`) at *wavelength_nm* (nm): given as ``fresnel`` to the NumPy BRDF, it plays
+    the part of ``eta`` with ``fresnel="exact"``, and :meth:`reshape` shapes its wavelengths as ``eta`` would be
+    shaped (``(n_λ, 1, ...)``) to broadcast against the directions."""
+
+    def __init__(self, material, wavelength_nm):
+        self.material = material
+        self.wavelength_nm = np.asarray(wavelength_nm, dtype=float)
+
+    def reshape(self, shape) -> "MaterialFresnel":
+        return MaterialFresnel(self.material, self.wavelength_nm.reshape(shape))
+
+    def __call__(self, cos_theta):
+        return self.material.F(cos_theta, self.wavelength_nm)
+
+
 def _fresnel_fn(fresnel, eta, F0):
+    if isinstance(fresnel, MaterialFresnel):   # the material's own reflectance (a film stack)
+        return fresnel
     if fresnel not in FRESNELS:
         raise unknown("Fresnel model", fresnel, FRESNELS)
     if fresnel == "exact" and eta is None:

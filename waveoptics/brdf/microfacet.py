@@ -53,7 +53,7 @@ from ..errors import WaveopticsError, unknown
 from ..materials.database import get_material
 from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
-from .fresnel_terms import FRESNELS, _fresnel_fn
+from .fresnel_terms import FRESNELS, MaterialFresnel, _fresnel_fn
 from .directions import _as_dirs, _dot, half_vector
 from .ndf import COS_MIN, _check_alpha, _ndf
 from .shadowing import _shadowing
@@ -138,8 +138,9 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
         Specular NDF and roughness (see :func:`D`).
     shadowing : str
         ``"smith"``, ``"smith-correlated"``, ``"cook-torrance"`` or ``"implicit"``.
-    fresnel : str
-        ``"exact"``, ``"schlick"`` or ``"one"``.
+    fresnel : str or MaterialFresnel
+        ``"exact"``, ``"schlick"`` or ``"one"``; or a material's own F(cos θ) (a thin-film stack,
+        :func:`fresnel_inputs`), in place of *eta*.
     eta : array_like of complex, optional
         Complex index n + ik (per wavelength: shape (n_λ, 1) against directions (n, 3)).
     F0 : array_like, optional
@@ -208,7 +209,9 @@ def fresnel_inputs(material, wavelength_nm, fresnel="exact") -> dict:
     Returns
     -------
     dict
-        ``{"fresnel": str, "eta": complex array (n_λ,) or None, "F0": array (n_λ,) or None}``.
+        ``{"fresnel": str, "eta": complex array (n_λ,) or None, "F0": array (n_λ,) or None}``; for a thin-film
+        stack (exact) ``"fresnel"`` is a :class:`~waveoptics.brdf.fresnel_terms.MaterialFresnel` of the wavelengths
+        (n_λ,), which the NumPy :func:`brdf` takes in place of a name and *eta*.
     """
 
     mat = get_material(material)
@@ -219,6 +222,8 @@ def fresnel_inputs(material, wavelength_nm, fresnel="exact") -> dict:
         return {"fresnel": "one", "eta": None, "F0": None}
     if mat.schlick_only or fresnel == "schlick":
         return {"fresnel": "schlick", "eta": None, "F0": np.asarray(mat.F0(w), dtype=float)}
+    if not mat.has_index:   # a thin-film stack: its own F(cos θ, λ), NumPy only
+        return {"fresnel": MaterialFresnel(mat, w), "eta": None, "F0": None}
     return {"fresnel": "exact", "eta": mat.eta(w), "F0": None}
 
 
@@ -245,6 +250,8 @@ def spectral_brdf(wi, wo, wavelength_nm, material, *, fresnel="exact", **kwargs)
     shape = (-1,) + (1,) * nb
     eta = None if fi["eta"] is None else fi["eta"].reshape(shape)
     F0 = None if fi["F0"] is None else fi["F0"].reshape(shape)
+    if isinstance(fi["fresnel"], MaterialFresnel):
+        fi["fresnel"] = fi["fresnel"].reshape(shape)
     kd = np.asarray(kwargs.pop("kd", 0.0), dtype=float)
     if kd.ndim == 1:
         kd = kd.reshape(shape)

@@ -78,10 +78,14 @@ def _check_diffuse_sigma(diffuse_sigma_deg) -> None:
 
 def _per_wavelength(kw: dict, n_axes: int) -> dict:
     """Reshape the per-wavelength arrays of *kw* to (n_λ, 1, ..., 1) for NumPy broadcasting."""
+    from .fresnel_terms import MaterialFresnel
+
     out = dict(kw)
     for key in ("eta", "F0"):
         if out.get(key) is not None:
             out[key] = np.asarray(out[key]).reshape((-1,) + (1,) * n_axes)
+    if isinstance(out.get("fresnel"), MaterialFresnel):   # a thin-film stack's F: its wavelengths shaped as eta's
+        out["fresnel"] = out["fresnel"].reshape((-1,) + (1,) * n_axes)
     return out
 
 
@@ -181,6 +185,9 @@ def microfacet_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None
                             diffuse_roughness=diffuse_roughness, tradeoff=tradeoff)
     n_w = len(wavelengths_nm)
     lam = np.asarray(wavelengths_nm, dtype=float)
+    if backend == "opencl" and not isinstance(kw["fresnel"], str):
+        raise FieldError(f"{{material}} {material!r} is a thin-film stack, whose reflectance is evaluated with NumPy; "
+                         "use {backend} numpy", "material", "backend")
 
     def evaluate(wi, wo, progress=None):
         if multiple_scattering:
@@ -299,7 +306,7 @@ def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polariz
     if mat.schlick_only:
         raise FieldError(f"{{material}} {spec!r} gives only F0; rayleigh-rice needs a complex index "
                          "(a preset, shelf/book/page or an index N+Kj)", "material")
-    eps = mat.eta(wavelengths_nm) ** 2
+    eps = scatter.permittivity(mat, wavelengths_nm)   # refuses a thin-film stack (no single interface)
     w3 = wavelengths_nm[:, None, None]
 
     def evaluate(wi, wo, progress=None):

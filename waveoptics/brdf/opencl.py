@@ -126,6 +126,9 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlat
         f in 1/sr (float64 copy of the device result).
     """
 
+    if not isinstance(fresnel, str):
+        raise WaveopticsError("brdf_cl evaluates the named Fresnel models (exact, schlick, one); a material's own "
+                              "reflectance (a thin-film stack) is evaluated with NumPy (brdf)")
     spec = _ndf(ndf)
     ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
     F_fn = _fresnel_fn(fresnel, eta, F0)

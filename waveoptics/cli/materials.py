@@ -40,5 +40,7 @@ def run(args):
                      "range_nm": list(m.wavelength_range_nm), "f0_550nm": float(m.F0(np.array(550.0)))})
     text = "\n".join(f"{r['name']:<14} {r['category']:<13} F0(550nm)={r['f0_550nm']:.3f}  {r['source']}"
                      for r in rows)
+    text += ("\nthin-film stacks: SUBSTRATE|FILM:THICKNESS|... (films from the substrate outwards), e.g. "
+             "'Al|Al2O3:120nm' (docs/thin-films.md)")
     emit(args, {"presets": rows}, text)
     return 0

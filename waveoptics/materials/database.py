@@ -80,6 +80,12 @@ PRESETS: dict[str, Preset] = {
     "diamond": Preset("main", "C", "Phillip", "dielectric", "diamond, Phillip & Taft 1964", ("C",)),
     "Si": Preset("main", "Si", "Green-2008", "semiconductor", "crystalline silicon, Green 2008",
                  ("silicon", "c-Si")),
+    # film materials (oxide layers and coatings: see waveoptics.materials.thinfilm), measured on thin films
+    "Al2O3": Preset("main", "Al2O3", "Boidin", "dielectric", "alumina thin film, Boidin et al. 2016",
+                    ("alumina",)),
+    "TiO2": Preset("main", "TiO2", "Sarkar", "dielectric", "titania thin film, Sarkar et al. 2019", ("titania",)),
+    "MgF2": Preset("main", "MgF2", "Dodge-o", "dielectric", "magnesium fluoride (ordinary ray), Dodge 1984",
+                   ("magnesium-fluoride",)),
 }
 
 
@@ -116,6 +122,12 @@ class Material:
     def schlick_only(self) -> bool:
         """True when only F0 is known, so Fresnel uses Schlick's approximation."""
         return self.f0_rgb is not None
+
+    @property
+    def has_index(self) -> bool:
+        """True when :meth:`eta` gives the one interface index n + ik that the reflectance comes from (False for
+        F0-only materials and thin-film stacks: code that needs a single index refuses those)."""
+        return not self.schlick_only
 
     @property
     def is_metal(self) -> bool:
@@ -165,6 +177,24 @@ class Material:
         if self.schlick_only:
             return fresnel.F_schlick(cos_theta_i, self._f0_spectrum(wavelength_nm))
         return fresnel.F(cos_theta_i, self.eta(wavelength_nm))
+
+    def F_sp(self, cos_theta_i, wavelength_nm):
+        """(R_s, R_p): the s- and p-polarized reflectances, broadcasting *cos_theta_i* against *wavelength_nm* (nm).
+
+        References
+        ----------
+        .. [1] Born & Wolf, *Principles of Optics*, §1.5.2, §14.2 (:func:`waveoptics.materials.fresnel.F_sp`).
+        """
+        if self.schlick_only:
+            raise FieldError(f"{{material}} {self.name!r} gives only F0; polarized reflectances need a complex index "
+                             "(a preset, shelf/book/page or n+kj)", "material")
+        return fresnel.F_sp(cos_theta_i, self.eta(wavelength_nm))
+
+    def F_facet(self, wi, wo, wavelength_nm, polarization: str = "unpolarized"):
+        """Reflectance of the facet mirroring ω_i into ω_o for s, p or unpolarized light (the macro plane's
+        polarization; :func:`waveoptics.materials.fresnel.F_facet_polarized`), wavelengths (nm) broadcast against
+        the directions' leading shape."""
+        return fresnel.F_facet_polarized(wi, wo, self.eta(wavelength_nm), polarization)
 
     def _f0_spectrum(self, wavelength_nm):
         w = check_wavelengths(wavelength_nm).reshape(np.shape(wavelength_nm))
@@ -280,7 +310,9 @@ def get_material(spec) -> Material:
     ----------
     spec : str or Material
         A preset name or alias (``"Au"``, ``"gold"``, case-insensitive), ``"shelf/book/page"`` of the
-        refractiveindex.info database, a constant index (``"1.5"``, ``"0.2+3.1j"``), or ``"f0:..."``.
+        refractiveindex.info database, a constant index (``"1.5"``, ``"0.2+3.1j"``), ``"f0:..."``, or a thin-film
+        stack ``"SUBSTRATE|FILM:THICKNESS|..."`` (films listed from the substrate outwards, light incident from air
+        on the last: ``"Al|Al2O3:120nm"``, ``"Si|SiO2:100nm|TiO2:50nm"``; :class:`waveoptics.materials.Stack`).
 
     Returns
     -------
@@ -294,6 +326,9 @@ def get_material(spec) -> Material:
         else:
             raise TypeError(f"material must be a name or a Material, got {type(spec).__name__}")
     s = spec.strip()
+    if "|" in s:   # a thin-film stack: SUBSTRATE|FILM:THICKNESS|... (films from the substrate outwards)
+        from .thinfilm import parse_stack
+        return parse_stack(s)
     if s.lower().startswith("f0:"):
         return _f0_material(s)
     table = _alias_table()
@@ -383,7 +418,7 @@ def search(query: str, limit: int | None = 30, *, with_total: bool = False):
 
 class PolarizedFresnel:
     """The facet reflectance of a material for s- or p-polarized incident light (see
-    :func:`waveoptics.materials.fresnel.F_facet_polarized`): it needs both directions, so it is evaluated with
+    :meth:`Material.F_facet`, :func:`waveoptics.materials.fresnel.F_facet_polarized`): it needs both directions, so it is evaluated with
     :meth:`at`; calling it with cos θ_d alone is refused rather than answered unpolarized."""
 
     def __init__(self, material: "Material", polarization: str):
@@ -392,7 +427,7 @@ class PolarizedFresnel:
 
     def at(self, wi, wo, wavelength_nm):
         """F (unitless) for directions (..., 3) and wavelengths broadcast against their leading shape (nm)."""
-        return fresnel.F_facet_polarized(wi, wo, self.material.eta(wavelength_nm), self.polarization)
+        return self.material.F_facet(wi, wo, wavelength_nm, self.polarization)
 
     def __call__(self, cos_theta_d, wavelength_nm):
         raise FieldError("{polarization} " + repr(self.polarization) + " needs the facet's directions; this "
@@ -424,9 +459,8 @@ class RelativeFacetFresnel:
             return np.ones(np.broadcast_shapes(wo.shape[:-1], np.shape(wavelength_nm)))
         mirror = wi * np.array([-1.0, -1.0, 1.0])
         if self.polarization != "unpolarized":
-            eta = self.material.eta(wavelength_nm)
-            num = fresnel.F_facet_polarized(wi, wo, eta, self.polarization)
-            den = fresnel.F_facet_polarized(wi, mirror, eta, self.polarization)
+            num = self.material.F_facet(wi, wo, wavelength_nm, self.polarization)
+            den = self.material.F_facet(wi, mirror, wavelength_nm, self.polarization)
         else:
             h = wi + wo
             h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)

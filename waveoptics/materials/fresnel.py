@@ -22,7 +22,7 @@ import pyopencl.array as cla
 from ..errors import WaveopticsError
 from ..runtime import build_options, build_program, get_runtime
 
-__all__ = ['F_sp', 'F_facet_polarized', 'F', 'F0', 'F_schlick', 'brewster_angle', 'F_sp_cl', 'F_schlick_cl']
+__all__ = ['F_sp', 'F_facet_polarized', 'F_facet_sp', 'F', 'F0', 'F_schlick', 'brewster_angle', 'F_sp_cl', 'F_schlick_cl']
 
 
 def _as_eta(eta) -> np.ndarray:
@@ -105,12 +105,24 @@ def F_facet_polarized(wi, wo, eta, polarization: str = "unpolarized"):
        Proc. 2000 Meeting of the Military Sensing Symposia Specialty Group on Passive Sensors, 2000.
     .. [2] Born & Wolf, *Principles of Optics*, §1.5.2 (R_s, R_p).
     """
+    return F_facet_sp(wi, wo, lambda cos_d: F_sp(cos_d, eta), polarization)
+
+
+def F_facet_sp(wi, wo, R_sp, polarization: str = "unpolarized"):
+    """:func:`F_facet_polarized` for any reflector whose s and p reflectances at the facet's angle θ_d are given by
+    *R_sp* (a callable cos θ_d → (R_s, R_p)): a bare interface (:func:`F_sp`) or a thin-film stack
+    (:mod:`waveoptics.materials.stack`). The facet-frame rotation is the same (Priest & Germer 2000).
+
+    References
+    ----------
+    .. [1] R. G. Priest, T. A. Germer, Proc. 2000 MSS Specialty Group on Passive Sensors, 2000 (facet frame).
+    """
     wi = np.asarray(wi, dtype=float)
     wo = np.asarray(wo, dtype=float)
     h = wi + wo
     h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
     cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
-    Rs, Rp = F_sp(cos_d, eta)
+    Rs, Rp = R_sp(cos_d)
     if polarization == "unpolarized":
         return 0.5 * (Rs + Rp)
     if polarization not in ("s", "p"):

@@ -27,8 +27,8 @@ from .colour_estimate import _proxy_model, colour_shift
 from .costmodel import CostModel
 from .decisions import LAMBDA_REF_NM, ORDER_EFFICIENCY_MIN, first_order_g, grating_orders, scattered_fraction
 from .report import _fmt_nm
-from .thresholds import (ESTIMATE_SHARE, ESTIMATE_SPHERE_THETAS, F_FLAT_TOL, FLAT_SCATTER, KIRCHHOFF_GRAZING_DEG,
-                         PSD_G_MAX, RAYLEIGH_RICE_G_MAX)
+from .thresholds import (ESTIMATE_SHARE, ESTIMATE_SPHERE_THETAS, F_FLAT_TOL, FILM_NODES_PER_FRINGE, FLAT_SCATTER,
+                         KIRCHHOFF_GRAZING_DEG, PSD_G_MAX, RAYLEIGH_RICE_G_MAX)
 
 #: the decisions are private steps of :func:`waveoptics.planning.plan_scene`
 __all__ = []
@@ -247,9 +247,38 @@ def _map_choice(e: _Entry, thetas):
     return choose_model(e.mat, k * float(np.sqrt(np.max(s2))), k * float(e.proxy.length_scale), thetas)
 
 
+def _film_step(e: _Entry):
+    """(step nm, reason) of the grid that puts :data:`FILM_NODES_PER_FRINGE` nodes on each interference fringe of
+    a thin-film stack: step None when the colour grid already does; None without films.
+
+    References
+    ----------
+    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §7.5.1 (fringe spacing Δλ ≈ λ²/(2 n d cos θ)).
+    """
+    spacing = getattr(e.mat, "fringe_spacing_nm", None)
+    if spacing is None or e.w_colour.size < 2:
+        return None
+    lam = float(np.min(e.w_colour))          # the closest fringes are at the shortest wavelength
+    fringe = float(np.min(spacing(e.w_colour)))
+    limit = fringe / FILM_NODES_PER_FRINGE
+    current = float(e.w_colour[1] - e.w_colour[0])
+    opd = float(np.max(e.mat.optical_thickness_nm(lam)))
+    why = (f"thin-film stack (optical thickness Σ n d = {opd:.4g} nm at {lam:g} nm): its fringes lie "
+           f"Δλ ≈ λ²/(2 n d cos θ_t) ≥ {fringe:.3g} nm apart, and {FILM_NODES_PER_FRINGE} nodes per fringe need a "
+           f"step ≤ {limit:.3g} nm")
+    if limit >= current:
+        return None, f"{why}, which the colour grid's {current:g} nm meets"
+    step = next((s for s in colour.STEPS_NM if s <= limit), limit)
+    return step, f"{why} (the colour grid's {current:g} nm would alias them): step {step:g} nm"
+
+
 def _decide_wavelengths(e: _Entry) -> None:
     """Only the lines of a line source; one evaluation when nothing depends on λ; else the coarsest grid that
-    meets the colour target on smooth spectra."""
+    meets the colour target on smooth spectra, refined for the fringes of a thin-film stack (:func:`_film_step`)."""
+    film = None if e.spd.lines else _film_step(e)
+    if film is not None and film[0] is not None:
+        e.w_colour = colour.spectral_grid(e.spd, film[0])
+        e.lam_min = float(np.min(e.w_colour))
     if e.spd.lines:
         e.w_sim = e.w_colour = colour.simulation_wavelengths(e.spd)
         e.lam_independent = (not e.diffraction) and _constant_over(e.mat, e.w_sim) and e.w_sim.size > 1
@@ -266,11 +295,16 @@ def _decide_wavelengths(e: _Entry) -> None:
         e.decide("wavelengths", "none (1 evaluation)",
                  f"pure geometric optics with a wavelength-independent Fresnel factor ({e.mat.source}): the BRDF is "
                  f"the same at every λ; evaluated once at {LAMBDA_REF_NM:g} nm, colour over {_fmt_nm(e.w_colour)}")
+    elif film is not None and film[0] is not None:
+        e.lam_independent = False
+        e.w_sim = e.w_colour
+        e.decide("wavelengths", _fmt_nm(e.w_sim), f"{film[1]} under {e.spd.name}")
     else:
         e.lam_independent = False
         e.w_sim = e.w_colour
         e.decide("wavelengths", _fmt_nm(e.w_sim), f"smooth spectra under {e.spd.name}: the coarsest grid whose "
-                                                  f"colour error on smooth reflectances stays ≤ ΔE {e.dE:g}")
+                                                  f"colour error on smooth reflectances stays ≤ ΔE {e.dE:g}"
+                                                  + (f"; {film[1]}" if film is not None else ""))
     e.metrics["wavelength_count"] = int(max(e.w_sim.size, 1))
 
 

@@ -97,6 +97,9 @@ def reference_bsdf(mi, model, *, material, alpha, alpha_y, ndf, kd) -> tuple[dic
     else:
         rough.update(alpha_u=float(alpha), alpha_v=float(alpha_y))
     mat = get_material(material)
+    if not (mat.has_index or mat.schlick_only):
+        raise FieldError(f"{{material}} {mat.name!r}: Mitsuba's reference models (roughconductor, roughplastic) take "
+                         "one interface index; a thin-film stack has none", "material")
     lam = np.asarray(model.wavelengths_nm, dtype=float)
     if mat.is_metal:
         eta = mat.eta(np.clip(lam, *mat.wavelength_range_nm))

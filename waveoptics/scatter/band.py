@@ -364,8 +364,9 @@ class BandSeries:
             cont = raw.copy()
             far = ALBEDO_THETAS_DEG > TANGENT_PLANE_MAX_DEG
             at = int(np.flatnonzero(ALBEDO_THETAS_DEG == TANGENT_PLANE_MAX_DEG)[0])
-            if material is None or getattr(material, "schlick_only", False):
-                # F = 1 (or only F0 known): the scalar problem of a modulus-1 reflection (Dirichlet, Q = 1)
+            if material is None or not getattr(material, "has_index", True):
+                # F = 1, only F0 known or a thin-film stack (no single interface permittivity for the vector Q):
+                # the scalar problem of a modulus-1 reflection (Dirichlet, Q = 1), times F(θ) when absolute
                 first = [rayleigh_rice_tis(t, lam, model, scalar=True) for t in ALBEDO_THETAS_DEG[at:]]
                 if absolute and material is not None:
                     first = [v * float(material.F(math.cos(math.radians(t)), lam))

@@ -135,6 +135,9 @@ def permittivity(material, wavelength_nm):
     if getattr(material, "schlick_only", False):
         raise FieldError(f"{{material}} {material.name!r} gives only F0; rayleigh-rice needs a complex index "
                          "(a preset, shelf/book/page or n+kj)", "material")
+    if not getattr(material, "has_index", True):
+        raise FieldError(f"{{material}} {material.name!r} is a thin-film stack; rayleigh-rice's polarization factor Q "
+                         "needs the permittivity of one rough interface (a bare material)", "material")
     return np.asarray(material.eta(wavelength_nm), dtype=np.complex128) ** 2
 
 
@@ -151,14 +154,12 @@ def _specular_reflectance(theta, wavelength_nm, material, polarization):
     """R(θ) of a flat *material* (s, p or unpolarized; 1 without one)."""
     import math
 
-    from ..materials.fresnel import F_facet_polarized
-
     if material is None:
         return 1.0
     wi = np.array([math.sin(theta), 0.0, math.cos(theta)])
     mirror = np.array([-wi[0], 0.0, wi[2]])
     if polarization != "unpolarized":
-        return float(F_facet_polarized(wi, mirror, material.eta(wavelength_nm), polarization))
+        return float(material.F_facet(wi, mirror, wavelength_nm, polarization))
     return float(material.F(math.cos(theta), wavelength_nm))
 
 

@@ -1,0 +1,192 @@
+"""Thin-film stacks as materials: a substrate under any number of films (oxide on a metal, anodizing, an oil film,
+an antireflection coating), with the interface of :class:`~waveoptics.materials.Material` (``F``, ``F0``, ``F_sp``,
+``F_facet``), evaluated by the transfer-matrix method of :mod:`waveoptics.materials.stack`.
+
+Grammar
+-------
+``SUBSTRATE|FILM:THICKNESS|FILM:THICKNESS...``: the films are listed **from the substrate outwards** and the light
+comes from air onto the last one. ``"Al|Al2O3:120nm"`` is aluminium under 120 nm of alumina;
+``"Si|SiO2:100nm|TiO2:50nm"`` is silicon under 100 nm of silica under 50 nm of titania. Each layer is any material
+with a complex index that :func:`~waveoptics.materials.get_material` accepts (a preset or alias, ``PRESET@PAGE``,
+``shelf/book/page``, ``n+kj``; not ``f0:``); each thickness is a length with its unit (``5nm``, ``1.2um``,
+:func:`waveoptics.units.parse_length`), 0 allowed (the bare substrate).
+
+Films and the single-interface models
+-------------------------------------
+A stack has no single interface index: :meth:`Stack.eta` refuses (naming the ``material`` field), so the first-order
+perturbation (Rayleigh-Rice) models, whose polarization factor Q needs the permittivity of one rough interface,
+refuse a stack in one line instead of silently using the substrate. Geometric-optics and Kirchhoff models take
+the stack's reflectance of each facet (``F``, ``F_facet``): the films are taken to follow the micro- and
+nano-roughness conformally, each facet a flat stack.
+
+References
+----------
+.. [1] F. Abelès, Ann. Phys. (Paris) 12(5), 596–640, 706–782, 1950.
+.. [2] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.6.
+.. [3] O. S. Heavens, *Optical Properties of Thin Solid Films*, Butterworths 1955, ch. 4.
+.. [4] H. A. Macleod, *Thin-Film Optical Filters*, 4th ed., CRC Press 2010, ch. 2.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import FieldError, WaveopticsError
+from ..units import LENGTH_UNITS, parse_length
+from . import fresnel, stack
+from .database import Material, get_material
+
+__all__ = ['Stack', 'parse_stack', 'GRAMMAR']
+
+#: the stack grammar, as errors write it
+GRAMMAR = "SUBSTRATE|FILM:THICKNESS|... (films from the substrate outwards, e.g. Al|Al2O3:120nm)"
+
+
+@dataclass(frozen=True)
+class Stack(Material):
+    """A substrate under thin films, incidence from air: a :class:`Material` whose reflectance is that of the stack.
+
+    Attributes
+    ----------
+    substrate : Material
+        The semi-infinite substrate.
+    films : tuple of (Material, float)
+        The films and their thicknesses in nm, **from the substrate outwards**.
+    """
+
+    substrate: Material = None
+    films: tuple = ()
+
+    @property
+    def has_index(self) -> bool:
+        """False: a stack has no single interface index (:meth:`eta` refuses)."""
+        return False
+
+    @property
+    def thicknesses_nm(self) -> tuple:
+        """The film thicknesses (nm), from the substrate outwards."""
+        return tuple(d for _, d in self.films)
+
+    def eta(self, wavelength_nm) -> np.ndarray:
+        """Refused: a stack has no single refractive index (the substrate's would silently drop the films)."""
+        raise FieldError(f"{{material}} {self.name!r} is a thin-film stack and has no single refractive index; this "
+                         "computation needs one interface (a bare material: preset, shelf/book/page or n+kj)",
+                         "material")
+
+    def indices(self, wavelength_nm):
+        """(n_substrate, [n_film, ...]) at *wavelength_nm* (nm), each of its shape (clamped at the data ranges as
+        :meth:`Material.eta`)."""
+        return self.substrate.eta(wavelength_nm), [m.eta(wavelength_nm) for m, _ in self.films]
+
+    def optical_thickness_nm(self, wavelength_nm) -> np.ndarray:
+        """Σ_j Re(n_j) d_j (nm) of the films at *wavelength_nm* (nm): the normal-incidence path that sets the fringes."""
+        return sum(np.real(m.eta(wavelength_nm)) * d for m, d in self.films)
+
+    def fringe_spacing_nm(self, wavelength_nm) -> np.ndarray:
+        """Spacing Δλ ≈ λ²/(2 Σ n_j d_j cos θ_j) (nm) of the interference fringes of R(λ) near *wavelength_nm*,
+        at normal incidence (cos θ_j = 1: the closest fringes of any angle, as n d cos θ_j ≤ n d); inf without
+        film.
+
+        References
+        ----------
+        .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §7.5.1 (fringes of equal inclination: successive
+           orders m of 2 n d cos θ = m λ, whence Δλ = λ²/(2 n d cos θ)).
+        .. [2] H. A. Macleod, *Thin-Film Optical Filters*, 4th ed., 2010, §2.7 (the spectral period of a film).
+        """
+        w = np.asarray(wavelength_nm, dtype=float)
+        opd = self.optical_thickness_nm(w)
+        with np.errstate(divide="ignore"):
+            return np.where(opd > 0, w * w / (2.0 * np.maximum(opd, 1e-300)), np.inf)
+
+    def out_of_range(self, wavelength_nm) -> np.ndarray:
+        """Wavelengths outside the data range of any layer (clamped there)."""
+        out = self.substrate.out_of_range(wavelength_nm)
+        for m, _ in self.films:
+            out = out | m.out_of_range(wavelength_nm)
+        return out
+
+    def F_sp(self, cos_theta_i, wavelength_nm):
+        """(R_s, R_p) of the stack, broadcasting *cos_theta_i* against *wavelength_nm* (nm).
+
+        References
+        ----------
+        .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.6; :func:`waveoptics.materials.stack.R`.
+        """
+        ns, nf = self.indices(wavelength_nm)
+        w = np.asarray(wavelength_nm, dtype=float)
+        d = self.thicknesses_nm
+        return (stack.R(cos_theta_i, w, ns, nf, d, "s"), stack.R(cos_theta_i, w, ns, nf, d, "p"))
+
+    def F(self, cos_theta_i, wavelength_nm) -> np.ndarray:
+        """Unpolarized reflectance (R_s + R_p)/2 of the stack."""
+        Rs, Rp = self.F_sp(cos_theta_i, wavelength_nm)
+        return 0.5 * (Rs + Rp)
+
+    def F0(self, wavelength_nm) -> np.ndarray:
+        """Normal-incidence reflectance spectrum of the stack."""
+        return self.F(1.0, wavelength_nm)
+
+    def F_facet(self, wi, wo, wavelength_nm, polarization: str = "unpolarized"):
+        """The facet reflectance for s, p or unpolarized light (:func:`waveoptics.materials.fresnel.F_facet_sp`
+        with the stack's R_s, R_p)."""
+        return fresnel.F_facet_sp(wi, wo, lambda cos_d: self.F_sp(cos_d, wavelength_nm), polarization)
+
+
+def _layer(spec: str, token: str, role: str) -> Material:
+    """The material of one layer of *spec*, refused in one line naming *token* when it has no complex index."""
+    if not token:
+        raise FieldError(f"{{material}} {spec!r}: empty {role} between '|'; write {GRAMMAR}", "material")
+    if token.lower().startswith("f0:"):
+        raise FieldError(f"{{material}} {spec!r}: {role} {token!r} gives only F0; a stack needs complex indices "
+                         "(a preset, PRESET@PAGE, shelf/book/page or n+kj)", "material")
+    try:
+        m = get_material(token)
+    except WaveopticsError as e:
+        raise FieldError(f"{{material}} {spec!r}: {role} {token!r}: {e}",
+                         "material") from None
+    return m
+
+
+def _thickness_nm(spec: str, film: str, text: str) -> float:
+    try:
+        return parse_length(text, name="material", allow_zero=True) * 1e9
+    except WaveopticsError:
+        raise FieldError(f"{{material}} {spec!r}: film {film!r} has thickness {text!r}, which is not a length >= 0 "
+                         f"with a unit ({', '.join(LENGTH_UNITS)}), e.g. 120nm or 1.2um", "material") from None
+
+
+def parse_stack(spec: str) -> Stack:
+    """A :class:`Stack` from ``"SUBSTRATE|FILM:THICKNESS|..."`` (module docstring), films from the substrate
+    outwards.
+
+    Raises
+    ------
+    FieldError
+        Naming the ``material`` field and the bad token: an empty layer, a film without ``:THICKNESS``, a thickness
+        that is not a length ≥ 0 with a unit, a layer the database does not know or that gives only F0.
+    """
+    s = str(spec).strip()
+    tokens = [t.strip() for t in s.split("|")]
+    if ":" in tokens[0] and not tokens[0].lower().startswith("f0:"):
+        raise FieldError(f"{{material}} {s!r}: the substrate {tokens[0]!r} takes no thickness (it is semi-infinite); "
+                         f"write {GRAMMAR}", "material")
+    substrate = _layer(s, tokens[0], "substrate")
+    films = []
+    for tok in tokens[1:]:
+        if ":" not in tok:
+            _layer(s, tok, "film")   # an empty or unknown token is named as such first
+            raise FieldError(f"{{material}} {s!r}: film {tok!r} needs a thickness; write FILM:THICKNESS, e.g. "
+                             f"{tok or 'Al2O3'}:120nm", "material")
+        name, _, text = tok.rpartition(":")
+        m = _layer(s, name.strip(), "film")
+        films.append((m, _thickness_nm(s, name.strip(), text.strip())))
+    if not films:
+        raise FieldError(f"{{material}} {s!r} has no film after '|'; write {GRAMMAR}", "material")
+    los = [substrate.wavelength_range_nm[0]] + [m.wavelength_range_nm[0] for m, _ in films]
+    his = [substrate.wavelength_range_nm[1]] + [m.wavelength_range_nm[1] for m, _ in films]
+    name = "|".join([substrate.name] + [f"{m.name}:{d:.10g}nm" for m, d in films])   # exact enough to key caches
+    source = "thin-film stack (transfer matrix) of " + "; ".join(
+        [f"substrate {substrate.name}: {substrate.source}"] + [f"{d:g} nm {m.name}: {m.source}" for m, d in films])
+    return Stack(name=name, source=source, category=substrate.category,
+                 wavelength_range_nm=(max(los), min(his)), substrate=substrate, films=tuple(films))
