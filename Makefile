@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-fast setup clean docs bench
+.PHONY: demo test test-fast durations setup clean docs bench
 
 # pytest-xdist workers: one per core (2 on CI)
 JOBS ?= auto
@@ -28,9 +28,13 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q -ra -n $(JOBS)
 
-# the edit loop: everything but the tests marked slow (whole pipelines, the Dask cluster, wheel builds), <= 2 min
+# the edit loop: everything but the slow tests (marked by hand, or recorded above 0.8 s in tests/durations.json), <= 2 min
 test-fast: $(STAMP)
 	$(PY) -m pytest -q -ra -n $(JOBS) -m "not slow"
+
+# re-measure every test's wall time into tests/durations.json (which tests make test-fast leaves out)
+durations: $(STAMP)
+	$(PY) -m pytest -q -ra -n $(JOBS) --store-durations
 
 docs: $(STAMP)
 	$(PY) scripts/make_docs.py

@@ -1,5 +1,8 @@
 """Shared fixtures: OpenCL runtime chosen like pyopencl's test suite (WAVEOPTICS_DEVICE / PYOPENCL_TEST),
 precision parametrization with float64 gated on device support, and tolerances kept in one place."""
+import json
+from pathlib import Path
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -47,3 +50,34 @@ def _private_cache(tmp_path_factory):
         os.environ.pop("WAVEOPTICS_CACHE_DIR", None)
     else:
         os.environ["WAVEOPTICS_CACHE_DIR"] = old
+
+
+#: measured wall time of every test (s, setup + call + teardown) on a 2-core machine, written by ``make durations``
+#: (``pytest --store-durations``); a test recorded above SLOW_S is marked ``slow`` and left out of ``make test-fast``
+DURATIONS = Path(__file__).with_name("durations.json")
+SLOW_S = 0.8
+
+
+def pytest_addoption(parser):
+    parser.addoption("--store-durations", action="store_true",
+                     help="write every test's wall time to tests/durations.json (make durations)")
+
+
+def pytest_collection_modifyitems(config, items):
+    recorded = json.loads(DURATIONS.read_text()) if DURATIONS.exists() else {}
+    for item in items:
+        if recorded.get(item.nodeid, 0.0) > SLOW_S:
+            item.add_marker(pytest.mark.slow)
+
+
+_measured: dict = {}
+
+
+def pytest_runtest_logreport(report):
+    _measured[report.nodeid] = _measured.get(report.nodeid, 0.0) + report.duration
+
+
+def pytest_sessionfinish(session, exitstatus):
+    config = session.config
+    if config.getoption("--store-durations") and not hasattr(config, "workerinput"):
+        DURATIONS.write_text(json.dumps({k: round(v, 3) for k, v in sorted(_measured.items())}, indent=0) + "\n")
