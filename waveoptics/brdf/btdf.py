@@ -351,7 +351,7 @@ class RoughDielectricBSDF(BRDF):
     def __post_init__(self):
         mat = get_material(self.material)
         if mat.is_metal or mat.schlick_only:
-            raise FieldError(f"material {mat.name!r} is not a dielectric with a refractive index; the rough "
+            raise FieldError(f"{{material}} {mat.name!r} is not a dielectric with a refractive index; the rough "
                              "dielectric needs one (e.g. glass or 1.5)", "material")
         object.__setattr__(self, "material", mat)
         if self.micro.shadowing not in DIELECTRIC_SHADOWINGS:
@@ -365,7 +365,7 @@ class RoughDielectricBSDF(BRDF):
     def _eta(self, lam):
         eta = float(np.real(self.material.eta(np.array([lam]))[0]))
         if abs(eta - 1.0) < 1e-9:
-            raise FieldError(f"material index {eta!r} at {lam:g} nm equals the outside's (1): there is no "
+            raise FieldError(f"the index {eta!r} of {{material}} at {lam:g} nm equals the outside's (1): there is no "
                              "interface", "material")
         return eta
 
