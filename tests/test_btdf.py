@@ -288,7 +288,7 @@ def test_white_furnace_single_scattering_loses_more_as_alpha_grows(ndf):
     assert np.all(np.diff(E[:, not_grazing], axis=0) < 0), E
 
 
-@pytest.mark.parametrize("ndf, alpha", [("ggx", 0.1), ("ggx", 0.5), ("ggx", 1.0), ("beckmann", 0.5), ("beckmann", 1.0)])
+@pytest.mark.parametrize("ndf, alpha", [("ggx", 0.1), ("ggx", 1.0), ("beckmann", 1.0)])
 def test_white_furnace_with_multiple_scattering(ndf, alpha):
     """With the Kulla-Conty compensation R + T + R_ms + T_ms = 1 within 1e-2 from outside and inside (total
     internal reflection included), by the quadrature written here."""
@@ -315,8 +315,7 @@ def test_dielectric_tables_are_fast_and_cached():
 
 # -- sampling ------------------------------------------------------------------------------------------------------
 
-CHI2_CASES = [(0.2, "ggx", 40, 1, False), (1.0, "ggx", 70, 1, False),
-              (0.3, "ggx", 20, -1, False), (0.5, "ggx", 60, -1, False), (0.5, "beckmann", 30, 1, False),
+CHI2_CASES = [(0.2, "ggx", 40, 1, False), (1.0, "ggx", 70, 1, False), (0.5, "ggx", 60, -1, False),
               (0.5, "beckmann", 30, -1, False), (0.6, "ggx", 50, 1, True), (0.6, "ggx", 50, -1, True)]
 
 
@@ -330,8 +329,7 @@ def test_sampling_chi2_over_the_sphere(alpha, ndf, theta, side, ms):
     assert res.passed, res.message
 
 
-@pytest.mark.parametrize("alpha, theta, side, ms", [(0.3, 30, 1, False), (1.0, 30, 1, False), (0.3, 30, -1, False),
-                                                    (1.0, 60, -1, False), (0.6, 45, 1, True)])
+@pytest.mark.parametrize("alpha, theta, side, ms", [(0.3, 30, -1, False), (1.0, 60, -1, False), (0.6, 45, 1, True)])
 def test_pdf_integrates_to_the_fraction_of_valid_samples(alpha, theta, side, ms):
     """∫ pdf dω over the sphere (Gauss-Legendre in cos θ on each hemisphere, midpoint rule in φ) equals the share of
     samples that leave on a valid side (seeded Monte Carlo, 3σ), which is at most 1 (1 − ∫ pdf: samples of
