@@ -13,6 +13,8 @@ References
 .. [2] N. Holzschuch, R. Pacanowski, "A two-scale microfacet reflectance model combining reflection and
    diffraction", ACM TOG 36(4):66, 2017 (twoscale).
 .. [3] J. C. Stover, *Optical Scattering: Measurement and Analysis*, 3rd ed., SPIE 2012, §4 (Rayleigh-Rice).
+.. [4] C. Kulla, A. Conty, "Revisiting Physically Based Shading at Imageworks", SIGGRAPH 2017 course
+   (rough-dielectric, multiple scattering).
 """
 from __future__ import annotations
 
@@ -24,7 +26,7 @@ import numpy as np
 from ..errors import FieldError
 
 __all__ = ['ModelEvaluation', 'function_evaluation', 'microfacet_model', 'kirchhoff_model', 'rayleigh_rice_model',
-           'twoscale_model', 'BRDF_MODELS']
+           'twoscale_model', 'rough_dielectric_model', 'BRDF_MODELS']
 
 
 def _each(iterable, desc):
@@ -417,6 +419,44 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
     return function_evaluation(build, wavelengths_nm)
 
 
+def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None, ndf="ggx", ndf_shape=None,
+                           shadowing="smith-correlated", material=None, ior=None, fresnel="exact",
+                           multiple_scattering=False) -> ModelEvaluation:
+    """The BSDF of a rough dielectric interface, reflection and transmission over the whole sphere (Walter et al.
+    2007; :class:`waveoptics.brdf.RoughDielectricBSDF`), as a function: directions with z < 0 lie in the
+    dielectric; the albedo is R + T; its parts are ``reflection``, ``transmission`` and ``multiple``.
+
+    Parameters
+    ----------
+    wavelengths_nm : ndarray (n_λ,)
+        Wavelengths in nm.
+    alpha, roughness, alpha_y, ndf, ndf_shape : float, float, float, str, float
+        The micro roughness, as :func:`microfacet_model`.
+    shadowing : str
+        ``smith`` or ``smith-correlated``.
+    material, ior : str
+        The dielectric below the surface: a material name or a real index (exactly one).
+    fresnel : str
+        ``exact`` only (the transmission is 1 − F).
+    multiple_scattering : bool
+        Kulla-Conty dielectric energy compensation.
+    """
+    from .btdf import RoughDielectricBSDF
+    from .twoscale import Micro
+
+    spec = _one_index(material, ior)
+    if spec is None:
+        raise FieldError("the rough-dielectric model needs {material} or {ior} (the dielectric's index)", "material",
+                         "ior")
+    if fresnel != "exact":
+        raise FieldError(f"{{fresnel}} {fresnel!r} is not available for the rough-dielectric model; it uses the "
+                         "exact dielectric Fresnel factor (transmission 1 − F)", "fresnel")
+    micro = Micro(alpha=_alpha(alpha, roughness, "rough-dielectric"), alpha_y=alpha_y, ndf=ndf, shadowing=shadowing,
+                  ndf_shape=ndf_shape)
+    bsdf = RoughDielectricBSDF(spec, micro, multiple_scattering=multiple_scattering)
+    return function_evaluation(lambda wi: bsdf, wavelengths_nm)
+
+
 #: BRDF model factories by name; each takes keyword arguments (``wavelengths_nm`` and the model's parameters)
 #: and returns a :class:`ModelEvaluation`
 BRDF_MODELS: dict[str, Callable] = {
@@ -424,4 +464,5 @@ BRDF_MODELS: dict[str, Callable] = {
     "kirchhoff": kirchhoff_model,
     "rayleigh-rice": rayleigh_rice_model,
     "twoscale": twoscale_model,
+    "rough-dielectric": rough_dielectric_model,
 }

@@ -92,7 +92,8 @@ def _microfacet_arguments(g) -> None:
     g.add_argument("--diffuse-roughness", type=float, default=0.5, metavar="R",
                    help="Burley diffuse roughness r in [0, 1] (--diffuse burley; default 0.5)")
     option(g, "--multiple-scattering", action="store_true",
-           note="microfacet and twoscale; NumPy, exact or one Fresnel; off by default")
+           note="microfacet, twoscale and rough-dielectric; NumPy, exact or one Fresnel; off by "
+                "default")
     g.add_argument("--no-tradeoff", action="store_true",
                    help="do not weight the diffuse term by (1 - F(θi))(1 - F(θo)) / (1 - F̄)")
     option(g, "--backend", choices=["numpy", "opencl"], default="numpy", note="albedo always uses NumPy")
@@ -315,6 +316,31 @@ def _twoscale_describe(args) -> dict:
 
 
 # ----------------------------------------------------------------------------------------------------------
+# rough-dielectric (reflection + transmission of a rough dielectric interface; logic in waveoptics.brdf.btdf)
+
+
+def _rough_dielectric_arguments(g) -> None:
+    """The rough dielectric takes the microfacet options (--alpha, --ndf, --shadowing, --material or --ior,
+    --multiple-scattering); nothing of its own."""
+
+
+def _rough_dielectric_build(args, wavelength_nm):
+    """:func:`waveoptics.brdf.rough_dielectric_model` of the options."""
+    from .. import brdf
+
+    _index(args, wavelength_nm)
+    return brdf.rough_dielectric_model(wavelengths_nm=wavelength_nm, alpha=args.alpha, roughness=args.roughness,
+                                       alpha_y=args.alpha_y, ndf=args.ndf, ndf_shape=args.ndf_shape,
+                                       shadowing=args.shadowing, material=args.material, ior=args.ior,
+                                       fresnel=args.fresnel, multiple_scattering=args.multiple_scattering)
+
+
+def _rough_dielectric_describe(args) -> dict:
+    return {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
+                                          "multiple_scattering")}
+
+
+# ----------------------------------------------------------------------------------------------------------
 # table (a BRDF table file as a function; logic in waveoptics.distributed.table.open_table)
 
 
@@ -350,6 +376,11 @@ MODELS: dict[str, Model] = {
                       "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski "
                       "2017), evaluated at the given directions; JSON also gives its coherent, diffraction "
                       "and diffuse parts"),
+    "rough-dielectric": Model(_rough_dielectric_arguments, _rough_dielectric_build, _rough_dielectric_describe,
+                              "BSDF of a rough dielectric interface (Walter et al. 2007): reflection and "
+                              "transmission (air above, the material below; the command's directions are above "
+                              "the surface, so it gives the reflection and the albedo R + T); JSON also gives its "
+                              "reflection, transmission and multiple parts"),
     "table": Model(_table_arguments, _table_build, _table_describe,
                    "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated "
                    "between incidences relative to the specular direction, coherent and diffuse parts "
@@ -388,8 +419,10 @@ def run(args) -> int:
     model = MODELS[args.model]
     if getattr(args, "diffuse", None) in DIFFUSE_ALIASES:
         args.diffuse = DIFFUSE_ALIASES[args.diffuse]
-    if getattr(args, "multiple_scattering", False) and args.model not in ("microfacet", "twoscale"):
-        raise WaveopticsError(f"--multiple-scattering applies to --model microfacet and twoscale, not {args.model!r}")
+    if getattr(args, "multiple_scattering", False) and args.model not in ("microfacet", "twoscale",
+                                                                                 "rough-dielectric"):
+        raise WaveopticsError("--multiple-scattering applies to --model microfacet, twoscale and rough-dielectric, "
+                              f"not {args.model!r}")
     wl = parse_wavelengths(args.wavelengths, name="--wavelengths")
     inc = [parse_direction(t, name="--incident") for t in args.incident]
     wi = direction_from_angles([t for t, _ in inc], [p for _, p in inc])
