@@ -241,7 +241,7 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
     band_limited : bool
         True (default): the series of the roughness inside the propagating band, σ_rel
         (:class:`waveoptics.scatter.band.BandSeries`, docs/physics.md §9); the two-scale model's coherent
-        fraction (:meth:`waveoptics.brdf.Nano.coherent_amplitude2`) is the complement of the light this lobe
+        fraction (:meth:`waveoptics.brdf.Nano.coherent_fraction`) is the complement of the light this lobe
         scatters, so the two add up to the reflected light.
         False: the classical series with the full σ (Beckmann & Spizzichino), whose coherent reduction also
         removes the variance in evanescent frequencies, which cannot scatter.
