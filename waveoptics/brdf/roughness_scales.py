@@ -158,7 +158,7 @@ class Nano:
                           polarization: str = "unpolarized"):
         """The factor that gives a statistics lobe at incidence θ_i its scattered albedo continued beyond the
         tangent plane's validity (:meth:`waveoptics.scatter.BandSeries.lobe_energy_scale`; 1 up to
-        :data:`waveoptics.scatter.band.TANGENT_PLANE_MAX_DEG`, for Rayleigh-Rice and for height fields)."""
+        :data:`waveoptics.scatter.band_energy.TANGENT_PLANE_MAX_DEG`, for Rayleigh-Rice and for height fields)."""
         c = np.clip(np.asarray(cos_theta_i, dtype=float), 0.0, 1.0)
         if self.model is None:
             return np.ones(np.broadcast_shapes(c.shape, np.shape(wavelength_nm)))
@@ -186,9 +186,9 @@ class Nano:
 
     def _rayleigh_rice_coherent(self, c, wavelength_nm, material):
         """1 − E_RR(θ) of the height field's periodogram (:func:`waveoptics.scatter.rayleigh_rice_albedo`),
-        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and material, on a conductor; on a
+        tabulated on :data:`waveoptics.scatter.band_energy.RR_THETAS_DEG` per wavelength and material, on a conductor; on a
         dielectric the Debye-Waller factor of the periodogram's band (:meth:`_periodogram_debye_waller`)."""
-        from ..scatter.band import RR_THETAS_DEG, rr_interp
+        from ..scatter.band_energy import RR_THETAS_DEG, rr_interp
 
         if not scatter.is_conductor(material):   # a dielectric: the Debye-Waller factor of the periodogram's band
             return self._periodogram_debye_waller(c, wavelength_nm)
@@ -209,9 +209,9 @@ class Nano:
     def _periodogram_debye_waller(self, c, wavelength_nm):
         """exp(−(2k σ_rel cosθ)²), σ_rel² the height field's periodogram summed over the propagating disc of
         incidence θ (azimuth 0, the plane of the Rayleigh-Rice albedo), tabulated on
-        :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength and interpolated linearly in sinθ (Davies 1954;
+        :data:`waveoptics.scatter.band_energy.RR_THETAS_DEG` per wavelength and interpolated linearly in sinθ (Davies 1954;
         Krywonos, Harvey & Choi 2011; docs/physics.md §9)."""
-        from ..scatter.band import RR_THETAS_DEG
+        from ..scatter.band_energy import RR_THETAS_DEG
 
         cache = self.__dict__.setdefault("_cache", {})
         psd = self.periodogram()
@@ -235,8 +235,8 @@ class Nano:
 
     def _rayleigh_rice_tis(self, c, wavelength_nm, material, polarization):
         """TIS(θ) of the height field's periodogram (absolute, :func:`waveoptics.scatter.rayleigh_rice_tis`),
-        tabulated on :data:`waveoptics.scatter.band.RR_THETAS_DEG` per wavelength, material and polarization."""
-        from ..scatter.band import RR_THETAS_DEG, rr_interp
+        tabulated on :data:`waveoptics.scatter.band_energy.RR_THETAS_DEG` per wavelength, material and polarization."""
+        from ..scatter.band_energy import RR_THETAS_DEG, rr_interp
 
         cache = self.__dict__.setdefault("_cache", {})
         lam = np.asarray(wavelength_nm, dtype=float)
