@@ -2,8 +2,8 @@
 
 The Kirchhoff field of the patch minus its coherent part, δU = U − χ̂ U_flat, as a BRDF
 (:func:`kirchhoff_scattered_lobe`), and the share of the specular light it scatters at one incidence
-(:func:`field_scattered_albedo`, tabulated over :data:`FIELD_THETAS_DEG` by :meth:`waveoptics.brdf.Nano.
-coherent_fraction`).
+(:func:`field_scattered_albedo`, tabulated over :data:`FIELD_THETAS_DEG` by
+:meth:`waveoptics.brdf.Nano.coherent_fraction`).
 
 References
 ----------

@@ -149,7 +149,7 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
     near the mirror direction (the core, :data:`CORE_CELLS`) take the lobe's average over each cell instead of its
     centre value (:func:`_core_cell_averages`); the tail beyond keeps its point samples, which a heavy ABC tail's
     slow variation leaves accurate. The lobe's energy is then made its scattered albedo: on a conductor F(θ_i) · E,
-    E = 1 − A the share of the reflected light the nano lobe scatters (:meth:`Nano.coherent_fraction`, the
+    E = 1 − A the share of the reflected light the nano lobe scatters (:meth:`waveoptics.brdf.Nano.coherent_fraction`, the
     complement of the coherent fraction the specular lobe keeps, so the two add up to the reflected light; while
     the lobe is paraxial E ≈ 1 − exp(−g_i), g_i = (4πσ_rel cosθ_i / λ)², docs/physics.md §3, §9); on a dielectric
     the lobe's own absolute albedo (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`), since there the coherent
@@ -157,7 +157,7 @@ def _resample_narrow_lobe(out, wi, wavelengths_nm, nano: Nano, grid: DirectionGr
     to reach it (the cell averages leave them within about 1 % of it); the tail, which the grid samples well, is
     never scaled: ABC σ = 10 nm, B = 200 µm, C = 3, 450 nm, 30°, 128² grid: the energy beyond 0.1 direction-cosine
     units within 2 % of a 1024² grid's (tests/test_narrow_lobes.py). When no core cell holds any of the lobe, that
-    energy is deposited in the mirror cell (as a micro lobe narrower than a cell is, see :func:`evaluate`).
+    energy is deposited in the mirror cell (as a micro lobe narrower than a cell is, see :func:`waveoptics.brdf.evaluate`).
 
     References
     ----------

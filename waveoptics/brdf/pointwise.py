@@ -117,7 +117,7 @@ class TwoScaleBRDF(TwoScaleParts):
                                                                              self.nodes // 2))
 
     def _check_series(self, lam):
-        """Refuse nano-roughness the truncated series cannot hold (:func:`waveoptics.brdf.twoscale.check_series`)."""
+        """Refuse nano-roughness the truncated series cannot hold (:func:`waveoptics.brdf.roughness_scales.check_series`)."""
         check_series(self.nano.model, lam)
 
     def _f_nano(self, wi, wo, lam):

@@ -115,14 +115,14 @@ class Nano:
         inside the propagating band (the relevant roughness, Krywonos, Harvey & Choi 2011; docs/physics.md §9), so
         variance in evanescent frequencies neither scatters nor reduces the specular light. While the lobe is
         paraxial this is the Davies (1954) factor exp(−(4πσ_rel cosθ_d/λ)²). For a height field it is the same
-        complement, 1 − E_field(θ_d) (:func:`field_scattered_albedo`): E_field is the albedo of the field's own
-        diffracted lobe |U − χ̂ U_flat|² (the lobe :func:`kirchhoff_scattered_lobe` gives, same samples, window and
+        complement, 1 − E_field(θ_d) (:func:`waveoptics.brdf.field_scattered_albedo`): E_field is the albedo of the field's own
+        diffracted lobe |U − χ̂ U_flat|² (the lobe :func:`waveoptics.brdf.kirchhoff_scattered_lobe` gives, same samples, window and
         diffraction model) on a direction grid of λ/(3L) cells, finer than the patch's spectrum varies, so
         nothing between the two halves is lost: roughness in evanescent frequencies neither scatters nor reduces
         the specular light (before, A = |χ̂|² took the whole variance and the albedo of heavy-tailed patches fell
         up to 12 % short of F; tests/test_twoscale.py). One or two incidences asked at once (the macro incidence)
         are evaluated exactly at the azimuth *azimuth_deg* (degrees); a spread of facet incidences is interpolated
-        by monotone cubics in a table over :data:`FIELD_THETAS_DEG` per wavelength, taken at azimuth 0 (the facets
+        by monotone cubics in a table over :data:`waveoptics.brdf.FIELD_THETAS_DEG` per wavelength, taken at azimuth 0 (the facets
         of a micro lobe face every azimuth; for an anisotropic field this is the share of light scattered in the
         x–z plane of incidence). Coherent and diffracted halves use the same values, so the energy balance does
         not depend on this choice. With *polarization* s or p E weighs each direction by its facet's polarized reflectance, as the
@@ -140,7 +140,7 @@ class Nano:
     def scattered_share(self, cos_theta_d, wavelength_nm, diffraction="kirchhoff", material=None,
                         polarization: str = "unpolarized", azimuth_deg: float = 0.0):
         """The light a facet at local incidence θ_d scatters, up to a factor common to all θ_d (ratios of it weigh
-        tilted facets, :func:`facet_scatter_weights`): 1 − A(θ_d) on a conductor and for a height field's
+        tilted facets, :func:`waveoptics.brdf.facet_scatter_weights`): 1 − A(θ_d) on a conductor and for a height field's
         Kirchhoff lobe; on a dielectric with statistics, or a height field's periodogram under Rayleigh-Rice, the
         lobe's own absolute albedo (its coherent fraction is the Debye-Waller factor, not the complement of its
         scatter: :meth:`waveoptics.scatter.BandSeries.coherent_fraction`)."""

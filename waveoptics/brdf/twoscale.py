@@ -18,10 +18,10 @@ Evaluation on the direction-cosine plane
 ----------------------------------------
 Lobes live on a :class:`waveoptics.scatter.DirectionGrid` over (u, v) = (sinθ cosφ, sinθ sinφ), where
 cosθ_o dω_o = du dv. For PSD statistics the diffracted part is the facet integral itself
-(:func:`facet_frame_diffraction`): per cell, a balance-heuristic quadrature over facet normals drawn from the micro
+(:func:`waveoptics.brdf.facet_frame_diffraction`): per cell, a balance-heuristic quadrature over facet normals drawn from the micro
 NDF and about the cell's half-vector, each facet's nano lobe read from tables over local incidence
-(:data:`FACET_THETAS_DEG`) in that facet's frame. For a nano height field, and for a PSD lobe narrower than the
-cells, it is the paraxial form (:func:`facet_route`; ``facet="paraxial"`` by name): the nano lobe at the macro
+(:data:`waveoptics.brdf.FACET_THETAS_DEG`) in that facet's frame. For a nano height field, and for a PSD lobe narrower than the
+cells, it is the paraxial form (:func:`waveoptics.brdf.facet_route`; ``facet="paraxial"`` by name): the nano lobe at the macro
 incidence is convolved with the *micro kernel* K, the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the
 mirror direction, i.e. shifted to each facet's mirror direction instead of being turned with the facet (accurate
 where each facet's lobe is narrow; docs/physics.md §7 gives its error on wide lobes). Both limits hold on the grid:
@@ -38,7 +38,7 @@ Modules
 :mod:`~waveoptics.brdf.twoscale_coherent` (coherent part), :mod:`~waveoptics.brdf.nano_grid` (the nano lobe on the
 grid), :mod:`~waveoptics.brdf.twoscale_paraxial` and :mod:`~waveoptics.brdf.twoscale_frame` (the two facet routes of
 the diffracted part), :mod:`~waveoptics.brdf.field_lobe` (a height field's lobe), :mod:`~waveoptics.brdf.scale_split`
-(:func:`split_scales`); this module composes them (:func:`evaluate`).
+(:func:`waveoptics.brdf.split_scales`); this module composes them (:func:`evaluate`).
 
 References
 ----------
@@ -157,7 +157,7 @@ def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None):
         The diffracted lobes and the microfacet lobe minus the coherent lobe.
     budget : ndarray (n_λ,), optional
         The light the lobes may hold instead of the integral of *lost*: the facet route's light scattered by the
-        facets before masking on the way out (:func:`facet_frame_diffraction`). A facet whose mirror direction is
+        facets before masking on the way out (:func:`waveoptics.brdf.facet_frame_diffraction`). A facet whose mirror direction is
         masked or below the horizon still sends part of its diffracted lobe out, so in Walter's integral the
         diffracted part can exceed the coherent part's loss; it cannot exceed what the facets scatter.
 
@@ -276,8 +276,8 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         scattered light in direction, so the light lost to bounces between micro facets is the microfacet
         model's. Its Fresnel average F_ms is of the unpolarized F (also for s or p light).
     facet : {'auto', 'frame', 'paraxial'}
-        How the facets carry the nano lobe (:func:`facet_route`): ``frame`` evaluates each facet's lobe in its own
-        frame (:func:`facet_frame_diffraction`), ``paraxial`` shifts the macro-incidence lobe to each facet's
+        How the facets carry the nano lobe (:func:`waveoptics.brdf.facet_route`): ``frame`` evaluates each facet's lobe in its own
+        frame (:func:`waveoptics.brdf.facet_frame_diffraction`), ``paraxial`` shifts the macro-incidence lobe to each facet's
         mirror direction (an FFT convolution, fast; docs/two-scale.md gives its error); ``auto`` (default) takes
         ``frame`` for PSD statistics the grid resolves. The route taken is ``info["facet_integration"]``.
 

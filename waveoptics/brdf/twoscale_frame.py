@@ -44,12 +44,12 @@ FACET_ROUTES = ("auto", "frame", "paraxial")
 
 
 def facet_route(micro: Micro, nano: Nano | None, grid: DirectionGrid, wavelengths_nm, facet: str = "auto") -> str:
-    """``frame`` or ``paraxial``: how :func:`evaluate` carries the nano lobe by the facets.
+    """``frame`` or ``paraxial``: how :func:`waveoptics.brdf.evaluate` carries the nano lobe by the facets.
 
     ``auto`` takes ``frame`` for PSD statistics whose nano lobe (width λ_min/(π ℓ)) is wider than
-    :data:`NARROW_CELLS` grid cells; else ``paraxial``: height fields (their lobe is not tabulated over local
+    :data:`waveoptics.brdf.NARROW_CELLS` grid cells; else ``paraxial``: height fields (their lobe is not tabulated over local
     incidence); a micro lobe narrower than a cell (its facets tilt by less than a cell, where the shift and the
-    turn of their lobes agree); nano lobes the grid cannot resolve, which :func:`nano_lobe` deposits with their
+    turn of their lobes agree); nano lobes the grid cannot resolve, which :func:`waveoptics.brdf.nano_lobe` deposits with their
     energy, where a facet's lobe lies within a cell or two of its mirror direction.
     """
     if facet not in FACET_ROUTES:
@@ -197,7 +197,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     diffraction : ndarray (n_λ, n_v, n_u), 1/sr
     scattered : ndarray (n_λ,)
         The light the facets' lobes scatter, F(θ_m) (1 − A(θ_m)) per facet on a conductor and the lobe's own
-        absolute albedo on a dielectric (:meth:`Nano.scattered_share`), averaged over the facets the light
+        absolute albedo on a dielectric (:meth:`waveoptics.brdf.Nano.scattered_share`), averaged over the facets the light
         sees (the NDF nodes, weights D (ω_i·m) G1 / p, normalized by their sum, which is 1 in expectation): the
         diffracted part's albedo falls short of it by the light masked on the way out or sent below the macro
         horizon.

@@ -104,7 +104,7 @@ def _convolve(lobe, K, grid):
 
 def facet_incidences_deg(wi, micro: Micro, grid: DirectionGrid) -> tuple[float, float] | None:
     """Range (degrees) of the facet incidences θ_d whose own coherent fraction a height field's micro lobe at
-    incidence *wi* on *grid* needs (the cells of :func:`micro_kernel` that hold all but :data:`FACET_TAIL_SHARE` of
+    incidence *wi* on *grid* needs (the cells of :func:`micro_kernel` that hold all but :data:`waveoptics.brdf.FACET_TAIL_SHARE` of
     its light); None for a lobe narrower than a cell (only θ_i itself)."""
     if sharp_micro_lobe(micro, grid):
         return None
@@ -114,9 +114,9 @@ def facet_incidences_deg(wi, micro: Micro, grid: DirectionGrid) -> tuple[float, 
 
 
 def field_albedo_evaluations(micro: Micro, grid: DirectionGrid, incidences, extra: int = 0) -> int:
-    """Lobes :func:`field_scattered_albedo` computes per wavelength for a height field's coherent fraction at the
+    """Lobes :func:`waveoptics.brdf.field_scattered_albedo` computes per wavelength for a height field's coherent fraction at the
     macro *incidences* (unit vectors (n, 3)) on *grid*: one each, plus the facet table's nodes that bracket the
-    facet incidences under their micro lobes (:meth:`Nano.coherent_fraction`). *extra* more incidences (a
+    facet incidences under their micro lobes (:meth:`waveoptics.brdf.Nano.coherent_fraction`). *extra* more incidences (a
     sphere's table) are counted with every node (their pixels see every facet incidence)."""
     wis = np.atleast_2d(np.asarray(incidences, dtype=float))
     if extra:
