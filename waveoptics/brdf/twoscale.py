@@ -18,11 +18,11 @@ Evaluation on the direction-cosine plane
 ----------------------------------------
 Lobes live on a :class:`waveoptics.scatter.DirectionGrid` over (u, v) = (sinθ cosφ, sinθ sinφ), where
 cosθ_o dω_o = du dv. For PSD statistics the diffracted part is the facet integral itself
-(:func:`waveoptics.brdf.facet_frame_diffraction`): per cell, a balance-heuristic quadrature over facet normals drawn from the micro
+(:func:`facet_frame_diffraction`): per cell, a balance-heuristic quadrature over facet normals drawn from the micro
 NDF and about the cell's half-vector, each facet's nano lobe read from tables over local incidence
-(:data:`waveoptics.brdf.FACET_THETAS_DEG`) in that facet's frame. For a nano height field, and for a PSD lobe narrower than the
-cells, it is the paraxial form (:func:`waveoptics.brdf.facet_route`; ``facet="paraxial"`` by name): the nano lobe at the macro
-incidence is convolved with the *micro kernel* K, the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the
+(:data:`waveoptics.brdf.FACET_THETAS_DEG`) in that facet's frame. For a nano height field, and for a PSD lobe
+narrower than the cells, it is the paraxial form (:func:`facet_route`; ``facet="paraxial"`` by name): the nano lobe
+at the macro incidence is convolved with the *micro kernel* K, the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the
 mirror direction, i.e. shifted to each facet's mirror direction instead of being turned with the facet (accurate
 where each facet's lobe is narrow; docs/physics.md §7 gives its error on wide lobes). Both limits hold on the grid:
 σ_nano → 0 gives A = 1 and f_n = 0 (the microfacet model), and α → 0 gives the pure nano lobe. Light a facet's lobe
@@ -49,7 +49,6 @@ References
 .. [3] H. Davies, Proc. IEE 101, 209 (1954) (coherent fraction).
 .. [4] E. Veach, PhD thesis, Stanford 1997, §9.2 (balance heuristic).
 """
-from __future__ import annotations
 from __future__ import annotations
 
 import warnings
@@ -237,6 +236,7 @@ def diffuse_lobe(wi, wo, wavelengths_nm, material: Material, kd=0.5, diffuse: st
         diff_albedo[i] = float(directional_albedo(f_d, wi, alpha=1.0))
     return diff, diff_albedo
 
+
 def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid: DirectionGrid, *,
              solver: str = "auto", kd=0.5, diffuse: str = "lambert", device=None, precision="float32",
              reference_grid: DirectionGrid | None = None, diffraction: str = "kirchhoff",
@@ -276,8 +276,8 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         scattered light in direction, so the light lost to bounces between micro facets is the microfacet
         model's. Its Fresnel average F_ms is of the unpolarized F (also for s or p light).
     facet : {'auto', 'frame', 'paraxial'}
-        How the facets carry the nano lobe (:func:`waveoptics.brdf.facet_route`): ``frame`` evaluates each facet's lobe in its own
-        frame (:func:`waveoptics.brdf.facet_frame_diffraction`), ``paraxial`` shifts the macro-incidence lobe to each facet's
+        How the facets carry the nano lobe (:func:`facet_route`): ``frame`` evaluates each facet's lobe in its own
+        frame (:func:`facet_frame_diffraction`), ``paraxial`` shifts the macro-incidence lobe to each facet's
         mirror direction (an FFT convolution, fast; docs/two-scale.md gives its error); ``auto`` (default) takes
         ``frame`` for PSD statistics the grid resolves. The route taken is ``info["facet_integration"]``.
 
