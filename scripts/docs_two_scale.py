@@ -132,7 +132,7 @@ def field_table():
             rel = scatter.relevant_variance_of_field(hf, lam, 0.5)
             chi2 = abs(scatter.coherent_amplitude(smp, wi, lam)) ** 2
             nano = twoscale.Nano(surface=hf)
-            E = 1 - nano.coherent_amplitude2(wi[2], lam, material=mat)
+            E = 1 - nano.coherent_fraction(wi[2], lam, material=mat)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", scatter.DiffractionWarning)
                 L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0), nano, grid, kd=0)

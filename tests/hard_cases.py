@@ -507,9 +507,9 @@ def _twoscale_direct(precision):
         wi = _dirs(30.0)[0]
         F = materials.get_material("Al").F
         grid = _grid(24)
-        a = twoscale.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="direct", precision=precision,
+        a = brdf.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="direct", precision=precision,
                                               device=None)
-        b = twoscale.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="fft")
+        b = brdf.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="fft")
         return {"direct": a, "fft": b, "difference": [np.abs(a - b).max() / b.max()]}
     return run
 

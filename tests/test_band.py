@@ -155,7 +155,7 @@ def test_the_specular_loss_is_the_light_first_order_perturbation_theory_scatters
                 # albedo (tests/test_dielectric_energy.py checks its coherent part)
                 loss = float(nano.scattered_share(wi[2], 550.0, material=material)) / float(material.F(wi[2], 550.0))
             else:
-                loss = 1.0 - float(nano.coherent_amplitude2(wi[2], 550.0, material=material))
+                loss = 1.0 - float(nano.coherent_fraction(wi[2], 550.0, material=material))
             if mat == "1.5" and m.length_scale < 1e-6 and th > 30.0:
                 continue   # glass, correlation length near λ, oblique: Kirchhoff 1.43× Rayleigh-Rice (docs/validity)
             assert loss == pytest.approx(tis, rel=0.25 if mat == "1.5" else 0.06), (m, th)

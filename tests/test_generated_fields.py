@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from waveoptics import simulate, surfaces
+from waveoptics import brdf, simulate, surfaces
 from waveoptics.brdf import twoscale
 from waveoptics.request import make_nano
 from waveoptics.scatter.grid import DirectionGrid
@@ -153,9 +153,9 @@ def test_field_route_lobe_matches_psd_route_within_the_ensemble_error(name):
         assert nano.surface.shape == (128, 128) and nano.surface.dx == pytest.approx(125e-9)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")              # aliasing note: spacing λ/4 is the route's own choice
-            E.append(_ring_energies(twoscale.nano_lobe(wi, [500.0], nano, grid, F, solver="fft")[0], grid, wi))
+            E.append(_ring_energies(brdf.nano_lobe(wi, [500.0], nano, grid, F, solver="fft")[0], grid, wi))
     E = np.array(E)
-    ref = _ring_energies(twoscale.nano_lobe(wi, [500.0], twoscale.Nano(model=model), grid, F, solver="psd")[0],
+    ref = _ring_energies(brdf.nano_lobe(wi, [500.0], twoscale.Nano(model=model), grid, F, solver="psd")[0],
                          grid, wi)
     keep = ref > 1e-3 * ref.sum()                        # rings that hold light
     mean, se = E.mean(0), E.std(0, ddof=1) / math.sqrt(len(E))

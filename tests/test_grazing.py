@@ -86,9 +86,9 @@ def test_grazing_coherent_fraction_follows_first_order_rayleigh_rice():
         g = np.sqrt(n * n - si * si)
         R = 0.5 * (abs((ci - g) / (ci + g)) ** 2 + abs((n * n * ci - g) / (n * n * ci + g)) ** 2)
         A_rr = 1 - tis(theta, lambda t, wo: Q_unpolarized(t, wo, eps)) / R
-        A = float(nano.coherent_amplitude2(ci, LAM, "kirchhoff", AL))
+        A = float(nano.coherent_fraction(ci, LAM, "kirchhoff", AL))
         assert A == pytest.approx(A_rr, rel=2e-2), (theta, A, A_rr)
-        A1 = float(nano.coherent_amplitude2(ci, LAM, "kirchhoff", None))
+        A1 = float(nano.coherent_fraction(ci, LAM, "kirchhoff", None))
         assert A1 == pytest.approx(1 - tis(theta, lambda t, wo: 1.0), rel=2e-2), (theta, A1)
 
 

@@ -17,7 +17,7 @@ import math
 import numpy as np
 import pytest
 
-from waveoptics import surfaces
+from waveoptics import brdf, surfaces
 from waveoptics.brdf import twoscale
 from waveoptics.scatter.grid import DirectionGrid, integrate
 from waveoptics.units import direction_from_angles
@@ -78,8 +78,8 @@ def test_narrow_lobe_tail_follows_the_series_and_energy_is_kept(B, C):
     of the series within 1 % (measured: tail ≤ 0.3 % cell by cell, ≤ 0.24 % in energy; total ≤ 0.16 %)."""
     grid = DirectionGrid.hemisphere(128)
     model = surfaces.PSDModel("abc", sigma=SIG, B=B, C=C)
-    assert LAM * 1e-9 / (np.pi * model.length_scale) < twoscale.NARROW_CELLS * grid.du   # the narrow-lobe path
-    f = twoscale.nano_lobe(WI, [LAM], twoscale.Nano(model=model), grid, F_one, solver="psd")[0]
+    assert LAM * 1e-9 / (np.pi * model.length_scale) < brdf.NARROW_CELLS * grid.du   # the narrow-lobe path
+    f = brdf.nano_lobe(WI, [LAM], twoscale.Nano(model=model), grid, F_one, solver="psd")[0]
     d = grid.directions()
     ref = first_order(d[..., 0], d[..., 1], SIG, B, C)
     tail = _tail(grid)
@@ -109,7 +109,7 @@ def test_narrow_lobe_on_glass_carries_its_own_albedo():
     B, C, n = 200e-6, 3.0, 1.5
     model = surfaces.PSDModel("abc", sigma=SIG, B=B, C=C)
     mat = materials.get_material(n)
-    f = twoscale.nano_lobe(WI, [LAM], twoscale.Nano(model=model), grid, mat.F, solver="psd", material=mat)[0]
+    f = brdf.nano_lobe(WI, [LAM], twoscale.Nano(model=model), grid, mat.F, solver="psd", material=mat)[0]
 
     def weighted(g):
         d = g.directions()

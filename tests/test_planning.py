@@ -129,7 +129,7 @@ def test_g_factor_is_the_davies_exponent():
     sigma, lam, c = 5e-9, 450.0, 0.8
     davies = (4 * np.pi * sigma * c / (lam * 1e-9)) ** 2
     assert float(scatter.roughness_g(sigma, 2 * c, lam)) == pytest.approx(davies, rel=1e-12)
-    assert float(scatter.coherent_fraction(c, lam, sigma)) == pytest.approx(np.exp(-davies), rel=1e-12)
+    assert float(scatter.debye_waller(c, lam, sigma)) == pytest.approx(np.exp(-davies), rel=1e-12)
 
 
 @pytest.mark.parametrize("width, dE", [(0.02, 1.0), (0.1, 0.5), (0.05, 3.0)])

@@ -72,10 +72,10 @@ def test_truncation_is_reported_for_very_rough_surfaces():
     assert cap < 0.5  # g ≈ 1600: 48 terms hold almost nothing, and the function says so
 
 
-def test_coherent_fraction_formula():
-    assert scatter.coherent_fraction(1.0, 500.0, 0.0) == 1.0
+def test_debye_waller_formula():
+    assert scatter.debye_waller(1.0, 500.0, 0.0) == 1.0
     g = (4 * np.pi * 10e-9 * 0.5 / 500e-9) ** 2
-    assert scatter.coherent_fraction(0.5, 500.0, 10e-9) == pytest.approx(np.exp(-g))
+    assert scatter.debye_waller(0.5, 500.0, 10e-9) == pytest.approx(np.exp(-g))
 
 
 def test_below_surface_and_grazing_give_zero_not_nan():

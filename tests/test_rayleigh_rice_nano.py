@@ -93,7 +93,7 @@ def test_every_model_keeps_the_coherent_lobe_as_sigma_vanishes():
     nano = make_nano("gaussian:sigma=0.01nm,T=1um", [LAM])
     for model in ("kirchhoff", "ghs", "rayleigh-rice"):
         for c in (1.0, 0.5, 0.1):
-            assert nano.coherent_amplitude2(c, LAM, model, AL) > 1 - 1e-5, (model, c)
+            assert nano.coherent_fraction(c, LAM, model, AL) > 1 - 1e-5, (model, c)
 
 
 def test_height_field_route_uses_the_periodogram():

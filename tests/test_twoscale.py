@@ -6,7 +6,7 @@ import pytest
 
 from waveoptics import brdf, scatter, surfaces
 from waveoptics import materials
-from waveoptics.brdf import twoscale
+from waveoptics.brdf import roughness_scales, twoscale
 from waveoptics.scatter.grid import DirectionGrid, integrate
 from waveoptics.units import direction_from_angles
 
@@ -55,7 +55,7 @@ def test_zero_micro_roughness_is_exactly_the_nano_diffraction_lobe():
     # while the lobe is paraxial (a long correlation length) that is the Davies factor exp(−g_rel)
     narrow = surfaces.PSDModel("gaussian", sigma=10e-9, T=10e-6)
     g = (4 * np.pi * wi[2] / (W * 1e-9)) ** 2 * np.array([scatter.relevant_variance(narrow, lam, wi[0]) for lam in W])
-    A = twoscale.Nano(model=narrow).coherent_amplitude2(np.full(W.size, wi[2]), W)
+    A = twoscale.Nano(model=narrow).coherent_fraction(np.full(W.size, wi[2]), W)
     np.testing.assert_allclose(A, np.exp(-g), rtol=1e-3)
 
 
@@ -114,7 +114,7 @@ def test_dielectric_gets_diffuse_metal_does_not():
 def test_micro_kernel_sums_to_micro_albedo_and_is_centred():
     wi = direction_from_angles(40.0, 0.0)
     micro = twoscale.Micro(alpha=0.15, ndf="beckmann")
-    K = twoscale.micro_kernel(wi, micro, GRID)
+    K = brdf.micro_kernel(wi, micro, GRID)
     assert K.sum() == pytest.approx(brdf.albedo(wi, fresnel="one", alpha=0.15, ndf="beckmann"), rel=1e-12)
     n = GRID.n_u
     iy, ix = np.unravel_index(np.argmax(K), K.shape)
@@ -146,7 +146,7 @@ def test_height_field_coherent_fraction_is_what_its_grating_orders_leave():
             cm = np.sqrt(1 - u * u)
             s2 = (m * lam * 1e-9 / period) ** 2 + (c + cm) ** 2
             lost += s2 ** 2 / (4 * c * cm * (c + cm) ** 2) * special.jv(m, k * a * (c + cm)) ** 2
-        assert nano.coherent_amplitude2(c, lam) == pytest.approx(1 - lost, abs=1e-4)
+        assert nano.coherent_fraction(c, lam) == pytest.approx(1 - lost, abs=1e-4)
 
 
 #: nano height fields of the issue's energy test: Gaussian, exponential and ABC PSDs (C from 2.2 to 4), σ = λ/10 at
@@ -172,7 +172,7 @@ def test_height_field_route_keeps_the_reflected_light(kind, solver, theta, rt):
     and 2.2 ≤ 3.3e-3: the cell quadrature of a speckle lobe that reaches the horizon, where the 96² grid and
     the 132² grid of the coherent fraction sample it differently), and the coherent-loss guard does not act.
 
-    The coherent fraction is what the field's own lobe leaves (:func:`twoscale.field_scattered_albedo`), so
+    The coherent fraction is what the field's own lobe leaves (:func:`waveoptics.brdf.field_scattered_albedo`), so
     variance in evanescent frequencies is not withheld. Before, A = |χ̂|² took the whole variance: albedo/F − 1
     was −0.12 (ABC C = 2.2, 0°), −0.018 (exponential), −0.007 (C = 4); earlier still, with the unweighted height
     histogram, −0.074 on Gaussian patches. Reference: F from the Fresnel equations (exact), written
@@ -227,8 +227,8 @@ def test_height_field_facet_table_follows_exact_evaluations():
     c = np.cos(np.radians(th))
     for kind in ("gaussian", "abc C=2.2"):
         nano = twoscale.Nano(surface=FIELDS[kind](0))
-        table = nano.coherent_amplitude2(c, 450.0, material=mat)
-        exact = np.array([nano.coherent_amplitude2(ci, 450.0, material=mat) for ci in c])
+        table = nano.coherent_fraction(c, 450.0, material=mat)
+        exact = np.array([nano.coherent_fraction(ci, 450.0, material=mat) for ci in c])
         np.testing.assert_allclose(table, exact, atol=1e-2)
 
 
@@ -257,8 +257,8 @@ def test_fft_and_direct_nano_lobes_agree(rt):
     grid = DirectionGrid.hemisphere(32)
     hf = surfaces.gaussian(sigma=10e-9, corr_length=0.8e-6, size=8e-6, samples=96, seed=3)
     F = lambda c, lam: np.ones(np.broadcast_shapes(np.shape(c), np.shape(lam)))  # noqa: E731
-    a = twoscale.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="fft")
-    b = twoscale.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="direct", precision="float32")
+    a = brdf.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="fft")
+    b = brdf.kirchhoff_scattered_lobe(hf, wi, grid, [500.0], F, solver="direct", precision="float32")
     assert np.max(np.abs(a - b)) < 1e-3 * a.max()
 
 
@@ -341,8 +341,8 @@ def test_field_albedo_evaluations_counts_the_lobes_evaluate_computes(alpha, monk
     :func:`twoscale.evaluate` computes per wavelength: the macro incidence plus the facet table's nodes under the
     micro lobe's light."""
     calls = []
-    real = twoscale.field_scattered_albedo
-    monkeypatch.setattr(twoscale, "field_scattered_albedo", lambda *a, **k: calls.append(a[2]) or real(*a, **k))
+    real = roughness_scales.field_scattered_albedo   # where Nano's coherent fraction looks it up
+    monkeypatch.setattr(roughness_scales, "field_scattered_albedo", lambda *a, **k: calls.append(a[2]) or real(*a, **k))
     grid = DirectionGrid.hemisphere(64)
     wi = direction_from_angles(40.0, 0.0)
     micro = twoscale.Micro(alpha=alpha, ndf="beckmann")
@@ -350,6 +350,6 @@ def test_field_albedo_evaluations_counts_the_lobes_evaluate_computes(alpha, monk
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", scatter.DiffractionWarning)
         twoscale.evaluate(wi, [450.0, 600.0], "Al", micro, twoscale.Nano(surface=hf), grid, solver="fft", kd=0)
-    expected = twoscale.field_albedo_evaluations(micro, grid, wi)
+    expected = brdf.field_albedo_evaluations(micro, grid, wi)
     assert calls.count(450.0) == calls.count(600.0) == expected
     assert expected == 1 if alpha == 0.0 else expected > 1

@@ -325,7 +325,7 @@ def nano_band(nano: twoscale.Nano | None, wavelengths_nm, theta_deg: float, phi_
         var = float(np.var(nano.surface.heights[nano.surface.valid]))
         rel = [scatter.relevant_variance_of_field(nano.surface, lam, s, phi_deg) for lam in wavelengths_nm]
         c = math.cos(math.radians(theta_deg))
-        out = {"scattered_share": [1.0 - float(nano.coherent_amplitude2(c, lam, azimuth_deg=phi_deg))
+        out = {"scattered_share": [1.0 - float(nano.coherent_fraction(c, lam, azimuth_deg=phi_deg))
                                    for lam in wavelengths_nm]}
     return {"incident_deg": [theta_deg, phi_deg], "sigma_m": math.sqrt(var),
             "sigma_relevant_m": [math.sqrt(max(r, 0.0)) for r in rel],

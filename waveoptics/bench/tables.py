@@ -58,11 +58,14 @@ def report(res: dict) -> str:
                      + " |")
     if "brdf_eval" in res:
         lines += ["", "### BRDF eval(): (ω_i, ω_o, λ) evaluations per second (NumPy, one process)", "",
-                  "| model | pairs | batch, one ω_i | batch, own ω_i per pair | Python loop | batch ÷ loop |",
-                  "|---|---|---|---|---|---|"]
+                  "| model | pairs | batch, one ω_i | batch, own ω_i per pair | Python loop | batch ÷ loop "
+                  "| own ω_i ÷ microfacet |",
+                  "|---|---|---|---|---|---|---|"]
         for r in res["brdf_eval"]["rows"]:
+            vs = r.get("vs_microfacet")
             lines.append(f"| {r['model']} | {r['pairs']} | {r['shared_wi_per_s']:.3g} | {r['own_wi_per_s']:.3g} "
-                         f"| {r['loop_per_s']:.3g} | {r['batch_vs_loop']:.3g} |")
+                         f"| {r['loop_per_s']:.3g} | {r['batch_vs_loop']:.3g} | "
+                         f"{'' if vs is None else format(vs, '.3g')} |")
     if "fft_threads" in res:
         ft = res["fft_threads"]
         lines += ["", f"### fft solver on 1 and {ft['cores']} cores ({ft['n']}² patch and grid, "

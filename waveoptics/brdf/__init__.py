@@ -25,12 +25,19 @@ from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES)
 from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
 from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albedo)
 from .opencl import (D_cl, Lambda_cl, brdf_cl)
-from .twoscale import (SERIES_MIN_CAPTURED, check_series, NARROW_CELLS, CAP_TOLERANCE, Micro, Nano, Lobes,
-    micro_kernel, kernel_cos_theta_d, facet_scatter_weights, nano_lobe, kirchhoff_scattered_lobe, FACET_THETAS_DEG,
-    FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODE_SPLIT, FACET_REFERENCE_NM, FACET_ROUTES, facet_nodes,
-    facet_route, facet_frame_diffraction, FIELD_THETAS_DEG, FIELD_GRID_OVERSAMPLING, field_scattered_albedo,
-    FACET_TAIL_SHARE, facet_incidences_deg, field_albedo_evaluations, evaluate, multiple_scattering_lobe,
-    SPLIT_PERIODS_OF_LAMBDA, split_scales)
+from .field_lobe import (kirchhoff_scattered_lobe, FIELD_THETAS_DEG, FIELD_GRID_OVERSAMPLING, field_scattered_albedo,
+    bracketing_nodes)
+from .roughness_scales import (SERIES_MIN_CAPTURED, check_series, Micro, Nano)
+from .scale_split import (SPLIT_PERIODS_OF_LAMBDA, split_scales)
+from .twoscale_grid import (mirror_direction, fresnel_at_mirror, mirror_cell, sharp_micro_lobe, azimuth_deg,
+    FACET_TAIL_SHARE, significant_cells)
+from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP, CORE_MAX_SUBSAMPLES)
+from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, facet_scatter_weights, facet_incidences_deg,
+    field_albedo_evaluations, paraxial_diffraction)
+from .twoscale_frame import (FACET_THETAS_DEG, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODE_SPLIT,
+    FACET_REFERENCE_NM, FACET_ROUTES, facet_route, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
+from .twoscale_coherent import (coherent_lobe)
+from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, multiple_scattering_lobe, evaluate)
 from .sampling import (NormalSampler, NORMAL_SAMPLERS, sample_normal, pdf_normal, pdf_reflected, sample_reflected)
 from .protocol import (BRDFSample, BRDF, MicrofacetBRDF, TwoScaleParts, sample_cosine, pdf_cosine, lobe_choice,
     check_uniform)
@@ -45,6 +52,6 @@ from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, refract, half_vec
     dielectric_tables, RoughDielectricBSDF)
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,
     twoscale_model, rough_dielectric_model, BRDF_MODELS)
-from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, btdf, spectral, ndf_fit, models  # noqa: F401
+from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, field_lobe, roughness_scales, scale_split, twoscale_grid, nano_grid, twoscale_paraxial, twoscale_frame, twoscale_coherent, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, btdf, spectral, ndf_fit, models  # noqa: F401
 
-__all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + btdf.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__
+__all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + field_lobe.__all__ + roughness_scales.__all__ + scale_split.__all__ + twoscale_grid.__all__ + nano_grid.__all__ + twoscale_paraxial.__all__ + twoscale_frame.__all__ + twoscale_coherent.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + btdf.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__

@@ -95,7 +95,7 @@ def _microfacet_params(wavelengths_nm, *, alpha, roughness, alpha_y, ndf, ndf_sh
                        material, ior, fresnel, diffuse, kd, diffuse_sigma_deg, diffuse_roughness, tradeoff) -> dict:
     """Keyword arguments of :func:`waveoptics.brdf.brdf`; Fresnel inputs per wavelength (n_λ,)."""
     from .microfacet import fresnel_inputs
-    from .twoscale import Micro
+    from .roughness_scales import Micro
 
     if slope_table is not None:   # the NDF of a micro height field's slopes; α, α_y place the quadrature's nodes
         micro = Micro.from_slopes(slope_table)
@@ -122,7 +122,7 @@ def _microfacet_params(wavelengths_nm, *, alpha, roughness, alpha_y, ndf, ndf_sh
 def _ms_brdf(kw, material, ior, fresnel, backend):
     """The microfacet BRDF function with multiple-scattering compensation (:class:`waveoptics.MicrofacetBRDF`)."""
     from .protocol import MicrofacetBRDF
-    from .twoscale import Micro
+    from .roughness_scales import Micro
 
     if backend == "opencl":
         raise FieldError("{multiple_scattering} is evaluated with NumPy; use {backend} numpy", "multiple_scattering",
@@ -382,7 +382,7 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
     """
     from .pointwise import TwoScaleBRDF
     from .tabulated import TabulatedTwoScaleBRDF
-    from .twoscale import Micro, Nano
+    from .roughness_scales import Micro, Nano
 
     if (surface is None) == (nano is None):
         raise FieldError("give exactly one of {nano} and {surface} for the twoscale model", "nano", "surface")

@@ -6,7 +6,7 @@
     f = A(θ_d) f_mf(ω_i, ω_o) + f_diff(ω_i, ω_o) + f_diffuse(ω_i, ω_o),
 
 * coherent part: the microfacet specular term with F, times the coherent fraction A(θ_d) of each facet
-  (:meth:`waveoptics.brdf.Nano.coherent_amplitude2`: on a conductor 1 − E(θ_d), the complement of the light its
+  (:meth:`waveoptics.brdf.Nano.coherent_fraction`: on a conductor 1 − E(θ_d), the complement of the light its
   nano lobe scatters; on a dielectric the Debye-Waller factor exp(−g_rel(θ_d)); docs/physics.md §9);
 * diffuse substrate of dielectrics (closed form, as the microfacet model);
 * diffracted part: Walter et al.'s integral of the nano lobe carried by every facet in the facet's own frame,
@@ -56,7 +56,7 @@ from .sampling import _sampler, sample_normal
 from .ndf import _ndf
 from .shadowing import _shadowing
 from .facet import COS_LEVELS, RADIAL_BINS, NanoRadial, _local_pair, facet_basis, from_facet, to_facet, unit_nodes
-from .twoscale import check_series
+from .roughness_scales import check_series
 
 __all__ = ['QUADRATURE_NODES', 'RADIAL_BINS', 'COS_LEVELS', 'TwoScaleBRDF', 'unit_nodes', 'NanoRadial', 'facet_basis',
            'to_facet', 'from_facet']
@@ -117,7 +117,7 @@ class TwoScaleBRDF(TwoScaleParts):
                                                                              self.nodes // 2))
 
     def _check_series(self, lam):
-        """Refuse nano-roughness the truncated series cannot hold (:func:`waveoptics.brdf.twoscale.check_series`)."""
+        """Refuse nano-roughness the truncated series cannot hold (:func:`waveoptics.brdf.roughness_scales.check_series`)."""
         check_series(self.nano.model, lam)
 
     def _f_nano(self, wi, wo, lam):
@@ -155,7 +155,7 @@ class TwoScaleBRDF(TwoScaleParts):
             f_nano(ω_i, ω_o; λ): the PSD series lobe of the *diffraction* model (or Rayleigh-Rice's), with the
             Fresnel factor F(θ_d) this BRDF applies (1 with ``fresnel="one"``); 0 where either z ≤ 0 and without
             nano-roughness. Its albedo at incidence θ is F(θ)(1 − A(θ)) on a conductor, the light the facet's
-            coherent part gives up (:meth:`waveoptics.brdf.Nano.coherent_amplitude2`), and its own on a dielectric. The diffracted part of :meth:`eval` is Walter's
+            coherent part gives up (:meth:`waveoptics.brdf.Nano.coherent_fraction`), and its own on a dielectric. The diffracted part of :meth:`eval` is Walter's
             integral of this function over the micro NDF's facets (module doc).
 
         References

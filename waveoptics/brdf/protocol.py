@@ -42,7 +42,7 @@ from .ndf import ALPHA_MAX, _check_alpha, _ndf
 from .quadrature import directional_albedo
 from .sampling import pdf_reflected, sample_reflected
 from .shadowing import _shadowing
-from .twoscale import Micro
+from .roughness_scales import Micro
 
 __all__ = ['BRDFSample', 'BRDF', 'MicrofacetBRDF', 'TwoScaleParts', 'sample_cosine', 'pdf_cosine', 'lobe_choice',
            'check_uniform']
@@ -364,7 +364,7 @@ class TwoScaleParts(MicrofacetBRDF):
         if not self._rough:
             return np.ones_like(np.asarray(cos_d, dtype=float))
         # the lobe's light is weighted by the Fresnel factor this BRDF applies (none with fresnel="one")
-        return self.nano.coherent_amplitude2(cos_d, lam, self.diffraction,
+        return self.nano.coherent_fraction(cos_d, lam, self.diffraction,
                                              self.material if self.fresnel == "exact" else None)
 
     def _share(self, cos_d, lam):

@@ -6,7 +6,7 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
 
 * the coherent part A(θ_d) f_mf and the diffuse substrate are closed forms, evaluated exactly per pair (A, what
   the nano lobe leaves, from tables over θ_d of the nano statistics or of the height field's own lobe:
-  :meth:`waveoptics.brdf.Nano.coherent_amplitude2`);
+  :meth:`waveoptics.brdf.Nano.coherent_fraction`);
 * the diffracted part is computed by :func:`waveoptics.brdf.evaluate` on a direction grid at incidence angles
   θ_k (azimuth 0; each facet's nano lobe in its own frame for PSD statistics, docs/physics.md §7) and
   interpolated between them *relative to the specular direction*: at θ_i between θ_a and θ_b, an isotropic table

@@ -33,7 +33,7 @@ def scattered_fraction(nano: twoscale.Nano, cos_theta, wavelength_nm) -> np.ndar
     ----------
     .. [1] Davies 1954; Bennett & Porteus 1961 (TIS = F (1 − exp(−g))).
     """
-    return 1.0 - np.asarray(nano.coherent_amplitude2(cos_theta, wavelength_nm), dtype=float)
+    return 1.0 - np.asarray(nano.coherent_fraction(cos_theta, wavelength_nm), dtype=float)
 
 
 def lobe_width(alpha: float, cos_theta_i: float) -> float:

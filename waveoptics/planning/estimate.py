@@ -12,7 +12,8 @@ import math
 import numpy as np
 
 from .. import scatter
-from ..brdf import twoscale
+from ..brdf.field_lobe import FIELD_GRID_OVERSAMPLING
+from ..brdf.twoscale_paraxial import field_albedo_evaluations
 from ..materials import get_material
 from ..request import SimulationRequest, make_nano
 from ..scatter.grid import DirectionGrid
@@ -47,8 +48,8 @@ def simulation_time(req: SimulationRequest, *, sphere: bool = True, surface=None
     grid = DirectionGrid.hemisphere(req.resolution)
     # the coherent fraction: the field's lobe on a grid of λ/(3L) cells per wavelength and incidence
     per_incidence = sum(fft_solver_units(smp, wi, [DirectionGrid.hemisphere(int(np.ceil(
-        twoscale.FIELD_GRID_OVERSAMPLING * max(smp.extent) / (lam * 1e-9))))], [lam]) for lam in w)
-    coherent = twoscale.field_albedo_evaluations(micro, grid, wi, extra=n_eval - 1) * per_incidence
+        FIELD_GRID_OVERSAMPLING * max(smp.extent) / (lam * 1e-9))))], [lam]) for lam in w)
+    coherent = field_albedo_evaluations(micro, grid, wi, extra=n_eval - 1) * per_incidence
     return base + (n_eval * fft_solver_units(smp, wi, [grid], w) + coherent) * cm.fft_unit
 
 

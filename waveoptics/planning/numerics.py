@@ -14,7 +14,8 @@ import math
 import numpy as np
 
 from .. import scatter
-from ..brdf import twoscale
+from ..brdf.field_lobe import field_scattered_albedo
+from ..brdf.twoscale_paraxial import field_albedo_evaluations
 from ..errors import FieldError
 from ..runtime import get_runtime
 from ..scatter.grid import DirectionGrid
@@ -121,7 +122,7 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
         # the height field's coherent fraction is what its own lobe leaves: one fft lobe on a grid of λ/(3L) cells
         # per wavelength and incidence (the macro ones, and the facet table's nodes under a micro lobe)
         theta0 = e.light.directions_deg[0][0]
-        t_char = _best(lambda: twoscale.field_scattered_albedo(e.hf, theta0, e.lam_min), 2)
+        t_char = _best(lambda: field_scattered_albedo(e.hf, theta0, e.lam_min), 2)
         hf_info.update(smp=smp, direct_term=direct_term, no_direct=no_direct)
         e.metrics.update(height_field_samples=smp.size, opencl=direct_term is not None, direct_term_s=direct_term,
                          coherent_fraction_s=t_char)
@@ -137,7 +138,7 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
         if not hf_solvers:
             costs[(dname, e.solver)] = base
             continue
-        n_field = twoscale.field_albedo_evaluations(
+        n_field = field_albedo_evaluations(
             e.micro, grids[0], direction_from_angles(*np.asarray(e.light.directions_deg, dtype=float).T),
             extra=n_eval - len(e.light.directions_deg))
         base += n_field * n_w * t_char

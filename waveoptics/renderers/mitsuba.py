@@ -129,6 +129,35 @@ def _rows(v, width=3) -> np.ndarray:
     return a.reshape(1, width) if a.ndim == 1 else a.reshape(width, -1).T
 
 
+def _plugin_inputs(si, other, width, spectral: bool, scalar: bool):
+    """(wi (n, 3), other (n, width), wavelengths (n, 4) or None) of a Mitsuba interaction, broadcast to a common n
+    (a JIT variable of width 1 is a constant)."""
+    wi, o = _rows(si.wi), _rows(other, width)
+    lam = None
+    if spectral:
+        lam = np.array(si.wavelengths, dtype=float)
+        lam = lam.reshape(1, -1) if scalar else lam.reshape(4, -1).T
+    n = max(wi.shape[0], o.shape[0], 1 if lam is None else lam.shape[0])
+    wi, o = np.broadcast_to(wi, (n, 3)), np.broadcast_to(o, (n, width))
+    return wi, o, None if lam is None else np.broadcast_to(lam, (n, lam.shape[1]))
+
+
+def _spectral_sample(model, wi, lam, u):
+    """(sample, weight f cosθ_o / pdf at each of the 4 wavelengths (n, 4)) of a spectral variant: ω_o drawn at the
+    hero wavelength lam[:, 0]."""
+    s = model.sample(wi, lam[:, 0], u)
+    wo_ok = np.where((s.pdf > 0)[:, None], s.wo, [0.0, 0.0, 1.0])
+    f = model.eval(wi[:, None, :], wo_ok[:, None, :], lam)
+    weight = np.where((s.pdf > 0)[:, None], f * (wo_ok[:, 2] / np.where(s.pdf > 0, s.pdf, 1.0))[:, None], 0.0)
+    return s, weight
+
+
+def _rgb_sample(model, wi, u):
+    """(sample, its RGB weight) of an RGB variant."""
+    s = model.sample_rgb(wi, u)
+    return s, s.weight
+
+
 def _bsdf_class(mi):
     """The plugin class for the variant set in *mi* (``mi.BSDF`` depends on the variant)."""
     import drjit as dr
@@ -165,16 +194,7 @@ def _bsdf_class(mi):
         # -- helpers -------------------------------------------------------------------------------------
         @staticmethod
         def _inputs(si, other, width):
-            """(wi (n, 3), other (n, width), wavelengths (n, 4) or None), broadcast to a common n (a JIT
-            variable of width 1 is a constant)."""
-            wi, o = _rows(si.wi), _rows(other, width)
-            lam = None
-            if spectral:
-                lam = np.array(si.wavelengths, dtype=float)
-                lam = lam.reshape(1, -1) if scalar else lam.reshape(4, -1).T
-            n = max(wi.shape[0], o.shape[0], 1 if lam is None else lam.shape[0])
-            wi, o = np.broadcast_to(wi, (n, 3)), np.broadcast_to(o, (n, width))
-            return wi, o, None if lam is None else np.broadcast_to(lam, (n, lam.shape[1]))
+            return _plugin_inputs(si, other, width, spectral, scalar)
 
         def _f(self, wi, wo, lam):
             """f (n, channels) in 1/sr."""
@@ -199,15 +219,7 @@ def _bsdf_class(mi):
             bs = dr.zeros(mi.BSDFSample3f) if scalar else dr.zeros(mi.BSDFSample3f, n)
             if not self._enabled(ctx):
                 return bs, spectrum(np.zeros((n, 4 if spectral else 3)))
-            if spectral:
-                s = self.model.sample(wi, lam[:, 0], u)
-                wo_ok = np.where((s.pdf > 0)[:, None], s.wo, [0.0, 0.0, 1.0])
-                f = self.model.eval(wi[:, None, :], wo_ok[:, None, :], lam)
-                weight = np.where((s.pdf > 0)[:, None],
-                                  f * (wo_ok[:, 2] / np.where(s.pdf > 0, s.pdf, 1.0))[:, None], 0.0)
-            else:
-                s = self.model.sample_rgb(wi, u)
-                weight = s.weight
+            s, weight = _spectral_sample(self.model, wi, lam, u) if spectral else _rgb_sample(self.model, wi, u)
             bs.wo = vectors(s.wo)
             bs.pdf = floats(s.pdf)
             bs.eta = 1.0

@@ -3,7 +3,8 @@
 Files: grid (the direction-cosine grid), patch (window and detrend of a height-field patch), models (the
 diffraction models: Kirchhoff, GHS, RGHS, OHS, ROHS), kirchhoff (the Kirchhoff
 factor and BRDF of a field), direct (the direct sum, NumPy and OpenCL), fft (the chirp-z solver), series (the
-Beckmann-Spizzichino series from a PSD), band (the propagating band and the relevant roughness),
+Beckmann-Spizzichino series from a PSD), band (the propagating band and the relevant roughness), band_energy
+(the band lobe's albedo and coherent fraction),
 perturbation (Rayleigh-Rice
 with the polarization factor Q), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
 Rayleigh-Rice for 1-D Gaussian surfaces), solvers (the :data:`SOLVERS` registry, :func:`brdf`,
@@ -18,9 +19,10 @@ from .direct import (VECTOR_WIDTH, TERMS_PER_LAUNCH, PhaseCoefficients, phase_co
     launch_pairs, exact_phase_args, kirchhoff_U_cl)
 from .fft import (FFT_TOL, FFT_BAND_X, FFT_MAX_ORDER, fft_plan, field_fft)
 from .series import (M_MAX, SeriesTables, series_tables, SeriesSum, series_sum, poisson_weights, roughness_g,
-    series_terms, coherent_fraction, obliquity, scattered_lobe, rayleigh_rice)
+    series_terms, debye_waller, obliquity, scattered_lobe, rayleigh_rice)
+from .band_energy import (TANGENT_PLANE_MAX_DEG, is_conductor, ALBEDO_THETAS_DEG, RR_THETAS_DEG, rr_interp,
+    polar_albedo, BandAlbedos)
 from .band import (band_arc, relevant_variance, relevant_variance_of_field, beyond_band_fraction, SIN_NODES,
-    TANGENT_PLANE_MAX_DEG, is_conductor, ALBEDO_THETAS_DEG, RR_THETAS_DEG, rr_interp, polar_albedo,
     relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series)
 from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, scattering_angles, q_factors, Q,
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
@@ -32,6 +34,6 @@ from .solvers import (ENERGY_TOL, DiffractionWarning, Solver, SOLVERS, BACKENDS,
     sampling_warnings, brdf, ScatterResult, memory_estimate, check_request_memory, scatter)
 from .footprint import (footprint_scatter, coherence_centres, incoherent_sum)
 from .output import (plot_scatter, SCATTER_FILES, write_scatter, brdf_exr_header)
-from . import grid, patch, models, kirchhoff, direct, fft, series, band, perturbation, mom, models1d, solvers, footprint, output  # noqa: F401
+from . import grid, patch, models, kirchhoff, direct, fft, series, band_energy, band, perturbation, mom, models1d, solvers, footprint, output  # noqa: F401
 
-__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + band.__all__ + perturbation.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + output.__all__
+__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + output.__all__

@@ -104,7 +104,9 @@ def coherent_amplitude(smp: Samples, wi, wavelength_nm, diffraction="kirchhoff")
     Gaussian heights. The spatial average over the patch replaces the ensemble average (ergodicity); the w²
     weights make exp(i v_z h) − χ̂ orthogonal to w, so that the coherent and the scattered lobes add without a
     cross term in the albedo. One patch's |χ̂|² is biased high by about (1 − |χ|²) · A_c / A_w (A_c the
-    correlation area); averaging χ̂ over realizations removes that bias.
+    correlation area); averaging χ̂ over realizations removes that bias. This is the complex amplitude; the power
+    fractions are :func:`waveoptics.scatter.debye_waller` (exp(−g) of a height distribution's σ) and
+    :meth:`waveoptics.brdf.Nano.coherent_fraction` (the two-scale model's A).
 
     References
     ----------

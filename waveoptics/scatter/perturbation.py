@@ -181,7 +181,7 @@ def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization
     """
     import math
 
-    from .band import polar_albedo
+    from .band_energy import polar_albedo
     from .series import rayleigh_rice
 
     lam = float(wavelength_nm)

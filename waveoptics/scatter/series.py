@@ -49,7 +49,7 @@ from scipy import special, stats
 from ..surfaces.psd import PSDModel
 from .models import K_kirchhoff, get_model
 
-__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'SeriesSum', 'series_sum', 'poisson_weights', 'roughness_g', 'series_terms', 'coherent_fraction', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
+__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'SeriesSum', 'series_sum', 'poisson_weights', 'roughness_g', 'series_terms', 'debye_waller', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
 
 #: most terms of the series (:func:`scattered_lobe`)
 M_MAX = 48
@@ -200,8 +200,11 @@ def series_terms(g, m_max: int = M_MAX) -> int:
     return int(min(m_max, math.ceil(g + 8 * math.sqrt(g) + 10)))
 
 
-def coherent_fraction(cos_theta_i, wavelength_nm, sigma):
-    """exp(−g) with g = (4πσ cosθ_i/λ)²: the specular (coherent) fraction of the reflected light.
+def debye_waller(cos_theta_i, wavelength_nm, sigma):
+    """exp(−g) with g = (4πσ cosθ_i/λ)²: the Debye-Waller factor of the whole rms height σ, the coherent fraction
+    of the reflected light of a surface with Gaussian heights whose roughness all lies in the propagating band.
+    The band-limited factor is :meth:`waveoptics.scatter.BandSeries.debye_waller`; the two-scale model's coherent
+    fraction is :meth:`waveoptics.brdf.Nano.coherent_fraction`.
 
     References
     ----------
@@ -241,7 +244,7 @@ def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int 
     band_limited : bool
         True (default): the series of the roughness inside the propagating band, σ_rel
         (:class:`waveoptics.scatter.band.BandSeries`, docs/physics.md §9); the two-scale model's coherent
-        fraction (:meth:`waveoptics.brdf.Nano.coherent_amplitude2`) is the complement of the light this lobe
+        fraction (:meth:`waveoptics.brdf.Nano.coherent_fraction`) is the complement of the light this lobe
         scatters, so the two add up to the reflected light.
         False: the classical series with the full σ (Beckmann & Spizzichino), whose coherent reduction also
         removes the variance in evanescent frequencies, which cannot scatter.

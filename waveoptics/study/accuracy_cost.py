@@ -358,6 +358,27 @@ def reference_setting(settings, cfg: Config, solver: str = "fft", precision: str
     return Setting(solver, res, de, n, precision)
 
 
+def _reference_run(cfg: Config, ref_s: Setting, wl_ref, runtime):
+    """(the reference's runs, their mean, its row of :func:`study`): one run per realization for a random surface (settings
+    are compared with the mean over the same seeds), with the relative standard error of that ensemble mean, its own
+    speckle noise (``noise_rel_l2``)."""
+    if cfg.random:
+        ref_runs = [_run(cfg, ref_s, wl_ref, cfg.seed + r, runtime, realizations=1)
+                    for r in range(ref_s.realizations)]
+    else:
+        ref_runs = [_run(cfg, ref_s, wl_ref, cfg.seed, runtime)]
+    ref = _mean(ref_runs, cfg.illuminant)
+    ref_row = {**dataclasses.asdict(ref_s), "wavelengths": int(ref.wavelengths_nm.size),
+               "wavelengths_nm": ref.wavelengths_nm, "time_s": ref.time_s, "albedo": ref.albedo,
+               "rgb": ref.rgb, "warnings": ref.warnings, "noise_rel_l2": None}
+    if len(ref_runs) >= 2:
+        E = np.stack([r.energy for r in ref_runs])
+        var = np.var(E, axis=0, ddof=1) / len(ref_runs)
+        norm = float(np.sqrt(np.sum(ref.energy ** 2)))
+        ref_row["noise_rel_l2"] = float(np.sqrt(np.sum(var)) / norm) if norm > 0 else None
+    return ref_runs, ref, ref_row
+
+
 def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float | None = None,
           target_error: float | None = None, metric: str = "error_rel_l2", reference: Setting | None = None,
           reference_solver: str = "fft", runtime=None, progress=None) -> dict:
@@ -423,21 +444,7 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
 
     _warm_up(settings + [ref_s], runtime)
     wl_ref = wavelengths(ref_s.colour_de)
-    if cfg.random:   # one run per realization: settings are compared with the mean over the same seeds
-        ref_runs = [_run(cfg, ref_s, wl_ref, cfg.seed + r, runtime, realizations=1)
-                    for r in range(ref_s.realizations)]
-    else:
-        ref_runs = [_run(cfg, ref_s, wl_ref, cfg.seed, runtime)]
-    ref = _mean(ref_runs, cfg.illuminant)
-    ref_row = {**dataclasses.asdict(ref_s), "wavelengths": int(ref.wavelengths_nm.size),
-               "wavelengths_nm": ref.wavelengths_nm, "time_s": ref.time_s, "albedo": ref.albedo,
-               "rgb": ref.rgb, "warnings": ref.warnings, "noise_rel_l2": None}
-    if len(ref_runs) >= 2:
-        # standard error of the ensemble mean, relative: its own speckle noise
-        E = np.stack([r.energy for r in ref_runs])
-        var = np.var(E, axis=0, ddof=1) / len(ref_runs)
-        norm = float(np.sqrt(np.sum(ref.energy ** 2)))
-        ref_row["noise_rel_l2"] = float(np.sqrt(np.sum(var)) / norm) if norm > 0 else None
+    ref_runs, ref, ref_row = _reference_run(cfg, ref_s, wl_ref, runtime)
     if progress is not None:
         progress(1)
 

@@ -1,0 +1,307 @@
+"""The facet-frame route: Walter's integral over facet normals of the nano lobe in each facet's own frame, read from
+tables over local incidence (:func:`facet_frame_diffraction`), and the choice between it and the paraxial route
+(:func:`facet_route`).
+
+References
+----------
+.. [1] B. Walter, S. Marschner, H. Li, K. Torrance, EGSR 2007, eq. (14) (a BRDF carried by each facet).
+.. [2] E. Veach, PhD thesis, Stanford 1997, §9.2 (balance heuristic).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .. import scatter
+from ..errors import FieldError, unknown
+from ..scatter.grid import DirectionGrid
+from .nano_grid import NARROW_CELLS
+from .roughness_scales import Micro, Nano, check_series
+from .twoscale_grid import sharp_micro_lobe
+
+__all__ = ['FACET_THETAS_DEG', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
+           'FACET_ROUTES', 'facet_route', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction']
+
+
+#: local incidences θ' (degrees) at which the facet-frame route tabulates the nano lobe on the direction grid: the
+#: nano lobe of a facet at any incidence is read between the two nodes around it, relative to the mirror direction
+FACET_THETAS_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 78, 81, 84, 86, 88])
+#: facet normals of the grid route's quadrature (:func:`facet_nodes`): (drawn through the micro NDF's sampler,
+#: shared by all cells; drawn about each cell's half-vector through the nano lobe's radial law), for a micro lobe
+#: narrower than :data:`FACET_NODE_SPLIT` nano lobe widths, and for a wider one. Measured per cell against the
+#: pointwise form (ABC σ = 10 nm, B = 2 µm, C = 2.6, 550 nm, Beckmann, 96²-128² grids): α = 0.05 at 30° with
+#: (64, 16) ≤ 2.7 % (32 + 16: 4.8 %); α = 0.3 at 60° with (64, 64) ≤ 2.1 % (64 + 16: 6.8 %, 32 + 64: 4.5 %)
+FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (64, 64)
+#: ratio 2α / w_n (the micro lobe's spread of mirror directions over the nano lobe's width λ/(π ℓ)) below which
+#: the grid route takes :data:`FACET_NODES_NARROW`
+FACET_NODE_SPLIT = 0.5
+#: wavelength (nm) of the nano lobe's radial law that places the grid route's half-vector normals and of w_n in
+#: :func:`facet_nodes`: one for every wavelength, so that each wavelength's lobe does not depend on the others asked
+FACET_REFERENCE_NM = 550.0
+#: evaluate's facet integration: ``frame`` (Walter's integral, each facet's nano lobe in its own frame),
+#: ``paraxial`` (the nano lobe at the macro incidence shifted to every facet's mirror direction: an FFT
+#: convolution), ``auto`` (frame where :func:`facet_route` allows it)
+FACET_ROUTES = ("auto", "frame", "paraxial")
+
+
+def facet_route(micro: Micro, nano: Nano | None, grid: DirectionGrid, wavelengths_nm, facet: str = "auto") -> str:
+    """``frame`` or ``paraxial``: how :func:`waveoptics.brdf.evaluate` carries the nano lobe by the facets.
+
+    ``auto`` takes ``frame`` for PSD statistics whose nano lobe (width λ_min/(π ℓ)) is wider than
+    :data:`waveoptics.brdf.NARROW_CELLS` grid cells; else ``paraxial``: height fields (their lobe is not tabulated over local
+    incidence); a micro lobe narrower than a cell (its facets tilt by less than a cell, where the shift and the
+    turn of their lobes agree); nano lobes the grid cannot resolve, which :func:`waveoptics.brdf.nano_lobe` deposits with their
+    energy, where a facet's lobe lies within a cell or two of its mirror direction.
+    """
+    if facet not in FACET_ROUTES:
+        raise unknown("facet", facet, FACET_ROUTES)
+    if nano is None or nano.model is None:
+        if facet == "frame" and nano is not None:
+            raise FieldError("facet 'frame' needs nano statistics (a PSD model); a height field's lobe is "
+                             "carried paraxially", "facet")
+        return "paraxial"
+    if facet != "auto":
+        return facet
+    if sharp_micro_lobe(micro, grid):
+        return "paraxial"
+    wn = float(np.min(wavelengths_nm)) * 1e-9 / (np.pi * nano.model.length_scale)
+    return "paraxial" if wn < NARROW_CELLS * max(grid.du, grid.dv) else "frame"
+
+
+def facet_nodes(micro: Micro, nano: Nano, wavelengths_nm) -> tuple[int, int]:
+    """(NDF normals, half-vector normals per cell) of the grid route's quadrature: :data:`FACET_NODES_NARROW` when
+    the micro lobe's mirror directions spread over less than :data:`FACET_NODE_SPLIT` nano lobe widths (2α < 0.5
+    λ/(π ℓ) at λ = :data:`FACET_REFERENCE_NM`), where the NDF's normals carry the integral, else
+    :data:`FACET_NODES_WIDE` (*wavelengths_nm* is not used: every wavelength gets the same nodes)."""
+    kw = micro.kw()
+    a = max(kw["alpha"], kw["alpha_y"] or 0.0)
+    wn = FACET_REFERENCE_NM * 1e-9 / (np.pi * nano.model.length_scale)
+    return FACET_NODES_NARROW if 2 * a < FACET_NODE_SPLIT * wn else FACET_NODES_WIDE
+
+
+def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
+    """g = f_nano cos θ_o of the nano lobe at local incidence :data:`FACET_THETAS_DEG` [k] (azimuth 0) at the cell
+    centres of *grid*, (n_v, n_u, n_λ) float32: F = 1 for the Kirchhoff family (its F(θ_d) is frame-independent
+    and applied afterwards), the Rayleigh-Rice lobe with its own factor Q of *material* and *polarization* (for s or
+    p light Q is taken relative to the facet's own plane of incidence, not the macro one: exact for unpolarized
+    light and for facets tilted in the plane of incidence).
+
+    g is finite up to the horizon (f grows like 1/cos θ_o there); cells beyond the rim of the disc hold g of the
+    rim direction on their radius, so that bilinear reads within a cell of the rim are not pulled towards 0.
+    Cached on *nano*."""
+    cache = nano.__dict__.setdefault("_cache", {})
+    key = ("facet-table", k, tuple(float(x) for x in w), grid.n_u, grid.n_v, tuple(grid.u_range),
+           tuple(grid.v_range), dm.name, getattr(material, "name", None), polarization)
+    if key not in cache:
+        th = np.radians(FACET_THETAS_DEG[k])
+        wi = np.array([np.sin(th), 0.0, np.cos(th)])
+        u, v = _centres(grid)
+        # the lobe of an isotropic PSD is even in v: rows from the middle up, mirrored onto the rows below
+        half = slice(grid.n_v // 2 - 1, grid.n_v) if _v_symmetric(grid) else slice(0, grid.n_v)
+        u, v = u[half], v[half]
+        r = np.hypot(u, v)
+        shrink = np.where(r > RIM_RADIUS, RIM_RADIUS / np.where(r > 0, r, 1.0), 1.0)
+        u, v = u * shrink, v * shrink
+        wo = np.stack([u, v, np.sqrt(np.maximum(1.0 - u * u - v * v, 0.0))], axis=-1)
+        out = np.empty((grid.n_v, grid.n_u, len(w)), dtype=np.float32)
+        for i, lam in enumerate(w):
+            if dm.perturbative:
+                f = scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization)
+            else:
+                check_series(nano.model, lam)
+                f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
+                # beyond the tangent plane's validity the lobe carries its continued albedo (docs/physics.md §9)
+                f = f * float(np.ravel(nano.lobe_energy_scale(wi[2], lam, dm, material, polarization))[0])
+            out[half, :, i] = f * wo[..., 2]
+        if half.start > 0:
+            out[:half.start] = out[grid.n_v - 1:grid.n_v - 1 - half.start:-1]
+        cache[key] = out
+    return cache[key]
+
+
+def _v_symmetric(grid: DirectionGrid) -> bool:
+    """Whether the rows of *grid* are symmetric about v = 0 (row i and n_v − 1 − i at opposite v)."""
+    return grid.n_v % 2 == 0 and np.isclose(grid.v_range[0], -grid.v_range[1])
+
+
+def _centres(grid: DirectionGrid):
+    """(u, v) of the cell centres of *grid*, (n_v, n_u) each."""
+    u = grid.u_range[0] + (np.arange(grid.n_u) + 0.5) * grid.du
+    v = grid.v_range[0] + (np.arange(grid.n_v) + 0.5) * grid.dv
+    return np.meshgrid(u, v)
+
+
+
+#: radius of the direction-cosine disc at which :func:`_facet_table` evaluates the cells beyond its rim
+RIM_RADIUS = 1.0 - 1e-6
+
+
+def _facet_stack(nano: Nano, w, grid: DirectionGrid, dm, material, polarization):
+    """:func:`_facet_table` at every :data:`FACET_THETAS_DEG` node, stacked (n_θ, n_v, n_u, n_λ); cached."""
+    cache = nano.__dict__.setdefault("_cache", {})
+    key = ("facet-stack", tuple(float(x) for x in w), grid.n_u, grid.n_v, tuple(grid.u_range), tuple(grid.v_range),
+           dm.name, getattr(material, "name", None), polarization)
+    if key not in cache:
+        cache[key] = np.stack([_facet_table(nano, k, w, grid, dm, material, polarization)
+                               for k in range(FACET_THETAS_DEG.size)])
+    return cache[key]
+
+
+def _facet_read(stack, grid: DirectionGrid, theta, lo):
+    """The tabulated g = f_nano cos θ_o (n, n_λ) at local incidences *theta* (rad, (n,) or scalar) and local
+    directions *lo* (n, 3) whose incidence lies in the local x–z plane: the two nodes θ_k around θ, each read at
+    *lo* turned about the local y axis by θ − θ_k (which takes θ's mirror direction to θ_k's; the lobe of a tilted
+    facet is a turned lobe), blended linearly in θ; a node whose turned direction falls below its horizon drops
+    out of the blend."""
+    nodes = np.radians(FACET_THETAS_DEG)
+    theta = np.broadcast_to(np.asarray(theta, dtype=float), lo.shape[:1])
+    f = np.interp(theta, nodes, np.arange(nodes.size))
+    a = np.minimum(np.floor(f).astype(int), nodes.size - 1)
+    b = np.minimum(a + 1, nodes.size - 1)
+    wb = f - a
+    n_v, n_u = stack.shape[1:3]
+    flat = stack.reshape(-1, stack.shape[-1])
+    idx, wts = [], []
+    den = np.zeros(lo.shape[0])
+    for k, wk in ((a, 1.0 - wb), (b, wb)):
+        beta = theta - nodes[k]
+        cb, sb = np.cos(beta), np.sin(beta)
+        u = lo[:, 0] * cb + lo[:, 2] * sb
+        z = -lo[:, 0] * sb + lo[:, 2] * cb
+        k0, j0, av, au, ok = grid.bilinear(u, lo[:, 1])
+        wk = np.where(ok & (z > 0), wk, 0.0)
+        i00 = (k * n_v + k0) * n_u + j0
+        idx += [i00, i00 + 1, i00 + n_u, i00 + n_u + 1]
+        wts += [wk * (1 - av) * (1 - au), wk * (1 - av) * au, wk * av * (1 - au), wk * av * au]
+        den += wk
+    val = np.einsum("cj,cjl->cl", np.stack(wts, axis=1).astype(np.float32), flat[np.stack(idx, axis=1)])
+    return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
+
+
+def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
+                            diffraction="kirchhoff", polarization: str = "unpolarized",
+                            table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None):
+    """The diffracted part on *grid*: Walter's integral over facet normals m of the nano lobe in each facet's
+    frame (docs/physics.md §7),
+
+        f_diff(ω_i, ω_o) = ∫ |ω_i·m| |ω_o·m| / (|ω_i·n| |ω_o·n|) f_nano(ω_i^m, ω_o^m) G(ω_i, ω_o, m) D(m) dm,
+
+    by the balance heuristic of two fixed node sets, as :class:`waveoptics.brdf.TwoScaleBRDF` does: N_a Sobol
+    normals through the micro NDF's sampler (shared by all cells) and, per cell, N_b normals about its half-vector
+    drawn through the nano lobe's radial law (they hold a heavy-tailed NDF's far facets and a nano lobe narrower
+    than the micro lobe); (N_a, N_b) = *nodes* or :func:`facet_nodes`. Each facet's nano lobe is read from tables
+    over local incidence (:data:`FACET_THETAS_DEG`, :func:`_facet_read`) on *table_grid* (default *grid*, a
+    hemisphere); F(θ_d), the same in every facet's frame, multiplies the sum.
+
+    Returns
+    -------
+    diffraction : ndarray (n_λ, n_v, n_u), 1/sr
+    scattered : ndarray (n_λ,)
+        The light the facets' lobes scatter, F(θ_m) (1 − A(θ_m)) per facet on a conductor and the lobe's own
+        absolute albedo on a dielectric (:meth:`waveoptics.brdf.Nano.scattered_share`), averaged over the facets the light
+        sees (the NDF nodes, weights D (ω_i·m) G1 / p, normalized by their sum, which is 1 in expectation): the
+        diffracted part's albedo falls short of it by the light masked on the way out or sent below the macro
+        horizon.
+    reflected : ndarray (n_λ,)
+        F(θ_m) averaged the same way: the light the facets reflect, coherent and diffracted together, before
+        masking on the way out.
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, eq. (14) (a BRDF carried by each facet); §5.3 (sampling normals).
+    .. [2] E. Veach, PhD thesis, 1997, §9.2 (balance heuristic of several techniques).
+    """
+    from .facet import NanoRadial, facet_basis, unit_nodes
+    from .ndf import _ndf
+    from .sampling import _sampler, pdf_normal, sample_normal
+    from .shadowing import _shadowing
+
+    w = np.asarray(wavelengths_nm, dtype=float)
+    dm = scatter.get_model(diffraction, perturbative=True)
+    kw = micro.kw()
+    ndf, ax = kw["ndf"], kw["alpha"]
+    ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
+    c, spec = kw["ndf_shape"], _ndf(kw["ndf"])
+    na, nb = nodes or facet_nodes(micro, nano, w)
+    m_a = sample_normal(np.broadcast_to(wi, (na, 3)), unit_nodes(na), ndf=ndf, ax=ax, ay=ay, c=c)
+    inside = grid.inside
+    wo = grid.directions()[inside]
+    h = wi + wo
+    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    cos_d = np.maximum(h @ wi, 1e-6)
+    rad = NanoRadial(nano.model, FACET_REFERENCE_NM, dm, nb)
+    level = rad.level(cos_d)
+    Li, Lo = float(spec.Lambda(wi, ax, ay, c)), spec.Lambda(wo, ax, ay, c)
+    gfn, _ = _shadowing(micro.shadowing)
+    visible = _sampler(ndf).visible
+    stack = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
+    out = np.zeros((wo.shape[0], w.size))
+
+    tgrid = table_grid or grid
+
+    def add(m, valid):
+        """Add the nodes m (3,) (an NDF node, shared by all cells) or (n_cells, 3) (one half-vector node per
+        cell), weighted by the balance heuristic."""
+        om = wo @ m if m.ndim == 1 else np.sum(wo * m, axis=-1)
+        im = m @ wi
+        D = spec.D(m, ax, ay, c)
+        pa = np.where(im > 0, D * im / (1.0 + Li), 0.0) / wi[2] if visible else D * m[..., 2]
+        mh = np.clip(h @ m if m.ndim == 1 else np.sum(m * h, axis=-1), 0.0, 1.0)
+        pb = np.where(mh > 0, rad.pdf_r(level, 2 * cos_d * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
+                      * 4 * cos_d ** 2 * mh, 0.0)
+        den = na * pa + nb * pb
+        ok = valid & (im > 0) & (om > 0) & (den > 0) & (D > 0)
+        if not ok.any():
+            return
+        wok = wo[ok]
+        Lok = Lo[ok]
+        Lik = np.full(Lok.shape, Li)
+        mk = np.broadcast_to(m, wok.shape) if m.ndim == 1 else m[ok]
+        G = gfn(np.broadcast_to(wi, wok.shape), wok, mk, lambda d: Lok if d is wok else Lik)
+        weight = (im * D if m.ndim == 1 else (im * D)[ok]) * G / (wi[2] * wok[:, 2] * den[ok])   # × |ω_o·m| f_nano
+        t, b = facet_basis(mk if m.ndim > 1 else m)
+        lx, ly = np.sum(t * wi, axis=-1), np.sum(b * wi, axis=-1)
+        r = np.hypot(lx, ly)
+        cp, sp = np.where(r > 0, lx / np.where(r > 0, r, 1), 1.0), np.where(r > 0, ly / np.where(r > 0, r, 1), 0.0)
+        ux, uy = np.sum(wok * t, axis=-1), np.sum(wok * b, axis=-1)   # turned so that ω_i^m lies in x–z
+        lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, om[ok]], axis=-1)
+        theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
+        out[ok] += weight[:, None] * _facet_read(stack, tgrid, theta, lo)
+
+    for j in range(na):
+        add(m_a[j], np.ones(wo.shape[0], bool))
+    radii = rad.node_radii[level]                        # (n_cells, n_b)
+    phis = 2 * np.pi * unit_nodes(nb)[:, 1]
+    e1, e2 = facet_basis(h)
+    for k in range(nb):
+        s_k = radii[:, k] / (2 * cos_d)                   # a tilt s from h sends ω_i to q = 2k cosθ_d s
+        ok = s_k < 1
+        s_k = np.where(ok, s_k, 0.0)
+        m = ((s_k * np.cos(phis[k]))[:, None] * e1 + (s_k * np.sin(phis[k]))[:, None] * e2
+             + np.sqrt(1 - s_k ** 2)[:, None] * h)
+        add(m, ok)
+    diffraction = np.zeros((w.size, grid.n_v, grid.n_u))
+    im_a = m_a @ wi
+    p_a = pdf_normal(np.broadcast_to(wi, (na, 3)), m_a, ndf=ndf, ax=ax, ay=ay, c=c)
+    node_w = np.where((im_a > 0) & (p_a > 0), im_a * spec.D(m_a, ax, ay, c)
+                      / (wi[2] * na * np.where(p_a > 0, p_a, 1.0)), 0.0)
+    mirror = 2 * im_a[:, None] * m_a - wi
+    scattered, reflected = np.zeros(w.size), np.zeros(w.size)
+    for i, lam in enumerate(w):
+        if dm.perturbative:
+            Fc = np.ones(wo.shape[0])
+        else:
+            Fc = F.at(np.broadcast_to(wi, wo.shape), wo, lam) if hasattr(F, "at") else F(np.clip(h @ wi, 0, 1), lam)
+        diffraction[i][inside] = out[:, i] * Fc
+        Fm = (F.at(np.broadcast_to(wi, (na, 3)), mirror, lam) if hasattr(F, "at")
+              else F(np.clip(im_a, 0.0, 1.0), lam)) * np.ones(na)
+        # per facet: F (1 − A) on a conductor, the lobe's own absolute albedo on a dielectric
+        share = np.asarray(nano.scattered_share(np.clip(im_a, 0.0, 1.0), lam, dm, material, polarization))
+        lost = Fm * share if scatter.is_conductor(material) else share * np.ones(na)
+        # Σ node_w G1 estimates ∫ G1 (ω_i·m) D dm / cos θ_i = 1 (Smith); normalized by it, so that near grazing
+        # incidence, where few NDF nodes face the light, the facets' share is not over-counted
+        total_w = float(np.sum(node_w))
+        scattered[i] = float(np.sum(node_w * lost) / total_w) if total_w > 0 else 0.0
+        reflected[i] = float(np.sum(node_w * Fm) / total_w) if total_w > 0 else 0.0
+    return diffraction, scattered, reflected
+
+
