@@ -169,3 +169,58 @@ def test_namespaces_are_explicit(path):
     stars = [n.lineno for n in ast.walk(ast.parse(path.read_text()))
              if isinstance(n, ast.ImportFrom) and any(a.name == "*" for a in n.names)]
     assert not stars, f"{_rel(path)}: star imports on lines {stars}"
+
+
+def _package_modules_by_short_name():
+    short = {}
+    for p in MODULES:
+        if p.name != "__init__.py":
+            short.setdefault(p.stem, []).append(p)
+    return {k: v[0] for k, v in short.items() if len(v) == 1}
+
+
+@pytest.mark.parametrize("path", MODULES, ids=_rel)
+def test_no_private_names_cross_modules(path):
+    """A name with a leading underscore is its module's own: another module neither imports it (``from m import
+    _x``) nor reaches for it (``m._x``); a helper two modules share gets a public name in the lower one."""
+    text = path.read_text()
+    imported = [a.name for n in ast.walk(ast.parse(text)) if isinstance(n, ast.ImportFrom)
+                for a in n.names if a.name.startswith("_") and not a.name.startswith("__")]
+    modules = _package_modules_by_short_name()
+    reached = [m.group(0) for m in re.finditer(r"(?<!\w)([a-z]\w*)\._([a-zA-Z]\w*)\b", text)
+               if m.group(1) in modules and modules[m.group(1)] != path]
+    assert not imported and not reached, f"{_rel(path)}: private names of other modules: {imported + reached}"
+
+
+def _sibling_imports() -> dict:
+    """module → the modules of its own sub-package it imports (at the top or inside functions)."""
+    graph = {}
+    for p in MODULES:
+        if p.name == "__init__.py" or p.parent == PKG:
+            continue
+        name = _module_name(p)
+        package = name.rsplit(".", 1)[0]
+        graph[name] = {m for m, _ in waveoptics_imports(p) if m.rsplit(".", 1)[0] == package and m != name
+                       and (PKG / (m.replace(".", "/") + ".py")).exists()}
+    return graph
+
+
+def test_no_import_cycles_inside_a_sub_package():
+    """Inside a sub-package the modules form layers too: no cycle, not even one hidden by a function-level import
+    (a higher module that a lower one needs registers itself instead, as metamers and thinfilm do)."""
+    graph = _sibling_imports()
+    state, cycles = {}, []
+
+    def visit(v, path):
+        state[v] = "open"
+        for w in sorted(graph.get(v, ())):
+            if state.get(w) == "open":
+                cycles.append(path[path.index(w):] + [w])
+            elif w not in state:
+                visit(w, path + [w])
+        state[v] = "done"
+
+    for v in sorted(graph):
+        if v not in state:
+            visit(v, [v])
+    assert not cycles, f"import cycles inside sub-packages: {cycles}"

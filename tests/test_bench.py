@@ -36,7 +36,7 @@ def problem():
     mask = np.ones_like(h, bool)
     mask[4:7, 5:20] = False
     smp = scatter.samples(HeightField(h, 125e-9, 110e-9, mask))
-    wi = scatter.grid._incident((40.0, 15.0))
+    wi = scatter.grid.incident_dirs((40.0, 15.0))
     wo = direction_from_angles(rng.uniform(0, 85, 61), rng.uniform(0, 360, 61))   # 61: not a multiple of 8 or 4
     coef = scatter.phase_coefficients(smp, wi, wo, [450.0, 633.0])
     return smp, wi, wo, coef, scatter.kirchhoff_U(smp, coef), float(np.sum(smp.w) * smp.dx * smp.dy)
@@ -117,7 +117,7 @@ def test_numpy_alternatives_are_the_same_sums(problem):
     hf = HeightField(np.random.default_rng(3).normal(0, 30e-9, (32, 32)), 125e-9)
     s = scatter.samples(hf)
     grid = scatter.DirectionGrid.hemisphere(32)
-    wi30 = scatter.grid._incident((30.0, 0.0))               # s_x dx / λ = (0.5 + u) / 4 falls on bins k / 256
+    wi30 = scatter.grid.incident_dirs((30.0, 0.0))               # s_x dx / λ = (0.5 + u) / 4 falls on bins k / 256
     U0 = scatter.field_fft(s, wi30, grid, 500.0, 0)[0]
     Up = bench.numpy_fft_pipeline(s, wi30, grid, 500.0, pad=256)
     top = float(np.sum(s.w) * s.dx * s.dy)

@@ -84,11 +84,11 @@ def test_plan_answers_from_the_cache_until_the_scene_or_its_files_change(cache_d
 def test_a_named_file_is_part_of_the_plan_key(cache_dir, tmp_path):
     from waveoptics import surfaces
     from waveoptics.cli import build_parser, command_parser
-    from waveoptics.cli.plan import _plan_key
+    from waveoptics.cli.plan import plan_key
 
     surfaces.save(surfaces.generate("flat", size="3.2um", samples="32"), tmp_path / "h.npz")
     (tmp_path / "s.toml").write_text('materials = [{name = "m", material = "Al", nano = {file = "h.npz"}}]\n')
     args = command_parser(build_parser(), "plan").parse_args([str(tmp_path / "s.toml")])
-    k1 = _plan_key(args)
+    k1 = plan_key(args)
     surfaces.save(surfaces.generate("flat", size="6.4um", samples="32"), tmp_path / "h.npz", overwrite=True)
-    assert _plan_key(args) != k1
+    assert plan_key(args) != k1

@@ -214,7 +214,7 @@ def test_the_guard_warns_in_one_line_naming_what_it_removed():
     grid = DirectionGrid.hemisphere(16)
     lobe = np.where(grid.inside, 1.0, 0.0)[None]
     with pytest.warns(UserWarning) as rec:
-        out, scale = twoscale._cap_to_coherent_loss(lobe, 0.5 * lobe, grid)
+        out, scale = twoscale.cap_to_coherent_loss(lobe, 0.5 * lobe, grid)
     msg = str(rec[0].message)
     assert "\n" not in msg and "removed 50%" in msg
     assert scale[0] == pytest.approx(0.5)

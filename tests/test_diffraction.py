@@ -67,7 +67,7 @@ def test_phase_reduction_float32_large_patch(rt, precision):
     rng = np.random.default_rng(7)
     hf = HeightField(rng.normal(0.0, 50e-9, (2, n)), L / 4)
     smp = scatter.samples(hf, "boxcar")
-    wi = scatter.grid._incident((60.0, 0.0))
+    wi = scatter.grid.incident_dirs((60.0, 0.0))
     wo = direction_from_angles([75.0, 20.0], [180.0, 33.0])
     coef = scatter.phase_coefficients(smp, wi, wo, [LAM])
     x, y = hf.coords()
@@ -95,7 +95,7 @@ def test_kirchhoff_U_cl_matches_numpy(rt, precision, rng):
     mask[5:9, 10:30] = False
     hf = HeightField(h, L / 4, L / 3, mask)
     smp = scatter.samples(hf)
-    wi = scatter.grid._incident((35.0, 20.0))
+    wi = scatter.grid.incident_dirs((35.0, 20.0))
     wo = direction_from_angles(rng.uniform(0, 89, 300), rng.uniform(0, 360, 300))
     coef = scatter.phase_coefficients(smp, wi, wo, [420.0, 555.5, 690.0])
     Un = scatter.kirchhoff_U(smp, coef)
@@ -108,7 +108,7 @@ def test_direct_twin_is_the_kirchhoff_integral(rng):
     """The NumPy twin equals the plain sum Σ w exp(i k s·(x, y, h)) dx dy written from docs/physics.md §1."""
     hf = surfaces.gaussian(40e-9, 1e-6, 12e-6, (40, 32), seed=3)
     smp = scatter.samples(hf)
-    wi = scatter.grid._incident((20.0, 45.0))
+    wi = scatter.grid.incident_dirs((20.0, 45.0))
     wo = direction_from_angles(rng.uniform(0, 80, 50), rng.uniform(0, 360, 50))
     U = scatter.kirchhoff_U(smp, scatter.phase_coefficients(smp, wi, wo, [LAM]))
     x, y = hf.coords()
@@ -128,7 +128,7 @@ def test_fft_order0_equals_frozen_direct_sum(rng):
     """order=0 is exactly the Kirchhoff sum with v_z frozen at 2 k cos θ_i (chirp-z = DTFT samples)."""
     hf = surfaces.gaussian(60e-9, 1e-6, 16e-6, 64, seed=11)
     smp = scatter.samples(hf)
-    wi = scatter.grid._incident((25.0, 10.0))
+    wi = scatter.grid.incident_dirs((25.0, 10.0))
     grid = scatter.DirectionGrid.hemisphere(32)
     U, info = scatter.field_fft(smp, wi, grid, LAM, order=0)
     assert info["transforms"] == 1
@@ -142,7 +142,7 @@ def test_fft_auto_equals_direct_everywhere(sigma_lam):
     """The banded Taylor series makes the fft solver exact Kirchhoff over the whole disc, smooth or rough."""
     hf = surfaces.gaussian(sigma_lam * L, 4 * sigma_lam * L + L, 16 * L, 64, seed=2)
     smp = scatter.samples(hf)
-    wi = scatter.grid._incident((40.0, 0.0))
+    wi = scatter.grid.incident_dirs((40.0, 0.0))
     grid = scatter.DirectionGrid.hemisphere(24)
     U, info = scatter.field_fft(smp, wi, grid, LAM)
     Ud = scatter.kirchhoff_U(smp, scatter.phase_coefficients(smp, wi, grid.directions()[grid.inside], [LAM]))
@@ -154,7 +154,7 @@ def test_fft_order0_holds_near_specular_only():
     """Frozen v_z: error grows with the distance from the specular direction (docs/physics.md §1)."""
     hf = surfaces.gaussian(L / 20, 2 * L, 32 * L, 128, seed=5)
     smp = scatter.samples(hf)
-    wi = scatter.grid._incident((0.0, 0.0))
+    wi = scatter.grid.incident_dirs((0.0, 0.0))
     grid = scatter.DirectionGrid.hemisphere(64)
     d = grid.directions()
     f0 = scatter.brdf_from_field(scatter.field_fft(smp, wi, grid, LAM, 0)[0][None], wi, d, [LAM], smp.area)[0]
@@ -223,7 +223,7 @@ def test_smooth_gaussian_coherent_fraction_and_tis(theta):
 
 
 def test_coherent_fraction_of_one_patch_is_exp_minus_g_of_its_heights():
-    wi = scatter.grid._incident((0.0, 0.0))
+    wi = scatter.grid.incident_dirs((0.0, 0.0))
     for seed in range(3):
         smp = scatter.samples(surfaces.gaussian(25e-9, 2e-6, 64e-6, 256, seed=seed))
         w2 = smp.w**2

@@ -106,7 +106,7 @@ def test_table_layout_and_values(reference):
     assert np.all(np.isfinite(t.brdf)) and np.all(t.brdf >= 0)
     # each block equals a direct evaluation of the whole spectrum at that angle (batching changes nothing)
     L = twoscale.evaluate(direction_from_angles(30.0, 0.0), CASE.wavelengths(), "Au", CASE.micro(),
-                          D.cases._nano(CASE, 0, CASE.wavelengths()), DirectionGrid.hemisphere(32))
+                          D.cases.case_nano(CASE, 0, CASE.wavelengths()), DirectionGrid.hemisphere(32))
     np.testing.assert_allclose(t.brdf[1], L.total.astype(np.float32), rtol=1e-6, atol=0)
     np.testing.assert_allclose(t.albedo[1], L.albedo(), rtol=1e-12)
     # RGB of the albedo spectrum is the colour pipeline's, per incident angle

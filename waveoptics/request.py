@@ -62,7 +62,7 @@ NANO_PARAMS = {
     "scratches": {"count": "number", "width": "length", "depth": "length", "orientation": "number",
                   "spread": "number"},
 }
-_NANO_ALIASES = {"corr": "T", "corr_length": "T", "corr-length": "T", "a": "amplitude", "amp": "amplitude",
+NANO_ALIASES = {"corr": "T", "corr_length": "T", "corr-length": "T", "a": "amplitude", "amp": "amplitude",
                  "b": "B", "c": "C", "rms": "sigma"}
 _NANO_OPTIONAL = ("orientation", "spread")
 _NANO_ZERO_OK = ("sigma", "depth", "amplitude")
@@ -96,7 +96,7 @@ def parse_nano(text: str) -> tuple[str, dict]:
         raise unknown("nano model", model, NANO_PARAMS, field="nano")
     params = {}
     for key, val, item in items:
-        key = _NANO_ALIASES.get(key, key)
+        key = NANO_ALIASES.get(key, key)
         if not key or key not in NANO_PARAMS[model]:
             raise FieldError(f"{{nano}} {text!r}: parameter {item!r} is not allowed for {model}; "
                              f"use {', '.join(k + '=...' for k in NANO_PARAMS[model])}", "nano")

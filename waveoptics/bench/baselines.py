@@ -66,7 +66,7 @@ def kirchhoff_U_naive_cl(smp, coef, *, runtime=None, precision="float32", **kw):
                         chunk_args=_naive_args(smp), runtime=runtime, precision=precision, **kw)
 
 
-def _naive(smp, coef, rt):
+def naive_sum(smp, coef, rt):
     """The naive kernel as its author would run it: -cl-fast-relaxed-math (without it PoCL cannot vectorize the
     sum and it runs ~10x slower), driver-chosen work-groups."""
     return kirchhoff_U_naive_cl(smp, coef, runtime=rt, precision="float32", local_size=0, fast_math=True)

@@ -52,12 +52,12 @@ def machine(rt=None) -> dict:
     return out
 
 
-def _problem(n: int, n_dir: int, seed: int = 1):
+def bench_problem(n: int, n_dir: int, seed: int = 1):
     """An n × n Gaussian patch (σ = 60 nm, dx = λ/4) and n_dir directions spread over the hemisphere."""
     rng = np.random.default_rng(seed)
     hf = HeightField(rng.normal(0.0, 60e-9, (n, n)), WAVELENGTH_NM * 1e-9 / 4)
     smp = scatter.samples(hf)
-    wi = scatter.grid._incident((30.0, 0.0))
+    wi = scatter.grid.incident_dirs((30.0, 0.0))
     wo = direction_from_angles(np.degrees(np.arcsin(np.sqrt(rng.uniform(0, 0.98, n_dir)))),
                                rng.uniform(0, 360, n_dir))
     return smp, wi, wo

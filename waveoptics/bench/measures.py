@@ -22,8 +22,8 @@ from .. import scatter
 from ..runtime import build_options, build_program, get_runtime
 from ..surfaces.heightfield import HeightField
 from ..units import direction_from_angles
-from .baselines import NAIVE, _naive, kirchhoff_U_sinpi_cl, numpy_direct_sum, numpy_fft_pipeline
-from .common import WAVELENGTH_NM, _problem, best_time, machine
+from .baselines import NAIVE, naive_sum, kirchhoff_U_sinpi_cl, numpy_direct_sum, numpy_fft_pipeline
+from .common import WAVELENGTH_NM, bench_problem, best_time, machine
 
 __all__ = ['MATH_FUNCTIONS', 'large_patch_errors', 'direct_kernels', 'direct_scaling', 'fft_backends', 'fft_pipeline',
            'math_errors', 'brdf_eval_rates', 'fft_threads', 'run_all']
@@ -40,7 +40,7 @@ def large_patch_errors(rt, n: int = 2**16, n_dir: int = 16) -> dict:
     rng = np.random.default_rng(7)
     hf = HeightField(rng.normal(0.0, 50e-9, (2, n)), WAVELENGTH_NM * 1e-9 / 4)
     smp = scatter.samples(hf, "boxcar")
-    wi = scatter.grid._incident((60.0, 0.0))
+    wi = scatter.grid.incident_dirs((60.0, 0.0))
     wo = direction_from_angles(rng.uniform(0, 80, n_dir), rng.uniform(0, 360, n_dir))
     coef = scatter.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
     ref = scatter.kirchhoff_U(smp, coef)
@@ -48,7 +48,7 @@ def large_patch_errors(rt, n: int = 2**16, n_dir: int = 16) -> dict:
     out = {"samples": smp.size, "length_wavelengths": n / 4}
     runs = {"opencl kirchhoff_U float32": lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt),
             "opencl kirchhoff_U float32 fast-math": lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, fast_math=True),
-            NAIVE: lambda: _naive(smp, coef, rt)}
+            NAIVE: lambda: naive_sum(smp, coef, rt)}
     if rt.fp64:
         runs["opencl kirchhoff_U float64"] = lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float64")
     for name, fn in runs.items():
@@ -62,7 +62,7 @@ def direct_kernels(rt, n: int = 256, n_dir: int = 4096, numpy_dirs: int = 64, re
     The NumPy variants run on the first *numpy_dirs* directions only (they are ~100× slower); their terms/s are
     per term all the same.
     """
-    smp, wi, wo = _problem(n, n_dir)
+    smp, wi, wo = bench_problem(n, n_dir)
     coef = scatter.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
     sub = slice(0, numpy_dirs)
     U_ref = scatter.kirchhoff_U(smp, coef.take(sub))
@@ -84,7 +84,7 @@ def direct_kernels(rt, n: int = 256, n_dir: int = 4096, numpy_dirs: int = 64, re
             lambda p=p: kirchhoff_U_sinpi_cl(smp, coef, runtime=rt, precision=p), terms, sub)
     add("opencl kirchhoff_U float32 fast-math",
         lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float32", fast_math=True), terms, sub)
-    add(NAIVE, lambda: _naive(smp, coef, rt), terms, sub)
+    add(NAIVE, lambda: naive_sum(smp, coef, rt), terms, sub)
     n_np = smp.size * numpy_dirs
     add("numpy direct sum (complex128)", lambda: numpy_direct_sum(smp, wi, wo[sub], WAVELENGTH_NM), n_np,
         slice(None))
@@ -106,13 +106,13 @@ def direct_scaling(rt, sizes=(32, 64, 128, 256), directions=(256, 1024, 4096, 16
     has at most *numpy_max_terms* terms)."""
 
     def one(n, nd):
-        smp, wi, wo = _problem(n, nd)
+        smp, wi, wo = bench_problem(n, nd)
         coef = scatter.phase_coefficients(smp, wi, wo, [WAVELENGTH_NM])
         row = {"samples": smp.size, "directions": nd, "terms": smp.size * nd}
         row["opencl_float32_s"] = best_time(lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt), repeat)
         row["opencl_float64_s"] = (best_time(lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision="float64"),
                                              repeat) if rt.fp64 else None)
-        row["naive_float32_s"] = best_time(lambda: _naive(smp, coef, rt), repeat)
+        row["naive_float32_s"] = best_time(lambda: naive_sum(smp, coef, rt), repeat)
         row["numpy_s"] = (best_time(lambda: numpy_direct_sum(smp, wi, wo, WAVELENGTH_NM), 1)
                           if smp.size * nd <= numpy_max_terms else None)
         return row
@@ -197,7 +197,7 @@ def _solver_backends(sizes, repeat: int) -> list[dict]:
     out = []
     for n in sizes:
         smp = scatter.samples(HeightField(rng.normal(0.0, 30e-9, (n, n)), WAVELENGTH_NM * 1e-9 / 4))
-        wi = scatter.grid._incident((30.0, 0.0))
+        wi = scatter.grid.incident_dirs((30.0, 0.0))
         grid = scatter.DirectionGrid.hemisphere(n)
         row = {"n": n, "transforms": scatter.field_fft(smp, wi, grid, WAVELENGTH_NM)[1]["transforms"]}
         for name, c in ctx.items():
@@ -216,7 +216,7 @@ def fft_pipeline(sizes=(64, 128, 256, 512), repeat: int = 2, check_cells: int = 
     for n in sizes:
         hf = HeightField(rng.normal(0.0, 30e-9, (n, n)), WAVELENGTH_NM * 1e-9 / 4)
         smp = scatter.samples(hf)
-        wi = scatter.grid._incident((30.0, 0.0))
+        wi = scatter.grid.incident_dirs((30.0, 0.0))
         grid = scatter.DirectionGrid.hemisphere(n)
         cells = np.flatnonzero(grid.inside)
         pick = np.sort(rng.choice(cells, size=min(check_cells, cells.size), replace=False))
@@ -261,7 +261,7 @@ def math_errors(rt, n: int = 200_001) -> dict:
     out = {}
     for prec in ["float32"] + (["float64"] if rt.fp64 else []):
         dt = rt.real_dtype(prec)
-        prg = build_program(rt, "bench_math.cl", build_options(dt, scatter.direct._sincos_options(prec)))
+        prg = build_program(rt, "bench_math.cl", build_options(dt, scatter.direct.sincos_options(prec)))
         knl = cl.Kernel(prg, "math_builtins")
         nf = len(MATH_FUNCTIONS) if prec == "float32" else 6
         res = {}
@@ -324,7 +324,7 @@ def fft_threads(n: int = 256, n_wavelengths: int = 8, repeat: int = 2) -> dict:
     :func:`waveoptics.runtime.cpu_workers`): an n × n Gaussian patch onto an n × n grid at *n_wavelengths*."""
     from ..runtime import cpu_workers
 
-    smp, wi, _ = _problem(n, 4)
+    smp, wi, _ = bench_problem(n, 4)
     grid = scatter.DirectionGrid.hemisphere(n)
     wl = np.linspace(450.0, 650.0, n_wavelengths)
     sol = scatter.get_solver("fft")

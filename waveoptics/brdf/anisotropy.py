@@ -12,7 +12,7 @@ import numpy as np
 __all__ = ['stretch_factors', 'D_stretched', 'Lambda_stretched', 'STRETCH_EXPONENT']
 
 
-def _tan2_stretched(w, ax, ay):
+def tan2_stretched(w, ax, ay):
     """(α_x² w_x² + α_y² w_y²) / w_z², i.e. α(φ)² tan²θ, for w_z > 0 (else inf)."""
     wz = w[..., 2]
     num = (ax * w[..., 0]) ** 2 + (ay * w[..., 1]) ** 2

@@ -69,13 +69,13 @@ from ..errors import FieldError, unknown
 from ..materials import Material, get_material
 from ..materials import fresnel as _fresnel
 from ..units import check_wavelengths
-from .directions import _as_dirs, _dot, reflect
+from .directions import as_dirs, dot_last, reflect
 from .fresnel_terms import F_mean
-from .ndf import COS_MIN, _check_alpha, _ndf
-from .protocol import BRDF, BRDFSample, _broadcast, check_uniform, lobe_choice
+from .ndf import COS_MIN, check_alpha, ndf_by_name
+from .protocol import BRDF, BRDFSample, broadcast_pair, check_uniform, lobe_choice
 from .quadrature import normal_quadrature
 from .sampling import pdf_normal, sample_normal
-from .smith import _gl01
+from .smith import gl01
 from .twoscale import Micro
 
 __all__ = ['DIELECTRIC_SHADOWINGS', 'DIELECTRIC_MS_NODES', 'refract', 'half_vector_refraction', 'DielectricTables',
@@ -98,7 +98,7 @@ def refract(w, m, eta_rel):
     ----------
     .. [1] B. Walter et al., EGSR 2007, eq. (40).
     """
-    c = _dot(w, m)
+    c = dot_last(w, m)
     eta_rel = np.asarray(eta_rel, dtype=float)
     k = 1.0 - (1.0 - c * c) / (eta_rel * eta_rel)
     ok = k > 0
@@ -156,7 +156,7 @@ def _single(wi, wo, eta, spec, ax, ay, c, shadowing):
     hr = (wi + wo) * np.sign(zi)[:, None]
     hr = hr / np.maximum(np.linalg.norm(hr, axis=-1, keepdims=True), 1e-300)
     h = np.where(refl[:, None], hr, half_vector_refraction(wi, wo, eta_i, eta_o))
-    ih, oh = _dot(wi, h), _dot(wo, h)
+    ih, oh = dot_last(wi, h), dot_last(wo, h)
     ok = (refl | trans) & (ih * zi > 0) & (oh * zo > 0) & (h[:, 2] > 0)
     h = np.where(ok[:, None], h, np.array([0.0, 0.0, 1.0]))
     F = _fresnel.F(np.abs(ih), eta_t / eta_i)
@@ -179,7 +179,7 @@ def _single_pdf(wi, wo, eta, ndf, ax, ay, c):
     hr = (wi + wo) * np.sign(zi)[:, None]
     hr = hr / np.maximum(np.linalg.norm(hr, axis=-1, keepdims=True), 1e-300)
     h = np.where(refl[:, None], hr, half_vector_refraction(wi, wo, eta_i, eta_o))
-    ih, oh = _dot(wi, h), _dot(wo, h)
+    ih, oh = dot_last(wi, h), dot_last(wo, h)
     ok = (refl | trans) & (ih * zi > 0) & (oh * zo > 0) & (h[:, 2] > 0)
     h = np.where(ok[:, None], h, np.array([0.0, 0.0, 1.0]))
     up = np.where(zi[:, None] < 0, -wi, wi)
@@ -196,7 +196,7 @@ def _sample_single(wi, u, eta, ndf, ax, ay, c):
     zi = wi[:, 2]
     s = np.sign(zi)
     m = sample_normal(np.where(zi[:, None] < 0, -wi, wi), u, ndf=ndf, ax=ax, ay=ay, c=c)
-    ih = _dot(wi, m)
+    ih = dot_last(wi, m)
     eta_i = np.where(zi > 0, 1.0, eta)
     eta_t = np.where(zi > 0, eta, 1.0)
     F = _fresnel.F(np.abs(ih), eta_t / eta_i)
@@ -253,7 +253,7 @@ def _albedo_single(wi, eta, spec, ndf, ax, ay, c, shadowing, symmetric=False):
         a = np.broadcast_to(w1, m.shape)
         fr, _ = _single(a, wr, eta, spec, ax, ay, c, shadowing)
         _, ft = _single(a, np.where(ok[:, None], wt, np.array([0.0, 0.0, s])), eta, spec, ax, ay, c, shadowing)
-        oh = _dot(wt, m)
+        oh = dot_last(wt, m)
         den = (eta_i * ih + eta_t * oh) ** 2
         jt = den / np.where(ok, eta_t ** 2 * np.abs(oh), 1.0)
         R[j] = np.sum(np.where(vis, fr * np.abs(wr[:, 2]) * 4.0 * np.abs(ih), 0.0) * w)
@@ -283,8 +283,8 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
     ----------
     .. [1] C. Kulla, A. Conty, SIGGRAPH 2017 course, the dielectric energy compensation.
     """
-    spec = _ndf(ndf)
-    x, wts = _gl01(DIELECTRIC_MS_NODES)
+    spec = ndf_by_name(ndf)
+    x, wts = gl01(DIELECTRIC_MS_NODES)
     st = np.sqrt(np.maximum(1.0 - x * x, 0.0))
     E = {}
     for side, sgn in (("up", 1.0), ("down", -1.0)):
@@ -357,9 +357,9 @@ class RoughDielectricBSDF(BRDF):
         if self.micro.shadowing not in DIELECTRIC_SHADOWINGS:
             raise unknown("shadowing model of the rough dielectric", self.micro.shadowing, DIELECTRIC_SHADOWINGS,
                           field="shadowing")
-        spec = _ndf(self.micro.ndf)
+        spec = ndf_by_name(self.micro.ndf)
         kw = self.micro.kw()
-        _check_alpha(kw["alpha"], kw["alpha_y"], spec, kw["ndf_shape"])
+        check_alpha(kw["alpha"], kw["alpha_y"], spec, kw["ndf_shape"])
 
     # -- pieces -------------------------------------------------------------------------------------------------
     def _eta(self, lam):
@@ -372,7 +372,7 @@ class RoughDielectricBSDF(BRDF):
     def _args(self):
         kw = self.micro.kw()
         ay = kw["alpha_y"] if kw["alpha_y"] is not None else kw["alpha"]
-        return _ndf(kw["ndf"]), kw["ndf"], kw["alpha"], ay, kw["ndf_shape"]
+        return ndf_by_name(kw["ndf"]), kw["ndf"], kw["alpha"], ay, kw["ndf_shape"]
 
     def _tables(self, lam):
         _, ndf, ax, ay, c = self._args()
@@ -392,7 +392,7 @@ class RoughDielectricBSDF(BRDF):
     def eval_parts(self, wi, wo, wavelength_nm) -> dict:
         """The parts of :meth:`eval` in 1/sr: ``reflection`` and ``transmission`` (single scattering) and
         ``multiple`` (the compensation lobes; 0 unless ``multiple_scattering``)."""
-        wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
+        wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
         out = {k: np.zeros(lam.size) for k in ("reflection", "transmission", "multiple")}
         for val in np.unique(lam):
             sel = lam == val
@@ -442,7 +442,7 @@ class RoughDielectricBSDF(BRDF):
         """Importance-sample ω_o on the sphere for ω_i at λ from u (..., 2) uniform in [0, 1)²; invalid samples
         have ``wo`` = 0, weight 0 and pdf 0."""
         u = check_uniform(u)
-        wi_b, _, lam, shape = _broadcast(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
+        wi_b, _, lam, shape = broadcast_pair(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
         u_flat = np.broadcast_to(u, shape + (2,)).reshape(-1, 2)
         wo = self._sample_flat(wi_b, u_flat, lam)
         valid = np.linalg.norm(wo, axis=-1) > 0.5
@@ -458,7 +458,7 @@ class RoughDielectricBSDF(BRDF):
         """∫ f |cos θ_o| dω_o of each part (dimensionless): ``reflection`` and ``transmission`` by quadrature over
         microfacet normals (:func:`_albedo_single`), ``multiple_reflection`` and ``multiple_transmission`` by
         Gauss-Legendre quadrature in cos θ_o of the compensation lobes (which depend on θ_o only)."""
-        wi = _as_dirs(wi, "wi")
+        wi = as_dirs(wi, "wi")
         lam = np.asarray(wavelength_nm, dtype=float)
         check_wavelengths(lam.ravel() if lam.size else lam)
         shape = np.broadcast_shapes(wi.shape[:-1], lam.shape)
@@ -467,7 +467,7 @@ class RoughDielectricBSDF(BRDF):
         keys = ("reflection", "transmission", "multiple_reflection", "multiple_transmission")
         out = {k: np.zeros(lam_f.size) for k in keys}
         spec, ndf, ax, ay, c = self._args()
-        x, wx = _gl01(64)
+        x, wx = gl01(64)
         for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
             if w1[2] == 0:
                 continue

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import WaveopticsError
 from .fresnel_terms import F_mean
-from .directions import _as_dirs
+from .directions import as_dirs
 
 __all__ = ['lambert', 'oren_nayar', 'burley', 'diffuse_tradeoff', 'DIFFUSES']
 
@@ -36,8 +36,8 @@ def lambert(wi, wo, kd=1.0):
     ----------
     .. [1] J. H. Lambert, *Photometria*, 1760.
     """
-    wi = _as_dirs(wi, "wi")
-    wo = _as_dirs(wo, "wo")
+    wi = as_dirs(wi, "wi")
+    wo = as_dirs(wo, "wo")
     up = (wi[..., 2] > 0) & (wo[..., 2] > 0)
     return np.where(up, np.asarray(kd, dtype=float) / np.pi, 0.0)
 
@@ -72,8 +72,8 @@ def oren_nayar(wi, wo, kd=1.0, sigma=0.0):
     sigma = float(sigma)
     if not np.isfinite(sigma) or sigma < 0:
         raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")
-    wi = _as_dirs(wi, "wi")
-    wo = _as_dirs(wo, "wo")
+    wi = as_dirs(wi, "wi")
+    wo = as_dirs(wo, "wo")
     return _oren_nayar(wi, wo, kd, sigma)
 
 
@@ -116,7 +116,7 @@ def burley(wi, wo, kd=1.0, roughness=0.5):
     if not np.isfinite(r) or not 0 <= r <= 1:
         raise WaveopticsError(f"roughness={roughness!r} is not allowed; the Burley diffuse roughness must be in "
                               "[0, 1]")
-    return _burley(_as_dirs(wi, "wi"), _as_dirs(wo, "wo"), kd, r)
+    return _burley(as_dirs(wi, "wi"), as_dirs(wo, "wo"), kd, r)
 
 
 def _burley(wi, wo, kd, r):

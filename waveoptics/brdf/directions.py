@@ -14,11 +14,11 @@ from ..errors import WaveopticsError
 __all__ = ['half_vector', 'reflect']
 
 
-def _dot(a, b):
+def dot_last(a, b):
     return np.sum(a * b, axis=-1)
 
 
-def _as_dirs(w, name):
+def as_dirs(w, name):
     w = np.asarray(w, dtype=np.float64)
     if w.shape[-1:] != (3,):
         raise WaveopticsError(f"{name} must have shape (..., 3) (unit vectors), got {w.shape}")
@@ -44,4 +44,4 @@ def half_vector(wi, wo):
 
 def reflect(w, m):
     """Mirror direction of *w* about the unit normal *m*: 2 (w·m) m − w."""
-    return 2.0 * _dot(w, m)[..., None] * m - w
+    return 2.0 * dot_last(w, m)[..., None] * m - w

@@ -137,7 +137,7 @@ def from_facet(v_local, m):
     return v_local[..., :1] * t + v_local[..., 1:2] * b + v_local[..., 2:3] * m
 
 
-def _local_pair(cos_i, cos_o, cos_io):
+def local_pair(cos_i, cos_o, cos_io):
     """A pair of directions with the facet-frame cosines *cos_i*, *cos_o* (to the facet normal) and the mutual
     cosine *cos_io* = ω_i·ω_o, ω_i in the local x–z plane: every invariant of the pair in that frame (elevations,
     relative azimuth, |ω_i + ω_o|) without building the frame."""

@@ -50,14 +50,14 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     smp = scatter.samples(surface)
     flat = dataclasses.replace(smp, h=np.zeros_like(smp.h))
     for msg in scatter.sampling_warnings(smp, wi, w, wo=grid.directions()[grid.inside]):  # aliasing
-        scatter.solvers._warn(msg, warnings)
+        scatter.solvers.warn_or_collect(msg, warnings)
     # the specular spike is removed here (δU), but a periodic surface's orders and a patch's speckle are just as
     # narrow (≈ λ/L): a coarser grid samples them at arbitrary points and their energy comes out wrong
     Lx, Ly = smp.extent
     lmin = float(w.min()) * 1e-9
     if grid.du > lmin / Lx * (1 + 1e-9) or grid.dv > lmin / Ly * (1 + 1e-9):
         need = int(np.ceil(2 * max(Lx, Ly) / lmin))
-        scatter.solvers._warn(f"direction grid cell {grid.du:.3g} is coarser than the patch's diffraction width lambda/L = "
+        scatter.solvers.warn_or_collect(f"direction grid cell {grid.du:.3g} is coarser than the patch's diffraction width lambda/L = "
                   f"{lmin / max(Lx, Ly):.3g}: sharp features (grating orders, speckle) are under-sampled and their "
                   f"energy is inexact; use resolution >= {need} or a smaller patch", warnings)
     dirs = grid.directions()

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import WaveopticsError, unknown
 from ..materials import fresnel as _fresnel
-from .smith import _gl01
+from .smith import gl01
 
 __all__ = ['FRESNELS', 'F_mean', 'MaterialFresnel']
 
@@ -57,7 +57,7 @@ class MaterialFresnel:
         return self.material.F(cos_theta, self.wavelength_nm)
 
 
-def _fresnel_fn(fresnel, eta, F0):
+def fresnel_fn(fresnel, eta, F0):
     if isinstance(fresnel, MaterialFresnel):   # the material's own reflectance (a film stack)
         return fresnel
     if fresnel not in FRESNELS:
@@ -89,7 +89,7 @@ def F_mean(F_fn: Callable, batch_ndim: int = 0, n: int = 64):
     ----------
     .. [1] P. Shirley et al., Pacific Graphics 1997, §4 (the normalization of the coupled diffuse term).
     """
-    x, w = _gl01(n)
+    x, w = gl01(n)
     mu = x.reshape((-1,) + (1,) * batch_ndim)
     Fv = np.asarray(F_fn(mu), dtype=float)
     Fv = np.broadcast_to(Fv, np.broadcast_shapes(Fv.shape, mu.shape))

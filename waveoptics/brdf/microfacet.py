@@ -53,10 +53,10 @@ from ..errors import WaveopticsError, unknown
 from ..materials.database import get_material
 from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
-from .fresnel_terms import FRESNELS, MaterialFresnel, _fresnel_fn
-from .directions import _as_dirs, _dot, half_vector
-from .ndf import COS_MIN, _check_alpha, _ndf
-from .shadowing import _shadowing
+from .fresnel_terms import FRESNELS, MaterialFresnel, fresnel_fn
+from .directions import as_dirs, dot_last, half_vector
+from .ndf import COS_MIN, check_alpha, ndf_by_name
+from .shadowing import shadowing_by_name
 
 __all__ = ['specular', 'brdf', 'fresnel_inputs', 'spectral_brdf']
 
@@ -97,20 +97,20 @@ def specular(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correla
     .. [1] R. L. Cook, K. E. Torrance, ACM TOG 1(1), 1982, eq. (4) (with 4 for π as corrected in [2]).
     .. [2] B. Walter et al., EGSR 2007, eq. (20).
     """
-    spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
-    gfn, _ = _shadowing(shadowing)
-    F_fn = _fresnel_fn(fresnel, eta, F0)
-    wi = _as_dirs(wi, "wi")
-    wo = _as_dirs(wo, "wo")
+    spec = ndf_by_name(ndf)
+    ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
+    gfn, _ = shadowing_by_name(shadowing)
+    F_fn = fresnel_fn(fresnel, eta, F0)
+    wi = as_dirs(wi, "wi")
+    wo = as_dirs(wo, "wo")
     wi, wo = np.broadcast_arrays(wi, wo)
-    return _specular(wi, wo, spec, ax, ay, ndf_shape, gfn, F_fn)
+    return specular_term(wi, wo, spec, ax, ay, ndf_shape, gfn, F_fn)
 
 
-def _specular(wi, wo, spec, ax, ay, c, gfn, F_fn):
+def specular_term(wi, wo, spec, ax, ay, c, gfn, F_fn):
     up = (wi[..., 2] > 0) & (wo[..., 2] > 0)
     h = half_vector(wi, wo)
-    cos_d = np.clip(_dot(wi, h), 0.0, 1.0)
+    cos_d = np.clip(dot_last(wi, h), 0.0, 1.0)
     g = gfn(wi, wo, h, lambda w: spec.Lambda(w, ax, ay, c))
     d = spec.D(h, ax, ay, c)
     # guard: f grows like 1/cos θ towards the horizon (G ~ cos θ / α); flooring the cosines of the denominator
@@ -165,10 +165,10 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
     .. [2] P. Shirley et al., Pacific Graphics 1997 (diffuse-specular coupling).
     .. [3] M. Oren, S. K. Nayar, SIGGRAPH 1994 (rough diffuse).
     """
-    spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
-    gfn, _ = _shadowing(shadowing)
-    F_fn = _fresnel_fn(fresnel, eta, F0)
+    spec = ndf_by_name(ndf)
+    ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
+    gfn, _ = shadowing_by_name(shadowing)
+    F_fn = fresnel_fn(fresnel, eta, F0)
     if diffuse not in DIFFUSES:
         raise unknown("diffuse model", diffuse, DIFFUSES)
     kd = np.asarray(kd, dtype=float)
@@ -180,10 +180,10 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated"
     if diffuse == "burley" and sigma > 1:
         raise WaveopticsError(f"sigma={sigma!r} is not allowed for the burley diffuse term; its roughness r must be "
                               "in [0, 1]")
-    wi = _as_dirs(wi, "wi")
-    wo = _as_dirs(wo, "wo")
+    wi = as_dirs(wi, "wi")
+    wo = as_dirs(wo, "wo")
     wi, wo = np.broadcast_arrays(wi, wo)
-    f = _specular(wi, wo, spec, ax, ay, ndf_shape, gfn, F_fn)
+    f = specular_term(wi, wo, spec, ax, ay, ndf_shape, gfn, F_fn)
     if diffuse != "none" and np.any(kd > 0):
         fd = DIFFUSES[diffuse][0](wi, wo, kd, sigma)
         if tradeoff:

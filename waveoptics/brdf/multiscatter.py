@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .microfacet import specular
-from .smith import _gl01
+from .smith import gl01
 from .quadrature import directional_albedo
 
 __all__ = ['MS_NODES', 'AlbedoTable', 'albedo_table', 'f_ms', 'F_ms']
@@ -56,7 +56,7 @@ class AlbedoTable:
 @functools.lru_cache(maxsize=64)
 def albedo_table(ndf: str, alpha: float, shadowing: str, ndf_shape: float | None) -> AlbedoTable:
     """E(μ) and E_avg of the F = 1 specular lobe (isotropic *alpha*) by :func:`waveoptics.brdf.directional_albedo`."""
-    x, w = _gl01(MS_NODES)
+    x, w = gl01(MS_NODES)
     E = np.empty(x.size)
     for i, mu in enumerate(x):
         wi = np.array([np.sqrt(max(1.0 - mu * mu, 0.0)), 0.0, mu])

@@ -17,12 +17,12 @@ from typing import Callable
 import numpy as np
 
 from ..errors import WaveopticsError, unknown
-from .directions import _as_dirs, reflect  # noqa: F401  (reflect: imported from here by pointwise, issue 28)
+from .directions import as_dirs, reflect  # noqa: F401  (reflect: imported from here by pointwise, issue 28)
 from .measured_ndf import D_tabulated, Lambda_tabulated, SlopeTable
 from .ndf_closed import D_beckmann, D_blinn_phong, D_ggx, Lambda_beckmann, Lambda_blinn_phong, Lambda_ggx
 from .ndf_shaped import (ABC_C_DEFAULT, EPD_P_DEFAULT, SGD_P_DEFAULT, D_abc, D_epd, D_sgd, Lambda_abc, Lambda_epd,
                          Lambda_sgd)
-from .smith import _G1
+from .smith import G1_from_lambda
 
 __all__ = ['ALPHA_MIN', 'ALPHA_MAX', 'COS_MIN', 'SHAPE_RANGE', 'NDF', 'NDFS', 'D', 'Lambda', 'G1']
 
@@ -55,7 +55,7 @@ class NDF:
 
     def G1(self, w, m, ax, ay=None, c=None):
         """Smith masking G1(w, m) = χ⁺(w · m) / (1 + Λ(w)) (unitless)."""
-        return _G1(w, m, self.Lambda(w, ax, ay, c))
+        return G1_from_lambda(w, m, self.Lambda(w, ax, ay, c))
 
 
 #: Normal distribution functions by name (``method=`` style registry)
@@ -78,13 +78,13 @@ NDFS: dict[str, NDF] = {
 SHAPE_RANGE = {"abc": (0.0, np.inf), "epd": (0.0, 20.0), "sgd": (0.0, 5.0)}
 
 
-def _ndf(name) -> NDF:
+def ndf_by_name(name) -> NDF:
     if name not in NDFS:
         raise unknown("NDF", name, NDFS)
     return NDFS[name]
 
 
-def _check_alpha(alpha, alpha_y, ndf: NDF, ndf_shape):
+def check_alpha(alpha, alpha_y, ndf: NDF, ndf_shape):
     """Validate (public boundary) and floor α (guard); returns (ax, ay)."""
     for label, a in (("alpha", alpha), ("alpha_y", alpha_y)):
         if a is None:
@@ -143,9 +143,9 @@ def D(m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     ----------
     .. [1] E. Heitz, JCGT 3(2), 2014, §2 (definition and normalization).
     """
-    spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
-    return spec.D(_as_dirs(m, "m"), ax, ay, ndf_shape)
+    spec = ndf_by_name(ndf)
+    ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
+    return spec.D(as_dirs(m, "m"), ax, ay, ndf_shape)
 
 
 def Lambda(w, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
@@ -157,9 +157,9 @@ def Lambda(w, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     ----------
     .. [1] E. Heitz, JCGT 3(2), 2014, §5 (eq. 72), eqs. (81), (86).
     """
-    spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
-    return spec.Lambda(_as_dirs(w, "w"), ax, ay, ndf_shape)
+    spec = ndf_by_name(ndf)
+    ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
+    return spec.Lambda(as_dirs(w, "w"), ax, ay, ndf_shape)
 
 
 def G1(w, m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
@@ -169,9 +169,9 @@ def G1(w, m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     ----------
     .. [1] E. Heitz, JCGT 3(2), 2014, eq. (43).
     """
-    spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
-    w = _as_dirs(w, "w")
-    m = _as_dirs(m, "m")
-    return _G1(w, m, spec.Lambda(w, ax, ay, ndf_shape))
+    spec = ndf_by_name(ndf)
+    ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
+    w = as_dirs(w, "w")
+    m = as_dirs(m, "m")
+    return G1_from_lambda(w, m, spec.Lambda(w, ax, ay, ndf_shape))
 

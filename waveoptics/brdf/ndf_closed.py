@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import special
 
-from .anisotropy import _tan2_stretched
+from .anisotropy import tan2_stretched
 from .roughness import blinn_phong_exponent
 
 __all__ = ['D_ggx', 'Lambda_ggx', 'D_beckmann', 'Lambda_beckmann', 'D_blinn_phong', 'Lambda_blinn_phong']
@@ -54,7 +54,7 @@ def Lambda_ggx(w, ax, ay, c=None):
     ----------
     .. [1] E. Heitz, JCGT 3(2), 2014, eq. (86).
     """
-    t = _tan2_stretched(w, ax, ay)
+    t = tan2_stretched(w, ax, ay)
     with np.errstate(invalid="ignore"):
         lam = t / (2.0 * (1.0 + np.sqrt(1.0 + t)))
     return np.where(np.isinf(t), np.inf, lam)
@@ -86,7 +86,7 @@ def Lambda_beckmann(w, ax, ay, c=None):
     .. [1] B. Walter et al., EGSR 2007, eq. (27).
     .. [2] E. Heitz, JCGT 3(2), 2014, eq. (81).
     """
-    t = _tan2_stretched(w, ax, ay)
+    t = tan2_stretched(w, ax, ay)
     fin = np.isfinite(t) & (t > 0)
     a = 1.0 / np.sqrt(np.where(fin, t, 1.0))
     lam = 0.5 * (np.exp(-a * a) / (a * np.sqrt(np.pi)) - special.erfc(a))

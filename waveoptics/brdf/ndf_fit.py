@@ -26,7 +26,7 @@ import numpy as np
 from scipy import optimize
 
 from ..errors import FieldError
-from .ndf import ALPHA_MAX, NDFS, _ndf
+from .ndf import ALPHA_MAX, NDFS, ndf_by_name
 
 __all__ = ["slope_magnitude_cdf", "alpha_for_median_slope", "GGX_AXIS_MEDIAN"]
 
@@ -39,7 +39,7 @@ _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(256)
 def slope_magnitude_cdf(ndf: str, alpha: float, t: float, shape=None) -> float:
     """P(|s| ≤ t): the share of projected facet area with slope magnitude at most *t* (isotropic NDF *ndf* of
     roughness *alpha*), by Gauss-Legendre quadrature of 2π P22(s) s on [0, t] split geometrically."""
-    spec = _ndf(ndf)
+    spec = ndf_by_name(ndf)
     if t <= 0:
         return 0.0
     edges = np.concatenate([[0.0], t * np.geomspace(1e-4, 1.0, 24)])
@@ -62,7 +62,7 @@ def alpha_for_median_slope(ndf: str, median_slope: float, shape=None) -> float:
         return float(median_slope)
     if ndf == "beckmann":
         return float(median_slope / math.sqrt(math.log(2.0)))
-    spec = NDFS[ndf] if ndf in NDFS else _ndf(ndf)
+    spec = NDFS[ndf] if ndf in NDFS else ndf_by_name(ndf)
     if spec.name == "tabulated":
         raise FieldError("a tabulated NDF has no α to fit; it is the slope law itself", "ndf")
     c = spec.shape_default if shape is None else shape

@@ -34,11 +34,11 @@ def _one_minus_cos(m):
 
 
 
-def _abc_B(ax):
+def abc_B(ax):
     return 2.0 / (ax * ax)
 
 
-def _expm1_over(p, L):
+def expm1_over(p, L):
     """(e^{pL} − 1)/p with its limit L at p = 0."""
     p = np.asarray(p, dtype=float)
     safe = np.where(p == 0, 1.0, p)
@@ -56,10 +56,10 @@ def abc_normalization(alpha, c=None):
     .. [1] J. Löw et al., ACM TOG 31(1), 2012, §5 (the ABC microfacet distribution).
     """
     c = ABC_C_DEFAULT if c is None else c
-    B = _abc_B(np.asarray(alpha, dtype=float))
+    B = abc_B(np.asarray(alpha, dtype=float))
     L = np.log1p(B)
-    e1 = _expm1_over(1.0 - c, L)
-    e2 = _expm1_over(2.0 - c, L)
+    e1 = expm1_over(1.0 - c, L)
+    e2 = expm1_over(2.0 - c, L)
     i1 = e1 / B
     i2 = (e2 - e1) / (B * B)
     return 1.0 / (2.0 * np.pi * (i1 - i2))
@@ -77,7 +77,7 @@ def D_abc(m, ax, ay=None, c=None):
     """
     c = ABC_C_DEFAULT if c is None else c
     A = abc_normalization(ax, c)
-    val = A * (1.0 + _abc_B(ax) * _one_minus_cos(m)) ** (-c)
+    val = A * (1.0 + abc_B(ax) * _one_minus_cos(m)) ** (-c)
     return np.where(m[..., 2] > 0, val, 0.0)
 
 
@@ -86,7 +86,7 @@ def _P22_abc(r, ax, c):
     # D(θ) cos⁴θ with cos θ = 1/√(1+r²); 1 − cos θ = r² / (√(1+r²) (1 + √(1+r²)))
     q = np.sqrt(1.0 + r * r)
     one_minus = r * r / (q * (1.0 + q))
-    return abc_normalization(ax, c) * (1.0 + _abc_B(ax) * one_minus) ** (-c) / (q ** 4)
+    return abc_normalization(ax, c) * (1.0 + abc_B(ax) * one_minus) ** (-c) / (q ** 4)
 
 
 def Lambda_abc(w, ax, ay=None, c=None):

@@ -11,9 +11,9 @@ from ..materials import fresnel as _fresnel
 from ..runtime import build_options, build_program, get_runtime
 from .diffuse import DIFFUSES
 from .fresnel_terms import F_mean
-from .microfacet import FRESNELS, _fresnel_fn
-from .directions import _as_dirs
-from .ndf import NDFS, _check_alpha, _ndf
+from .microfacet import FRESNELS, fresnel_fn
+from .directions import as_dirs
+from .ndf import NDFS, check_alpha, ndf_by_name
 
 
 def _shape(spec, ndf_shape) -> float:
@@ -21,7 +21,7 @@ def _shape(spec, ndf_shape) -> float:
     if ndf_shape is not None:
         return float(ndf_shape)
     return float(spec.shape_default) if spec.shape_default is not None else 0.0
-from .shadowing import _shadowing
+from .shadowing import shadowing_by_name
 
 __all__ = ['D_cl', 'Lambda_cl', 'brdf_cl']
 
@@ -53,13 +53,13 @@ def _kernel(prg, name):
 def _defines(ndf=None, shadowing=None, fresnel=None, diffuse=None, tradeoff=None):
     d = []
     if ndf is not None:
-        spec = _ndf(ndf)
+        spec = ndf_by_name(ndf)
         if spec.cl_id is None:
             raise WaveopticsError(f"NDF {ndf!r} has no OpenCL kernel; evaluate it with NumPy (kernel NDFs: "
                                   + ", ".join(k for k, v in NDFS.items() if v.cl_id is not None) + ")")
         d.append(f"-DWO_NDF={spec.cl_id}")
     if shadowing is not None:
-        d.append(f"-DWO_SHADOWING={_shadowing(shadowing)[1]}")
+        d.append(f"-DWO_SHADOWING={shadowing_by_name(shadowing)[1]}")
     if fresnel is not None:
         if fresnel not in FRESNELS:
             raise unknown("Fresnel model", fresnel, FRESNELS)
@@ -80,9 +80,9 @@ def _vec_dev(queue, w, dt):
 
 def _ndf_kernel(kname, w, alpha, alpha_y, ndf, ndf_shape, runtime, precision):
 
-    spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
-    w = _as_dirs(w, "w")
+    spec = ndf_by_name(ndf)
+    ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
+    w = as_dirs(w, "w")
     rt, dt, prg = _cl_setup(runtime, precision, _defines(ndf=ndf))
     n = w.size // 3
     d_w = _vec_dev(rt.queue, w, dt)
@@ -129,17 +129,17 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlat
     if not isinstance(fresnel, str):
         raise WaveopticsError("brdf_cl evaluates the named Fresnel models (exact, schlick, one); a material's own "
                               "reflectance (a thin-film stack) is evaluated with NumPy (brdf)")
-    spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
-    F_fn = _fresnel_fn(fresnel, eta, F0)
+    spec = ndf_by_name(ndf)
+    ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
+    F_fn = fresnel_fn(fresnel, eta, F0)
     kd_a = np.atleast_1d(np.asarray(kd, dtype=float))
     if np.any(~np.isfinite(kd_a) | (kd_a < 0) | (kd_a > 1)):
         raise WaveopticsError(f"kd={np.asarray(kd).tolist()!r} is not allowed; the diffuse albedo must be in [0, 1]")
     sigma = float(sigma)
     if not np.isfinite(sigma) or sigma < 0:
         raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")
-    wi = _as_dirs(wi, "wi").reshape(-1, 3)
-    wo = _as_dirs(wo, "wo").reshape(-1, 3)
+    wi = as_dirs(wi, "wi").reshape(-1, 3)
+    wo = as_dirs(wo, "wo").reshape(-1, 3)
     wi, wo = np.broadcast_arrays(wi, wo)
     n = wi.shape[0]
     eta_a = np.atleast_1d(np.asarray(1.0 if eta is None else eta, dtype=np.complex128))

@@ -25,7 +25,7 @@
 Beyond the tangent plane's validity (a facet's local θ > 75°) its nano lobe carries its albedo at 75° continued with
 first-order perturbation theory's incidence dependence (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`), as
 the grid model's does, so the white furnace (F = 1) holds up to grazing incidence without the grid model's energy
-guard (:func:`waveoptics.brdf.twoscale._cap_to_coherent_loss`, which needs the whole lobe and is not applied here):
+guard (:func:`waveoptics.brdf.twoscale.cap_to_coherent_loss`, which needs the whole lobe and is not applied here):
 ≤ 1.01 at θ_i up to 89.5° (tests/test_grazing.py).
 
 Sampling is a mixture of the three parts in proportion F(θ_i)A(θ_i) : F(θ_i)(1 − A(θ_i)) : kd(1 − F(θ_i));
@@ -52,10 +52,10 @@ import numpy as np
 from .. import scatter
 from ..errors import FieldError
 from .protocol import TwoScaleParts
-from .sampling import _sampler, sample_normal
-from .ndf import _ndf
-from .shadowing import _shadowing
-from .facet import COS_LEVELS, RADIAL_BINS, NanoRadial, _local_pair, facet_basis, from_facet, to_facet, unit_nodes
+from .sampling import sampler_for, sample_normal
+from .ndf import ndf_by_name
+from .shadowing import shadowing_by_name
+from .facet import COS_LEVELS, RADIAL_BINS, NanoRadial, local_pair, facet_basis, from_facet, to_facet, unit_nodes
 from .roughness_scales import check_series
 
 __all__ = ['QUADRATURE_NODES', 'RADIAL_BINS', 'COS_LEVELS', 'TwoScaleBRDF', 'unit_nodes', 'NanoRadial', 'facet_basis',
@@ -223,7 +223,7 @@ class TwoScaleBRDF(TwoScaleParts):
         wo = np.where(up[:, None], wo, [0.0, 0.0, 1.0])
         na = nb = self.nodes // 2
         ndf, ax, ay = self._micro_args()
-        spec = _ndf(ndf)
+        spec = ndf_by_name(ndf)
         ma = self._ndf_normals(wi)
         mb, ok_b, rad, level, h, cos_d = self._half_vector_normals(wi, wo, lam)
         m = np.concatenate([ma, mb], axis=1)
@@ -235,7 +235,7 @@ class TwoScaleBRDF(TwoScaleParts):
         D = spec.D(m, ax, ay, self.ndf_shape)
         Li = spec.Lambda(wi, ax, ay, self.ndf_shape)
         # densities of both node sets at every node (the micro sampler's: visible normals or D cos θ_m)
-        if _sampler(ndf).visible:
+        if sampler_for(ndf).visible:
             pa = np.where(im > 0, D * im / (1.0 + Li[:, None]), 0.0) / wi[:, 2:3]
         else:
             pa = D * m[..., 2]
@@ -245,11 +245,11 @@ class TwoScaleBRDF(TwoScaleParts):
         den = na * pa + nb * pb
         # the integrand |i·m||o·m| / (|i·n||o·n|) f_nano(i_m, o_m) G(i, o, m) D(m)
         ok = valid & (im > 0) & (om > 0) & (den > 0)
-        li, lo = _local_pair(im, om, np.sum(wi * wo, axis=-1)[:, None])
+        li, lo = local_pair(im, om, np.sum(wi * wo, axis=-1)[:, None])
         fn = self._f_nano(li, lo, lam)
         Lo = spec.Lambda(wo, ax, ay, self.ndf_shape)
         shape = m.shape[:2]
-        gfn, _ = _shadowing(self.micro.shadowing)
+        gfn, _ = shadowing_by_name(self.micro.shadowing)
         G = gfn(wi_b, wo_b, m, lambda w: np.broadcast_to((Li if w is wi_b else Lo)[:, None], shape))
         val = im * om * fn * G * D / np.where(ok, den, 1.0)
         out = np.sum(np.where(ok, val, 0.0), axis=1)

@@ -36,12 +36,12 @@ from ..materials import Material, get_material
 from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .fresnel_terms import FRESNELS
-from .microfacet import _specular
-from .directions import _as_dirs
-from .ndf import ALPHA_MAX, _check_alpha, _ndf
+from .microfacet import specular_term
+from .directions import as_dirs
+from .ndf import ALPHA_MAX, check_alpha, ndf_by_name
 from .quadrature import directional_albedo
 from .sampling import pdf_reflected, sample_reflected
-from .shadowing import _shadowing
+from .shadowing import shadowing_by_name
 from .roughness_scales import Micro
 
 __all__ = ['BRDFSample', 'BRDF', 'MicrofacetBRDF', 'TwoScaleParts', 'sample_cosine', 'pdf_cosine', 'lobe_choice',
@@ -91,10 +91,10 @@ def check_uniform(u):
     return u
 
 
-def _broadcast(wi, wo, wavelength_nm):
+def broadcast_pair(wi, wo, wavelength_nm):
     """Flatten broadcast (wi, wo, λ) to (n, 3), (n, 3), (n,); returns them and the batch shape."""
-    wi = _as_dirs(wi, "wi")
-    wo = _as_dirs(wo, "wo")
+    wi = as_dirs(wi, "wi")
+    wo = as_dirs(wo, "wo")
     lam = np.asarray(wavelength_nm, dtype=float)
     check_wavelengths(lam.ravel() if lam.size else lam)
     shape = np.broadcast_shapes(wi.shape[:-1], wo.shape[:-1], lam.shape)
@@ -111,18 +111,18 @@ class BRDF:
 
     def eval(self, wi, wo, wavelength_nm):
         """f(ω_i, ω_o, λ) in 1/sr (broadcast shape of the inputs)."""
-        wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
+        wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
         return self._eval_flat(wi, wo, lam).reshape(shape)
 
     def pdf(self, wi, wo, wavelength_nm):
         """Density (1/sr over ω_o) of :meth:`sample`."""
-        wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
+        wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
         return self._pdf_flat(wi, wo, lam).reshape(shape)
 
     def sample(self, wi, wavelength_nm, u) -> BRDFSample:
         """Importance-sample ω_o for ω_i at λ from u (..., 2) uniform in [0, 1)²."""
         u = check_uniform(u)
-        wi_b, u2, lam, shape = _broadcast(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
+        wi_b, u2, lam, shape = broadcast_pair(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
         u_flat = np.broadcast_to(u, shape + (2,)).reshape(-1, 2)
         wo = self._sample_flat(wi_b, u_flat, lam)
         up = (wi_b[:, 2] > 0) & (wo[:, 2] > 0)
@@ -137,7 +137,7 @@ class BRDF:
     def albedo(self, wi, wavelength_nm):
         """Directional albedo ∫ f cos θ_o dω_o (dimensionless) by quadrature of :meth:`eval` over half-vectors
         (:func:`waveoptics.brdf.directional_albedo`, nodes placed by each term's width)."""
-        wi = _as_dirs(wi, "wi")
+        wi = as_dirs(wi, "wi")
         lam = np.asarray(wavelength_nm, dtype=float)
         check_wavelengths(lam.ravel() if lam.size else lam)
         shape = np.broadcast_shapes(wi.shape[:-1], lam.shape)
@@ -233,7 +233,7 @@ class MicrofacetBRDF(BRDF):
             raise unknown("Fresnel model", self.fresnel, [k for k in FRESNELS if k != "schlick"])
         if not (np.isfinite(self.kd) and 0 <= self.kd <= 1):
             raise FieldError(f"kd={self.kd!r} is not allowed; the diffuse albedo must be in [0, 1]", "kd")
-        spec = _ndf(self.micro.ndf)
+        spec = ndf_by_name(self.micro.ndf)
         shape = getattr(self.micro, "ndf_shape", None)
         if self.ndf_shape is None:
             object.__setattr__(self, "ndf_shape", shape)
@@ -241,7 +241,7 @@ class MicrofacetBRDF(BRDF):
             raise FieldError(f"ndf_shape={self.ndf_shape!r} differs from micro.ndf_shape={shape!r}; give it once",
                              "ndf_shape")
         if self.ndf_shape is not None:
-            _check_alpha(min(self.micro.alpha, ALPHA_MAX), None, spec, self.ndf_shape)
+            check_alpha(min(self.micro.alpha, ALPHA_MAX), None, spec, self.ndf_shape)
 
     # -- pieces shared with the two-scale model ---------------------------------------------------------
     def _F(self, lam):
@@ -255,8 +255,8 @@ class MicrofacetBRDF(BRDF):
 
     def _f_specular(self, wi, wo, F_fn):
         ndf, ax, ay = self._micro_args()
-        gfn, _ = _shadowing(self.micro.shadowing)
-        return _specular(wi, wo, _ndf(ndf), ax, ay, self.ndf_shape, gfn, F_fn)
+        gfn, _ = shadowing_by_name(self.micro.shadowing)
+        return specular_term(wi, wo, ndf_by_name(ndf), ax, ay, self.ndf_shape, gfn, F_fn)
 
     def _has_diffuse(self):
         return (not self.material.is_metal) and self.kd > 0 and self.diffuse != "none"
@@ -389,7 +389,7 @@ class TwoScaleParts(MicrofacetBRDF):
     def eval_parts(self, wi, wo, wavelength_nm) -> dict:
         """The parts of :meth:`eval` separately: ``coherent``, ``diffraction``, ``diffuse`` and ``multiple`` (the
         multiple-scattering lobe; 0 unless ``multiple_scattering``), in 1/sr."""
-        wi, wo, lam, shape = _broadcast(wi, wo, wavelength_nm)
+        wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
         out = {k: np.zeros(lam.size) for k in ("coherent", "diffraction", "diffuse", "multiple")}
         for val in np.unique(lam):
             sel = lam == val

@@ -8,9 +8,9 @@ from typing import Callable
 import numpy as np
 
 from .microfacet import brdf
-from .directions import _as_dirs, reflect
+from .directions import as_dirs, reflect
 from .ndf import ALPHA_MIN
-from .smith import _gl01
+from .smith import gl01
 
 __all__ = ['NODE_BLOCK', 'normal_quadrature', 'directional_albedo', 'albedo']
 
@@ -26,7 +26,7 @@ NODE_BLOCK = 1 << 18
 
 def _radial_nodes(ax, ay, n_rho):
     """Radial nodes ρ and weights (stretched slope units) of :func:`normal_quadrature`."""
-    x, w = _gl01(n_rho)
+    x, w = gl01(n_rho)
     amin = min(ax, ay)
     # radial segments in stretched slope units ρ (slope = (α_x ρ cos φ, α_y ρ sin φ)): geometric edges from
     # ρ = 1/8 until the slope reaches 8 (θ_m ≈ 83°), then a tail [ρ_K, ∞) mapped by ρ = ρ_K / t
@@ -133,7 +133,7 @@ def directional_albedo(f: Callable, wi, *, alpha=1.0, alpha_y=None, n_rho=16, n_
     ----------
     .. [1] B. Walter et al., EGSR 2007, eq. (14) (Jacobian of the reflection mapping).
     """
-    wi_arr = _as_dirs(wi, "wi")
+    wi_arr = as_dirs(wi, "wi")
     single = wi_arr.ndim == 1
     wi2 = wi_arr.reshape(-1, 3)
     ax = max(float(alpha), ALPHA_MIN)

@@ -56,9 +56,9 @@ class Micro:
             if a is not None and (not np.isfinite(a) or a < 0):
                 raise WaveopticsError(f"micro {name}={a!r} is not allowed; it must be >= 0")
         if self.ndf_shape is not None:
-            from .ndf import _check_alpha, _ndf
+            from .ndf import check_alpha, ndf_by_name
 
-            _check_alpha(min(self.alpha, ALPHA_MAX), None, _ndf(self.ndf), self.ndf_shape)
+            check_alpha(min(self.alpha, ALPHA_MAX), None, ndf_by_name(self.ndf), self.ndf_shape)
 
     @classmethod
     def from_slopes(cls, table, shadowing: str = "smith-correlated") -> "Micro":

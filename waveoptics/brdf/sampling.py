@@ -39,9 +39,9 @@ from scipy import special
 from .measured_ndf import sample_dcos_tabulated
 
 from .anisotropy import STRETCH_EXPONENT, stretch_factors
-from .directions import _dot, reflect
+from .directions import dot_last, reflect
 from .ndf import NDFS
-from .ndf_shaped import (ABC_C_DEFAULT, EPD_P_DEFAULT, SGD_P_DEFAULT, _abc_B, _expm1_over, abc_normalization,
+from .ndf_shaped import (ABC_C_DEFAULT, EPD_P_DEFAULT, SGD_P_DEFAULT, abc_B, expm1_over, abc_normalization,
                          gamma_upper)
 from .roughness import blinn_phong_exponent
 
@@ -79,7 +79,7 @@ def pdf_vndf(ndf_name):
     def pdf(wi, m, ax, ay, c):
         g1 = spec.G1(wi, m, ax, ay, c)
         wz = wi[..., 2]
-        val = g1 * np.maximum(_dot(wi, m), 0.0) * spec.D(m, ax, ay, c) / np.where(wz > 0, wz, 1.0)
+        val = g1 * np.maximum(dot_last(wi, m), 0.0) * spec.D(m, ax, ay, c) / np.where(wz > 0, wz, 1.0)
         return np.where(wz > 0, val, 0.0)
     return pdf
 
@@ -123,10 +123,10 @@ def abc_cdf(t, ax, c):
     2πA ∫₀ᵗ (1 + Bs)^{−C} (1 − s) ds = 2πA [E₁/B − (E₂ − E₁)/B²], E_p = ((1 + Bt)^p − 1)/p at p = 1 − C, 2 − C
     (the integral of :func:`waveoptics.brdf.abc_normalization` stopped at t; 1 at t = 1)."""
     c = ABC_C_DEFAULT if c is None else c
-    B = _abc_B(ax)
+    B = abc_B(ax)
     L = np.log1p(B * np.asarray(t, dtype=float))
-    e1 = _expm1_over(1.0 - c, L)
-    e2 = _expm1_over(2.0 - c, L)
+    e1 = expm1_over(1.0 - c, L)
+    e2 = expm1_over(2.0 - c, L)
     return 2.0 * np.pi * abc_normalization(ax, c) * (e1 / B - (e2 - e1) / (B * B))
 
 
@@ -242,7 +242,7 @@ NORMAL_SAMPLERS: dict[str, NormalSampler] = {
 }
 
 
-def _sampler(ndf) -> NormalSampler:
+def sampler_for(ndf) -> NormalSampler:
     if ndf not in NORMAL_SAMPLERS:
         raise unknown("NDF", ndf, NORMAL_SAMPLERS)
     return NORMAL_SAMPLERS[ndf]
@@ -250,12 +250,12 @@ def _sampler(ndf) -> NormalSampler:
 
 def sample_normal(wi, u, *, ndf, ax, ay, c):
     """A microfacet normal (..., 3) for incident *wi* (..., 3) from uniform *u* (..., 2) (see module doc)."""
-    return _sampler(ndf).sample(np.asarray(wi, float), ax, ay, c, np.asarray(u, float))
+    return sampler_for(ndf).sample(np.asarray(wi, float), ax, ay, c, np.asarray(u, float))
 
 
 def pdf_normal(wi, m, *, ndf, ax, ay, c):
     """Density (1/sr over normals) with which :func:`sample_normal` draws *m* for *wi*."""
-    return _sampler(ndf).pdf(np.asarray(wi, float), np.asarray(m, float), ax, ay, c)
+    return sampler_for(ndf).pdf(np.asarray(wi, float), np.asarray(m, float), ax, ay, c)
 
 
 def sample_reflected(wi, u, *, ndf, ax, ay, c):
@@ -273,7 +273,7 @@ def pdf_reflected(wi, wo, *, ndf, ax, ay, c):
     s = wi + wo
     n = np.linalg.norm(s, axis=-1, keepdims=True)
     m = s / np.where(n > 0, n, 1.0)
-    dot = _dot(wi, m)
+    dot = dot_last(wi, m)
     up = (wi[..., 2] > 0) & (wo[..., 2] > 0) & (dot > 0) & (n[..., 0] > 0)
     p = pdf_normal(wi, np.where(up[..., None], m, np.array([0.0, 0.0, 1.0])), ndf=ndf, ax=ax, ay=ay, c=c)
     return np.where(up, p / (4.0 * np.where(dot > 0, dot, 1.0)), 0.0)

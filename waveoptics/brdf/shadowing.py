@@ -12,9 +12,9 @@ from typing import Callable
 import numpy as np
 
 from ..errors import unknown
-from .directions import _as_dirs, _dot
-from .ndf import _check_alpha, _ndf
-from .smith import _G1
+from .directions import as_dirs, dot_last
+from .ndf import check_alpha, ndf_by_name
+from .smith import G1_from_lambda
 
 __all__ = ['G_smith', 'G_smith_correlated', 'G_cook_torrance', 'G_implicit', 'SHADOWINGS', 'G']
 
@@ -30,7 +30,7 @@ def G_smith(wi, wo, m, lam):
     .. [1] B. Walter et al., EGSR 2007, eq. (23).
     .. [2] E. Heitz, JCGT 3(2), 2014, eq. (98).
     """
-    return _G1(wi, m, lam(wi)) * _G1(wo, m, lam(wo))
+    return G1_from_lambda(wi, m, lam(wi)) * G1_from_lambda(wo, m, lam(wo))
 
 
 def G_smith_correlated(wi, wo, m, lam):
@@ -43,7 +43,7 @@ def G_smith_correlated(wi, wo, m, lam):
     li, lo = lam(wi), lam(wo)
     with np.errstate(invalid="ignore"):
         g = 1.0 / (1.0 + li + lo)
-    ok = (_dot(wi, m) > 0) & (_dot(wo, m) > 0) & (wi[..., 2] > 0) & (wo[..., 2] > 0)
+    ok = (dot_last(wi, m) > 0) & (dot_last(wo, m) > 0) & (wi[..., 2] > 0) & (wo[..., 2] > 0)
     return np.where(ok, g, 0.0)
 
 
@@ -54,8 +54,8 @@ def G_cook_torrance(wi, wo, m, lam=None):
     ----------
     .. [1] R. L. Cook, K. E. Torrance, ACM TOG 1(1), 1982, eq. (5) (after Blinn 1977).
     """
-    vm = _dot(wo, m)
-    ok = (vm > 0) & (_dot(wi, m) > 0) & (wi[..., 2] > 0) & (wo[..., 2] > 0)
+    vm = dot_last(wo, m)
+    ok = (vm > 0) & (dot_last(wi, m) > 0) & (wi[..., 2] > 0) & (wo[..., 2] > 0)
     safe = np.where(ok, vm, 1.0)
     g = np.minimum(1.0, np.minimum(2 * m[..., 2] * wo[..., 2] / safe, 2 * m[..., 2] * wi[..., 2] / safe))
     return np.where(ok, np.maximum(g, 0.0), 0.0)
@@ -80,7 +80,7 @@ SHADOWINGS: dict[str, tuple[Callable, int]] = {
 }
 
 
-def _shadowing(name):
+def shadowing_by_name(name):
     if name not in SHADOWINGS:
         raise unknown("shadowing model", name, SHADOWINGS)
     return SHADOWINGS[name]
@@ -105,7 +105,7 @@ def G(wi, wo, m, alpha, alpha_y=None, *, ndf="ggx", shadowing="smith-correlated"
     .. [1] E. Heitz, JCGT 3(2), 2014, §6.
     .. [2] R. L. Cook, K. E. Torrance, ACM TOG 1(1), 1982.
     """
-    spec = _ndf(ndf)
-    ax, ay = _check_alpha(alpha, alpha_y, spec, ndf_shape)
-    fn, _ = _shadowing(shadowing)
-    return fn(_as_dirs(wi, "wi"), _as_dirs(wo, "wo"), _as_dirs(m, "m"), lambda w: spec.Lambda(w, ax, ay, ndf_shape))
+    spec = ndf_by_name(ndf)
+    ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
+    fn, _ = shadowing_by_name(shadowing)
+    return fn(as_dirs(wi, "wi"), as_dirs(wo, "wo"), as_dirs(m, "m"), lambda w: spec.Lambda(w, ax, ay, ndf_shape))

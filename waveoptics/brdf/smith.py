@@ -12,7 +12,7 @@ from typing import Callable
 
 import numpy as np
 
-from .directions import _dot
+from .directions import dot_last
 
 __all__ = ['LAMBDA_GL_ORDER', 'Lambda_radial']
 
@@ -22,7 +22,7 @@ LAMBDA_GL_ORDER = 32
 
 
 @functools.lru_cache(maxsize=8)
-def _gl01(n):
+def gl01(n):
     """Gauss-Legendre nodes and weights on [0, 1]."""
     x, w = np.polynomial.legendre.leggauss(n)
     return 0.5 * (x + 1.0), 0.5 * w
@@ -56,7 +56,7 @@ def Lambda_radial(w, P22: Callable, alpha):
     st = np.sqrt(w[..., 0] ** 2 + w[..., 1] ** 2)
     ok = (wz > 0) & (st > 0)
     mu = np.where(ok, wz / np.where(st > 0, st, 1.0), 1.0)[..., None]
-    s, ws = _gl01(LAMBDA_GL_ORDER)
+    s, ws = gl01(LAMBDA_GL_ORDER)
     c = np.sqrt(alpha * alpha + mu * mu)
     half = 0.5 * np.pi * s
     rho = c * np.tan(half)
@@ -68,7 +68,7 @@ def Lambda_radial(w, P22: Callable, alpha):
 
 
 
-def _G1(w, m, lam):
+def G1_from_lambda(w, m, lam):
     with np.errstate(invalid="ignore"):
         g = 1.0 / (1.0 + lam)
-    return np.where((_dot(w, m) > 0) & (w[..., 2] > 0), g, 0.0)
+    return np.where((dot_last(w, m) > 0) & (w[..., 2] > 0), g, 0.0)

@@ -32,8 +32,8 @@ import numpy as np
 
 from .. import colour
 from ..errors import FieldError
-from .protocol import BRDF, BRDFSample, _broadcast, check_uniform, lobe_choice
-from .directions import _as_dirs
+from .protocol import BRDF, BRDFSample, broadcast_pair, check_uniform, lobe_choice
+from .directions import as_dirs
 
 __all__ = ['SpectralNodes']
 
@@ -166,7 +166,7 @@ class SpectralNodes(BRDF):
     # -- RGB -----------------------------------------------------------------------------------------------
     def eval_spectrum(self, wi, wo):
         """f at every node: (..., n_nodes) in 1/sr."""
-        wi, wo, _, shape = _broadcast(wi, wo, self.nodes[0])
+        wi, wo, _, shape = broadcast_pair(wi, wo, self.nodes[0])
         out = np.stack([self.base._eval1(wi, wo, lam) for lam in self.wavelengths_nm], axis=-1)
         return out.reshape(shape + (self.nodes.size,))
 
@@ -176,14 +176,14 @@ class SpectralNodes(BRDF):
 
     def pdf_rgb(self, wi, wo):
         """Density (1/sr over ω_o) of :meth:`sample_rgb`: the mean of the nodes' densities."""
-        wi, wo, _, shape = _broadcast(wi, wo, self.nodes[0])
+        wi, wo, _, shape = broadcast_pair(wi, wo, self.nodes[0])
         return np.mean([self.base._pdf1(wi, wo, lam) for lam in self.wavelengths_nm], axis=0).reshape(shape)
 
     def sample_rgb(self, wi, u) -> BRDFSample:
         """Sample ω_o from the node mixture: u[..., 0] picks a node uniformly and is remapped (pbrt-v4 §2.4) for
         that node's own sampler. The weight is RGB (..., 3): f_rgb cos θ_o / pdf_rgb."""
         u = check_uniform(u)
-        wi = _as_dirs(wi, "wi")
+        wi = as_dirs(wi, "wi")
         shape = np.broadcast_shapes(wi.shape[:-1], u.shape[:-1])
         wi_f = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
         u_f = np.broadcast_to(u, shape + (2,)).reshape(-1, 2).copy()

@@ -127,14 +127,14 @@ class Lobes:
             return np.where(c + d > 0, c / (c + d), 1.0)
 
 
-#: the diffracted lobes may exceed their budget by this share before :func:`_cap_to_coherent_loss` acts: the two
+#: the diffracted lobes may exceed their budget by this share before :func:`cap_to_coherent_loss` acts: the two
 #: are integrated by different quadratures (the paraxial lobe on the evaluation grid against E¹ on a polar grid:
 #: < 2e-3; the facet-frame lobe's per-cell quadrature of 64 + 16 normals against the budget's average over the NDF
 #: nodes: up to 2 %, measured on glass at α = 0.1, tests/test_dielectric_energy.py)
 CAP_TOLERANCE = 3e-2
 
 
-def _cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None):
+def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None):
     """Scale the diffracted lobes down where they hold more light than the coherent lobe gave up.
 
     guard: on a conductor the coherent fraction is the complement of the nano lobe's own albedo (energy
@@ -202,7 +202,7 @@ def diffracted_lobe(route, wi, w, mat, micro, nano, grid, F, dm, polarization, r
                                                    device=device, precision=precision)
         budget = None
     if reference_grid is None:
-        diffraction, energy_scale = _cap_to_coherent_loss(diffraction, lost, grid, budget)
+        diffraction, energy_scale = cap_to_coherent_loss(diffraction, lost, grid, budget)
     else:
         energy_scale = np.ones(w.size)
     used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")

@@ -211,16 +211,16 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     .. [2] E. Veach, PhD thesis, 1997, §9.2 (balance heuristic of several techniques).
     """
     from .facet import NanoRadial, facet_basis, unit_nodes
-    from .ndf import _ndf
-    from .sampling import _sampler, pdf_normal, sample_normal
-    from .shadowing import _shadowing
+    from .ndf import ndf_by_name
+    from .sampling import sampler_for, pdf_normal, sample_normal
+    from .shadowing import shadowing_by_name
 
     w = np.asarray(wavelengths_nm, dtype=float)
     dm = scatter.get_model(diffraction, perturbative=True)
     kw = micro.kw()
     ndf, ax = kw["ndf"], kw["alpha"]
     ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
-    c, spec = kw["ndf_shape"], _ndf(kw["ndf"])
+    c, spec = kw["ndf_shape"], ndf_by_name(kw["ndf"])
     na, nb = nodes or facet_nodes(micro, nano, w)
     m_a = sample_normal(np.broadcast_to(wi, (na, 3)), unit_nodes(na), ndf=ndf, ax=ax, ay=ay, c=c)
     inside = grid.inside
@@ -231,8 +231,8 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     rad = NanoRadial(nano.model, FACET_REFERENCE_NM, dm, nb)
     level = rad.level(cos_d)
     Li, Lo = float(spec.Lambda(wi, ax, ay, c)), spec.Lambda(wo, ax, ay, c)
-    gfn, _ = _shadowing(micro.shadowing)
-    visible = _sampler(ndf).visible
+    gfn, _ = shadowing_by_name(micro.shadowing)
+    visible = sampler_for(ndf).visible
     stack = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
     out = np.zeros((wo.shape[0], w.size))
 

@@ -135,7 +135,7 @@ def _measured_ndf(args):
     if args.footprint is not None:   # the NDF one pixel sees (memory-mapped for a .npy)
         fp = surfaces.Footprint.parse(args.footprint)
         if getattr(args, "channel", None) is None:
-            field = surfaces.open_large(args.micro_surface, spacing=_spacing(args), units=getattr(args, "units", None))
+            field = surfaces.open_large(args.micro_surface, spacing=spacing_from_args(args), units=getattr(args, "units", None))
         else:
             field = surfaces.load(args.micro_surface, spacing=getattr(args, "spacing", None),
                                   units=getattr(args, "units", None), channel=args.channel)
@@ -147,7 +147,7 @@ def _measured_ndf(args):
     return table
 
 
-def _spacing(args):
+def spacing_from_args(args):
     """--spacing as (dx, dy) in m, or None."""
     from ..units import parse_length
 

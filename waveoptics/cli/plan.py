@@ -44,7 +44,7 @@ def make_plan(args):
                                recalibrate=getattr(args, "recalibrate", False))
 
 
-def _plan_key(args) -> str | None:
+def plan_key(args) -> str | None:
     """Cache key of a plan: the scene's bytes, the bytes of every file it names (surfaces, spectra), the options
     and the device; None when the scene cannot be read (the planner then says why)."""
     import hashlib
@@ -85,7 +85,7 @@ def _plan_key(args) -> str | None:
 def run(args):
     from .. import cache
 
-    key = _plan_key(args)
+    key = plan_key(args)
     hit = cache.get("plans", key) if key and not args.recalibrate else None
     if isinstance(hit, dict) and "data" in hit and "text" in hit:
         emit(args, {**hit["data"], "from_cache": True},

@@ -86,7 +86,7 @@ def run_glints(args):
     from ..render import percentile_exposure, plot_spheres, tonemap
     from ..renderers import glints
     from ..units import parse_direction, parse_wavelengths
-    from .brdf import _spacing
+    from .brdf import spacing_from_args
 
     given = [k for k, v in _NOT_GLINTS.items() if getattr(args, k) != v]
     if given:
@@ -105,7 +105,7 @@ def run_glints(args):
                                     light_azimuth_deg=lp, wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)),
                                     shape=args.shape)
     if str(args.surface).lower().endswith(".npy") and args.channel is None:
-        field = surfaces.open_large(args.surface, spacing=_spacing(args), units=args.units)
+        field = surfaces.open_large(args.surface, spacing=spacing_from_args(args), units=args.units)
     else:
         field = load_surface(args)
     bar = progress(total=settings.size, desc="glints", args=args)

@@ -79,9 +79,9 @@ def _footprint(args):
         raise WaveopticsError("--footprint sets the window (its Gaussian); drop --window")
     fp = surfaces.Footprint.parse(args.footprint)
     if str(args.surface).lower().endswith(".npy") and args.channel is None:
-        from .brdf import _spacing
+        from .brdf import spacing_from_args
 
-        return fp, surfaces.open_large(args.surface, spacing=_spacing(args), units=args.units)
+        return fp, surfaces.open_large(args.surface, spacing=spacing_from_args(args), units=args.units)
     return fp, load_surface(args)
 
 

@@ -75,7 +75,7 @@ def case_from_scene(sc, *, material: str | None = None, light: str | None = None
     return SimulationRequest(**kw), hf
 
 
-def _token(data) -> str:
+def case_token(data) -> str:
     """Deterministic short hash of JSON-able *data* (the identity of a run, used in task keys and on resume)."""
     return hashlib.sha1(io.to_json(data, sort_keys=True).encode()).hexdigest()[:16]
 
@@ -95,7 +95,7 @@ def _generated_nano(spec: str, wavelengths_nm: tuple, solver: str, seed: int):
     return make_nano(spec, np.asarray(wavelengths_nm), solver=solver, seed=seed)
 
 
-def _nano(case: SimulationRequest, r: int, wavelengths_nm: np.ndarray, surface=None) -> twoscale.Nano | None:
+def case_nano(case: SimulationRequest, r: int, wavelengths_nm: np.ndarray, surface=None) -> twoscale.Nano | None:
     """The nano roughness of realization *r*: the given height-field tile, or *case.nano* (seed ``seed + r``).
 
     Generated height fields are sized from the *whole* wavelength list, never a task's batch, so every batch of

@@ -77,7 +77,7 @@ LOOPBACK = dict(dashboard_address=None, worker_dashboard_address="127.0.0.1:0",
                 silence_logs=logging.CRITICAL)
 
 
-def _check_cluster_args(workers, scheduler) -> None:
+def check_cluster_args(workers, scheduler) -> None:
     if workers is not None and scheduler is not None:
         raise FieldError("give either {workers} N (a local cluster) or {scheduler} ADDRESS, not both", "workers", "scheduler")
     if scheduler is not None and "://" not in str(scheduler):
@@ -98,7 +98,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None):
         Address of an existing scheduler, ``tcp://HOST:PORT``.
     """
 
-    _check_cluster_args(workers, scheduler)
+    check_cluster_args(workers, scheduler)
     if scheduler is not None:
         try:
             client = Client(str(scheduler), timeout="20s")
@@ -148,14 +148,14 @@ class WarmWorker(WorkerPlugin):
         pass
 
 
-def _warm(client, cases, device) -> None:
+def warm_workers(client, cases, device) -> None:
     """Register :class:`WarmWorker` for each distinct (material, solver) of *cases*."""
     for material, solver in dict.fromkeys((c.material, c.solver) for c in cases):
         plugin = WarmWorker(material, solver, device)
         client.register_plugin(plugin, name=plugin.name)
 
 
-class _Job(NamedTuple):
+class Job(NamedTuple):
     key: str
     fn: Callable
     args: tuple
@@ -189,7 +189,7 @@ def _run_jobs(client, jobs: list, on_result: Callable, *, retries: int = DEFAULT
         raise
 
 
-def _run_timed(client, workers, scheduler, needed: bool, submit, on_result, timings: dict, *, retries, progress):
+def run_timed(client, workers, scheduler, needed: bool, submit, on_result, timings: dict, *, retries, progress):
     """Open a client (unless *client* is given), build the jobs with ``submit(client)``, run them, close; record
     ``start_s`` (cluster start, worker warm-up, scatter), ``compute_s`` (first submit to last stored result) and
     ``stop_s`` (cluster shutdown) in *timings*."""

@@ -11,7 +11,7 @@ from ..errors import FieldError, OutputExistsError, WaveopticsError
 
 __all__ = ['partial_path']
 
-def _refuse_or_prepare(final: Path, partial: Path, *, resume: bool, overwrite: bool) -> None:
+def refuse_or_prepare(final: Path, partial: Path, *, resume: bool, overwrite: bool) -> None:
     """Apply the rules on existing outputs before any work (see :func:`run_table`)."""
     parent = final.parent if str(final.parent) else Path(".")
     if not parent.is_dir():
@@ -27,7 +27,7 @@ def _refuse_or_prepare(final: Path, partial: Path, *, resume: bool, overwrite: b
         shutil.rmtree(partial)
 
 
-class _Store:
+class Store:
     """The partial store ``OUT.partial/``: ``run.json`` (parameters) and one atomically written file per task."""
 
     def __init__(self, root: Path, run: dict, *, resume: bool):

@@ -15,11 +15,11 @@ import numpy as np
 
 from .. import colour, io, simulate, surfaces
 from ..errors import FieldError, WaveopticsError, unknown
-from ..request import _NANO_ALIASES, NANO_PARAMS, SimulationRequest, parse_nano
+from ..request import NANO_ALIASES, NANO_PARAMS, SimulationRequest, parse_nano
 from ..units import LENGTH_UNITS, parse_length, parse_number_list
-from .cases import _token, surface_digest
-from .cluster import DEFAULT_RETRIES, _check_cluster_args, _Job, _run_timed, _warm
-from .store import _refuse_or_prepare, _Store, partial_path
+from .cases import case_token, surface_digest
+from .cluster import DEFAULT_RETRIES, check_cluster_args, Job, run_timed, warm_workers
+from .store import refuse_or_prepare, Store, partial_path
 
 __all__ = ['MAX_SWEEP_POINTS', 'parse_length_list', 'VARY', 'parse_vary', 'apply_vary', 'sweep_points', 'sweep_point', 'SWEEP_COLUMNS', 'value_text', 'run_sweep', 'read_sweep']
 
@@ -58,7 +58,7 @@ def _set_nano_param(case: SimulationRequest, key: str, value) -> SimulationReque
         raise FieldError(f"{{vary}} {key}: the nano roughness is a height-field file; vary {{nano}} parameters "
                               "only with {nano} MODEL:params", 'vary', 'nano')
     model, p = parse_nano(case.nano)
-    key = _NANO_ALIASES.get(key, key)
+    key = NANO_ALIASES.get(key, key)
     if key not in NANO_PARAMS[model]:
         raise FieldError(f"{{vary}} nano.{key}: {model} has no parameter {key!r}; allowed: "
                               f"{', '.join(NANO_PARAMS[model])}", 'vary')
@@ -109,7 +109,7 @@ def parse_vary(text: str, base: SimulationRequest | None = None) -> tuple[str, l
     if not eq or not values.strip():
         raise FieldError(f"{{vary}} {text!r} is not NAME=VALUES (e.g. material=Au,Ag,Cu or sigma_nano=1nm:20nm:5)", 'vary')
     if name.startswith("nano."):
-        key = _NANO_ALIASES.get(name[5:], name[5:])
+        key = NANO_ALIASES.get(name[5:], name[5:])
         model = parse_nano(base.nano)[0] if base is not None and base.nano else None
         kind = NANO_PARAMS.get(model, {}).get(key, "length" if key in ("sigma", "T", "B") else "number")
         vals = _vary_nano(key)(values, kind)
@@ -230,13 +230,13 @@ def run_sweep(base: SimulationRequest, varies: list[tuple[str, list]], output, *
         hf = surfaces.load(base.surface)
     if hf is not None:
         params["surface_digest"] = surface_digest(hf)
-    token = _token(params)
+    token = case_token(params)
     if resume and final.exists() and not partial.exists():
         return {"output": str(final), "rows": read_sweep(final), "points": len(points), "computed": 0,
                 "skipped": len(points), "wall_s": time.perf_counter() - t0}
-    _check_cluster_args(workers, scheduler)
-    _refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
-    store = _Store(partial, {"kind": "sweep", "token": token, "parameters": params}, resume=resume)
+    check_cluster_args(workers, scheduler)
+    refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
+    store = Store(partial, {"kind": "sweep", "token": token, "parameters": params}, resume=resume)
     names = [f"p{i:05d}" for i in range(len(points))]
     todo = [i for i, n in enumerate(names) if not store.has(n, ".json")]
     computed = []
@@ -250,12 +250,12 @@ def run_sweep(base: SimulationRequest, varies: list[tuple[str, list]], output, *
         timings["store_s"] += time.perf_counter() - t
 
     def submit(cl):
-        _warm(cl, [c for _, c in points], device)
+        warm_workers(cl, [c for _, c in points], device)
         hf_ref = cl.scatter(hf, broadcast=False, hash=False) if hf is not None else None
-        return [_Job(f"wo-sweep-{token}-{names[i]}", _sweep_task,
+        return [Job(f"wo-sweep-{token}-{names[i]}", _sweep_task,
                      (i, points[i][1], task_fn, hf_ref, sphere_size, device)) for i in todo]
 
-    _run_timed(client, workers, scheduler, bool(todo), submit, on_result, timings, retries=retries,
+    run_timed(client, workers, scheduler, bool(todo), submit, on_result, timings, retries=retries,
                progress=progress)
     rows = []
     for i, (vals, case) in enumerate(points):

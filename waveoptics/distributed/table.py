@@ -23,9 +23,9 @@ from ..request import SimulationRequest, make_nano
 from ..scatter.grid import DirectionGrid
 from ..scatter.solvers import split_patch
 from ..units import check_theta, direction_from_angles
-from .cases import _nano, _token, surface_digest
-from .cluster import DEFAULT_RETRIES, _check_cluster_args, _Job, _run_timed, _warm
-from .store import _refuse_or_prepare, _Store, partial_path
+from .cases import case_nano, case_token, surface_digest
+from .cluster import DEFAULT_RETRIES, check_cluster_args, Job, run_timed, warm_workers
+from .store import refuse_or_prepare, Store, partial_path
 
 __all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'table_size', 'check_table_size', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table', 'open_table']
 
@@ -111,7 +111,7 @@ class TableSpec:
                 "surface_digest": self.surface_digest}
 
     def token(self) -> str:
-        return _token({**self.params(), "format_version": TABLE_VERSION})
+        return case_token({**self.params(), "format_version": TABLE_VERSION})
 
 
 class TableTask(NamedTuple):
@@ -159,7 +159,7 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
     t0, c0 = time.perf_counter(), time.thread_time()
     case = spec.case
     w = case.wavelengths()
-    nano = _nano(case, task.r, w, surface)
+    nano = case_nano(case, task.r, w, surface)
     wi = direction_from_angles(spec.thetas_deg[task.t], spec.phi_deg)
     grid = DirectionGrid.hemisphere(case.resolution)
     L = twoscale.evaluate(wi, w[task.lo:task.hi], get_material(case.material), case.micro(), nano, grid,
@@ -292,9 +292,9 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
                 "timings_s": {}, "complete": True}
     case = spec.case.validate()
     _check_realizations(case, spec.realizations)
-    _check_cluster_args(workers, scheduler)
+    check_cluster_args(workers, scheduler)
     check_table_size(spec, final, max_memory)
-    _refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
+    refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
     if surface is not None:
         tiles = split_patch(surface, spec.realizations) if spec.realizations > 1 else [surface]
         digest = surface_digest(surface)
@@ -302,7 +302,7 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
         tiles, digest = _table_surface(case, spec.realizations)
     spec = dataclasses.replace(spec, surface_digest=digest)
     token = spec.token()
-    store = _Store(partial, {"kind": "table", "token": token, "parameters": spec.params()}, resume=resume)
+    store = Store(partial, {"kind": "table", "token": token, "parameters": spec.params()}, resume=resume)
     tasks = table_tasks(spec)
     todo = [t for t in tasks if not store.has(t.name, ".npz")]
     written: list[str] = []
@@ -322,12 +322,12 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
         timings["store_s"] += time.perf_counter() - t
 
     def submit(cl):
-        _warm(cl, [case], device)
+        warm_workers(cl, [case], device)
         tile_refs = cl.scatter(tiles, broadcast=False, hash=False) if tiles is not None else None
-        return [_Job(f"wo-table-{token}-{t.name}", task_fn,
+        return [Job(f"wo-table-{token}-{t.name}", task_fn,
                      (spec, t, None if tile_refs is None else tile_refs[t.r], device)) for t in todo]
 
-    _run_timed(client, workers, scheduler, bool(todo), submit, on_result, timings, retries=retries,
+    run_timed(client, workers, scheduler, bool(todo), submit, on_result, timings, retries=retries,
                progress=progress)
     t = time.perf_counter()
     _assemble_table(spec, token, store, final, overwrite=overwrite or resume)
@@ -359,7 +359,7 @@ def _table_token(spec: TableSpec, surface=None) -> str:
     return dataclasses.replace(spec, surface_digest=digest).token()
 
 
-def _assemble_table(spec: TableSpec, token: str, store: _Store, final: Path, *, overwrite: bool) -> None:
+def _assemble_table(spec: TableSpec, token: str, store: Store, final: Path, *, overwrite: bool) -> None:
     """Write the HDF5 table from the block files (streaming one (θ, batch) at a time), atomically."""
 
     case = spec.case

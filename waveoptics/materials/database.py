@@ -303,6 +303,11 @@ def category_from_f0(f0_luminance: float) -> str:
     return "dielectric"
 
 
+#: Material specifications built by a higher module, by kind: :mod:`waveoptics.materials.thinfilm` registers the
+#: film stack (``"stack"``: ``SUBSTRATE|FILM:THICKNESS|...``), which is itself made of this module's materials.
+SPEC_PARSERS: dict = {}
+
+
 def get_material(spec) -> Material:
     """Resolve a material specification.
 
@@ -327,8 +332,9 @@ def get_material(spec) -> Material:
             raise TypeError(f"material must be a name or a Material, got {type(spec).__name__}")
     s = spec.strip()
     if "|" in s:   # a thin-film stack: SUBSTRATE|FILM:THICKNESS|... (films from the substrate outwards)
-        from .thinfilm import parse_stack
-        return parse_stack(s)
+        if "stack" not in SPEC_PARSERS:  # only when waveoptics.materials.thinfilm was never imported
+            raise FieldError(f"material {s!r} is a film stack; import waveoptics.materials first", "material")
+        return SPEC_PARSERS["stack"](s)
     if s.lower().startswith("f0:"):
         return _f0_material(s)
     table = _alias_table()

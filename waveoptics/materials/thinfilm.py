@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import FieldError, WaveopticsError
 from ..units import LENGTH_UNITS, parse_length
 from . import fresnel, stack
-from .database import Material, get_material
+from .database import SPEC_PARSERS, Material, get_material
 
 __all__ = ['Stack', 'parse_stack', 'GRAMMAR']
 
@@ -190,3 +190,6 @@ def parse_stack(spec: str) -> Stack:
         [f"substrate {substrate.name}: {substrate.source}"] + [f"{d:g} nm {m.name}: {m.source}" for m, d in films])
     return Stack(name=name, source=source, category=substrate.category,
                  wavelength_range_nm=(max(los), min(his)), substrate=substrate, films=tuple(films))
+
+
+SPEC_PARSERS["stack"] = parse_stack

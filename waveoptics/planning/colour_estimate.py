@@ -25,7 +25,7 @@ __all__ = ['colour_shift']
 # Nano surfaces: the object the solver uses and a PSD proxy for the estimate
 # ----------------------------------------------------------------------------------------------------------------
 
-def _proxy_model(spec: MaterialSpec, hf) -> surfaces.PSDModel:
+def proxy_model(spec: MaterialSpec, hf) -> surfaces.PSDModel:
     """PSD statistics standing in for a height field in the colour estimate (the generator's own when known)."""
 
     n = spec.nano

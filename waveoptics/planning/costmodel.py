@@ -66,7 +66,7 @@ class CostModel:
         return dict(self.__dict__)
 
 
-def _best(fn, repeat=3) -> float:
+def best_of(fn, repeat=3) -> float:
     best = math.inf
     for _ in range(repeat):
         t = time.perf_counter()
@@ -101,12 +101,12 @@ def band_table_time(model, wavelength_nm: float, material=None, theta_deg: float
     coherent fraction needs, timed once past the cache on this machine. Its cost depends on the model (the radial
     grid follows its length scale, the terms its σ) by 2× and more between the PSDs of the example scenes, which
     the calibration's one model (:attr:`CostModel.band_wl`) cannot follow; the shortest wavelength is the dearest."""
-    from ..scatter.band import _band_series
+    from ..scatter.band import band_series_cached
 
     def build():
-        _band_series.__wrapped__(model, float(wavelength_nm), None, 512).scattered_albedo(theta_deg,
+        band_series_cached.__wrapped__(model, float(wavelength_nm), None, 512).scattered_albedo(theta_deg,
                                                                                             material=material)
-    return _best(build, 1)
+    return best_of(build, 1)
 
 
 @functools.lru_cache(maxsize=1)
@@ -128,7 +128,7 @@ def calibrate() -> CostModel:
 
     def t(n, k, mat=metal, nano=None, repeat=3):
         f = lambda: twoscale.evaluate(wi, wls[k], mat, micro, nano, grids[n], kd=0.5)  # noqa: E731
-        return _best(f, repeat)
+        return best_of(f, repeat)
 
     runs = [(16, 1), (64, 1), (64, 6), (32, 3)]
     mf = {r: t(*r) for r in runs}
@@ -149,17 +149,17 @@ def calibrate() -> CostModel:
     # fft: one chirp-z transform of a 128² patch onto a 32² grid
     hf = surfaces.generate("flat", size=128 * 100e-9, samples=128)
     smp = scatter.samples(hf)
-    t_fft = _best(lambda: scatter.field_fft(smp, wi, grids[32], 550.0, order=0), 2)
+    t_fft = best_of(lambda: scatter.field_fft(smp, wi, grids[32], 550.0, order=0), 2)
     fft_unit = t_fft / fft_units((smp.nx, smp.ny), (32, 32))
     # the band-limited series of a PSD model is built once per wavelength (scatter.band_series, cached): time two
     # builds past the cache (a recalibration in the same process would otherwise time cache hits), with the albedo
     # table the coherent fraction needs
-    from ..scatter.band import _band_series
+    from ..scatter.band import band_series_cached
 
     band_model = surfaces.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)
     t_band = time.perf_counter()
     for lam in (431.7, 563.3):
-        _band_series.__wrapped__(band_model, lam, None, 512).scattered_albedo(30.0, material=metal)
+        band_series_cached.__wrapped__(band_model, lam, None, 512).scattered_albedo(30.0, material=metal)
     band_wl = (time.perf_counter() - t_band) / 2
     return CostModel(float(call), float(cell), float(cell_wl), diffuse, float(psd_wl), float(psd_cell_wl),
                      float(psd_term), fft_unit, float(band_wl), time.perf_counter() - t0)
@@ -234,5 +234,5 @@ def _time_direct(rt, precision):
     wo = g.directions()[g.inside]
     coef = scatter.phase_coefficients(smp, direction_from_angles(30.0, 0.0), wo, [550.0])
     scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision)      # build + warm-up
-    t = _best(lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision), 2)
+    t = best_of(lambda: scatter.kirchhoff_U_cl(smp, coef, runtime=rt, precision=precision), 2)
     return t / (coef.size * smp.size)

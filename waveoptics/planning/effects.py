@@ -1,6 +1,6 @@
 """The planner's decisions on the physical effects of one (material, light) pair, in the order they are taken:
 diffuse term, diffraction (and its model), simulated wavelengths (refined for gratings), the nano surface's route,
-multiple scattering. Each reads the :class:`_Entry` and records its outcome and reason there; the rules are
+multiple scattering. Each reads the :class:`Entry` and records its outcome and reason there; the rules are
 described in :mod:`waveoptics.planning.planner`.
 
 References
@@ -23,10 +23,10 @@ from ..planning.scene import MaterialSpec, Scene
 from ..request import make_nano
 from ..scatter.series import roughness_g
 from ..units import parse_length
-from .colour_estimate import _proxy_model, colour_shift
+from .colour_estimate import proxy_model, colour_shift
 from .costmodel import CostModel
 from .decisions import LAMBDA_REF_NM, ORDER_EFFICIENCY_MIN, first_order_g, grating_orders, scattered_fraction
-from .report import _fmt_nm
+from .report import fmt_nm
 from .thresholds import (ESTIMATE_SHARE, ESTIMATE_SPHERE_THETAS, F_FLAT_TOL, FILM_NODES_PER_FRINGE, FLAT_SCATTER,
                          KIRCHHOFF_GRAZING_DEG, PSD_G_MAX, RAYLEIGH_RICE_G_MAX)
 
@@ -42,7 +42,7 @@ def _constant_over(mat: Material, w) -> bool:
 
 
 @dataclass
-class _Entry:
+class Entry:
     """The state of planning one (material, light) pair: inputs, then each decision's outcome in turn."""
 
     scene: Scene
@@ -102,7 +102,7 @@ class _Entry:
         self.decisions.append((name, value, reason))
 
 
-def _decide_diffuse(e: _Entry) -> None:
+def decide_diffuse(e: Entry) -> None:
     """Metals have no diffuse term; dielectrics have one unless their diffuse albedo is 0."""
     if e.mat.is_metal:
         if e.force.get("diffuse") is True:
@@ -123,7 +123,7 @@ def _decide_diffuse(e: _Entry) -> None:
     e.kd = e.spec.diffuse_albedo if e.diffuse else 0.0
 
 
-def _decide_multiple_scattering(e: _Entry) -> None:
+def decide_multiple_scattering(e: Entry) -> None:
     """The Kulla-Conty compensation lobe runs when the scene asks for it (``multiple_scattering = true``); the
     reason states the share of the light single scattering loses at the light's directions, which it returns."""
     if not e.spec.multiple_scattering:
@@ -139,7 +139,7 @@ def _decide_multiple_scattering(e: _Entry) -> None:
              + " of the light that single scattering loses at the light's direction(s) (Kulla & Conty 2017)")
 
 
-def _decide_diffraction(e: _Entry) -> None:
+def decide_diffraction(e: Entry) -> None:
     """Diffraction runs when the nano surface scatters enough light to change the colour by a visible amount
     (a coarse estimate against the scene's ΔE target), or when almost no coherent reflection is left."""
     if e.spec.nano is None:
@@ -151,7 +151,7 @@ def _decide_diffraction(e: _Entry) -> None:
         return
     if e.spec.nano.kind != "statistics":
         e.hf = e.spec.nano.height_field(e.scene.seed)
-    e.proxy = _proxy_model(e.spec, e.hf)
+    e.proxy = proxy_model(e.spec, e.hf)
     probe = twoscale.Nano(surface=e.hf) if e.hf is not None else twoscale.Nano(model=e.proxy)
     s = float(np.max(scattered_fraction(probe, e.cos_max, e.lam_min)))
     F_max = float(np.max(e.mat.F(np.array([e.cos_max]), e.w_colour)))
@@ -189,7 +189,7 @@ def _decide_diffraction(e: _Entry) -> None:
 
 
 
-def _decide_diffraction_model(e: _Entry) -> None:
+def decide_diffraction_model(e: Entry) -> None:
     """The scene's model when it names one; else Kirchhoff, the model whose limits are measured (flat patch = F,
     exp(−g), grating orders, the Beckmann limit), with a note when the light comes near grazing incidence, where
     its factor K grows as 1/cosθ_i (docs/physics.md §10; docs/wave-optics.md compares the models)."""
@@ -235,7 +235,7 @@ def _decide_diffraction_model(e: _Entry) -> None:
     e.decide("diffraction model", "kirchhoff", why)
 
 
-def _map_choice(e: _Entry, thetas):
+def _map_choice(e: Entry, thetas):
     """The validity map's verdict (:func:`waveoptics.planning.validity.choose_model`) for the entry's nano statistics
     at its shortest wavelength: k σ_rel (the relevant roughness, largest over the incidences) and k ℓ (the PSD's
     length scale standing in for the Gaussian correlation length of the map's surfaces)."""
@@ -247,7 +247,7 @@ def _map_choice(e: _Entry, thetas):
     return choose_model(e.mat, k * float(np.sqrt(np.max(s2))), k * float(e.proxy.length_scale), thetas)
 
 
-def _film_step(e: _Entry):
+def film_step(e: Entry):
     """(step nm, reason) of the grid that puts :data:`FILM_NODES_PER_FRINGE` nodes on each interference fringe of
     a thin-film stack: step None when the colour grid already does; None without films.
 
@@ -272,10 +272,10 @@ def _film_step(e: _Entry):
     return step, f"{why} (the colour grid's {current:g} nm would alias them): step {step:g} nm"
 
 
-def _decide_wavelengths(e: _Entry) -> None:
+def decide_wavelengths(e: Entry) -> None:
     """Only the lines of a line source; one evaluation when nothing depends on λ; else the coarsest grid that
-    meets the colour target on smooth spectra, refined for the fringes of a thin-film stack (:func:`_film_step`)."""
-    film = None if e.spd.lines else _film_step(e)
+    meets the colour target on smooth spectra, refined for the fringes of a thin-film stack (:func:`film_step`)."""
+    film = None if e.spd.lines else film_step(e)
     if film is not None and film[0] is not None:
         e.w_colour = colour.spectral_grid(e.spd, film[0])
         e.lam_min = float(np.min(e.w_colour))
@@ -288,27 +288,27 @@ def _decide_wavelengths(e: _Entry) -> None:
                      f"line source {e.spd.name}, and the BRDF does not depend on λ (constant F, no diffraction): "
                      "one evaluation serves every line")
         else:
-            e.decide("wavelengths", _fmt_nm(e.w_sim), f"line source {e.spd.name}: only its visible lines carry light")
+            e.decide("wavelengths", fmt_nm(e.w_sim), f"line source {e.spd.name}: only its visible lines carry light")
     elif not e.diffraction and _constant_over(e.mat, e.w_colour):
         e.lam_independent = True
         e.w_sim = np.array([])
         e.decide("wavelengths", "none (1 evaluation)",
                  f"pure geometric optics with a wavelength-independent Fresnel factor ({e.mat.source}): the BRDF is "
-                 f"the same at every λ; evaluated once at {LAMBDA_REF_NM:g} nm, colour over {_fmt_nm(e.w_colour)}")
+                 f"the same at every λ; evaluated once at {LAMBDA_REF_NM:g} nm, colour over {fmt_nm(e.w_colour)}")
     elif film is not None and film[0] is not None:
         e.lam_independent = False
         e.w_sim = e.w_colour
-        e.decide("wavelengths", _fmt_nm(e.w_sim), f"{film[1]} under {e.spd.name}")
+        e.decide("wavelengths", fmt_nm(e.w_sim), f"{film[1]} under {e.spd.name}")
     else:
         e.lam_independent = False
         e.w_sim = e.w_colour
-        e.decide("wavelengths", _fmt_nm(e.w_sim), f"smooth spectra under {e.spd.name}: the coarsest grid whose "
+        e.decide("wavelengths", fmt_nm(e.w_sim), f"smooth spectra under {e.spd.name}: the coarsest grid whose "
                                                   f"colour error on smooth reflectances stays ≤ ΔE {e.dE:g}"
                                                   + (f"; {film[1]}" if film is not None else ""))
     e.metrics["wavelength_count"] = int(max(e.w_sim.size, 1))
 
 
-def _decide_nano_route(e: _Entry) -> None:
+def decide_nano_route(e: Entry) -> None:
     """The PSD series for Gaussian statistics within its range; a height field (fft or direct, chosen by cost
     later) otherwise."""
     e.nano, e.solver = None, "none"
@@ -333,7 +333,7 @@ def _decide_nano_route(e: _Entry) -> None:
 
 
 
-def _refine_wavelengths_for_grating(e: _Entry) -> None:
+def refine_wavelengths_for_grating(e: Entry) -> None:
     """A periodic nano surface under a continuous source: its orders move by m Δλ / Λ in direction cosine; keep
     that within one grid cell so the rainbow has no gaps (grating equation, docs/physics.md §5)."""
     periodic = e.diffraction and e.spec.nano.kind == "generator" and e.spec.nano.params["model"] == "sinusoid"
@@ -348,7 +348,7 @@ def _refine_wavelengths_for_grating(e: _Entry) -> None:
     if e.w_sim.size < 2 or step < e.w_sim[1] - e.w_sim[0]:
         e.w_sim = e.w_colour = colour.spectral_grid(e.spd, step)
         i = next(k for k, d in enumerate(e.decisions) if d[0] == "wavelengths")
-        e.decisions[i] = ("wavelengths", _fmt_nm(e.w_sim),
+        e.decisions[i] = ("wavelengths", fmt_nm(e.w_sim),
                           f"periodic nano surface (Λ = {period * 1e6:.3g} µm, orders up to {m} with efficiency ≥ "
                           f"{ORDER_EFFICIENCY_MIN:g}): Δλ ≤ Λ du / m = {limit:.3g} nm keeps each order's rainbow "
                           "free of gaps on this grid")

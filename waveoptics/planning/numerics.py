@@ -21,10 +21,10 @@ from ..runtime import get_runtime
 from ..scatter.grid import DirectionGrid
 from ..simulate import sphere_evaluations
 from ..units import direction_from_angles
-from .costmodel import _best, band_table_time, direct_calibration, fft_solver_units, psd_terms
+from .costmodel import best_of, band_table_time, direct_calibration, fft_solver_units, psd_terms
 from .decisions import LAMBDA_REF_NM, diffraction_lobe_width, float32_floor, grid_step, lobe_width, weakest_level
-from .effects import _Entry
-from .report import _fmt_s
+from .effects import Entry
+from .report import fmt_s
 from .thresholds import FLOOR_MARGIN, PATCH_SIGMAS, PSD_G_MAX, RESOLUTION_RANGE
 
 #: the decisions are private steps of :func:`waveoptics.planning.plan_scene`
@@ -52,7 +52,7 @@ def _patch_grids(views_deg, resolution: int, half_width: float) -> list[Directio
 
 
 
-def _decide_resolution(e: _Entry) -> None:
+def decide_resolution(e: Entry) -> None:
     """The grid resolves the narrowest lobe within the colour target (or the height field's specular spike)."""
     if e.micro.alpha > 0:
         e.widths["micro lobe"] = lobe_width(min(e.micro.alpha, e.micro.alpha_y or e.micro.alpha), min(e.cos_i))
@@ -85,7 +85,7 @@ def _decide_resolution(e: _Entry) -> None:
 
 
 
-def _direction_options(e: _Entry) -> tuple[dict, float]:
+def _direction_options(e: Entry) -> tuple[dict, float]:
     """Candidate direction sets: the hemisphere, and patches around the view directions when no output needs the
     hemisphere; with the patches' half-width."""
     out = e.scene.output
@@ -104,7 +104,7 @@ def _direction_options(e: _Entry) -> tuple[dict, float]:
     return options, half
 
 
-def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
+def _costs(e: Entry, options: dict) -> tuple[dict, dict]:
     """Estimated seconds of every (directions, solver) option, and facts about the height-field solvers."""
     n_eval = len(e.light.directions_deg) + (sphere_evaluations(e.micro, e.nano) if e.sphere else 0)
     n_w = max(e.w_sim.size, 1)
@@ -122,7 +122,7 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
         # the height field's coherent fraction is what its own lobe leaves: one fft lobe on a grid of λ/(3L) cells
         # per wavelength and incidence (the macro ones, and the facet table's nodes under a micro lobe)
         theta0 = e.light.directions_deg[0][0]
-        t_char = _best(lambda: field_scattered_albedo(e.hf, theta0, e.lam_min), 2)
+        t_char = best_of(lambda: field_scattered_albedo(e.hf, theta0, e.lam_min), 2)
         hf_info.update(smp=smp, direct_term=direct_term, no_direct=no_direct)
         e.metrics.update(height_field_samples=smp.size, opencl=direct_term is not None, direct_term_s=direct_term,
                          coherent_fraction_s=t_char)
@@ -150,7 +150,7 @@ def _costs(e: _Entry, options: dict) -> tuple[dict, dict]:
     return costs, hf_info
 
 
-def _decide_directions(e: _Entry) -> None:
+def decide_directions(e: Entry) -> None:
     """The cheapest direction set (and height-field solver) that the outputs allow, by the cost model."""
     options, half = _direction_options(e)
     costs, hf = _costs(e, options)
@@ -174,7 +174,7 @@ def _decide_directions(e: _Entry) -> None:
         n_p = sum(g.n_u * g.n_v for g in options["views"])
         e.decide("directions", e.directions,
                  f"{len(e.views)} patches of ±{half:.2g} around the view directions ({n_p} cells): "
-                 f"{_fmt_s(t_views)}; the hemisphere ({e.resolution ** 2} cells): {_fmt_s(t_hemi)}")
+                 f"{fmt_s(t_views)}; the hemisphere ({e.resolution ** 2} cells): {fmt_s(t_hemi)}")
     else:
         e.decide("directions", "hemisphere", "no view directions: the whole hemisphere")
     if hf["hf_solvers"]:
@@ -182,7 +182,7 @@ def _decide_directions(e: _Entry) -> None:
     e.patches = options.get("views", []) if e.directions == "views" else []
 
 
-def _explain_solver(e: _Entry, costs: dict, hf: dict) -> None:
+def _explain_solver(e: Entry, costs: dict, hf: dict) -> None:
     """The reason for the height-field solver the cost model chose."""
     if "solver" in e.force:
         e.decide("solver", e.solver, "forced")
@@ -190,7 +190,7 @@ def _explain_solver(e: _Entry, costs: dict, hf: dict) -> None:
     alt = {s_: v for (d, s_), v in costs.items() if d == e.directions}
     smp = hf["smp"]
     why = (f"height field of {smp.nx}x{smp.ny} samples, both exact Kirchhoff: " +
-           ", ".join(f"{k} {_fmt_s(v)}" for k, v in sorted(alt.items(), key=lambda kv: kv[1])))
+           ", ".join(f"{k} {fmt_s(v)}" for k, v in sorted(alt.items(), key=lambda kv: kv[1])))
     if hf["direct_term"] is None:
         why += f" (direct sum unavailable: {hf['no_direct']})"
     if e.spec.nano.kind == "statistics":
@@ -198,7 +198,7 @@ def _explain_solver(e: _Entry, costs: dict, hf: dict) -> None:
     e.decide("solver", e.solver, why)
 
 
-def _decide_precision(e: _Entry) -> None:
+def decide_precision(e: Entry) -> None:
     """float32 for the direct sum unless its noise floor comes near the weakest visible level of the lobe."""
     if e.solver != "direct":
         e.precision = "float64"

@@ -72,24 +72,24 @@ from .. import colour
 from ..materials import get_material
 from ..planning.scene import MaterialSpec, Scene
 from .costmodel import CostModel, calibration
-from .effects import (_decide_diffraction, _decide_diffraction_model, _decide_diffuse, _decide_multiple_scattering,
-                      _decide_nano_route, _decide_wavelengths, _Entry, _refine_wavelengths_for_grating)
-from .numerics import _decide_directions, _decide_precision, _decide_resolution
+from .effects import (decide_diffraction, decide_diffraction_model, decide_diffuse, decide_multiple_scattering,
+                      decide_nano_route, decide_wavelengths, Entry, refine_wavelengths_for_grating)
+from .numerics import decide_directions, decide_precision, decide_resolution
 from .plan import EntryPlan, Plan
 
 __all__ = ['plan_scene']
 
 
 #: the decisions, in the order they are taken (each reads the outcomes of those before it)
-DECISIONS = (_decide_diffuse, _decide_diffraction, _decide_diffraction_model, _decide_wavelengths,
-             _decide_nano_route, _decide_resolution, _refine_wavelengths_for_grating, _decide_directions,
-             _decide_precision, _decide_multiple_scattering)
+DECISIONS = (decide_diffuse, decide_diffraction, decide_diffraction_model, decide_wavelengths,
+             decide_nano_route, decide_resolution, refine_wavelengths_for_grating, decide_directions,
+             decide_precision, decide_multiple_scattering)
 
 
 def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostModel, device,
                 max_resolution: int | None) -> EntryPlan:
     """Plan one (material, light) pair: take every decision of :data:`DECISIONS` in turn."""
-    e = _Entry(scene, spec, light, force, cm, device, max_resolution)
+    e = Entry(scene, spec, light, force, cm, device, max_resolution)
     e.mat = get_material(spec.material)
     e.spd = colour.illuminant(light.spd)
     e.micro = spec.micro()

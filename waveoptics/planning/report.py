@@ -15,22 +15,22 @@ def plan_table(plan) -> str:
     for e in plan.entries:
         lines.append("")
         lines.append(f"{e.name} ({e.material.name}, {e.material.category}) under {e.light_name} ({e.spd.name}): "
-                     f"estimated {_fmt_s(e.estimated_time_s)}")
+                     f"estimated {fmt_s(e.estimated_time_s)}")
         w = max(len(d) for d, _, _ in e.decisions)
         v = min(24, max(len(str(val)) for _, val, _ in e.decisions))
         for d, val, r in e.decisions:
             lines.append(f"  {d:<{w}}  {str(val):<{v}}  {r}")
     lines.append("")
-    lines.append(f"total estimated {_fmt_s(plan.estimated_time_s)} (planning took {_fmt_s(plan.planning_time_s)}; "
-                 f"cost model calibrated in {_fmt_s(plan.cost_model.calibration_s)})")
+    lines.append(f"total estimated {fmt_s(plan.estimated_time_s)} (planning took {fmt_s(plan.planning_time_s)}; "
+                 f"cost model calibrated in {fmt_s(plan.cost_model.calibration_s)})")
     return "\n".join(lines)
 
 
-def _fmt_s(t: float) -> str:
+def fmt_s(t: float) -> str:
     return f"{t * 1e3:.0f} ms" if t < 1 else f"{t:.1f} s"
 
 
-def _fmt_nm(w) -> str:
+def fmt_nm(w) -> str:
     w = np.asarray(w, dtype=float)
     if w.size == 0:
         return "none"

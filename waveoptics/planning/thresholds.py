@@ -29,7 +29,7 @@ F_FLAT_TOL = 1e-9
 FLOOR_MARGIN = 0.1
 #: incidence beyond which the tangent-plane factor's excess over the light the coherent lobe gives up is large
 #: (measured with the height-field route: the coherent-loss guard trims < 0.2 % below 60°, 40 % at 80°;
-#: waveoptics.brdf.twoscale._cap_to_coherent_loss)
+#: waveoptics.brdf.twoscale.cap_to_coherent_loss)
 KIRCHHOFF_GRAZING_DEG = 75.0
 #: largest (4πσ/λ)² (the g of normal incidence and backscatter, the largest over all directions) at which the
 #: planner trusts first-order Rayleigh-Rice (its domain is g ≪ 1)

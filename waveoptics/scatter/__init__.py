@@ -19,11 +19,12 @@ from .direct import (VECTOR_WIDTH, TERMS_PER_LAUNCH, PhaseCoefficients, phase_co
     launch_pairs, exact_phase_args, kirchhoff_U_cl)
 from .fft import (FFT_TOL, FFT_BAND_X, FFT_MAX_ORDER, fft_plan, field_fft)
 from .series import (M_MAX, SeriesTables, series_tables, SeriesSum, series_sum, poisson_weights, roughness_g,
-    series_terms, debye_waller, obliquity, scattered_lobe, rayleigh_rice)
+    series_terms, debye_waller, obliquity, rayleigh_rice)
+from .polar import (polar_albedo)
 from .band_energy import (TANGENT_PLANE_MAX_DEG, is_conductor, ALBEDO_THETAS_DEG, RR_THETAS_DEG, rr_interp,
-    polar_albedo, BandAlbedos)
+    BandAlbedos)
 from .band import (band_arc, relevant_variance, relevant_variance_of_field, beyond_band_fraction, SIN_NODES,
-    relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series)
+    relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series, scattered_lobe)
 from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, scattering_angles, q_factors, Q,
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
     rayleigh_rice_tis)
@@ -34,6 +35,6 @@ from .solvers import (ENERGY_TOL, DiffractionWarning, Solver, SOLVERS, BACKENDS,
     sampling_warnings, brdf, ScatterResult, memory_estimate, check_request_memory, scatter)
 from .footprint import (footprint_scatter, coherence_centres, incoherent_sum)
 from .output import (plot_scatter, SCATTER_FILES, write_scatter, brdf_exr_header)
-from . import grid, patch, models, kirchhoff, direct, fft, series, band_energy, band, perturbation, mom, models1d, solvers, footprint, output  # noqa: F401
+from . import grid, patch, models, kirchhoff, direct, fft, series, polar, band_energy, band, perturbation, mom, models1d, solvers, footprint, output  # noqa: F401
 
-__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + output.__all__
+__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + output.__all__

@@ -154,7 +154,7 @@ def sincos_poly(precision: str = "float32") -> tuple[np.ndarray, np.ndarray]:
     return S, np.concatenate([[1.0], C])
 
 
-def _sincos_options(precision: str) -> tuple[str, ...]:
+def sincos_options(precision: str) -> tuple[str, ...]:
     """``-DWO_SIN_C<n>=...`` / ``-DWO_COS_C<n>=...`` build options carrying :func:`sincos_poly`."""
     S, C = sincos_poly(precision)
     suffix = "f" if precision == "float32" else ""
@@ -197,7 +197,7 @@ def _cl_setup(runtime, precision, vector_width, smp: Samples, fast_math: bool = 
     vw = int(vector_width or VECTOR_WIDTH)
     if vw not in (2, 4, 8, 16):
         raise WaveopticsError(f"vector_width={vw!r} is not allowed; use 2, 4, 8 or 16")
-    extra = (f"-DWO_VW={vw}", f"-DWO_ND={PAIRS_PER_ITEM[pname]}") + _sincos_options(pname)
+    extra = (f"-DWO_VW={vw}", f"-DWO_ND={PAIRS_PER_ITEM[pname]}") + sincos_options(pname)
     if fast_math:
         extra += ("-cl-fast-relaxed-math",)
     prg = build_program(rt, program, build_options(dt, extra))

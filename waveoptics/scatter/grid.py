@@ -158,7 +158,7 @@ def integrate(f, grid: DirectionGrid, *, region=None) -> np.ndarray:
     return np.sum(np.where(m, f, 0.0), axis=(-2, -1)) * grid.du * grid.dv
 
 
-def _incident(wi) -> np.ndarray:
+def incident_dirs(wi) -> np.ndarray:
     """ω_i from (θ, φ) in degrees or a 3-vector; validated, cos θ_i floored at COS_I_MIN."""
     a = np.asarray(wi, dtype=float).ravel()
     if a.size == 2 or a.size == 1:
@@ -181,7 +181,7 @@ def _incident(wi) -> np.ndarray:
     return w
 
 
-def _outgoing(wo) -> np.ndarray:
+def outgoing_dirs(wo) -> np.ndarray:
     a = np.asarray(wo, dtype=float)
     if a.ndim == 1:
         a = a[None, :]

@@ -41,6 +41,7 @@ import numpy as np
 from ..errors import FieldError, unknown
 from ..surfaces.psd import PSDModel
 from ..vocabulary import POLARIZATIONS
+from .polar import polar_albedo
 from .series import rayleigh_rice
 
 __all__ = ["POLARIZATIONS", "COMPONENTS", "PEC_PERMITTIVITY", "scattering_angles", "q_factors", "Q",
@@ -181,8 +182,6 @@ def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization
     """
     import math
 
-    from .band_energy import polar_albedo
-    from .series import rayleigh_rice
 
     lam = float(wavelength_nm)
     t = math.radians(float(theta_deg))

@@ -47,9 +47,9 @@ import numpy as np
 from scipy import special, stats
 
 from ..surfaces.psd import PSDModel
-from .models import K_kirchhoff, get_model
+from .models import K_kirchhoff
 
-__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'SeriesSum', 'series_sum', 'poisson_weights', 'roughness_g', 'series_terms', 'debye_waller', 'obliquity', 'scattered_lobe', 'rayleigh_rice']
+__all__ = ['M_MAX', 'SeriesTables', 'series_tables', 'SeriesSum', 'series_sum', 'poisson_weights', 'roughness_g', 'series_terms', 'debye_waller', 'obliquity', 'rayleigh_rice']
 
 #: most terms of the series (:func:`scattered_lobe`)
 M_MAX = 48
@@ -217,90 +217,6 @@ def obliquity(wi, wo, wavelength_nm):
     """|ω_i + ω_o|⁴ / (4 λ² cosθ_i cosθ_o (cosθ_i + cosθ_o)²) in 1/m² (docs/physics.md §1); 0 below the surface: the
     Kirchhoff factor of :data:`waveoptics.scatter.DIFFRACTION_MODELS`."""
     return K_kirchhoff(wi, wo, wavelength_nm)
-
-
-def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int = M_MAX, return_captured=False,
-                   diffraction="kirchhoff", band_limited: bool = True):
-    """BRDF (1/sr) of the diffusely scattered part for the PSD *model* (the series of the module doc, with the
-    factor K and the vertical phase of the *diffraction* model, :mod:`waveoptics.scatter.models`).
-
-    Parameters
-    ----------
-    wi, wo : array_like (..., 3)
-        Unit vectors towards the light and the viewer (macro normal = z).
-    wavelength_nm : array_like
-        Vacuum wavelength(s) in nm, broadcast against the direction arrays' leading shape.
-    model : PSDModel
-        Height statistics.
-    F : array_like
-        Fresnel reflectance at the half-vector angle (broadcast), 1 by default.
-    m_max : int
-        Number of series terms.
-    return_captured : bool
-        Also return Σ_{m≤m_max} p_m(g) / (1 − e^{−g}), the fraction of the scattered energy the truncated
-        series holds (1 when converged).
-    diffraction : str or DiffractionModel
-        ``kirchhoff`` (default), ``ghs``, ``rghs``, ``ohs`` or ``rohs``.
-    band_limited : bool
-        True (default): the series of the roughness inside the propagating band, σ_rel
-        (:class:`waveoptics.scatter.band.BandSeries`, docs/physics.md §9); the two-scale model's coherent
-        fraction (:meth:`waveoptics.brdf.Nano.coherent_fraction`) is the complement of the light this lobe
-        scatters, so the two add up to the reflected light.
-        False: the classical series with the full σ (Beckmann & Spizzichino), whose coherent reduction also
-        removes the variance in evanescent frequencies, which cannot scatter.
-
-    Returns
-    -------
-    ndarray
-        f_s, zero where either direction is below the surface.
-    """
-    wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
-    lam = np.asarray(wavelength_nm, dtype=float)
-    k = 2 * np.pi / (lam * 1e-9)
-    s = wi + wo
-    q = k * np.hypot(s[..., 0], s[..., 1])
-    dm = get_model(diffraction)
-    g = roughness_g(model.sigma, dm.cos_sum(wi, wo), lam)
-    if model.sigma == 0:
-        out = np.zeros(np.broadcast(q, g).shape)
-        return (out, np.ones_like(out)) if return_captured else out
-    if band_limited:
-        from .band import band_series
-
-        c = dm.cos_sum(wi, wo)
-        lam_b, q_b, c_b = np.broadcast_arrays(lam, q, c)
-        wi_b = np.broadcast_to(wi, q_b.shape + (3,))
-        wo_b = np.broadcast_to(wo, q_b.shape + (3,))
-        total = np.empty(q_b.shape)
-        g_b = np.empty(q_b.shape)
-        for l_val in np.unique(lam_b):
-            sel = lam_b == l_val
-            bs = band_series(model, float(l_val), None if m_max == M_MAX else m_max)
-            total[sel] = bs(wi_b[sel], wo_b[sel], c_b[sel], q=q_b[sel])
-            sin_i = np.hypot(wi_b[sel][..., 0], wi_b[sel][..., 1])
-            sin_o = np.hypot(wo_b[sel][..., 0], wo_b[sel][..., 1])
-            g_b[sel] = bs.k ** 2 * 0.5 * (bs.sigma2_rel(sin_i) + bs.sigma2_rel(sin_o)) * c_b[sel] ** 2
-        val = np.asarray(F) * dm.K(wi, wo, lam) * total
-        if return_captured:
-            m_use = series_terms(float(np.max(g_b)) if g_b.size else 0.0, m_max)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                captured = np.where(g_b > 0, poisson_weights(g_b, m_use).sum(axis=0) / -np.expm1(-g_b), 1.0)
-            return val, captured
-        return val
-    # round the table range up to a power of two so that one table serves a whole spectrum (cache hit)
-    q_max = 2.0 ** math.ceil(math.log2(float(np.max(q)) * 1.001 + 1.0))
-    tab = series_tables(model, q_max, m_max)
-    q_b, g_b = np.broadcast_arrays(q, g)
-    m_use = series_terms(float(np.max(g_b)) if g_b.size else 0.0, m_max)
-    p = poisson_weights(g_b, m_use)
-    Hm = tab.Hm(q_b)[:m_use]
-    total = np.sum(p * Hm, axis=0)
-    val = np.asarray(F) * dm.K(wi, wo, lam) * total
-    if return_captured:
-        with np.errstate(invalid="ignore", divide="ignore"):
-            captured = np.where(g_b > 0, p.sum(axis=0) / -np.expm1(-g_b), 1.0)
-        return val, captured
-    return val
 
 
 def rayleigh_rice(wi, wo, wavelength_nm, model: PSDModel, Q=1.0):

@@ -19,7 +19,7 @@ from ..surfaces.heightfield import HeightField
 from ..units import check_wavelengths
 from .direct import kirchhoff_U, kirchhoff_U_cl, phase_coefficients
 from .fft import FFT_TOL, field_fft
-from .grid import HORIZON_SIN, DirectionGrid, _incident, _outgoing, integrate
+from .grid import HORIZON_SIN, DirectionGrid, incident_dirs, outgoing_dirs, integrate
 from .kirchhoff import brdf_from_field, coherent_amplitude, cos_theta_d
 from .models import get_model
 from .patch import DEFAULT_WINDOW, Samples, samples
@@ -34,7 +34,7 @@ class DiffractionWarning(UserWarning):
     """A result is computed but an approximation or sampling condition is violated (aliasing, coarse grid...)."""
 
 
-def _warn(msg: str, sink: list | None = None) -> None:
+def warn_or_collect(msg: str, sink: list | None = None) -> None:
     if sink is not None:
         sink.append(msg)
     warnings.warn(msg, DiffractionWarning, stacklevel=3)
@@ -92,7 +92,7 @@ def _lobe_at_direct(smp: Samples, wi, wo, wl, F, *, backend="opencl", runtime=No
                     progress=None, diffraction="kirchhoff", **_) -> np.ndarray:
     """f at the given directions by the direct sum there."""
     for m in sampling_warnings(smp, wi, wl, wo=wo):
-        _warn(m)
+        warn_or_collect(m)
     coef = phase_coefficients(smp, wi, wo, wl, frozen_cos_sum=get_model(diffraction).frozen_cos_sum)
     U = kirchhoff_U(smp, coef) if backend == "numpy" else kirchhoff_U_cl(smp, coef, runtime=runtime,
                                                                           precision=precision, progress=progress)
@@ -107,7 +107,7 @@ def _lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, 
     grid = DirectionGrid.hemisphere(res)
     dirs = grid.directions()
     for m in sampling_warnings(smp, wi, wl, grid=grid):
-        _warn(m)
+        warn_or_collect(m)
     out = np.zeros((len(wl), wo.shape[0]))
     for i, lam in enumerate(wl):
         U, _ = field_fft(smp, wi, grid, lam, order, frozen_cos_sum=get_model(diffraction).frozen_cos_sum)
@@ -290,8 +290,8 @@ def brdf(surface, wi, wo, wavelengths_nm, material=None, *, solver: str = "direc
     """
     sol = get_solver(solver, backend)
     get_model(diffraction)
-    wi = _incident(wi)
-    wo = _outgoing(wo)
+    wi = incident_dirs(wi)
+    wo = outgoing_dirs(wo)
     wl = check_wavelengths(wavelengths_nm)
     F = fresnel_function(material, polarization)
     hfs = _realizations(surface, realizations, seed)
@@ -436,7 +436,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     t0 = time.perf_counter()
     sol = get_solver(solver, backend)
     model = get_model(diffraction)
-    wi = _incident(wi)
+    wi = incident_dirs(wi)
     wl = check_wavelengths(wavelengths_nm)
     F = fresnel_function(material, polarization)
     check_request_memory((grid.n_u, grid.n_v) if grid is not None else resolution, wl.size,
@@ -462,7 +462,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
         smp = samples(hf, window_name, detrend)
         for m in sampling_warnings(smp, wi, wl, grid=grid):
             if m not in msgs:
-                _warn(m, msgs)
+                warn_or_collect(m, msgs)
         t1 = time.perf_counter()
         U, inf = sol.grid_field(smp, wi, grid, wl, backend=backend, runtime=runtime, precision=precision,
                                 order=order, tol=tol, progress=progress, diffraction=model)
@@ -489,7 +489,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     bad = (spec_share > 0.05 * np.maximum(alb, 1e-300)) & (alb > 0)
     if np.any(bad):
         i = int(np.argmax(np.where(bad, spec_share / np.maximum(alb, 1e-300), 0)))
-        _warn(f"{100 * spec_share[i] / alb[i]:.0f}% of the albedo at {wl[i]:g} nm lies near the horizon "
+        warn_or_collect(f"{100 * spec_share[i] / alb[i]:.0f}% of the albedo at {wl[i]:g} nm lies near the horizon "
               f"(sin theta_o > {HORIZON_SIN}), where 1/cos theta_o amplifies errors and the tangent-plane model "
               "(no shadowing) is least reliable" + (" and the frozen-v_z fft approximation fails; use "
                                                     "order='auto' or solver='direct'"
@@ -503,7 +503,7 @@ def scatter(surface, wi, wavelengths_nm, material=None, *, solver: str = "fft", 
     alb1 = integrate(np.where(Fg > 0, f_mean / np.where(Fg > 0, Fg, 1.0), 0.0), grid)
     if np.any(alb1 > ENERGY_TOL):
         i = int(np.argmax(alb1))
-        _warn(f"energy not conserved: the Kirchhoff albedo with F = 1 is {alb1[i]:.3g} > 1 at {wl[i]:g} nm for "
+        warn_or_collect(f"energy not conserved: the Kirchhoff albedo with F = 1 is {alb1[i]:.3g} > 1 at {wl[i]:g} nm for "
               f"theta_i = {math.degrees(math.acos(min(1.0, wi[2]))):.4g} deg; the tangent-plane model fails this "
               "close to grazing incidence (obliquity ~ 1/cos theta_i, no shadowing) and these lobes are not "
               "physical", msgs)

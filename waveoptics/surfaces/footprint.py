@@ -112,7 +112,7 @@ class LargeHeightField:
     """
 
     def __init__(self, path, spacing=None, units=None):
-        from .formats import _npy_parts
+        from .formats import npy_parts
 
         p = Path(path)
         if p.suffix.lower() != ".npy":
@@ -120,7 +120,7 @@ class LargeHeightField:
         if not p.is_file():
             raise WaveopticsError(f"file {str(p)!r} does not exist")
         sp = None if spacing is None else (float(spacing[0]), float(spacing[-1]))
-        a, self.scale, sp, self.meta, self.nan_is_mask = _npy_parts(p, sp, units, False, mmap=True)
+        a, self.scale, sp, self.meta, self.nan_is_mask = npy_parts(p, sp, units, False, mmap=True)
         if a.ndim != 2 or a.dtype.kind not in "fiu" or a.size == 0:
             raise WaveopticsError(f"{str(p)!r} holds a {a.dtype} array of shape {a.shape}; heights must be a "
                                   "non-empty 2-D array of numbers")

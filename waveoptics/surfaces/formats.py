@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import FieldError, OutputExistsError, WaveopticsError, unknown
 from ..io.files import atomic_path, read_exr, to_json, write_exr
 from ..units import LENGTH_UNITS
-from .generators import _length
+from .generators import length_value
 from .heightfield import HeightField
 from . import instruments
 from .instruments import INSTRUMENT_EXTS, WRITERS
@@ -78,8 +78,8 @@ def _spacing_arg(spacing):
     if isinstance(spacing, (list, tuple, np.ndarray)):
         if len(spacing) != 2:
             raise WaveopticsError(f"spacing {spacing!r} is not allowed; give D or (DX, DY)")
-        return _length(spacing[0], "spacing dx"), _length(spacing[1], "spacing dy")
-    d = _length(spacing, "spacing")
+        return length_value(spacing[0], "spacing dx"), length_value(spacing[1], "spacing dy")
+    d = length_value(spacing, "spacing")
     return d, d
 
 
@@ -271,7 +271,7 @@ def npy_fingerprint(path) -> str:
     return h.hexdigest()
 
 
-def _npy_parts(p, sp, units, nan_is_mask, *, mmap: bool = False):
+def npy_parts(p, sp, units, nan_is_mask, *, mmap: bool = False):
     """(array, scale to metres, spacing (dx, dy) m or None, meta, NaN allowed) of a .npy file and its sidecar; the
     array is memory-mapped (nothing read yet) with *mmap*."""
     try:
@@ -300,7 +300,7 @@ def _npy_parts(p, sp, units, nan_is_mask, *, mmap: bool = False):
 
 
 def _load_npy(p, sp, units, nan_is_mask):
-    a, scale, sp, meta, allow_nan = _npy_parts(p, sp, units, nan_is_mask)
+    a, scale, sp, meta, allow_nan = npy_parts(p, sp, units, nan_is_mask)
     h = _real_heights(a, "the .npy array")
     h, mask = _nan_mask(h, allow_nan, "the .npy array")
     side = p.with_name(p.name + ".json")

@@ -24,7 +24,7 @@ __all__ = ['flat', 'gaussian', 'exponential', 'abc', 'sinusoid', 'MAX_SCRATCHES'
 # Generators
 # ----------------------------------------------------------------------------------------------------------------
 
-def _length(value, name: str, *, allow_zero: bool = False) -> float:
+def length_value(value, name: str, *, allow_zero: bool = False) -> float:
     """A length in metres from a number (m) or a string with a unit ('5nm')."""
     if isinstance(value, str):
         return parse_length(value, name=name, allow_zero=allow_zero)
@@ -84,10 +84,10 @@ def _grid(size, samples) -> tuple[int, int, float, float]:
     if isinstance(size, (list, tuple, np.ndarray)):
         if len(size) != 2:
             raise WaveopticsError(f"size {size!r} is not allowed; give L or (Lx, Ly)")
-        dx = _length(size[0], "size Lx") / nx
-        dy = _length(size[1], "size Ly") / ny
+        dx = length_value(size[0], "size Lx") / nx
+        dy = length_value(size[1], "size Ly") / ny
     else:
-        dx = dy = _length(size, "size") / max(nx, ny)
+        dx = dy = length_value(size, "size") / max(nx, ny)
     return nx, ny, dx, dy
 
 
@@ -202,8 +202,8 @@ def _random_meta(model, params, seed, band, renormalize, exact_rms):
 
 def _correlated(model, sigma, corr_length, size, samples, seed, renormalize, exact_rms) -> HeightField:
     """A random surface of a PSD family with rms height σ and correlation length T (:data:`PSD_MODELS`)."""
-    sigma = _length(sigma, "sigma")
-    T = _length(corr_length, "corr_length")
+    sigma = length_value(sigma, "sigma")
+    T = length_value(corr_length, "corr_length")
     nx, ny, dx, dy = _grid(size, samples)
     rng, seed = _rng_seed(seed)
     family = PSD_MODELS[model]
@@ -300,12 +300,12 @@ def abc(B, C, size, samples, seed=None, *, A=None, sigma=None, renormalize=False
     ----------
     .. [1] Church & Takacs, Proc. SPIE 1530, 1991; Holzschuch & Pacanowski, ACM TOG 36(4), 2017 (use in rendering).
     """
-    B = _length(B, "B")
+    B = length_value(B, "B")
     C = _number(C, "C", lo=2, lo_open=True)
     if (A is None) == (sigma is None):
         raise WaveopticsError("ABC surface: give exactly one of A (m^4) and sigma (m)")
     if sigma is not None:
-        sigma = _length(sigma, "sigma")
+        sigma = length_value(sigma, "sigma")
         A = abc_A(sigma, B, C)
     else:
         A = _number(A, "A", lo=0, lo_open=True)
@@ -339,8 +339,8 @@ def sinusoid(amplitude, period, size, samples, orientation_deg=0.0, phase_deg=0.
     ``meta["periodic"]`` is True only when the patch holds a whole number of periods along both axes; the
     diffraction orders are at sin θ_m = sin θ_i + m λ/Λ (docs/physics.md §5).
     """
-    a = _length(amplitude, "amplitude", allow_zero=True)
-    P = _length(period, "period")
+    a = length_value(amplitude, "amplitude", allow_zero=True)
+    P = length_value(period, "period")
     phi = math.radians(_number(orientation_deg, "orientation_deg"))
     ph0 = math.radians(_number(phase_deg, "phase_deg"))
     nx, ny, dx, dy = _grid(size, samples)
@@ -405,11 +405,11 @@ def scratches(count, width, depth, size, samples, orientation_deg=0.0, spread_de
         raise WaveopticsError(f"count={count!r} is not allowed; it must be a whole number in 0..{MAX_SCRATCHES} "
                               "(each scratch costs a pass over the grid)")
     n = int(n)
-    w = _length(width, "width")
-    d = _length(depth, "depth", allow_zero=True)
+    w = length_value(width, "width")
+    d = length_value(depth, "depth", allow_zero=True)
     th0 = _number(orientation_deg, "orientation_deg")
     spread = _number(spread_deg, "spread_deg", lo=0, hi=180)
-    ln = None if length is None else _length(length, "length")
+    ln = None if length is None else length_value(length, "length")
     v = _number(variation, "variation", lo=0)
     if v >= 1:
         raise WaveopticsError(f"variation={variation!r} is not allowed; it must be in [0, 1)")
@@ -459,7 +459,7 @@ def flakes(size_flake, tilt, size, samples, seed=None) -> HeightField:
     """
     from scipy.spatial import cKDTree
 
-    d = _length(size_flake, "size_flake")
+    d = length_value(size_flake, "size_flake")
     t = _number(tilt, "tilt", lo=0, hi=60)
     nx, ny, dx, dy = _grid(size, samples)
     rng, seed = _rng_seed(seed)
