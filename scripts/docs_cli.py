@@ -70,10 +70,9 @@ def compute() -> dict:
 
 
 def main() -> None:
-    import docs_render
+    import make_docs
 
-    docs_render.write_data("cli", compute())
-    docs_render.write("cli")
+    make_docs.main(["cli"])
 
 
 if __name__ == "__main__":

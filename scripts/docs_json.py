@@ -39,10 +39,9 @@ def compute() -> dict:
 
 
 def main() -> None:
-    import docs_render
+    import make_docs
 
-    docs_render.write_data("json", compute())
-    docs_render.write("json")
+    make_docs.main(["json"])
 
 
 if __name__ == "__main__":
