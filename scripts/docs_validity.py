@@ -1,6 +1,7 @@
-"""Data of docs/validity.md (docs/data/validity.json; prose in docs/templates/validity.md): where the microfacet, Kirchhoff, GHS and Rayleigh-Rice models agree with each other and
-with a rigorous solution (the Rayleigh-Fourier method for sinusoidal gratings, waveoptics.scatter.rigorous), and
-what each loses beyond. Every number is computed by this script."""
+"""Data of docs/validity.md (docs/data/validity.json; prose in docs/templates/validity.md): where the microfacet,
+Kirchhoff, GHS and Rayleigh-Rice models agree with each other and with a rigorous solution (the Rayleigh-Fourier
+method for sinusoidal gratings, waveoptics.scatter.rigorous), and what each loses beyond. Every number is computed
+by this script."""
 from __future__ import annotations
 
 import math
@@ -186,8 +187,8 @@ def random_surface_table() -> dict:
             model = surfaces.PSDModel("gaussian", sigma=s_l * LAM * 1e-9, T=T_l * LAM * 1e-9)
             series = scatter.band_series(model, LAM)
             rows.append({"sigma_over_lam": s_l, "T_over_lam": T_l, "cells": [
-                [float(series.scattered_albedo(t, "kirchhoff", AL)), float(scatter.rayleigh_rice_albedo(t, LAM, model, AL))]
-                for t in thetas]})
+                [float(series.scattered_albedo(t, "kirchhoff", AL)),
+                 float(scatter.rayleigh_rice_albedo(t, LAM, model, AL))] for t in thetas]})
     ratio = {t: [r["cells"][i][0] / r["cells"][i][1] for r in rows] for i, t in enumerate(thetas)}
     tis_over = [[s_l, max(r["cells"][0][1] / r["cells"][0][0] for r in rows if r["sigma_over_lam"] == s_l)]
                 for s_l in (0.05, 0.1)]

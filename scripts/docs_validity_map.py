@@ -1,7 +1,7 @@
-"""Data of docs/validity-map.md (docs/data/validity_map.json; prose in docs/templates/validity_map.md): where the project's 1-D Kirchhoff and first-order
-perturbation (Rayleigh-Rice) models hold against the rigorous mean of the method of moments
-(waveoptics.scatter.mom) on Gaussian surfaces, over kσ, kℓ, the incidence, s and p, a perfect conductor,
-aluminium and glass; with the convergence of the reference itself. Every number is computed by this script.
+"""Data of docs/validity-map.md (docs/data/validity_map.json; prose in docs/templates/validity_map.md): where the
+project's 1-D Kirchhoff and first-order perturbation (Rayleigh-Rice) models hold against the rigorous mean of the
+method of moments (waveoptics.scatter.mom) on Gaussian surfaces, over kσ, kℓ, the incidence, s and p, a perfect
+conductor, aluminium and glass; with the convergence of the reference itself. Every number is computed by this script.
 
     PYTHONPATH=. python scripts/docs_validity_map.py            # the full map (2 processes)
     PYTHONPATH=. python scripts/docs_validity_map.py --quick    # a reduced map (< 1 min), as the tests run it
@@ -275,7 +275,8 @@ def page_data(data) -> dict:
     page = {"bin_deg": BIN_DEG, "noise": {"min": min(nf), "max": max(nf), "median": float(np.median(nf))},
             "regions": _regions(rows, p), "summary": _summary(rows, p), "thorsos": _thorsos(rows),
             "grids": _grids(rows, p),
-            "cost": [{"medium": m, "unknowns": n, "seconds": float(np.median(v))} for (m, n), v in sorted(cost.items())]}
+            "cost": [{"medium": m, "unknowns": n, "seconds": float(np.median(v))}
+                     for (m, n), v in sorted(cost.items())]}
     return {**data, "page": page}
 
 
