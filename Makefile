@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-fast durations setup clean docs bench
+.PHONY: demo test test-fast durations setup clean docs docs-render bench
 
 # pytest-xdist workers: one per core (2 on CI)
 JOBS ?= auto
@@ -36,8 +36,13 @@ test-fast: $(STAMP)
 durations: $(STAMP)
 	$(PY) -m pytest -q -ra -n $(JOBS) --store-durations
 
+# recompute every docs page's data (slow: benchmarks and studies) and render it
 docs: $(STAMP)
 	$(PY) scripts/make_docs.py
+
+# re-render the pages from the committed docs/data/*.json after editing docs/templates/*.md (seconds)
+docs-render: $(STAMP)
+	$(PY) scripts/make_docs.py --render-only
 
 bench: $(STAMP)
 	$(PY) -m waveoptics bench

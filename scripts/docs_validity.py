@@ -1,9 +1,11 @@
-"""Write docs/validity.md: where the microfacet, Kirchhoff, GHS and Rayleigh-Rice models agree with each other and
-with a rigorous solution (the Rayleigh-Fourier method for sinusoidal gratings, waveoptics.scatter.rigorous), and
-what each loses beyond. Every number is computed by this script."""
+"""Data of docs/validity.md (docs/data/validity.json; prose in docs/templates/validity.md): where the microfacet,
+Kirchhoff, GHS and Rayleigh-Rice models agree with each other and with a rigorous solution (the Rayleigh-Fourier
+method for sinusoidal gratings, waveoptics.scatter.rigorous), and what each loses beyond. Every number is computed
+by this script."""
 from __future__ import annotations
 
 import math
+import sys
 import time
 from pathlib import Path
 
@@ -17,7 +19,7 @@ from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.scatter.rigorous import RAYLEIGH_HYPOTHESIS_KA, rayleigh_fourier
 
 ROOT = Path(__file__).resolve().parent.parent
-DOC = ROOT / "docs" / "validity.md"
+sys.path.insert(0, str(ROOT / "scripts"))
 LAM = 550.0
 AL = get_material("Al")
 EPS = complex(AL.eta(LAM)) ** 2
@@ -96,26 +98,26 @@ def error(model_eff, rig, specular: bool = True):
     return sum(abs(model_eff.get(m, 0.0) - rig.get(m, 0.0)) for m in orders) / max(diffracted, 1e-300)
 
 
-def grating_tables():
+def _errors(a, d, theta):
+    """Kirchhoff, GHS and Rayleigh-Rice errors against the rigorous solution (unpolarized, aluminium)."""
+    rig = rigorous(a, d, theta)
+    return [error(scalar("kirchhoff", a, d, theta), rig), error(scalar("ghs", a, d, theta), rig),
+            error(rayleigh_rice(a, d, theta), rig)]
+
+
+def grating_tables() -> list:
+    """Per incidence, per a/λ: the three errors at each d/λ (None where K a is beyond the Rayleigh hypothesis)."""
     out = []
     for theta in THETAS:
-        rows = [f"**θ_i = {theta:g}°** (cells: Kirchhoff · GHS · Rayleigh-Rice; **bold** within {TOL:.0%})\n",
-                "| a/λ \\ d/λ | " + " | ".join(f"{d:g}" for d in D_OVER_LAM) + " |",
-                "|---" * (len(D_OVER_LAM) + 1) + "|"]
+        rows = []
         for a_l in A_OVER_LAM:
             cells = []
             for d_l in D_OVER_LAM:
                 a, d = a_l * LAM * 1e-9, d_l * LAM * 1e-9
-                if 2 * math.pi * a / d > RAYLEIGH_HYPOTHESIS_KA:
-                    cells.append("(Ka > 0.448)")
-                    continue
-                rig = rigorous(a, d, theta)
-                errs = [error(scalar("kirchhoff", a, d, theta), rig), error(scalar("ghs", a, d, theta), rig),
-                        error(rayleigh_rice(a, d, theta), rig)]
-                cells.append(" · ".join(f"**{e:.0%}**" if e <= TOL else f"{e:.0%}" for e in errs))
-            rows.append(f"| {a_l:g} | " + " | ".join(cells) + " |")
-        out.append("\n".join(rows))
-    return "\n\n".join(out)
+                cells.append(None if 2 * math.pi * a / d > RAYLEIGH_HYPOTHESIS_KA else _errors(a, d, theta))
+            rows.append({"a_over_lam": a_l, "cells": cells})
+        out.append({"theta_deg": theta, "rows": rows})
+    return out
 
 
 #: gratings of the polarization and dielectric maps: (a/λ, d/λ)
@@ -124,15 +126,13 @@ POL_THETAS = (0.0, 30.0, 60.0)
 GLASS_EPS = 1.5 ** 2
 
 
-def polarization_tables():
+def polarization_tables() -> dict:
     """Kirchhoff · Rayleigh-Rice errors against the rigorous solution for s and p light, on aluminium and on glass
     (n = 1.5), per grating and incidence; and the extremes the text quotes."""
     out = []
     quoted = {"rr_shallow": 0.0, "glass_p60": [], "glass_s60": []}
     for name, eps in (("aluminium", EPS), ("glass n = 1.5", GLASS_EPS)):
-        cols = [f"{pol} {t:g}°" for pol in ("s", "p") for t in POL_THETAS]
-        rows = [f"**{name}** (cells: Kirchhoff · Rayleigh-Rice; **bold** within {TOL:.0%})\n",
-                "| a/λ, d/λ | " + " | ".join(cols) + " |", "|---" * (len(cols) + 1) + "|"]
+        rows = []
         for a_l, d_l in POL_GRATINGS:
             a, d = a_l * LAM * 1e-9, d_l * LAM * 1e-9
             cells = []
@@ -141,26 +141,24 @@ def polarization_tables():
                     rig = rigorous(a, d, t, eps, pol)
                     errs = [error(scalar("kirchhoff", a, d, t, facet_F(eps, pol)), rig, specular=False),
                             error(rayleigh_rice(a, d, t, eps, pol), rig, specular=False)]
-                    cells.append(" · ".join(f"**{e:.0%}**" if e <= TOL else f"{e:.0%}" for e in errs))
+                    cells.append(errs)
                     if a_l <= 0.01:
                         quoted["rr_shallow"] = max(quoted["rr_shallow"], errs[1])
                     if eps == GLASS_EPS and t == 60.0:
                         quoted[f"glass_{pol}60"].append(errs[0])
-            rows.append(f"| {a_l:g}, {d_l:g} | " + " | ".join(cells) + " |")
-        out.append("\n".join(rows))
-    return "\n\n".join(out), quoted
+            rows.append({"a_over_lam": a_l, "d_over_lam": d_l, "cells": cells})
+        out.append({"name": name, "rows": rows})
+    return {"columns": [[pol, t] for pol in ("s", "p") for t in POL_THETAS], "tables": out,
+            "rr_shallow_max": quoted["rr_shallow"],
+            "glass_s60": [min(quoted["glass_s60"]), max(quoted["glass_s60"])],
+            "glass_p60": [min(quoted["glass_p60"]), max(quoted["glass_p60"])]}
 
 
-def issue_example():
+def issue_example() -> dict:
     """The grating the issue names: period 2 µm, amplitude 100 nm, at 550 nm."""
     a, d = 100e-9, 2e-6
-    cells = []
-    for theta in THETAS:
-        rig = rigorous(a, d, theta)
-        errs = [error(scalar("kirchhoff", a, d, theta), rig), error(scalar("ghs", a, d, theta), rig),
-                error(rayleigh_rice(a, d, theta), rig)]
-        cells.append(f"{theta:g}°: Kirchhoff {errs[0]:.0%}, GHS {errs[1]:.0%}, Rayleigh-Rice {errs[2]:.0%}")
-    return "; ".join(cells)
+    return {"d_over_lam": d / (LAM * 1e-9), "a_over_lam": a / (LAM * 1e-9), "Ka": 2 * math.pi * a / d,
+            "errors": [{"theta_deg": theta, "errors": _errors(a, d, theta)} for theta in THETAS]}
 
 
 def reference_checks():
@@ -175,31 +173,28 @@ def reference_checks():
     th = r.theta_deg[list(r.orders).index(-1)]
     back = rayleigh_fourier(LAM, 2e-6, 80e-9, abs(th), EPS, "s")
     recip = abs(back.order(1 if th >= 0 else -1) / r.order(-1) - 1)
-    return (f"flat aluminium at 35° against the Fresnel equations: {flat:.1e} relative; lossless glass grating "
-            f"(period 2 µm, amplitude 100 nm, 633 nm, p): |Σ R + Σ T − 1| = {energy:.1e}; reciprocity of order −1 "
-            f"on aluminium: {recip:.1e}")
+    return {"flat_fresnel": flat, "energy": energy, "reciprocity": recip}
 
 
-def random_surface_table():
-    """E (share of F scattered) of the band-limited Kirchhoff lobe against Rayleigh-Rice, Gaussian PSDs on Al."""
+def random_surface_table() -> dict:
+    """E (share of F scattered) of the band-limited Kirchhoff lobe and of Rayleigh-Rice, Gaussian PSDs on Al."""
     sig = (0.005, 0.01, 0.02, 0.05, 0.1)
     Ts = (1.0, 2.0, 5.0, 10.0)
     thetas = (0.0, 30.0, 60.0, 80.0, 85.0)
-    rows = ["| σ/λ | T/λ | " + " | ".join(f"θ_i = {t:g}°" for t in thetas) + " |",
-            "|---|---|" + "---|" * len(thetas)]
+    rows = []
     for s_l in sig:
         for T_l in Ts:
             model = surfaces.PSDModel("gaussian", sigma=s_l * LAM * 1e-9, T=T_l * LAM * 1e-9)
             series = scatter.band_series(model, LAM)
-            cells = []
-            for t in thetas:
-                ek = float(series.scattered_albedo(t, "kirchhoff", AL))
-                er = float(scatter.rayleigh_rice_albedo(t, LAM, model, AL))
-                ratio = ek / er
-                txt = f"{ek:.3g} / {er:.3g}"
-                cells.append(f"**{txt}**" if abs(ratio - 1) <= TOL else txt)
-            rows.append(f"| {s_l:g} | {T_l:g} | " + " | ".join(cells) + " |")
-    return "\n".join(rows)
+            rows.append({"sigma_over_lam": s_l, "T_over_lam": T_l, "cells": [
+                [float(series.scattered_albedo(t, "kirchhoff", AL)),
+                 float(scatter.rayleigh_rice_albedo(t, LAM, model, AL))] for t in thetas]})
+    ratio = {t: [r["cells"][i][0] / r["cells"][i][1] for r in rows] for i, t in enumerate(thetas)}
+    tis_over = [[s_l, max(r["cells"][0][1] / r["cells"][0][0] for r in rows if r["sigma_over_lam"] == s_l)]
+                for s_l in (0.05, 0.1)]
+    return {"thetas": list(thetas), "rows": rows, "rr_over_kirchhoff_at_0": tis_over,
+            "kirchhoff_over_rr_at_80": [min(ratio[80.0]), max(ratio[80.0])],
+            "kirchhoff_over_rr_at_85_max": max(ratio[85.0])}
 
 
 def microfacet_table():
@@ -211,7 +206,7 @@ def microfacet_table():
     cell = np.unravel_index(np.argmin(np.sum((wo - np.array([-wi[0], 0, wi[2]])) ** 2, axis=-1)), wo.shape[:2])
     sig = (0.02, 0.05, 0.1, 0.2, 0.4)
     Ts = (2.0, 5.0, 10.0, 20.0)
-    rows = ["| σ/λ \\ T/λ | " + " | ".join(f"{t:g}" for t in Ts) + " |", "|---" * (len(Ts) + 1) + "|"]
+    rows = []
     for s_l in sig:
         cells = []
         for T_l in Ts:
@@ -220,7 +215,7 @@ def microfacet_table():
             try:
                 kl = scatter.scattered_lobe(wi[None, None, :], wo, LAM, model, 1.0, band_limited=False)
             except Exception as exc:          # the series refuses g beyond its range
-                cells.append(f"({type(exc).__name__})")
+                cells.append(type(exc).__name__)
                 continue
             kl = np.where(grid.inside, kl, 0.0)
             g = (4 * math.pi * sigma * wi[2] / (LAM * 1e-9)) ** 2
@@ -228,98 +223,26 @@ def microfacet_table():
             mf = np.where(grid.inside, brdf.specular(wi[None, None, :], wo, alpha=2 * sigma / T, ndf="beckmann",
                                                      shadowing="smith-correlated", fresnel="one"), 0.0)
             d = float(np.sum(np.abs(kl - mf))) / float(np.sum(kl))
-            cells.append(f"**{d:.0%}**" if d <= TOL else f"{d:.0%}")
-        rows.append(f"| {s_l:g} | " + " | ".join(cells) + " |")
-    return "\n".join(rows)
+            cells.append(d)
+        rows.append({"sigma_over_lam": s_l, "cells": cells})
+    return {"T_over_lam": list(Ts), "rows": rows}
+
+
+def compute() -> dict:
+    """Every number of docs/validity.md."""
+    t0 = time.perf_counter()
+    out = {"tolerance": TOL, "wavelength_nm": LAM, "rayleigh_hypothesis_Ka": RAYLEIGH_HYPOTHESIS_KA,
+           "checks": reference_checks(), "d_over_lam": list(D_OVER_LAM), "gratings": grating_tables(),
+           "example": issue_example(), "random": random_surface_table(), "microfacet": microfacet_table(),
+           "polarization": polarization_tables()}
+    out["seconds"] = time.perf_counter() - t0
+    return out
 
 
 def main() -> None:
-    t0 = time.perf_counter()
-    checks = reference_checks()
-    gratings = grating_tables()
-    example = issue_example()
-    random = random_surface_table()
-    micro = microfacet_table()
-    pol_tables, pol_q = polarization_tables()
-    parts = [
-        "# Where each model holds\n",
-        "*Generated by `scripts/docs_validity.py` — do not edit by hand: every number below was computed in that "
-        f"run ({time.perf_counter() - t0:.0f} s).*\n",
-        "waveoptics offers four descriptions of how a rough surface reflects: the **microfacet** model (geometric "
-        "optics), **Kirchhoff** (tangent-plane diffraction) and its Harvey-Shack variant **GHS**, and first-order "
-        "**Rayleigh-Rice** perturbation theory (docs/physics.md §1, §4, §6, §10). This page maps where they agree "
-        f"within {TOL:.0%} with each other and with a rigorous solution, for aluminium at {LAM:g} nm (unpolarized "
-        "light; s and p light and a glass in their own section).\n",
-        "## The rigorous reference\n",
-        "For 1-D sinusoidal gratings a cos(2πx/d) waveoptics carries a Rayleigh-Fourier solver "
-        "(`waveoptics.scatter.rigorous.rayleigh_fourier`): Maxwell's equations with the Rayleigh expansion, exact "
-        f"while K a < {RAYLEIGH_HYPOTHESIS_KA} (Millar 1971). Its own checks, measured here: {checks}. "
-        "tests/test_rigorous.py holds these, and convergence in the number of orders.\n",
-        "## Gratings: scalar models against the rigorous solution\n",
-        "Error of each model's reflected efficiencies, Σ_m |η_m − η_m^rigorous| over the propagating orders, "
-        "relative to the light the rigorous solution diffracts out of the specular order (Σ_{m≠0} η_m). "
-        "Kirchhoff and GHS: F(θ_d) K λ² J_m²(k(cosθ_i + cosθ_m) a) with each model's factor K; Rayleigh-Rice: "
-        "orders ±1 only, (2πa/λ)² cosθ_i cosθ_±1 Q, the rest of R(θ_i) specular. Cells where K a exceeds the "
-        "Rayleigh hypothesis have no reference.\n",
-        gratings + "\n",
-        f"The grating of period 2 µm and amplitude 100 nm (d = {2e-6 / (LAM * 1e-9):.2f} λ, a = "
-        f"{100e-9 / (LAM * 1e-9):.2f} λ, K a = {2 * math.pi * 100e-9 / 2e-6:.3f}): {example}.\n",
-        "Read (aluminium, 550 nm): **Rayleigh-Rice** is within 5 % for shallow gratings (a/λ ≤ 0.02) up to "
-        "θ_i = 60° at every period, and fails from a/λ ≈ 0.05 (its efficiency grows as a² without saturating, "
-        "and it has no orders beyond ±1); at 80° it is off by 3–20 %. **Kirchhoff** is within 5 % at every depth "
-        "the reference reaches (a/λ up to 0.2) once the period is long enough for the incidence — d ≳ 1.6 λ at "
-        "normal incidence, 3.2 λ at 30°, 6.4–12.8 λ at 60° — and fails for short periods at oblique incidence "
-        "(35–41 % at d = 1.6 λ) and at 80° for every period (23–150 %: its obliquity factor overestimates the "
-        "orders; grazing-light gratings need a rigorous solver). **GHS** is further from the reference than "
-        "Kirchhoff in every cell here; it holds only for long periods near normal incidence. Where an evanescent "
-        "order lies just beyond grazing (θ_i = 60°, d = 6.4 λ: order −12 at sin θ = −1.009) the rigorous "
-        "efficiencies carry a resonance (Wood's anomaly, the metal's surface plasmon) that no scalar or first-order "
-        "model has: Rayleigh-Rice is 27 % off there and nowhere else at that depth.\n",
-        "## Polarized light, and a dielectric\n",
-        "The error of the diffracted orders (m ≠ 0 only: on a dielectric the specular beam also gives light to "
-        "the transmitted orders, which neither scalar model here describes) for s and p light separately: the "
-        "rigorous solution per polarization; Kirchhoff with the s or p Fresnel reflectance of each order's facet, "
-        "as `--polarization` does; Rayleigh-Rice with Q_ss or Q_pp (a classical mount scatters no "
-        "cross-polarized light). Aluminium and glass (n = 1.5), reflection:\n",
-        pol_tables + "\n",
-        "Read: Rayleigh-Rice holds for shallow gratings (a/λ = 0.01) for s and p light, on the metal and on the "
-        f"glass, at every incidence here (≤ {pol_q['rr_shallow']:.1%}): its Q_ss and Q_pp are the polarized "
-        "first-order answer. Kirchhoff's diffracted orders follow the unpolarized map on aluminium for both "
-        "polarizations. On glass the s orders do too (at 60°: "
-        f"{min(pol_q['glass_s60']):.0%}–{max(pol_q['glass_s60']):.0%}), but the p orders at 60°, near Brewster's "
-        f"angle (56.3°), are {min(pol_q['glass_p60']):.0%}–{max(pol_q['glass_p60']):.0%} off at every depth and "
-        "period: the p reflectance of each order's facet is not the weight the rigorous solution gives a "
-        "p-polarized order there (Rayleigh-Rice's Q_pp is). For p light on dielectrics near Brewster's angle "
-        "choose `--diffraction rayleigh-rice` where the surface is smooth enough.\n",
-        "## Random surfaces: Kirchhoff against Rayleigh-Rice\n",
-        "No rigorous solution is at hand for a random 2-D surface, so the two theories are held against each other: "
-        "the share of F a Gaussian-PSD surface scatters (E), from the band-limited Kirchhoff series "
-        "(`BandSeries.scattered_albedo`) / from first-order Rayleigh-Rice with Q (`rayleigh_rice_albedo`); **bold** "
-        f"where they agree within {TOL:.0%}.\n",
-        random + "\n",
-        "Read: they agree within 5 % where both should, smooth surfaces (σ/λ ≤ 0.02) up to 60°, at every "
-        "correlation length from λ to 10 λ. As σ/λ grows the first-order TIS overestimates (it has no exp(−g) "
-        "saturation: 1.2× at σ/λ = 0.05 and 2× at 0.1 at normal incidence), so Rayleigh-Rice is left first. "
-        "Towards grazing incidence the Kirchhoff lobe scatters more (1.1–1.3× at 80°, up to 2.4× at 85°, most for "
-        "short correlation lengths): its factor grows as 1/cosθ_i, which the grating map above shows is "
-        "Kirchhoff's error, so at grazing light on smooth surfaces the planner picks Rayleigh-Rice "
-        "(docs/physics.md §10).\n",
-        "## Geometric optics: the microfacet model against Kirchhoff\n",
-        "Relative L1 distance between the Kirchhoff lobe of a Gaussian surface (the classical series with its "
-        "coherent part, F = 1) and the Beckmann microfacet lobe of the same slopes (α = 2σ/T, F = 1, Smith "
-        "masking), θ_i = 30°, on 128² direction cells; **bold** within "
-        f"{TOL:.0%}:\n",
-        micro + "\n",
-        "Read: the microfacet model reaches Kirchhoff within 5 % only at σ/λ = 0.4 (g ≈ 19 at 30°: the coherent "
-        "part gone, the Beckmann limit); at σ/λ = 0.2 it is 13 % off and below 0.1 it misses most of the lobe "
-        "(the coherent spike and the diffraction halo), which is what the two-scale model adds to it.\n",
-        "## Not covered here\n",
-        "2-D rigorous references (e.g. RCWA for crossed gratings or a boundary-integral solver for random "
-        "surfaces), hence cross-polarized (sp, ps) light, which a classical-mount grating does not make; the maps "
-        "are at one wavelength, for one metal and one glass.\n",
-    ]
-    DOC.write_text("\n".join(parts))
-    print(f"wrote {DOC.relative_to(ROOT)}")
+    import make_docs
+
+    make_docs.main(["validity"])
 
 
 if __name__ == "__main__":

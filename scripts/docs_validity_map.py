@@ -1,7 +1,7 @@
-"""Write docs/data/validity_map.json and docs/validity-map.md: where the project's 1-D Kirchhoff and first-order
-perturbation (Rayleigh-Rice) models hold against the rigorous mean of the method of moments
-(waveoptics.scatter.mom) on Gaussian surfaces, over kσ, kℓ, the incidence, s and p, a perfect conductor,
-aluminium and glass; with the convergence of the reference itself. Every number is computed by this script.
+"""Data of docs/validity-map.md (docs/data/validity_map.json; prose in docs/templates/validity_map.md): where the
+project's 1-D Kirchhoff and first-order perturbation (Rayleigh-Rice) models hold against the rigorous mean of the
+method of moments (waveoptics.scatter.mom) on Gaussian surfaces, over kσ, kℓ, the incidence, s and p, a perfect
+conductor, aluminium and glass; with the convergence of the reference itself. Every number is computed by this script.
 
     PYTHONPATH=. python scripts/docs_validity_map.py            # the full map (2 processes)
     PYTHONPATH=. python scripts/docs_validity_map.py --quick    # a reduced map (< 1 min), as the tests run it
@@ -25,6 +25,7 @@ import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
 
 from waveoptics.materials import get_material  # noqa: E402
 from waveoptics.scatter.models1d import kirchhoff_1d, spm1_1d  # noqa: E402
@@ -192,160 +193,91 @@ def _grade(c, n):
     return "unresolved" if c <= 0.20 else "beyond"
 
 
-MARKS = {"5": "✓", "20": "○", "unresolved": "·", "beyond": "✗"}
+def _grade_of(r, model):
+    return _grade(corrected(r[f"{model}_l2"], r["noise_floor"]), r["noise_floor"])
 
 
-def _table(rows, p, model, medium, pol):
-    head = "| kσ | θᵢ | " + " | ".join(f"kℓ = {kl:g}" for kl in p["k_ell"]) + " |"
-    lines = [head, "|" + "---|" * (2 + len(p["k_ell"]))]
-    for ks in p["k_sigma"]:
-        for th in p["theta"]:
-            cells = []
-            for kl in p["k_ell"]:
-                r = next(r for r in rows if (r["k_sigma"], r["k_ell"], r["medium"], r["polarization"],
-                                             r["theta_deg"]) == (ks, kl, medium, pol, th))
-                e, nf = r[f"{model}_l2"], r["noise_floor"]
-                c = corrected(e, nf)
-                cells.append(f"{MARKS[_grade(c, nf)]} {100 * c:.0f} % ({100 * e:.0f} ± {100 * nf:.0f}) "
-                             f"{r[f'{model}_albedo_error']:+.3f}")
-            lines.append(f"| {ks:g} | {th:g}° | " + " | ".join(cells) + " |")
-    return lines
+def _grids(rows, p):
+    """Per model, medium and polarization: every (kσ, θᵢ) row of cells over kℓ, each cell its grade, errors and
+    albedo error."""
+    out = []
+    for model in MODELS:
+        for medium in p["media"]:
+            for pol in p["pols"]:
+                lines = []
+                for ks in p["k_sigma"]:
+                    for th in p["theta"]:
+                        cells = []
+                        for kl in p["k_ell"]:
+                            r = next(r for r in rows if (r["k_sigma"], r["k_ell"], r["medium"], r["polarization"],
+                                                         r["theta_deg"]) == (ks, kl, medium, pol, th))
+                            cells.append({"grade": _grade_of(r, model), "noise": r["noise_floor"],
+                                          "corrected": corrected(r[f"{model}_l2"], r["noise_floor"]),
+                                          "error": r[f"{model}_l2"], "albedo_error": r[f"{model}_albedo_error"]})
+                        lines.append({"k_sigma": ks, "theta_deg": th, "cells": cells})
+                out.append({"model": model, "medium": medium, "polarization": pol, "rows": lines})
+    return out
 
 
 def _summary(rows, p):
-    lines = ["| model | medium | pol. | within 5 % | within 20 % | within the noise only | cells | noise floor "
-             "(median) | where within 20 % (kσ, kℓ, θᵢ) |", "|---|---|---|---|---|---|---|---|---|"]
+    out = []
     for model in MODELS:
         for medium in p["media"]:
             for pol in p["pols"]:
                 sel = [r for r in rows if r["medium"] == medium and r["polarization"] == pol]
-                grades = [_grade(corrected(r[f"{model}_l2"], r["noise_floor"]), r["noise_floor"]) for r in sel]
+                grades = [_grade_of(r, model) for r in sel]
                 ok20 = [r for r, g in zip(sel, grades) if g in ("5", "20")]
-                where = ", ".join(f"({r['k_sigma']:g}, {r['k_ell']:g}, {r['theta_deg']:g}°)" for r in ok20)
-                nf = np.median([r["noise_floor"] for r in sel])
-                lines.append(f"| {model} | {medium} | {pol} | {grades.count('5')} | {len(ok20)} | "
-                             f"{grades.count('unresolved')} | {len(sel)} | {100 * nf:.0f} % | {where or '—'} |")
-    return lines
+                out.append({"model": model, "medium": medium, "polarization": pol, "within_5": grades.count("5"),
+                            "within_20": len(ok20), "unresolved": grades.count("unresolved"), "cells": len(sel),
+                            "noise_median": float(np.median([r["noise_floor"] for r in sel])),
+                            "where": [[r["k_sigma"], r["k_ell"], r["theta_deg"]] for r in ok20]})
+    return out
 
 
 def _regions(rows, p):
     """Per model: in how many of the media × polarizations each (kσ, θᵢ, kℓ) cell is within 20 % (resolved)."""
-    combos = [(m, q) for m in p["media"] for q in p["pols"]]
     out = []
     for model in MODELS:
-        out += [f"**{model}**: cells within 20 % out of {len(combos)} (media × polarizations)", "",
-                "| kσ | θᵢ | " + " | ".join(f"kℓ = {kl:g}" for kl in p["k_ell"]) + " |",
-                "|" + "---|" * (2 + len(p["k_ell"]))]
+        lines = []
         for ks in p["k_sigma"]:
             for th in p["theta"]:
                 cells = []
                 for kl in p["k_ell"]:
                     sel = [r for r in rows if (r["k_sigma"], r["k_ell"], r["theta_deg"]) == (ks, kl, th)]
-                    ok = sum(_grade(corrected(r[f"{model}_l2"], r["noise_floor"]), r["noise_floor"]) in ("5", "20")
-                             for r in sel)
-                    cells.append(f"{ok}/{len(sel)}")
-                out.append(f"| {ks:g} | {th:g}° | " + " | ".join(cells) + " |")
-        out.append("")
+                    cells.append([sum(_grade_of(r, model) in ("5", "20") for r in sel), len(sel)])
+                lines.append({"k_sigma": ks, "theta_deg": th, "cells": cells})
+        out.append({"model": model, "combinations": len(p["media"]) * len(p["pols"]), "rows": lines})
     return out
 
 
-def _thorsos(rows, p):
-    """Kirchhoff on the perfect conductor (s): mean error where kℓ ≥ 8 and θᵢ ≤ 40°, against the rest."""
+def _thorsos(rows):
+    """Kirchhoff on the perfect conductor (s): mean error where kℓ ≥ 6 and θᵢ ≤ 40°, against the rest (None when
+    the map lacks the perfect conductor in s)."""
     pec = [r for r in rows if r["medium"] == "conductor" and r["polarization"] == "s"]
     if not pec:
-        return ["(the perfect conductor in s is not in this map)"]
+        return None
     err = {id(r): corrected(r["kirchhoff_l2"], r["noise_floor"]) for r in pec}
-    big = [err[id(r)] for r in pec if r["k_ell"] >= 6 and r["theta_deg"] <= 40]
-    small = [err[id(r)] for r in pec if r["k_ell"] < 6 and r["theta_deg"] <= 40]
-    steep = [err[id(r)] for r in pec if r["theta_deg"] >= 70]
-    out = []
-    for label, v in (("kℓ ≥ 6, θᵢ ≤ 40°", big), ("kℓ < 6, θᵢ ≤ 40°", small), ("θᵢ = 70°, all kℓ", steep)):
-        if v:
-            out.append(f"- {label}: median noise-corrected relative L2 error of Kirchhoff {100 * np.median(v):.0f} % "
-                       f"(range {100 * min(v):.0f}–{100 * max(v):.0f} %, {len(v)} cells)")
-    return out
+    groups = (("kℓ ≥ 6, θᵢ ≤ 40°", [err[id(r)] for r in pec if r["k_ell"] >= 6 and r["theta_deg"] <= 40]),
+              ("kℓ < 6, θᵢ ≤ 40°", [err[id(r)] for r in pec if r["k_ell"] < 6 and r["theta_deg"] <= 40]),
+              ("θᵢ = 70°, all kℓ", [err[id(r)] for r in pec if r["theta_deg"] >= 70]))
+    return [{"label": label, "median": float(np.median(v)), "min": min(v), "max": max(v), "cells": len(v)}
+            for label, v in groups if v]
 
 
-def write_markdown(data, path):
+def page_data(data) -> dict:
+    """The map's measurements (*data*: quick, parameters, rows, convergence, taper, beam, seconds) with what the
+    page derives from them under ``page``: grades, summaries, the Thorsos check and the cost per realization."""
     p, rows = data["parameters"], data["rows"]
-    L = ["<!-- generated by scripts/docs_validity_map.py: do not edit by hand -->",
-         "# Validity map: the 1-D models against the method of moments", "",
-         "Generated by `scripts/docs_validity_map.py`" + (" in its reduced (`--quick`) form" if data["quick"] else "")
-         + f" in {data['seconds']:.0f} s. The rigorous reference is `waveoptics.scatter.mom` (boundary integral "
-         "equations, Thorsos 1988; Maradudin et al. 1990), averaged over "
-         f"{p['realizations']} seeded realizations of Gaussian surfaces (correlation σ² exp(−τ²/ℓ²)) of "
-         f"{p['length']:g} λ lit by Thorsos' tapered wave of width g = {p['beam']:g} λ, 10 nodes per wavelength or "
-         "more on steep surfaces (10 √(1 + 4 s²), s the rms slope). The models are `waveoptics.scatter.models1d`: "
-         "Kirchhoff (tangent plane, the 1-D Beckmann-Spizzichino series with the Fresnel factor at the facet angle) "
-         "and first-order perturbation (1-D Rayleigh-Rice, `spm1`). Normalization of σ: docs/physics.md § 13.", "",
-         "Each cell: ✓ within 5 %, ○ within 20 %, ✗ beyond, judged on the noise-corrected error √(e² − n²) shown "
-         "first, and only where the noise floor n is itself below the tolerance (· marks a model within 20 % of a "
-         "rigorous mean too noisy to tell); in parentheses e ± n: e the relative L2 error of the incoherent "
-         "scattering coefficient over θₛ in "
-         f"{BIN_DEG:g}° bins, ‖σ_model − σ_MoM‖ / ‖σ_MoM‖, and n the sampling noise floor of the rigorous mean "
-         "(the standard error of the binned mean over realizations, same norm; were the model exact, e would "
-         "average to n). Last the albedo error (model − MoM total reflectance, the model's "
-         "coherent part |r|² e^{−(2kσ cosθᵢ)²} included).", ""]
     nf = [r["noise_floor"] for r in rows]
-    L += ["## Where each model holds", "",
-          f"The noise floor of the rigorous mean is {100 * min(nf):.0f}–{100 * max(nf):.0f} % (median "
-          f"{100 * np.median(nf):.0f} %) with {p['realizations']} realizations: agreement within 20 % is resolved, "
-          "within 5 % is not (it would take about (n/5 %)² times as many realizations); a model whose "
-          "noise-corrected error is below 5 % is counted within 20 % here.", ""] + _regions(rows, p)
-    L += _summary(rows, p) + [""]
-    L += ["## Thorsos 1988 reproduced (perfect conductor, s)", "",
-          "Thorsos found the Kirchhoff approximation good for kℓ ≳ 6 away from grazing and failing as kℓ drops and "
-          "towards grazing. On this map:", ""] + _thorsos(rows, p) + [""]
-    for model in MODELS:
-        for medium in p["media"]:
-            for pol in p["pols"]:
-                L += [f"### {model}, {medium}, {pol}", ""] + _table(rows, p, model, medium, pol) + [""]
-    L += ["## 85° incidence", "",
-          "Not computed. Thorsos' taper needs k g cos²θᵢ ≫ 1: the beam's angular spectrum (width 1/(kg cosθᵢ)) must "
-          "stay clear of grazing, or the part of it that runs along the surface reaches the truncated ends "
-          "(the table below: the flat conductor at 70°). At 85° (cos²θᵢ = 0.0076) k g cos²θᵢ = 7 needs g ≈ 150 λ "
-          "and a surface of about 600 λ, 6 000–12 000 unknowns per realization: beyond a dense solver in this "
-          "map's budget (the library refuses k g cos²θᵢ < 2, g < 42 λ at 85°).", ""]
-    L += ["## The beam and the truncation", "", "| case | g (λ) | L (λ) | k g cos²θᵢ | error |",
-          "|---|---|---|---|---|"]
-    for r in data["taper"]:
-        err = (f"{r['error']:+.1e}" if not isinstance(r["error"], list)
-               else " / ".join(f"{e:+.1e}" for e in r["error"]) + " (θᵢ = 0°, 40°)")
-        tp = f"{r['taper_parameter']:.1f}" if "taper_parameter" in r else "—"
-        L.append(f"| {r['kind']} | {r['beam_width_wl']:g} | {r['length_wl']:g} | {tp} | {err} |")
-    L += ["", "Flat 70°: the specular ratio σ(θᵢ)/(k cos²θᵢ |â|²/2πP) − |r|², exact on an infinite surface. "
-          "Energy: ∫σ dθₛ − 1 on one conducting realization (kσ = 0.63, kℓ = 3.1), the same surface cut to each "
-          "length: Dirichlet (s) conserves energy to 1e-4; Neumann (p) loses the waves scattered towards grazing "
-          "that run along the truncated surface (slowly, as about 1/L). The same is expected for p on aluminium, "
-          "where roughness also launches surface plasmons (decay length about 23 λ at 550 nm) that reach the ends; "
-          "not measured separately here. The map's p cells carry an error of this size in the albedo, well below "
-          "their noise floors in σ.", ""]
-    if "beam" in data:
-        L += ["## The beam width", "",
-              f"Mean incoherent reflectance ∫σ_incoh dθₛ ± its standard error ({data['beam'][0]['realizations']} "
-              "realizations, kσ = 0.3, kℓ = 4, "
-              "surface 4 g long) against the beam width g, at θᵢ = 0°, 40°, 70°: independent of g within the "
-              "sampling error once k g cos²θᵢ is large enough.", "",
-              "| medium | pol. | g (λ) | 0° | 40° | 70° |", "|---|---|---|---|---|---|"]
-        for r in data["beam"]:
-            vals = " | ".join(f"{v:.4f} ± {e:.4f}" for v, e in zip(r["incoherent"], r["incoherent_se"]))
-            L.append(f"| {r['medium']} | {r['polarization']} | {r['beam_width_wl']:g} | {vals} |")
-        L.append("")
-    L += ["## Convergence of the reference", "",
-          "One realization, kσ = 0.6, kℓ = 4, θᵢ = 40°; the change of σ from the finest grid (relative L2) and "
-          "the albedo; seconds on this machine (shared).", "",
-          "| medium | pol. | nodes/λ | albedo | σ change | s |", "|---|---|---|---|---|---|"]
-    for r in data["convergence"]:
-        L.append(f"| {r['medium']} | {r['polarization']} | {r['points_per_wavelength']:g} | {r['albedo']:.5f} | "
-                 f"{r['sigma_change']:.1e} | {r['seconds']:.2f} |")
     cost = {}
     for r in rows:
         cost.setdefault((r["medium"], r["n_unknowns"]), []).append(r["seconds_per_realization"])
-    L += ["", "Cost of the map's realizations (s per realization, all incidences together):", "",
-          "| medium | unknowns | s |", "|---|---|---|"]
-    for (m, n), v in sorted(cost.items()):
-        L.append(f"| {m} | {n} | {np.median(v):.2f} |")
-    path.write_text("\n".join(L) + "\n")
+    page = {"bin_deg": BIN_DEG, "noise": {"min": min(nf), "max": max(nf), "median": float(np.median(nf))},
+            "regions": _regions(rows, p), "summary": _summary(rows, p), "thorsos": _thorsos(rows),
+            "grids": _grids(rows, p),
+            "cost": [{"medium": m, "unknowns": n, "seconds": float(np.median(v))}
+                     for (m, n), v in sorted(cost.items())]}
+    return {**data, "page": page}
 
 
 def planning_table(data):
@@ -367,8 +299,36 @@ def _planning_path(out):
     return out / "planning_validity_map.json" if out else ROOT / "waveoptics" / "planning" / "validity_map.json"
 
 
+def measure(p, *, quick=False, processes=2, json_path=None) -> dict:
+    """The map on the grid *p* (FULL or QUICK), then the convergence, truncation and beam tables; the map alone is
+    written to *json_path* first (the tables take minutes)."""
+    t0 = time.perf_counter()
+    jobs = [(ks, kl, m, pol, p) for ks in p["k_sigma"] for kl in p["k_ell"] for m in p["media"] for pol in p["pols"]]
+    if quick or processes == 1:
+        rows = [r for j in jobs for r in run_config(j)]
+    else:
+        with Pool(processes) as pool:
+            rows = [r for part in pool.map(run_config, jobs, chunksize=1) for r in part]
+    data = dict(quick=quick, parameters={k: list(v) if isinstance(v, tuple) else v for k, v in p.items()},
+                rows=rows)
+    if json_path:
+        json_path.write_text(json.dumps(data, indent=1) + "\n")
+    data.update(convergence=convergence(quick), taper=taper_table(quick), beam=beam_table(quick),
+                seconds=time.perf_counter() - t0)
+    return data
+
+
+def compute() -> dict:
+    """The full map (and the planner's table waveoptics/planning/validity_map.json, written as a side effect)."""
+    data = page_data(measure(dict(FULL), json_path=ROOT / "docs" / "data" / "validity_map.json"))
+    _planning_path(None).write_text(json.dumps(planning_table(data), indent=0) + "\n")
+    return data
+
+
 def main(argv=None) -> None:
-    """Build the map; *argv* defaults to the command line when run as a script and to none under make_docs."""
+    """Build the map; *argv* defaults to the command line when run as a script."""
+    import docs_render
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="a reduced map (< 1 min)")
     ap.add_argument("--out", type=Path, help="write both files into this folder")
@@ -377,37 +337,24 @@ def main(argv=None) -> None:
     ap.add_argument("--update-tables", action="store_true",
                     help="with --from-json: recompute the convergence, truncation and beam tables into that file")
     ap.add_argument("--realizations", type=int, help="realizations per configuration (full map: 64)")
-    a = ap.parse_args(argv if argv is not None else sys.argv[1:] if __name__ == "__main__" else [])
+    a = ap.parse_args(argv if argv is not None else sys.argv[1:])
     if a.from_json:
         data = json.loads(a.from_json.read_text())
         if a.update_tables:
             data.update(convergence=convergence(data["quick"]), taper=taper_table(data["quick"]),
                         beam=beam_table(data["quick"]))
-            a.from_json.write_text(json.dumps(data, indent=1) + "\n")
-        write_markdown(data, (a.out or ROOT / "docs") / "validity-map.md")
-        if not data["quick"]:
-            _planning_path(a.out).write_text(json.dumps(planning_table(data), indent=0) + "\n")
-        return
-    p = dict(QUICK if a.quick else FULL)
-    if a.realizations:
-        p["realizations"] = a.realizations
-    t0 = time.perf_counter()
-    jobs = [(ks, kl, m, pol, p) for ks in p["k_sigma"] for kl in p["k_ell"] for m in p["media"] for pol in p["pols"]]
-    if a.quick or a.processes == 1:
-        rows = [r for j in jobs for r in run_config(j)]
+        json_path, md_path = a.from_json, (a.out or ROOT / "docs") / "validity-map.md"
     else:
-        with Pool(a.processes) as pool:
-            rows = [r for part in pool.map(run_config, jobs, chunksize=1) for r in part]
-    data = dict(quick=a.quick, parameters={k: list(v) if isinstance(v, tuple) else v for k, v in p.items()},
-                rows=rows)
-    json_path = (a.out / "validity_map.json") if a.out else ROOT / "docs" / "data" / "validity_map.json"
-    md_path = (a.out / "validity-map.md") if a.out else ROOT / "docs" / "validity-map.md"
-    json_path.write_text(json.dumps(data, indent=1) + "\n")          # the map first: the tables below take minutes
-    data.update(convergence=convergence(a.quick), taper=taper_table(a.quick), beam=beam_table(a.quick),
-                seconds=time.perf_counter() - t0)
-    json_path.write_text(json.dumps(data, indent=1) + "\n")
-    write_markdown(data, md_path)
-    if not a.quick:
+        p = dict(QUICK if a.quick else FULL)
+        if a.realizations:
+            p["realizations"] = a.realizations
+        json_path = (a.out / "validity_map.json") if a.out else ROOT / "docs" / "data" / "validity_map.json"
+        md_path = (a.out / "validity-map.md") if a.out else ROOT / "docs" / "validity-map.md"
+        data = measure(p, quick=a.quick, processes=a.processes, json_path=json_path)
+    data = page_data(data)
+    json_path.write_text(docs_render.dumps(data), encoding="utf-8")
+    md_path.write_text(docs_render.render("validity_map", data), encoding="utf-8")
+    if not data["quick"]:
         _planning_path(a.out).write_text(json.dumps(planning_table(data), indent=0) + "\n")
     print(f"wrote {json_path} and {md_path} in {data['seconds']:.0f} s")
 
