@@ -147,7 +147,7 @@ def aliasing(get_material) -> list[str]:
     import colour as cs
     from waveoptics import colour
     from waveoptics.planning import FILM_NODES_PER_FRINGE
-    from waveoptics.planning.effects import _film_step
+    from waveoptics.planning.effects import film_step
 
     cmfs, d65 = cs.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"], cs.SDS_ILLUMINANTS["D65"]
     w1 = np.arange(360.0, 831.0)
@@ -168,7 +168,7 @@ def aliasing(get_material) -> list[str]:
     for spec in ALIAS_FILMS:
         m = get_material(spec)
         ref = cs.sd_to_XYZ(cs.SpectralDistribution(dict(zip(w1, m.F0(w1)))), cmfs, d65, method="Integration") / 100
-        film = _film_step(SimpleNamespace(mat=m, w_colour=grids[20.0]))
+        film = film_step(SimpleNamespace(mat=m, w_colour=grids[20.0]))
         step = 20.0 if film is None or film[0] is None else film[0]
         grid = grids[step] if step in grids else colour.spectral_grid("D65", step)
         fringe = float(np.min(m.fringe_spacing_nm(np.array([380.0]))))

@@ -242,7 +242,7 @@ with the micro kernel K, the F = 1 microfacet lobe re-centred on the mirror dire
   add up to F at every angle until the lobe alone would hold more than F. Where the diffracted lobe holds more
   than the coherent lobe gives up (for PSD statistics in the facet frame: than the facets scatter, or with the
   coherent part than they reflect; by more than 1 %), a
-  guard scales it down to that light (`twoscale._cap_to_coherent_loss`; the factor is
+  guard scales it down to that light (`twoscale.cap_to_coherent_loss`; the factor is
   `Lobes.info["diffraction_energy_scale"]`). Measured factor (n = 1 + 6i, 550 nm, 96² grid):
 
 {guard_table()}

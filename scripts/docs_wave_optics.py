@@ -146,7 +146,7 @@ def _frozen_table():
                            ("σ = λ, T = 6.7λ", L, 6.7 * L)):
         hf = surfaces.gaussian(sigma, T, 64 * L, 256, seed=5)
         smp = scatter.samples(hf)
-        wi = scatter.grid._incident((30.0, 0.0))
+        wi = scatter.grid.incident_dirs((30.0, 0.0))
         grid = scatter.DirectionGrid.hemisphere(96)
         d = grid.directions()
         f0 = scatter.brdf_from_field(scatter.field_fft(smp, wi, grid, LAM, 0)[0][None], wi, d, [LAM], smp.area)[0]
@@ -170,7 +170,7 @@ def _cost_table(rt):
         grid = scatter.DirectionGrid.hemisphere(res_)
         dirs = grid.directions()[grid.inside]
         nd = dirs.shape[0]
-        wi = scatter.grid._incident((30.0, 0.0))
+        wi = scatter.grid.incident_dirs((30.0, 0.0))
         for order in (0, "auto"):
             t = time.perf_counter()
             _, info = scatter.field_fft(smp, wi, grid, LAM, order)
@@ -196,7 +196,7 @@ def _cost_table(rt):
         nx = 2**16
         hf = surfaces.HeightField(np.random.default_rng(7).normal(0.0, 50e-9, (2, nx)), L / 4)
         smp = scatter.samples(hf, "boxcar")
-        wi = scatter.grid._incident((60.0, 0.0))
+        wi = scatter.grid.incident_dirs((60.0, 0.0))
         wo = np.array([[-math.sin(math.radians(75)), 0.0, math.cos(math.radians(75))]])
         coef = scatter.phase_coefficients(smp, wi, wo, [LAM])
         ref = scatter.kirchhoff_phase(smp.ix, smp.iy, smp.h, coef.Ax[0], coef.Ay[0], coef.lox[0], coef.loy[0], coef.cz[0],
