@@ -18,6 +18,7 @@ from scipy.ndimage import map_coordinates
 from . import colour, io, scatter, surfaces
 from .renderers import lighting, sphere as render
 from .brdf import MicrofacetBRDF, TabulatedTwoScaleBRDF, twoscale
+from .brdf.roughness_scales import isotropic
 from .brdf.tabulated import PHI_NODES_ANISOTROPIC, THETA_NODES_DEG
 from .io import figures
 from .io.figures import save_figure
@@ -43,13 +44,9 @@ def sphere_nodes(isotropic: bool) -> tuple[tuple, int]:
     return (THETA_NODES_DEG, 1) if isotropic else (SPHERE_THETAS_DEG, PHI_NODES_ANISOTROPIC)
 
 
-def _isotropic(micro, nano) -> bool:
-    return micro.alpha_y is None and (nano is None or nano.model is not None)
-
-
 def sphere_evaluations(micro, nano) -> int:
     """Lobe evaluations of the diffracted-lobe table behind sphere renders (:func:`sphere_nodes`)."""
-    thetas, n_phi = sphere_nodes(_isotropic(micro, nano))
+    thetas, n_phi = sphere_nodes(isotropic(micro, nano))
     return len(thetas) * n_phi
 
 
@@ -57,7 +54,7 @@ def sphere_steps(req: SimulationRequest) -> int:
     """Lobe evaluations :func:`run` makes for *req* with sphere renders (for progress bars)."""
     psd = req.surface is None and not req.split and (req.nano is None or req.nano.split(":")[0].strip().lower()
                                                      in surfaces.PSD_MODELS)
-    thetas, n_phi = sphere_nodes(psd)
+    thetas, n_phi = sphere_nodes(isotropic(req.micro(), psd))
     return 1 + len(thetas) * n_phi
 
 @dataclass
@@ -245,7 +242,7 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
     t = time.perf_counter()
     brdf_wave = None
     if sphere:   # the two-scale BRDF as a function of (ω_i, ω_o, λ): diffracted lobes tabulated over incidence
-        thetas, n_phi = sphere_nodes(_isotropic(micro, nano_obj))
+        thetas, n_phi = sphere_nodes(isotropic(micro, nano_obj))
         brdf_wave = TabulatedTwoScaleBRDF(
             material=mat, micro=micro, nano=nano_obj, kd=req.kd, wavelengths_nm=tuple(w), resolution=req.resolution,
             thetas_deg=thetas, n_phi=n_phi, solver=req.solver, diffraction=req.diffraction, device=device,

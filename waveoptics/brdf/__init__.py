@@ -27,7 +27,7 @@ from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albe
 from .opencl import (D_cl, Lambda_cl, brdf_cl)
 from .field_lobe import (kirchhoff_scattered_lobe, FIELD_THETAS_DEG, FIELD_GRID_OVERSAMPLING, field_scattered_albedo,
     bracketing_nodes)
-from .roughness_scales import (SERIES_MIN_CAPTURED, check_series, Micro, Nano)
+from .roughness_scales import (SERIES_MIN_CAPTURED, check_series, Micro, Nano, isotropic)
 from .scale_split import (SPLIT_PERIODS_OF_LAMBDA, split_scales)
 from .twoscale_grid import (mirror_direction, fresnel_at_mirror, mirror_cell, sharp_micro_lobe, azimuth_deg,
     FACET_TAIL_SHARE, significant_cells)

@@ -21,7 +21,7 @@ from ..surfaces.heightfield import HeightField
 from .field_lobe import bracketing_nodes, field_scattered_albedo
 from .ndf import ALPHA_MAX, ALPHA_MIN
 
-__all__ = ['SERIES_MIN_CAPTURED', 'check_series', 'Micro', 'Nano']
+__all__ = ['SERIES_MIN_CAPTURED', 'check_series', 'Micro', 'Nano', 'isotropic']
 
 
 #: smallest share of the scattered light the truncated PSD series may hold in any direction (else it refuses)
@@ -286,3 +286,20 @@ class Nano:
             # specular light is left there, A = 0, never negative
             out[sel] = np.clip(1.0 - E, 0.0, 1.0)
         return out if out.ndim else float(out)
+
+
+def isotropic(micro: Micro, nano) -> bool:
+    """Whether a two-scale BRDF depends on the azimuths only through φ_o − φ_i (one rule for every table, render
+    and cost estimate): an isotropic micro NDF (no ``alpha_y``) and nano-roughness that is none or isotropic
+    statistics (a PSD model; a height field, even an isotropic one, is a single realization with its own azimuthal
+    structure).
+
+    Parameters
+    ----------
+    micro : Micro
+    nano : Nano, None or bool
+        The nano-roughness, or (for a caller that knows only the request's specification) whether it is given by
+        statistics.
+    """
+    statistical = nano if isinstance(nano, bool) else (nano is None or nano.model is not None)
+    return micro.alpha_y is None and statistical

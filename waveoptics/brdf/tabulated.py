@@ -39,6 +39,7 @@ import numpy as np
 from ..errors import FieldError
 from ..scatter.grid import DirectionGrid
 from .protocol import TwoScaleParts
+from .roughness_scales import isotropic
 from .twoscale import evaluate
 
 __all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'TabulatedTwoScaleBRDF']
@@ -127,7 +128,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     @property
     def isotropic(self) -> bool:
         """Whether the lobe depends on θ_i only: PSD statistics (isotropic) and an isotropic micro NDF."""
-        return self.micro.alpha_y is None and (self.nano is None or self.nano.model is not None)
+        return isotropic(self.micro, self.nano)
 
     def _build(self):
         if self.table_lobes is not None:

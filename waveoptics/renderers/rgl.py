@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import colour
+from ..brdf import roughness_scales
 from ..errors import FieldError
 
 __all__ = ['RGLGrid', 'export_rgl', 'read_back_eval', 'read_back_albedo', 'u2theta', 'u2phi', 'theta2u', 'phi2u', 'UNIFORM_NDF_SHARE']
@@ -196,7 +197,7 @@ def export_rgl(model, path, *, grid: RGLGrid = RGLGrid(), description: str = "wa
     wY = _luminance_weights(lam)
     if isotropic is None:
         base = model.base
-        isotropic = bool(getattr(base, "isotropic", base.micro.alpha_y is None))
+        isotropic = roughness_scales.isotropic(base.micro, getattr(base, "nano", None))
     n, nn = grid.resolution, grid.ndf_resolution
 
     ndf = _ndf_table(model, nn, wY, isotropic).astype(np.float32)
