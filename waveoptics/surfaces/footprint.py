@@ -159,7 +159,7 @@ def open_large(path, spacing=None, units=None):
 
 
 def _region(field, i0, j0, i1, j1) -> HeightField:
-    if isinstance(field, LargeHeightField):
+    if not isinstance(field, HeightField):     # LargeHeightField or any tiled field (waveoptics.surfaces.tiled)
         return field.region(i0, j0, i1, j1)
     sl = (slice(j0, j1), slice(i0, i1))
     meta = {k: v for k, v in field.meta.items() if k != "periodic"}
