@@ -16,7 +16,7 @@ from .statistics import (PeriodogramPSD, DETRENDS, detrended, rms_height, rms_sl
 from .preparation import (level, crop_region, parse_region, transform)
 from .formats import (TEXT_EXTS, FORMATS, READ_FORMATS, WRITE_FORMATS, load, save, FINGERPRINT_BYTES,
     npy_fingerprint)
-from .footprint import (N_SIGMA, Footprint, LargeHeightField, open_large, footprint_patch)
+from .footprint import (N_SIGMA, Footprint, LargeHeightField, open_large, footprint_box, footprint_patch)
 from .tiled import (TiledField, NpyField, HDF5Field, create_npy, create_hdf5, write_tiles, PSDField,
     ScratchField, FlakeField, PROCEDURAL, procedural)
 from .plots import (plot)
