@@ -202,6 +202,6 @@ def test_glint_render_smoke_and_cli(tmp_path):
                                "500,600", "-o", str(tmp_path / "g"), "--json"])
     assert rc == 0, err
     d = json.loads(out)
-    assert d["timings_s"]["wave_per_pixel"] > 0 and (tmp_path / "g" / "glints.png").is_file()
+    assert d["timings_s"]["per_pixel"] > 0 and (tmp_path / "g" / "glints.png").is_file()
     rc, _, err, _ = run_cli(["render", "--glints", "-o", str(tmp_path / "h")])
     assert rc == 2 and "--surface" in err

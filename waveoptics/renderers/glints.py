@@ -54,10 +54,12 @@ import numpy as np
 from .. import colour
 from ..errors import FieldError, unknown
 from ..materials import get_material
-from ..surfaces.footprint import Footprint, footprint_patch
+from ..scatter.pixel import pixel_brdf
+from ..surfaces.footprint import Footprint
 from ..vocabulary import GLINT_SHAPES
 
-__all__ = ["SHAPES", "GlintSettings", "GlintRender", "Geometry", "camera_rays", "geometry", "render_glints"]
+__all__ = ["SHAPES", "GlintSettings", "GlintRender", "GlintEstimate", "Geometry", "camera_rays", "geometry",
+           "footprints", "render_glints", "estimate_glints"]
 
 
 @dataclass(frozen=True)
@@ -82,6 +84,11 @@ class GlintSettings:
         Wavelengths (nm) summed to RGB.
     shape : str
         What the field textures: ``plane`` or ``sphere`` (:data:`SHAPES`).
+    coherence_m : float, m, optional
+        Coherence width of the light (Yan et al. 2018); None: each footprint is coherent.
+    backend, precision : str
+        Evaluator of the footprint sums (:func:`waveoptics.scatter.footprint_sums`): ``opencl`` (default; float64
+        where the device has it unless *precision* says float32) or ``numpy``.
     """
 
     size: int = 64
@@ -94,6 +101,9 @@ class GlintSettings:
     intrinsic_slope: float = 0.01
     wavelengths_nm: tuple = (450.0, 500.0, 550.0, 600.0, 650.0)
     shape: str = "plane"
+    coherence_m: float | None = None
+    backend: str = "opencl"
+    precision: str | None = None
 
     def __post_init__(self):
         if self.shape not in SHAPES:
@@ -112,7 +122,8 @@ class GlintSettings:
 class GlintRender:
     """Linear sRGB images (size, size, 3) of the wave and geometric renders (saturated diffraction colours can lie
     outside the sRGB gamut: negative components), their radiance spectra (size, size, n_λ), the mask of pixels
-    on the field, timings (s) and the median footprint widths (m)."""
+    on the field, timings (s) and the median footprint widths (m); per pixel the BRDFs (1/sr, size, size, n_λ),
+    the footprint (x, y, σ_1, σ_2, angle°: m, m, m, m, degrees) and the local directions (ω_i, ω_o)."""
 
     wave: np.ndarray
     geometric: np.ndarray
@@ -121,6 +132,10 @@ class GlintRender:
     footprint_sigma_m: tuple
     wave_spectral: np.ndarray
     geometric_spectral: np.ndarray
+    wave_brdf: np.ndarray | None = None
+    geometric_brdf: np.ndarray | None = None
+    footprints: np.ndarray | None = None
+    directions: np.ndarray | None = None
 
 
 def _dir(theta_deg, phi_deg):
@@ -301,42 +316,60 @@ def _geometric_f(patch, G, wi, wo, F, slope_sigma):
     return F * D / (4 * wi[2] * wo[2])
 
 
+def footprints(geo: Geometry, filter_px: float):
+    """Footprints of every pixel at once: (σ_1, σ_2, angle in degrees) (size, size) each, the principal axes of
+    Σ = J diag(s², s²) Jᵀ (σ_1 the larger; as :func:`_footprint`)."""
+    C = (filter_px ** 2) * (geo.J @ np.swapaxes(geo.J, -1, -2))
+    vals, vecs = np.linalg.eigh(C)
+    angle = np.degrees(np.arctan2(vecs[..., 1, 1], vecs[..., 0, 1]))
+    return np.sqrt(np.maximum(vals[..., 1], 0.0)), np.sqrt(np.maximum(vals[..., 0], 1e-30)), angle
+
+
+def _local_directions(geo: Geometry, r, i):
+    """(ω_i, ω_o) in the shading frame of pixel (r, i), and the irradiance factor cos θ_i d²/|light − P|²."""
+    p = geo.P[r, i]
+    a, b = geo.light - p, geo.eye - p
+    r2 = float(a @ a)
+    wi, wo = geo.frame[r, i] @ (a / math.sqrt(r2)), geo.frame[r, i] @ (b / np.linalg.norm(b))
+    return wi, wo, wi[2] / r2 * geo.dist ** 2
+
+
 def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows) -> dict:
-    """Render the pixel rows *rows* (a range) whose geometry is *geo* (:meth:`Geometry.take` of those rows):
-    spectral radiance of both models, the mask of pixels shown, the footprint widths and the time of each model
-    (one task of :func:`render_glints`)."""
-    mat = get_material(material)
+    """Render the pixel rows *rows* (a range) whose geometry is *geo* (:meth:`Geometry.take` of those rows): the
+    BRDFs of both models per pixel (:func:`waveoptics.scatter.pixel_brdf`, one batch for the task), the mask of
+    pixels shown, the footprints and the time of reading the field and of the sums (one task of
+    :func:`render_glints`)."""
     lam = np.asarray(s.wavelengths_nm, dtype=float)
     n = s.size
     out = {"rows": rows, "wave": np.zeros((len(rows), n, lam.size)), "geo": np.zeros((len(rows), n, lam.size)),
-           "on": np.zeros((len(rows), n), bool), "sig": [], "t_wave": 0.0, "t_geo": 0.0}
+           "E": np.zeros((len(rows), n)), "on": np.zeros((len(rows), n), bool), "fp": np.zeros((len(rows), n, 5)),
+           "dirs": np.zeros((len(rows), n, 6)), "t_read": 0.0, "t_sums": 0.0, "samples": 0}
+    s1, s2, ang = footprints(geo, s.filter_px)
+    pix, fps, wis, wos = [], [], [], []
     for r in range(len(rows)):
         for i in range(n):
             if not geo.hit[r, i]:
                 continue
-            try:
-                fp = _footprint(geo.c[r, i], geo.J[r, i], s.filter_px)
-                patch, G = footprint_patch(field, fp)
-            except FieldError:
-                continue
-            p = geo.P[r, i]
-            wi, wo = geo.light - p, geo.eye - p
-            r2 = float(wi @ wi)
-            wi, wo = geo.frame[r, i] @ (wi / math.sqrt(r2)), geo.frame[r, i] @ (wo / np.linalg.norm(wo))
+            wi, wo, E = _local_directions(geo, r, i)
+            fp = Footprint(float(geo.c[r, i, 0]), float(geo.c[r, i, 1]), float(s1[r, i]), float(s2[r, i]),
+                           float(ang[r, i]))
+            out["fp"][r, i] = (fp.x, fp.y, fp.sigma, fp.sigma_y, fp.angle_deg)
+            out["dirs"][r, i] = np.concatenate([wi, wo])
             if wi[2] <= 0 or wo[2] <= 0:        # the light or the camera is below this point's horizon
                 out["on"][r, i] = True
                 continue
-            cos_d = float(np.clip(wi @ ((wi + wo) / np.linalg.norm(wi + wo)), 0.0, 1.0))
-            F = mat.F(cos_d, lam)
-            E = wi[2] / r2 * geo.dist ** 2       # irradiance of a unit-intensity light, normalized at distance d
-            t0 = time.perf_counter()
-            out["wave"][r, i] = _wave_f(patch, G, wi, wo, lam, F) * E
-            t1 = time.perf_counter()
-            out["geo"][r, i] = _geometric_f(patch, G, wi, wo, F, s.intrinsic_slope) * E
-            out["t_wave"] += t1 - t0
-            out["t_geo"] += time.perf_counter() - t1
-            out["on"][r, i] = True
-            out["sig"].append((fp.sigma, fp.sigma_y or fp.sigma))
+            out["E"][r, i] = E
+            pix.append((r, i))
+            fps.append(fp)
+            wis.append(wi)
+            wos.append(wo)
+    if pix:
+        res = pixel_brdf(field, fps, np.array(wis), np.array(wos), lam, material, slope_sigma=s.intrinsic_slope,
+                         coherence_m=s.coherence_m, backend=s.backend, precision=s.precision)
+        for k, (r, i) in enumerate(pix):
+            if res.ok[k]:
+                out["wave"][r, i], out["geo"][r, i], out["on"][r, i] = res.wave[k], res.geometric[k], True
+        out["t_read"], out["t_sums"], out["samples"] = res.timings_s["read"], res.timings_s["sums"], res.samples
     return out
 
 
@@ -346,8 +379,9 @@ ROWS_PER_TASK = 4
 
 def render_glints(field, material, settings: GlintSettings = GlintSettings(), *, progress=None,
                   executor=None) -> GlintRender:
-    """Render *field* (HeightField or memory-mapped LargeHeightField) of *material* as described in the module
-    doc; pixels whose footprint box leaves the field stay black (``on_field`` False).
+    """Render *field* (HeightField, memory-mapped LargeHeightField or any tiled field of
+    :mod:`waveoptics.surfaces.tiled`) of *material* as described in the module doc; pixels whose footprint box
+    leaves the field stay black (``on_field`` False).
 
     Parameters
     ----------
@@ -361,11 +395,11 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
     M = colour.reflectance_to_rgb_matrix(lam)
     geo = geometry(field, settings)
     n = settings.size
-    wave = np.zeros((n, n, len(lam)))
-    geo_img = np.zeros((n, n, len(lam)))
-    on = np.zeros((n, n), bool)
-    t_wave = t_geo = 0.0
-    sig = []
+    f_wave, f_geo = np.zeros((n, n, len(lam))), np.zeros((n, n, len(lam)))
+    E, on = np.zeros((n, n)), np.zeros((n, n), bool)
+    fps, dirs = np.zeros((n, n, 5)), np.zeros((n, n, 6))
+    t_read = t_sums = 0.0
+    samples = 0
     tasks = [range(j, min(j + ROWS_PER_TASK, n)) for j in range(0, n, ROWS_PER_TASK)]
     t_start = time.perf_counter()
     parts = [geo.take(rows) for rows in tasks]
@@ -376,20 +410,68 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
                                [settings] * len(tasks), parts, tasks)
     for res in results:
         rows = list(res["rows"])
-        wave[rows], geo_img[rows], on[rows] = res["wave"], res["geo"], res["on"]
-        t_wave += res["t_wave"]
-        t_geo += res["t_geo"]
-        sig += res["sig"]
+        f_wave[rows], f_geo[rows], E[rows], on[rows] = res["wave"], res["geo"], res["E"], res["on"]
+        fps[rows], dirs[rows] = res["fp"], res["dirs"]
+        t_read += res["t_read"]
+        t_sums += res["t_sums"]
+        samples += res["samples"]
         if progress is not None:
             progress(len(rows))
     wall = time.perf_counter() - t_start
-    if not sig:
+    lit = on & (E > 0)
+    if not lit.any():
         raise FieldError("no pixel's footprint lies inside the height field; use a larger field or image",
                          "surface")
-    s = np.array(sig)
-    n_px = len(sig)
+    n_px = int(lit.sum())
+    wave, geo_img = f_wave * E[..., None], f_geo * E[..., None]
     return GlintRender(wave=wave @ M, geometric=geo_img @ M, on_field=on,
-                       timings_s={"wave": t_wave, "geometric": t_geo, "pixels": n_px, "wall": wall,
-                                  "wave_per_pixel": t_wave / n_px, "geometric_per_pixel": t_geo / n_px},
-                       footprint_sigma_m=(float(np.median(s[:, 0])), float(np.median(s[:, 1]))),
-                       wave_spectral=wave, geometric_spectral=geo_img)
+                       timings_s={"read": t_read, "sums": t_sums, "pixels": n_px, "wall": wall,
+                                  "per_pixel": wall / n_px, "sums_per_pixel": t_sums / n_px,
+                                  "footprints_per_s": n_px / max(t_sums, 1e-12), "samples": samples},
+                       footprint_sigma_m=(float(np.median(fps[lit][:, 2])), float(np.median(fps[lit][:, 3]))),
+                       wave_spectral=wave, geometric_spectral=geo_img, wave_brdf=f_wave, geometric_brdf=f_geo,
+                       footprints=fps, directions=dirs)
+
+
+@dataclass
+class GlintEstimate:
+    """What a glint render will cost, before it starts: pixels on the surface, the median footprint (m), the
+    samples its sums visit, the per-pixel time measured on a probe of pixels and the extrapolated wall time (s)."""
+
+    pixels: int
+    footprint_sigma_m: tuple
+    samples: int
+    probe_pixels: int
+    per_pixel_s: float
+    estimate_s: float
+
+    def describe(self) -> str:
+        return (f"{self.pixels} pixels, footprint σ ≈ {self.footprint_sigma_m[0] * 1e6:.3g} × "
+                f"{self.footprint_sigma_m[1] * 1e6:.3g} µm, {self.samples / max(self.pixels, 1):.3g} samples/pixel; "
+                f"probe of {self.probe_pixels} pixels: {self.per_pixel_s * 1e3:.3g} ms/pixel → about "
+                f"{self.estimate_s:.0f} s")
+
+
+def estimate_glints(field, material, settings: GlintSettings = GlintSettings(), *, probe: int = 256,
+                    seed: int = 0) -> GlintEstimate:
+    """Estimate :func:`render_glints`'s cost: the footprint of every pixel (cheap), their box samples, and the
+    time of rendering *probe* random pixel rows' worth of pixels (the same code), scaled by samples."""
+    geo = geometry(field, settings)
+    s1, s2, _ = footprints(geo, settings.filter_px)
+    hit = geo.hit
+    n_px = int(hit.sum())
+    if n_px == 0:
+        raise FieldError("no pixel of this view meets the surface", "surface")
+    box = (8 * s1 / field.dx + 2) * (8 * s2 / field.dy + 2)        # ±N_SIGMA box of each ellipse, roughly
+    total = float(np.sum(box[hit]))
+    rng = np.random.default_rng(seed)
+    rows = np.sort(rng.choice(settings.size, size=min(settings.size, max(1, probe // settings.size + 1)),
+                              replace=False))
+    t0 = time.perf_counter()
+    res = [_render_rows(field, material, settings, geo.take([r]), range(r, r + 1)) for r in rows]
+    t = time.perf_counter() - t0
+    probe_samples = float(sum(np.sum(box[r][hit[r]]) for r in rows))
+    done = int(sum(np.sum(x["on"]) for x in res))
+    per_sample = t / max(probe_samples, 1.0)
+    return GlintEstimate(n_px, (float(np.median(s1[hit])), float(np.median(s2[hit]))), int(total), done,
+                         t / max(done, 1), per_sample * total)

@@ -31,6 +31,7 @@ References
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,6 +39,7 @@ import numpy as np
 from ..errors import FieldError
 from ..materials import get_material
 from ..surfaces.footprint import Footprint, footprint_box
+from ..surfaces.heightfield import HeightField
 from .footprint import coherence_centres
 
 __all__ = ["PIXEL_BACKENDS", "MAX_REGION_SAMPLES", "PixelBRDF", "footprint_sums", "footprint_sums_numpy", "pixel_brdf",
@@ -57,12 +59,14 @@ _VW = 8
 @dataclass
 class PixelBRDF:
     """BRDFs (1/sr) of n footprints at their direction pairs: ``wave`` and ``geometric`` (n, n_λ), ``ok`` (n,) False
-    where a footprint's box leaves the field (both NaN there), ``samples`` the samples summed (all windows)."""
+    where a footprint's box leaves the field (both NaN there), ``samples`` the samples summed (all windows),
+    ``timings_s`` the time (s) of reading the field (``read``) and of the sums (``sums``)."""
 
     wave: np.ndarray
     geometric: np.ndarray
     ok: np.ndarray
     samples: int
+    timings_s: dict
 
 
 def _geometry(fp: Footprint, box, s, t, dx, dy) -> np.ndarray:
@@ -172,7 +176,7 @@ def _groups(boxes, max_samples):
     return groups
 
 
-def _items(field, fps, wi, wo, coherence_m):
+def _items(fps, coherence_m):
     """Per footprint item: (pixel index, weight, wave?, geometric?, footprint); coherence windows are wave-only."""
     items = []
     for p, fp in enumerate(fps):
@@ -214,7 +218,7 @@ def pixel_brdf(field, footprints, wi, wo, wavelengths_nm, material=None, *, slop
         raise FieldError(f"slope_sigma={slope_sigma!r} is not allowed; it must be > 0", "slope_sigma")
     if np.any(wi[:, 2] <= 0) or np.any(wo[:, 2] <= 0):
         raise FieldError("every ω_i and ω_o must lie above the surface (z > 0)", "directions")
-    items = _items(field, footprints, wi, wo, coherence_m)
+    items = _items(footprints, coherence_m)
     ny, nx = field.shape
     boxes = np.array([footprint_box(it[4], field.dx, field.dy) for it in items], dtype=np.int64).reshape(-1, 4)
     inside = (boxes[:, 0] >= 1) & (boxes[:, 1] >= 1) & (boxes[:, 2] <= nx - 1) & (boxes[:, 3] <= ny - 1)
@@ -224,19 +228,31 @@ def pixel_brdf(field, footprints, wi, wo, wavelengths_nm, material=None, *, slop
     sums = np.full((len(items), 2 * lam.size + 3), np.nan)
     use = np.flatnonzero(inside & ok[[it[0] for it in items]])
     s_all, t_all = _half_vectors(wi, wo)
+    t_read = t_sums = 0.0
     for grp in _groups(boxes[use], max_region_samples):
         idx = use[grp]
         b = boxes[idx]
         ri0, rj0 = int(b[:, 0].min()) - 1, int(b[:, 1].min()) - 1
-        region = field.region(ri0, rj0, int(b[:, 2].max()) + 1, int(b[:, 3].max()) + 1).heights
+        t0 = time.perf_counter()
+        region = _region(field, ri0, rj0, int(b[:, 2].max()) + 1, int(b[:, 3].max()) + 1)
+        t1 = time.perf_counter()
+        t_read += t1 - t0
         geo = np.array([_geometry(items[k][4], boxes[k], s_all[items[k][0]], t_all[items[k][0]],
                                   field.dx, field.dy) for k in idx])
         sums[idx] = footprint_sums(region, field.dx, field.dy, b - [ri0, rj0, ri0, rj0], geo, lam, slope_sigma,
                                    backend=backend, precision=precision, runtime=runtime)
+        t_sums += time.perf_counter() - t1
     wave, geometric = _finish(sums, items, n, wi, wo, lam, material, slope_sigma, field.dx * field.dy)
     wave[~ok], geometric[~ok] = np.nan, np.nan
     samples = int(np.sum(np.prod(boxes[use, 2:] - boxes[use, :2], axis=1)))
-    return PixelBRDF(wave, geometric, ok, samples)
+    return PixelBRDF(wave, geometric, ok, samples, {"read": t_read, "sums": t_sums})
+
+
+def _region(field, i0, j0, i1, j1) -> np.ndarray:
+    """Heights (m) of samples [j0:j1, i0:i1] of a HeightField or of any field with ``region``."""
+    if isinstance(field, HeightField):
+        return field.heights[j0:j1, i0:i1]
+    return field.region(i0, j0, i1, j1).heights
 
 
 def _half_vectors(wi, wo):
