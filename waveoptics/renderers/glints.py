@@ -452,10 +452,12 @@ class GlintEstimate:
                 f"{self.estimate_s:.0f} s")
 
 
-def estimate_glints(field, material, settings: GlintSettings = GlintSettings(), *, probe: int = 256,
-                    seed: int = 0) -> GlintEstimate:
-    """Estimate :func:`render_glints`'s cost: the footprint of every pixel (cheap), their box samples, and the
-    time of rendering *probe* random pixel rows' worth of pixels (the same code), scaled by samples."""
+def estimate_glints(field, material, settings: GlintSettings = GlintSettings(), *, probe_tasks: int = 2
+                    ) -> GlintEstimate:
+    """Estimate :func:`render_glints`'s cost before it starts: the footprint of every pixel (cheap), the samples
+    of their boxes, and the time of *probe_tasks* whole row tasks (the same code, after building the kernel on a
+    dummy call) spread over the rows that meet the surface; the estimate is that time per sample times all
+    samples (the field's reading scales with the same footprints)."""
     geo = geometry(field, settings)
     s1, s2, _ = footprints(geo, settings.filter_px)
     hit = geo.hit
@@ -464,14 +466,20 @@ def estimate_glints(field, material, settings: GlintSettings = GlintSettings(), 
         raise FieldError("no pixel of this view meets the surface", "surface")
     box = (8 * s1 / field.dx + 2) * (8 * s2 / field.dy + 2)        # ±N_SIGMA box of each ellipse, roughly
     total = float(np.sum(box[hit]))
-    rng = np.random.default_rng(seed)
-    rows = np.sort(rng.choice(settings.size, size=min(settings.size, max(1, probe // settings.size + 1)),
-                              replace=False))
+    if settings.backend == "opencl":                                   # build the program outside the clock
+        from ..scatter.pixel import footprint_sums
+
+        footprint_sums(np.zeros((4, 4)), 1.0, 1.0, np.array([[1, 1, 2, 2]]), np.zeros((1, 12)),
+                       settings.wavelengths_nm, 1.0, precision=settings.precision)
+    n = settings.size
+    starts = [j for j in range(0, n, ROWS_PER_TASK) if hit[j:j + ROWS_PER_TASK].any()]
+    pick = sorted({starts[int(k)] for k in np.linspace(0, len(starts) - 1, probe_tasks + 2)[1:-1].round()})
     t0 = time.perf_counter()
-    res = [_render_rows(field, material, settings, geo.take([r]), range(r, r + 1)) for r in rows]
+    probe_px = 0
+    for j in pick:
+        rows = range(j, min(j + ROWS_PER_TASK, n))
+        probe_px += int(np.sum(_render_rows(field, material, settings, geo.take(rows), rows)["on"]))
     t = time.perf_counter() - t0
-    probe_samples = float(sum(np.sum(box[r][hit[r]]) for r in rows))
-    done = int(sum(np.sum(x["on"]) for x in res))
-    per_sample = t / max(probe_samples, 1.0)
-    return GlintEstimate(n_px, (float(np.median(s1[hit])), float(np.median(s2[hit]))), int(total), done,
-                         t / max(done, 1), per_sample * total)
+    probe_samples = float(sum(np.sum(box[j:j + ROWS_PER_TASK][hit[j:j + ROWS_PER_TASK]]) for j in pick))
+    return GlintEstimate(n_px, (float(np.median(s1[hit])), float(np.median(s2[hit]))), int(total), probe_px,
+                         t / max(probe_px, 1), t / max(probe_samples, 1.0) * total)
