@@ -172,15 +172,15 @@ def test_cli_gaussian_window(tmp_path, field):
 
 
 def test_glint_pixel_is_the_footprint_kirchhoff_sum():
-    """The glint renderer's per-pixel wave BRDF is the windowed Kirchhoff sum of its footprint (the test's own
-    float64 sum above), at that pixel's direction pair."""
-    from waveoptics.renderers import glints
+    """The glint renderer's per-pixel wave BRDF (scatter.footprint_brdf, an elliptical turned footprint) is the
+    windowed Kirchhoff sum of its footprint (the test's own float64 sum above), at that pixel's direction pair."""
+    from waveoptics.scatter import footprint_brdf
 
     hf = surfaces.generate("gaussian", sigma="15nm", corr_length="0.8um", size="12um", samples=256, seed=2)
     fp = surfaces.Footprint(6e-6, 6e-6, 0.7e-6, 0.5e-6, 20.0)
     patch, G = surfaces.footprint_patch(hf, fp)
     wi, wo = direction_from_angles(35.0, 10.0), direction_from_angles(20.0, 200.0)
-    got = glints._wave_f(patch, G, wi, wo, [500.0, 600.0], np.ones(2))
+    got, _ = footprint_brdf(hf, fp, wi, wo, [500.0, 600.0], None, precision="float64")
     want = [kirchhoff_sum(patch, G, wi, wo[None], lam)[0] for lam in (500.0, 600.0)]
     np.testing.assert_allclose(got, want, rtol=1e-9)
 

@@ -274,51 +274,9 @@ def geometry(field, s: GlintSettings) -> Geometry:
     return SHAPES[s.shape](field, s)
 
 
-def _footprint(c, J, filter_px):
-    """The Gaussian footprint of a pixel: Σ = J diag(s², s²) Jᵀ as (σ_x, σ_y, angle) of its principal axes."""
-    C = (filter_px ** 2) * (J @ J.T)
-    vals, vecs = np.linalg.eigh(C)
-    angle = math.degrees(math.atan2(vecs[1, 1], vecs[0, 1]))
-    return Footprint(float(c[0]), float(c[1]), float(math.sqrt(vals[1])), float(math.sqrt(max(vals[0], 1e-30))),
-                     angle)
-
-
-def _wave_f(patch, G, wi, wo, lam_nm, F):
-    """Windowed Kirchhoff BRDF (1/sr) of one footprint at one direction pair, per wavelength (n_λ,)."""
-    ny, nx = patch.shape
-    x = np.arange(nx) * patch.dx
-    y = np.arange(ny) * patch.dy
-    w2 = G * G
-    h = patch.heights - np.sum(w2 * patch.heights) / np.sum(w2)
-    area = np.sum(w2) * patch.dx * patch.dy
-    s = wi + wo
-    ci, co = wi[2], wo[2]
-    out = np.empty(len(lam_nm))
-    for i, lam in enumerate(lam_nm):
-        k = 2 * np.pi / (lam * 1e-9)
-        phase = np.exp(1j * k * s[0] * x)[None, :] * np.exp(1j * k * s[1] * y)[:, None] * np.exp(1j * k * s[2] * h)
-        U = np.sum(G * phase) * patch.dx * patch.dy
-        K = np.dot(s, s) ** 2 / (4 * (lam * 1e-9) ** 2 * ci * co * (ci + co) ** 2)
-        out[i] = F[i] * K * abs(U) ** 2 / area
-    return out
-
-
-def _geometric_f(patch, G, wi, wo, F, slope_sigma):
-    """Footprint microfacet BRDF (1/sr) at one direction pair, per wavelength."""
-    h = wi + wo
-    h = h / np.linalg.norm(h)
-    sxh, syh = -h[0] / h[2], -h[1] / h[2]
-    gx = np.gradient(patch.heights, patch.dx, axis=1)
-    gy = np.gradient(patch.heights, patch.dy, axis=0)
-    kern = np.exp(-0.5 * ((gx - sxh) ** 2 + (gy - syh) ** 2) / slope_sigma ** 2) / (2 * np.pi * slope_sigma ** 2)
-    P22 = np.sum(G * kern) / np.sum(G)
-    D = P22 / h[2] ** 4
-    return F * D / (4 * wi[2] * wo[2])
-
-
 def footprints(geo: Geometry, filter_px: float):
     """Footprints of every pixel at once: (σ_1, σ_2, angle in degrees) (size, size) each, the principal axes of
-    Σ = J diag(s², s²) Jᵀ (σ_1 the larger; as :func:`_footprint`)."""
+    Σ = J diag(s², s²) Jᵀ (σ_1 the larger)."""
     C = (filter_px ** 2) * (geo.J @ np.swapaxes(geo.J, -1, -2))
     vals, vecs = np.linalg.eigh(C)
     angle = np.degrees(np.arctan2(vecs[..., 1, 1], vecs[..., 0, 1]))
@@ -401,7 +359,7 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
     t_read = t_sums = 0.0
     samples = 0
     tasks = [range(j, min(j + ROWS_PER_TASK, n)) for j in range(0, n, ROWS_PER_TASK)]
-    t_start = time.perf_counter()
+    t_start, cpu_start = time.perf_counter(), time.process_time()
     parts = [geo.take(rows) for rows in tasks]
     if executor is None:
         results = (_render_rows(field, material, settings, g, rows) for g, rows in zip(parts, tasks))
@@ -417,7 +375,7 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
         samples += res["samples"]
         if progress is not None:
             progress(len(rows))
-    wall = time.perf_counter() - t_start
+    wall, cpu = time.perf_counter() - t_start, time.process_time() - cpu_start
     lit = on & (E > 0)
     if not lit.any():
         raise FieldError("no pixel's footprint lies inside the height field; use a larger field or image",
@@ -425,7 +383,7 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
     n_px = int(lit.sum())
     wave, geo_img = f_wave * E[..., None], f_geo * E[..., None]
     return GlintRender(wave=wave @ M, geometric=geo_img @ M, on_field=on,
-                       timings_s={"read": t_read, "sums": t_sums, "pixels": n_px, "wall": wall,
+                       timings_s={"read": t_read, "sums": t_sums, "pixels": n_px, "wall": wall, "cpu": cpu,
                                   "per_pixel": wall / n_px, "sums_per_pixel": t_sums / n_px,
                                   "footprints_per_s": n_px / max(t_sums, 1e-12), "samples": samples},
                        footprint_sigma_m=(float(np.median(fps[lit][:, 2])), float(np.median(fps[lit][:, 3]))),
