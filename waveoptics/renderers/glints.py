@@ -22,7 +22,7 @@ pixel (finite differences): an ellipse that stretches along the view direction a
 Per pixel, with ω_i towards the light and ω_o towards the camera (both from the hit point, in its shading frame):
 
 * wave optics: f = F(θ_d) K |Σ_j G_j e^{i k (ω_i + ω_o)·r_j} ΔxΔy|² / (λ² Σ_j G_j² ΔxΔy), the windowed
-  Kirchhoff integral of the footprint (:mod:`waveoptics.scatter.footprint`) at this one direction pair;
+  Kirchhoff integral of the footprint (:mod:`waveoptics.scatter.pixel`) at this one direction pair;
 * geometric optics: f = F(θ_d) D(h) / (4 cos θ_i cos θ_o) with D the footprint's facet-normal distribution, each
   facet smoothed by a Gaussian of rms slope ``intrinsic_slope`` per axis (Yan et al. 2016's intrinsic roughness:
   the histogram of a few hundred facets is otherwise a set of spikes), D = P22(s_h)/cos⁴θ_h (Heitz 2014); no
@@ -31,6 +31,11 @@ Per pixel, with ω_i towards the light and ω_o towards the camera (both from th
 The radiance is L = f cos θ_i I / d² for a light of intensity I (W/sr per unit spectrum) at distance d, summed to
 linear sRGB with the colour-matching functions (:func:`waveoptics.colour.reflectance_to_rgb_matrix`, the light's
 spectrum white). Wavelengths are few (the glint's colour comes from diffraction's λ dependence).
+
+Both BRDFs of all the pixels of a task come from one call of :func:`waveoptics.scatter.pixel_brdf` (an OpenCL
+kernel summing every footprint's samples, float64 where the device has it), which reads one region of the field for
+many footprints: the field may be any tiled field of :mod:`waveoptics.surfaces.tiled` (memory-mapped, chunked HDF5,
+procedural), millimetres at 0.1 µm, never held in memory. :func:`estimate_glints` predicts the cost before a render.
 
 Pixels are independent: rows of pixels are tasks, run in turn or by any ``concurrent.futures``-style executor
 (``executor.map``; the command line passes a Dask client's executor for ``--workers N``). A memory-mapped field
@@ -54,7 +59,7 @@ import numpy as np
 from .. import colour
 from ..errors import FieldError, unknown
 from ..materials import get_material
-from ..scatter.pixel import pixel_brdf
+from ..scatter.pixel import PIXEL_BACKENDS, pixel_brdf
 from ..surfaces.footprint import Footprint
 from ..vocabulary import GLINT_SHAPES
 
@@ -116,6 +121,12 @@ class GlintSettings:
                 raise FieldError(f"{name}={v!r} is not allowed; an elevation must be in [0, 89) degrees", name)
         if not (self.filter_px > 0 and self.intrinsic_slope > 0):
             raise FieldError("filter_px and intrinsic_slope must be > 0", "filter_px")
+        if self.backend not in PIXEL_BACKENDS:
+            raise unknown("footprint backend", self.backend, PIXEL_BACKENDS, field="backend")
+        if self.precision not in (None, "float32", "float64"):
+            raise FieldError(f"precision={self.precision!r} is not allowed; float32, float64 or None", "precision")
+        if self.coherence_m is not None and not (math.isfinite(self.coherence_m) and self.coherence_m > 0):
+            raise FieldError(f"coherence_m={self.coherence_m!r} m is not allowed; it must be > 0", "coherence_m")
 
 
 @dataclass
