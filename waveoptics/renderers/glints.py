@@ -303,11 +303,11 @@ def _local_directions(geo: Geometry, r, i):
     return wi, wo, wi[2] / r2 * geo.dist ** 2
 
 
-def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows) -> dict:
+def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows, only: int | None = None) -> dict:
     """Render the pixel rows *rows* (a range) whose geometry is *geo* (:meth:`Geometry.take` of those rows): the
     BRDFs of both models per pixel (:func:`waveoptics.scatter.pixel_brdf`, one batch for the task), the mask of
     pixels shown, the footprints and the time of reading the field and of the sums (one task of
-    :func:`render_glints`)."""
+    :func:`render_glints`; *only*: that pixel column alone)."""
     lam = np.asarray(s.wavelengths_nm, dtype=float)
     n = s.size
     out = {"rows": rows, "wave": np.zeros((len(rows), n, lam.size)), "geo": np.zeros((len(rows), n, lam.size)),
@@ -316,7 +316,7 @@ def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows) -> dict
     s1, s2, ang = footprints(geo, s.filter_px)
     pix, fps, wis, wos = [], [], [], []
     for r in range(len(rows)):
-        for i in range(n):
+        for i in range(n) if only is None else (only,):
             if not geo.hit[r, i]:
                 continue
             wi, wo, E = _local_directions(geo, r, i)
@@ -424,8 +424,8 @@ class GlintEstimate:
 def estimate_glints(field, material, settings: GlintSettings = GlintSettings(), *, probe_tasks: int = 2
                     ) -> GlintEstimate:
     """Estimate :func:`render_glints`'s cost before it starts: the footprint of every pixel (cheap), the samples
-    of their boxes, and the time of *probe_tasks* whole row tasks (the same code, after building the kernel on a
-    dummy call) spread over the rows that meet the surface; the estimate is that time per sample times all
+    of their boxes, and the time of *probe_tasks* whole row tasks (the same code, after one pixel that builds the
+    kernel and pays the first-call costs) spread over the rows that meet the surface; the estimate is that time per sample times all
     samples (the field's reading scales with the same footprints)."""
     geo = geometry(field, settings)
     s1, s2, _ = footprints(geo, settings.filter_px)
@@ -435,11 +435,9 @@ def estimate_glints(field, material, settings: GlintSettings = GlintSettings(), 
         raise FieldError("no pixel of this view meets the surface", "surface")
     box = (8 * s1 / field.dx + 2) * (8 * s2 / field.dy + 2)        # ±N_SIGMA box of each ellipse, roughly
     total = float(np.sum(box[hit]))
-    if settings.backend == "opencl":                                   # build the program outside the clock
-        from ..scatter.pixel import footprint_sums
-
-        footprint_sums(np.zeros((4, 4)), 1.0, 1.0, np.array([[1, 1, 2, 2]]), np.zeros((1, 12)),
-                       settings.wavelengths_nm, 1.0, precision=settings.precision)
+    # one pixel outside the clock: builds the kernel and pays every first-call cost (imports, material tables)
+    j, i = np.argwhere(hit)[int(n_px // 2)]
+    _render_rows(field, material, settings, geo.take([j]), range(j, j + 1), only=int(i))
     n = settings.size
     starts = [j for j in range(0, n, ROWS_PER_TASK) if hit[j:j + ROWS_PER_TASK].any()]
     pick = sorted({starts[int(k)] for k in np.linspace(0, len(starts) - 1, probe_tasks + 2)[1:-1].round()})
