@@ -1,6 +1,6 @@
 """Write docs/glints.md (+ docs/img/glints_footprints.png, glints_brushed.png, glints_flakes.png): fields of real
 size, per-pixel footprint BRDFs and what they cost, and glint renders at real scale — every number measured in
-this run (GLINTS_DOC_SIZE sets the brushed sphere's size, default 256)."""
+this run (GLINTS_DOC_SIZE sets the brushed sphere's size, default 128)."""
 from __future__ import annotations
 
 import os
@@ -29,7 +29,8 @@ def _time(fn, repeat=3):
 
 
 def timing_table() -> str:
-    """Footprints per second of the per-pixel sums (scatter.pixel_brdf) at real footprint sizes."""
+    """Footprints per second of the per-pixel sums (scatter.pixel_brdf) at real footprint sizes, footprints on a
+    lattice 2σ apart as a render's pixels."""
     from waveoptics.surfaces import tiled
 
     field = tiled.procedural("psd", 2e-3, 0.1e-6, seed=3)
@@ -38,9 +39,10 @@ def timing_table() -> str:
     rows = ["| footprint σ | samples per footprint | OpenCL float64 | OpenCL float32 | NumPy twin (float64) |",
             "|---|---|---|---|---|"]
     for sig in (1e-6, 2e-6, 5e-6, 10e-6, 30e-6):
-        n = max(2, int(round(64 * (2e-6 / sig) ** 2)))
-        rng = np.random.default_rng(1)
-        fps = [surfaces.Footprint(float(x), float(y), sig) for x, y in rng.uniform(200e-6, 1800e-6, (n, 2))]
+        m = max(2, int(round(8 * 2e-6 / sig)))          # m × m footprints 2σ apart (a render's pixel pitch)
+        n = m * m
+        fps = [surfaces.Footprint(300e-6 + 2 * sig * a, 300e-6 + 2 * sig * b, sig) for a in range(m)
+               for b in range(m)]
         cells = []
         for backend, prec in (("opencl", "float64"), ("opencl", "float32"), ("numpy", None)):
             if backend == "numpy" and sig > 5e-6:
@@ -120,10 +122,12 @@ def glint_section():
     return "\n".join(rows), out
 
 
-#: (image name, --surface, image size) of the scenes: a sphere of radius 0.9 W/π fills the image, so a field of
-#: W = 2 mm on 256² pixels (or 4 mm on 512²) gives footprints of ~2-3 µm at 0.5 px filter width
-SCENES = (("brushed", "procedural:brushed:2mm:0.1um:1", int(os.environ.get("GLINTS_DOC_SIZE", "256"))),
-          ("flakes", "procedural:flakes:1mm:0.1um:2", int(os.environ.get("GLINTS_DOC_SIZE", "256")) // 2))
+#: image size of the brushed scene (GLINTS_DOC_SIZE); its field is 1 mm per 128 px, so that footprints stay
+#: ~2-3 µm (the sphere's pixel pitch is 2.1 R / size with R = 0.9 W / π) and the cost grows as the size squared
+DOC_SIZE = int(os.environ.get("GLINTS_DOC_SIZE", "128"))
+#: (image name, --surface, image size) of the scenes
+SCENES = (("brushed", f"procedural:brushed:{DOC_SIZE / 128:g}mm:0.1um:1", DOC_SIZE),
+          ("flakes", f"procedural:flakes:{0.75 * DOC_SIZE / 128:g}mm:0.1um:2", 3 * DOC_SIZE // 4))
 
 
 def cores() -> int:
@@ -177,7 +181,8 @@ def main() -> None:
         "kernel (`kernels/footprint.cl`, SIMD over a row, float64 where the device has it) sums both; its NumPy "
         "twin is `footprint_sums_numpy`. Footprints are grouped so that one region of the field (≤ 8 M samples) "
         "serves many of them. `footprint_brdf(field, fp, wi, wo, λ)` is the single query.\n",
-        "Throughput at 0.1 µm spacing, 5 wavelengths, a Gaussian random field generated per region (sums only):\n",
+        "Throughput at 0.1 µm spacing, 5 wavelengths, a Gaussian random field generated per region, footprints on "
+        "a lattice 2σ apart as a render's pixels (the sums only: the kernel and the transfer of its region):\n",
         times + "\n",
         "Tested (`tests/test_pixel_brdf.py`): at σ = 5 µm (401² samples) over 121 directions about the mirror "
         "direction, the float64 kernel and the NumPy twin match a float64 complex128 direct sum written in the "
@@ -201,9 +206,10 @@ def main() -> None:
         glint_rows + "\n",
         "The machine is shared: the wall time of a render is its CPU time divided by the share of the cores it "
         "got, which the CPU-time column shows (on 2 free cores the wall time is about the CPU time / 2, the sums "
-        "being parallel). The sphere's pixel pitch is 2.1 R / size, so the same footprints on a 512² image need a "
-        "field twice as wide (`procedural:brushed:4mm:0.1um`) and four times the pixels: four times the cost of "
-        "the 256² brushed row.\n",
+        "being parallel). The cost follows the samples the footprints cover, not the pixels: the same footprints "
+        f"on a 512² image need a field {512 / b_size:g}× as wide (`procedural:brushed:4mm:0.1um`) and "
+        f"{(512 / b_size) ** 2:g}× the pixels, so {(512 / b_size) ** 2:g}× the cost of the {b_size}² brushed "
+        "row.\n",
         "## Checked (`tests/test_footprint.py`, `tests/test_glints.py`, `tests/test_glints_scale.py`)\n",
         "* every pixel of a 32² scratched-metal sphere (footprints ~2 µm) equals the single footprint query at its "
         "own footprint and directions at 20 random pixels to 1e-6 (both models);\n",

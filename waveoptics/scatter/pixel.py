@@ -159,18 +159,23 @@ def footprint_sums(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, *, backend:
 
 
 def _groups(boxes, max_samples):
-    """Indices of footprints in groups whose union box holds at most *max_samples* (sorted by x, then greedy)."""
+    """Indices of footprints in groups whose union box holds at most *max_samples*, and at most 4 times the
+    samples of its boxes once past 2¹⁶ (scattered footprints do not read the field between them): sorted by x,
+    then greedy."""
     order = np.lexsort((boxes[:, 1], boxes[:, 0]))
-    groups, cur, u = [], [], None
+    groups, cur, u, covered = [], [], None, 0
     for k in order:
         b = boxes[k]
+        area = int((b[2] - b[0] + 2) * (b[3] - b[1] + 2))
         nu = b.copy() if u is None else np.array([min(u[0], b[0]), min(u[1], b[1]), max(u[2], b[2]),
                                                   max(u[3], b[3])])
-        if cur and (nu[2] - nu[0] + 2) * (nu[3] - nu[1] + 2) > max_samples:
+        union = int((nu[2] - nu[0] + 2) * (nu[3] - nu[1] + 2))
+        if cur and (union > max_samples or (union > 2 ** 16 and union > 4 * (covered + area))):
             groups.append(cur)
-            cur, nu = [], b.copy()
+            cur, nu, covered = [], b.copy(), 0
         cur.append(k)
         u = nu
+        covered += area
     if cur:
         groups.append(cur)
     return groups
