@@ -144,3 +144,16 @@ def test_bad_patches_are_refused():
         f.patch(90, 0, 20, 5)
     with pytest.raises(FieldError, match="model"):
         tiled.PSDField("lorentz", 1e-9, 1e-6, (10, 10), DX)
+
+
+def test_psd_field_stretch_makes_it_anisotropic():
+    """stretch = (3, 1): correlation length 3 T along x and T along y (C = σ² exp(−x²/(3T)² − y²/T²))."""
+    sigma, T = 10e-9, 0.5e-6
+    f = tiled.PSDField("gaussian", sigma, T, (20000, 20000), DX, seed=12, tile=128, stretch=(3.0, 1.0))
+    h = f.patch(5000, 5000, 1500, 1500).heights
+    h = h - h.mean()
+    assert abs(h.std() / sigma - 1) < 0.06
+    v = np.mean(h * h)
+    cx = np.mean(h[:, :-15] * h[:, 15:]) / v                 # lag 1.5 µm along x
+    cy = np.mean(h[:-5, :] * h[5:, :]) / v                   # lag 0.5 µm along y
+    assert abs(cx - math.exp(-1.0)) < 0.06 and abs(cy - math.exp(-1.0)) < 0.04
