@@ -224,7 +224,10 @@ def main() -> None:
         "## Not yet\n",
         "The light is a point: the BRDF is taken at one direction pair per pixel, not integrated over a light's "
         "solid angle. Yan et al. (2018)'s own Gabor-kernel evaluation is not implemented, so there is no "
-        "comparison against it (the references are direct float64 sums). No GPU timing; no Mitsuba integration.\n",
+        "comparison against it (the references are direct float64 sums). No GPU timing; no Mitsuba integration. "
+        "The patch NDF takes slopes by central differences, so across the steps between flakes it counts "
+        "spurious facets (one slope component from the step, the other from the flake): the faint cross of "
+        "geometric glints through the flake sphere's highlight comes from them.\n",
     ]
     DOC.write_text("\n".join(parts))
     print(f"wrote {DOC.relative_to(ROOT)}")
