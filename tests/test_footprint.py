@@ -172,15 +172,15 @@ def test_cli_gaussian_window(tmp_path, field):
 
 
 def test_glint_pixel_is_the_footprint_kirchhoff_sum():
-    """The glint renderer's per-pixel wave BRDF is the windowed Kirchhoff sum of its footprint (the test's own
-    float64 sum above), at that pixel's direction pair."""
-    from waveoptics.renderers import glints
+    """The glint renderer's per-pixel wave BRDF (scatter.footprint_brdf, an elliptical turned footprint) is the
+    windowed Kirchhoff sum of its footprint (the test's own float64 sum above), at that pixel's direction pair."""
+    from waveoptics.scatter import footprint_brdf
 
     hf = surfaces.generate("gaussian", sigma="15nm", corr_length="0.8um", size="12um", samples=256, seed=2)
     fp = surfaces.Footprint(6e-6, 6e-6, 0.7e-6, 0.5e-6, 20.0)
     patch, G = surfaces.footprint_patch(hf, fp)
     wi, wo = direction_from_angles(35.0, 10.0), direction_from_angles(20.0, 200.0)
-    got = glints._wave_f(patch, G, wi, wo, [500.0, 600.0], np.ones(2))
+    got, _ = footprint_brdf(hf, fp, wi, wo, [500.0, 600.0], None, precision="float64")
     want = [kirchhoff_sum(patch, G, wi, wo[None], lam)[0] for lam in (500.0, 600.0)]
     np.testing.assert_allclose(got, want, rtol=1e-9)
 
@@ -202,6 +202,6 @@ def test_glint_render_smoke_and_cli(tmp_path):
                                "500,600", "-o", str(tmp_path / "g"), "--json"])
     assert rc == 0, err
     d = json.loads(out)
-    assert d["timings_s"]["wave_per_pixel"] > 0 and (tmp_path / "g" / "glints.png").is_file()
+    assert d["timings_s"]["per_pixel"] > 0 and (tmp_path / "g" / "glints.png").is_file()
     rc, _, err, _ = run_cli(["render", "--glints", "-o", str(tmp_path / "h")])
     assert rc == 2 and "--surface" in err

@@ -36,8 +36,11 @@ def register(sub):
     gl = p.add_argument_group("glints (--glints)")
     gl.add_argument("--glints", action="store_true",
                     help="render the --surface height field as a plane where every pixel's footprint gives its "
-                         "own BRDF, wave optics beside geometric optics (NumPy; docs/glints.md); takes --material, "
-                         "--incident (the light), --view, --wavelengths and --sphere-size")
+                         "own BRDF, wave optics beside geometric optics (an OpenCL sum per pixel; docs/glints.md); takes "
+                         "--material, --incident (the light), --view, --wavelengths, --sphere-size, --shape, "
+                         "--coherence; --surface may be a .npy (memory-mapped), .h5 (chunked) or "
+                         "procedural:NAME:SIZE:SPACING[:SEED] (brushed, scratched, flakes, psd: nothing stored); "
+                         "prints its estimated cost before it starts")
     option(gl, "--incident", note="the point light's direction from the field's centre (default 30,0)")
     gl.add_argument("--view", metavar="THETA[,PHI]",
                     help="the camera's direction from the field's centre, degrees (default 30,180)")
@@ -45,6 +48,9 @@ def register(sub):
     gl.add_argument("--shape", choices=GLINT_SHAPES,
                     help="what the height field textures: a plane, or a sphere (latitude-longitude map about the "
                          "camera) (default plane)")
+    gl.add_argument("--coherence", metavar="L",
+                    help="width of the light's coherence area, with unit (Yan et al. 2018): windows of this width "
+                         "inside each footprint add as intensities (default: each footprint coherent)")
     add_workers(p, group=gl)
     add_output(p)
     add_common(p, device=False)
@@ -53,7 +59,7 @@ def register(sub):
 
 #: --glints options and their defaults
 _GLINT_DEFAULTS = {"incident": "30,0", "view": "30,180", "wavelengths": "450:650:50", "shape": "plane",
-                   "workers": None, "scheduler": None}
+                   "workers": None, "scheduler": None, "coherence": None}
 
 
 def run(args):
@@ -76,6 +82,7 @@ def run_glints(args):
     """``render --glints``: footprint BRDFs per pixel over a height field (:mod:`waveoptics.renderers.glints`)."""
     import contextlib
     import importlib
+    import sys
     from pathlib import Path
 
     import numpy as np
@@ -83,18 +90,18 @@ def run_glints(args):
     from .. import colour, surfaces
     from ..errors import WaveopticsError
     from ..io import files
-    from ..render import percentile_exposure, plot_spheres, tonemap
+    from ..renderers.sphere import percentile_exposure, plot_spheres, tonemap
     from ..renderers import glints
-    from ..units import parse_direction, parse_wavelengths
-    from .brdf import spacing_from_args
+    from ..units import parse_direction, parse_length, parse_wavelengths
 
     given = [k for k, v in _NOT_GLINTS.items() if getattr(args, k) != v]
     if given:
         flag = {"alpha": "micro-alpha"}.get(given[0], given[0].replace("_", "-"))
         raise WaveopticsError(f"--glints renders the --surface height field itself; drop --{flag}")
     if args.surface is None:
-        raise WaveopticsError("--glints needs --surface FILE (the height field to render)")
-    out_names = ("glints_wave.exr", "glints_geometric.exr", "glints.png", "summary.json")
+        raise WaveopticsError("--glints needs --surface FILE (the height field to render) or "
+                              "procedural:NAME:SIZE:SPACING[:SEED]")
+    out_names = ("glints_wave.exr", "glints_geometric.exr", "glints_layers.exr", "glints.png", "summary.json")
     outdir = files.prepare_outdir(args.output, overwrite=args.overwrite, expected=out_names)
     for k, v in _GLINT_DEFAULTS.items():
         if getattr(args, k) is None:
@@ -103,11 +110,12 @@ def run_glints(args):
     vt, vp = parse_direction(args.view, name="--view")
     settings = glints.GlintSettings(size=args.sphere_size, view_deg=vt, view_azimuth_deg=vp, light_deg=lt,
                                     light_azimuth_deg=lp, wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)),
-                                    shape=args.shape)
-    if str(args.surface).lower().endswith(".npy") and args.channel is None:
-        field = surfaces.open_large(args.surface, spacing=spacing_from_args(args), units=args.units)
-    else:
-        field = load_surface(args)
+                                    shape=args.shape, coherence_m=None if args.coherence is None
+                                    else parse_length(args.coherence, name="--coherence"))
+    field = _glint_field(args, surfaces)
+    est = glints.estimate_glints(field, args.material, settings)
+    if not args.json:
+        print(f"estimate: {est.describe()}", file=sys.stderr)
     bar = progress(total=settings.size, desc="glints", args=args)
     with contextlib.ExitStack() as stack:
         executor = None
@@ -128,6 +136,9 @@ def run_glints(args):
         for name, img in (("glints_wave.exr", r.wave), ("glints_geometric.exr", r.geometric)):
             files.write_exr(stage / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
                             {"waveoptics": "linear sRGB radiance of a unit-intensity point light"})
+        files.write_exr(stage / "glints_layers.exr", _glint_layers(r, settings),
+                        {"waveoptics": "per pixel: footprint (x, y, sigma1, sigma2 in m, angle in degrees) and "
+                                       "spectral radiance per wavelength (wave., geometric.)"})
         plot_spheres([tonemap(r.wave, exposure), tonemap(r.geometric, exposure)],
                      [f"wave optics (footprint Kirchhoff)\n{args.material}, {Path(args.surface).name}",
                       "geometric optics (footprint NDF)"], stage / "glints.png", diff=de,
@@ -141,13 +152,48 @@ def run_glints(args):
                    "footprint_sigma_m": list(r.footprint_sigma_m),
                    "pixels_on_field": int(on.sum()), "delta_e2000_mean": float(de[on].mean()),
                    "timings_s": {k: (round(v, 6) if isinstance(v, float) else v) for k, v in r.timings_s.items()},
+                   "estimate": {"pixels": est.pixels, "samples": est.samples, "per_pixel_s": est.per_pixel_s,
+                                "estimate_s": est.estimate_s, "probe_pixels": est.probe_pixels},
                    "outputs": list(out_names)}
         files.write_json(stage / "summary.json", summary)
     t = r.timings_s
-    emit(args, summary, f"wrote {outdir}/ ({', '.join(out_names)}); {t['pixels']} pixels, wave "
-                        f"{t['wave_per_pixel'] * 1e3:.2f} ms/pixel ({t['wave']:.1f} s), geometric "
-                        f"{t['geometric_per_pixel'] * 1e3:.2f} ms/pixel ({t['geometric']:.1f} s)")
+    emit(args, summary, f"wrote {outdir}/ ({', '.join(out_names)}); {t['pixels']} pixels in {t['wall']:.1f} s: "
+                        f"{t['per_pixel'] * 1e3:.3g} ms/pixel (sums {t['sums_per_pixel'] * 1e3:.3g} ms/pixel, "
+                        f"{t['footprints_per_s']:.0f} footprints/s; reading the field {t['read']:.1f} s); "
+                        f"estimated {est.estimate_s:.0f} s")
     return 0
+
+
+def _glint_field(args, surfaces):
+    """The height field of a glint render: ``procedural:NAME:SIZE:SPACING[:SEED]``, a .h5 / .hdf5 (chunked), a .npy
+    (memory-mapped) or any other height-field file."""
+    from ..units import parse_length
+    from .brdf import _spacing
+
+    text = str(args.surface)
+    if text.startswith("procedural:"):
+        from ..errors import WaveopticsError
+
+        parts = text.split(":")
+        if len(parts) not in (4, 5):
+            raise WaveopticsError(f"--surface {text!r}: give procedural:NAME:SIZE:SPACING[:SEED], e.g. "
+                                  "procedural:brushed:2mm:0.1um")
+        return surfaces.procedural(parts[1], parse_length(parts[2], name="--surface"),
+                                   parse_length(parts[3], name="--surface"), int(parts[4]) if len(parts) > 4 else 0)
+    if text.lower().endswith((".h5", ".hdf5")):
+        return surfaces.HDF5Field(text)
+    if text.lower().endswith(".npy") and args.channel is None:
+        return surfaces.open_large(args.surface, spacing=_spacing(args), units=args.units)
+    return load_surface(args)
+
+
+def _glint_layers(r, settings) -> dict:
+    """EXR channels of a glint render: the footprint and the spectral radiance of both models per pixel."""
+    ch = {f"footprint.{k}": r.footprints[..., n] for n, k in enumerate(("x", "y", "sigma1", "sigma2", "angle"))}
+    for k, lam in enumerate(settings.wavelengths_nm):
+        ch[f"wave.{lam:g}nm"] = r.wave_spectral[..., k]
+        ch[f"geometric.{lam:g}nm"] = r.geometric_spectral[..., k]
+    return ch
 
 
 def run_render(args):
@@ -160,7 +206,7 @@ def run_render(args):
     from ..renderers import lighting
     from ..errors import WaveopticsError
     from ..io import files
-    from ..render import key_exposure, plot_spheres, tonemap
+    from ..renderers.sphere import key_exposure, plot_spheres, tonemap
     from ..renderers import mitsuba as wm
     from ..renderers import rgl, scene
 

@@ -22,7 +22,7 @@ pixel (finite differences): an ellipse that stretches along the view direction a
 Per pixel, with ω_i towards the light and ω_o towards the camera (both from the hit point, in its shading frame):
 
 * wave optics: f = F(θ_d) K |Σ_j G_j e^{i k (ω_i + ω_o)·r_j} ΔxΔy|² / (λ² Σ_j G_j² ΔxΔy), the windowed
-  Kirchhoff integral of the footprint (:mod:`waveoptics.scatter.footprint`) at this one direction pair;
+  Kirchhoff integral of the footprint (:mod:`waveoptics.scatter.pixel`) at this one direction pair;
 * geometric optics: f = F(θ_d) D(h) / (4 cos θ_i cos θ_o) with D the footprint's facet-normal distribution, each
   facet smoothed by a Gaussian of rms slope ``intrinsic_slope`` per axis (Yan et al. 2016's intrinsic roughness:
   the histogram of a few hundred facets is otherwise a set of spikes), D = P22(s_h)/cos⁴θ_h (Heitz 2014); no
@@ -31,6 +31,11 @@ Per pixel, with ω_i towards the light and ω_o towards the camera (both from th
 The radiance is L = f cos θ_i I / d² for a light of intensity I (W/sr per unit spectrum) at distance d, summed to
 linear sRGB with the colour-matching functions (:func:`waveoptics.colour.reflectance_to_rgb_matrix`, the light's
 spectrum white). Wavelengths are few (the glint's colour comes from diffraction's λ dependence).
+
+Both BRDFs of all the pixels of a task come from one call of :func:`waveoptics.scatter.pixel_brdf` (an OpenCL
+kernel summing every footprint's samples, float64 where the device has it), which reads one region of the field for
+many footprints: the field may be any tiled field of :mod:`waveoptics.surfaces.tiled` (memory-mapped, chunked HDF5,
+procedural), millimetres at 0.1 µm, never held in memory. :func:`estimate_glints` predicts the cost before a render.
 
 Pixels are independent: rows of pixels are tasks, run in turn or by any ``concurrent.futures``-style executor
 (``executor.map``; the command line passes a Dask client's executor for ``--workers N``). A memory-mapped field
@@ -54,10 +59,12 @@ import numpy as np
 from .. import colour
 from ..errors import FieldError, unknown
 from ..materials import get_material
-from ..surfaces.footprint import Footprint, footprint_patch
+from ..scatter.pixel import PIXEL_BACKENDS, pixel_brdf
+from ..surfaces.footprint import Footprint
 from ..vocabulary import GLINT_SHAPES
 
-__all__ = ["SHAPES", "GlintSettings", "GlintRender", "Geometry", "camera_rays", "geometry", "render_glints"]
+__all__ = ["SHAPES", "GlintSettings", "GlintRender", "GlintEstimate", "Geometry", "camera_rays", "geometry",
+           "footprints", "render_glints", "estimate_glints"]
 
 
 @dataclass(frozen=True)
@@ -82,6 +89,11 @@ class GlintSettings:
         Wavelengths (nm) summed to RGB.
     shape : str
         What the field textures: ``plane`` or ``sphere`` (:data:`SHAPES`).
+    coherence_m : float, m, optional
+        Coherence width of the light (Yan et al. 2018); None: each footprint is coherent.
+    backend, precision : str
+        Evaluator of the footprint sums (:func:`waveoptics.scatter.footprint_sums`): ``opencl`` (default; float64
+        where the device has it unless *precision* says float32) or ``numpy``.
     """
 
     size: int = 64
@@ -94,6 +106,9 @@ class GlintSettings:
     intrinsic_slope: float = 0.01
     wavelengths_nm: tuple = (450.0, 500.0, 550.0, 600.0, 650.0)
     shape: str = "plane"
+    coherence_m: float | None = None
+    backend: str = "opencl"
+    precision: str | None = None
 
     def __post_init__(self):
         if self.shape not in SHAPES:
@@ -106,13 +121,20 @@ class GlintSettings:
                 raise FieldError(f"{name}={v!r} is not allowed; an elevation must be in [0, 89) degrees", name)
         if not (self.filter_px > 0 and self.intrinsic_slope > 0):
             raise FieldError("filter_px and intrinsic_slope must be > 0", "filter_px")
+        if self.backend not in PIXEL_BACKENDS:
+            raise unknown("footprint backend", self.backend, PIXEL_BACKENDS, field="backend")
+        if self.precision not in (None, "float32", "float64"):
+            raise FieldError(f"precision={self.precision!r} is not allowed; float32, float64 or None", "precision")
+        if self.coherence_m is not None and not (math.isfinite(self.coherence_m) and self.coherence_m > 0):
+            raise FieldError(f"coherence_m={self.coherence_m!r} m is not allowed; it must be > 0", "coherence_m")
 
 
 @dataclass
 class GlintRender:
     """Linear sRGB images (size, size, 3) of the wave and geometric renders (saturated diffraction colours can lie
     outside the sRGB gamut: negative components), their radiance spectra (size, size, n_λ), the mask of pixels
-    on the field, timings (s) and the median footprint widths (m)."""
+    on the field, timings (s) and the median footprint widths (m); per pixel the BRDFs (1/sr, size, size, n_λ),
+    the footprint (x, y, σ_1, σ_2, angle°: m, m, m, m, degrees) and the local directions (ω_i, ω_o)."""
 
     wave: np.ndarray
     geometric: np.ndarray
@@ -121,6 +143,10 @@ class GlintRender:
     footprint_sigma_m: tuple
     wave_spectral: np.ndarray
     geometric_spectral: np.ndarray
+    wave_brdf: np.ndarray | None = None
+    geometric_brdf: np.ndarray | None = None
+    footprints: np.ndarray | None = None
+    directions: np.ndarray | None = None
 
 
 def _dir(theta_deg, phi_deg):
@@ -259,84 +285,60 @@ def geometry(field, s: GlintSettings) -> Geometry:
     return SHAPES[s.shape](field, s)
 
 
-def _footprint(c, J, filter_px):
-    """The Gaussian footprint of a pixel: Σ = J diag(s², s²) Jᵀ as (σ_x, σ_y, angle) of its principal axes."""
-    C = (filter_px ** 2) * (J @ J.T)
+def footprints(geo: Geometry, filter_px: float):
+    """Footprints of every pixel at once: (σ_1, σ_2, angle in degrees) (size, size) each, the principal axes of
+    Σ = J diag(s², s²) Jᵀ (σ_1 the larger)."""
+    C = (filter_px ** 2) * (geo.J @ np.swapaxes(geo.J, -1, -2))
     vals, vecs = np.linalg.eigh(C)
-    angle = math.degrees(math.atan2(vecs[1, 1], vecs[0, 1]))
-    return Footprint(float(c[0]), float(c[1]), float(math.sqrt(vals[1])), float(math.sqrt(max(vals[0], 1e-30))),
-                     angle)
+    angle = np.degrees(np.arctan2(vecs[..., 1, 1], vecs[..., 0, 1]))
+    return np.sqrt(np.maximum(vals[..., 1], 0.0)), np.sqrt(np.maximum(vals[..., 0], 1e-30)), angle
 
 
-def _wave_f(patch, G, wi, wo, lam_nm, F):
-    """Windowed Kirchhoff BRDF (1/sr) of one footprint at one direction pair, per wavelength (n_λ,)."""
-    ny, nx = patch.shape
-    x = np.arange(nx) * patch.dx
-    y = np.arange(ny) * patch.dy
-    w2 = G * G
-    h = patch.heights - np.sum(w2 * patch.heights) / np.sum(w2)
-    area = np.sum(w2) * patch.dx * patch.dy
-    s = wi + wo
-    ci, co = wi[2], wo[2]
-    out = np.empty(len(lam_nm))
-    for i, lam in enumerate(lam_nm):
-        k = 2 * np.pi / (lam * 1e-9)
-        phase = np.exp(1j * k * s[0] * x)[None, :] * np.exp(1j * k * s[1] * y)[:, None] * np.exp(1j * k * s[2] * h)
-        U = np.sum(G * phase) * patch.dx * patch.dy
-        K = np.dot(s, s) ** 2 / (4 * (lam * 1e-9) ** 2 * ci * co * (ci + co) ** 2)
-        out[i] = F[i] * K * abs(U) ** 2 / area
-    return out
+def _local_directions(geo: Geometry, r, i):
+    """(ω_i, ω_o) in the shading frame of pixel (r, i), and the irradiance factor cos θ_i d²/|light − P|²."""
+    p = geo.P[r, i]
+    a, b = geo.light - p, geo.eye - p
+    r2 = float(a @ a)
+    wi, wo = geo.frame[r, i] @ (a / math.sqrt(r2)), geo.frame[r, i] @ (b / np.linalg.norm(b))
+    return wi, wo, wi[2] / r2 * geo.dist ** 2
 
 
-def _geometric_f(patch, G, wi, wo, F, slope_sigma):
-    """Footprint microfacet BRDF (1/sr) at one direction pair, per wavelength."""
-    h = wi + wo
-    h = h / np.linalg.norm(h)
-    sxh, syh = -h[0] / h[2], -h[1] / h[2]
-    gx = np.gradient(patch.heights, patch.dx, axis=1)
-    gy = np.gradient(patch.heights, patch.dy, axis=0)
-    kern = np.exp(-0.5 * ((gx - sxh) ** 2 + (gy - syh) ** 2) / slope_sigma ** 2) / (2 * np.pi * slope_sigma ** 2)
-    P22 = np.sum(G * kern) / np.sum(G)
-    D = P22 / h[2] ** 4
-    return F * D / (4 * wi[2] * wo[2])
-
-
-def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows) -> dict:
-    """Render the pixel rows *rows* (a range) whose geometry is *geo* (:meth:`Geometry.take` of those rows):
-    spectral radiance of both models, the mask of pixels shown, the footprint widths and the time of each model
-    (one task of :func:`render_glints`)."""
-    mat = get_material(material)
+def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows, only: int | None = None) -> dict:
+    """Render the pixel rows *rows* (a range) whose geometry is *geo* (:meth:`Geometry.take` of those rows): the
+    BRDFs of both models per pixel (:func:`waveoptics.scatter.pixel_brdf`, one batch for the task), the mask of
+    pixels shown, the footprints and the time of reading the field and of the sums (one task of
+    :func:`render_glints`; *only*: that pixel column alone)."""
     lam = np.asarray(s.wavelengths_nm, dtype=float)
     n = s.size
     out = {"rows": rows, "wave": np.zeros((len(rows), n, lam.size)), "geo": np.zeros((len(rows), n, lam.size)),
-           "on": np.zeros((len(rows), n), bool), "sig": [], "t_wave": 0.0, "t_geo": 0.0}
+           "E": np.zeros((len(rows), n)), "on": np.zeros((len(rows), n), bool), "fp": np.zeros((len(rows), n, 5)),
+           "dirs": np.zeros((len(rows), n, 6)), "t_read": 0.0, "t_sums": 0.0, "samples": 0}
+    s1, s2, ang = footprints(geo, s.filter_px)
+    pix, fps, wis, wos = [], [], [], []
     for r in range(len(rows)):
-        for i in range(n):
+        for i in range(n) if only is None else (only,):
             if not geo.hit[r, i]:
                 continue
-            try:
-                fp = _footprint(geo.c[r, i], geo.J[r, i], s.filter_px)
-                patch, G = footprint_patch(field, fp)
-            except FieldError:
-                continue
-            p = geo.P[r, i]
-            wi, wo = geo.light - p, geo.eye - p
-            r2 = float(wi @ wi)
-            wi, wo = geo.frame[r, i] @ (wi / math.sqrt(r2)), geo.frame[r, i] @ (wo / np.linalg.norm(wo))
+            wi, wo, E = _local_directions(geo, r, i)
+            fp = Footprint(float(geo.c[r, i, 0]), float(geo.c[r, i, 1]), float(s1[r, i]), float(s2[r, i]),
+                           float(ang[r, i]))
+            out["fp"][r, i] = (fp.x, fp.y, fp.sigma, fp.sigma_y, fp.angle_deg)
+            out["dirs"][r, i] = np.concatenate([wi, wo])
             if wi[2] <= 0 or wo[2] <= 0:        # the light or the camera is below this point's horizon
                 out["on"][r, i] = True
                 continue
-            cos_d = float(np.clip(wi @ ((wi + wo) / np.linalg.norm(wi + wo)), 0.0, 1.0))
-            F = mat.F(cos_d, lam)
-            E = wi[2] / r2 * geo.dist ** 2       # irradiance of a unit-intensity light, normalized at distance d
-            t0 = time.perf_counter()
-            out["wave"][r, i] = _wave_f(patch, G, wi, wo, lam, F) * E
-            t1 = time.perf_counter()
-            out["geo"][r, i] = _geometric_f(patch, G, wi, wo, F, s.intrinsic_slope) * E
-            out["t_wave"] += t1 - t0
-            out["t_geo"] += time.perf_counter() - t1
-            out["on"][r, i] = True
-            out["sig"].append((fp.sigma, fp.sigma_y or fp.sigma))
+            out["E"][r, i] = E
+            pix.append((r, i))
+            fps.append(fp)
+            wis.append(wi)
+            wos.append(wo)
+    if pix:
+        res = pixel_brdf(field, fps, np.array(wis), np.array(wos), lam, material, slope_sigma=s.intrinsic_slope,
+                         coherence_m=s.coherence_m, backend=s.backend, precision=s.precision)
+        for k, (r, i) in enumerate(pix):
+            if res.ok[k]:
+                out["wave"][r, i], out["geo"][r, i], out["on"][r, i] = res.wave[k], res.geometric[k], True
+        out["t_read"], out["t_sums"], out["samples"] = res.timings_s["read"], res.timings_s["sums"], res.samples
     return out
 
 
@@ -346,8 +348,9 @@ ROWS_PER_TASK = 4
 
 def render_glints(field, material, settings: GlintSettings = GlintSettings(), *, progress=None,
                   executor=None) -> GlintRender:
-    """Render *field* (HeightField or memory-mapped LargeHeightField) of *material* as described in the module
-    doc; pixels whose footprint box leaves the field stay black (``on_field`` False).
+    """Render *field* (HeightField, memory-mapped LargeHeightField or any tiled field of
+    :mod:`waveoptics.surfaces.tiled`) of *material* as described in the module doc; pixels whose footprint box
+    leaves the field stay black (``on_field`` False).
 
     Parameters
     ----------
@@ -361,13 +364,13 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
     M = colour.reflectance_to_rgb_matrix(lam)
     geo = geometry(field, settings)
     n = settings.size
-    wave = np.zeros((n, n, len(lam)))
-    geo_img = np.zeros((n, n, len(lam)))
-    on = np.zeros((n, n), bool)
-    t_wave = t_geo = 0.0
-    sig = []
+    f_wave, f_geo = np.zeros((n, n, len(lam))), np.zeros((n, n, len(lam)))
+    E, on = np.zeros((n, n)), np.zeros((n, n), bool)
+    fps, dirs = np.zeros((n, n, 5)), np.zeros((n, n, 6))
+    t_read = t_sums = 0.0
+    samples = 0
     tasks = [range(j, min(j + ROWS_PER_TASK, n)) for j in range(0, n, ROWS_PER_TASK)]
-    t_start = time.perf_counter()
+    t_start, cpu_start = time.perf_counter(), time.process_time()
     parts = [geo.take(rows) for rows in tasks]
     if executor is None:
         results = (_render_rows(field, material, settings, g, rows) for g, rows in zip(parts, tasks))
@@ -376,20 +379,74 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
                                [settings] * len(tasks), parts, tasks)
     for res in results:
         rows = list(res["rows"])
-        wave[rows], geo_img[rows], on[rows] = res["wave"], res["geo"], res["on"]
-        t_wave += res["t_wave"]
-        t_geo += res["t_geo"]
-        sig += res["sig"]
+        f_wave[rows], f_geo[rows], E[rows], on[rows] = res["wave"], res["geo"], res["E"], res["on"]
+        fps[rows], dirs[rows] = res["fp"], res["dirs"]
+        t_read += res["t_read"]
+        t_sums += res["t_sums"]
+        samples += res["samples"]
         if progress is not None:
             progress(len(rows))
-    wall = time.perf_counter() - t_start
-    if not sig:
+    wall, cpu = time.perf_counter() - t_start, time.process_time() - cpu_start
+    lit = on & (E > 0)
+    if not lit.any():
         raise FieldError("no pixel's footprint lies inside the height field; use a larger field or image",
                          "surface")
-    s = np.array(sig)
-    n_px = len(sig)
+    n_px = int(lit.sum())
+    wave, geo_img = f_wave * E[..., None], f_geo * E[..., None]
     return GlintRender(wave=wave @ M, geometric=geo_img @ M, on_field=on,
-                       timings_s={"wave": t_wave, "geometric": t_geo, "pixels": n_px, "wall": wall,
-                                  "wave_per_pixel": t_wave / n_px, "geometric_per_pixel": t_geo / n_px},
-                       footprint_sigma_m=(float(np.median(s[:, 0])), float(np.median(s[:, 1]))),
-                       wave_spectral=wave, geometric_spectral=geo_img)
+                       timings_s={"read": t_read, "sums": t_sums, "pixels": n_px, "wall": wall, "cpu": cpu,
+                                  "per_pixel": wall / n_px, "sums_per_pixel": t_sums / n_px,
+                                  "footprints_per_s": n_px / max(t_sums, 1e-12), "samples": samples},
+                       footprint_sigma_m=(float(np.median(fps[lit][:, 2])), float(np.median(fps[lit][:, 3]))),
+                       wave_spectral=wave, geometric_spectral=geo_img, wave_brdf=f_wave, geometric_brdf=f_geo,
+                       footprints=fps, directions=dirs)
+
+
+@dataclass
+class GlintEstimate:
+    """What a glint render will cost, before it starts: pixels on the surface, the median footprint (m), the
+    samples its sums visit, the per-pixel time measured on a probe of pixels and the extrapolated wall time (s)."""
+
+    pixels: int
+    footprint_sigma_m: tuple
+    samples: int
+    probe_pixels: int
+    per_pixel_s: float
+    estimate_s: float
+
+    def describe(self) -> str:
+        return (f"{self.pixels} pixels, footprint σ ≈ {self.footprint_sigma_m[0] * 1e6:.3g} × "
+                f"{self.footprint_sigma_m[1] * 1e6:.3g} µm, {self.samples / max(self.pixels, 1):.3g} samples/pixel; "
+                f"probe of {self.probe_pixels} pixels: {self.per_pixel_s * 1e3:.3g} ms/pixel → about "
+                f"{self.estimate_s:.0f} s")
+
+
+def estimate_glints(field, material, settings: GlintSettings = GlintSettings(), *, probe_tasks: int = 2
+                    ) -> GlintEstimate:
+    """Estimate :func:`render_glints`'s cost before it starts: the footprint of every pixel (cheap), the samples
+    of their boxes, and the time of *probe_tasks* whole row tasks (the same code, after one pixel that builds the
+    kernel and pays the first-call costs) spread over the rows that meet the surface; the estimate is that time per sample times all
+    samples (the field's reading scales with the same footprints)."""
+    geo = geometry(field, settings)
+    s1, s2, _ = footprints(geo, settings.filter_px)
+    hit = geo.hit
+    n_px = int(hit.sum())
+    if n_px == 0:
+        raise FieldError("no pixel of this view meets the surface", "surface")
+    box = (8 * s1 / field.dx + 2) * (8 * s2 / field.dy + 2)        # ±N_SIGMA box of each ellipse, roughly
+    total = float(np.sum(box[hit]))
+    # one pixel outside the clock: builds the kernel and pays every first-call cost (imports, material tables)
+    j, i = np.argwhere(hit)[int(n_px // 2)]
+    _render_rows(field, material, settings, geo.take([j]), range(j, j + 1), only=int(i))
+    n = settings.size
+    starts = [j for j in range(0, n, ROWS_PER_TASK) if hit[j:j + ROWS_PER_TASK].any()]
+    pick = sorted({starts[int(k)] for k in np.linspace(0, len(starts) - 1, probe_tasks + 2)[1:-1].round()})
+    t0 = time.perf_counter()
+    probe_px = 0
+    for j in pick:
+        rows = range(j, min(j + ROWS_PER_TASK, n))
+        probe_px += int(np.sum(_render_rows(field, material, settings, geo.take(rows), rows)["on"]))
+    t = time.perf_counter() - t0
+    probe_samples = float(sum(np.sum(box[j:j + ROWS_PER_TASK][hit[j:j + ROWS_PER_TASK]]) for j in pick))
+    return GlintEstimate(n_px, (float(np.median(s1[hit])), float(np.median(s2[hit]))), int(total), probe_px,
+                         t / max(probe_px, 1), t / max(probe_samples, 1.0) * total)

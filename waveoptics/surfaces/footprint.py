@@ -35,7 +35,7 @@ from ..errors import FieldError, WaveopticsError
 from ..units import parse_length
 from .heightfield import HeightField
 
-__all__ = ["N_SIGMA", "Footprint", "LargeHeightField", "open_large", "footprint_patch"]
+__all__ = ["N_SIGMA", "Footprint", "LargeHeightField", "open_large", "footprint_box", "footprint_patch"]
 
 #: half-width of a footprint's patch, in footprint widths
 N_SIGMA = 4.0
@@ -159,12 +159,20 @@ def open_large(path, spacing=None, units=None):
 
 
 def _region(field, i0, j0, i1, j1) -> HeightField:
-    if isinstance(field, LargeHeightField):
+    if not isinstance(field, HeightField):     # LargeHeightField or any tiled field (waveoptics.surfaces.tiled)
         return field.region(i0, j0, i1, j1)
     sl = (slice(j0, j1), slice(i0, i1))
     meta = {k: v for k, v in field.meta.items() if k != "periodic"}
     meta["cropped"] = {"from_samples": [field.shape[1], field.shape[0]], "origin_samples": [i0, j0]}
     return HeightField(field.heights[sl], field.dx, field.dy, None if field.mask is None else field.mask[sl], meta)
+
+
+def footprint_box(fp: Footprint, dx: float, dy: float, n_sigma: float = N_SIGMA) -> tuple[int, int, int, int]:
+    """Sample box (i0, j0, i1, j1) (columns [i0, i1), rows [j0, j1)) holding footprint *fp* out to *n_sigma*
+    widths on a grid of spacing *dx*, *dy* (m) whose first sample is at the origin."""
+    hx, hy = fp.half_extent(n_sigma)
+    return (int(math.floor((fp.x - hx) / dx)), int(math.floor((fp.y - hy) / dy)),
+            int(math.ceil((fp.x + hx) / dx)) + 1, int(math.ceil((fp.y + hy) / dy)) + 1)
 
 
 def footprint_patch(field, fp: Footprint, n_sigma: float = N_SIGMA) -> tuple[HeightField, np.ndarray]:
@@ -178,8 +186,7 @@ def footprint_patch(field, fp: Footprint, n_sigma: float = N_SIGMA) -> tuple[Hei
     """
     ny, nx = field.shape
     hx, hy = fp.half_extent(n_sigma)
-    i0, i1 = int(math.floor((fp.x - hx) / field.dx)), int(math.ceil((fp.x + hx) / field.dx)) + 1
-    j0, j1 = int(math.floor((fp.y - hy) / field.dy)), int(math.ceil((fp.y + hy) / field.dy)) + 1
+    i0, j0, i1, j1 = footprint_box(fp, field.dx, field.dy, n_sigma)
     if i0 < 0 or j0 < 0 or i1 > nx or j1 > ny:
         raise FieldError(
             f"footprint at ({fp.x * 1e6:.6g}, {fp.y * 1e6:.6g}) um with its {n_sigma:g}-width box "
