@@ -168,7 +168,7 @@ def _glint_field(args, surfaces):
     """The height field of a glint render: ``procedural:NAME:SIZE:SPACING[:SEED]``, a .h5 / .hdf5 (chunked), a .npy
     (memory-mapped) or any other height-field file."""
     from ..units import parse_length
-    from .brdf import _spacing
+    from .brdf import spacing_from_args
 
     text = str(args.surface)
     if text.startswith("procedural:"):
@@ -183,7 +183,7 @@ def _glint_field(args, surfaces):
     if text.lower().endswith((".h5", ".hdf5")):
         return surfaces.HDF5Field(text)
     if text.lower().endswith(".npy") and args.channel is None:
-        return surfaces.open_large(args.surface, spacing=_spacing(args), units=args.units)
+        return surfaces.open_large(args.surface, spacing=spacing_from_args(args), units=args.units)
     return load_surface(args)
 
 

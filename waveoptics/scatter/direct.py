@@ -211,7 +211,7 @@ def _cl_setup(runtime, precision, vector_width, smp: Samples, fast_math: bool = 
     return rt, dt, prg, q, arrays, smp.size + pad
 
 
-def _default_local_size(rt):
+def default_local_size(rt):
     """1 on CPU devices (PoCL then runs the kernels' explicit vectors as written: measured 2x), else the
     driver's choice."""
 
@@ -263,7 +263,7 @@ def launch_pairs(smp: Samples, coef: PhaseCoefficients, *, kernel: str, chunk_ar
     nd = PAIRS_PER_ITEM[_precision_name(dt)] if pairs_per_item is None else int(pairs_per_item)
     n = coef.size
     out = np.empty(n, np.complex128)
-    lsz = _default_local_size(rt) if local_size is None else (int(local_size) or None)   # 0: driver's choice
+    lsz = default_local_size(rt) if local_size is None else (int(local_size) or None)   # 0: driver's choice
     chunk = max(256, TERMS_PER_LAUNCH // max(ns, 1))
     chunk -= chunk % nd
     for a in range(0, n, chunk):

@@ -131,7 +131,7 @@ def footprint_sums(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, *, backend:
     import pyopencl.array as cla
 
     from ..runtime import build_options, build_program, get_runtime
-    from .direct import _default_local_size, _sincos_options
+    from .direct import default_local_size, sincos_options
 
     rt = runtime if runtime is not None else get_runtime()
     precision = precision or ("float64" if rt.fp64 else "float32")
@@ -139,7 +139,7 @@ def footprint_sums(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, *, backend:
     nl = len(wavelengths_nm)
     pname = "float64" if dt == np.float64 else "float32"
     prg = build_program(rt, "footprint.cl", build_options(dt, (f"-DWO_NL={nl}", f"-DWO_VW={_VW}")
-                                                          + _sincos_options(pname)))
+                                                          + sincos_options(pname)))
     box = np.ascontiguousarray(box, dtype=np.int32)
     n = len(box)
     rows = int(np.max(box[:, 3] - box[:, 1]))
@@ -151,7 +151,7 @@ def footprint_sums(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, *, backend:
     d_geo = cla.to_device(q, np.ascontiguousarray(geo, dtype=dt))
     d_lam = cla.to_device(q, (1.0 / (np.asarray(wavelengths_nm, dtype=float) * 1e-9)).astype(dt))
     d_out = cla.empty(q, n * n_chunks * (2 * nl + 3), dt)
-    lsz = _default_local_size(rt)
+    lsz = default_local_size(rt)
     cl.Kernel(prg, "footprint_sums")(q, (n * n_chunks,), None if lsz is None else (lsz,), d_h.data, np.int32(h.shape[1]), dt(dx), dt(dy),
                                      d_box.data, d_geo.data, d_lam.data, dt(1.0 / slope_sigma ** 2), np.int32(n),
                                      np.int32(n_chunks), d_out.data)
