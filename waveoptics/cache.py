@@ -159,14 +159,19 @@ def put_arrays(kind: str, digest: str, arrays: dict, *, keep: int = 8) -> None:
     import numpy as np
 
     path = _array_path(kind, digest)
+    tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".npz", dir=path.parent)
         with os.fdopen(fd, "wb") as fh:
             np.savez(fh, **arrays)
         os.replace(tmp, path)
+        tmp = None
         entries = sorted(path.parent.glob("*.npz"), key=lambda p: p.stat().st_mtime, reverse=True)
         for old in entries[keep:]:
             old.unlink(missing_ok=True)
     except OSError:
-        pass   # a cache only saves time: an unwritable one is skipped
+        pass   # a cache only saves time: an unwritable one (or a full disk) is skipped
+    finally:
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
