@@ -15,8 +15,10 @@ nodes that cover a spectral renderer's range.
   :data:`TABLE_CACHE_KIND`) under a key of every parameter they depend on (the material's index at the nodes, the
   micro NDF, the nano statistics or the height field's bytes, the diffraction model, the nodes, the resolution)
   and the code's version (:func:`waveoptics.cache.code_version`), so a second run with the same model reads them
-  instead of computing them (the default render model: 52 s CPU → 0.1 s). They are stored as float32, the
-  precision of the facet tables they are computed from (:func:`waveoptics.brdf.twoscale.facet_frame_diffraction`).
+  instead of computing them (measured on 2 busy cores, ``render --material gold --micro-alpha 0.2``: 82-87 s CPU
+  for the command with the lobes computed, 46 s with them read; the band-limited series of each wavelength, built
+  on first use by the coherent part, remain). They are stored as float32, the precision of the facet tables they
+  are computed from (:func:`waveoptics.brdf.twoscale.facet_frame_diffraction`).
 """
 from __future__ import annotations
 
