@@ -8,6 +8,11 @@ versions), so a cache copied to another machine, or kept across an upgrade, is n
 also keyed by the scene file's bytes, the bytes of every file the scene names, and the options. Writes are atomic;
 a cache that cannot be written (read-only home) is skipped without a word, since it only saves time. This module
 imports nothing heavy.
+
+Arrays (:func:`get_arrays`, :func:`put_arrays`: the tabulated lobes of the models handed to renderers) are kept one
+``.npz`` file per key under ``arrays/KIND/``; their keys hold every parameter of what was computed and
+:func:`code_version` (the package's version and the bytes of its source), not the machine: the numbers do not
+depend on it.
 """
 from __future__ import annotations
 
@@ -18,7 +23,8 @@ import platform
 import tempfile
 from pathlib import Path
 
-__all__ = ["cache_dir", "machine_key", "get", "put", "file_digest"]
+__all__ = ["cache_dir", "machine_key", "get", "put", "file_digest", "code_version", "key_digest", "get_arrays",
+           "put_arrays"]
 
 #: bump when the layout of an entry changes
 FORMAT = 1
@@ -106,3 +112,66 @@ def put(kind: str, key: str, value, *, keep: int = 64) -> None:
         os.replace(tmp, path)
     except OSError:
         pass   # a cache only saves time: an unwritable one is skipped
+
+
+def code_version() -> str:
+    """The waveoptics version, NumPy's and SciPy's, and a SHA-256 of the bytes of every ``.py`` file of the
+    package: a computed array depends on the code that computed it, which an editable install changes without a
+    new version."""
+    h = hashlib.sha256()
+    root = Path(__file__).resolve().parent
+    for path in sorted(root.rglob("*.py")):
+        h.update(path.relative_to(root).as_posix().encode())
+        h.update(file_digest(path).encode())
+    return "|".join([_version("waveoptics"), _version("numpy"), _version("scipy"), h.hexdigest()[:20]])
+
+
+def key_digest(parts: dict) -> str:
+    """A file-name-safe digest of *parts* (plain JSON data: every parameter of a computation) and
+    :func:`code_version`."""
+    text = json.dumps({"parts": parts, "code": code_version(), "format": FORMAT}, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:32]
+
+
+def _array_path(kind: str, digest: str) -> Path:
+    return cache_dir() / "arrays" / kind / f"{digest}.npz"
+
+
+def get_arrays(kind: str, digest: str):
+    """The arrays stored under *digest* (:func:`key_digest`) in the *kind* cache, as a dict, or None."""
+    import numpy as np
+
+    path = _array_path(kind, digest)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            out = {k: data[k] for k in data.files}
+    except (OSError, ValueError, EOFError):
+        return None
+    try:
+        os.utime(path)   # recently used: kept longest
+    except OSError:
+        pass
+    return out
+
+
+def put_arrays(kind: str, digest: str, arrays: dict, *, keep: int = 8) -> None:
+    """Store *arrays* (name → ndarray) under *digest*; keeps the *keep* most recently used entries of the kind."""
+    import numpy as np
+
+    path = _array_path(kind, digest)
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".npz", dir=path.parent)
+        with os.fdopen(fd, "wb") as fh:
+            np.savez(fh, **arrays)
+        os.replace(tmp, path)
+        tmp = None
+        entries = sorted(path.parent.glob("*.npz"), key=lambda p: p.stat().st_mtime, reverse=True)
+        for old in entries[keep:]:
+            old.unlink(missing_ok=True)
+    except OSError:
+        pass   # a cache only saves time: an unwritable one (or a full disk) is skipped
+    finally:
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)

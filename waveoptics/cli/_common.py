@@ -168,3 +168,18 @@ def add_colour(parser, *, illuminant: bool = True) -> None:
     if illuminant:
         option(parser, "--illuminant", default="D65")
     option(parser, "--observer", default="CIE 1931 2 Degree Standard Observer", note="default the 1931 2° observer")
+
+
+def parse_budget(text):
+    """``--budget`` in seconds, or None for 'none'."""
+    from ..errors import WaveopticsError
+
+    if str(text).strip().lower() in ("none", "inf", "unlimited"):
+        return None
+    try:
+        v = float(text)
+    except ValueError:
+        raise WaveopticsError(f"--budget {text!r} is not allowed; give seconds > 0 or 'none'") from None
+    if not v > 0 or v != v:
+        raise WaveopticsError(f"--budget {text!r} is not allowed; give seconds > 0 or 'none'")
+    return v

@@ -69,6 +69,7 @@ OPTIONS = {o.flag: o for o in (
     Option("--sphere-size", "size of the sphere renders in pixels", "PX", int, "px"),
     Option("--environment", "environment light: sky, studio, constant or an equirectangular .exr (+y up)", "MAP"),
     Option("--spp", "samples per pixel", "N", int),
+    Option("--budget", "time budget in seconds ('none': no limit)", "SECONDS", unit="s"),
     Option("--window", "taper over the patch: a scipy.signal.windows name (boxcar = none)", "NAME"),
     Option("--detrend", "what to remove from the heights first: mean, plane (least squares: levelling) or none"),
     Option("--generator", "surface generator"),

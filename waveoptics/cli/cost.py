@@ -8,7 +8,7 @@ from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
 from ..units import parse_direction
 from ..vocabulary import COST_BUDGET_S, COST_TARGET_ERROR
-from ._common import add_common, add_output, add_surface, emit, load_surface, progress
+from ._common import add_common, add_output, add_surface, emit, load_surface, parse_budget, progress
 from ._options import option, renamed
 
 
@@ -51,9 +51,8 @@ def register(sub) -> None:
                         "models, 1 otherwise)")
     renamed(p, "cost", "--realizations", dest="realization_counts")
     p.add_argument("--precisions", default="float32,float64", help="direct solver precisions")
-    p.add_argument("--budget", default=f"{COST_BUDGET_S:g}", metavar="SECONDS",
-                   help="time for the ladder after the reference, in s; settings predicted to overrun are skipped "
-                        f"and listed (default {COST_BUDGET_S:g}; 'none' runs every setting)")
+    option(p, "--budget", default=f"{COST_BUDGET_S:g}",
+           note="of the ladder after the reference; settings predicted to overrun are skipped and listed")
     p.add_argument("--target-error", type=float, default=COST_TARGET_ERROR, metavar="E",
                    help=f"recommend the fastest setting whose --metric is <= E (default {COST_TARGET_ERROR:g})")
     p.add_argument("--reference", choices=("fft", "direct"), default="fft",
@@ -64,19 +63,6 @@ def register(sub) -> None:
     add_output(p, required=False, note="a directory: cost.json, cost.png (error vs time), cost.md")
     add_common(p)
     p.set_defaults(func=run)
-
-
-def _budget(text):
-    """--budget in seconds, or None for 'none'."""
-    if str(text).strip().lower() in ("none", "inf", "unlimited"):
-        return None
-    try:
-        v = float(text)
-    except ValueError:
-        raise WaveopticsError(f"--budget {text!r} is not allowed; give seconds > 0 or 'none'") from None
-    if not v > 0 or v != v:
-        raise WaveopticsError(f"--budget {text!r} is not allowed; give seconds > 0 or 'none'")
-    return v
 
 
 def run(args) -> int:
@@ -103,7 +89,7 @@ def run(args) -> int:
     out = prepare_outdir(args.output, overwrite=args.overwrite, expected=cost.FILES) if args.output else None
     rt = get_runtime(args.device)          # the direct rungs (and a direct reference) run on it
     bar = progress(total=len(settings) + 1, desc="cost", args=args)
-    res = cost.study(cfg, settings, budget_s=_budget(args.budget), target_error=args.target_error,
+    res = cost.study(cfg, settings, budget_s=parse_budget(args.budget), target_error=args.target_error,
                      metric=args.metric, reference_solver=args.reference, runtime=rt, progress=bar.update)
     bar.close()
     if out is not None:

@@ -2,9 +2,13 @@
 environment map, rendered by Mitsuba 3, side by side with their ΔE2000 (:mod:`waveoptics.renderers.scene`)."""
 from __future__ import annotations
 
-from ._common import add_common, add_output, add_workers, emit, load_surface, progress
+from ._common import add_common, add_output, add_workers, emit, load_surface, parse_budget, progress
 from ._options import option
 from ._renderer import add_model, model_description, model_from_args, plugin_parameters
+
+#: most samples per pixel of --target-noise by default (:data:`waveoptics.renderers.scene.MAX_SPP_DEFAULT`; kept
+#: here so that building the parser imports nothing heavy)
+MAX_SPP_DEFAULT = 4096
 
 #: files of one run (summary.json last: it says the set is complete)
 OUTPUTS = ("wave.exr", "reference.exr", "delta_e.exr", "render.png", "summary.json")
@@ -32,7 +36,15 @@ def register(sub):
                    help="how the wave-optics BRDF enters Mitsuba: measured (its RGL export, native and fast; "
                         "spectral variants) or plugin (the model itself through NumPy; slower) (default measured)")
     option(g, "--sphere-size", default=256, note="the image is PX x PX")
-    option(g, "--spp", default=32)
+    option(g, "--spp", default=32, note="of each render; with --target-noise the first round's")
+    g.add_argument("--target-noise", type=float, metavar="DE",
+                   help="double the samples per pixel until the noise floor (mean ΔE2000 on the sphere between two "
+                        "renders of the wave-optics model with different seeds) is below DE, or --max-spp or "
+                        "--budget is reached (default: one round at --spp)")
+    g.add_argument("--max-spp", type=int, default=MAX_SPP_DEFAULT, metavar="N",
+                   help=f"most samples per pixel --target-noise doubles to (default {MAX_SPP_DEFAULT})")
+    option(g, "--budget", default="600", note="of the --target-noise renders; a doubling predicted to pass it is "
+                                              "not started")
     gl = p.add_argument_group("glints (--glints)")
     gl.add_argument("--glints", action="store_true",
                     help="render the --surface height field as a plane where every pixel's footprint gives its "
@@ -57,6 +69,8 @@ def register(sub):
     p.set_defaults(func=run)
 
 
+#: sphere-render options that --glints does not take, with their defaults
+_SPHERE_ONLY = {"target_noise": None, "max_spp": MAX_SPP_DEFAULT, "budget": "600"}
 #: --glints options and their defaults
 _GLINT_DEFAULTS = {"incident": "30,0", "view": "30,180", "wavelengths": "450:650:50", "shape": "plane",
                    "workers": None, "scheduler": None, "coherence": None}
@@ -94,6 +108,10 @@ def run_glints(args):
     from ..renderers import glints
     from ..units import parse_direction, parse_length, parse_wavelengths
 
+    given = [k for k, v in _SPHERE_ONLY.items() if getattr(args, k) != v]
+    if given:
+        raise WaveopticsError(f"--{given[0].replace('_', '-')} belongs to the sphere render; --glints renders "
+                              "each pixel's footprint BRDF once, without Monte Carlo noise")
     given = [k for k, v in _NOT_GLINTS.items() if getattr(args, k) != v]
     if given:
         flag = {"alpha": "micro-alpha"}.get(given[0], given[0].replace("_", "-"))
@@ -198,6 +216,7 @@ def _glint_layers(r, settings) -> dict:
 
 def run_render(args):
     import json
+    import sys
     import time
     import warnings
 
@@ -220,12 +239,23 @@ def run_render(args):
     env = lighting.environment(args.environment)       # a bad map fails here, before any work
     if args.environment in lighting.PROCEDURAL:
         env = lighting.procedural_environment(args.environment, height=256)
+    budget = parse_budget(args.budget)
+    if args.target_noise is not None and not args.target_noise > 0:
+        raise WaveopticsError(f"--target-noise {args.target_noise!r} is not allowed; give a ΔE2000 > 0")
+    if args.max_spp < args.spp:
+        raise WaveopticsError(f"--max-spp {args.max_spp} is below --spp {args.spp}")
     timings = {}
     t0 = time.perf_counter()
     model, params = model_from_args(args)
     timings["model_s"] = time.perf_counter() - t0
     desc = model_description(args, params)
-    bar = progress(total=2 * max(1, min(settings.passes, settings.spp)), desc="render", args=args)
+    bar = progress(total=3 * max(1, min(settings.passes, settings.spp)), desc="render", args=args)
+
+    def tick(done, total):
+        bar.total = total
+        bar.update(done - bar.n)
+
+    on = scene.sphere_mask(settings.size)
     with files.staged_outputs(outdir, outputs, last="summary.json") as stage:
         t0 = time.perf_counter()
         if args.bsdf == "measured":
@@ -235,42 +265,66 @@ def run_render(args):
                                plugin_parameters=plugin_parameters(args, params) if args.bsdf == "plugin" else None)
         ref, notes = scene.reference_bsdf(mi, model, **{k: params[k] for k in ("material", "alpha", "alpha_y",
                                                                                "ndf", "kd")})
-        images = {}
-        for key, bsdf in (("wave", wave), ("reference", ref)):
-            t0 = time.perf_counter()
-            images[key] = scene.render_image(mi, scene.scene_dict(mi, bsdf, env.radiance, settings), settings,
-                                             progress=bar.update)
-            timings[f"render_{key}_s"] = time.perf_counter() - t0
+        scenes = {k: scene.scene_dict(mi, b, env.radiance, settings) for k, b in (("wave", wave), ("reference", ref))}
+        cmp = scene.render_comparison(mi, scenes, settings, on, target_noise=args.target_noise,
+                                      max_spp=args.max_spp, budget_s=budget, progress=tick)
         bar.close()
+        images = cmp.images
+        timings.update({f"render_{k}_s": v for k, v in cmp.render_s.items()})
         de = scene.delta_e_map(images["wave"], images["reference"])
-        on = scene.sphere_mask(settings.size)
         for key in ("wave", "reference"):
             img = images[key]
             files.write_exr(stage / f"{key}.exr", {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
-                            {"waveoptics": f"linear sRGB radiance, {args.variant}, {settings.spp} spp"})
-        files.write_exr(stage / "delta_e.exr", {"Y": de}, {"waveoptics": "CIEDE2000 wave vs reference"})
+                            {"waveoptics": f"linear sRGB radiance, {args.variant}, {cmp.spp} spp"})
+        files.write_exr(stage / "delta_e.exr", {"Y": de, "noise": cmp.noise_floor},
+                        {"waveoptics": "Y: CIEDE2000 wave vs reference; noise: CIEDE2000 between two renders of the "
+                                       "wave-optics model with different seeds (the noise floor)"})
         ref_name = ref["type"]
+        floor = _stats(cmp.noise_floor, on)
+        model_de = _stats(de, on)
         exposure = key_exposure(images["reference"], on)
         plot_spheres([tonemap(images["wave"], exposure), tonemap(images["reference"], exposure)],
                      [f"wave optics ({args.bsdf})\n{params['material']}, α = {params['alpha']:g}, "
                       f"{desc.get('nano') or 'surface'}", f"Mitsuba {ref_name}\nsame α and index"],
                      stage / "render.png", diff=de,
-                     diff_title=f"ΔE2000 (sphere mean {float(de[on].mean()):.2f})",
+                     diff_title=f"ΔE2000 (sphere mean {model_de['mean']:.2f}; noise floor {floor['mean']:.2f})",
                      exposure=exposure,
-                     caption=f"environment {env.name}; Mitsuba 3 {args.variant}, {settings.spp} spp, "
+                     caption=f"environment {env.name}; Mitsuba 3 {args.variant}, {cmp.spp} spp, "
                              f"{settings.size}² px; camera looks down −z, y up")
         summary = {"model": desc, "bsdf": args.bsdf, "reference": ref_name, "reference_notes": notes,
                    "variant": args.variant, "environment": env.name, "ground": args.ground,
-                   "size_px": settings.size, "spp": settings.spp,
-                   "delta_e2000": {"mean": float(de[on].mean()), "p95": float(np.percentile(de[on], 95)),
-                                   "max": float(de[on].max()), "pixels": "sphere",
-                                   "mean_image": float(de.mean())},
+                   "size_px": settings.size, "spp": cmp.spp,
+                   "delta_e2000": dict(model_de, pixels="sphere", mean_image=float(de.mean()),
+                                       meaning="CIEDE2000 (unitless; 1 is about a just-noticeable difference) "
+                                               "between the wave-optics render and the reference render, per "
+                                               "pixel: the models' difference plus Monte Carlo noise"),
+                   "noise_floor_delta_e2000": dict(floor, pixels="sphere",
+                                                   meaning="CIEDE2000 between two renders of the wave-optics "
+                                                           "model that differ only in their seeds, each at spp "
+                                                           "samples per pixel: what sampling noise alone gives "
+                                                           "(the reference shares the first render's seeds); a "
+                                                           "model difference shows where delta_e2000 stands "
+                                                           "well above it"),
+                   "model_to_noise": model_de["mean"] / floor["mean"] if floor["mean"] > 0 else None,
+                   "target_noise": args.target_noise, "noise_history": [[n, f] for n, f in cmp.history],
+                   "stop": cmp.stop or None,
                    "timings_s": {k: round(v, 3) for k, v in timings.items()},
                    "outputs": list(outputs)}
         files.write_json(stage / "summary.json", summary)
     for note in notes:
         warnings.warn(note, UserWarning, stacklevel=1)
-    emit(args, summary, f"wrote {outdir}/ ({', '.join(outputs)}); mean ΔE2000 on the sphere {summary['delta_e2000']['mean']:.2f} "
-                        f"(p95 {summary['delta_e2000']['p95']:.2f}); render {timings['render_wave_s']:.1f} s + "
-                        f"{timings['render_reference_s']:.1f} s, model {timings['model_s']:.1f} s")
+    if cmp.stop and not args.json:
+        print(cmp.stop, file=sys.stderr)
+    emit(args, summary, f"wrote {outdir}/ ({', '.join(outputs)}); mean ΔE2000 on the sphere {model_de['mean']:.2f} "
+                        f"(p95 {model_de['p95']:.2f}), noise floor {floor['mean']:.2f} at {cmp.spp} spp; render "
+                        f"{timings['render_wave_s']:.1f} s + {timings['render_wave_repeat_s']:.1f} s (noise floor) "
+                        f"+ {timings['render_reference_s']:.1f} s, model {timings['model_s']:.1f} s")
     return 0
+
+
+def _stats(de, on) -> dict:
+    """Mean, 95th percentile and maximum of a ΔE2000 map over the pixels *on*."""
+    import numpy as np
+
+    return {"mean": float(de[on].mean()), "p95": float(np.percentile(de[on], 95)), "max": float(de[on].max())}
+

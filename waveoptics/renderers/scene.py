@@ -19,6 +19,14 @@ References
    ``measured`` plugins).
 .. [2] B. Walter et al., "Microfacet Models for Refraction through Rough Surfaces", EGSR 2007.
 .. [3] CIE 142-2001 / colour-science ``delta_E`` (CIEDE2000 colour difference of the two renders).
+.. [4] E. Veach, PhD thesis, Stanford, 1997, §2.4 (a Monte Carlo estimate's standard error falls as 1/√N).
+
+**Noise floor.** Each image is a Monte Carlo estimate, so the ΔE2000 of two renders holds their sampling noise as
+well as the models' difference. :func:`render_comparison` renders the wave-optics model a second time with seeds of
+its own (:data:`SEED_STREAMS`) and reports the ΔE2000 between its two renders, the noise floor: what two renders of
+one and the same model differ by at this many samples per pixel. The noise of each pixel falls as 1/√spp and, for
+differences small enough that ΔE2000 is linear in them, so does the floor; with a target it doubles the samples per
+pixel of all three renders (adding renders with new seeds) until the floor is below the target or a limit is hit.
 """
 from __future__ import annotations
 
@@ -31,7 +39,8 @@ from ..errors import FieldError, WaveopticsError
 from ..vocabulary import RENDER_BSDFS
 
 __all__ = ["WAVE_BSDFS", "REFERENCE_NDFS", "RenderSettings", "reference_bsdf", "wave_bsdf", "scene_dict",
-           "render_image", "delta_e_map", "sphere_mask", "CAMERA"]
+           "render_image", "delta_e_map", "sphere_mask", "CAMERA", "SEED_STREAMS", "Progressive", "Comparison",
+           "render_comparison", "MAX_SPP_DEFAULT"]
 
 #: how the wave-optics BRDF enters Mitsuba
 WAVE_BSDFS = RENDER_BSDFS
@@ -177,20 +186,149 @@ def scene_dict(mi, bsdf: dict, radiance: np.ndarray, settings: RenderSettings) -
     return scene
 
 
+def _split(spp: int, passes: int) -> list[int]:
+    """*spp* samples per pixel over at most *passes* passes (as even as integers allow)."""
+    passes = max(1, min(int(passes), int(spp)))
+    return [spp // passes + (1 if i < spp % passes else 0) for i in range(passes)]
+
+
+#: first sampler seed of each render of a comparison (each pass takes the next seed): the wave-optics model, its
+#: repeat (seeds of its own: its difference from the first is the noise floor) and the reference, which shares the
+#: first render's seeds (common random numbers, as before the noise floor was measured). Below 2^24: Mitsuba's
+#: scalar variants render seed 2^24 as seed 0 (measured, Mitsuba 3.9)
+SEED_STREAMS = {"wave": 0, "wave_repeat": 1 << 20, "reference": 0}
+#: most samples per pixel a --target-noise render doubles to by default
+MAX_SPP_DEFAULT = 4096
+
+
+class Progressive:
+    """One Mitsuba scene rendered in passes with consecutive seeds from *seed*, accumulated: :meth:`add` renders
+    more samples per pixel, :attr:`image` is the mean of all of them (each pixel's estimate over :attr:`spp`
+    samples)."""
+
+    def __init__(self, mi, scene: dict, size: int, seed: int = 0):
+        self.mi, self.loaded, self.size = mi, mi.load_dict(scene), int(size)
+        self.sum = np.zeros((self.size, self.size, 3))
+        self.spp, self.seed = 0, int(seed)
+
+    def add(self, spp: int, passes: int, progress=None) -> None:
+        """Render *spp* more samples per pixel over at most *passes* passes, each with the next seed."""
+        for k in _split(int(spp), passes):
+            self.sum += k * np.array(self.mi.render(self.loaded, spp=k, seed=self.seed), dtype=float)[..., :3]
+            self.seed += 1
+            self.spp += k
+            if progress is not None:
+                progress(1)
+
+    @property
+    def image(self) -> np.ndarray:
+        img = self.sum / max(self.spp, 1)
+        if not np.all(np.isfinite(img)):
+            raise WaveopticsError("the render holds non-finite pixels")
+        return img
+
+
 def render_image(mi, scene: dict, settings: RenderSettings, *, progress=None) -> np.ndarray:
     """Linear sRGB image (size, size, 3): the mean of ``settings.passes`` renders with their own seeds."""
+    r = Progressive(mi, scene, settings.size, SEED_STREAMS["wave"])
+    r.add(settings.spp, settings.passes, progress)
+    return r.image
+
+
+@dataclass
+class Comparison:
+    """The renders of :func:`render_comparison`.
+
+    Attributes
+    ----------
+    images : dict
+        ``wave``, ``wave_repeat``, ``reference``: linear sRGB (size, size, 3), each at :attr:`spp`.
+    spp : int
+        Samples per pixel of every image.
+    noise_floor : ndarray
+        ΔE2000 per pixel between ``wave`` and ``wave_repeat`` (size, size).
+    history : list of (int, float)
+        (spp, mean noise floor over the mask) after each round.
+    stop : str
+        Why the rounds stopped, one line (empty without a target).
+    render_s : dict
+        Seconds spent rendering each image.
+    """
+
+    images: dict
+    spp: int
+    noise_floor: np.ndarray
+    history: list
+    stop: str
+    render_s: dict
+
+
+def render_comparison(mi, scenes: dict, settings: RenderSettings, mask, *, target_noise: float | None = None,
+                      max_spp: int = MAX_SPP_DEFAULT, budget_s: float | None = None, progress=None) -> Comparison:
+    """Render ``scenes["wave"]`` twice (seeds :data:`SEED_STREAMS`) and ``scenes["reference"]`` at
+    ``settings.spp``; with *target_noise* (ΔE2000) double the samples per pixel of all three, by adding as many
+    again with new seeds, until the mean noise floor over *mask* (module doc) is below it, the next doubling would
+    pass *max_spp*, or it would pass *budget_s* seconds in all (each doubling costs about what the renders so far
+    cost).
+
+    *progress* is called as ``progress(done, total)`` (render passes) after each pass.
+
+    References
+    ----------
+    .. [1] E. Veach, PhD thesis, Stanford, 1997, §2.4 (the standard error of a Monte Carlo estimate ∝ 1/√N).
+    """
+    import time
+
+    if target_noise is not None and not (np.isfinite(target_noise) and target_noise > 0):
+        raise FieldError(f"{{target_noise}} {target_noise!r} is not allowed; give a ΔE2000 > 0", "target_noise")
+    if not (isinstance(max_spp, (int, np.integer)) and max_spp >= settings.spp):
+        raise FieldError(f"{{max_spp}} {max_spp!r} is not allowed; give at least the samples per pixel "
+                         f"({settings.spp})", "max_spp")
+    if budget_s is not None and not (np.isfinite(budget_s) and budget_s > 0):
+        raise FieldError(f"{{budget}} {budget_s!r} s is not allowed; give seconds > 0", "budget")
+    t_start = time.perf_counter()
+    keys = ("wave", "wave_repeat", "reference")
+    runs = {k: Progressive(mi, scenes["reference" if k == "reference" else "wave"], settings.size, SEED_STREAMS[k])
+            for k in keys}
     passes = max(1, min(int(settings.passes), int(settings.spp)))
-    spp = [settings.spp // passes + (1 if i < settings.spp % passes else 0) for i in range(passes)]
-    loaded = mi.load_dict(scene)
-    acc = np.zeros((settings.size, settings.size, 3))
-    for i, k in enumerate(spp):
-        acc += k * np.array(mi.render(loaded, spp=k, seed=i), dtype=float)[..., :3]
+    state = {"done": 0, "total": 3 * passes}
+    render_s = dict.fromkeys(keys, 0.0)
+
+    def tick(_):
+        state["done"] += 1
         if progress is not None:
-            progress(1)
-    img = acc / settings.spp
-    if not np.all(np.isfinite(img)):
-        raise WaveopticsError("the render holds non-finite pixels")
-    return img
+            progress(state["done"], state["total"])
+
+    def round_(spp):
+        for k in keys:
+            t0 = time.perf_counter()
+            runs[k].add(spp, passes, tick)
+            render_s[k] += time.perf_counter() - t0
+        de = delta_e_map(runs["wave"].image, runs["wave_repeat"].image)
+        history.append((runs["wave"].spp, float(np.mean(de[mask]))))
+        return de
+
+    history = []
+    de = round_(settings.spp)
+    stop = ""
+    while target_noise is not None:
+        spp, floor = history[-1]
+        if floor < target_noise:
+            stop = f"noise floor {floor:.3g} ΔE2000 is below the target {target_noise:g} at {spp} spp"
+            break
+        elapsed = time.perf_counter() - t_start
+        if 2 * spp > max_spp:
+            stop = (f"stopped at {spp} spp (the most samples per pixel, {max_spp}): noise floor {floor:.3g} ΔE2000, "
+                    f"target {target_noise:g}")
+            break
+        if budget_s is not None and 2 * elapsed > budget_s:
+            stop = (f"stopped at {spp} spp (the next doubling, about {elapsed:.0f} s, would pass the time budget "
+                    f"{budget_s:g} s): noise floor {floor:.3g} ΔE2000, target {target_noise:g}")
+            break
+        state["total"] += 3 * passes
+        de = round_(spp)
+    return Comparison(images={k: runs[k].image for k in keys}, spp=runs["wave"].spp, noise_floor=de,
+                      history=history, stop=stop, render_s=render_s)
 
 
 def delta_e_map(rgb_a, rgb_b) -> np.ndarray:

@@ -324,7 +324,15 @@ def band_series(model: PSDModel, wavelength_nm: float, m_max: int | None = None,
     return band_series_cached(model, float(wavelength_nm), None if m_max is None else int(m_max), int(n_q))
 
 
-@functools.lru_cache(maxsize=24)   # ~10 MB each (the look-up tables)
+#: band series kept in memory (~5 MB each, the look-up tables): more than the wavelength nodes one model is built
+#: at (a renderer's 25 at the default 20 nm step, 48 at 10 nm), since callers loop over all of them per incidence and
+#: an LRU cache smaller than such a loop is evicted on every call: at 24 entries and 25 nodes every look-up missed
+#: and rebuilt its series (the render's default model, 2 of its 20 incidences: not done after 20 min on a busy
+#: 2-core machine; 24 s CPU with every series kept, the whole model 52 s CPU)
+BAND_CACHE_SIZE = 50
+
+
+@functools.lru_cache(maxsize=BAND_CACHE_SIZE)
 def band_series_cached(model: PSDModel, wavelength_nm: float, m_max: int | None, n_q: int) -> BandSeries:
     """:class:`BandSeries` of *model* at *wavelength_nm* (nm), built once and cached.
 
