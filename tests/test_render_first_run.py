@@ -15,7 +15,7 @@ SMALL = dict(material="gold", alpha=0.2, nano="abc:sigma=10nm,B=2um,C=2.6", wave
 
 
 def test_band_cache_holds_every_wavelength_node_of_the_default_and_a_10nm_render():
-    assert band._band_series.cache_parameters()["maxsize"] == band.BAND_CACHE_SIZE
+    assert band.band_series_cached.cache_parameters()["maxsize"] == band.BAND_CACHE_SIZE
     assert band.BAND_CACHE_SIZE >= len(rmodel.wavelength_nodes()) == 25
     assert band.BAND_CACHE_SIZE >= len(rmodel.wavelength_nodes(10.0))
 
