@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 
 import waveoptics as wo
-from waveoptics import colour, render
+from waveoptics import colour
+from waveoptics.renderers import sphere as render
 from waveoptics.io import figures
 from waveoptics.request import make_nano
 

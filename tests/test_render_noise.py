@@ -25,7 +25,7 @@ SIZE = 32
 
 
 def _scenes(mi, settings):
-    from waveoptics import lighting
+    from waveoptics.renderers import lighting
 
     env = lighting.procedural_environment("studio", height=64)
     metal = {"type": "roughconductor", "material": "Cu", "alpha": 0.3}

@@ -76,6 +76,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--surface", "height-field file", "FILE"),
     Option("--footprint", "a pixel footprint: Gaussian centred at X,Y (from the first sample) of width SIGMA "
                           "(SIGMA_Y, turned by ANGLE degrees for an ellipse), lengths with units", "X,Y,SIGMA"),
+    Option("--coherence", "width of the light's coherence area with unit (Yan et al. 2018): windows of this width "
+                          "inside a footprint add as intensities", "L", unit="m"),
     Option("--spacing", "grid spacing of the height field with unit, e.g. 50nm or 50nm,80nm: needed when the "
                         "file does not state it, and overrides it when it does", "D[,DY]", unit="m"),
     Option("--units", "unit of heights and lengths in a height-field file that does not state it: m, mm, um, nm, "

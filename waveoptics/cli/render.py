@@ -60,9 +60,7 @@ def register(sub):
     gl.add_argument("--shape", choices=GLINT_SHAPES,
                     help="what the height field textures: a plane, or a sphere (latitude-longitude map about the "
                          "camera) (default plane)")
-    gl.add_argument("--coherence", metavar="L",
-                    help="width of the light's coherence area, with unit (Yan et al. 2018): windows of this width "
-                         "inside each footprint add as intensities (default: each footprint coherent)")
+    option(p, "--coherence", group=gl, note="default: each footprint coherent")
     add_workers(p, group=gl)
     add_output(p)
     add_common(p, device=False)

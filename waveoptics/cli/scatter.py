@@ -43,9 +43,7 @@ def register(sub) -> None:
                                                 "the patch")
     option(p, "--footprint", note="the BRDF of that footprint only (its Gaussian is the window; a .npy file is "
                                   "memory-mapped and only the footprint's patch is read)")
-    p.add_argument("--coherence", metavar="L",
-                   help="with --footprint: width of the coherence area, with unit; windows of this width add "
-                        "incoherently over the footprint (default: the whole footprint is coherent)")
+    option(p, "--coherence", note="with --footprint; default: the whole footprint is coherent")
     option(p, "--detrend", choices=("mean", "plane", "none"), default="mean",
            note="of each patch, weighted by the window")
     option(p, "--precision", choices=("float32", "float64"), default="float32", note="direct solver")
