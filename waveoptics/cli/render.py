@@ -126,8 +126,7 @@ def run_glints(args):
     exposure = percentile_exposure((r.wave, r.geometric), on)   # one exposure for both; glints are sparse
     with files.staged_outputs(outdir, out_names, last="summary.json") as stage:
         for name, img in (("glints_wave.exr", r.wave), ("glints_geometric.exr", r.geometric)):
-            files.write_exr(stage / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
-                            {"waveoptics": "linear sRGB radiance of a unit-intensity point light"})
+            files.write_rgb_exr(stage / name, img, {"waveoptics": "linear sRGB radiance of a unit-intensity point light"})
         plot_spheres([tonemap(r.wave, exposure), tonemap(r.geometric, exposure)],
                      [f"wave optics (footprint Kirchhoff)\n{args.material}, {Path(args.surface).name}",
                       "geometric optics (footprint NDF)"], stage / "glints.png", diff=de,
@@ -200,8 +199,8 @@ def run_render(args):
         on = scene.sphere_mask(settings.size)
         for key in ("wave", "reference"):
             img = images[key]
-            files.write_exr(stage / f"{key}.exr", {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
-                            {"waveoptics": f"linear sRGB radiance, {args.variant}, {settings.spp} spp"})
+            files.write_rgb_exr(stage / f"{key}.exr", img,
+                                {"waveoptics": f"linear sRGB radiance, {args.variant}, {settings.spp} spp"})
         files.write_exr(stage / "delta_e.exr", {"Y": de}, {"waveoptics": "CIEDE2000 wave vs reference"})
         ref_name = ref["type"]
         exposure = key_exposure(images["reference"], on)

@@ -10,7 +10,6 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy.interpolate import RegularGridInterpolator
 
 from ..errors import WaveopticsError, unknown
 from ..materials import fresnel_function
@@ -112,8 +111,9 @@ def _lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, 
     for i, lam in enumerate(wl):
         U, _ = field_fft(smp, wi, grid, lam, order, frozen_cos_sum=get_model(diffraction).frozen_cos_sum)
         f = brdf_from_field(U[None], wi, dirs, [lam], smp.area, F, diffraction)[0]
-        interp = RegularGridInterpolator((grid.v, grid.u), f, bounds_error=False, fill_value=None)
-        out[i] = np.where(wo[:, 2] > 0, interp(np.stack([wo[:, 1], wo[:, 0]], axis=1)), 0.0)
+        # bilinear between the four nearest cell centres, held at the edge cells (a convex combination: never
+        # below the smallest of them); linear extrapolation beyond the outermost centres made f < 0 near the horizon
+        out[i] = np.where(wo[:, 2] > 0, grid.interpolate(f, wo[:, 0], wo[:, 1]), 0.0)
         if progress is not None:
             progress(1)
     return out
