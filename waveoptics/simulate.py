@@ -22,7 +22,7 @@ from .io import figures
 from .io.figures import save_figure
 from .errors import FieldError
 from .materials import get_material
-from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano
+from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano, parse_nano
 from .scatter.grid import DirectionGrid, integrate
 from .units import direction_from_angles
 
@@ -189,7 +189,18 @@ def memory_estimate(req: SimulationRequest, *, sphere=True, n_lambda=None) -> fl
     lobes = 12 * 8 * nl * n * n
     table = 16 * nl * n * n * max(len(THETA_NODES_DEG), len(SPHERE_THETAS_DEG) * PHI_NODES_ANISOTROPIC) if sphere \
         else 0
-    return float(lobes + table)
+    return float(lobes + table + _nano_field_bytes(req))
+
+
+def _nano_field_bytes(req: SimulationRequest) -> int:
+    """Bytes of a nano height field and its transforms' buffers (about ten complex128 arrays of its samples, at
+    most :data:`MAX_NANO_SAMPLES` per side after cropping): every nano kind that runs as a height field (a file,
+    a split surface, sinusoid and scratches, statistics with the fft or direct solver); 0 for the PSD series."""
+    if req.surface is None and not req.split:
+        model = parse_nano(req.nano)[0]
+        if model in surfaces.PSD_MODELS and req.solver in ("auto", "psd"):
+            return 0
+    return 10 * 16 * MAX_NANO_SAMPLES ** 2
 
 
 def check_request_memory(req: SimulationRequest, *, sphere=True, max_memory=None) -> None:

@@ -23,7 +23,7 @@ from .kirchhoff import brdf_from_field, coherent_amplitude, cos_theta_d
 from .models import get_model
 from .patch import DEFAULT_WINDOW, Samples, samples
 
-__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'Solver', 'SOLVERS', 'BACKENDS', 'get_solver', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'memory_estimate', 'check_request_memory', 'scatter']
+__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'Solver', 'SOLVERS', 'BACKENDS', 'get_solver', 'tile_layout', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'memory_estimate', 'check_request_memory', 'scatter']
 
 #: largest albedo of the F = 1 lobe that :func:`scatter` accepts without an "energy not conserved" warning
 ENERGY_TOL = 1.05
@@ -190,15 +190,22 @@ def _realizations(surface, realizations, seed=0) -> list[HeightField]:
     return hfs
 
 
-def split_patch(hf: HeightField, n: int) -> list[HeightField]:
-    """Split *hf* into *n* equal, non-overlapping tiles (as square a layout as possible) for ensemble averages.
-
-    Tiles of one large measured or generated patch stand in for independent realizations when the patch spans
-    many correlation lengths; each tile is smaller, so the angular resolution λ/L is coarser.
-    """
-    if int(n) != n or n < 1:
+def tile_layout(shape, n) -> tuple[int, int]:
+    """(a, b): the split of a patch of *shape* (ny, nx) into *n* equal tiles, a along y and b along x, each at
+    least 2x2 samples and as square as possible; a one-line error when *n* is not an integer >= 1 or no split
+    exists. Checked before any work (the CLI asks it before its time estimate)."""
+    try:
+        ok = not isinstance(n, bool) and float(n) == int(n) and int(n) >= 1
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
         raise WaveopticsError(f"realizations={n!r} is not allowed; it must be an integer >= 1")
-    ny, nx = hf.shape
+    n = int(n)
+    ny, nx = shape
+    most = (ny // 2) * (nx // 2)
+    if n > most:   # before the search over divisors, which would take n steps
+        raise WaveopticsError(f"cannot split a {nx}x{ny} patch into {n} tiles of at least 2x2 samples; use "
+                              f"realizations 1..{max(most, 1)}")
     best = None
     for a in range(1, n + 1):
         if n % a:
@@ -211,7 +218,18 @@ def split_patch(hf: HeightField, n: int) -> list[HeightField]:
             best = (score, a, b)
     if best is None:
         raise WaveopticsError(f"cannot split a {nx}x{ny} patch into {n} tiles of at least 2x2 samples")
-    _, a, b = best
+    return best[1], best[2]
+
+
+def split_patch(hf: HeightField, n: int) -> list[HeightField]:
+    """Split *hf* into *n* equal, non-overlapping tiles (as square a layout as possible, :func:`tile_layout`) for
+    ensemble averages.
+
+    Tiles of one large measured or generated patch stand in for independent realizations when the patch spans
+    many correlation lengths; each tile is smaller, so the angular resolution λ/L is coarser.
+    """
+    ny, nx = hf.shape
+    a, b = tile_layout(hf.shape, n)
     ty, tx = ny // a, nx // b
     out = []
     for i in range(a):
