@@ -337,7 +337,7 @@ def write_rgb_exr(path, rgb, header: dict | None = None, *, space: str = "sRGB",
         raise WaveopticsError(f"an RGB image must have shape (H, W, 3), got {img.shape}")
     if not np.all(np.isfinite(img)):
         raise NonFiniteOutputError(f"the image {Path(path).name} holds a NaN or infinite value")
-    note = gamut_note(img, space)
+    note = gamut_note(img.astype(np.float32), space)   # as stored: a component that rounds to -0 is not negative
     hdr = dict(header or {})
     if note is not None:
         hdr[OUT_OF_GAMUT_ATTR] = (f"{note['pixels']} of {note['of']} pixels lie outside the linear {space} gamut "
