@@ -83,8 +83,8 @@ def simulation_from_args(args, bar=None, req=None):
 def _announce_if_long(req, surface) -> None:
     from ..planning.estimate import simulation_time
 
-    warn_if_long(simulation_time(req, surface=surface), "lower --resolution, the number of --wavelengths or the "
-                                                        "nano roughness's height")
+    warn_if_long(simulation_time(req, surface=surface), "lower --resolution or the number of --wavelengths (or "
+                                                        "the nano roughness's height)")
 
 
 def register(sub):
