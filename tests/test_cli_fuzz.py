@@ -7,6 +7,8 @@ units, misplaced separators). Whatever it draws, the promise is the same:
 * the exit code is 0 or 2, never a crash;
 * on 2, exactly one line on stderr, naming the command, and no traceback;
 * every number printed or written (stdout, ``--json``, JSON files) is finite;
+* no EXR or JSON file written holds a negative or non-finite BRDF or radiance, and an RGB image with colours
+  outside its gamut says so (tests/output_scan.py; issue 34);
 * the process stays within its memory budget (``WAVEOPTICS_MAX_MEMORY``).
 
 Each command starts from a small valid invocation (so that valid draws finish in seconds); the drawn options come
@@ -31,6 +33,8 @@ from hypothesis import strategies as st
 
 from waveoptics.cli import build_parser, command_parser
 from waveoptics.cli import main as cli_main
+
+from output_scan import scan_outputs
 
 SCENE = str(Path(__file__).resolve().parents[1] / "examples" / "scenes" / "smooth-plastic.toml")
 
@@ -67,7 +71,8 @@ JUNK = ["", " ", "nan", "inf", "-inf", "-1", "0", "1e308", "-1e308", "1e-308", "
 
 #: valid and edge values of options that take a value, by flag (others get JUNK and the generic numbers)
 VALUES = {
-    "--wavelengths": ["550", "450,650", "500:600:50", "0.55um", "380", "830", "200", "100000", "550nm"],
+    "--wavelengths": ["550", "450,650", "500:600:50", "0.55um", "380", "830", "200", "100000", "550nm", "550,,650",
+                      "1e300"],
     "--incident": ["30", "30,45", "0", "89.9", "90", "-10", "30,400", "45,nan"],
     "--outgoing": ["40,180", "0", "89,0", "95,0"],
     "--incident-angles": ["0,40", "0:80:40", "89.99", "90", "0:80:0.00001"],
@@ -75,7 +80,8 @@ VALUES = {
     "--material": ["Au", "Al", "1.5", "1+6j", "f0:0.9", "f0:1.5", "nosuch", "1e-300", "Au@Babar"],
     "--nano": ["gaussian:sigma=5nm,T=1um", "abc:sigma=10nm,B=2um,C=2.6", "abc:sigma=10nm,B=2um,C=1.5",
                "gaussian:sigma=-5nm,T=1um", "gaussian:sigma=5,T=1um", "exponential:sigma=1um,T=1um",
-               "sinusoid:amplitude=40nm,period=2um", "gaussian:sigma=5nm"],
+               "sinusoid:amplitude=40nm,period=2um", "gaussian:sigma=5nm", "Gaussian:sigma=5nm,T=1um",
+               "gaussian: sigma=5nm, T=1um"],
     "--micro-alpha": ["0", "0.1", "2", "3", "-1"],
     "--alpha": ["0", "0.1", "2", "3", "-1"],
     "--alpha-y": ["0.001", "0.5", "2"],
@@ -96,11 +102,13 @@ VALUES = {
     "--coherence": ["0.5um", "-1um"],
     "--order": ["0", "3", "auto", "1000"],
     "--units": ["nm", "um", "furlong"],
-    "--vary": ["micro_alpha=0.1,0.2", "sigma_nano=1nm:1000000nm:1nm", "nosuch=1,2", "micro_alpha=0:1:0.5"],
+    "--vary": ["micro_alpha=0.1,0.2", "sigma_nano=1nm:1000000nm:1nm", "nosuch=1,2", "micro_alpha=0:1:0.5",
+               "theta=30,30"],
+    "--force": ["diffraction=on", "diffraction=off", "diffuse", "solver=fft"],
     "--tail": ["10", "0", "90"],
     "--phi": ["0", "45", "nan"],
     "--batch": ["1", "0"],
-    "--device": ["cpu", "99:99", "nvidia"],
+    "--device": ["cpu", "99:99", "nvidia", "", " "],
     "--output": ["{out}/x", ""],
     "-o": ["{out}/x", ""],
     "--generator": ["gaussian", "sinusoid", "scratches", "flakes"],
@@ -195,6 +203,8 @@ def _run(argv, capsys):
             for p in work.rglob("*.json"):
                 if not p.name.startswith("."):
                     _finite_json(p.read_text(), f"{shown}: {p.name}")
+            problems = scan_outputs(work)
+            assert not problems, f"{shown}: {problems}"
     finally:
         os.chdir(here)
         shutil.rmtree(work, ignore_errors=True)

@@ -42,7 +42,7 @@ from .brdf import NDFS, SHADOWINGS, twoscale
 from .errors import FieldError, WaveopticsError, unknown
 from .materials import get_material
 from .surfaces import HeightField
-from .units import check_theta, check_wavelengths, parse_length, split_spec
+from .units import check_optical_range, check_theta, check_wavelengths, parse_length, split_spec
 from .vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
@@ -290,8 +290,13 @@ class SimulationRequest:
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalization
         if self.wavelengths_nm is not None:
-            w = check_wavelengths(self.wavelengths_nm, name="wavelengths_nm")
+            w = check_optical_range(check_wavelengths(self.wavelengths_nm, name="wavelengths_nm"),
+                                    name="wavelengths_nm")
             set_("wavelengths_nm", tuple(float(x) for x in w))
+        if isinstance(self.seed, (bool, np.bool_)) or not isinstance(self.seed, (int, np.integer)) \
+                or not 0 <= int(self.seed) < 2**63:
+            raise FieldError(f"{{seed}} {self.seed!r} is not allowed; a random seed is an integer in 0..2**63-1 "
+                             "(numpy's generators take no negative seed)", "seed")
         inc = tuple(self.incident_deg) if np.ndim(self.incident_deg) else (self.incident_deg, 0.0)
         if len(inc) != 2:
             raise FieldError(f"{{incident_deg}} {self.incident_deg!r} is not (θ, φ) in degrees", "incident_deg")

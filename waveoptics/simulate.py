@@ -24,7 +24,7 @@ from .io import figures
 from .io.figures import save_figure
 from .errors import FieldError
 from .materials import get_material
-from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano
+from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano, parse_nano
 from .scatter.grid import DirectionGrid, integrate
 from .units import direction_from_angles
 
@@ -187,7 +187,18 @@ def memory_estimate(req: SimulationRequest, *, sphere=True, n_lambda=None) -> fl
     lobes = 12 * 8 * nl * n * n
     table = 16 * nl * n * n * max(len(THETA_NODES_DEG), len(SPHERE_THETAS_DEG) * PHI_NODES_ANISOTROPIC) if sphere \
         else 0
-    return float(lobes + table)
+    return float(lobes + table + _nano_field_bytes(req))
+
+
+def _nano_field_bytes(req: SimulationRequest) -> int:
+    """Bytes of a nano height field and its transforms' buffers (about ten complex128 arrays of its samples, at
+    most :data:`MAX_NANO_SAMPLES` per side after cropping): every nano kind that runs as a height field (a file,
+    a split surface, sinusoid and scratches, statistics with the fft or direct solver); 0 for the PSD series."""
+    if req.surface is None and not req.split:
+        model = parse_nano(req.nano)[0]
+        if model in surfaces.PSD_MODELS and req.solver in ("auto", "psd"):
+            return 0
+    return 10 * 16 * MAX_NANO_SAMPLES ** 2
 
 
 def check_request_memory(req: SimulationRequest, *, sphere=True, max_memory=None) -> None:
@@ -339,6 +350,8 @@ SUMMARY_UNITS = {
     "microfacet_rgb_albedo": "1, as rgb_albedo", "delta_e2000": "CIEDE2000 colour difference (1 ≈ just noticeable)",
     "brdf images": "1/sr (BRDF, not multiplied by cos theta_o)", "sphere images": "radiance; irradiance pi",
     "nano_polarized_albedo": "1 (albedo of each polarized Rayleigh-Rice nano lobe; a = incident, b = scattered)",
+    "out_of_gamut": "RGB images whose colours lie outside their linear space's gamut: pixels, of (all pixels), min "
+                    "(the most negative component, kept unclipped; the spectra are non-negative)",
 }
 
 #: the extra files of an environment-lit render (:func:`write_outputs` with *environment*)
@@ -433,9 +446,11 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
     rgb_out = sim.rgb_lobe("total", space)
     rgb = sim.rgb_lobe("total") if space != "sRGB" else rgb_out
     rgb_mf = sim.rgb_lobe("microfacet")
-    io.write_exr(out / "brdf_rgb.exr", {c: g.to_image(rgb_out[..., k]) for k, c in enumerate("RGB")},
-                 header={**hdr, "waveoptics_colourspace": f"linear {space}, white-balanced (CAT02) from "
-                                                          f"{sim.params['illuminant']}"}, overwrite=True)
+    gamut = {}   # RGB images with colours outside their space's gamut: kept unclipped, stated in file and summary
+    gamut["brdf_rgb.exr"] = io.write_rgb_exr(
+        out / "brdf_rgb.exr", g.to_image(np.moveaxis(rgb_out, -1, 0)).transpose(1, 2, 0), space=space,
+        header={**hdr, "waveoptics_colourspace": f"linear {space}, white-balanced (CAT02) from "
+                                                 f"{sim.params['illuminant']}"})
     _plot_hemispheres(rgb, rgb_mf, g, out / "brdf.png", sim)
     wave, mf, dE, mask = render_spheres(sim, sphere_size)
     exposure = render.key_exposure(wave, mask)
@@ -449,8 +464,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
                   "waveoptics_illuminant": str(sim.params["illuminant"]), "waveoptics_material": sim.params["material"]}
     for name, img, model in (("sphere_wave.exr", wave, "two-scale (wave optics)"),
                              ("sphere_microfacet.exr", mf, "microfacet (geometric optics)")):
-        io.write_exr(out / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
-                     header={**sphere_hdr, "waveoptics_model": model}, overwrite=True)
+        gamut[name] = io.write_rgb_exr(out / name, img, header={**sphere_hdr, "waveoptics_model": model})
     fig, ax = plt.subplots(figsize=(4.2, 3.6))
     im = ax.imshow(np.where(mask, dE, np.nan), cmap="magma", vmin=0)
     ax.set_title("ΔE2000: two-scale vs microfacet", fontsize=9)
@@ -464,13 +478,12 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
         for name, fn in (("sphere_env_wave.exr", sim.brdf_wave), ("sphere_env_microfacet.exr", sim.brdf_microfacet)):
             img, on = render.render_sphere_environment(fn, sim.wavelengths_nm, env, size=env_size, spp=spp,
                                                        illuminant=sim.illuminant, progress=progress)
-            io.write_exr(out / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
-                         header={**sphere_hdr, "waveoptics_light_deg": f"environment {env.name}",
+            gamut[name] = io.write_rgb_exr(
+                out / name, img, header={**sphere_hdr, "waveoptics_light_deg": f"environment {env.name}",
                                  "waveoptics_quantity": "radiance, linear sRGB (D65 white), of a sphere lit by the "
                                                         "environment map (white Lambertian in a constant map of 1: 1)",
                                  "waveoptics_environment": f"{env.name}, equirectangular, +y up, column 0 = -z",
-                                 "waveoptics_samples": f"{spp} BRDF + {spp} environment samples per pixel (MIS)"},
-                         overwrite=True)
+                                 "waveoptics_samples": f"{spp} BRDF + {spp} environment samples per pixel (MIS)"})
             imgs.append(img)
         exp_env = render.key_exposure(imgs[0], on)
         render.plot_spheres([render.tonemap(i, exp_env) for i in imgs],
@@ -504,6 +517,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
         "rgb_albedo": sim.rgb_albedo("total", space),
         "microfacet_rgb_albedo": sim.rgb_albedo("microfacet", space),
         "colourspace": f"linear {space}",
+        "out_of_gamut": {k: v for k, v in gamut.items() if v is not None},
         "delta_e2000": {"mean": float(dE[mask].mean()) if mask.any() else 0.0,
                         "max": float(dE[mask].max()) if mask.any() else 0.0},
         "solver": sim.params["solver"],

@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import FieldError
 
-__all__ = ['LENGTH_UNITS', 'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'parse_direction', 'check_theta', 'direction_from_angles', 'split_spec']
+__all__ = ['LENGTH_UNITS', 'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'OPTICAL_RANGE_NM', 'check_optical_range', 'parse_direction', 'check_theta', 'direction_from_angles', 'split_spec']
 
 #: metres per unit
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "A": 1e-10}
@@ -121,9 +121,11 @@ def parse_number_list(text, *, name: str = "value", units=None, max_values: int 
             raise _error(name, f" {text!r} holds {n:.3g} values; at most {max_values} are allowed (use a larger "
                                "STEP)")
         return a + step * np.arange(n)
-    tokens = [p for p in s.split(",") if p.strip() != ""]
-    if not tokens:
+    tokens = s.split(",")
+    if all(p.strip() == "" for p in tokens):
         raise _error(name, f" {text!r} holds no number; write START:STOP:STEP or A,B,C")
+    if any(p.strip() == "" for p in tokens):   # '550,,650' or '550,': a value left out is a typo, not a list
+        raise _error(name, f" {text!r} has an empty item; write A,B,C with a number between every two commas")
     if len(tokens) > max_values:
         raise _error(name, f" {text!r} holds {len(tokens)} values; at most {max_values} are allowed")
     return np.array([_number(p, name, text, units) for p in tokens], dtype=float)
@@ -140,7 +142,38 @@ def parse_wavelengths(text, *, name: str = "wavelengths_nm") -> np.ndarray:
     """
     vals = parse_number_list(text, name=name, units={"nm": 1.0, "um": 1e3, "µm": 1e3})
     check_wavelengths(vals, name=name)
+    check_optical_range(vals, name=name)
     return vals
+
+
+#: wavelengths (nm) where this simulator's physics holds: below 100 nm (extreme UV, X-rays) the optical constants
+#: are those of single atoms (n ≈ 1 − δ, tables of Henke et al. 1993) and nanometre heights are a few atoms, so
+#: the continuum Fresnel index and the scalar Kirchhoff theory of a height field end; above 1 mm (microwaves) no
+#: material table of the database reaches and the patches of a height field are smaller than one wavelength
+OPTICAL_RANGE_NM = (100.0, 1.0e6)
+
+
+def check_optical_range(wavelength_nm, *, name: str = "wavelength") -> np.ndarray:
+    """Refuse wavelengths outside :data:`OPTICAL_RANGE_NM`, naming the first and where the theory ends.
+
+    References
+    ----------
+    .. [1] B. L. Henke, E. M. Gullikson, J. C. Davis, "X-ray interactions: photoabsorption, scattering,
+       transmission and reflection at E = 50-30000 eV", Atomic Data and Nuclear Data Tables 54, 181 (1993).
+    .. [2] P. Beckmann, A. Spizzichino, *The Scattering of Electromagnetic Waves from Rough Surfaces*, Pergamon
+       1963, ch. 3 (the Kirchhoff approximation needs radii of curvature ≫ λ).
+    """
+    w = np.atleast_1d(np.asarray(wavelength_nm, dtype=float))
+    lo, hi = OPTICAL_RANGE_NM
+    for x in w:
+        if x < lo:
+            raise _error(name, f" {x:g} nm is not allowed: below {lo:g} nm (extreme UV and X-rays) the material "
+                               "data and the scalar theory of this simulator end (atomic optical constants, heights "
+                               f"of a few atoms); use {lo:g}..{hi:g} nm")
+        if x > hi:
+            raise _error(name, f" {x:g} nm is not allowed: beyond {hi:g} nm (1 mm, microwaves) the material data "
+                               f"end; use {lo:g}..{hi:g} nm")
+    return w
 
 
 def check_wavelengths(wavelength_nm, *, name: str = "wavelength") -> np.ndarray:

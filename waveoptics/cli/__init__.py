@@ -63,7 +63,13 @@ def _check_device(args) -> None:
     all but the direct solver): resolved once, before any work, with a one-line error listing the devices."""
     import os
 
-    spec = getattr(args, "device", None) or os.environ.get("WAVEOPTICS_DEVICE")
+    given = getattr(args, "device", None)
+    if given is not None and not given.strip():   # '' or ' ' names no device: refused, not taken as "the default"
+        from ..errors import WaveopticsError
+
+        raise WaveopticsError(f"--device {given!r} names no device; give a substring of 'platform device' or P:D "
+                              "indices (see 'waveoptics info'), or leave --device out for the default")
+    spec = given or os.environ.get("WAVEOPTICS_DEVICE")
     if spec:
         from ..runtime import select_device
 

@@ -110,15 +110,26 @@ def emit(args, data, text: str | None = None) -> None:
         print(text)
 
 
+def _duration(seconds: float) -> str:
+    return f"{seconds / 60:.1f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+
+
 def warn_if_long(seconds: float, reduce: str) -> None:
     """Announce a request the cost model expects to run beyond :data:`waveoptics.planning.LONG_REQUEST_S`, with
-    its estimate and what to reduce (one warning line; ``--quiet`` silences it)."""
+    its estimate and what to reduce (one warning line; ``--quiet`` silences it), and refuse one beyond the time
+    budget (:func:`waveoptics.planning.estimate.time_budget`, default a day) before any work, in one line."""
     import warnings
 
-    from ..planning.estimate import LONG_REQUEST_S
+    from ..errors import WaveopticsError
+    from ..planning.estimate import LONG_REQUEST_S, time_budget
 
+    budget = time_budget()
+    if seconds > budget:
+        raise WaveopticsError(f"this request would take about {_duration(seconds)} by this machine's cost model, "
+                              f"beyond the time budget of {_duration(budget)}; {reduce} (or set "
+                              "WAVEOPTICS_MAX_TIME, e.g. 48h)")
     if seconds > LONG_REQUEST_S:
-        when = f"{seconds / 60:.1f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+        when = _duration(seconds)
         warnings.warn(f"this request will take about {when} by this machine's cost model ('waveoptics plan "
                       f"--recalibrate' re-times it); {reduce} to shorten it", UserWarning, stacklevel=2)
 

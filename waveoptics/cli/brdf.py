@@ -13,6 +13,8 @@ JSON output: ``{"model": ..., "values": [{"incident": [θ, φ], "outgoing": [θ,
 """
 from __future__ import annotations
 
+import argparse
+
 import sys
 from dataclasses import dataclass
 from typing import Callable
@@ -44,6 +46,7 @@ class Model:
     build: Callable
     describe: Callable
     help: str
+    uses: tuple = ()   #: destinations of the options this model reads (beyond the command's own)
 
 
 def _bar(args):
@@ -363,29 +366,62 @@ def _table_describe(args) -> dict:
     return {"table": args.table}
 
 
+#: options of the micro-scale facets (NDF, index, diffuse term) and of a file's metadata
+_MICRO = ("ndf", "micro_surface", "footprint", "shadowing", "alpha", "roughness", "alpha_y", "ndf_shape", "material",
+          "ior", "fresnel", "diffuse", "kd", "sigma", "multiple_scattering", "spacing", "units", "channel")
+_INDEX = ("material", "ior", "fresnel")
+
 #: BRDF models offered by ``waveoptics brdf --model``
 MODELS: dict[str, Model] = {
     "microfacet": Model(_microfacet_arguments, _microfacet_build, _microfacet_describe,
-                        "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term"),
+                        "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term",
+                        _MICRO + ("diffuse_roughness", "no_tradeoff", "backend", "precision")),
     "kirchhoff": Model(_kirchhoff_arguments, _kirchhoff_build, _kirchhoff_describe,
-                       "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.scatter)"),
+                       "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.scatter)",
+                       _INDEX + ("surface", "spacing", "units", "channel", "solver", "resolution", "realizations",
+                                 "window", "diffraction", "backend", "precision", "polarization")),
     "rayleigh-rice": Model(_rayleigh_rice_arguments, _rayleigh_rice_build, _rayleigh_rice_describe,
                            "first-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the "
-                           "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)"),
+                           "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)",
+                           ("material", "ior", "nano", "surface", "spacing", "units", "channel", "polarization",
+                            "resolution")),
     "twoscale": Model(_twoscale_arguments, _twoscale_build, _twoscale_describe,
                       "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski "
                       "2017), evaluated at the given directions; JSON also gives its coherent, diffraction "
-                      "and diffuse parts"),
+                      "and diffuse parts",
+                      _MICRO + ("nano", "surface", "diffraction", "resolution", "polarization")),
     "rough-dielectric": Model(_rough_dielectric_arguments, _rough_dielectric_build, _rough_dielectric_describe,
                               "BSDF of a rough dielectric interface (Walter et al. 2007): reflection and "
                               "transmission (air above, the material below; the command's directions are above "
                               "the surface, so it gives the reflection and the albedo R + T); JSON also gives its "
-                              "reflection, transmission and multiple parts"),
+                              "reflection, transmission and multiple parts",
+                              ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "ndf_shape", "material", "ior",
+                               "fresnel", "multiple_scattering")),
     "table": Model(_table_arguments, _table_build, _table_describe,
                    "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated "
                    "between incidences relative to the specular direction, coherent and diffuse parts "
-                   "exact; at the table's wavelengths"),
+                   "exact; at the table's wavelengths", ("table",)),
 }
+
+#: options every model takes (the command's own)
+_COMMON = {"model", "wavelengths", "incident", "outgoing", "albedo", "device", "json", "debug", "quiet", "func",
+           "command"}
+
+
+def _refuse_unused(args) -> None:
+    """An option that the chosen model does not read is refused in one line, naming the models that take it: a
+    value given and silently ignored (``--model microfacet --surface F``) reads as if it had been used."""
+    model = args.model
+    uses = set(MODELS[model].uses) | _COMMON
+    for dest, default in args._brdf_defaults.items():
+        if dest in uses or dest.startswith("_"):
+            continue
+        value = getattr(args, dest, default)
+        if value is not None and value != default:
+            takers = [m for m, spec in MODELS.items() if dest in spec.uses]
+            flag = args._brdf_flags.get(dest, dest)
+            raise WaveopticsError(f"{flag} is not used by --model {model}" + (
+                f" (it is an option of --model {', '.join(takers)})" if takers else "") + "; drop it")
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -409,7 +445,9 @@ def register(sub) -> None:
     for name, model in MODELS.items():
         model.add_arguments(p.add_argument_group(f"--model {name}"))
     add_common(p)
-    p.set_defaults(func=run)
+    shown = [a for a in p._actions if a.option_strings and a.help != argparse.SUPPRESS]
+    p.set_defaults(func=run, _brdf_defaults={a.dest: a.default for a in shown},
+                   _brdf_flags={a.dest: next(o for o in a.option_strings if o.startswith("--")) for a in shown})
 
 
 def run(args) -> int:
@@ -417,6 +455,7 @@ def run(args) -> int:
     import numpy as np
 
     model = MODELS[args.model]
+    _refuse_unused(args)
     if getattr(args, "diffuse", None) in DIFFUSE_ALIASES:
         args.diffuse = DIFFUSE_ALIASES[args.diffuse]
     if getattr(args, "multiple_scattering", False) and args.model not in ("microfacet", "twoscale",

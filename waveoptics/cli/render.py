@@ -150,8 +150,7 @@ def run_glints(args):
     exposure = percentile_exposure((r.wave, r.geometric), on)   # one exposure for both; glints are sparse
     with files.staged_outputs(outdir, out_names, last="summary.json") as stage:
         for name, img in (("glints_wave.exr", r.wave), ("glints_geometric.exr", r.geometric)):
-            files.write_exr(stage / name, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
-                            {"waveoptics": "linear sRGB radiance of a unit-intensity point light"})
+            files.write_rgb_exr(stage / name, img, {"waveoptics": "linear sRGB radiance of a unit-intensity point light"})
         files.write_exr(stage / "glints_layers.exr", _glint_layers(r, settings),
                         {"waveoptics": "per pixel: footprint (x, y, sigma1, sigma2 in m, angle in degrees) and "
                                        "spectral radiance per wavelength (wave., geometric.)"})
@@ -272,8 +271,8 @@ def run_render(args):
         de = scene.delta_e_map(images["wave"], images["reference"])
         for key in ("wave", "reference"):
             img = images[key]
-            files.write_exr(stage / f"{key}.exr", {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]},
-                            {"waveoptics": f"linear sRGB radiance, {args.variant}, {cmp.spp} spp"})
+            files.write_rgb_exr(stage / f"{key}.exr", img,
+                                {"waveoptics": f"linear sRGB radiance, {args.variant}, {cmp.spp} spp"})
         files.write_exr(stage / "delta_e.exr", {"Y": de, "noise": cmp.noise_floor},
                         {"waveoptics": "Y: CIEDE2000 wave vs reference; noise: CIEDE2000 between two renders of the "
                                        "wave-optics model with different seeds (the noise floor)"})

@@ -26,6 +26,7 @@ def run(args):
     from .. import io
     from .. import planning
 
+    planning.parse_force(args.force)   # a contradictory --force is refused before the output directory exists
     io.prepare_outdir(args.output, overwrite=args.overwrite, expected=["plan.json", "results.json"])  # before work
     plan = make_plan(args)
     io.prepare_outdir(args.output, overwrite=args.overwrite, expected=planning.output_files(plan))

@@ -108,6 +108,8 @@ def run(args) -> int:
     fp, field = _footprint(args)
     hf = field if fp is None else None
     fresnel_function(args.material)      # refuse a bad material before computing
+    if fp is None:
+        scatter.tile_layout(hf.shape, args.realizations)   # before the time estimate: an error is its only line
     scatter.check_request_memory(args.resolution, len(wl), field.shape if fp is None else (0, 0), args.max_memory)
     if fp is None and (args.solver != "direct" or args.backend == "opencl"):
         from ..planning.estimate import scatter_time

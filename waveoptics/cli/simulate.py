@@ -83,7 +83,8 @@ def simulation_from_args(args, bar=None, req=None):
 def _announce_if_long(req, surface) -> None:
     from ..planning.estimate import simulation_time
 
-    warn_if_long(simulation_time(req, surface=surface), "lower --resolution or the number of --wavelengths")
+    warn_if_long(simulation_time(req, surface=surface), "lower --resolution or the number of --wavelengths (or "
+                                                        "the nano roughness's height)")
 
 
 def register(sub):
@@ -119,10 +120,10 @@ def run(args):
         env = lighting.environment(args.environment)   # a bad map fails here, before any computing
     req = request_from_args(args)
     sim_mod.check_request_memory(req, max_memory=args.max_memory)   # before anything is created
+    surface = _surface(args)
+    _announce_if_long(req, surface)   # before the output directory (a refusal creates nothing) and the progress bar
     prepare_outdir(args.output, overwrite=args.overwrite,
                    expected=sim_mod.output_files(env is not None, req.diffraction == "rayleigh-rice"))
-    surface = _surface(args)
-    _announce_if_long(req, surface)                  # before the progress bar, which releases the warnings
     bar = progress(total=sim_mod.sphere_steps(req), desc="simulate", args=args)
     try:
         sim = sim_mod.run(req, device=args.device, progress=bar.update, max_memory=args.max_memory,

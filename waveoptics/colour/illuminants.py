@@ -112,13 +112,62 @@ def standard_illuminant(name: str) -> SPD:
     return SPD(name.upper() if name.upper() in _STANDARD_ALIASES else key, sd.wavelengths, sd.values)
 
 
+#: most data rows an SPD file may hold (a spectrometer's 0.01 nm steps over 380-780 nm are 40 001)
+MAX_SPD_ROWS = 100_000
+
+
+def _read_spd_rows(p: Path):
+    """(column names, rows of floats) of a CSV spectrum: a header row (wavelength, then one name per spectrum; a
+    file without one gets the names 1, 2, ...), a UTF-8 byte-order mark and blank lines ignored. One line errors:
+    no data, a ragged or non-numeric row, more than :data:`MAX_SPD_ROWS` rows."""
+    import csv
+
+    try:
+        fh = open(p, newline="", encoding="utf-8-sig")
+    except OSError as exc:
+        raise WaveopticsError(f"SPD file {str(p)!r} cannot be read ({exc.strerror})") from None
+    names, rows = None, []
+    with fh:
+        try:
+            for n, row in enumerate(csv.reader(fh), 1):
+                cells = [c.strip() for c in row]
+                if not any(cells):
+                    continue
+                try:
+                    vals = [float(c) for c in cells]
+                except ValueError:
+                    if names is None and not rows:
+                        names = cells[1:]
+                        continue
+                    raise WaveopticsError(f"SPD file {str(p)!r} line {n}: {','.join(cells)[:60]!r} is not numbers "
+                                          "(wavelength,value,...)") from None
+                if len(rows) >= MAX_SPD_ROWS:
+                    raise WaveopticsError(f"SPD file {str(p)!r} holds more than {MAX_SPD_ROWS} rows; at most "
+                                          f"{MAX_SPD_ROWS} are allowed (resample it, e.g. to 1 nm steps)")
+                rows.append(vals)
+        except (UnicodeDecodeError, csv.Error) as exc:
+            raise WaveopticsError(f"SPD file {str(p)!r} is not a CSV text file ({exc})") from None
+    if not rows:
+        raise WaveopticsError(f"SPD file {str(p)!r} has no data rows; write wavelength,value rows (nm) under a "
+                              "header row")
+    width = len(rows[0])
+    names = names if names is not None else [str(k) for k in range(1, width)]
+    if width < 2 or any(len(r) != width for r in rows) or len(names) != width - 1:
+        raise WaveopticsError(f"SPD file {str(p)!r} needs the same columns on every row: wavelength (nm), then "
+                              f"one value per spectrum ({', '.join(names) or 'none named'})")
+    return names, np.asarray(rows, dtype=float)
+
+
 def spd_from_csv(path, column: str | None = None) -> SPD:
-    """A continuous SPD from a CSV file: first column wavelength (nm), then one column per spectrum.
+    """An SPD from a CSV file: first column wavelength (nm), then one column per spectrum.
+
+    Several rows are a continuous spectrum (per nm, linear between rows); a single row is one line of that
+    wavelength and power (a laser, the way a lab writes one line: ``wavelength,power`` / ``532,1``).
 
     Parameters
     ----------
     path : str or Path
-        CSV file with a header row (colour-science ``read_sds_from_csv_file`` format).
+        CSV file with a header row (colour-science ``read_sds_from_csv_file`` format: wavelength, then names).
     column : str, optional
         Column to use; required when the file has more than one spectrum.
     """
@@ -126,30 +175,25 @@ def spd_from_csv(path, column: str | None = None) -> SPD:
     p = Path(path)
     if not p.is_file():
         raise WaveopticsError(f"SPD file {str(p)!r} does not exist")
-    try:
-        sds = colour.io.read_sds_from_csv_file(str(p))
-    except Exception as exc:  # noqa: BLE001 - colour raises assorted errors for malformed CSV
-        raise WaveopticsError(f"SPD file {str(p)!r} is not a CSV of wavelength,value columns ({exc})") from None
-    if not sds:
-        raise WaveopticsError(f"SPD file {str(p)!r} has no spectrum column")
+    names, data = _read_spd_rows(p)
     if column is None:
-        if len(sds) > 1:
-            raise WaveopticsError(f"SPD file {str(p)!r} has {len(sds)} spectra ({', '.join(sds)}); "
+        if len(names) > 1:
+            raise WaveopticsError(f"SPD file {str(p)!r} has {len(names)} spectra ({', '.join(names)}); "
                                   f"pick one with {p.name}:COLUMN")
-        column = next(iter(sds))
-    if column not in sds:
-        raise unknown(f"column of {p.name}", column, list(sds))
-    sd = sds[column]
-    values = np.asarray(sd.values, dtype=float)
-    wl = np.asarray(sd.wavelengths, dtype=float)
+        column = names[0]
+    if column not in names:
+        raise unknown(f"column of {p.name}", column, list(names))
+    wl = data[:, 0]
+    values = data[:, 1 + names.index(column)]
     # the first column is in nm: a spectrum entirely below 100 nm is a file in µm (0.38-0.78), whose light would
     # otherwise fall outside the colour-matching functions and still "give colour" from their extrapolation
     if wl.size and np.max(wl) < 100.0:
         raise WaveopticsError(f"SPD file {str(p)!r}: wavelengths {wl.min():g}-{wl.max():g} are not nm (they look "
                               "like µm); write the first column in nm")
-    if not np.all(np.isfinite(values)):
+    if not np.all(np.isfinite(values)) or not np.all(np.isfinite(wl)):
         raise WaveopticsError(f"SPD file {str(p)!r} column {column!r} has missing or non-numeric values")
-    return SPD(f"{p.name}:{column}" if len(sds) > 1 else p.name, sd.wavelengths, values)
+    name = f"{p.name}:{column}" if len(names) > 1 else p.name
+    return SPD(name, wl, values, lines=wl.size == 1)
 
 
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"

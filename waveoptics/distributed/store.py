@@ -9,10 +9,19 @@ from pathlib import Path
 from .. import io
 from ..errors import FieldError, OutputExistsError, WaveopticsError
 
-__all__ = ['partial_path']
+__all__ = ['partial_path', 'check_resume_overwrite']
+
+def check_resume_overwrite(resume: bool, overwrite: bool) -> None:
+    """*resume* keeps the finished tasks of an interrupted run, *overwrite* discards them: asking for both is a
+    contradiction, refused in one line (neither wins silently)."""
+    if resume and overwrite:
+        raise FieldError("{resume} continues the interrupted run and {overwrite} discards it; give one of them",
+                         "resume", "overwrite", python={"overwrite": "overwrite=True", "resume": "resume=True"})
+
 
 def refuse_or_prepare(final: Path, partial: Path, *, resume: bool, overwrite: bool) -> None:
     """Apply the rules on existing outputs before any work (see :func:`run_table`)."""
+    check_resume_overwrite(resume, overwrite)
     parent = final.parent if str(final.parent) else Path(".")
     if not parent.is_dir():
         raise WaveopticsError(f"output directory {str(parent)!r} does not exist")

@@ -19,7 +19,7 @@ from ..request import NANO_ALIASES, NANO_PARAMS, SimulationRequest, parse_nano
 from ..units import LENGTH_UNITS, parse_length, parse_number_list
 from .cases import case_token, surface_digest
 from .cluster import DEFAULT_RETRIES, check_cluster_args, Job, run_timed, warm_workers
-from .store import refuse_or_prepare, Store, partial_path
+from .store import refuse_or_prepare, Store, check_resume_overwrite, partial_path
 
 __all__ = ['MAX_SWEEP_POINTS', 'parse_length_list', 'VARY', 'parse_vary', 'apply_vary', 'sweep_points', 'sweep_point', 'SWEEP_COLUMNS', 'value_text', 'run_sweep', 'read_sweep']
 
@@ -119,6 +119,12 @@ def parse_vary(text: str, base: SimulationRequest | None = None) -> tuple[str, l
         raise unknown("parameter", name, [*VARY, "nano.KEY"], field='vary')
     if not vals:
         raise FieldError(f"{{vary}} {text!r} gives no values", 'vary')
+    seen = set()
+    for v in vals:   # a repeated value is the same point computed twice under one name: a typo, not a sweep
+        key = v if isinstance(v, str) else float(f"{float(v):.12g}")
+        if key in seen:
+            raise FieldError(f"{{vary}} {text!r} gives the value {value_text(name, v)} twice; each point once", 'vary')
+        seen.add(key)
     return name, vals
 
 
@@ -231,6 +237,7 @@ def run_sweep(base: SimulationRequest, varies: list[tuple[str, list]], output, *
     if hf is not None:
         params["surface_digest"] = surface_digest(hf)
     token = case_token(params)
+    check_resume_overwrite(resume, overwrite)
     if resume and final.exists() and not partial.exists():
         return {"output": str(final), "rows": read_sweep(final), "points": len(points), "computed": 0,
                 "skipped": len(points), "wall_s": time.perf_counter() - t0}

@@ -25,7 +25,7 @@ from ..scatter.solvers import split_patch
 from ..units import check_theta, direction_from_angles
 from .cases import case_nano, case_token, surface_digest
 from .cluster import DEFAULT_RETRIES, check_cluster_args, Job, run_timed, warm_workers
-from .store import refuse_or_prepare, Store, partial_path
+from .store import refuse_or_prepare, Store, check_resume_overwrite, partial_path
 
 __all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'table_size', 'check_table_size', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table', 'open_table']
 
@@ -280,6 +280,7 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
     t0 = time.perf_counter()
     final = Path(output)
     partial = partial_path(final)
+    check_resume_overwrite(resume, overwrite)
     if resume and final.exists() and not partial.exists():
         info = table_info(final)
         if info.get("token") != _table_token(spec, surface):

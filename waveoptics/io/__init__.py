@@ -5,7 +5,7 @@ Files: files (atomic writes, JSON, EXR), spectral_exr (Fichet 2021 spectral EXR)
 matplotlib output, sphere panels).
 """
 from .files import (NonFiniteOutputError, atomic_path, staged_outputs, recover_staged, prepare_outdir, to_json,
-    write_json, write_exr, read_exr)
+    write_json, write_exr, write_rgb_exr, gamut_note, read_exr)
 from .spectral_exr import (SPECTRAL_LAYOUT_VERSION, spectral_channel_name, write_spectral_exr, read_spectral_exr)
 from .figures import (pyplot, save_png, save_figure)
 from . import files, spectral_exr, figures  # noqa: F401

@@ -22,7 +22,7 @@ import OpenEXR
 
 from ..errors import OutputExistsError, WaveopticsError
 
-__all__ = ['NonFiniteOutputError', 'atomic_path', 'staged_outputs', 'recover_staged', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'read_exr']
+__all__ = ['NonFiniteOutputError', 'atomic_path', 'staged_outputs', 'recover_staged', 'prepare_outdir', 'to_json', 'write_json', 'write_exr', 'write_rgb_exr', 'gamut_note', 'read_exr']
 
 @contextlib.contextmanager
 def atomic_path(final, *, overwrite: bool = True):
@@ -297,6 +297,54 @@ def write_exr(path, channels: dict, header: dict | None = None, *, overwrite: bo
         except RuntimeError as exc:   # the bindings report a full disk or an I/O error as RuntimeError
             raise WaveopticsError(f"cannot write {str(path)!r}: {exc}") from None
     return Path(path)
+
+
+#: header attribute of an RGB EXR whose linear RGB holds colours outside its space's gamut (negative components)
+OUT_OF_GAMUT_ATTR = "waveoptics_out_of_gamut"
+
+
+def gamut_note(rgb, space: str = "sRGB") -> dict | None:
+    """How many pixels of the linear RGB image *rgb* (..., 3) lie outside the gamut of *space* (a negative
+    component), and the most negative component: ``{"pixels", "of", "min"}``, or None when every colour is inside.
+
+    A non-negative spectrum (a BRDF, a radiance) can map to a negative RGB component: its chromaticity lies outside
+    the triangle of the space's primaries (CIE 015:2018 §7; a narrow-band or steep spectrum, such as a diffraction
+    tail that grows as λ⁻⁴). The value is kept, unclipped, and stated (:func:`write_rgb_exr`).
+    """
+    a = np.asarray(rgb, dtype=float).reshape(-1, 3)
+    out = (a < 0).any(axis=1)
+    if not out.any():
+        return None
+    return {"pixels": int(out.sum()), "of": int(a.shape[0]), "min": float(a.min()), "space": str(space)}
+
+
+def write_rgb_exr(path, rgb, header: dict | None = None, *, space: str = "sRGB", overwrite: bool = True) -> dict | None:
+    """Write a linear RGB image (H, W, 3) as an EXR with channels R, G, B (atomically), and return its
+    :func:`gamut_note` (None when every colour lies inside the gamut).
+
+    A non-finite value is refused (:class:`NonFiniteOutputError`). Colours outside the gamut of *space* keep their
+    negative components (clipping would change the colour silently) and the file says so in the header attribute
+    ``waveoptics_out_of_gamut``: how many pixels, the most negative component and that the spectral data behind
+    them are non-negative.
+
+    References
+    ----------
+    .. [1] CIE 015:2018, *Colorimetry*, §7 (tristimulus values of non-negative spectra; the spectrum locus lies
+       outside every RGB triangle).
+    """
+    img = np.asarray(rgb, dtype=float)
+    if img.ndim != 3 or img.shape[-1] != 3:
+        raise WaveopticsError(f"an RGB image must have shape (H, W, 3), got {img.shape}")
+    if not np.all(np.isfinite(img)):
+        raise NonFiniteOutputError(f"the image {Path(path).name} holds a NaN or infinite value")
+    note = gamut_note(img.astype(np.float32), space)   # as stored: a component that rounds to -0 is not negative
+    hdr = dict(header or {})
+    if note is not None:
+        hdr[OUT_OF_GAMUT_ATTR] = (f"{note['pixels']} of {note['of']} pixels lie outside the linear {space} gamut "
+                                  f"(components down to {note['min']:.6g}); kept unclipped: their spectra are "
+                                  "non-negative, their chromaticity lies outside the space's primaries")
+    write_exr(path, {"R": img[..., 0], "G": img[..., 1], "B": img[..., 2]}, hdr, overwrite=overwrite)
+    return note
 
 
 def read_exr(path) -> tuple[dict, dict]:

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import WaveopticsError
-from .files import read_exr, write_exr
+from .files import NonFiniteOutputError, read_exr, write_exr
 
 __all__ = ['SPECTRAL_LAYOUT_VERSION', 'spectral_channel_name', 'write_spectral_exr', 'read_spectral_exr']
 
@@ -65,7 +65,14 @@ def write_spectral_exr(path, layers: dict, header: dict | None = None, *, emissi
         name = spectral_channel_name(wl, emissive=emissive)
         if name in chans:
             raise WaveopticsError(f"wavelength {wl!r} nm appears twice in the spectral layers")
-        chans[name] = layers[wl]
+        img = np.asarray(layers[wl], dtype=float)
+        # a BRDF, a reflectance or a radiance is never negative nor infinite: such a value is a defect upstream,
+        # refused here in one line rather than written (issue 34); the cause is fixed where it is computed
+        if not np.all(np.isfinite(img)) or (img.size and img.min() < 0):
+            bad = img[~np.isfinite(img)] if not np.all(np.isfinite(img)) else [img.min()]
+            raise NonFiniteOutputError(f"the spectral layer {wl:g} nm of {Path(path).name} holds {bad[0]!r}: a "
+                                       "BRDF or radiance is finite and >= 0")
+        chans[name] = img
     hdr = {"spectralLayoutVersion": SPECTRAL_LAYOUT_VERSION}
     if emissive:
         hdr["emissiveUnits"] = "W.m^-2.sr^-1"

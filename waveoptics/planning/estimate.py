@@ -21,10 +21,35 @@ from ..simulate import sphere_evaluations
 from ..units import direction_from_angles
 from .costmodel import calibration, direct_calibration, fft_solver_units, psd_terms
 
-__all__ = ["LONG_REQUEST_S", "simulation_time", "scatter_time"]
+__all__ = ["LONG_REQUEST_S", "MAX_REQUEST_S", "time_budget", "simulation_time", "scatter_time"]
 
 #: a request estimated to take longer than this (s) is announced with its estimate before it starts
 LONG_REQUEST_S = 60.0
+
+#: the default time budget (s): a request estimated beyond it is refused before it starts, as one beyond the memory
+#: budget is (``WAVEOPTICS_MAX_TIME`` sets another: seconds, or a number with s, min, h or d)
+MAX_REQUEST_S = 24 * 3600.0
+
+_TIME_UNITS = {"": 1.0, "s": 1.0, "min": 60.0, "m": 60.0, "h": 3600.0, "d": 86400.0}
+
+
+def time_budget(text=None) -> float:
+    """Seconds a request may be estimated to take: *text* (``"3600"``, ``"90min"``, ``"12h"``), else
+    ``WAVEOPTICS_MAX_TIME``, else :data:`MAX_REQUEST_S`."""
+    import os
+    import re
+
+    from ..errors import FieldError
+
+    text = os.environ.get("WAVEOPTICS_MAX_TIME") if text is None else text
+    if text is None:
+        return MAX_REQUEST_S
+    m = re.fullmatch(r"\s*([0-9.]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]*)\s*", str(text).lower())
+    value = float(m.group(1)) * _TIME_UNITS[m.group(2)] if m and m.group(2) in _TIME_UNITS else math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise FieldError(f"{{max_time}} {text!r} is not a time budget; write seconds > 0 or e.g. 90min, 12h",
+                         "max_time")
+    return value
 
 
 def simulation_time(req: SimulationRequest, *, sphere: bool = True, surface=None) -> float:

@@ -23,10 +23,18 @@ def parse_force(items) -> dict:
         if key in ("diffraction", "diffuse"):
             if val not in _ON:
                 raise FieldError(f"{{force}} {item!r}: {key} takes on or off", 'force')
-            out[key] = _ON[val]
+            value = _ON[val]
         elif val not in FORCEABLE[key]:
             raise FieldError(f"{{force}} {item!r} is not allowed; {key} takes {', '.join(FORCEABLE[key])}", 'force')
         else:
-            out[key] = val
+            value = val
+        if key in out and out[key] != value:   # two settings of one decision: neither may win silently
+            raise FieldError(f"{{force}} sets {key} twice, to {_word(out[key])} and {_word(value)}; give it once",
+                             'force')
+        out[key] = value
     return out
+
+
+def _word(value) -> str:
+    return {True: "on", False: "off"}.get(value, str(value)) if isinstance(value, bool) else str(value)
 

@@ -179,9 +179,8 @@ def execute(plan: Plan, outdir, *, overwrite: bool = False, device=None, progres
                         written.append(name)
                     if sc.output.rgb_images:
                         rgb = colour.reflectance_to_rgb(np.moveaxis(L.total, 0, -1), w, e.spd)
-                        io.write_exr(stage / f"{p}_{t}_brdf_rgb.exr",
-                                     {c: L.grid.to_image(rgb[..., k]) for k, c in enumerate("RGB")}, header=hdr,
-                                     overwrite=True)
+                        io.write_rgb_exr(stage / f"{p}_{t}_brdf_rgb.exr",
+                                         L.grid.to_image(np.moveaxis(rgb, -1, 0)).transpose(1, 2, 0), header=hdr)
                         img = np.where(L.grid.inside[..., None], render.tonemap(rgb), 0.0)[::-1]  # row 0 = top = +v
                         k = max(1, 256 // max(img.shape[:2]))                   # nearest-neighbour zoom for viewing
                         img = np.repeat(np.repeat(img, k, axis=0), k, axis=1)
@@ -193,8 +192,8 @@ def execute(plan: Plan, outdir, *, overwrite: bool = False, device=None, progres
                 sim = Simulation(lobes=first, brdf_wave=res.sphere_brdfs[0], brdf_microfacet=res.sphere_brdfs[1],
                                  illuminant=e.spd, params={"incident_deg": list(e.light_directions_deg[0])})
                 wave, mfimg, dEmap, mask = render_spheres(sim, sc.output.sphere_size)
-                io.write_exr(stage / f"{p}_sphere.exr", {"R": wave[..., 0], "G": wave[..., 1], "B": wave[..., 2]},
-                             header={"waveoptics_scene": sc.name, "waveoptics_material": e.material.name}, overwrite=True)
+                io.write_rgb_exr(stage / f"{p}_sphere.exr", wave,
+                                 header={"waveoptics_scene": sc.name, "waveoptics_material": e.material.name})
                 figures.save_png(stage / f"{p}_sphere.png", render.tonemap(wave))
                 written += [f"{p}_sphere.exr", f"{p}_sphere.png"]
                 sphere = {"delta_e2000_vs_microfacet": {"mean": float(dEmap[mask].mean()) if mask.any() else 0.0,

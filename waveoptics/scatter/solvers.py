@@ -10,7 +10,6 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy.interpolate import RegularGridInterpolator
 
 from ..errors import WaveopticsError, unknown
 from ..materials import fresnel_function
@@ -24,7 +23,7 @@ from .kirchhoff import brdf_from_field, coherent_amplitude, cos_theta_d
 from .models import get_model
 from .patch import DEFAULT_WINDOW, Samples, samples
 
-__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'Solver', 'SOLVERS', 'BACKENDS', 'get_solver', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'memory_estimate', 'check_request_memory', 'scatter']
+__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'Solver', 'SOLVERS', 'BACKENDS', 'get_solver', 'tile_layout', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'memory_estimate', 'check_request_memory', 'scatter']
 
 #: largest albedo of the F = 1 lobe that :func:`scatter` accepts without an "energy not conserved" warning
 ENERGY_TOL = 1.05
@@ -99,7 +98,7 @@ def _lobe_at_direct(smp: Samples, wi, wo, wl, F, *, backend="opencl", runtime=No
     return brdf_from_field(U.reshape(len(wl), -1), wi, wo, wl, smp.area, F, diffraction)
 
 
-def _lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, progress=None,
+def lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, progress=None,
                  diffraction="kirchhoff", **_) -> np.ndarray:
     """f at the given directions, interpolated bilinearly in (u, v) from the lobe on a hemisphere grid fine enough
     to resolve the specular spike at the shortest wavelength (or *resolution*)."""
@@ -112,8 +111,9 @@ def _lobe_at_fft(smp: Samples, wi, wo, wl, F, *, order="auto", resolution=None, 
     for i, lam in enumerate(wl):
         U, _ = field_fft(smp, wi, grid, lam, order, frozen_cos_sum=get_model(diffraction).frozen_cos_sum)
         f = brdf_from_field(U[None], wi, dirs, [lam], smp.area, F, diffraction)[0]
-        interp = RegularGridInterpolator((grid.v, grid.u), f, bounds_error=False, fill_value=None)
-        out[i] = np.where(wo[:, 2] > 0, interp(np.stack([wo[:, 1], wo[:, 0]], axis=1)), 0.0)
+        # bilinear between the four nearest cell centres, held at the edge cells (a convex combination: never
+        # below the smallest of them); linear extrapolation beyond the outermost centres made f < 0 near the horizon
+        out[i] = np.where(wo[:, 2] > 0, grid.interpolate(f, wo[:, 0], wo[:, 1]), 0.0)
         if progress is not None:
             progress(1)
     return out
@@ -143,7 +143,7 @@ SOLVERS = {
     "direct": Solver("direct", "direct Kirchhoff sum on the OpenCL device or its NumPy twin (exact tangent-plane "
                                "model; O(samples x directions))", _grid_field_direct, _lobe_at_direct),
     "fft": Solver("fft", "chirp-z transforms on the direction-cosine grid, banded Taylor series in v_z "
-                         "(order='auto') or frozen v_z (order=0)", _grid_field_fft, _lobe_at_fft),
+                         "(order='auto') or frozen v_z (order=0)", _grid_field_fft, lobe_at_fft),
 }
 BACKENDS = ("opencl", "numpy")
 
@@ -190,15 +190,22 @@ def _realizations(surface, realizations, seed=0) -> list[HeightField]:
     return hfs
 
 
-def split_patch(hf: HeightField, n: int) -> list[HeightField]:
-    """Split *hf* into *n* equal, non-overlapping tiles (as square a layout as possible) for ensemble averages.
-
-    Tiles of one large measured or generated patch stand in for independent realizations when the patch spans
-    many correlation lengths; each tile is smaller, so the angular resolution λ/L is coarser.
-    """
-    if int(n) != n or n < 1:
+def tile_layout(shape, n) -> tuple[int, int]:
+    """(a, b): the split of a patch of *shape* (ny, nx) into *n* equal tiles, a along y and b along x, each at
+    least 2x2 samples and as square as possible; a one-line error when *n* is not an integer >= 1 or no split
+    exists. Checked before any work (the CLI asks it before its time estimate)."""
+    try:
+        ok = not isinstance(n, bool) and float(n) == int(n) and int(n) >= 1
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
         raise WaveopticsError(f"realizations={n!r} is not allowed; it must be an integer >= 1")
-    ny, nx = hf.shape
+    n = int(n)
+    ny, nx = shape
+    most = (ny // 2) * (nx // 2)
+    if n > most:   # before the search over divisors, which would take n steps
+        raise WaveopticsError(f"cannot split a {nx}x{ny} patch into {n} tiles of at least 2x2 samples; use "
+                              f"realizations 1..{max(most, 1)}")
     best = None
     for a in range(1, n + 1):
         if n % a:
@@ -211,7 +218,18 @@ def split_patch(hf: HeightField, n: int) -> list[HeightField]:
             best = (score, a, b)
     if best is None:
         raise WaveopticsError(f"cannot split a {nx}x{ny} patch into {n} tiles of at least 2x2 samples")
-    _, a, b = best
+    return best[1], best[2]
+
+
+def split_patch(hf: HeightField, n: int) -> list[HeightField]:
+    """Split *hf* into *n* equal, non-overlapping tiles (as square a layout as possible, :func:`tile_layout`) for
+    ensemble averages.
+
+    Tiles of one large measured or generated patch stand in for independent realizations when the patch spans
+    many correlation lengths; each tile is smaller, so the angular resolution λ/L is coarser.
+    """
+    ny, nx = hf.shape
+    a, b = tile_layout(hf.shape, n)
     ty, tx = ny // a, nx // b
     out = []
     for i in range(a):

@@ -211,6 +211,26 @@ def _finish(h, sp, mask, meta, what):
     return HeightField(h, sp[0], sp[1], mask, meta)
 
 
+def _npz_spacing(data: dict, name: str, scale: float):
+    """(dx, dy) in metres stated by a .npz archive, or None: ``dx`` (and ``dy``, default dx), or a ``spacing`` /
+    ``dx`` array of one value (square cells) or two (dx, dy), as numpy users write a grid's spacing."""
+    key = "dx" if "dx" in data else ("spacing" if "spacing" in data else None)
+    if key is None:
+        return None
+    v = np.asarray(data[key], dtype=float).ravel()
+    if key == "dx" and "dy" in data:
+        dy = np.asarray(data["dy"], dtype=float).ravel()
+        if v.size != 1 or dy.size != 1:
+            bad, n = ("dx", v.size) if v.size != 1 else ("dy", dy.size)
+            raise WaveopticsError(f"{bad} in {name!r} holds {n} values; with both dx and dy each must be one "
+                                  "spacing in metres")
+        v = np.concatenate([v, dy])
+    if v.size not in (1, 2):
+        raise WaveopticsError(f"{key} in {name!r} holds {v.size} values; it must be one spacing in metres or two "
+                              "(dx, dy)")
+    return float(v[0]) * scale, float(v[-1]) * scale
+
+
 def _load_npz(p, sp, units, nan_is_mask):
 
     try:
@@ -229,15 +249,8 @@ def _load_npz(p, sp, units, nan_is_mask):
     u = str(data["units"]) if "units" in data else (units or "m")
     scale = _unit_scale(u)
     meta = _json_meta(str(data["meta"]), ".npz") if "meta" in data else {}
-    if sp is None and "dx" in data:
-        def one(key, default):
-            v = np.asarray(data.get(key, default), dtype=float).ravel()
-            if v.size != 1:
-                raise WaveopticsError(f"{key} in {p.name!r} holds {v.size} values; it must be one spacing in "
-                                      "metres")
-            return float(v[0])
-        dx = one("dx", None)
-        sp = (dx * scale, one("dy", dx) * scale)
+    if sp is None:
+        sp = _npz_spacing(data, p.name, scale)
     mask = None
     if "mask" in data:
         mask = np.asarray(data["mask"])
@@ -334,7 +347,7 @@ def _load_exr(p, sp, units, nan_is_mask):
 def _parse_text(p):
     """(header dict, data rows as list of token lists with their line numbers)."""
     try:
-        text = p.read_text(encoding="utf-8")
+        text = p.read_text(encoding="utf-8-sig")   # a byte-order mark (Windows editors write one) is no data
     except UnicodeDecodeError:
         raise WaveopticsError("is not UTF-8 text") from None
     header, lines = {}, []
