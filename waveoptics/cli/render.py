@@ -217,8 +217,6 @@ def run_render(args):
     import time
     import warnings
 
-    import numpy as np
-
     from ..renderers import lighting
     from ..errors import WaveopticsError
     from ..io import files
@@ -288,25 +286,8 @@ def run_render(args):
                      exposure=exposure,
                      caption=f"environment {env.name}; Mitsuba 3 {args.variant}, {cmp.spp} spp, "
                              f"{settings.size}² px; camera looks down −z, y up")
-        summary = {"model": desc, "bsdf": args.bsdf, "reference": ref_name, "reference_notes": notes,
-                   "variant": args.variant, "environment": env.name, "ground": args.ground,
-                   "size_px": settings.size, "spp": cmp.spp,
-                   "delta_e2000": dict(model_de, pixels="sphere", mean_image=float(de.mean()),
-                                       meaning="CIEDE2000 (unitless; 1 is about a just-noticeable difference) "
-                                               "between the wave-optics render and the reference render, per "
-                                               "pixel: the models' difference plus Monte Carlo noise"),
-                   "noise_floor_delta_e2000": dict(floor, pixels="sphere",
-                                                   meaning="CIEDE2000 between two renders of the wave-optics "
-                                                           "model that differ only in their seeds, each at spp "
-                                                           "samples per pixel: what sampling noise alone gives "
-                                                           "(the reference shares the first render's seeds); a "
-                                                           "model difference shows where delta_e2000 stands "
-                                                           "well above it"),
-                   "model_to_noise": model_de["mean"] / floor["mean"] if floor["mean"] > 0 else None,
-                   "target_noise": args.target_noise, "noise_history": [[n, f] for n, f in cmp.history],
-                   "stop": cmp.stop or None,
-                   "timings_s": {k: round(v, 3) for k, v in timings.items()},
-                   "outputs": list(outputs)}
+        summary = _render_summary(args, desc, ref_name, notes, env, settings, cmp, de, model_de, floor, timings,
+                                  outputs)
         files.write_json(stage / "summary.json", summary)
     for note in notes:
         warnings.warn(note, UserWarning, stacklevel=1)
@@ -317,6 +298,32 @@ def run_render(args):
                         f"{timings['render_wave_s']:.1f} s + {timings['render_wave_repeat_s']:.1f} s (noise floor) "
                         f"+ {timings['render_reference_s']:.1f} s, model {timings['model_s']:.1f} s")
     return 0
+
+
+
+def _render_summary(args, desc, ref_name, notes, env, settings, cmp, de, model_de, floor, timings,
+                    outputs) -> dict:
+    """summary.json of a render: the model, both ΔE2000 statistics (model vs reference, and the noise floor) with
+    their meaning, the stopping rule, timings and outputs."""
+    return {"model": desc, "bsdf": args.bsdf, "reference": ref_name, "reference_notes": notes,
+            "variant": args.variant, "environment": env.name, "ground": args.ground,
+            "size_px": settings.size, "spp": cmp.spp,
+            "delta_e2000": dict(model_de, pixels="sphere", mean_image=float(de.mean()),
+                                meaning="CIEDE2000 (unitless; 1 is about a just-noticeable difference) "
+                                        "between the wave-optics render and the reference render, per "
+                                        "pixel: the models' difference plus Monte Carlo noise"),
+            "noise_floor_delta_e2000": dict(floor, pixels="sphere",
+                                            meaning="CIEDE2000 between two renders of the wave-optics "
+                                                    "model that differ only in their seeds, each at spp "
+                                                    "samples per pixel: what sampling noise alone gives "
+                                                    "(the reference shares the first render's seeds); a "
+                                                    "model difference shows where delta_e2000 stands "
+                                                    "well above it"),
+            "model_to_noise": model_de["mean"] / floor["mean"] if floor["mean"] > 0 else None,
+            "target_noise": args.target_noise, "noise_history": [[n, f] for n, f in cmp.history],
+            "stop": cmp.stop or None,
+            "timings_s": {k: round(v, 3) for k, v in timings.items()},
+            "outputs": list(outputs)}
 
 
 def _stats(de, on) -> dict:
