@@ -188,11 +188,16 @@ class DrJitTwoScale:
             return int(x)
         return self.mi.UInt32(x)
 
+    def _mod(self, x, m):
+        """x mod m in [0, m) (NumPy's ``mod`` for m > 0)."""
+        r = x - m * self.dr.floor(x / m)
+        return self.dr.select(r >= m, r - m, r)
+
     def _interp_sorted(self, xs, n, ys, x):
         """np.interp(x, xs, ys) for ascending *xs* of length n (held at the ends)."""
         dr = self.dr
         if self.scalar:
-            b = dr.binary_search(1, n - 1, lambda i: xs[i] <= x)
+            b = dr.binary_search(1, n - 1, lambda i: bool(xs[i] <= x))
         else:
             b = dr.binary_search(1, n - 1, lambda i: dr.gather(self.mi.Float, xs, i) <= x)
         a = b - 1
@@ -209,7 +214,7 @@ class DrJitTwoScale:
         w = self.w_dr
         lam = dr.clip(lam, float(self.nodes[0]), float(self.nodes[-1]))
         if self.scalar:
-            b = int(dr.binary_search(1, self.J - 1, lambda i: w[i] < lam))
+            b = int(dr.binary_search(1, self.J - 1, lambda i: bool(w[i] < lam)))
         else:
             b = dr.binary_search(1, self.J - 1, lambda i: dr.gather(self.mi.Float, w, i) < lam)
         a = b - 1
@@ -224,6 +229,8 @@ class DrJitTwoScale:
             return 0
         wa, wb = self._gather(self.w_dr, a), self._gather(self.w_dr, b)
         lam = dr.clip(lam, float(self.nodes[0]), float(self.nodes[-1]))
+        if self.scalar:
+            return a if lam - wa <= wb - lam else b
         return dr.select(lam - wa <= wb - lam, a, b)
 
     # -- Fresnel -------------------------------------------------------------------------------------------
@@ -481,11 +488,11 @@ class DrJitTwoScale:
         if self.P == 1:
             return [(0.0, 1.0)]
         step = 2.0 * math.pi / self.P
-        f = dr.fmod(dr.fmod(phi_i, 2.0 * math.pi) + 2.0 * math.pi, 2.0 * math.pi) / step
+        f = self._mod(phi_i, 2.0 * math.pi) / step
         fl = dr.floor(f)
         t = f - fl
-        a = dr.fmod(fl, float(self.P))
-        return [(a, 1.0 - t), (dr.fmod(a + 1.0, float(self.P)), t)]
+        a = self._mod(fl, float(self.P))
+        return [(a, 1.0 - t), (self._mod(a + 1.0, float(self.P)), t)]
 
     def _lookup(self, table, p, k, j, u, v):
         """Cell-centred bilinear read (clamped within half a cell of the edge, 0 beyond; library
@@ -541,8 +548,8 @@ class DrJitTwoScale:
         if self.P == 1:
             return theta * 0.0, k
         phi = dr.atan2(wi.y, wi.x)
-        f = dr.fmod(dr.fmod(phi, 2.0 * math.pi) + 2.0 * math.pi, 2.0 * math.pi) / (2.0 * math.pi / self.P)
-        return dr.fmod(dr.round(f), float(self.P)), k
+        f = self._mod(phi, 2.0 * math.pi) / (2.0 * math.pi / self.P)
+        return self._mod(dr.round(f), float(self.P)), k
 
     def _mirror(self, p, k):
         th = self._gather_list(self.thetas, k) if self.K > 1 else self.thetas[0] + k * 0.0
@@ -579,7 +586,7 @@ class DrJitTwoScale:
         start = node * C
         target = u.x
         if self.scalar:
-            c = dr.binary_search(0, C - 1, lambda i: self.cdf[start + i] < target)
+            c = dr.binary_search(0, C - 1, lambda i: bool(self.cdf[start + i] < target))
         else:
             c = dr.binary_search(0, C - 1, lambda i: dr.gather(mi.Float, self.cdf, start + i) < target)
         c = mi.UInt32(c) if not self.scalar else int(c)
