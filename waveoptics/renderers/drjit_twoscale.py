@@ -421,10 +421,11 @@ class DrJitTwoScale:
             out = out + pn * self.pdf_diffraction(g, j)
         return out
 
-    def sample_node(self, wi, u0, u, j):
-        """ω_o drawn by node j's sampler from u0 (lobe choice, remapped) and u (2-D) (library
+    def sample_node(self, wi, u, j):
+        """ω_o drawn by node j's sampler from u (2-D; u.x picks the lobe and is remapped) (library
         ``TwoScaleParts._sample1`` with :func:`waveoptics.brdf.lobe_choice`); below the surface when invalid."""
         dr, mi = self.dr, self.mi
+        u0 = u.x
         pc, pn, pd = self.probs(wi, j)
         tot = pc + pn + pd
         tot = dr.select(tot > 0, tot, 1.0)

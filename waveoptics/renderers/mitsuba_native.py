@@ -11,6 +11,9 @@ those of the ``waveoptics`` plugin:
 * RGB variants: f in linear sRGB (Σ_j f(λ_j) M_j), sampled from the equal-weight mixture of the nodes (the first
   number picks a node and is remapped, pbrt-v4 §2.4).
 
+As in the ``waveoptics`` plugin, sampling draws on ``sample2`` only (its first number chooses the node and the lobe,
+remapped each time); ``sample1`` is not used.
+
 Mitsuba's ``eval`` is f cos θ_o; ``si.wi`` is the first direction, ``wo`` the second. Polarized variants are refused
 (the Mueller matrix of the two-scale model is not written here).
 
@@ -120,12 +123,12 @@ def _native_class(mi, fixed_model=None):
                 return bs, mi.Spectrum(0.0)
             wi = si.wi
             if spectral:
-                wo = tab.sample_node(wi, sample1, sample2, tab.nearest_node(si.wavelengths[0]))
-            else:
-                x = sample1 * tab.J
+                wo = tab.sample_node(wi, sample2, tab.nearest_node(si.wavelengths[0]))
+            else:   # a node picked by sample2.x, which is remapped (library SpectralNodes.sample_rgb)
+                x = sample2.x * tab.J
                 j = dr.minimum(dr.floor(x), tab.J - 1.0)
                 u0 = dr.clip(x - j, 0.0, 0.99999994)
-                wo = tab.sample_node(wi, u0, sample2, tab._idx(j))
+                wo = tab.sample_node(wi, mi.Point2f(u0, sample2.y), tab._idx(j))
             up = (wi.z > 0) & (wo.z > 0)
             wo_ok = dr.select(up, wo, mi.Vector3f(0.0, 0.0, 1.0))
             g = tab.geometry(wi, wo_ok)
