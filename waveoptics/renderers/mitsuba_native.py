@@ -8,6 +8,7 @@ those of the ``waveoptics`` plugin:
 
 * spectral variants: f at the path's wavelengths (linear between nodes), sampled and its density taken at the node
   nearest the hero wavelength;
+* mono variants: the luminance of the RGB value;
 * RGB variants: f in linear sRGB (Σ_j f(λ_j) M_j), sampled from the equal-weight mixture of the nodes (the first
   number picks a node and is remapped, pbrt-v4 §2.4).
 
@@ -82,6 +83,8 @@ def _native_class(mi, fixed_model=None):
             for j in range(tab.J):
                 fj = tab.f_node(g, j)
                 rgb = [rgb[c] + fj * float(tab.rgb[j, c]) for c in range(3)]
+            if "mono" in mi.variant():   # the luminance of linear sRGB (ITU-R BT.709), as Mitsuba's mono variants
+                return mi.Spectrum(0.212671 * rgb[0] + 0.715160 * rgb[1] + 0.072169 * rgb[2])
             return mi.Spectrum(*rgb)
 
         def _pdf(self, g, si):
