@@ -367,19 +367,26 @@ class DrJitTwoScale(DiffractedLobes):
         return dr.select(g.up, kd / math.pi * (A + B * proj / cmax), 0.0)
 
     # -- one wavelength node -------------------------------------------------------------------------------
-    def f_node(self, g, j):
-        """f (1/sr) of node j at the pairs of *g* (library ``TwoScaleParts._parts``)."""
+    def f_parts(self, g, j):
+        """(c, F(θ_d), rest) of node j: f = c F(θ_d) + rest, c = G D A / (4 cos θ_i cos θ_o) the coherent part
+        without its Fresnel factor, rest the diffracted, diffuse and multiple-scattering parts (1/sr)."""
         dr = self.dr
-        f = g.spec * self.F(g.cos_d, j) * self.A(g.theta_d, j)
+        coh = g.spec * self.A(g.theta_d, j)
+        rest = g.spec * 0.0
         if g.diffuse is not None:
             Fi, Fo = self.F(g.ci, j), self.F(g.co, j)
             t = 1.0 - self._node_value("Fbar", j)
-            f = f + g.diffuse * dr.select(t > 0, (1.0 - Fi) * (1.0 - Fo) / dr.select(t > 0, t, 1.0), 0.0)
+            rest = rest + g.diffuse * dr.select(t > 0, (1.0 - Fi) * (1.0 - Fo) / dr.select(t > 0, t, 1.0), 0.0)
         if self.ms:
-            f = f + g.ms * self._node_value("Fms", j)
+            rest = rest + g.ms * self._node_value("Fms", j)
         if self.rough:
-            f = f + self.f_diffraction(g, j)
-        return f
+            rest = rest + self.f_diffraction(g, j)
+        return coh, self.F(g.cos_d, j), rest
+
+    def f_node(self, g, j):
+        """f (1/sr) of node j at the pairs of *g* (library ``TwoScaleParts._parts``)."""
+        coh, F, rest = self.f_parts(g, j)
+        return coh * F + rest
 
     def probs(self, wi, j):
         """Lobe probabilities (coherent, diffracted, cosine) of node j (library ``TwoScaleParts._probs``)."""

@@ -15,8 +15,12 @@ those of the ``waveoptics`` plugin:
 As in the ``waveoptics`` plugin, sampling draws on ``sample2`` only (its first number chooses the node and the lobe,
 remapped each time); ``sample1`` is not used.
 
-Mitsuba's ``eval`` is f cos θ_o; ``si.wi`` is the first direction, ``wo`` the second. Polarized variants are refused
-(the Mueller matrix of the two-scale model is not written here).
+* polarized spectral variants: a Mueller matrix whose (0, 0) element is the unpolarized f cos θ_o: the coherent
+  part polarizes as a mirror facet does (Fresnel amplitudes of the complex index, in roughconductor's frames, so
+  without nano-roughness it is Mitsuba's polarized roughconductor), the other parts are depolarizers (the
+  polarization of the diffracted lobe is not modelled here).
+
+Mitsuba's ``eval`` is f cos θ_o; ``si.wi`` is the first direction, ``wo`` the second.
 
 References
 ----------
@@ -51,6 +55,7 @@ def _native_class(mi, fixed_model=None):
     import drjit as dr
 
     spectral = mi.is_spectral
+    polarized = mi.is_polarized
 
     class WaveopticsNativeBSDF(mi.BSDF):
         """waveoptics two-scale BRDF in Dr.Jit (see :mod:`waveoptics.renderers.mitsuba_native`)."""
@@ -64,6 +69,9 @@ def _native_class(mi, fixed_model=None):
             self.model = fixed_model if fixed_model is not None else _model_from(items)
             self.parameters = dict(items)
             self.tab = native_tables(self.model, mi)
+            if polarized and self.tab.fresnel != "exact":
+                raise WaveopticsError(f"the polarized {NATIVE_PLUGIN_NAME} BSDF needs a material with a complex "
+                                      "index (its Fresnel amplitudes), not F0 only")
             flags = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
             if self.model.base._has_diffuse():
                 flags = flags | mi.BSDFFlags.DiffuseReflection
@@ -87,6 +95,39 @@ def _native_class(mi, fixed_model=None):
                 return mi.Spectrum(0.212671 * rgb[0] + 0.715160 * rgb[1] + 0.072169 * rgb[2])
             return mi.Spectrum(*rgb)
 
+        def _mueller(self, ctx, g, si, wo):
+            """Polarized variants: the coherent part's Mueller matrix from the complex Fresnel amplitudes of each
+            node (``mi.mueller.specular_reflection``), in the frames Mitsuba's roughconductor uses (s axes normal
+            to the facet's plane of reflection, rotated onto the Stokes bases of −ŵ_o and ŵ_i); the diffracted,
+            diffuse and multiple-scattering parts as depolarizers (their polarization is not modelled here)."""
+            tab = self.tab
+            radiance = ctx.mode == mi.TransportMode.Radiance
+            wo_hat, wi_hat = (wo, si.wi) if radiance else (si.wi, wo)
+            h = dr.normalize(si.wi + wo)
+            cos_d = dr.dot(wo_hat, h)
+            s_in, s_out = dr.cross(h, -wo_hat), dr.cross(h, wi_hat)
+            collinear = dr.all(s_in == mi.Vector3f(0.0))
+            s_in = dr.select(collinear, mi.Vector3f(1.0, 0.0, 0.0), dr.normalize(s_in))
+            s_out = dr.select(collinear, mi.Vector3f(1.0, 0.0, 0.0), dr.normalize(s_out))
+            entries = [[[] for _ in range(4)] for _ in range(4)]
+            for i in range(4):
+                a, b, t = tab.lambda_bracket(si.wavelengths[i])
+                M = 0.0
+                for j, w in ((a, 1.0 - t), (b, t)):
+                    coh, _, rest = tab.f_parts(g, j)
+                    eta = mi.Complex2f(tab._node_value("eta_re", j), tab._node_value("eta_im", j))
+                    M = M + mi.mueller.specular_reflection(cos_d, eta) * (w * coh) + mi.mueller.depolarizer(w * rest)
+                M = mi.mueller.rotate_mueller_basis(M, -wo_hat, s_in, mi.mueller.stokes_basis(-wo_hat),
+                                                    wi_hat, s_out, mi.mueller.stokes_basis(wi_hat))
+                for r in range(4):
+                    for c in range(4):
+                        entries[r][c].append(M[r][c])
+            out = dr.zeros(mi.Spectrum, dr.width(cos_d))
+            for r in range(4):
+                for c in range(4):
+                    out[r, c] = mi.UnpolarizedSpectrum(*entries[r][c])
+            return out
+
         def _pdf(self, g, si):
             tab = self.tab
             if spectral:
@@ -104,7 +145,8 @@ def _native_class(mi, fixed_model=None):
             if not self._enabled(ctx):
                 return mi.Spectrum(0.0)
             g = self.tab.geometry(si.wi, wo)
-            return dr.select(active, self._f(g, si) * dr.maximum(wo.z, 0.0), 0.0)
+            f = self._mueller(ctx, g, si, wo) if polarized else self._f(g, si)
+            return dr.select(active & g.up, f * dr.maximum(wo.z, 0.0), 0.0)
 
         def pdf(self, ctx, si, wo, active=True):
             if not self._enabled(ctx):
@@ -116,7 +158,8 @@ def _native_class(mi, fixed_model=None):
             if not self._enabled(ctx):
                 return mi.Spectrum(0.0), mi.Float(0.0)
             g = self.tab.geometry(si.wi, wo)
-            return (dr.select(active, self._f(g, si) * dr.maximum(wo.z, 0.0), 0.0),
+            f = self._mueller(ctx, g, si, wo) if polarized else self._f(g, si)
+            return (dr.select(active & g.up, f * dr.maximum(wo.z, 0.0), 0.0),
                     dr.select(active, self._pdf(g, si), 0.0))
 
         def sample(self, ctx, si, sample1, sample2, active=True):
@@ -142,7 +185,8 @@ def _native_class(mi, fixed_model=None):
             bs.eta = 1.0
             bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
             bs.sampled_component = mi.UInt32(0)
-            weight = self._f(g, si) * (wo_ok.z / dr.select(ok, p, 1.0))
+            f = self._mueller(ctx, g, si, wo_ok) if polarized else self._f(g, si)
+            weight = f * (wo_ok.z / dr.select(ok, p, 1.0))
             return bs, dr.select(ok, weight, 0.0)
 
         def traverse(self, callback):
@@ -176,9 +220,9 @@ def register_native(variant: str | None = None, model=None, name: str = NATIVE_P
         mi = load_mitsuba(variant)
     else:
         import mitsuba as mi
-    if mi.is_polarized:
-        raise WaveopticsError(f"the {NATIVE_PLUGIN_NAME} BSDF has no polarized form; use an unpolarized variant "
-                              f"instead of {mi.variant()!r}")
+    if mi.is_polarized and not mi.is_spectral:
+        raise WaveopticsError(f"the {NATIVE_PLUGIN_NAME} BSDF has no polarized monochrome form; use a spectral "
+                              f"variant instead of {mi.variant()!r}")
     cls = _native_class(mi, model)
     mi.register_bsdf(name, lambda props: cls(props))
     return mi
