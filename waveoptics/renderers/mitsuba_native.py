@@ -51,6 +51,46 @@ def native_tables(model, mi) -> DrJitTwoScale:
     return _TABLES[key][1]
 
 
+def _mueller(mi, dr, tab, ctx, g, si, wo):
+    """Polarized variants: the Mueller matrix of f (cos θ_o not applied). The coherent part polarizes by the complex
+    Fresnel amplitudes of each node (``mi.mueller.specular_reflection``), in the frames Mitsuba's roughconductor
+    uses (s axes normal to the facet's plane of reflection, rotated onto the Stokes bases of −ŵ_o and ŵ_i); the
+    diffracted, diffuse and multiple-scattering parts are depolarizers (their polarization is not modelled here).
+
+    References
+    ----------
+    .. [1] W. Jakob et al., Mitsuba 3, ``src/bsdfs/roughconductor.cpp`` (the frames) and ``mueller.h``
+       (``specular_reflection``, ``rotate_mueller_basis``, ``stokes_basis``).
+    .. [2] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5.2 and §14.2 (Fresnel amplitudes).
+    """
+    radiance = ctx.mode == mi.TransportMode.Radiance
+    wo_hat, wi_hat = (wo, si.wi) if radiance else (si.wi, wo)
+    h = dr.normalize(si.wi + wo)
+    cos_d = dr.dot(wo_hat, h)
+    s_in, s_out = dr.cross(h, -wo_hat), dr.cross(h, wi_hat)
+    collinear = dr.all(s_in == mi.Vector3f(0.0))
+    s_in = dr.select(collinear, mi.Vector3f(1.0, 0.0, 0.0), dr.normalize(s_in))
+    s_out = dr.select(collinear, mi.Vector3f(1.0, 0.0, 0.0), dr.normalize(s_out))
+    entries = [[[] for _ in range(4)] for _ in range(4)]
+    for i in range(4):
+        a, b, t = tab.lambda_bracket(si.wavelengths[i])
+        M = 0.0
+        for j, w in ((a, 1.0 - t), (b, t)):
+            coh, _, rest = tab.f_parts(g, j)
+            eta = mi.Complex2f(tab._node_value("eta_re", j), tab._node_value("eta_im", j))
+            M = M + mi.mueller.specular_reflection(cos_d, eta) * (w * coh) + mi.mueller.depolarizer(w * rest)
+        M = mi.mueller.rotate_mueller_basis(M, -wo_hat, s_in, mi.mueller.stokes_basis(-wo_hat),
+                                            wi_hat, s_out, mi.mueller.stokes_basis(wi_hat))
+        for r in range(4):
+            for c in range(4):
+                entries[r][c].append(M[r][c])
+    out = dr.zeros(mi.Spectrum, dr.width(cos_d))
+    for r in range(4):
+        for c in range(4):
+            out[r, c] = mi.UnpolarizedSpectrum(*entries[r][c])
+    return out
+
+
 def _native_class(mi, fixed_model=None):
     import drjit as dr
 
@@ -96,37 +136,7 @@ def _native_class(mi, fixed_model=None):
             return mi.Spectrum(*rgb)
 
         def _mueller(self, ctx, g, si, wo):
-            """Polarized variants: the coherent part's Mueller matrix from the complex Fresnel amplitudes of each
-            node (``mi.mueller.specular_reflection``), in the frames Mitsuba's roughconductor uses (s axes normal
-            to the facet's plane of reflection, rotated onto the Stokes bases of −ŵ_o and ŵ_i); the diffracted,
-            diffuse and multiple-scattering parts as depolarizers (their polarization is not modelled here)."""
-            tab = self.tab
-            radiance = ctx.mode == mi.TransportMode.Radiance
-            wo_hat, wi_hat = (wo, si.wi) if radiance else (si.wi, wo)
-            h = dr.normalize(si.wi + wo)
-            cos_d = dr.dot(wo_hat, h)
-            s_in, s_out = dr.cross(h, -wo_hat), dr.cross(h, wi_hat)
-            collinear = dr.all(s_in == mi.Vector3f(0.0))
-            s_in = dr.select(collinear, mi.Vector3f(1.0, 0.0, 0.0), dr.normalize(s_in))
-            s_out = dr.select(collinear, mi.Vector3f(1.0, 0.0, 0.0), dr.normalize(s_out))
-            entries = [[[] for _ in range(4)] for _ in range(4)]
-            for i in range(4):
-                a, b, t = tab.lambda_bracket(si.wavelengths[i])
-                M = 0.0
-                for j, w in ((a, 1.0 - t), (b, t)):
-                    coh, _, rest = tab.f_parts(g, j)
-                    eta = mi.Complex2f(tab._node_value("eta_re", j), tab._node_value("eta_im", j))
-                    M = M + mi.mueller.specular_reflection(cos_d, eta) * (w * coh) + mi.mueller.depolarizer(w * rest)
-                M = mi.mueller.rotate_mueller_basis(M, -wo_hat, s_in, mi.mueller.stokes_basis(-wo_hat),
-                                                    wi_hat, s_out, mi.mueller.stokes_basis(wi_hat))
-                for r in range(4):
-                    for c in range(4):
-                        entries[r][c].append(M[r][c])
-            out = dr.zeros(mi.Spectrum, dr.width(cos_d))
-            for r in range(4):
-                for c in range(4):
-                    out[r, c] = mi.UnpolarizedSpectrum(*entries[r][c])
-            return out
+            return _mueller(mi, dr, self.tab, ctx, g, si, wo)
 
         def _pdf(self, g, si):
             tab = self.tab
