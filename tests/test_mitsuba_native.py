@@ -274,3 +274,14 @@ def test_polarized_monochrome_variants_are_refused_in_one_line():
     with pytest.raises(WaveopticsError, match="no polarized monochrome form") as exc:
         register_native("llvm_ad_mono_polarized")
     assert "\n" not in str(exc.value)
+
+
+def test_mono_variant_gives_the_luminance_of_the_rgb_value():
+    """Mitsuba's mono variants: Y of linear sRGB (ITU-R BT.709 weights, written here) of the model's RGB f."""
+    mi, name = _plugin("llvm_ad_mono", "dielectric")
+    model = _model("dielectric")
+    wi, wo, lam = _pairs(200, seed=2)
+    got, pdf = _eval_pdf(mi, mi.load_dict({"type": name}), wi, wo, lam)
+    want = (model.eval_rgb(wi, wo) * wo[:, 2:3]) @ np.array([0.212671, 0.715160, 0.072169])
+    _assert_close(got[:, 0], want, "mono eval")
+    _assert_close(pdf, model.pdf_rgb(wi, wo), "mono pdf")
