@@ -183,6 +183,39 @@ def test_mitsubas_chi2_accepts_sample_and_pdf(case, theta_deg):
     assert chi2.run(), chi2.messages
 
 
+def test_mitsubas_chi2_accepts_the_spectral_sampler():
+    """llvm_ad_spectral, anisotropic case at 60°: the hero wavelength's node sampler and its density (Mitsuba's
+    adapter leaves the wavelengths at 0, so this one sets them)."""
+    import drjit as dr
+
+    mi, name = _plugin("llvm_ad_spectral", "anisotropic")
+    from mitsuba.chi2 import ChiSquareTest, SphericalDomain
+
+    t = np.radians(60.0)
+    wi = mi.Vector3f(float(np.sin(t) * np.cos(0.4)), float(np.sin(t) * np.sin(0.4)), float(np.cos(t)))
+    plugin = mi.load_dict({"type": name})
+
+    def context(n):
+        si = dr.zeros(mi.SurfaceInteraction3f, n)
+        si.wi = wi
+        si.wavelengths = mi.Spectrum(*[mi.Float(np.full(n, x, dtype=np.float32)) for x in (600.0, 430.0, 520.0, 690.0)])
+        return si
+
+    def sample_func(sample, *args):
+        bs, weight = plugin.sample(mi.BSDFContext(), context(dr.width(sample)), sample[0],
+                                   mi.Vector2f([sample[1], sample[2]]))
+        w = dr.full(mi.Float, 1.0, dr.width(weight))
+        w[dr.all(weight == 0)] = 0
+        return bs.wo, w
+
+    def pdf_func(wo, *args):
+        return plugin.pdf(mi.BSDFContext(), context(dr.width(wo)), wo)
+
+    chi2 = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func, sample_dim=3,
+                         sample_count=200_000, res=101, ires=8, seed=7)
+    assert chi2.run(), chi2.messages
+
+
 ROUGH = dict(material="0.2+3j", alpha=0.3, nano="none", shadowing="smith", wavelength_step=94.0)
 
 
