@@ -9,7 +9,8 @@ BSDF renders once to compile its kernels, then is timed over a second render wit
 compiled kernels); both times are printed. The NumPy plugin runs last, because registering it turns Dr.Jit's
 symbolic loops and calls off for the process.
 
-Usage: ``PYTHONPATH=. python scripts/bench_mitsuba_native.py [--variant llvm_ad_spectral] [--size 64] [--spp 16]``
+Usage: ``PYTHONPATH=. python scripts/bench_mitsuba_native.py [--variant llvm_ad_spectral] [--size 64] [--spp 16]
+[--resolution 64] [--wavelength-step 47]``
 (``--json`` prints the numbers as JSON).
 """
 from __future__ import annotations
@@ -60,6 +61,8 @@ def main(argv=None):
     ap.add_argument("--variant", default="llvm_ad_spectral")
     ap.add_argument("--size", type=int, default=64)
     ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--resolution", type=int, default=PARAMS["resolution"], help="direction-grid cells per axis")
+    ap.add_argument("--wavelength-step", type=float, default=PARAMS["wavelength_step"], help="nm")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
 
@@ -67,13 +70,14 @@ def main(argv=None):
     from waveoptics.renderers.mitsuba_native import NATIVE_PLUGIN_NAME, register_native
     from waveoptics.renderers.model import cached_renderer_brdf
 
+    params = dict(PARAMS, resolution=args.resolution, wavelength_step=args.wavelength_step)
     t0 = time.perf_counter()
-    kw = {("wavelength_step_nm" if k == "wavelength_step" else k): v for k, v in PARAMS.items()}
+    kw = {("wavelength_step_nm" if k == "wavelength_step" else k): v for k, v in params.items()}
     model = cached_renderer_brdf(**dict(sorted(kw.items())))
     out = {"variant": args.variant, "size": args.size, "spp": args.spp, "model_s": time.perf_counter() - t0,
-           "params": PARAMS}
+           "params": params}
     mi = register_native(args.variant)
-    res = {"native": _time(mi, {"type": NATIVE_PLUGIN_NAME, **PARAMS}, args.size, args.spp)}
+    res = {"native": _time(mi, {"type": NATIVE_PLUGIN_NAME, **params}, args.size, args.spp)}
     if mi.is_spectral:
         from waveoptics.renderers.rgl import export_rgl
 
@@ -84,7 +88,7 @@ def main(argv=None):
             out["rgl_export_s"] = time.perf_counter() - t0
             res["measured"] = _time(mi, {"type": "measured", "filename": str(path)}, args.size, args.spp)
     register(args.variant)
-    res["numpy"] = _time(mi, {"type": PLUGIN_NAME, **PARAMS}, args.size, args.spp)
+    res["numpy"] = _time(mi, {"type": PLUGIN_NAME, **params}, args.size, args.spp)
     ref = res["numpy"]["image"]
     for name, r in res.items():
         img = r.pop("image")
