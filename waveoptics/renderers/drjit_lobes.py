@@ -26,7 +26,7 @@ __all__ = ['DiffractedLobes']
 
 class DiffractedLobes:
     """Upload and Dr.Jit reading of the tabulated diffracted lobes (a base of
-    :class:`waveoptics.renderers.drjit_twoscale.DrJitTwoScale`, whose helpers ``_upload``, ``_gather``, ``_idx``,
+    :class:`waveoptics.renderers.drjit_twoscale.DrJitTwoScale`, whose helpers ``_upload``, ``_gather``, ``idx``,
     ``_mod`` and attributes ``dr``, ``mi``, ``scalar``, ``J`` it uses)."""
 
     def _upload_lobes(self, base):
@@ -106,8 +106,8 @@ class DiffractedLobes:
         k0 = dr.clip(dr.floor(fv), 0.0, nv - 2.0)
         av, au = dr.clip(fv - k0, 0.0, 1.0), dr.clip(fu - j0, 0.0, 1.0)
         # integer arithmetic: the tables hold more cells than float32 counts exactly
-        node = (self._idx(p) * self.K + self._idx(k)) * self.J + j
-        base = node * (nu * nv) + self._idx(k0) * nu + self._idx(j0)
+        node = (self.idx(p) * self.K + self.idx(k)) * self.J + j
+        base = node * (nu * nv) + self.idx(k0) * nu + self.idx(j0)
         val = ((1.0 - av) * ((1.0 - au) * self._gather(table, base) + au * self._gather(table, base + 1))
                + av * ((1.0 - au) * self._gather(table, base + nu) + au * self._gather(table, base + nu + 1)))
         return dr.select(ok, val, 0.0)
@@ -168,9 +168,9 @@ class DiffractedLobes:
         col = dr.floor((uu - u0) / du)
         row = dr.floor((vv - v0) / dv)
         ok = (col >= 0) & (col < nu) & (row >= 0) & (row < nv) & (g.wo.z > 0)
-        node = (self._idx(p) * self.K + self._idx(k)) * self.J + j
+        node = (self.idx(p) * self.K + self.idx(k)) * self.J + j
         total = self._gather(self.total, node)
-        cell = self._idx(dr.clip(row, 0.0, nv - 1.0) * nu + dr.clip(col, 0.0, nu - 1.0)) + node * (nu * nv)
+        cell = self.idx(dr.clip(row, 0.0, nv - 1.0) * nu + dr.clip(col, 0.0, nu - 1.0)) + node * (nu * nv)
         val = self._gather(self.lobe, cell)
         dens = dr.select(ok & (total > 0), val / dr.select(total > 0, total, 1.0), 0.0) / (du * dv)
         return dens * dr.maximum(g.wo.z, 0.0)
@@ -182,7 +182,7 @@ class DiffractedLobes:
         u0, v0, du, dv, nu, nv = self.grid
         C = nu * nv
         p, k = self._nearest_node(wi)
-        node = (self._idx(p) * self.K + self._idx(k)) * self.J + j
+        node = (self.idx(p) * self.K + self.idx(k)) * self.J + j
         start = node * C
         target = u.x
         if self.scalar:
@@ -208,6 +208,6 @@ class DiffractedLobes:
 
 
 def _rotate(mi, dr, w, phi):
-    """Rotate vectors about z by −phi (library ``tabulated._rotate``)."""
+    """Rotate vectors about z by −phi (as the library's tabulated model does)."""
     c, s = dr.cos(phi), dr.sin(phi)
     return mi.Vector3f(c * w.x + s * w.y, -s * w.x + c * w.y, w.z)

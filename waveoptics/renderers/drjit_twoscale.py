@@ -165,7 +165,7 @@ class DrJitTwoScale(DiffractedLobes):
             self._per_node[key] = self._upload(arr)
         return self._gather(self._per_node[key], j)
 
-    def _idx(self, x):
+    def idx(self, x):
         """Float (integral, ≥ 0) → unsigned index: a Python int for Python numbers and in scalar variants."""
         if self.scalar or isinstance(x, (int, float, np.integer, np.floating)):
             return int(x)
@@ -254,7 +254,7 @@ class DrJitTwoScale(DiffractedLobes):
         x = dr.clip(theta, 0.0, 0.5 * math.pi) * ((A_NODES - 1) / (0.5 * math.pi))
         a = dr.clip(dr.floor(x), 0.0, A_NODES - 2.0)
         t = x - a
-        base = self._idx(a) + j * A_NODES
+        base = self.idx(a) + j * A_NODES
         return (1.0 - t) * self._gather(self.A_tab, base) + t * self._gather(self.A_tab, base + 1)
 
     # -- micro NDF -----------------------------------------------------------------------------------------

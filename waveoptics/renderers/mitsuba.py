@@ -109,7 +109,7 @@ def plugin_parameters() -> tuple:
     return tuple(_PARAMETERS)
 
 
-def _model_from(items) -> object:
+def model_from(items) -> object:
     kw = {}
     for key, value in items:
         if key == "id" or key not in _PARAMETERS:
@@ -183,7 +183,7 @@ def _bsdf_class(mi):
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
             items = [(k, props[k]) for k in props.keys()]
-            self.model = _model_from(items)
+            self.model = model_from(items)
             self.parameters = dict(items)
             flags = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
             if self.model.base._has_diffuse():

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 from ..errors import WaveopticsError
 from .drjit_twoscale import DrJitTwoScale
-from .mitsuba import _model_from, load_mitsuba
+from .mitsuba import model_from, load_mitsuba
 
 __all__ = ['NATIVE_PLUGIN_NAME', 'register_native', 'native_tables']
 
@@ -91,10 +91,49 @@ def _mueller(mi, dr, tab, ctx, g, si, wo):
     return out
 
 
+def _spectrum(mi, tab, g, si):
+    """f (not × cos) as a mi.Spectrum: interpolated between the wavelength nodes in spectral variants, the nodes'
+    RGB weights in RGB variants, the luminance in mono ones."""
+    if mi.is_spectral:
+        out = []
+        for i in range(4):
+            a, b, t = tab.lambda_bracket(si.wavelengths[i])
+            out.append((1.0 - t) * tab.f_node(g, a) + t * tab.f_node(g, b))
+        return mi.Spectrum(*out)
+    rgb = [0.0, 0.0, 0.0]
+    for j in range(tab.J):
+        fj = tab.f_node(g, j)
+        rgb = [rgb[c] + fj * float(tab.rgb[j, c]) for c in range(3)]
+    if "mono" in mi.variant():   # the luminance of linear sRGB (ITU-R BT.709), as Mitsuba's mono variants
+        return mi.Spectrum(0.212671 * rgb[0] + 0.715160 * rgb[1] + 0.072169 * rgb[2])
+    return mi.Spectrum(*rgb)
+
+
+def _pdf_value(mi, tab, g, si):
+    """The sampling density (1/sr): of the node nearest the path's first wavelength, or the mean over the nodes in
+    RGB variants (which pick a node uniformly)."""
+    if mi.is_spectral:
+        return tab.pdf_node(g, tab.nearest_node(si.wavelengths[0]))
+    total = 0.0
+    for j in range(tab.J):
+        total = total + tab.pdf_node(g, j)
+    return total / tab.J
+
+
+def _sample_direction(mi, dr, tab, wi, sample2, si):
+    """ω_o sampled from one wavelength node's lobe: the node nearest the path's first wavelength, or (RGB) a node
+    picked by sample2.x, which is remapped (as the library's SpectralNodes.sample_rgb)."""
+    if mi.is_spectral:
+        return tab.sample_node(wi, sample2, tab.nearest_node(si.wavelengths[0]))
+    x = sample2.x * tab.J
+    j = dr.minimum(dr.floor(x), tab.J - 1.0)
+    u0 = dr.clip(x - j, 0.0, 0.99999994)
+    return tab.sample_node(wi, mi.Point2f(u0, sample2.y), tab.idx(j))
+
+
 def _native_class(mi, fixed_model=None):
     import drjit as dr
 
-    spectral = mi.is_spectral
     polarized = mi.is_polarized
 
     class WaveopticsNativeBSDF(mi.BSDF):
@@ -106,7 +145,7 @@ def _native_class(mi, fixed_model=None):
             if fixed_model is not None and any(k != "id" for k, _ in items):
                 raise WaveopticsError("this BSDF holds a fixed model and takes no parameters; got "
                                       f"{', '.join(k for k, _ in items if k != 'id')}")
-            self.model = fixed_model if fixed_model is not None else _model_from(items)
+            self.model = fixed_model if fixed_model is not None else model_from(items)
             self.parameters = dict(items)
             self.tab = native_tables(self.model, mi)
             if polarized and self.tab.fresnel != "exact":
@@ -119,33 +158,13 @@ def _native_class(mi, fixed_model=None):
             self.m_flags = flags
 
         def _f(self, g, si):
-            """f (not × cos) as a mi.Spectrum."""
-            tab = self.tab
-            if spectral:
-                out = []
-                for i in range(4):
-                    a, b, t = tab.lambda_bracket(si.wavelengths[i])
-                    out.append((1.0 - t) * tab.f_node(g, a) + t * tab.f_node(g, b))
-                return mi.Spectrum(*out)
-            rgb = [0.0, 0.0, 0.0]
-            for j in range(tab.J):
-                fj = tab.f_node(g, j)
-                rgb = [rgb[c] + fj * float(tab.rgb[j, c]) for c in range(3)]
-            if "mono" in mi.variant():   # the luminance of linear sRGB (ITU-R BT.709), as Mitsuba's mono variants
-                return mi.Spectrum(0.212671 * rgb[0] + 0.715160 * rgb[1] + 0.072169 * rgb[2])
-            return mi.Spectrum(*rgb)
+            return _spectrum(mi, self.tab, g, si)
 
         def _mueller(self, ctx, g, si, wo):
             return _mueller(mi, dr, self.tab, ctx, g, si, wo)
 
         def _pdf(self, g, si):
-            tab = self.tab
-            if spectral:
-                return tab.pdf_node(g, tab.nearest_node(si.wavelengths[0]))
-            total = 0.0
-            for j in range(tab.J):
-                total = total + tab.pdf_node(g, j)
-            return total / tab.J
+            return _pdf_value(mi, self.tab, g, si)
 
         @staticmethod
         def _enabled(ctx):
@@ -178,13 +197,7 @@ def _native_class(mi, fixed_model=None):
             if not self._enabled(ctx):
                 return bs, mi.Spectrum(0.0)
             wi = si.wi
-            if spectral:
-                wo = tab.sample_node(wi, sample2, tab.nearest_node(si.wavelengths[0]))
-            else:   # a node picked by sample2.x, which is remapped (library SpectralNodes.sample_rgb)
-                x = sample2.x * tab.J
-                j = dr.minimum(dr.floor(x), tab.J - 1.0)
-                u0 = dr.clip(x - j, 0.0, 0.99999994)
-                wo = tab.sample_node(wi, mi.Point2f(u0, sample2.y), tab._idx(j))
+            wo = _sample_direction(mi, dr, tab, wi, sample2, si)
             up = (wi.z > 0) & (wo.z > 0)
             wo_ok = dr.select(up, wo, mi.Vector3f(0.0, 0.0, 1.0))
             g = tab.geometry(wi, wo_ok)
