@@ -147,8 +147,11 @@ def _G2(lam_i, lam_o, transmission, shadowing):
     return np.where(np.isfinite(g), g, 0.0)
 
 
-def _single(wi, wo, eta, spec, ax, ay, c, shadowing):
-    """Single-scattering (f_r, f_t) in 1/sr (module doc) of flat arrays (n, 3) at a real index η."""
+def _pair_geometry(wi, wo, eta):
+    """(η_i, η_o, η_t, reflection?, transmission?, h, ω_i·h, ω_o·h, valid?) of flat direction pairs (n, 3): the half
+    vector of reflection, or the generalized half vector of refraction (Walter et al. 2007, eq. 16), turned to the
+    +z side; pairs whose half vector puts either direction on the wrong side of its microfacet are not valid (their
+    h is set to +z)."""
     zi, zo = wi[:, 2], wo[:, 2]
     eta_i, eta_o, eta_t = _sides(wi, wo, eta)
     refl = zi * zo > 0
@@ -159,6 +162,13 @@ def _single(wi, wo, eta, spec, ax, ay, c, shadowing):
     ih, oh = dot_last(wi, h), dot_last(wo, h)
     ok = (refl | trans) & (ih * zi > 0) & (oh * zo > 0) & (h[:, 2] > 0)
     h = np.where(ok[:, None], h, np.array([0.0, 0.0, 1.0]))
+    return eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok
+
+
+def _single(wi, wo, eta, spec, ax, ay, c, shadowing):
+    """Single-scattering (f_r, f_t) in 1/sr (module doc) of flat arrays (n, 3) at a real index η."""
+    zi, zo = wi[:, 2], wo[:, 2]
+    eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok = _pair_geometry(wi, wo, eta)
     F = _fresnel.F(np.abs(ih), eta_t / eta_i)
     D = spec.D(h, ax, ay, c)
     G = _G2(_Lambda(spec, wi, ax, ay, c), _Lambda(spec, wo, ax, ay, c), trans, shadowing)
@@ -172,16 +182,8 @@ def _single(wi, wo, eta, spec, ax, ay, c, shadowing):
 
 def _single_pdf(wi, wo, eta, ndf, ax, ay, c):
     """Density (1/sr over ω_o) of :func:`_sample_single`."""
-    zi, zo = wi[:, 2], wo[:, 2]
-    eta_i, eta_o, eta_t = _sides(wi, wo, eta)
-    refl = zi * zo > 0
-    trans = zi * zo < 0
-    hr = (wi + wo) * np.sign(zi)[:, None]
-    hr = hr / np.maximum(np.linalg.norm(hr, axis=-1, keepdims=True), 1e-300)
-    h = np.where(refl[:, None], hr, half_vector_refraction(wi, wo, eta_i, eta_o))
-    ih, oh = dot_last(wi, h), dot_last(wo, h)
-    ok = (refl | trans) & (ih * zi > 0) & (oh * zo > 0) & (h[:, 2] > 0)
-    h = np.where(ok[:, None], h, np.array([0.0, 0.0, 1.0]))
+    zi = wi[:, 2]
+    eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok = _pair_geometry(wi, wo, eta)
     up = np.where(zi[:, None] < 0, -wi, wi)
     pm = pdf_normal(up, h, ndf=ndf, ax=ax, ay=ay, c=c)
     F = _fresnel.F(np.abs(ih), eta_t / eta_i)
