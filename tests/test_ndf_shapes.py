@@ -35,8 +35,8 @@ def sgd_paper(theta, alpha, p):
     return K * np.exp(-(alpha ** 2 + x) / alpha) / (alpha ** 2 + x) ** p / (math.pi * np.cos(theta) ** 4)
 
 
-CASES = [("epd", 0.2, 0.5), ("epd", 0.3, 1.0), ("epd", 0.1, 2.5), ("sgd", 0.05, 0.4), ("sgd", 0.2, 1.0),
-         ("sgd", 0.3, 1.8)]
+#: three shapes of EPD, two of SGD (its evaluation is the slow one: the incomplete gamma), spanning α and p
+CASES = [("epd", 0.2, 0.5), ("epd", 0.3, 1.0), ("epd", 0.1, 2.5), ("sgd", 0.05, 0.4), ("sgd", 0.3, 1.8)]
 PAPER = {"epd": epd_paper, "sgd": sgd_paper}
 
 
