@@ -28,7 +28,7 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q -ra -n $(JOBS)
 
-# the edit loop: everything but the slow tests (marked by hand, or recorded above 0.8 s in tests/durations.json), <= 2 min
+# the edit loop: everything but the slow tests (marked by hand, or recorded above 0.5 s in tests/durations.json), <= 2 min
 test-fast: $(STAMP)
 	$(PY) -m pytest -q -ra -n $(JOBS) -m "not slow"
 

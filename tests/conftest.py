@@ -55,7 +55,7 @@ def _private_cache(tmp_path_factory):
 #: measured wall time of every test (s, setup + call + teardown) on a 2-core machine, written by ``make durations``
 #: (``pytest --store-durations``); a test recorded above SLOW_S is marked ``slow`` and left out of ``make test-fast``
 DURATIONS = Path(__file__).with_name("durations.json")
-SLOW_S = 0.8
+SLOW_S = 0.5
 
 
 def pytest_addoption(parser):
