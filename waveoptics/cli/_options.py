@@ -36,7 +36,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--incident-angles", "incident angles θ in degrees: 0:80:10 or 0,30,60", "DEG", unit="deg"),
     Option("--accuracy", "colour accuracy (ΔE2000) that picks the wavelength step", "DE", float, "ΔE2000"),
     Option("--material", "material: a name (see 'waveoptics materials'), shelf/book/page, a constant index n+kj "
-                         "(1.5, 0.2+3.1j) or f0:VALUE", "M"),
+                         "(1.5, 0.2+3.1j), f0:VALUE, or a thin-film stack SUBSTRATE|FILM:THICKNESS|... (films "
+                         "from the substrate outwards, e.g. 'Al|Al2O3:120nm')", "M"),
     Option("--illuminant", "light: D65, D50, A, F1..F12, E, blackbody:5500K, laser:465,532,638, rgb-laser or a CSV "
                            "file", "SPD"),
     Option("--kd", "diffuse albedo kd in [0, 1]", "KD", float, "1"),
