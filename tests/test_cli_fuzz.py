@@ -213,6 +213,10 @@ def _run(argv, capsys):
 #: hypothesis draws per command (30: the 60 of before spent 5 minutes of the suite on one legal, CPU-heavy compare draw)
 EXAMPLES = 30
 
+#: fewer draws for the commands whose base invocation alone runs a whole scene or sweep (~1 s a draw on 2 cores);
+#: run has 7 drawable options (15 draws of up to four reach each several times), sweep 27 (each about twice)
+HEAVY_EXAMPLES = {"run": 15, "sweep": 15}
+
 
 #: the memory budget every draw runs under: legal but huge requests (``--resolution 1_000``: 1.6 GB) are refused by
 #: the same check that guards a user's machine, instead of running for minutes
@@ -226,7 +230,7 @@ def _budget(monkeypatch):
 
 @pytest.mark.parametrize("command", sorted(BASE))
 def test_any_option_draw_exits_0_or_2_with_one_line_and_finite_numbers(command, capsys):
-    @settings(max_examples=EXAMPLES, derandomize=True, deadline=None, database=None,
+    @settings(max_examples=HEAVY_EXAMPLES.get(command, EXAMPLES), derandomize=True, deadline=None, database=None,
               suppress_health_check=list(HealthCheck))
     @given(invocations(command))
     def check(argv):

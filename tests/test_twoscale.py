@@ -126,14 +126,15 @@ def test_height_field_coherent_fraction_is_what_its_grating_orders_leave():
     Kirchhoff efficiency η_m = |s|⁴ / (4 cosθ_i cosθ_m (cosθ_i + cosθ_m)²) · J_m²(k a (cosθ_i + cosθ_m))
     (Jacobi-Anger expansion of exp(i v_z h); Beckmann & Spizzichino 1963, ch. 4), and the coherent fraction is
     what they leave, A = 1 − Σ η_m (issue 13: no light is withheld by evanescent orders). Written here from the
-    formula, independently of the solvers; measured agreement 2e-6. J0²(2ka cosθ), the value that ignores the
-    obliquity of the orders, would be 0.861 at 650 nm and cos θ = 0.7, 3.7 % below."""
+    formula, independently of the solvers; measured agreement 2.6e-6 on 1024² samples (λ/8 at 500 nm; the same
+    to 1e-8 on 2048²). J0²(2ka cosθ), the value that ignores the obliquity of the orders, would be 0.861 at 650 nm
+    and cos θ = 0.7, 3.7 % below."""
     from scipy import special
 
     from waveoptics import surfaces
 
     a, period = 40e-9, 2e-6
-    hf = surfaces.sinusoid(amplitude=a, period=period, size=64e-6, samples=4096)
+    hf = surfaces.sinusoid(amplitude=a, period=period, size=64e-6, samples=1024)
     nano = twoscale.Nano(surface=hf)
     for lam, c in ((500.0, 1.0), (650.0, 0.7)):
         k = 2 * np.pi / (lam * 1e-9)
