@@ -119,8 +119,8 @@ class Nano:
         diffracted lobe |U − χ̂ U_flat|² (the lobe :func:`waveoptics.brdf.kirchhoff_scattered_lobe` gives, same samples, window and
         diffraction model) on a direction grid of λ/(3L) cells, finer than the patch's spectrum varies, so
         nothing between the two halves is lost: roughness in evanescent frequencies neither scatters nor reduces
-        the specular light (before, A = |χ̂|² took the whole variance and the albedo of heavy-tailed patches fell
-        up to 12 % short of F; tests/test_twoscale.py). One or two incidences asked at once (the macro incidence)
+        the specular light (A = |χ̂|² would take the whole variance, and the albedo of heavy-tailed patches would
+        fall up to 12 % short of F; tests/test_twoscale.py). One or two incidences asked at once (the macro incidence)
         are evaluated exactly at the azimuth *azimuth_deg* (degrees); a spread of facet incidences is interpolated
         by monotone cubics in a table over :data:`waveoptics.brdf.FIELD_THETAS_DEG` per wavelength, taken at azimuth 0 (the facets
         of a micro lobe face every azimuth; for an anisotropic field this is the share of light scattered in the
