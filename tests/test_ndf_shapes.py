@@ -72,10 +72,17 @@ def test_smith_identity_projected_area(ndf, alpha, p):
         wo = _dir(theta_o)
         lam = float(brdf.Lambda(wo, alpha, ndf=ndf, ndf_shape=p))
 
-        def integrand(phi, th):
-            m = _dir(np.degrees(th), np.degrees(phi))
-            return max(float(m @ wo), 0.0) * PAPER[ndf](th, alpha, p) * math.sin(th)
-        val = integrate.dblquad(integrand, 0, math.pi / 2, 0, 2 * math.pi, epsabs=1e-10, epsrel=1e-8)[0]
+        def azimuthal(th):
+            """∫₀^{2π} ⟨m·ω_o⟩ dφ in closed form: m·ω_o = a cos φ + b with a = sinθ sinθ_o, b = cosθ cosθ_o,
+            positive for |φ| < φ₀ = arccos(−b/a) (all φ when b ≥ a)."""
+            a, b = math.sin(th) * wo[0], math.cos(th) * wo[2]
+            if b >= a:
+                return 2 * math.pi * b
+            phi0 = math.acos(-b / a)
+            return 2 * (b * phi0 + a * math.sin(phi0))
+        kink = math.pi / 2 - math.radians(theta_o)   # where the facets start to turn away from ω_o
+        val = integrate.quad(lambda th: azimuthal(th) * PAPER[ndf](th, alpha, p) * math.sin(th), 0, math.pi / 2,
+                             epsabs=1e-12, epsrel=1e-10, limit=400, points=[0.01, 0.05, 0.2, kink])[0]
         assert val / (1 + lam) == pytest.approx(math.cos(math.radians(theta_o)), rel=2e-5), theta_o
 
 
