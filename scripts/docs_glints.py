@@ -1,6 +1,7 @@
 """Data of docs/glints.md (docs/data/glints.json; prose in docs/templates/glints.md) and the figures
 docs/img/glints_footprints.png, glints_brushed.png, glints_flakes.png: per-pixel footprint BRDFs and what they
-cost, and glint renders at real scale — every number measured in this run (GLINTS_DOC_SIZE sets the brushed sphere's size, default 128)."""
+cost, and glint renders at real scale — every number measured in this run (GLINTS_DOC_SIZE sets the brushed
+sphere's size, default 128)."""
 from __future__ import annotations
 
 import os
