@@ -1,5 +1,7 @@
-"""Write docs/planning.md: scene files, the planner's thresholds and, for every example scene, its plan and the
-measured time beside the estimate — every number produced by the code."""
+"""Data of docs/planning.md (docs/data/planning.json; prose in docs/templates/planning.md): the scene-file schema and
+the decision rules (from the docstrings of waveoptics.planning.scene and .planner, single source), the planner's
+thresholds, the cost model on this machine and, for every example scene, its plan and the measured time beside the
+estimate — every number produced by the code (a few minutes: it plans and runs every example scene)."""
 from __future__ import annotations
 
 import re
@@ -13,30 +15,14 @@ import numpy as np
 from waveoptics import colour
 from waveoptics import planning
 from waveoptics.planning import scene
-from waveoptics.io.files import atomic_path
 
 ROOT = Path(__file__).resolve().parent.parent
-DOC = ROOT / "docs" / "planning.md"
 SCENES = ROOT / "examples" / "scenes"
 
-#: constant name -> (decision it drives, meaning); values are read from waveoptics.planning
-THRESHOLDS = {
-    "ESTIMATE_RESOLUTION": ("diffraction", "cells per side of the coarse grid of the colour estimate"),
-    "ESTIMATE_STEP_NM": ("diffraction", "wavelength step (nm) of the colour estimate (line sources: their lines)"),
-    "ESTIMATE_SPHERE_THETAS": ("diffraction", "extra incidence angles (deg) probed for a sphere camera"),
-    "ESTIMATE_SHARE": ("diffraction", "diffraction runs when the estimated ΔE2000 exceeds this share of the target"),
-    "FLAT_SCATTER": ("diffraction", "scattered fraction 1 − A below which the nano surface counts as flat"),
-    "PSD_G_MAX": ("diffraction, solver", "largest g = (4πσ cosθ/λ)² of the PSD series; beyond it nothing stays "
-                                         "coherent and a height field is generated"),
-    "DE_PER_RELATIVE_Y": ("resolution", "ΔE2000 per unit relative luminance change at L* = 50 (CIE L* slope)"),
-    "RESOLUTION_RANGE": ("resolution", "smallest and largest direction grid (cells per side)"),
-    "PATCH_SIGMAS": ("directions", "half-width of a view patch in lobe standard deviations"),
-    "LAMBDA_REF_NM": ("wavelengths", "wavelength (nm) of the single evaluation of a λ-independent BRDF"),
-    "F_FLAT_TOL": ("wavelengths", "relative spread of F over the spectrum below which F counts as constant"),
-    "ORDER_EFFICIENCY_MIN": ("wavelengths", "grating orders weaker than this are ignored for the wavelength step"),
-    "LSTAR_SLOPE_BLACK": ("precision", "CIE L* = 903.3 Y near black: the luminance of a just-visible haze"),
-    "FLOOR_MARGIN": ("precision", "float32 is kept while its noise floor is below this share of that haze"),
-}
+#: the planner's thresholds in the order of the page's table (their meaning is in the template)
+THRESHOLDS = ("ESTIMATE_RESOLUTION", "ESTIMATE_STEP_NM", "ESTIMATE_SPHERE_THETAS", "ESTIMATE_SHARE", "FLAT_SCATTER",
+              "PSD_G_MAX", "DE_PER_RELATIVE_Y", "RESOLUTION_RANGE", "PATCH_SIGMAS", "LAMBDA_REF_NM", "F_FLAT_TOL",
+              "ORDER_EFFICIENCY_MIN", "LSTAR_SLOPE_BLACK", "FLOOR_MARGIN")
 
 
 def _schema() -> str:
@@ -47,50 +33,41 @@ def _schema() -> str:
     return "\n".join(line[4:] if line.startswith("    ") else line for line in lines).strip("\n")
 
 
-def _md_escape(s) -> str:
-    return str(s).replace("|", "\\|")
-
-
-def _plan_table(e) -> list[str]:
-    out = ["| decision | value | reason |", "|---|---|---|"]
-    for d, v, r in e.decisions:
-        out.append(f"| {d} | {_md_escape(v)} | {_md_escape(r)} |")
+def decisions_doc() -> list:
+    """The decision rules, one {name, text} per ````name```` block of waveoptics.planning.planner's docstring (up to
+    "Costs come from", which the template says itself), with Sphinx roles written as Markdown code."""
+    doc = planning.planner.__doc__.split("For every (material, light) pair of a :class:`waveoptics.planning.scene."
+                                         "Scene` the planner takes, in order:", 1)[1].split("References", 1)[0]
+    blocks = re.split(r"\n``(\w+)``\n", doc)      # split before the roles are rewritten: the names are ``name``
+    out = []
+    for name, body in zip(blocks[1::2], blocks[2::2]):
+        body = re.sub(r":(?:data|func|mod|class|meth):`~?([^`]+)`", r"`\1`", body)
+        body = re.sub(r"``([^`]+)``", r"`\1`", body)
+        para = " ".join(line.strip() for line in body.strip().split("\n"))
+        cut = para.find("Costs come from")
+        out.append({"name": name, "text": para[:cut].strip() if cut >= 0 else para})
     return out
 
 
 def _run(sc, outdir, **force):
-    plan = planning.plan_scene(sc, force=force)
-    data = planning.execute(plan, outdir, overwrite=True)
     import json
 
+    plan = planning.plan_scene(sc, force=force)
+    data = planning.execute(plan, outdir, overwrite=True)
     res = json.loads((Path(outdir) / "results.json").read_text())
     return plan, data, res
 
 
-def main() -> None:
-    tmp = Path(tempfile.mkdtemp(prefix="wo-docs-planning-"))
-    try:
-        text = build(tmp)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    with atomic_path(DOC) as p:
-        p.write_text(text)
-    print(f"wrote {DOC.relative_to(ROOT)}")
-
-
-def _plan_times() -> list[str]:
+def plan_times() -> list:
     """Wall time of `waveoptics plan` on each example scene, measured as a user meets it: with an empty cache
     (the first plan on a machine: calibration and imports), a new scene on a calibrated machine, and the same
     scene again."""
     import os
     import subprocess
     import sys
-    import tempfile
 
-    rows = ["### How long `plan` takes (this machine)", "",
-            "| scene | first plan on the machine (calibrates) | new scene, calibrated machine | same scene again |",
-            "|---|---|---|---|"]
-    for path in sorted((ROOT / "examples" / "scenes").glob("*.toml")):
+    rows = []
+    for path in sorted(SCENES.glob("*.toml")):
         times = []
         with tempfile.TemporaryDirectory() as cache:
             env = dict(os.environ, WAVEOPTICS_CACHE_DIR=cache)
@@ -102,118 +79,59 @@ def _plan_times() -> list[str]:
                 subprocess.run([sys.executable, "-m", "waveoptics", "plan", str(path)], env=env, check=True,
                                capture_output=True)
                 times.append(time.perf_counter() - t)
-        rows.append(f"| {path.stem} | {times[0]:.1f} s | {times[1]:.1f} s | {times[2]:.2f} s |")
+        rows.append({"scene": path.stem, "first_s": times[0], "new_s": times[1], "again_s": times[2]})
     return rows
 
 
-def build(tmp: Path) -> str:
-    t_start = time.perf_counter()
+def cost_model() -> dict:
+    """The calibration: its time, seconds per unit (in the cost model's order) and the OpenCL direct-sum term."""
     cm = planning.calibration()
-    L = ["# Planning: simulate only the effects a scene calls for", "",
-         "*Generated by `scripts/docs_planning.py` — do not edit by hand.*", "",
-         "Wave-optics simulation is expensive and most of a scene does not need it. A scene file says what the user "
-         "wants to see; `waveoptics plan SCENE` decides, from physics, which effects matter for each material under "
-         "each light and prints the reason for every decision with an estimated time; `waveoptics run SCENE -o "
-         "OUTDIR` simulates only those and writes the outputs asked for, `results.json` (colours at the view "
-         "directions, albedos) and `plan.json` (the plan with the measured time beside the estimate). "
-         "`--force diffraction`, `--force diffraction=off`, `--force diffuse=off`, `--force solver=fft`, "
-         "`--force precision=float64`, `--force directions=hemisphere` override a decision; `--json` prints the "
-         "plan as `{\"materials\": [{\"name\", \"light\", \"effects\": {\"diffraction\", \"diffuse\", \"spectral\", "
-         "...}, \"solver\", \"wavelengths_nm\", \"precision\", \"estimated_time_s\", \"reasons\": [...]}]}`.", "",
-         "## Scene files", "",
-         "TOML (read with the standard library's `tomllib`), validated by `waveoptics.planning.scene.load`: an unknown key, a "
-         "missing table or a bad value stops with one line naming the key and what is allowed, e.g. "
-         "`scene.toml: materials[0].roughnes is not a known key (did you mean 'roughness'?); allowed: ...`. "
-         "Worked examples are in `examples/scenes/`.", "", "```toml", _schema(), "```", "",
-         "## Decisions", "",
-         "For every (material, light) pair, in this order:", ""]
-    # the decision rules: the planning module's own description (single source)
-    doc = planning.planner.__doc__.split("For every (material, light) pair of a :class:`waveoptics.planning.scene.Scene` the planner "
-                                 "takes, in order:", 1)[1].split("References", 1)[0]
-    doc = re.sub(r":(?:data|func|mod|class):`~?([^`]+)`", r"`\1`", doc)
-    doc = re.sub(r"``([^`]+)``", r"`\1`", doc)
-    blocks = re.split(r"\n``(\w+)``\n", doc)
-    for name, body in zip(blocks[1::2], blocks[2::2]):
-        para = " ".join(line.strip() for line in body.strip().split("\n"))
-        cut = para.find("Costs come from")
-        L += [f"* **{name}** — {para[:cut].strip() if cut >= 0 else para}", ""]
-    L += ["Costs come from a calibration timed once per machine and kept in the per-user cache "
-          "(`planning.calibration`; `$WAVEOPTICS_CACHE_DIR`, else `~/.cache/waveoptics`, keyed by CPU, worker "
-          "threads and versions; `waveoptics plan --recalibrate` times it again): tiny runs of each code path give "
-          "the seconds per evaluation call, per direction cell, per cell and wavelength, per PSD series term, per "
-          "chirp-z work unit and (OpenCL) per direct-sum term; the estimate multiplies them by the work the plan "
-          "implies. A plan is kept in the same cache, keyed by the scene's bytes, the bytes of every file it names "
-          "and the options, so planning an unchanged scene again answers at once. The band-limited series' tables "
-          "of a PSD are counted once per wavelength for an entry, not once per evaluation, and timed on the "
-          "scene's own PSD at its shortest wavelength (their cost follows the PSD's length scale and σ: 0.17 s "
-          "for the haze scene's, 0.34 s for the calibration's ABC); a height field's coherent fraction likewise "
-          "by one of its lobes, times the lobes `evaluate` computes for it. The same model "
-          "estimates plain `simulate`, `compare` and `scatter` requests before they start "
-          "(`planning.simulation_time`, `planning.scatter_time`): beyond "
-          f"{planning.LONG_REQUEST_S:g} s they warn with the estimate and what to reduce.", "",
-          *_plan_times(), "",
-          "### Thresholds", "", "| constant | value | decision | meaning |", "|---|---|---|---|"]
-    for name, (dec, meaning) in THRESHOLDS.items():
-        v = getattr(planning, name)
-        vs = f"{v:.4g}" if isinstance(v, float) else str(v)
-        L.append(f"| `{name}` | {vs} | {dec} | {meaning} |")
-    L += ["", "### Cost model on this machine", "",
-          f"Calibrated in {cm.calibration_s:.2f} s:", "", "| unit | seconds |", "|---|---|"]
-    for k, v in cm.as_dict().items():
-        if k != "calibration_s":
-            L.append(f"| {k} | {v:.3g} |")
     direct, why = planning.direct_calibration()
-    L.append(f"| direct_term (OpenCL, per sample x direction x wavelength) | "
-             f"{f'{direct:.3g}' if direct is not None else 'unavailable: ' + why} |")
+    return {"calibration_s": cm.calibration_s, "direct_term": direct, "direct_why": why,
+            "units": [[k, v] for k, v in cm.as_dict().items() if k != "calibration_s"]}
 
-    # --- example scenes -------------------------------------------------------------------------------------------
-    L += ["", "## The example scenes", "",
-          "Each scene planned and run here as `waveoptics plan` / `waveoptics run` would (planned resolution, all "
-          "outputs written); times are this machine's.", ""]
-    summary = ["| scene | material | diffraction | diffuse | solver | wavelengths | directions | grid | "
-               "estimated | measured | planning |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+
+def _entry(e, m) -> dict:
+    return {"name": e.name, "material": e.material.name, "category": e.material.category, "light": e.light_name,
+            "spd": e.spd.name, "estimated_s": m["estimated_time_s"], "measured_s": m["measured_time_s"],
+            "outputs_s": m["outputs_time_s"], "files": list(m["files"]),
+            "decisions": [[d, str(v), str(r)] for d, v, r in e.decisions],
+            "diffraction": bool(e.effects["diffraction"]), "diffuse": bool(e.effects["diffuse"]), "solver": e.solver, "wavelengths": int(e.wavelengths_nm.size),
+            "directions": e.directions, "resolution": e.resolution}
+
+
+def example_scenes(tmp: Path) -> list:
+    """Every example scene planned and run: its plan entries with estimated and measured times."""
+    out = []
     for path in sorted(SCENES.glob("*.toml")):
         sc = scene.load(path)
         plan, data, _ = _run(sc, tmp / path.stem)
-        L += [f"### {sc.name} (`examples/scenes/{path.name}`)", "", sc.description + ".", ""]
-        for e, m in zip(plan.entries, data["materials"]):
-            L += [f"**{e.name}** ({e.material.name}, {e.material.category}) under **{e.light_name}** "
-                  f"({e.spd.name}): estimated {m['estimated_time_s']:.3g} s, measured {m['measured_time_s']:.3g} s "
-                  f"(+ {m['outputs_time_s']:.2g} s writing); files: " + ", ".join(f"`{f}`" for f in m["files"]), ""]
-            L += _plan_table(e) + [""]
-            nw = "none (1 evaluation)" if e.wavelengths_nm.size == 0 else str(e.wavelengths_nm.size)
-            summary.append(f"| {sc.name} | {e.name} | {'on' if e.effects['diffraction'] else 'off'} | "
-                           f"{'on' if e.effects['diffuse'] else 'off'} | {e.solver} | {nw} | {e.directions} | "
-                           f"{e.resolution} | {m['estimated_time_s']:.3g} s | {m['measured_time_s']:.3g} s | "
-                           f"{plan.planning_time_s:.2f} s |")
-    at = L.index("## The example scenes") + 4
-    L[at:at] = summary + [""]
+        out.append({"name": sc.name, "file": path.name, "description": sc.description,
+                    "planning_s": plan.planning_time_s,
+                    "entries": [_entry(e, m) for e, m in zip(plan.entries, data["materials"])]})
+    return out
 
-    # --- what skipping costs and saves ------------------------------------------------------------------------------
-    L += ["## What skipping diffraction saves, and what it costs", ""]
+
+def skipping(tmp: Path) -> dict:
+    """Smooth plastic as planned (no diffraction) against diffraction forced on: time and colour differences."""
     sc = scene.load(SCENES / "smooth-plastic.toml")
     p0, d0, r0 = _run(sc, tmp / "plastic-planned")
     p1, d1, r1 = _run(sc, tmp / "plastic-forced", diffraction=True)
     v0 = np.array([v["rgb"] for v in r0["materials"][0]["views"]])
     v1 = np.array([v["rgb"] for v in r1["materials"][0]["views"]])
-    dE_views = colour.delta_e2000(v0, v1)
     a0 = np.array(r0["materials"][0]["albedo"]["i30_0"]["rgb"])
     a1 = np.array(r1["materials"][0]["albedo"]["i30_0"]["rgb"])
     t0, t1 = d0["measured_time_s"], d1["measured_time_s"]
-    e1 = p1.entries[0]
-    L += [f"Smooth plastic (`smooth-plastic.toml`, grid {p0.entries[0].resolution}², sphere camera): the plan "
-          f"skips diffraction and evaluates the λ-independent BRDF once; forcing diffraction on "
-          f"(`--force diffraction`) runs the PSD series at {e1.wavelengths_nm.size} wavelengths.", "",
-          "| | planned | diffraction forced on |", "|---|---|---|",
-          f"| simulation time (measured) | {t0:.3g} s | {t1:.3g} s |",
-          f"| estimated | {d0['materials'][0]['estimated_time_s']:.3g} s | "
-          f"{d1['materials'][0]['estimated_time_s']:.3g} s |",
-          f"| speed-up | {t1 / t0:.0f}x | |",
-          f"| largest ΔE2000 at the view directions | {float(np.max(dE_views)):.2g} | (reference) |",
-          f"| ΔE2000 of the albedo colour | {float(colour.delta_e2000(a0, a1)):.2g} | (reference) |",
-          f"| sphere: ΔE2000 two-scale vs microfacet (max) | 0 | "
-          f"{r1['materials'][0]['sphere']['delta_e2000_vs_microfacet']['max']:.2g} |", "",
-          f"Both stay far inside the target ΔE2000 ≤ {sc.delta_e:g}: the skipped diffraction was invisible.", ""]
+    return {"resolution": p0.entries[0].resolution, "forced_wavelengths": int(p1.entries[0].wavelengths_nm.size),
+            "measured_s": [t0, t1], "speedup": t1 / t0,
+            "estimated_s": [d0["materials"][0]["estimated_time_s"], d1["materials"][0]["estimated_time_s"]],
+            "views_dE_max": float(np.max(colour.delta_e2000(v0, v1))),
+            "albedo_dE": float(colour.delta_e2000(a0, a1)),
+            "sphere_dE_max": r1["materials"][0]["sphere"]["delta_e2000_vs_microfacet"]["max"], "target": sc.delta_e}
+
+
+def haze(tmp: Path) -> dict:
+    """Polished aluminium: the planner's estimate, and the colour change at three views when diffraction is off."""
     sc = scene.load(SCENES / "polished-aluminium-haze.toml")
     views = [[25, 180], [40, 180], [0, 0]]
     probe = scene.parse({"name": "haze-views",
@@ -226,37 +144,31 @@ def build(tmp: Path) -> str:
     q1, _, s1 = _run(probe, tmp / "haze-off", diffraction=False)
     h0 = np.array([v["rgb"] for v in s0["materials"][0]["views"]])
     h1 = np.array([v["rgb"] for v in s1["materials"][0]["views"]])
-    dE_h = colour.delta_e2000(h0, h1)
-    L += [f"The opposite case, polished aluminium (α = {sc.materials[0].roughness:g}, nano "
-          f"{sc.materials[0].nano.text}): the planner estimates ΔE2000 "
-          f"{q0.entries[0].metrics['estimated_delta_e']:.3g} and keeps diffraction; forcing it off "
-          "(`--force diffraction=off`) changes the colour seen from " +
-          ", ".join(f"θ = {t:g}° (ΔE2000 {x:.3g})" for (t, _), x in zip(views, dE_h)) +
-          " under light from θ = 30°: the haze around the highlight is gone.",
-          ""]
+    return {"alpha": sc.materials[0].roughness, "nano": sc.materials[0].nano.text,
+            "estimated_dE": q0.entries[0].metrics["estimated_delta_e"],
+            "views": [{"theta_deg": t, "dE": float(x)} for (t, _), x in zip(views, colour.delta_e2000(h0, h1))]}
 
-    L += ["## Where the planner can be wrong", "",
-          "* The colour estimate runs on a 32² grid at 40 nm: features narrower than a cell (a sharp highlight, "
-          "grating orders) are seen as cell averages. Height fields without known statistics are estimated through "
-          "a Gaussian proxy with their rms height and correlation length, which puts a grating's energy into a "
-          "smooth lobe instead of orders: right in amount, wrong in place.",
-          "* The resolution rule assumes Gaussian-like lobes; GGX tails are wider (safe), and lobes narrower than the "
-          "largest grid are kept as energy-exact spikes, not resolved.",
-          "* λ-independence is decided on F alone: it holds for pure geometric optics (no diffraction) with a "
-          "constant index or grey F0 and a constant diffuse albedo, and is refused otherwise.",
-          "* View patches are normalized on the whole grid, but the two-scale coherent-loss cap (which acts only "
-          "near grazing incidence) needs the whole lobe and is not applied on a patch.",
-          "* The float32 criterion bounds round-off noise of the direct sum against the faintest visible haze; "
-          "it does not cover systematic errors of the Kirchhoff model itself.",
-          "* Timings are this machine's; the calibration is timed once per machine (and after an upgrade), so "
-          "estimates do not follow a machine's later load; `--recalibrate` re-times it. A calibration timed while "
-          "the machine was busy inflates every later estimate: one kept here from a test run put the haze scene at "
-          "18 s for a 4.8 s run until it was re-timed. A calibration timed while the load average exceeds the "
-          "CPU count is therefore used by its process only and not kept (`planning.machine_busy`).",
-          "* The first plan of a scene in a process imports the numerical libraries (colour-science alone imports "
-          "matplotlib and takes about 2 s here), which keeps it above 1 s; only a cached plan answers below it.", "",
-          f"*Page generated in {time.perf_counter() - t_start:.0f} s.*", ""]
-    return "\n".join(L)
+
+def compute() -> dict:
+    """Every number and code-derived text of docs/planning.md."""
+    t_start = time.perf_counter()
+    out = {"schema": _schema(), "decisions": decisions_doc(), "long_request_s": planning.LONG_REQUEST_S,
+           "plan_times": plan_times(), "cost_model": cost_model(),
+           "thresholds": {name: getattr(planning, name) if isinstance(getattr(planning, name), (int, float))
+                          else str(getattr(planning, name)) for name in THRESHOLDS}}
+    tmp = Path(tempfile.mkdtemp(prefix="wo-docs-planning-"))
+    try:
+        out.update(scenes=example_scenes(tmp), skipping=skipping(tmp), haze=haze(tmp))
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    out["seconds"] = time.perf_counter() - t_start
+    return out
+
+
+def main() -> None:
+    import make_docs
+
+    make_docs.main(["planning"])
 
 
 if __name__ == "__main__":

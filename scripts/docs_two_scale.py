@@ -1,7 +1,9 @@
-"""Write docs/two-scale.md: the model, its limits (measured), and figures made by running the main job."""
+"""Data of docs/two-scale.md (docs/data/two_scale.json; prose in docs/templates/two_scale.md): the model's limits
+(measured), and figures made by running the main job."""
 from __future__ import annotations
 
 import shutil
+import sys
 import tempfile
 import time
 import warnings
@@ -19,19 +21,21 @@ from waveoptics import colour
 from waveoptics.renderers import sphere as render
 
 ROOT = Path(__file__).resolve().parent.parent
-DOC = ROOT / "docs" / "two-scale.md"
 IMG = ROOT / "docs" / "img"
+sys.path.insert(0, str(ROOT / "scripts"))
 
 
-def limits_table() -> str:
+def limits_table() -> dict:
+    """σ_nano = 0 against the microfacet model, α_micro = 0 against the pure nano lobe, and the largest albedo
+    excess over F on 20 random configurations."""
     grid = DirectionGrid.hemisphere(96)
     w = np.array([400.0, 550.0, 700.0])
     wi = direction_from_angles(30.0, 0.0)
     model = surfaces.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)
-    rows = ["| check | measured | tolerance in tests |", "|---|---|---|"]
+    out = {}
     zero = twoscale.Nano(model=surfaces.PSDModel("abc", sigma=0.0, B=2e-6, C=2.6))
     L = twoscale.evaluate(wi, w, "Au", twoscale.Micro(alpha=0.2), zero, grid)
-    rows.append(f"| σ_nano = 0: max abs(two-scale − microfacet) | {np.abs(L.total - L.microfacet).max():.1e} | exact |")
+    out["sigma0_max_abs"] = float(np.abs(L.total - L.microfacet).max())
     mat = materials.get_material("Al")
     L = twoscale.evaluate(wi, w, mat, twoscale.Micro(alpha=0.0), twoscale.Nano(model=model), grid)
     wo = grid.directions()
@@ -42,7 +46,7 @@ def limits_table() -> str:
     err = max(np.abs(L.diffraction[i] - np.where(grid.inside, scatter.scattered_lobe(wi, wo, lam, model,
                                                                                F=mat.F(cos_d, lam)), 0) * rho).max()
               / L.diffraction[i].max() for i, lam in enumerate(w))
-    rows.append(f"| α_micro = 0: max rel. difference to the pure nano lobe | {err:.1e} | 1e-9 |")
+    out["alpha0_max_rel"] = float(err)
     worst = -1.0
     rng = np.random.default_rng(0)
     for _ in range(20):
@@ -53,11 +57,11 @@ def limits_table() -> str:
         L = twoscale.evaluate(wi2, w, name, twoscale.Micro(alpha=rng.choice([0.0, 0.05, 0.2, 0.5])),
                               twoscale.Nano(model=m), grid)
         worst = max(worst, float(np.max(L.albedo() - materials.get_material(name).F(wi2[2], w))))
-    rows.append(f"| max (albedo − F(θi)) over 20 random configurations | {worst:+.4f} | ≤ +0.01 |")
-    return "\n".join(rows)
+    out["albedo_excess_max"] = worst
+    return out
 
 
-def guard_table():
+def guard_table() -> dict:
     """The coherent-loss guard's factor against incidence and micro roughness, on one height field and one PSD."""
     mat = materials.get_material("1+6j")
     grid = DirectionGrid.hemisphere(96)
@@ -66,29 +70,26 @@ def guard_table():
              ("PSD, ABC σ = 40 nm, B = 3.7 µm, C = 2.2",
               twoscale.Nano(model=surfaces.PSDModel("abc", sigma=40e-9, B=3.7e-6, C=2.2))))
     thetas = (0.0, 40.0, 70.0, 80.0, 85.0)
-    rows = ["  | nano roughness | micro α | " + " | ".join(f"θ_i = {t:g}°" for t in thetas) + " |",
-            "  |---|---|" + "---|" * len(thetas)]
+    rows = []
     for label, nano in cases:
         for alpha in (0.0, 0.3):
             vals = []
             for t in thetas:
                 L = twoscale.evaluate(direction_from_angles(t, 0.0), [550.0], mat, twoscale.Micro(alpha=alpha), nano,
                                       grid, kd=0)
-                vals.append(f"{L.info['diffraction_energy_scale'][0]:.3f}")
-            rows.append(f"  | {label} | {alpha:g} | " + " | ".join(vals) + " |")
-    return "\n".join(rows)
+                vals.append(L.info["diffraction_energy_scale"][0])
+            rows.append({"nano": label, "alpha": alpha, "factors": vals})
+    return {"thetas": thetas, "rows": rows}
 
 
-def band_table():
+def band_table() -> list:
     """Per surface and λ at θ_i = 30°: σ, σ_rel, the share of σ² beyond the band, the light the full-σ exp(−g) would
     withhold from both halves, the share of the reflected light the band-limited lobe scatters (E), the share of it
     the multiple-order terms returned to the band, and the two-scale albedo over F (micro α = 0)."""
     cases = (("Al default", "Al", surfaces.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)),
              ("Au, heavy tail", "Au", surfaces.PSDModel("abc", sigma=39e-9, B=3.7e-6, C=2.34)),
              ("Au, Gaussian", "Au", surfaces.PSDModel("gaussian", sigma=10e-9, T=1e-6)))
-    rows = ["| surface | λ (nm) | σ (nm) | σ_rel (nm) | σ² beyond the band | full-σ exp(−g) would withhold | E | "
-            "returned to the band | albedo / F |",
-            "|---|---|---|---|---|---|---|---|---|"]
+    rows = []
     s, c = 0.5, np.sqrt(0.75)
     grid = DirectionGrid.hemisphere(128)
     wi = direction_from_angles(30.0, 0.0)
@@ -101,11 +102,11 @@ def band_table():
             lost = F * (np.exp(-k2 * rel) - np.exp(-k2 * m.sigma ** 2))
             bs = scatter.band_series(m, lam)
             L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0), twoscale.Nano(model=m), grid, kd=0)
-            rows.append(f"| {name} {m.kind} σ={m.sigma * 1e9:g} nm | {lam:g} | {m.sigma * 1e9:.3g} | "
-                        f"{np.sqrt(rel) * 1e9:.3g} | {scatter.beyond_band_fraction(m.sigma ** 2, rel):.3f} | "
-                        f"{lost:.4f} | {float(bs.scattered_albedo(30.0, material=mat)):.4f} | "
-                        f"{bs.redistributed_share(s, 2 * c):.4f} | {L.albedo()[0] / F:.5f} |")
-    return "\n".join(rows)
+            rows.append({"surface": name, "kind": m.kind, "sigma_nm": m.sigma * 1e9, "wavelength_nm": lam,
+                         "sigma_rel_nm": np.sqrt(rel) * 1e9, "beyond": scatter.beyond_band_fraction(m.sigma ** 2, rel),
+                         "withheld": lost, "E": float(bs.scattered_albedo(30.0, material=mat)),
+                         "returned": bs.redistributed_share(s, 2 * c), "albedo_over_F": L.albedo()[0] / F})
+    return rows
 
 
 #: the nano height fields of the energy tables: 128² samples over 17.6 µm, σ = 40 nm (λ/10 at 400 nm)
@@ -115,15 +116,13 @@ FIELDS = (("Gaussian T = 1.5 µm", lambda: surfaces.gaussian(40e-9, 1.5e-6, 128 
           ("ABC B = 3.7 µm, C = 4", lambda: surfaces.abc(3.7e-6, 4.0, 128 * 137.5e-9, 128, 0, sigma=40e-9)))
 
 
-def field_table():
+def field_table() -> list:
     """Per height field and λ at θ_i = 30°, micro α = 0: σ² beyond the band, the share 1 − |χ̂|² the whole variance
     would take from the specular light, E_field (what the lobe scatters), and the albedo over F."""
     mat = materials.get_material("1+6j")
     grid = DirectionGrid.hemisphere(128)
     wi = direction_from_angles(30.0, 0.0)
-    rows = ["| height field (σ = 40 nm, 128², 17.6 µm) | λ (nm) | σ² beyond the band | 1 − abs(χ̂)² | E_field | "
-            "albedo / F | with 1 − abs(χ̂)² it was |",
-            "|---|---|---|---|---|---|---|"]
+    rows = []
     for name, make in FIELDS:
         hf = make()
         smp = scatter.samples(hf)
@@ -138,12 +137,12 @@ def field_table():
                 L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0), nano, grid, kd=0)
             F = float(mat.F(wi[2], lam))
             old = (L.albedo("diffraction")[0] + F * chi2) / F
-            rows.append(f"| {name} | {lam:g} | {scatter.beyond_band_fraction(var, rel):.3f} | {1 - chi2:.4f} | "
-                        f"{E:.4f} | {L.albedo()[0] / F:.5f} | {old:.4f} |")
-    return "\n".join(rows)
+            rows.append({"field": name, "wavelength_nm": lam, "beyond": scatter.beyond_band_fraction(var, rel),
+                         "incoherent_chi": 1 - chi2, "E": E, "albedo_over_F": L.albedo()[0] / F, "before": old})
+    return rows
 
 
-def horizon_table():
+def horizon_table() -> list:
     """Two-scale albedo against the microfacet albedo with micro roughness, and the light the facets' lobes lose to
     masking on the way out and below the horizon (θ_i = 0° and 40°, 450 nm, Beckmann micro NDF)."""
     mat = materials.get_material("1+6j")
@@ -153,8 +152,7 @@ def horizon_table():
              ("PSD Gaussian σ = 20 nm, T = 1.5 µm",
               lambda: twoscale.Nano(model=surfaces.PSDModel("gaussian", sigma=20e-9, T=1.5e-6)))]
     cases += [(f"field {name}", lambda make=make: twoscale.Nano(surface=make())) for name, make in FIELDS[::2]]
-    rows = ["| nano roughness | micro α | θ_i | two-scale / microfacet − 1 | beyond the horizon / microfacet |",
-            "|---|---|---|---|---|"]
+    rows = []
     for name, make in cases:
         nano = make()
         for alpha in (0.1, 0.3):
@@ -164,12 +162,13 @@ def horizon_table():
                     L = twoscale.evaluate(direction_from_angles(theta, 0.0), [450.0], mat,
                                           twoscale.Micro(alpha=alpha, ndf="beckmann"), nano, grid, kd=0)
                 mf = L.albedo("microfacet")[0]
-                rows.append(f"| {name} | {alpha:g} | {theta:g}° | {L.albedo()[0] / mf - 1:+.4f} | "
-                            f"{L.info['diffraction_beyond_horizon'][0] / mf:.4f} |")
-    return "\n".join(rows)
+                rows.append({"nano": name, "alpha": alpha, "theta_deg": theta, "excess": L.albedo()[0] / mf - 1,
+                             "beyond_horizon": L.info["diffraction_beyond_horizon"][0] / mf})
+    return rows
 
 
-def main():
+def default_case() -> dict:
+    """``waveoptics simulate``'s default run: its parameters, time, albedos and sphere ΔE2000; the figures."""
     IMG.mkdir(parents=True, exist_ok=True)
     t = time.perf_counter()
     sim = simulate.simulate()
@@ -188,149 +187,30 @@ def main():
     rows = compare.compare(sim, [0, 20, 40, 60, 80])
     compare.plot(rows, IMG / "two_scale_compare.png", title="Al, nano ABC σ=10 nm: two-scale vs microfacet")
     p = sim.params
-    text = f"""# The two-scale BRDF: microfacets that diffract
+    return {**{k: p[k] for k in ("material", "material_source", "nano", "ndf", "micro_alpha", "illuminant",
+                                 "resolution")},
+            "incident_deg": p["incident_deg"][0], "wavelengths": len(sim.wavelengths_nm),
+            "wavelength_range_nm": [sim.wavelengths_nm[0], sim.wavelengths_nm[-1]], "seconds": t_sim,
+            "rgb_albedo": np.round(summary["rgb_albedo"], 4), "microfacet_rgb_albedo":
+            np.round(summary["microfacet_rgb_albedo"], 4),
+            "delta_e2000": {k: summary["delta_e2000"][k] for k in ("mean", "max")}}
 
-*Generated by `scripts/docs_two_scale.py` — do not edit by hand.*
 
-## Model
-Micro-geometry (≫ λ, below a pixel) is a microfacet NDF D with roughness α; each microfacet carries
-nano-roughness (≈ λ or smaller) of rms height σ. Following Holzschuch & Pacanowski (2017) and physics.md §7, the
-light a facet reflects splits into
+def compute() -> dict:
+    """Every number of docs/two-scale.md (minutes). The facet-frame sweep's rows are written by
+    ``scripts/facet_frame_sweep.py --write`` (slow) and kept here from the committed data."""
+    import docs_render
 
-* a **coherent** part, the fraction A(λ, θ_d) of the Fresnel-reflected light that stays in the microfacet
-  specular lobe: f_c = A · F(θ_d) G D / (4 cos θ_i cos θ_o). A is what the facet's nano lobe leaves,
-  1 − E(θ_d) with E the share of the reflected light that lobe scatters (physics.md §9): while the lobe is
-  paraxial this is Davies' exp(−(4πσ_rel cos θ_d / λ)²) (1954) of the roughness inside the propagating band. On
-  both routes (PSD statistics and height fields) the two halves therefore add up to the reflected light;
-* a **diffracted** part: the nano lobe f_n carried by every facet in the facet's own frame (Walter et al. 2007's
-  integral of a facet BRDF over the micro NDF, with masking-shadowing; physics.md §7). f_n comes from the PSD (`--solver psd`, the
-  Beckmann-Spizzichino series generalized to any isotropic PSD, `waveoptics/scatter/series.py`) or from a Kirchhoff solver on a
-  nano height field (`fft` or `direct`), keeping only the incoherent field δU = U − ⟨χ⟩ U_flat;
-* for dielectrics, a **diffuse** term with the diffuse-specular trade-off (metals have none).
+    kept = docs_render.load_data("two_scale")["facet_frame_sweep"] if docs_render.data_path("two_scale").exists() \
+        else []
+    return {"limits": limits_table(), "guard": guard_table(), "band": band_table(), "field": field_table(),
+            "horizon": horizon_table(), "default": default_case(), "facet_frame_sweep": kept}
 
-Lobes live on the direction-cosine plane (u, v) = (sin θ cos φ, sin θ sin φ), where cos θ dω = du dv. For PSD
-statistics each cell is a quadrature over facet normals (drawn from the micro NDF and about the cell's
-half-vector, balance heuristic), each facet's lobe read from tables of f_n over local incidence in its own frame;
-`waveoptics.brdf.TwoScaleBRDF` evaluates the same integral with f_n exact. A nano height field's lobe (and a PSD
-lobe narrower than two cells) is still shifted paraxially: a 2-D convolution (FFT) of f_n at the macro incidence
-with the micro kernel K, the F = 1 microfacet lobe re-centred on the mirror direction.
 
-## Limits, measured
+def main():
+    import make_docs
 
-{limits_table()}
-
-## Where it breaks
-* **The facet frame against the paraxial shift.** The diffracted part against an independent Monte-Carlo facet
-  integral (`scripts/facet_frame_sweep.py`; Al, ABC σ = 10 nm, B = 2 µm, C = 2.6, 550 nm, Beckmann; θ_o 15-85°
-  forward in the plane and 40°, 70° across it). The paraxial shift, still used for nano height fields, is the
-  former default for PSDs:
-
-<!-- facet-frame sweep -->
-<!-- /facet-frame sweep -->
-
-  The grid form's deviation is its per-cell quadrature (64 NDF + 16 half-vector normals, 64 + 64 for micro lobes
-  wider than half the nano lobe) and, within two cells of the horizon, its tables' bilinear reads (θ_o ≤ 70° in
-  the column; at θ_i = 80° the grazing-incidence guard below may also act).
-* Single scattering only: like every single-scattering microfacet model it loses energy at large α
-  (see docs/microfacet.md); inter-reflections between facets are not diffracted.
-* The PSD route assumes Gaussian height statistics and converges for g ≲ 30; the Kirchhoff route is scalar and
-  tangent-plane (polarization only through each facet's s/p Fresnel factors, no multiple scattering at the nano
-  scale, correlation lengths ≳ λ).
-* **Grazing incidence**: the tangent-plane factor of the Kirchhoff lobe grows as 1/cos θ_i, so towards grazing
-  incidence the lobe scatters more and more light (physics.md §9: beyond ~75° more than first-order Rayleigh-Rice
-  theory says). The coherent fraction is the complement of what the lobe scatters (both routes), so the halves
-  add up to F at every angle until the lobe alone would hold more than F. Where the diffracted lobe holds more
-  than the coherent lobe gives up (for PSD statistics in the facet frame: than the facets scatter, or with the
-  coherent part than they reflect; by more than 1 %), a
-  guard scales it down to that light (`twoscale.cap_to_coherent_loss`; the factor is
-  `Lobes.info["diffraction_energy_scale"]`). Measured factor (n = 1 + 6i, 550 nm, 96² grid):
-
-{guard_table()}
-
-  Other diffraction models (`--diffraction`, docs/wave-optics.md) have other factors; none is validated at grazing
-  incidence yet.
-* **Roughness that cannot scatter** (physics.md §9): only surface frequencies inside the propagating band
-  |f + sinθ_i/λ| ≤ 1/λ send light into real directions. The PSD route works with the surface band-limited to
-  them: the lobe is the Kirchhoff series of σ_rel, and the coherent fraction is the complement of the light that
-  lobe scatters (E), so nothing is withheld. A coherent reduction exp(−g) with the full σ would withhold the
-  light in the "full-σ" column (it did before). `summary.json` reports per wavelength the share of σ² beyond the
-  band, E and the share returned to the band (`nano_band`). Measured at θ_i = 30°, micro α = 0:
-
-{band_table()}
-
-  A **height field** is band-limited the same way: its coherent fraction is 1 − E_field, E_field the albedo of
-  its own lobe on a direction grid of λ/(3L) cells, so the light of its evanescent frequencies is not withheld
-  from both halves, as 1 − abs(χ̂)² (the whole variance) withheld it before. Measured at θ_i = 30°, micro α = 0,
-  n = 1 + 6i, fft solver, 128² grid:
-
-{field_table()}
-
-* **Micro roughness and the horizon**: each facet's lobe (in its own frame for PSDs, shifted to its facet's
-  mirror direction for height fields) is masked on its way out and sends part of its light below the horizon, so
-  the two-scale albedo falls below the microfacet albedo by that light and by no more (`Lobes.info["diffraction_beyond_horizon"]`; the tests
-  allow 1e-3 above, and below that light by 1e-3 for PSDs and 5e-3 for height fields, whose speckle lobes the
-  evaluation grid and the coherent fraction's grid sample differently). n = 1 + 6i, 450 nm, 128² grid:
-
-{horizon_table()}
-
-* Sphere renders evaluate the BRDF per pixel (`waveoptics.brdf.TabulatedTwoScaleBRDF`): coherent and diffuse
-  parts in closed form; the diffracted part from lobes tabulated over θ_i (5° steps; height fields and other
-  azimuth-dependent surfaces: 10° steps × 4 azimuths) and interpolated relative to the specular direction, so a
-  highlight stays round and a grating keeps its orientation. Between nodes 10° apart the diffracted lobe's peak
-  is within 1.4 % and its energy within 1.8 % of a direct evaluation (ABC and Gaussian PSDs, θ_i ≤ 55°,
-  `tests/test_brdf_tabulated.py`); where the grid model's grazing-incidence guard acts (below), the table
-  carries its kink.
-* A micro lobe narrower than a grid cell (α ≲ 2/resolution) is stored as a spike in the mirror cell with the
-  right energy in the grid lobes; sphere renders and `eval()` evaluate the coherent lobe exactly.
-* A PSD nano lobe narrower than two cells (ABC B ≳ 50 µm, common on polished surfaces, on a 128² grid) takes,
-  within 4 cells of the mirror direction, its average over each cell instead of the centre value, and only those
-  core cells absorb what the energy balance F·E asks; the tail keeps its point samples (within 0.3 % of the
-  first-order series beyond 0.1 direction-cosine units, `tests/test_narrow_lobes.py`; scaling the whole lobe, as
-  before, put the tail of ABC B = 200 µm, C = 3 at 2.7× its value).
-* A generated nano height field keeps S(f) exactly where its grid resolves it; the variance it cannot hold is left
-  out, not rescaled into the resolved band (which scattered 1.3× to 2.5× too much). `summary.json` reports σ
-  asked and realized and where the rest lies (`nano_field`, docs/wave-optics.md).
-
-## The default case (`waveoptics simulate -o out`)
-{p['material']} ({p['material_source']}), nano `{p['nano']}`, micro {p['ndf']} α = {p['micro_alpha']},
-θi = {p['incident_deg'][0]}°, {p['illuminant']}, {len(sim.wavelengths_nm)} wavelengths
-({sim.wavelengths_nm[0]:.0f}–{sim.wavelengths_nm[-1]:.0f} nm), {p['resolution']}² directions; computed in
-{t_sim:.1f} s on this machine. Albedo (linear sRGB): two-scale {np.round(summary['rgb_albedo'], 4).tolist()}, microfacet
-{np.round(summary['microfacet_rgb_albedo'], 4).tolist()}; sphere ΔE2000 mean {summary['delta_e2000']['mean']:.2f},
-max {summary['delta_e2000']['max']:.2f}.
-
-![spheres](img/two_scale_spheres.png)
-
-Plane-of-incidence cross-sections: the diffraction tail (solid) is orders of magnitude above the microfacet lobe
-(dashed) away from the highlight, and bluer (shorter wavelengths scatter more, g ∝ 1/λ²):
-
-![lobes](img/two_scale_lobes.png)
-
-Hemisphere previews (colour from the RGB lobe, brightness log-scaled):
-
-![brdf](img/two_scale_brdf.png)
-
-`waveoptics compare` over incidence angles:
-
-![compare](img/two_scale_compare.png)
-
-## References
-- N. Holzschuch, R. Pacanowski, A two-scale microfacet reflectance model combining reflection and diffraction,
-  ACM TOG 36(4), 2017.
-- P. Beckmann, A. Spizzichino, The Scattering of Electromagnetic Waves from Rough Surfaces, 1963.
-- H. Davies, The reflection of electromagnetic waves from a rough surface, Proc. IEE 101, 1954.
-- B. Walter et al., Microfacet models for refraction through rough surfaces, EGSR 2007.
-- E. L. Church, P. Z. Takacs, T. A. Leonard, The prediction of BRDFs from surface profile measurements,
-  Proc. SPIE 1165, 1989.
-"""
-    # the facet-frame sweep's table is written by scripts/facet_frame_sweep.py --write: keep it
-    mark = ("<!-- facet-frame sweep -->", "<!-- /facet-frame sweep -->")
-    old = DOC.read_text() if DOC.exists() else ""
-    if mark[0] in old and mark[1] in old:
-        kept = old[old.index(mark[0]):old.index(mark[1]) + len(mark[1])]
-        text = text.replace(f"{mark[0]}\n{mark[1]}", kept)
-    DOC.write_text(text)
-    print(f"wrote {DOC}")
+    make_docs.main(["two_scale"])
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
-"""Sweep: the two-scale diffracted part against the independent facet-frame reference; writes its table into
-docs/two-scale.md (between the markers ``<!-- facet-frame sweep -->`` and ``<!-- /facet-frame sweep -->``).
+"""Sweep: the two-scale diffracted part against the independent facet-frame reference; ``--write`` stores its rows
+as ``facet_frame_sweep`` in docs/data/two_scale.json and re-renders docs/two-scale.md (the table between the
+markers ``<!-- facet-frame sweep -->`` and ``<!-- /facet-frame sweep -->`` of docs/templates/two_scale.md).
 
 Al at 550 nm, ABC σ = 10 nm, B = 2 µm, C = 2.6, Beckmann micro NDF. For each α and θ_i, over θ_o ∈ {15, 40, 60, 75,
 85}° forward in the plane of incidence and {40, 70}° at φ_o = 90°, the ratio to the reference
@@ -12,7 +13,6 @@ Usage: ``PYTHONPATH=$PWD python scripts/facet_frame_sweep.py [--write]``.
 from __future__ import annotations
 
 import argparse
-import re
 import sys
 from pathlib import Path
 
@@ -23,12 +23,13 @@ from waveoptics.scatter.grid import DirectionGrid
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "scripts"))
+import docs_render  # noqa: E402
 import twoscale_reference as R  # noqa: E402
 
 LAM = 550.0
 NANO = brdf.Nano(model=surfaces.PSDModel("abc", 10e-9, B=2e-6, C=2.6))
 OUT = [(15, 180), (40, 180), (60, 180), (75, 180), (85, 180), (40, 90), (70, 90)]
-MARK = ("<!-- facet-frame sweep -->", "<!-- /facet-frame sweep -->")
 
 
 def row(alpha, theta, grid):
@@ -46,35 +47,31 @@ def row(alpha, theta, grid):
         out[route] = grid.interpolate(L.diffraction[0], wo[:, 0], wo[:, 1]) / ref
     near = np.array([o[0] <= 70 for o in OUT])
     dev = lambda r: float(np.max(np.abs(r - 1)))  # noqa: E731
-    return (f"| {alpha:g} | {theta:g}° | {dev(pw):.3f} | {dev(out['frame'][near]):.3f} | "
-            f"{out['paraxial'].min():.2f}–{out['paraxial'].max():.2f} | {float(np.max(se / ref)):.3f} |")
+    return {"alpha": alpha, "theta_deg": theta, "pointwise": dev(pw), "grid": dev(out["frame"][near]),
+            "paraxial": [float(out["paraxial"].min()), float(out["paraxial"].max())],
+            "reference_se": float(np.max(se / ref))}
 
 
-def table() -> str:
+def table() -> list:
+    """One row per (α, θ_i): the largest deviations of the pointwise and grid forms, the paraxial ratio range and
+    the reference's standard error."""
     grid = DirectionGrid.hemisphere(128)
-    rows = ["| micro α | θ_i | pointwise: max abs(ratio − 1) | grid 128² (θ_o ≤ 70°): max abs(ratio − 1) | "
-            "paraxial shift: ratio range | reference s.e. (max) |", "|---|---|---|---|---|---|"]
-    for alpha in (0.05, 0.1, 0.3, 0.5):
-        for theta in (0.0, 30.0, 60.0, 80.0):
-            rows.append(row(alpha, theta, grid))
-    return "\n".join(rows)
+    return [row(alpha, theta, grid) for alpha in (0.05, 0.1, 0.3, 0.5) for theta in (0.0, 30.0, 60.0, 80.0)]
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--write", action="store_true", help="replace the table in docs/two-scale.md")
+    ap.add_argument("--write", action="store_true", help="store the rows in docs/data/two_scale.json and "
+                                                          "re-render docs/two-scale.md")
     args = ap.parse_args(argv)
-    text = table()
-    print(text)
+    rows = table()
+    for r in rows:
+        print(r)
     if args.write:
-        doc = ROOT / "docs" / "two-scale.md"
-        old = doc.read_text()
-        block = f"{MARK[0]}\n{text}\n{MARK[1]}"
-        new, n = re.subn(re.escape(MARK[0]) + ".*?" + re.escape(MARK[1]), lambda _: block, old, flags=re.S)
-        doc.write_text(new if n else old)
-        if not n:
-            print("markers not found in docs/two-scale.md", file=sys.stderr)
-            return 1
+        data = docs_render.load_data("two_scale")
+        data["facet_frame_sweep"] = rows
+        docs_render.write_data("two_scale", data)
+        docs_render.write("two_scale")
     return 0
 
 

@@ -5,10 +5,9 @@ Usage::
     python scripts/make_docs.py [TOPIC ...]              # recompute and render (default: every topic)
     python scripts/make_docs.py --render-only [TOPIC ...]  # render from the committed data only (fast)
 
-Topics are the ``*`` of ``scripts/docs_*.py``. A topic with a template ``docs/templates/<topic>.md`` is computed by
-its generator's ``compute()`` (written to ``docs/data/<topic>.json``; figures are written by ``compute()`` too) and
-rendered by ``scripts/docs_render.py``; a topic without one still runs its generator's ``main()``, which writes the
-page itself. ``--render-only`` computes nothing and accepts only topics that have a template.
+Topics are the ``*`` of ``scripts/docs_*.py``. Every topic has a template ``docs/templates/<topic>.md``: it is
+computed by its generator's ``compute()`` (written to ``docs/data/<topic>.json``; figures are written by
+``compute()`` too) and rendered by ``scripts/docs_render.py``. ``--render-only`` computes nothing.
 """
 from __future__ import annotations
 
@@ -36,13 +35,9 @@ def load(topic: str, path: Path):
 
 
 def run(topic: str, path: Path) -> None:
-    """Recompute *topic* and write its page (and data, where it has a template)."""
-    mod = load(topic, path)
-    if topic in docs_render.topics():
-        docs_render.write_data(topic, mod.compute())
-        docs_render.write(topic)
-    else:
-        mod.main()
+    """Recompute *topic*: its data from ``compute()``, then its page."""
+    docs_render.write_data(topic, load(topic, path).compute())
+    docs_render.write(topic)
 
 
 def main(argv=None) -> int:

@@ -31,6 +31,15 @@ def test_reference_pages_have_templates():
     assert {"cli", "json"} <= set(TOPICS)
 
 
+def test_every_generator_is_data_and_template():
+    """Every scripts/docs_<topic>.py has a template and committed data, and defines compute() (make_docs calls it)."""
+    gens = {p.stem[len("docs_"):]: p for p in (ROOT / "scripts").glob("docs_*.py") if p.stem != "docs_render"}
+    assert set(gens) == set(TOPICS)
+    for topic, path in gens.items():
+        assert docs_render.data_path(topic).exists(), topic
+        assert "\ndef compute(" in path.read_text(encoding="utf-8"), f"{path.name} has no compute()"
+
+
 @pytest.mark.parametrize("topic", TOPICS)
 def test_page_renders_from_committed_data(topic):
     page = docs_render.page_path(topic)
