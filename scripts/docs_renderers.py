@@ -47,7 +47,7 @@ def interpolation_table() -> str:
     rows = ["| material | worst median error, 20 nm nodes (at λ) | worst median error, 10 nm nodes (at λ) |",
             "|---|---|---|"]
     for mat in ("gold", "copper", "silver", "aluminium"):
-        exact = brdf.TwoScaleBRDF(material=mat, micro=brdf.Micro(alpha=0.3), nano=nano, nodes=64)
+        exact = brdf.TwoScaleBRDF(material=mat, micro=brdf.Micro(alpha=0.3, ndf="ggx"), nano=nano, nodes=64)
         wo = exact.sample(wi, 550.0, rng.random((200, 2))).wo
         ok = wo[:, 2] > 0
         a, b = wi[ok], wo[ok]

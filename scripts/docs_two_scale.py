@@ -30,10 +30,10 @@ def limits_table() -> str:
     model = surfaces.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)
     rows = ["| check | measured | tolerance in tests |", "|---|---|---|"]
     zero = twoscale.Nano(model=surfaces.PSDModel("abc", sigma=0.0, B=2e-6, C=2.6))
-    L = twoscale.evaluate(wi, w, "Au", twoscale.Micro(alpha=0.2), zero, grid)
+    L = twoscale.evaluate(wi, w, "Au", twoscale.Micro(alpha=0.2, ndf="ggx"), zero, grid)
     rows.append(f"| σ_nano = 0: max abs(two-scale − microfacet) | {np.abs(L.total - L.microfacet).max():.1e} | exact |")
     mat = materials.get_material("Al")
-    L = twoscale.evaluate(wi, w, mat, twoscale.Micro(alpha=0.0), twoscale.Nano(model=model), grid)
+    L = twoscale.evaluate(wi, w, mat, twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(model=model), grid)
     wo = grid.directions()
     h = wi + wo
     h /= np.linalg.norm(h, axis=-1, keepdims=True)
@@ -50,7 +50,7 @@ def limits_table() -> str:
         m = surfaces.PSDModel("abc", sigma=rng.uniform(1, 60) * 1e-9, B=rng.uniform(0.5, 20) * 1e-6, C=rng.uniform(2.3, 4))
         name = rng.choice(["Au", "Ag", "Al", "Cu"])
         wi2 = direction_from_angles(th, 0.0)
-        L = twoscale.evaluate(wi2, w, name, twoscale.Micro(alpha=rng.choice([0.0, 0.05, 0.2, 0.5])),
+        L = twoscale.evaluate(wi2, w, name, twoscale.Micro(alpha=rng.choice([0.0, 0.05, 0.2, 0.5]), ndf="ggx"),
                               twoscale.Nano(model=m), grid)
         worst = max(worst, float(np.max(L.albedo() - materials.get_material(name).F(wi2[2], w))))
     rows.append(f"| max (albedo − F(θi)) over 20 random configurations | {worst:+.4f} | ≤ +0.01 |")
@@ -72,7 +72,7 @@ def guard_table():
         for alpha in (0.0, 0.3):
             vals = []
             for t in thetas:
-                L = twoscale.evaluate(direction_from_angles(t, 0.0), [550.0], mat, twoscale.Micro(alpha=alpha), nano,
+                L = twoscale.evaluate(direction_from_angles(t, 0.0), [550.0], mat, twoscale.Micro(alpha=alpha, ndf="ggx"), nano,
                                       grid, kd=0)
                 vals.append(f"{L.info['diffraction_energy_scale'][0]:.3f}")
             rows.append(f"  | {label} | {alpha:g} | " + " | ".join(vals) + " |")
@@ -100,7 +100,7 @@ def band_table():
             F = float(np.ravel(mat.F(np.array([c]), lam))[0])
             lost = F * (np.exp(-k2 * rel) - np.exp(-k2 * m.sigma ** 2))
             bs = scatter.band_series(m, lam)
-            L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0), twoscale.Nano(model=m), grid, kd=0)
+            L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(model=m), grid, kd=0)
             rows.append(f"| {name} {m.kind} σ={m.sigma * 1e9:g} nm | {lam:g} | {m.sigma * 1e9:.3g} | "
                         f"{np.sqrt(rel) * 1e9:.3g} | {scatter.beyond_band_fraction(m.sigma ** 2, rel):.3f} | "
                         f"{lost:.4f} | {float(bs.scattered_albedo(30.0, material=mat)):.4f} | "
@@ -135,7 +135,7 @@ def field_table():
             E = 1 - nano.coherent_fraction(wi[2], lam, material=mat)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", scatter.DiffractionWarning)
-                L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0), nano, grid, kd=0)
+                L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, grid, kd=0)
             F = float(mat.F(wi[2], lam))
             old = (L.albedo("diffraction")[0] + F * chi2) / F
             rows.append(f"| {name} | {lam:g} | {scatter.beyond_band_fraction(var, rel):.3f} | {1 - chi2:.4f} | "

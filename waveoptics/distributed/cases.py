@@ -47,7 +47,7 @@ def case_from_scene(sc, *, material: str | None = None, light: str | None = None
     kw = dict(material=mat.material, micro_alpha=mat.roughness, ndf=mat.ndf, ndf_shape=mat.ndf_shape,
               shadowing=mat.shadowing,
               kd=mat.diffuse_albedo, illuminant=li.spd, incident_deg=tuple(li.directions_deg[0]),
-              accuracy_dE=sc.delta_e, seed=sc.seed, nano=NO_NANO, surface=None,
+              delta_e=sc.delta_e, seed=sc.seed, nano=NO_NANO, surface=None,
               multiple_scattering=mat.multiple_scattering)
     if mat.micro_surface is not None:
         if mat.micro_surface.params:

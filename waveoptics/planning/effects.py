@@ -81,7 +81,7 @@ class Entry:
     diffraction_model: str = "kirchhoff"
 
     @property
-    def dE(self) -> float:
+    def delta_e(self) -> float:
         return self.scene.delta_e
 
     @property
@@ -180,11 +180,11 @@ def decide_diffraction(e: Entry) -> None:
         est, info = colour_shift(e.mat, e.micro, e.proxy, e.spd, dirs, views_deg=e.views, hemisphere=hemi,
                                  kd=e.kd)
         e.metrics.update(estimated_delta_e=est, estimate_resolution=info["resolution"])
-        e.diffraction = est > ESTIMATE_SHARE * e.dE
+        e.diffraction = est > ESTIMATE_SHARE * e.delta_e
         proxy_note = "" if e.statistical else " (height field through a Gaussian-statistics proxy)"
         cmp = ">" if e.diffraction else "≤"
         e.decide("diffraction", "on" if e.diffraction else "off",
-                 f"{why}; coarse estimate{proxy_note}: ΔE2000 {est:.2g} {cmp} {ESTIMATE_SHARE:g} × target {e.dE:g}"
+                 f"{why}; coarse estimate{proxy_note}: ΔE2000 {est:.2g} {cmp} {ESTIMATE_SHARE:g} × target {e.delta_e:g}"
                  + ("" if e.diffraction else ", so only the microfacet model runs"))
 
 
@@ -303,7 +303,7 @@ def decide_wavelengths(e: Entry) -> None:
         e.lam_independent = False
         e.w_sim = e.w_colour
         e.decide("wavelengths", fmt_nm(e.w_sim), f"smooth spectra under {e.spd.name}: the coarsest grid whose "
-                                                  f"colour error on smooth reflectances stays ≤ ΔE {e.dE:g}"
+                                                  f"colour error on smooth reflectances stays ≤ ΔE {e.delta_e:g}"
                                                   + (f"; {film[1]}" if film is not None else ""))
     e.metrics["wavelength_count"] = int(max(e.w_sim.size, 1))
 

@@ -64,7 +64,7 @@ def decide_resolution(e: Entry) -> None:
         e.resolution = int(e.force.get("resolution", e.scene.output.resolution))
         e.decide("resolution", e.resolution, "set by the scene's output.resolution")
         return
-    need = {k: int(math.ceil(2.0 / grid_step(s, e.dE))) for k, s in e.widths.items() if s > 0}
+    need = {k: int(math.ceil(2.0 / grid_step(s, e.delta_e))) for k, s in e.widths.items() if s > 0}
     if e.hf is not None and e.diffraction:
         L = max(e.hf.extent)
         need["the height field's specular spike"] = int(math.ceil(2.0 * L / (e.lam_min * 1e-9)))
@@ -76,7 +76,7 @@ def decide_resolution(e: Entry) -> None:
     e.resolution = int(np.clip(need[key], lo, hi))
     note = f"{key} needs {need[key]} cells per side " + (
         f"(du ≤ λ_min/L, L = {L * 1e6:.3g} µm)" if key.startswith("the height") else
-        f"(linear interpolation within ΔE {e.dE:g}: du ≤ {grid_step(e.widths[key], e.dE):.3g})")
+        f"(linear interpolation within ΔE {e.delta_e:g}: du ≤ {grid_step(e.widths[key], e.delta_e):.3g})")
     if need[key] > hi:
         note += f"; capped at {hi} (narrower lobes keep their energy and colour, not their shape)"
     elif need[key] < lo:
@@ -206,7 +206,7 @@ def decide_precision(e: Entry) -> None:
         return
     h_max = float(np.max(np.abs(e.hf.heights - e.hf.heights.mean())))
     floor = float32_floor(e.hf.heights.size, h_max, e.lam_min)
-    level = weakest_level(e.dE, max(e.hf.extent), e.lam_min)
+    level = weakest_level(e.delta_e, max(e.hf.extent), e.lam_min)
     e.metrics.update(float32_floor=floor, weakest_level=level)
     if "precision" in e.force:
         e.precision = e.force["precision"]

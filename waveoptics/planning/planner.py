@@ -95,7 +95,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
     e.micro = spec.micro()
     e.cos_i = [math.cos(math.radians(t)) for t, _ in light.directions_deg]
     e.cos_max = 1.0 if e.sphere else max(e.cos_i)
-    e.w_colour = colour.simulation_wavelengths(e.spd, e.dE)
+    e.w_colour = colour.simulation_wavelengths(e.spd, e.delta_e)
     e.lam_min = float(np.min(e.w_colour))
     for decide in DECISIONS:
         decide(e)
