@@ -964,8 +964,8 @@ def _bad_inputs() -> list[BadInput]:
                  argv=lambda tmp: ["surface", "stats", str(_good_surface(tmp)), "--spacing", "0nm"], same=True))
     add(BadInput("spacing-negative", "parameter", "--spacing -5nm", r"spacing '-5nm' is negative", setup=setup_ok,
                  argv=lambda tmp: _scatter_argv(tmp, "--spacing=-5nm")))
-    add(BadInput("accuracy-zero", "parameter", "--accuracy 0", r"--accuracy 0\.0 is not allowed",
-                 argv=lambda tmp: ["simulate", "--accuracy", "0", "-o", str(tmp / "sim")]))
+    add(BadInput("delta-e-zero", "parameter", "--delta-e 0", r"--delta-e 0\.0 is not allowed",
+                 argv=lambda tmp: ["simulate", "--delta-e", "0", "-o", str(tmp / "sim")]))
     add(BadInput("blackbody-negative", "parameter", "blackbody:-5K", r"blackbody temperature -5\.0 K is not allowed",
                  api=lambda tmp: colour.illuminant("blackbody:-5K"),
                  argv=lambda tmp: _simulate_argv(tmp, "--illuminant", "blackbody:-5K"), same=True))
