@@ -56,7 +56,7 @@ def decide_resolution(e: Entry) -> None:
     """The grid resolves the narrowest lobe within the colour target (or the height field's specular spike)."""
     if e.micro.alpha > 0:
         e.widths["micro lobe"] = lobe_width(min(e.micro.alpha, e.micro.alpha_y or e.micro.alpha), min(e.cos_i))
-    if e.diffraction and e.nano is not None and e.nano.model is not None:
+    if e.diffracts and e.nano is not None and e.nano.model is not None:
         e.widths["nano lobe"] = diffraction_lobe_width(e.nano.model, e.lam_min)
     hi = min(RESOLUTION_RANGE[1], e.max_resolution or RESOLUTION_RANGE[1])
     lo = min(RESOLUTION_RANGE[0], hi)
@@ -65,7 +65,7 @@ def decide_resolution(e: Entry) -> None:
         e.decide("resolution", e.resolution, "set by the scene's output.resolution")
         return
     need = {k: int(math.ceil(2.0 / grid_step(s, e.delta_e))) for k, s in e.widths.items() if s > 0}
-    if e.hf is not None and e.diffraction:
+    if e.hf is not None and e.diffracts:
         L = max(e.hf.extent)
         need["the height field's specular spike"] = int(math.ceil(2.0 * L / (e.lam_min * 1e-9)))
     if not need:
@@ -113,7 +113,7 @@ def _costs(e: Entry, options: dict) -> tuple[dict, dict]:
     if terms is not None:
         t_band = band_table_time(e.nano.model, e.lam_min, e.mat, e.light.directions_deg[0][0])
         e.metrics.update(band_table_s=t_band)
-    hf_solvers = e.diffraction and e.solver in (None, "fft", "direct")
+    hf_solvers = e.diffracts and e.solver in (None, "fft", "direct")
     hf_info = {"hf_solvers": hf_solvers}
     if hf_solvers:
         smp = scatter.samples(e.hf)
