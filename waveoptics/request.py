@@ -178,7 +178,7 @@ def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None):
     from .brdf import twoscale
 
     if surface is not None:
-        hf = surface if isinstance(surface, HeightField) else surfaces.load(surface)
+        hf = surface if isinstance(surface, surfaces.HeightField) else surfaces.load(surface)
         if solver == "psd":
             raise FieldError("{solver} 'psd' needs nano statistics (MODEL:...), not a height field", "solver")
         return twoscale.Nano(surface=hf)

@@ -12,7 +12,7 @@ from .. import io, surfaces
 from ..brdf import twoscale
 from ..errors import WaveopticsError
 from ..planning.scene import request_of
-from ..request import make_nano
+from ..request import SimulationRequest, make_nano
 
 __all__ = ['case_from_scene', 'surface_digest']
 

@@ -93,7 +93,7 @@ class Plan:
 
     def as_dict(self) -> dict:
         return {"scene": self.scene.name, "path": str(self.scene.path) if self.scene.path else None,
-                "accuracy_delta_e": self.scene.delta_e, "force": self.force,
+                "delta_e": self.scene.delta_e, "force": self.force,
                 "materials": [e.as_dict() for e in self.entries],
                 "estimated_time_s": self.estimated_time_s, "planning_time_s": self.planning_time_s,
                 "cost_model": self.cost_model.as_dict()}
