@@ -211,3 +211,23 @@ def test_a_scene_material_without_keys_takes_the_request_defaults(tmp_path):
     for field in ("micro_alpha", "ndf", "shadowing", "kd", "multiple_scattering", "resolution"):
         assert getattr(req, field) == DOCUMENTED[field], field
     assert (sc.materials[0].roughness, sc.materials[0].ndf, sc.materials[0].diffuse_albedo) == (0.05, "beckmann", 0.5)
+
+
+def test_the_planner_hands_the_runner_the_scene_request(tmp_path):
+    """A plan entry carries the scene's request with the planner's decisions applied; the runner evaluates it."""
+    from waveoptics.planning import plan_scene, scene
+
+    path = _scene(tmp_path, """
+        name = "gold"
+        material = "Au"
+        roughness = 0.2
+        ndf = "ggx"
+        """)
+    e = plan_scene(scene.load(path)).entries[0]
+    req = e.request
+    assert (req.material, req.micro_alpha, req.ndf, req.illuminant, req.incident_deg, req.delta_e, req.seed) == \
+        ("Au", 0.2, "ggx", "A", (20.0, 45.0), 2.5, 3)
+    assert (req.kd, req.resolution, req.precision, req.diffraction) == (e.kd, e.resolution, e.precision,
+                                                                        e.diffraction)
+    simulated = e.wavelengths_nm if e.wavelengths_nm.size else e.colour_wavelengths_nm
+    assert req.wavelengths_nm == tuple(simulated)
