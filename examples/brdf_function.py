@@ -22,7 +22,7 @@ out = Path(next((a for a in sys.argv[1:] if not a.startswith("--")), "out/brdf_f
 out.mkdir(parents=True, exist_ok=True)
 
 nano = make_nano("abc:sigma=10nm,B=2um,C=2.6", [550.0])
-f = wo.TwoScaleBRDF("Au", wo.brdf.Micro(alpha=0.1), nano=nano)
+f = wo.TwoScaleBRDF("Au", wo.brdf.Micro(alpha=0.1, ndf="ggx"), nano=nano)
 
 
 def direction(theta_deg, phi_deg=0.0):
@@ -42,7 +42,7 @@ print(f"albedo at 550 nm: Monte Carlo {s.weight.mean():.4f} ± {s.weight.std() /
       f"quadrature {float(f.albedo(wi, 550.0)):.4f}")
 
 w = np.array([450.0, 550.0, 650.0])
-table = wo.TabulatedTwoScaleBRDF("Au", wo.brdf.Micro(alpha=0.1), nano=nano, wavelengths_nm=tuple(w),
+table = wo.TabulatedTwoScaleBRDF("Au", wo.brdf.Micro(alpha=0.1, ndf="ggx"), nano=nano, wavelengths_nm=tuple(w),
                                  resolution=32 if fast else 128)
 img, mask = render.render_sphere(table, w, direction(30), size=48 if fast else 256)
 figures.save_png(out / "sphere.png", render.tonemap(img))

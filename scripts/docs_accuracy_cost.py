@@ -22,7 +22,7 @@ SURFACES = (
      "gaussian:sigma=150nm,corr_length=1.5um", "Al"),
 )
 SIZE, SAMPLES, INCIDENT = "12.16um", 128, (30.0, 0.0)
-COLOUR_DE = cost.DEFAULT_COLOUR_DE
+DELTA_E = cost.DEFAULT_DELTA_E
 #: targets for which the recommendation is reported
 TARGETS = (("error_rel_l2", 1e-1), ("error_rel_l2", 1e-2), ("error_rel_l2", 1e-3), ("delta_e2000", 1.0),
            ("error_albedo", 1e-2))
@@ -60,7 +60,7 @@ def compute(quick: bool = False) -> dict:
         size = f"{float(SIZE[:-2]) * samples / SAMPLES:.4g}um"
         cfg = cost.model_config(model, size, samples, material=mat, incident=INCIDENT, seed=1, name=title)
         res_ladder = (8, 16, 32) if quick else cost.DEFAULT_RESOLUTIONS
-        settings = cost.ladder(resolutions=res_ladder, colour_de=COLOUR_DE,
+        settings = cost.ladder(resolutions=res_ladder, delta_e=DELTA_E,
                                realizations=(1, 2) if cfg.random else (1,))
         res = cost.study(cfg, settings, target_error=1e-2, runtime=rt, budget_s=60 if quick else 400,
                          reference_solver="direct")
@@ -69,8 +69,8 @@ def compute(quick: bool = False) -> dict:
         print(f"{key}: {res['time_s']:.1f} s", flush=True)
     m = machine(rt)
     return {"surfaces": out, "reference_realizations": cost.REFERENCE_REALIZATIONS,
-            "wavelengths_ladder": [[de, simulation_wavelengths("D65", de).size] for de in COLOUR_DE],
-            "wavelengths_reference": [min(COLOUR_DE) / 2, simulation_wavelengths("D65", min(COLOUR_DE) / 2).size],
+            "wavelengths_ladder": [[de, simulation_wavelengths("D65", de).size] for de in DELTA_E],
+            "wavelengths_reference": [min(DELTA_E) / 2, simulation_wavelengths("D65", min(DELTA_E) / 2).size],
             "machine": {k: m.get(k) for k in ("cpu", "cores", "device", "platform", "load_average_1min")}}
 
 

@@ -48,7 +48,7 @@ def interpolation_table() -> list:
     wi = _dirs(rng, 200, 80.0)
     rows = []
     for mat in ("gold", "copper", "silver", "aluminium"):
-        exact = brdf.TwoScaleBRDF(material=mat, micro=brdf.Micro(alpha=0.3), nano=nano, nodes=64)
+        exact = brdf.TwoScaleBRDF(material=mat, micro=brdf.Micro(alpha=0.3, ndf="ggx"), nano=nano, nodes=64)
         wo = exact.sample(wi, 550.0, rng.random((200, 2))).wo
         ok = wo[:, 2] > 0
         a, b = wi[ok], wo[ok]

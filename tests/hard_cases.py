@@ -222,7 +222,7 @@ def _twoscale(theta, material="Ag", *, alpha=0.05, alpha_y=None, nano="gaussian"
         n = None
     mat = materials.get_material(material)
     grid = _grid(grid_n)
-    lobes = twoscale.evaluate(wi, wl, mat, twoscale.Micro(alpha=alpha, alpha_y=alpha_y), n, grid, kd=kd,
+    lobes = twoscale.evaluate(wi, wl, mat, twoscale.Micro(alpha=alpha, alpha_y=alpha_y, ndf="ggx"), n, grid, kd=kd,
                               solver=solver)
     # F_max: the largest facet reflectance F(θ_d) over the grid; a rough metal near grazing incidence reflects
     # through facets whose θ_d is below θ_i, past the dip of F(θ_i), so F(θ_i) alone is no bound there
@@ -349,7 +349,7 @@ def _furnace(alpha, alpha_y, ndfs=("ggx", "beckmann")):
 def _sigma_zero(env):
     o = _twoscale(30.0, "Au", sigma=0.0)
     zero = twoscale.Nano(model=surfaces.PSDModel("abc", sigma=0.0, B=2e-6, C=2.6))
-    lob = twoscale.evaluate(_dirs(30.0)[0], [450.0, 650.0], "Au", twoscale.Micro(alpha=0.05), zero, _grid())
+    lob = twoscale.evaluate(_dirs(30.0)[0], [450.0, 650.0], "Au", twoscale.Micro(alpha=0.05, ndf="ggx"), zero, _grid())
     return {**o, "difference": np.abs(lob.total - lob.microfacet)}
 
 
@@ -928,7 +928,7 @@ def _bad_inputs() -> list[BadInput]:
     add(BadInput("micro-alpha-negative", "parameter", "micro α < 0 (simulate)", r"micro-alpha -1\.0 is not allowed",
                  argv=lambda tmp: _simulate_argv(tmp, "--micro-alpha=-1")))
     add(BadInput("micro-alpha-api", "parameter", "micro α < 0 (two-scale API)", r"micro alpha=-1\.0 is not allowed",
-                 api=lambda tmp: twoscale.Micro(alpha=-1.0)))
+                 api=lambda tmp: twoscale.Micro(alpha=-1.0, ndf="ggx")))
     for th in ("95", "-1", "nan"):
         add(BadInput(f"theta-{th}", "parameter", f"θ_i = {th}°", rf"--incident θ={float(th)!r}° is outside the "
                      r"allowed range \[0, 90\]",
@@ -964,8 +964,8 @@ def _bad_inputs() -> list[BadInput]:
                  argv=lambda tmp: ["surface", "stats", str(_good_surface(tmp)), "--spacing", "0nm"], same=True))
     add(BadInput("spacing-negative", "parameter", "--spacing -5nm", r"spacing '-5nm' is negative", setup=setup_ok,
                  argv=lambda tmp: _scatter_argv(tmp, "--spacing=-5nm")))
-    add(BadInput("accuracy-zero", "parameter", "--accuracy 0", r"--accuracy 0\.0 is not allowed",
-                 argv=lambda tmp: ["simulate", "--accuracy", "0", "-o", str(tmp / "sim")]))
+    add(BadInput("delta-e-zero", "parameter", "--delta-e 0", r"--delta-e 0\.0 is not allowed",
+                 argv=lambda tmp: ["simulate", "--delta-e", "0", "-o", str(tmp / "sim")]))
     add(BadInput("blackbody-negative", "parameter", "blackbody:-5K", r"blackbody temperature -5\.0 K is not allowed",
                  api=lambda tmp: colour.illuminant("blackbody:-5K"),
                  argv=lambda tmp: _simulate_argv(tmp, "--illuminant", "blackbody:-5K"), same=True))

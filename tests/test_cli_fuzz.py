@@ -93,7 +93,7 @@ VALUES = {
     "--spacing": ["50nm", "50nm,80nm", "50", "0nm"],
     "--seed": ["1", "-1", "2**70"],
     "--illuminant": ["D65", "A", "blackbody:5500K", "laser:532", "blackbody:-5K", "F13"],
-    "--accuracy": ["1", "0.1", "0", "-1"],
+    "--delta-e": ["1", "0.1", "0", "-1"],
     "--ndf-shape": ["2.5", "1.5", "0.5"],
     "--max-memory": ["1GB", "1kB", "0", "lots"],
     "--realizations": ["1", "2", "0"],

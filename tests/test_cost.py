@@ -25,7 +25,7 @@ TOL = {
 }
 
 ROW_KEYS = {"solver", "resolution", "wavelengths", "precision", "error_rel_l2", "error_albedo", "delta_e2000",
-            "time_s", "realizations", "colour_de", "wavelengths_nm", "warnings", "skipped", "same_as_reference"}
+            "time_s", "realizations", "delta_e", "wavelengths_nm", "warnings", "skipped", "same_as_reference"}
 
 
 @pytest.fixture(scope="module")

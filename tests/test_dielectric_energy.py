@@ -117,7 +117,7 @@ def tis_p(theta, psd=abc_psd):
 def _evaluate(theta, pol, diffraction="kirchhoff", alpha=0.0, n=96):
     with warnings.catch_warnings():
         warnings.simplefilter("error")        # the energy guard warns when it acts: it must not
-        return twoscale.evaluate(_dir(theta), [LAM], GLASS, twoscale.Micro(alpha=alpha), twoscale.Nano(model=MODEL),
+        return twoscale.evaluate(_dir(theta), [LAM], GLASS, twoscale.Micro(alpha=alpha, ndf="ggx"), twoscale.Nano(model=MODEL),
                                  DirectionGrid.hemisphere(n), kd=0, polarization=pol, diffraction=diffraction)
 
 
@@ -204,7 +204,7 @@ def test_a_metal_keeps_the_complement_of_its_scatter():
         ci, si = math.cos(t), math.sin(t)
         g = np.sqrt(eta ** 2 - si * si)
         Rp = abs((eta ** 2 * ci - g) / (eta ** 2 * ci + g)) ** 2
-        L = twoscale.evaluate(_dir(theta), [LAM], metal, twoscale.Micro(alpha=0.0), twoscale.Nano(model=MODEL),
+        L = twoscale.evaluate(_dir(theta), [LAM], metal, twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(model=MODEL),
                               DirectionGrid.hemisphere(96), kd=0, polarization="p")
         assert float(L.albedo()[0]) == pytest.approx(Rp, rel=1e-3)
 
@@ -228,7 +228,7 @@ def test_rayleigh_rice_of_a_height_field_on_glass_keeps_its_p_lobe_at_brewster()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
         warnings.filterwarnings("error", message=".*energy guard.*")
-        L = twoscale.evaluate(_dir(THETA_B), [LAM], GLASS, twoscale.Micro(alpha=0.0), twoscale.Nano(surface=hf),
+        L = twoscale.evaluate(_dir(THETA_B), [LAM], GLASS, twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(surface=hf),
                               DirectionGrid.hemisphere(96), kd=0, polarization="p", diffraction="rayleigh-rice")
     expected = tis_p(THETA_B, lambda f: math.pi * (3e-9) ** 2 * (1e-6) ** 2 * np.exp(-(math.pi * 1e-6 * f) ** 2))
     assert float(L.albedo("coherent")[0]) < 1e-12

@@ -432,7 +432,7 @@ def test_scene_file_gives_the_case(tmp_path):
     assert (case.material, case.micro_alpha, case.ndf, case.illuminant, case.resolution, case.seed) == \
         ("Au", 0.12, "ggx", "A", 24, 4)
     assert case.nano == "abc:sigma=5nm,B=2um,C=2.6" and case.incident_deg == (25.0, 10.0)
-    assert case.accuracy_dE == 2.0
+    assert case.delta_e == 2.0
     out = tmp_path / "scene.h5"
     assert main(["table", str(scene), "--incident-angles", "0,40", "--wavelengths", "500,600", "-o", str(out)]) == 0
     t = D.read_table(out)

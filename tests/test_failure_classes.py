@@ -84,7 +84,7 @@ def test_json_output_refuses_nan_naming_the_result():
 def test_albedo_of_extreme_anisotropy_against_visible_normal_sampling(ax, ay):
     """Ratio 2000: the quadrature (12 million nodes, used in blocks of NODE_BLOCK) against a Monte Carlo estimate
     from the GGX visible-normal sampler (an independent route: weights G2/G1 · F)."""
-    b = MicrofacetBRDF("Au", Micro(alpha=ax, alpha_y=ay))
+    b = MicrofacetBRDF("Au", Micro(alpha=ax, alpha_y=ay, ndf="ggx"))
     wi = np.array([0.5, 0.0, np.sqrt(0.75)])
     s = b.sample(wi, 550.0, np.random.default_rng(4).random((400_000, 2)))
     assert float(b.albedo(wi, 550.0)) == pytest.approx(s.weight.mean(),
@@ -144,7 +144,7 @@ def test_lambert_albedo_is_exact_on_any_grid():
 
     F0 = float(get_material("PMMA").F(1.0, 550.0))
     for res in (8, 16, 64):
-        L = twoscale.evaluate(np.array([0.0, 0.0, 1.0]), [550.0], "PMMA", Micro(alpha=0.3), None,
+        L = twoscale.evaluate(np.array([0.0, 0.0, 1.0]), [550.0], "PMMA", Micro(alpha=0.3, ndf="ggx"), None,
                               DirectionGrid.hemisphere(res), kd=1.0)
         assert float(L.albedo("diffuse")[0]) == pytest.approx(1.0 - F0, rel=1e-6)
         assert float(L.albedo("total")[0]) <= 1.0
@@ -338,7 +338,7 @@ def test_a_unitless_spacing_in_a_scene_file_is_refused(tmp_path):
     from waveoptics.planning import scene
 
     surfaces.save(surfaces.gaussian("5nm", "1um", "16um", 32, seed=1), tmp_path / "h.npz")
-    text = ('name = "t"\n[[materials]]\nname = "m"\nmaterial = "Au"\nroughness = 0.1\n[materials.nano]\n'
+    text = ('name = "t"\n[[materials]]\nname = "m"\nmaterial = "Au"\nroughness = 0.1\nndf = "ggx"\n[materials.nano]\n'
             'file = {path = "h.npz", spacing = SPACING}\n[[lights]]\nname = "sun"\nspd = "D65"\n'
             'directions_deg = [[30, 0]]\n')
     (tmp_path / "bad.toml").write_text(text.replace("SPACING", "5"))

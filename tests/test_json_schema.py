@@ -58,7 +58,7 @@ def test_simulate_and_compare(surface_file, tmp_path):
 
 def test_cost():
     validate(_json(["cost", "--generator", "sinusoid:amplitude=30nm,period=0.8um", "--size", "3.2um", "--samples",
-                    "32", "--resolutions", "8,16", "--colour-accuracy", "4", "--solvers", "fft0,fft"]), "cost")
+                    "32", "--resolutions", "8,16", "--delta-e", "4", "--solvers", "fft0,fft"]), "cost")
 
 
 def test_schemas_reject_what_they_should():

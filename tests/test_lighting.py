@@ -44,7 +44,7 @@ def test_white_furnace():
 
 def test_constant_map_shows_the_directional_albedo():
     env = lighting.procedural_environment("constant", height=16)
-    b = MicrofacetBRDF("gold", Micro(alpha=0.3), fresnel="one")
+    b = MicrofacetBRDF("gold", Micro(alpha=0.3, ndf="ggx"), fresnel="one")
     img, on = render.render_sphere_environment(b, [550.0], env, size=24, spp=32, seed=2)
     n, _ = render.sphere_geometry(24)
     cz = n[on][:, 2]

@@ -57,10 +57,10 @@ def _model(case):
                   table_lobes=_lobes(n_phi, thetas, grid, seed=n_phi),
                   table_phis_deg=tuple(360.0 * p / n_phi for p in range(n_phi)))
     if case == "metal":
-        base = brdf.TabulatedTwoScaleBRDF(material="aluminium", micro=brdf.Micro(alpha=0.2),
+        base = brdf.TabulatedTwoScaleBRDF(material="aluminium", micro=brdf.Micro(alpha=0.2, ndf="ggx"),
                                           nano=make_nano("abc:sigma=15nm,B=2um,C=2.6", NODES), **common)
     elif case == "anisotropic":
-        base = brdf.TabulatedTwoScaleBRDF(material="gold", micro=brdf.Micro(alpha=0.1, alpha_y=0.3),
+        base = brdf.TabulatedTwoScaleBRDF(material="gold", micro=brdf.Micro(alpha=0.1, alpha_y=0.3, ndf="ggx"),
                                           nano=make_nano("abc:sigma=15nm,B=2um,C=2.6", NODES),
                                           multiple_scattering=True, **common)
     else:

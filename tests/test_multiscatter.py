@@ -31,14 +31,14 @@ def test_fresnel_average_of_multiple_scattering():
 def test_compensated_albedo_of_a_metal_lies_between_single_scattering_and_F():
     wi = _dir(30)
     for a in (0.3, 1.0):
-        single = MicrofacetBRDF("Au", Micro(alpha=a)).albedo(wi, 550.0)
-        multi = MicrofacetBRDF("Au", Micro(alpha=a), multiple_scattering=True)
+        single = MicrofacetBRDF("Au", Micro(alpha=a, ndf="ggx")).albedo(wi, 550.0)
+        multi = MicrofacetBRDF("Au", Micro(alpha=a, ndf="ggx"), multiple_scattering=True)
         E = float(multi.albedo(wi, 550.0))
         assert float(single) < E < float(multi.material.F(np.cos(np.radians(30)), 550.0)) + 0.05
 
 
 def test_reciprocity_and_sampling_with_compensation():
-    b = MicrofacetBRDF("PMMA", Micro(alpha=0.8), kd=0.3, multiple_scattering=True)
+    b = MicrofacetBRDF("PMMA", Micro(alpha=0.8, ndf="ggx"), kd=0.3, multiple_scattering=True)
     rng = np.random.default_rng(3)
     wi, wo = rng.normal(size=(200, 3)), rng.normal(size=(200, 3))
     wi[:, 2], wo[:, 2] = np.abs(wi[:, 2]), np.abs(wo[:, 2])
@@ -62,8 +62,8 @@ def test_two_scale_functions_take_the_option():
     nano = make_nano("gaussian:sigma=5nm,T=1um", [550.0])
     wi, wo = _dir(30), _dir(50) * np.array([-1.0, 1.0, 1.0])
     for cls, kw in ((TwoScaleBRDF, {}), (TabulatedTwoScaleBRDF, dict(wavelengths_nm=(550.0,), resolution=64))):
-        on = cls("Au", Micro(alpha=0.5), nano=nano, multiple_scattering=True, **kw)
-        off = cls("Au", Micro(alpha=0.5), nano=nano, **kw)
+        on = cls("Au", Micro(alpha=0.5, ndf="ggx"), nano=nano, multiple_scattering=True, **kw)
+        off = cls("Au", Micro(alpha=0.5, ndf="ggx"), nano=nano, **kw)
         assert on.eval(wi, wo, 550.0) > off.eval(wi, wo, 550.0)
 
 
@@ -131,7 +131,7 @@ def test_two_scale_white_furnace_with_multiple_scattering(alpha):
     from waveoptics import brdf, surfaces
 
     nano = brdf.Nano(model=surfaces.PSDModel("gaussian", sigma=15e-9, T=1.5e-6))
-    b = brdf.TwoScaleBRDF(material="1.5", micro=brdf.Micro(alpha=alpha), nano=nano, fresnel="one",
+    b = brdf.TwoScaleBRDF(material="1.5", micro=brdf.Micro(alpha=alpha, ndf="ggx"), nano=nano, fresnel="one",
                           multiple_scattering=True, nodes=64)
     for th in (0.0, 30.0, 60.0, 75.0):
         wi = np.array([np.sin(np.radians(th)), 0.0, np.cos(np.radians(th))])
@@ -145,7 +145,7 @@ def test_two_scale_multiple_scattering_sampling_passes_chi2():
     from waveoptics import brdf, surfaces
 
     nano = brdf.Nano(model=surfaces.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6))
-    b = brdf.TwoScaleBRDF(material="gold", micro=brdf.Micro(alpha=0.7), nano=nano, multiple_scattering=True,
+    b = brdf.TwoScaleBRDF(material="gold", micro=brdf.Micro(alpha=0.7, ndf="ggx"), nano=nano, multiple_scattering=True,
                           nodes=64)
     wi = np.array([np.sin(0.6), 0.0, np.cos(0.6)])
 

@@ -25,7 +25,7 @@ RES = 40  # direction grid of the runs
 def plastic(**over):
     """The smooth-plastic example as a dict (small grid), with overrides."""
     d = {"name": "plastic", "accuracy": {"delta_e": 1.0},
-         "materials": [{"name": "plastic", "ior": 1.5, "roughness": 0.05, "diffuse_albedo": 0.5,
+         "materials": [{"name": "plastic", "ior": 1.5, "roughness": 0.05, "ndf": "ggx", "diffuse_albedo": 0.5,
                         "nano": {"statistics": "gaussian:sigma=0.5nm,T=1um"}}],
          "lights": [{"name": "sun", "spd": "D65", "directions_deg": [[30, 0]]}],
          "view": {"directions_deg": [[0, 0], [30, 180], [60, 180]]},
@@ -64,7 +64,7 @@ def test_example_scenes_load_and_plan(path):
 def test_diffraction_model_is_the_scenes_or_kirchhoff_with_its_reason(tmp_path):
     """A scene may name the diffraction model of a material; otherwise the planner picks Kirchhoff and says why,
     and the run uses the model the plan names."""
-    mat = {"name": "plastic", "ior": 1.5, "roughness": 0.05, "diffuse_albedo": 0.5,
+    mat = {"name": "plastic", "ior": 1.5, "roughness": 0.05, "ndf": "ggx", "diffuse_albedo": 0.5,
            "nano": {"statistics": "gaussian:sigma=20nm,T=1um"}}
     auto = planning.plan_scene(plastic(materials=[mat]))
     e = auto.entries[0]
@@ -196,7 +196,7 @@ def test_metal_has_no_diffuse_term(tmp_path):
 
 def test_laser_scene_simulates_only_the_laser_lines(tmp_path):
     lines = [465.0, 532.0, 638.0]
-    sc = plastic(materials=[{"name": "glass", "material": "BK7", "roughness": 0.05, "diffuse_albedo": 0.3,
+    sc = plastic(materials=[{"name": "glass", "material": "BK7", "roughness": 0.05, "ndf": "ggx", "diffuse_albedo": 0.3,
                              "nano": {"statistics": "abc:sigma=5nm,B=2um,C=2.6"}}],
                  lights=[{"name": "rgb", "spd": "laser:465,532,638", "directions_deg": [[30, 0]]}],
                  output={"spectral_brdf": True, "rgb_images": False, "resolution": 32})
@@ -233,7 +233,7 @@ def test_plastic_skips_diffraction_with_the_same_result_as_forcing_it(tmp_path):
 
 def test_forcing_diffraction_off_removes_the_haze(tmp_path):
     """A polished metal whose haze the planner keeps: forcing diffraction off changes its colour by > target."""
-    d = {"name": "haze", "materials": [{"name": "al", "material": "Al", "roughness": 0.02,
+    d = {"name": "haze", "materials": [{"name": "al", "material": "Al", "roughness": 0.02, "ndf": "ggx",
                                         "nano": {"statistics": "abc:sigma=5nm,B=5um,C=2.5"}}],
          "lights": [{"name": "sun", "spd": "D65", "directions_deg": [[30, 0]]}],
          "view": {"directions_deg": [[25, 180], [40, 180]]},
@@ -258,7 +258,7 @@ def test_forcing_diffuse_off_removes_the_diffuse_albedo(tmp_path):
 
 
 def test_view_patches_equal_the_hemisphere_at_the_view_directions():
-    sc = plastic(materials=[{"name": "al", "material": "Al", "roughness": 0.05,
+    sc = plastic(materials=[{"name": "al", "material": "Al", "roughness": 0.05, "ndf": "ggx",
                              "nano": {"statistics": "abc:sigma=5nm,B=5um,C=2.5"}}],
                  lights=[{"name": "l", "spd": "laser:532", "directions_deg": [[30, 0]]}])
     vals = {}
@@ -344,7 +344,7 @@ def test_height_field_file_fft_and_direct_agree_at_the_views(tmp_path, rt):
     hf = surfaces.generate("sinusoid", amplitude="40nm", period="1.6um", size="12um", samples=128)
     surfaces.save(hf, tmp_path / "grating.npz")
     (tmp_path / "g.toml").write_text(
-        '[[materials]]\nname = "grating"\nmaterial = "Al"\nroughness = 0.005\n'
+        '[[materials]]\nname = "grating"\nmaterial = "Al"\nroughness = 0.005\nndf = "ggx"\n'
         '[materials.nano]\nfile = "grating.npz"\n'
         '[[lights]]\nname = "laser"\nspd = "laser:532"\ndirections_deg = [[20, 0]]\n'
         '[view]\ndirections_deg = [[20, 180], [0.545, 180], [18.85, 0]]\n'
@@ -368,7 +368,7 @@ def test_height_field_file_fft_and_direct_agree_at_the_views(tmp_path, rt):
 
 def test_grating_under_daylight_samples_wavelengths_finer_than_one_cell_per_order():
     """Grating equation: order m moves by m Δλ/Λ in direction cosine, so Δλ ≤ Λ du / m keeps the rainbow whole."""
-    sc = plastic(materials=[{"name": "g", "material": "Al", "roughness": 0.005,
+    sc = plastic(materials=[{"name": "g", "material": "Al", "roughness": 0.005, "ndf": "ggx",
                              "nano": {"generator": {"model": "sinusoid", "amplitude": "40nm", "period": "1.6um",
                                                     "size": "12um", "samples": 128}}}],
                  output={"rgb_images": True})

@@ -63,12 +63,12 @@ def test_two_scale_with_rayleigh_rice_keeps_fresnel_up_to_grazing(theta):
     scatter alike there (within 10 %; before, Kirchhoff scattered 2.6× as much at 85° and 40× at 89°)."""
     nano = make_nano("abc:sigma=5nm,B=3um,C=2.8", [LAM])
     grid = DirectionGrid.hemisphere(128)
-    L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0), nano, grid, diffraction="rayleigh-rice")
+    L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, grid, diffraction="rayleigh-rice")
     F = float(AL.F(math.cos(math.radians(theta)), LAM))
     assert float(L.albedo()[0]) == pytest.approx(F, rel=1e-3)
     assert L.info["diffraction_energy_scale"] == [1.0]
     if theta >= 85:
-        K = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0), nano, grid)
+        K = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, grid)
         assert float(K.albedo("diffraction")[0]) == pytest.approx(float(L.albedo("diffraction")[0]), rel=0.1)
 
 
@@ -104,9 +104,9 @@ def test_height_field_route_uses_the_periodogram():
     stats = make_nano("gaussian:sigma=3nm,T=1um", [LAM])
     grid = DirectionGrid.hemisphere(128)
     for theta in (20.0, 70.0):
-        L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0), nano, grid,
+        L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, grid,
                               diffraction="rayleigh-rice")
-        S = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0), stats, grid,
+        S = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0, ndf="ggx"), stats, grid,
                               diffraction="rayleigh-rice")
         F = float(AL.F(math.cos(math.radians(theta)), LAM))
         assert float(L.albedo()[0]) == pytest.approx(F, rel=1e-3)
@@ -115,7 +115,7 @@ def test_height_field_route_uses_the_periodogram():
 
 def test_pointwise_function_and_command_line(tmp_path):
     nano = make_nano("abc:sigma=5nm,B=3um,C=2.8", [LAM])
-    micro = twoscale.Micro(alpha=0.1)
+    micro = twoscale.Micro(alpha=0.1, ndf="ggx")
     rr = brdf.TwoScaleBRDF(material="Al", micro=micro, nano=nano, diffraction="rayleigh-rice")
     mf = brdf.MicrofacetBRDF("Al", micro)
     wi = _dir(30.0)[None]
@@ -138,7 +138,7 @@ def test_pointwise_function_and_command_line(tmp_path):
 
 
 def _scene(sigma, sphere=True, theta=30):
-    d = {"name": "t", "materials": [{"name": "m", "material": "Al", "roughness": 0.05,
+    d = {"name": "t", "materials": [{"name": "m", "material": "Al", "roughness": 0.05, "ndf": "ggx",
                                      "nano": {"statistics": f"abc:sigma={sigma},B=3um,C=2.8"}}],
          "lights": [{"name": "l", "spd": "D65", "directions_deg": [[theta, 0]]}]}
     if sphere:   # a sphere shows every incidence up to grazing
@@ -196,7 +196,7 @@ def test_polarized_light_keeps_its_fresnel_reflectance(model, pol):
         c, s = math.cos(math.radians(theta)), math.sin(math.radians(theta))
         g = np.sqrt(eta ** 2 - s * s)
         R = abs((c - g) / (c + g)) ** 2 if pol == "s" else abs((eta ** 2 * c - g) / (eta ** 2 * c + g)) ** 2
-        L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0), nano, grid, diffraction=model,
+        L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, grid, diffraction=model,
                               polarization=pol)
         assert float(L.albedo()[0]) == pytest.approx(R, rel=1e-3), theta
         assert L.info["diffraction_energy_scale"] == [1.0]

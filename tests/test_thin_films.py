@@ -314,7 +314,7 @@ def fixed_costs(monkeypatch):
 
 def _plan(material):
     d = {"name": "film", "accuracy": {"delta_e": 1.0},
-         "materials": [{"name": "film", "material": material, "roughness": 0.05}],
+         "materials": [{"name": "film", "material": material, "roughness": 0.05, "ndf": "ggx"}],
          "lights": [{"name": "sun", "spd": "D65", "directions_deg": [[30, 0]]}],
          "view": {"directions_deg": [[0, 0]]},
          "output": {"rgb_images": False, "tables": True, "resolution": 32}}

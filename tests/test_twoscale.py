@@ -38,7 +38,7 @@ def test_zero_micro_roughness_is_exactly_the_nano_diffraction_lobe():
     wi = direction_from_angles(30.0, 0.0)
     nano = twoscale.Nano(model=ABC)
     mat = materials.get_material("Al")
-    L = twoscale.evaluate(wi, W, mat, twoscale.Micro(alpha=0.0), nano, GRID)
+    L = twoscale.evaluate(wi, W, mat, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, GRID)
     wo = GRID.directions()
     h = wi + wo
     h /= np.linalg.norm(h, axis=-1, keepdims=True)
@@ -81,7 +81,7 @@ def test_energy_split_matches_tis_for_smooth_metal():
     wi = direction_from_angles(0.0, 0.0)
     model = surfaces.PSDModel("gaussian", sigma=15e-9, T=4e-6)
     grid = DirectionGrid.hemisphere(256)
-    L = twoscale.evaluate(wi, W, "Al", twoscale.Micro(alpha=0.0), twoscale.Nano(model=model), grid)
+    L = twoscale.evaluate(wi, W, "Al", twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(model=model), grid)
     F = materials.get_material("Al").F(1.0, W)
     g = (4 * np.pi * model.sigma / (W * 1e-9)) ** 2
     np.testing.assert_allclose(L.albedo("coherent"), F * np.exp(-g), rtol=1e-3)
@@ -90,7 +90,7 @@ def test_energy_split_matches_tis_for_smooth_metal():
 
 def test_result_is_smooth_in_wavelength():
     w = np.arange(480.0, 641.0, 10.0)   # 10 nm steps over the middle of the visible: enough to see a jump
-    L = twoscale.evaluate(direction_from_angles(20.0, 0.0), w, "Ag", twoscale.Micro(alpha=0.05),
+    L = twoscale.evaluate(direction_from_angles(20.0, 0.0), w, "Ag", twoscale.Micro(alpha=0.05, ndf="ggx"),
                           twoscale.Nano(model=ABC), GRID)
     a = L.albedo()
     d2 = np.abs(np.diff(a, 2))
@@ -102,11 +102,11 @@ def test_result_is_smooth_in_wavelength():
 def test_dielectric_gets_diffuse_metal_does_not():
     wi = direction_from_angles(30.0, 0.0)
     for mat, expect in (("BK7", True), ("Au", False)):
-        L = twoscale.evaluate(wi, W, mat, twoscale.Micro(alpha=0.1), twoscale.Nano(model=ABC), GRID, kd=0.6)
+        L = twoscale.evaluate(wi, W, mat, twoscale.Micro(alpha=0.1, ndf="ggx"), twoscale.Nano(model=ABC), GRID, kd=0.6)
         assert (L.albedo("diffuse") > 0.3).all() == expect
         assert (L.albedo("diffuse") == 0).all() != expect
     # the diffuse layer gets only what the interface did not reflect: albedo ≈ kd (1 − F(θi)) ≤ kd
-    L = twoscale.evaluate(wi, W, "BK7", twoscale.Micro(alpha=0.1), None, GRID, kd=0.6)
+    L = twoscale.evaluate(wi, W, "BK7", twoscale.Micro(alpha=0.1, ndf="ggx"), None, GRID, kd=0.6)
     F = materials.get_material("BK7").F(wi[2], W)
     np.testing.assert_allclose(L.albedo("diffuse"), 0.6 * (1 - F), rtol=0.03)
 
@@ -187,7 +187,7 @@ def test_height_field_route_keeps_the_reflected_light(kind, solver, theta, rt):
     for seed in range(2 if solver == "fft" else 1):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", scatter.DiffractionWarning)   # 137.5 nm aliases beyond 0.45 at 400 nm
-            L = twoscale.evaluate(wi, w, mat, twoscale.Micro(alpha=0.0), twoscale.Nano(surface=FIELDS[kind](seed)),
+            L = twoscale.evaluate(wi, w, mat, twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(surface=FIELDS[kind](seed)),
                                   grid, solver=solver, kd=0, device=None)
         np.testing.assert_allclose(L.albedo() / F, 1.0, atol=1e-2)
         assert L.info["diffraction_energy_scale"] == [1.0, 1.0]
@@ -244,10 +244,10 @@ def test_height_field_route_matches_psd_route_for_gaussian_surface():
     diff = []
     for seed in (1, 2):
         hf = surfaces.gaussian(sigma=15e-9, corr_length=1e-6, size=32e-6, samples=256, seed=seed)
-        L = twoscale.evaluate(wi, w, "Al", twoscale.Micro(alpha=0.0), twoscale.Nano(surface=hf), grid,
+        L = twoscale.evaluate(wi, w, "Al", twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(surface=hf), grid,
                               solver="fft")
         diff.append(L.albedo("diffraction"))
-    P = twoscale.evaluate(wi, w, "Al", twoscale.Micro(alpha=0.0), twoscale.Nano(model=model), grid)
+    P = twoscale.evaluate(wi, w, "Al", twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(model=model), grid)
     np.testing.assert_allclose(np.mean(diff, axis=0), P.albedo("diffraction"), rtol=0.05)
 
 
@@ -305,7 +305,7 @@ def test_heavy_tailed_psd_keeps_the_reflected_light():
     grid = DirectionGrid.hemisphere(128)
     wi = direction_from_angles(20.0, 0.0)
     nano = twoscale.Nano(model=surfaces.PSDModel("abc", sigma=40e-9, B=3.7e-6, C=2.2))
-    L = twoscale.evaluate(wi, [550.0], mat, twoscale.Micro(alpha=0.0), nano, grid, kd=0)
+    L = twoscale.evaluate(wi, [550.0], mat, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, grid, kd=0)
     assert L.albedo()[0] / float(mat.F(wi[2], 550.0)) == pytest.approx(1.0, abs=1e-2)
     assert L.info["diffraction_energy_scale"] == [1.0]
 
@@ -320,13 +320,13 @@ def test_polarized_two_scale_mirror_reflects_rs_and_rp():
     grid = DirectionGrid.hemisphere(64)
     wi = direction_from_angles(55.0, 0.0)
     Rs, Rp = fresnel.F_sp(wi[2], 1.5)
-    got = {p: twoscale.evaluate(wi, [550.0], mat, twoscale.Micro(alpha=0.0), None, grid, kd=0,
+    got = {p: twoscale.evaluate(wi, [550.0], mat, twoscale.Micro(alpha=0.0, ndf="ggx"), None, grid, kd=0,
                                 polarization=p).albedo()[0] for p in ("s", "p", "unpolarized")}
     assert got["s"] == pytest.approx(float(Rs), rel=1e-6)
     assert got["p"] == pytest.approx(float(Rp), rel=1e-6)
     assert got["unpolarized"] == pytest.approx(0.5 * float(Rs + Rp), rel=1e-6)
     nano = twoscale.Nano(model=surfaces.PSDModel("gaussian", sigma=20e-9, T=1e-6))
-    L = {p: twoscale.evaluate(wi, [550.0], "Au", twoscale.Micro(alpha=0.1), nano, grid, kd=0, polarization=p)
+    L = {p: twoscale.evaluate(wi, [550.0], "Au", twoscale.Micro(alpha=0.1, ndf="ggx"), nano, grid, kd=0, polarization=p)
          for p in ("s", "p", "unpolarized")}
     # each polarization's coherent fraction weighs its scattered light by its own facet reflectance: exact at the
     # macro incidence ((R_s A_s + R_p A_p)/2 = R A), to first order at tilted facets (measured 1.0e-6 of the peak,

@@ -37,18 +37,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import colour, surfaces
-from .brdf import NDFS, SHADOWINGS, twoscale
+# the numerical sub-packages (colour, surfaces, brdf, materials) are imported where they are used, so that the
+# command line can read the fields' defaults (:func:`request_default`) without loading them
 from .errors import FieldError, WaveopticsError, unknown
-from .materials import get_material
-from .surfaces import HeightField
 from .units import check_optical_range, check_theta, check_wavelengths, parse_length, split_spec
-from .vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
+from .vocabulary import (DEFAULT_MATERIAL, DEFAULT_NANO, DEFAULT_NDF, DIFFRACTION, NANO_SOLVERS,
+                         PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS, SHADOWING_NAMES)
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
-           "MAX_NANO_SAMPLES", "SimulationRequest", "parse_nano", "nano_surface_size", "make_nano", "crop"]
-
-#: the default nano roughness: aluminium-like polish, ABC PSD (Holzschuch & Pacanowski 2017 use this family)
+           "MAX_NANO_SAMPLES", "SimulationRequest", "request_default", "parse_nano", "nano_surface_size",
+           "make_nano", "crop"]
 
 #: the documented way to say "no nano roughness" (σ = 0)
 NO_NANO = "gaussian:sigma=0nm,T=1um"
@@ -132,8 +130,11 @@ def nano_surface_size(wavelengths_nm, length_scale_m, *, max_samples=MAX_NANO_SA
     return n * dx, n
 
 
-def crop(hf: HeightField, n: int) -> HeightField:
-    """The central tile of at most n × n samples of *hf* (unchanged if already that small)."""
+def crop(hf, n: int):
+    """The central tile of at most n × n samples of *hf* (a :class:`~waveoptics.surfaces.HeightField`; unchanged if
+    already that small)."""
+    from .surfaces import HeightField
+
     ny, nx = hf.shape
     if ny <= n and nx <= n:
         return hf
@@ -158,7 +159,7 @@ def _generator_args(model: str, p: dict, seed: int) -> dict:
     return args
 
 
-def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None) -> twoscale.Nano | None:
+def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None):
     """A :class:`~waveoptics.brdf.twoscale.Nano` from nano text or a height field; None for σ = 0.
 
     Parameters
@@ -173,8 +174,11 @@ def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None) -> t
     surface : HeightField, str or Path, optional
         A nano height field (object or file).
     """
+    from . import surfaces
+    from .brdf import twoscale
+
     if surface is not None:
-        hf = surface if isinstance(surface, HeightField) else surfaces.load(surface)
+        hf = surface if isinstance(surface, surfaces.HeightField) else surfaces.load(surface)
         if solver == "psd":
             raise FieldError("{solver} 'psd' needs nano statistics (MODEL:...), not a height field", "solver")
         return twoscale.Nano(surface=hf)
@@ -192,9 +196,10 @@ def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None) -> t
 
 
 @functools.lru_cache(maxsize=8)
-def _micro_of_file(path: str, shadowing: str) -> twoscale.Micro:
+def _micro_of_file(path: str, shadowing: str):
     """The tabulated micro roughness of a height-field file (read once per process and path)."""
-    from .brdf import slope_table
+    from . import surfaces
+    from .brdf import slope_table, twoscale
 
     try:
         hf = surfaces.load(path)
@@ -235,8 +240,8 @@ class SimulationRequest:
     illuminant : str
         Light source (:func:`waveoptics.colour.illuminant`).
     wavelengths_nm : tuple of float or None
-        Wavelengths in nm; None: chosen from the illuminant for *accuracy_dE*.
-    accuracy_dE : float
+        Wavelengths in nm; None: chosen from the illuminant for *delta_e*.
+    delta_e : float
         Colour accuracy (ΔE2000) that picks the wavelength step, in (0, 100).
     resolution : int
         Direction-grid cells per axis, in :data:`RESOLUTION_RANGE`.
@@ -265,16 +270,16 @@ class SimulationRequest:
         (off by default).
     """
 
-    material: str = "Al"
+    material: str = DEFAULT_MATERIAL
     nano: str | None = DEFAULT_NANO
     surface: str | None = None
     micro_alpha: float = 0.05
-    ndf: str = "beckmann"
+    ndf: str = DEFAULT_NDF
     shadowing: str = "smith-correlated"
     incident_deg: tuple = (30.0, 0.0)
     illuminant: str = "D65"
     wavelengths_nm: tuple | None = None
-    accuracy_dE: float = 1.0
+    delta_e: float = 1.0
     resolution: int = 128
     solver: str = "auto"
     kd: float = 0.5
@@ -319,16 +324,18 @@ class SimulationRequest:
         kd = _finite_number(self.kd, "kd")
         if not 0 <= kd <= 1:
             raise FieldError(f"{{kd}} {self.kd!r} is not allowed; the diffuse albedo must be in [0, 1]", "kd")
-        acc = _finite_number(self.accuracy_dE, "accuracy_dE")
+        acc = _finite_number(self.delta_e, "delta_e")
         if not 0 < acc < 100:
-            raise FieldError(f"{{accuracy_dE}} {self.accuracy_dE!r} is not allowed; use a ΔE2000 in (0, 100)",
-                             "accuracy_dE")
+            raise FieldError(f"{{delta_e}} {self.delta_e!r} is not allowed; use a ΔE2000 in (0, 100)",
+                             "delta_e")
         for field, allowed in (("solver", SOLVERS), ("precision", PRECISIONS), ("ndf", PARAMETRIC_NDF_NAMES),
-                               ("shadowing", SHADOWINGS), ("diffraction", DIFFRACTION),
+                               ("shadowing", SHADOWING_NAMES), ("diffraction", DIFFRACTION),
                                ("polarization", POLARIZATIONS)):
             if getattr(self, field) not in allowed:
                 raise unknown(field, getattr(self, field), allowed, field=field)
         if self.ndf_shape is not None:
+            from .brdf import twoscale
+
             shape = _finite_number(self.ndf_shape, "ndf_shape")
             try:
                 twoscale.Micro(alpha=min(alpha, 2.0), ndf=self.ndf, ndf_shape=shape)
@@ -358,15 +365,20 @@ class SimulationRequest:
     def validate(self) -> "SimulationRequest":
         """Resolve the names that need data (material, illuminant), so that a typo is one clear error before any
         work starts (in the client, not on a worker)."""
+        from . import colour
+        from .materials import get_material
+
         get_material(self.material)
         colour.illuminant(self.illuminant)
         return self
 
     def wavelengths(self) -> np.ndarray:
-        """Wavelengths in nm: the given ones, or the grid the illuminant needs for *accuracy_dE*."""
+        """Wavelengths in nm: the given ones, or the grid the illuminant needs for *delta_e*."""
+        from . import colour
+
         if self.wavelengths_nm is not None:
             return np.asarray(self.wavelengths_nm, dtype=float)
-        return colour.simulation_wavelengths(colour.illuminant(self.illuminant), self.accuracy_dE)
+        return colour.simulation_wavelengths(colour.illuminant(self.illuminant), self.delta_e)
 
     def resolved(self) -> "SimulationRequest":
         """This request with its wavelength list fixed (chosen once, not again in every task)."""
@@ -374,8 +386,11 @@ class SimulationRequest:
             return self
         return dataclasses.replace(self, wavelengths_nm=tuple(float(x) for x in self.wavelengths()))
 
-    def micro(self) -> twoscale.Micro:
-        """The micro-scale roughness of this request (the slope law of *micro_surface* when it is given)."""
+    def micro(self):
+        """The micro-scale roughness of this request (a :class:`~waveoptics.brdf.Micro`; the slope law of
+        *micro_surface* when it is given)."""
+        from .brdf import twoscale
+
         if self.micro_surface is not None:
             return _micro_of_file(self.micro_surface, self.shadowing)
         return twoscale.Micro(alpha=self.micro_alpha, ndf=self.ndf, shadowing=self.shadowing, ndf_shape=self.ndf_shape)
@@ -388,3 +403,18 @@ class SimulationRequest:
         if self.surface is not None:
             d["nano"] = None
         return d
+
+
+def request_default(field: str):
+    """The default of the :class:`SimulationRequest` field *field*: front ends (the command line's option defaults
+    and help, scene files) read it here instead of restating it.
+
+    Examples
+    --------
+    >>> request_default("ndf"), request_default("micro_alpha")
+    ('beckmann', 0.05)
+    """
+    for f in dataclasses.fields(SimulationRequest):
+        if f.name == field:
+            return f.default
+    raise unknown("request field", field, [f.name for f in dataclasses.fields(SimulationRequest)])

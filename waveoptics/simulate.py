@@ -24,7 +24,7 @@ from .io import figures
 from .io.figures import save_figure
 from .errors import FieldError
 from .materials import get_material
-from .request import DEFAULT_NANO, MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano, parse_nano
+from .request import MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano, parse_nano
 from .scatter.grid import DirectionGrid, integrate
 from .units import direction_from_angles
 
@@ -89,76 +89,53 @@ class Simulation:
         return colour.reflectance_to_rgb(a, self.wavelengths_nm, self.illuminant, space=space)
 
 
-def simulate(material="Al", *, nano=DEFAULT_NANO, surface=None, micro_alpha=0.05, ndf="beckmann",
-             shadowing="smith-correlated", incident=(30.0, 0.0), illuminant="D65", wavelengths=None,
-             accuracy_dE=1.0, resolution=128, solver="auto", kd=0.5, sphere=True, seed=0, device=None,
-             precision="float32", progress=None, split=False, diffraction="kirchhoff",
-             polarization="unpolarized", micro_surface=None, multiple_scattering=False) -> Simulation:
+def simulate(material=None, *, surface=None, incident=None, wavelengths=None, sphere=True, device=None,
+             progress=None, **fields) -> Simulation:
     """Simulate a two-scale surface and the plain microfacet model (keyword form of :func:`run`).
+
+    Every argument left out takes the default of its :class:`~waveoptics.request.SimulationRequest` field.
 
     Parameters
     ----------
-    material : str or Material
+    material : str or Material, optional
         Surface material (see :func:`waveoptics.materials.get_material`).
-    nano : str
-        ``MODEL:params`` nano-roughness (ignored when *surface* is given); σ = 0 disables it
-        (grammar: :func:`waveoptics.request.parse_nano`).
     surface : str, Path or HeightField, optional
         Nano height field (file or object); uses the fft/direct solvers.
-    micro_alpha : float
-        Micro NDF roughness α (≥ 0). ndf, shadowing: see :mod:`waveoptics.brdf`.
-    incident : (θ, φ) degrees
-        Direction of the light for the lobe outputs (and the sphere's light).
-    illuminant : str
-        Light source (see :func:`waveoptics.colour.illuminant`).
+    incident : (θ, φ) degrees, optional
+        Direction of the light for the lobe outputs (and the sphere's light): the field *incident_deg*.
     wavelengths : array_like, nm, optional
-        Wavelengths; default chosen from the illuminant for *accuracy_dE*.
-    accuracy_dE : float
-        Colour accuracy (ΔE2000) that picks the wavelength step.
-    resolution : int
-        Direction grid cells per axis over the projected hemisphere.
-    solver : {"auto", "psd", "fft", "direct"}
-    kd : float
-        Diffuse albedo of a dielectric substrate (metals have none).
+        Wavelengths (the field *wavelengths_nm*); default chosen from the illuminant for *delta_e*.
     sphere : bool
         Also tabulate lobes over incidence angles for sphere renders.
-    seed : int
-        Seed of generated nano surfaces.
     device : str, optional
         OpenCL device (see :func:`waveoptics.runtime.get_runtime`).
-    precision : {"float32", "float64"}
-        OpenCL precision of the height-field solvers.
     progress : callable, optional
         Called with 1 after each lobe set.
-    split : bool
-        *surface* holds both scales: split it (:func:`waveoptics.brdf.twoscale.split_scales`); the micro NDF's α
-        comes from the long-period part's slopes (*micro_alpha* is ignored) and the short-period part diffracts.
-    diffraction : str
-        Diffraction model of the nano lobe (:data:`waveoptics.scatter.DIFFRACTION_MODELS`; default kirchhoff).
-    polarization : {"unpolarized", "s", "p"}
-        Of the incident light, relative to the plane of incidence (sphere renders take it in each pixel's local
-        plane of incidence).
-    micro_surface : str or Path, optional
-        Micro-scale height field (a file) whose slope law is the micro NDF (``tabulated``); *micro_alpha* and
-        *ndf* are then not used.
-    multiple_scattering : bool
-        Add the Kulla-Conty compensation lobe of the micro NDF to both models (off by default).
+    **fields
+        Any other field of :class:`~waveoptics.request.SimulationRequest` (``nano``, ``micro_alpha``, ``ndf``,
+        ``shadowing``, ``illuminant``, ``delta_e``, ``resolution``, ``solver``, ``kd``, ``seed``, ``precision``,
+        ``split``, ``diffraction``, ``polarization``, ``ndf_shape``, ``micro_surface``, ``multiple_scattering``),
+        documented there.
 
     Returns
     -------
     Simulation
     """
     hf = surface if isinstance(surface, surfaces.HeightField) else None
-    req = SimulationRequest(
-        material=material if isinstance(material, str) else getattr(material, "name", str(material)),
-        nano=nano, surface=None if surface is None else ("height field" if hf is not None else str(surface)),
-        micro_alpha=micro_alpha, ndf=ndf, shadowing=shadowing, incident_deg=tuple(incident), illuminant=illuminant,
-        wavelengths_nm=None if wavelengths is None else tuple(np.atleast_1d(np.asarray(wavelengths, float))),
-        accuracy_dE=accuracy_dE, resolution=resolution, solver=solver, kd=kd, precision=precision, seed=seed,
-        split=split, diffraction=diffraction, polarization=polarization,
-        micro_surface=None if micro_surface is None else str(micro_surface), multiple_scattering=multiple_scattering)
-    return run(req, surface=hf, material=None if isinstance(material, str) else material, sphere=sphere,
-               device=device, progress=progress)
+    given = dict(fields)
+    if material is not None:
+        given["material"] = material if isinstance(material, str) else getattr(material, "name", str(material))
+    if surface is not None:
+        given["surface"] = "height field" if hf is not None else str(surface)
+    if incident is not None:
+        given["incident_deg"] = incident
+    if wavelengths is not None:
+        given["wavelengths_nm"] = tuple(np.atleast_1d(np.asarray(wavelengths, float)))
+    if given.get("micro_surface") is not None:
+        given["micro_surface"] = str(given["micro_surface"])
+    req = SimulationRequest(**given)
+    return run(req, surface=hf, material=None if material is None or isinstance(material, str) else material,
+               sphere=sphere, device=device, progress=progress)
 
 
 def _nano_of(req: SimulationRequest, w, surface, micro: twoscale.Micro):

@@ -296,7 +296,7 @@ def brdf_eval_rates(n: int = 100_000, loop: int = 300) -> dict:
         d[:, 2] = np.abs(d[:, 2])
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
-    micro = brdf.Micro(alpha=0.1)
+    micro = brdf.Micro(alpha=0.1, ndf="ggx")   # the NDF the recorded baselines were timed with
     nano = make_nano(DEFAULT_NANO, [550.0])
     models = {"microfacet": brdf.MicrofacetBRDF("gold", micro),
               "twoscale (PSD, quadrature)": brdf.TwoScaleBRDF("gold", micro, nano=nano),

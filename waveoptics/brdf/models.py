@@ -24,6 +24,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import FieldError
+from ..vocabulary import DEFAULT_MATERIAL
 
 __all__ = ['ModelEvaluation', 'function_evaluation', 'microfacet_model', 'kirchhoff_model', 'rayleigh_rice_model',
            'twoscale_model', 'rough_dielectric_model', 'BRDF_MODELS']
@@ -398,7 +399,7 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
     else:
         micro = Micro(alpha=_alpha(alpha, roughness, "twoscale"), alpha_y=alpha_y, ndf=ndf, shadowing=shadowing,
                       ndf_shape=ndf_shape)
-    common = dict(material=spec if spec is not None else "aluminium", micro=micro, kd=kd, diffuse=diffuse,
+    common = dict(material=spec if spec is not None else DEFAULT_MATERIAL, micro=micro, kd=kd, diffuse=diffuse,
                   fresnel=fresnel, diffuse_sigma=float(np.radians(diffuse_sigma_deg)), diffraction=diffraction,
                   multiple_scattering=multiple_scattering)
     cache = {}

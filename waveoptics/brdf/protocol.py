@@ -34,6 +34,7 @@ import numpy as np
 from ..errors import FieldError, unknown
 from ..materials import Material, get_material
 from ..units import check_wavelengths
+from ..vocabulary import DEFAULT_MATERIAL
 from .diffuse import DIFFUSES, diffuse_tradeoff
 from .fresnel_terms import FRESNELS
 from .microfacet import specular_term
@@ -213,7 +214,7 @@ class MicrofacetBRDF(BRDF):
     .. [3] P. Shirley et al., Pacific Graphics 1997 (the diffuse-specular coupling).
     """
 
-    material: Material | str = "aluminium"
+    material: Material | str = DEFAULT_MATERIAL
     micro: Micro = Micro()
     kd: float = 0.0
     diffuse: str = "lambert"

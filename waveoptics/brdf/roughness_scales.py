@@ -17,6 +17,7 @@ import numpy as np
 
 from .. import scatter, surfaces
 from ..errors import WaveopticsError
+from ..vocabulary import DEFAULT_NDF
 from ..surfaces.heightfield import HeightField
 from .field_lobe import bracketing_nodes, field_scattered_albedo
 from .ndf import ALPHA_MAX, ALPHA_MIN
@@ -47,7 +48,7 @@ class Micro:
 
     alpha: float = 0.05
     alpha_y: float | None = None
-    ndf: str = "ggx"
+    ndf: str = DEFAULT_NDF   # one default NDF with the request and scene files (waveoptics.vocabulary)
     shadowing: str = "smith-correlated"
     ndf_shape: float | None = None   # the NDF's shape parameter (ABC's C, EPD's/SGD's p); None: its default
 

@@ -13,7 +13,6 @@ from ._options import option
 FIELD_DESTS = {
     "incident_deg": ("incident",),
     "wavelengths_nm": ("wavelengths",),
-    "accuracy_dE": ("accuracy",),
     "thetas_deg": ("incident_angles",),
     "phi_deg": ("phi",),
     "angles_deg": ("incident_angles",),

@@ -4,14 +4,16 @@ and, where needed, a note on what that command does with it. A test holds every 
 ``docs/cli.md`` is generated from the parsers.
 
 Renamed options keep working for one release as hidden aliases that print a one-line deprecation warning
-(:data:`RENAMED`; the changelog lists them).
+(:data:`RENAMED`; the changelog lists them). Names retired for one name per quantity (:data:`RETIRED`) are refused
+with a one-line error naming the new option.
 """
 from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
 
-__all__ = ["Option", "OPTIONS", "RENAMED", "REMOVED_IN", "option", "renamed", "now_default", "deprecations"]
+__all__ = ["Option", "OPTIONS", "RENAMED", "RETIRED", "REMOVED_IN", "option", "renamed", "retired", "now_default",
+           "deprecations"]
 
 #: the release that drops the aliases of :data:`RENAMED`
 REMOVED_IN = "0.3"
@@ -34,7 +36,7 @@ OPTIONS = {o.flag: o for o in (
     Option("--incident", "direction to the light: θ from the normal, φ about it, in degrees", "THETA[,PHI]",
            unit="deg"),
     Option("--incident-angles", "incident angles θ in degrees: 0:80:10 or 0,30,60", "DEG", unit="deg"),
-    Option("--accuracy", "colour accuracy (ΔE2000) that picks the wavelength step", "DE", float, "ΔE2000"),
+    Option("--delta-e", "colour accuracy (ΔE2000) that picks the wavelength step", "DE", float, "ΔE2000"),
     Option("--material", "material: a name (see 'waveoptics materials'), shelf/book/page, a constant index n+kj "
                          "(1.5, 0.2+3.1j), f0:VALUE, or a thin-film stack SUBSTRATE|FILM:THICKNESS|... (films "
                          "from the substrate outwards, e.g. 'Al|Al2O3:120nm')", "M"),
@@ -109,6 +111,13 @@ RENAMED = {
     ("surface generate", "--model"): "--generator",
 }
 
+#: (command, old flag) → new flag: options renamed so that a quantity has one name everywhere (issue 30); the old
+#: flag is refused with a one-line error naming the new one (it would otherwise keep a second name alive)
+RETIRED = {
+    **{(cmd, "--accuracy"): "--delta-e" for cmd in ("simulate", "compare", "table", "sweep")},
+    ("cost", "--colour-accuracy"): "--delta-e",
+}
+
 
 def _help(meaning: str, note: str | None, default) -> str:
     text = meaning + (f"; {note}" if note else "")
@@ -164,6 +173,23 @@ def renamed(parser, command: str, old: str, *, dest: str, type=None, append: boo
         type = target.type
     parser.add_argument(old, dest=dest, action=_Renamed, new_flag=new, type=type, default=argparse.SUPPRESS,
                         store="append" if append else None, help=argparse.SUPPRESS, choices=choices)
+
+
+class _Retired(argparse.Action):
+    """A retired option's old flag: refused with one line naming its new name."""
+
+    def __init__(self, option_strings, dest, new_flag=None, **kwargs):
+        self.new_flag = new_flag
+        super().__init__(option_strings, dest, nargs="?", **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        parser.error(f"{option_string} is renamed {self.new_flag} (one name per quantity); use {self.new_flag}")
+
+
+def retired(parser, command: str, old: str) -> None:
+    """Refuse the old flag *old* of *command* (:data:`RETIRED`) with a one-line error naming the new flag."""
+    parser.add_argument(old, dest="_retired_" + old.strip("-").replace("-", "_"), action=_Retired,
+                        new_flag=RETIRED[(command, old)], default=argparse.SUPPRESS, help=argparse.SUPPRESS)
 
 
 class _NowDefault(argparse.Action):

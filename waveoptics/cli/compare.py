@@ -10,7 +10,7 @@ from pathlib import Path
 from ..errors import WaveopticsError
 from ..units import check_theta, parse_number_list
 from ._common import add_common, add_output, emit
-from ._options import option, renamed
+from ._options import option, renamed, retired
 
 
 def register(sub):
@@ -23,6 +23,7 @@ def register(sub):
                                    "colour and of rendered spheres. Same surface options as 'simulate'.")
 
     add_scene_options(p)
+    retired(p, "compare", "--accuracy")
     option(p, "--incident-angles", default="0:80:10")
     renamed(p, "compare", "--angles", dest="incident_angles")
     p.add_argument("--tail", type=float, default=10.0, metavar="DEG",

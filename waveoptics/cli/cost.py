@@ -7,9 +7,9 @@ from __future__ import annotations
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
 from ..units import parse_direction
-from ..vocabulary import COST_BUDGET_S, COST_TARGET_ERROR
+from ..vocabulary import COST_BUDGET_S, COST_DELTA_E, COST_TARGET_ERROR, DEFAULT_MATERIAL
 from ._common import add_common, add_output, add_surface, emit, load_surface, parse_budget, progress
-from ._options import option, renamed
+from ._options import option, renamed, retired
 
 
 def _list(text, conv, name):
@@ -38,14 +38,15 @@ def register(sub) -> None:
     option(p, "--size", default="12.8um")
     option(p, "--samples", default="128")
     option(p, "--seed", default=0, note="of the first realization")
-    option(p, "--material", default="Al", note="or 'one' for F = 1")
+    option(p, "--material", default=DEFAULT_MATERIAL, note="or 'one' for F = 1")
     option(p, "--incident", default="30,0")
     option(p, "--illuminant", default="D65")
     p.add_argument("--solvers", default="fft0,fft,direct", help="solvers of the ladder (default fft0,fft,direct)")
     p.add_argument("--resolutions", default="32,64,128",
                    help="direction-grid resolutions; each must divide the largest (default 32,64,128)")
-    p.add_argument("--colour-accuracy", default="4,1,0.5", metavar="DE,...",
-                   help="wavelength grids chosen for these ΔE2000 colour accuracies (default 4,1,0.5)")
+    option(p, "--delta-e", default=list(COST_DELTA_E), nargs="+",
+           note="one rung of the ladder per value, e.g. --delta-e 4 1 0.5 (default 4 1 0.5)")
+    retired(p, "cost", "--colour-accuracy")
     p.add_argument("--realization-counts", default=None, metavar="N,...",
                    help="numbers of surface realizations averaged, one ladder step each (default 1,2 for random "
                         "models, 1 otherwise)")
@@ -84,7 +85,7 @@ def run(args) -> int:
     reals = (_list(args.realization_counts, int, "--realization-counts") if args.realization_counts
              else ([1, 2] if cfg.random else [1]))
     settings = cost.ladder(_list(args.solvers, str, "--solvers"), _list(args.resolutions, int, "--resolutions"),
-                           _list(args.colour_accuracy, float, "--colour-accuracy"), reals,
+                           [float(x) for x in args.delta_e], reals,
                            _list(args.precisions, str, "--precisions"))
     out = prepare_outdir(args.output, overwrite=args.overwrite, expected=cost.FILES) if args.output else None
     rt = get_runtime(args.device)          # the direct rungs (and a direct reference) run on it

@@ -5,62 +5,71 @@ import os
 
 from ..errors import FieldError
 from ..io.files import prepare_outdir
-from ..vocabulary import DEFAULT_NANO, DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
+from ..request import SimulationRequest, request_default
+from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, add_surface, emit, load_surface, progress, warn_if_long
-from ._options import option
+from ._options import option, retired
 
 
 def add_scene_options(p) -> None:
-    """Options that describe the surface, light and sampling (shared by simulate and compare)."""
+    """Options that describe the surface, light and sampling (shared by simulate and compare); their defaults are
+    the fields of :class:`~waveoptics.request.SimulationRequest` (:func:`~waveoptics.request.request_default`)."""
+    d = request_default
     src = p.add_mutually_exclusive_group()
     add_surface(p, group=src, note="the nano height field (fft or direct solver)")
-    option(p, "--nano", group=src, note=f"default {DEFAULT_NANO}; sigma=0 disables it; also "
+    option(p, "--nano", group=src, note=f"default {d('nano')}; sigma=0 disables it; also "
                                          "exponential:sigma=5nm,T=1um, scratches:count=20,width=200nm,depth=30nm")
-    option(p, "--micro-alpha", note="default 0.05")
-    option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note="default beckmann")
+    # micro α, NDF and shape stay None when not given (--micro-surface refuses them), the request fills them in
+    option(p, "--micro-alpha", note=f"default {d('micro_alpha'):g}")
+    option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note=f"default {d('ndf')}")
     option(p, "--ndf-shape")
     option(p, "--micro-surface", note="its own file metadata gives the spacing")
-    option(p, "--multiple-scattering", action="store_true", default=False, note="added to both models")
-    option(p, "--material", default="Al")
-    option(p, "--incident", default="30")
-    option(p, "--illuminant", default="D65")
-    option(p, "--wavelengths", note="default: chosen from the illuminant and --accuracy")
-    option(p, "--accuracy", default=1.0)
-    option(p, "--resolution", default=128)
-    option(p, "--solver", default="auto", choices=NANO_SOLVERS,
+    option(p, "--multiple-scattering", action="store_true", default=d("multiple_scattering"),
+           note="added to both models")
+    option(p, "--material", default=d("material"))
+    option(p, "--incident", default=format_direction(d("incident_deg")))
+    option(p, "--illuminant", default=d("illuminant"))
+    option(p, "--wavelengths", note="default: chosen from the illuminant and --delta-e")
+    option(p, "--delta-e", default=d("delta_e"))
+    option(p, "--resolution", default=d("resolution"))
+    option(p, "--solver", default=d("solver"), choices=NANO_SOLVERS,
            note="psd (statistics), fft or direct (height field); auto picks")
-    option(p, "--kd", default=0.5, note="of a dielectric; metals have none")
-    option(p, "--precision", default="float32", choices=PRECISIONS)
-    option(p, "--seed", default=0)
-    option(p, "--diffraction", default="kirchhoff", choices=DIFFRACTION)
-    option(p, "--polarization", default="unpolarized", choices=POLARIZATIONS,
+    option(p, "--kd", default=d("kd"), note="of a dielectric; metals have none")
+    option(p, "--precision", default=d("precision"), choices=PRECISIONS)
+    option(p, "--seed", default=d("seed"))
+    option(p, "--diffraction", default=d("diffraction"), choices=DIFFRACTION)
+    option(p, "--polarization", default=d("polarization"), choices=POLARIZATIONS,
            note="each facet reflects its own s/p split")
-    p.add_argument("--split", action="store_true",
+    p.add_argument("--split", action="store_true", default=d("split"),
                    help="--surface holds both scales: split it at a cut-off period of 10 λmax; the micro α comes "
                         "from the long-period slopes, the short-period part diffracts")
 
 
-def request_from_args(args):
-    """The :class:`~waveoptics.request.SimulationRequest` the scene options describe (its fields validate them)."""
-    from ..request import DEFAULT_NANO
-    from ..request import SimulationRequest
+def format_direction(theta_phi) -> str:
+    """``θ`` or ``θ,φ`` (degrees) as --incident takes it."""
+    theta, phi = theta_phi
+    return f"{theta:g}" if phi == 0 else f"{theta:g},{phi:g}"
 
+
+def request_from_args(args):
+    """The :class:`~waveoptics.request.SimulationRequest` the scene options describe (its fields validate them;
+    options left unset take the fields' defaults)."""
     if args.micro_surface is not None:
         given = [f for f, v in (("--micro-alpha", args.micro_alpha), ("--ndf", args.ndf),
                                 ("--ndf-shape", args.ndf_shape)) if v is not None]
         if given:
             raise FieldError(f"--micro-surface sets the NDF from the file's slopes; drop {', '.join(given)}",
                              "micro_surface")
+    optional = {"nano": args.nano, "micro_alpha": args.micro_alpha, "ndf": args.ndf, "ndf_shape": args.ndf_shape}
     return SimulationRequest(
-        material=args.material, nano=args.nano or DEFAULT_NANO, surface=args.surface,
-        micro_alpha=0.05 if args.micro_alpha is None else args.micro_alpha, ndf=args.ndf or "beckmann",
-        micro_surface=args.micro_surface, multiple_scattering=args.multiple_scattering,
-        incident_deg=parse_direction(args.incident), illuminant=args.illuminant,
+        surface=args.surface, material=args.material, micro_surface=args.micro_surface,
+        multiple_scattering=args.multiple_scattering, incident_deg=parse_direction(args.incident),
+        illuminant=args.illuminant,
         wavelengths_nm=None if args.wavelengths is None else tuple(parse_wavelengths(args.wavelengths)),
-        accuracy_dE=args.accuracy, resolution=args.resolution, solver=args.solver, kd=args.kd,
+        delta_e=args.delta_e, resolution=args.resolution, solver=args.solver, kd=args.kd,
         precision=args.precision, seed=args.seed, split=args.split, diffraction=args.diffraction,
-        polarization=args.polarization, ndf_shape=args.ndf_shape)
+        polarization=args.polarization, **{k: v for k, v in optional.items() if v is not None})
 
 
 def _surface(args):
@@ -95,6 +104,7 @@ def register(sub):
                     "previews, sphere renders of both models and their ΔE2000, lobe cross-sections and "
                     "summary.json. With no options it runs a nano-rough aluminium under D65.")
     add_scene_options(p)
+    retired(p, "simulate", "--accuracy")
     option(p, "--sphere-size", default=256)
     option(p, "--environment", note="also render both spheres lit by it (multiple importance sampling at "
                                     "--sphere-size; sphere_env_*.exr and sphere_env.png)")

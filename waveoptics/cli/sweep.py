@@ -27,7 +27,7 @@ def register(sub):
                         "STOP:STEP, a bare STEP in START's unit)  micro_alpha=0.05,0.2  theta=0:60:30")
     option(p, "--incident", note="default 30; with a scene file, its light's first direction")
     option(p, "--sphere-size", default=64, note="for the per-pixel ΔE2000; 0 skips the renders")
-    add_case_options(p, resolution=64)
+    add_case_options(p, command="sweep", resolution=64)
     option(p, "--output", short="-o", required=True, metavar="OUT.csv", note="a table (.csv or .json)")
     add_cluster_options(p)
     add_common(p)

@@ -8,41 +8,46 @@ from pathlib import Path
 
 
 from ..errors import WaveopticsError
+from ..request import request_default
 from ..units import parse_number_list, parse_wavelengths
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, PRECISIONS
 from ._common import SURFACE_FORMATS_HELP, add_common, add_workers, emit, progress
-from ._options import option
+from ._options import option, retired
 
 SCENE_SUFFIXES = (".toml",)
 
 
-def add_case_options(p, *, resolution: int) -> None:
+def add_case_options(p, *, command: str, resolution: int) -> None:
     """Options describing one two-scale case (material, nano/micro roughness, spectrum, grid, solver).
 
-    With a scene file they override the scene's values; their defaults are None so that "not given" is visible.
+    With a scene file they override the scene's values; their defaults are None so that "not given" is visible, and
+    the help states the :class:`~waveoptics.request.SimulationRequest` field's default
+    (:func:`~waveoptics.request.request_default`).
     """
-    option(p, "--nano", note="instead of a SURFACE file (default abc:sigma=10nm,B=2um,C=2.6)")
+    d = request_default
+    option(p, "--nano", note=f"instead of a SURFACE file (default {d('nano')})")
     for flag in ("--spacing", "--units", "--channel"):
         option(p, flag)
-    option(p, "--material", note="default Al; with a scene file: the name of one of its materials (default the "
-                                 "first)")
+    option(p, "--material", note=f"default {d('material')}; with a scene file: the name of one of its materials "
+                                 "(default the first)")
     p.add_argument("--light", default=None, metavar="NAME",
                    help="with a scene file: the name of one of its lights (default the first)")
-    option(p, "--micro-alpha", note="default 0 with a SURFACE file, whose heights are the whole geometry; 0.05 "
-                                    "with --nano")
-    option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note="default beckmann")
+    option(p, "--micro-alpha", note="default 0 with a SURFACE file, whose heights are the whole geometry; "
+                                    f"{d('micro_alpha'):g} with --nano")
+    option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note=f"default {d('ndf')}")
     option(p, "--ndf-shape")
-    option(p, "--wavelengths", note="default: chosen from the illuminant and --accuracy")
-    option(p, "--illuminant", note="for RGB and the default wavelengths (default D65)")
-    option(p, "--accuracy", note="default 1.0")
+    option(p, "--wavelengths", note="default: chosen from the illuminant and --delta-e")
+    option(p, "--illuminant", note=f"for RGB and the default wavelengths (default {d('illuminant')})")
+    option(p, "--delta-e", note=f"default {d('delta_e')}")
+    retired(p, command, "--accuracy")
     option(p, "--resolution", note=f"default {resolution}")
     p.set_defaults(default_resolution=resolution)
-    option(p, "--solver", default="auto", choices=NANO_SOLVERS,
+    option(p, "--solver", default=d("solver"), choices=NANO_SOLVERS,
            note="psd (statistics), fft or direct (height field); auto picks")
-    option(p, "--diffraction", default="kirchhoff", choices=DIFFRACTION)
-    option(p, "--kd", note="of a dielectric; metals have none (default 0.5)")
-    option(p, "--precision", default="float32", choices=PRECISIONS)
-    option(p, "--seed", note="default 0")
+    option(p, "--diffraction", default=d("diffraction"), choices=DIFFRACTION)
+    option(p, "--kd", note=f"of a dielectric; metals have none (default {d('kd')})")
+    option(p, "--precision", default=d("precision"), choices=PRECISIONS)
+    option(p, "--seed", note=f"default {d('seed')}")
 
 
 def add_cluster_options(p) -> None:
@@ -62,11 +67,10 @@ def case_from_args(args, *, source=None):
     file. Options left unset take the request's defaults (or the scene's values)."""
     from .. import distributed
     from ..planning import scene
-    from ..request import DEFAULT_NANO
     from ..request import SimulationRequest
 
     given = dict(wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)) if args.wavelengths else None,
-                 micro_alpha=args.micro_alpha, ndf=args.ndf, ndf_shape=args.ndf_shape, illuminant=args.illuminant, accuracy_dE=args.accuracy,
+                 micro_alpha=args.micro_alpha, ndf=args.ndf, ndf_shape=args.ndf_shape, illuminant=args.illuminant, delta_e=args.delta_e,
                  resolution=args.resolution, solver=args.solver, kd=args.kd, precision=args.precision,
                  diffraction=args.diffraction,
                  seed=args.seed, incident_deg=getattr(args, "incident_deg", None))
@@ -94,8 +98,9 @@ def case_from_args(args, *, source=None):
         kw.setdefault("micro_alpha", 0.0)  # a height field carries its own slopes
     if args.material:
         kw["material"] = args.material
-    case = SimulationRequest(nano=None if source else (args.nano or DEFAULT_NANO),
-                             surface=str(source) if source else None, **kw)
+    if source is None and args.nano:
+        kw["nano"] = args.nano
+    case = SimulationRequest(**({"nano": None, "surface": str(source)} if source else {}), **kw)
     if source is None and meta_opts:
         raise WaveopticsError(f"--{meta_opts[0]} describes a SURFACE file; give one")
     hf = None
@@ -122,7 +127,7 @@ def register(sub):
     option(p, "--realizations", default=1, note="seeds of a generated --nano surface need --solver fft/direct")
     p.add_argument("--batch", type=int, default=None, metavar="B",
                    help="wavelengths per task (default 8)")
-    add_case_options(p, resolution=128)
+    add_case_options(p, command="table", resolution=128)
     option(p, "--output", short="-o", required=True, metavar="OUT.h5", note="an HDF5 file")
     option(p, "--max-memory", note="of one task")
     add_cluster_options(p)

@@ -102,13 +102,13 @@ def step_errors(illuminant, steps_nm=STEPS_NM, observer=DEFAULT_OBSERVER, reflec
     return out
 
 
-def simulation_wavelengths(illuminant, accuracy_dE: float = 0.5, observer=DEFAULT_OBSERVER,
+def simulation_wavelengths(illuminant, delta_e: float = 0.5, observer=DEFAULT_OBSERVER,
                            reflectances=None, method: str = "linear") -> np.ndarray:
     """The wavelengths (nm) a simulation must compute to reach a colour accuracy under a light source.
 
     Line SPDs: exactly their visible lines (accuracy is then exact). Continuous SPDs: the coarsest uniform grid
     among :data:`STEPS_NM` whose worst ΔE2000 over the test reflectances (see :func:`step_errors`) stays
-    ≤ *accuracy_dE* against 1 nm sampling (falls back to 1 nm), when the simulated spectra are integrated
+    ≤ *delta_e* against 1 nm sampling (falls back to 1 nm), when the simulated spectra are integrated
     with the same *method* (see :func:`tristimulus_weights`).
 
     Notes
@@ -119,10 +119,10 @@ def simulation_wavelengths(illuminant, accuracy_dE: float = 0.5, observer=DEFAUL
     spd = as_spd(illuminant)
     if spd.lines:
         return spectral_grid(spd, observer=observer)
-    if not (math.isfinite(accuracy_dE) and accuracy_dE > 0):
-        raise WaveopticsError(f"colour accuracy {accuracy_dE!r} ΔE is not allowed; it must be > 0")
+    if not (math.isfinite(delta_e) and delta_e > 0):
+        raise WaveopticsError(f"colour accuracy {delta_e!r} ΔE is not allowed; it must be > 0")
     errors = step_errors(spd, STEPS_NM[:-1], observer, reflectances, method)
     for step, (dE, _) in errors.items():
-        if dE <= accuracy_dE:
+        if dE <= delta_e:
             return spectral_grid(spd, step, observer)
     return spectral_grid(spd, 1.0, observer)

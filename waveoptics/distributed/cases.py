@@ -11,7 +11,8 @@ import numpy as np
 from .. import io, surfaces
 from ..brdf import twoscale
 from ..errors import WaveopticsError
-from ..request import NO_NANO, SimulationRequest, make_nano
+from ..planning.scene import request_of
+from ..request import SimulationRequest, make_nano
 
 __all__ = ['case_from_scene', 'surface_digest']
 
@@ -35,44 +36,22 @@ def case_from_scene(sc, *, material: str | None = None, light: str | None = None
         The height field of a nano ``file`` or ``generator`` (loaded or generated here, in the client, with the
         scene's seed); statistics stay text and run on the PSD route.
     """
+    req = request_of(sc, material, light, **overrides)
     mat = sc.material(material) if material is not None else sc.materials[0]
-    if light is None:
-        li = sc.lights[0]
-    else:
-        found = [x for x in sc.lights if x.name == light]
-        if not found:
-            raise WaveopticsError(f"scene {sc.name!r} has no light {light!r}; it has "
-                                  f"{', '.join(x.name for x in sc.lights)}")
-        li = found[0]
-    kw = dict(material=mat.material, micro_alpha=mat.roughness, ndf=mat.ndf, ndf_shape=mat.ndf_shape,
-              shadowing=mat.shadowing,
-              kd=mat.diffuse_albedo, illuminant=li.spd, incident_deg=tuple(li.directions_deg[0]),
-              accuracy_dE=sc.delta_e, seed=sc.seed, nano=NO_NANO, surface=None,
-              multiple_scattering=mat.multiple_scattering)
-    if mat.micro_surface is not None:
-        if mat.micro_surface.params:
-            raise WaveopticsError(f"{sc.path or sc.name}: material {mat.name!r} micro_surface: tables and sweeps "
-                                  "read it as a plain path; use a file that states its own spacing and units "
-                                  "(.npy with its sidecar, .x3p, ...)")
-        kw.update(micro_surface=str(mat.micro_surface.path), micro_alpha=0.05, ndf="beckmann", ndf_shape=None)
-    if sc.output.resolution is not None:
-        kw["resolution"] = sc.output.resolution
+    if mat.micro_surface is not None and mat.micro_surface.params:
+        raise WaveopticsError(f"{sc.path or sc.name}: material {mat.name!r} micro_surface: tables and sweeps "
+                              "read it as a plain path; use a file that states its own spacing and units "
+                              "(.npy with its sidecar, .x3p, ...)")
     hf = None
-    where = f"{sc.path or sc.name}: material {mat.name!r} nano"
-    if mat.nano is not None and mat.nano.kind == "statistics":
-        kw["nano"] = mat.nano.text
-    elif mat.nano is not None and mat.nano.kind == "file":
+    if mat.nano is not None and mat.nano.kind == "file":
         hf = surfaces.load(mat.nano.path, **mat.nano.params)
-        kw.update(nano=None, surface=str(mat.nano.path))
-    elif mat.nano is not None:
+    elif mat.nano is not None and mat.nano.kind == "generator":
         params = dict(mat.nano.params)
         model = params.pop("model")
         if "seed" in inspect.signature(surfaces.GENERATORS[model]).parameters:
             params.setdefault("seed", sc.seed)
         hf = surfaces.generate(model, **params)
-        kw.update(nano=None, surface=f"{where} {mat.nano.describe()}")
-    kw.update({k: v for k, v in overrides.items() if v is not None})
-    return SimulationRequest(**kw), hf
+    return req, hf
 
 
 def case_token(data) -> str:

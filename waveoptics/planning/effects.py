@@ -20,7 +20,7 @@ from ..brdf import twoscale
 from ..errors import FieldError
 from ..materials import Material
 from ..planning.scene import MaterialSpec, Scene
-from ..request import make_nano
+from ..request import make_nano, request_default
 from ..scatter.series import roughness_g
 from ..units import parse_length
 from .colour_estimate import proxy_model, colour_shift
@@ -66,7 +66,7 @@ class Entry:
     kd: float = 0.0
     hf: object = None
     proxy: object = None
-    diffraction: bool = False
+    diffracts: bool = False                  # the decision: the nano lobe is computed
     g_series: float = 0.0
     w_sim: np.ndarray = None
     lam_independent: bool = False
@@ -78,10 +78,10 @@ class Entry:
     patches: list = field(default_factory=list)
     time_s: float = 0.0
     precision: str = "float64"
-    diffraction_model: str = "kirchhoff"
+    diffraction: str = request_default("diffraction")   # the nano lobe's model (the request field)
 
     @property
-    def dE(self) -> float:
+    def delta_e(self) -> float:
         return self.scene.delta_e
 
     @property
@@ -146,7 +146,7 @@ def decide_diffraction(e: Entry) -> None:
         if e.force.get("diffraction") or "solver" in e.force:
             raise FieldError(f"{{force}} diffraction: material {e.spec.name!r} has no nano surface "
                              "(add [materials.nano] with statistics, generator or file)", "force")
-        e.diffraction = False
+        e.diffracts = False
         e.decide("diffraction", "off", "no nano surface given: the microfacet model is the whole BRDF")
         return
     if e.spec.nano.kind != "statistics":
@@ -164,13 +164,13 @@ def decide_diffraction(e: Entry) -> None:
     why = (f"σ = {sigma * 1e9:.3g} nm, σ/λ_min = {sigma / (e.lam_min * 1e-9):.3g}, g ≤ {g_max:.3g}, "
            f"scattered fraction ≤ {s:.2g} (TIS ≤ {s * F_max:.2g})")
     if e.force.get("diffraction") is not None or "solver" in e.force:
-        e.diffraction = e.force.get("diffraction", True)
-        e.decide("diffraction", "on" if e.diffraction else "off", f"forced ({why})")
+        e.diffracts = e.force.get("diffraction", True)
+        e.decide("diffraction", "on" if e.diffracts else "off", f"forced ({why})")
     elif s < FLAT_SCATTER:
-        e.diffraction = False
+        e.diffracts = False
         e.decide("diffraction", "off", f"{why}: the nano surface is flat at these wavelengths")
     elif e.g_series > PSD_G_MAX:
-        e.diffraction = True
+        e.diffracts = True
         e.decide("diffraction", "on", f"{why}: g(θ_o = 0) = {e.g_series:.3g} > {PSD_G_MAX:g}, almost no coherent "
                                       "reflection is left (and the PSD estimate does not apply)")
     else:
@@ -180,12 +180,12 @@ def decide_diffraction(e: Entry) -> None:
         est, info = colour_shift(e.mat, e.micro, e.proxy, e.spd, dirs, views_deg=e.views, hemisphere=hemi,
                                  kd=e.kd)
         e.metrics.update(estimated_delta_e=est, estimate_resolution=info["resolution"])
-        e.diffraction = est > ESTIMATE_SHARE * e.dE
+        e.diffracts = est > ESTIMATE_SHARE * e.delta_e
         proxy_note = "" if e.statistical else " (height field through a Gaussian-statistics proxy)"
-        cmp = ">" if e.diffraction else "≤"
-        e.decide("diffraction", "on" if e.diffraction else "off",
-                 f"{why}; coarse estimate{proxy_note}: ΔE2000 {est:.2g} {cmp} {ESTIMATE_SHARE:g} × target {e.dE:g}"
-                 + ("" if e.diffraction else ", so only the microfacet model runs"))
+        cmp = ">" if e.diffracts else "≤"
+        e.decide("diffraction", "on" if e.diffracts else "off",
+                 f"{why}; coarse estimate{proxy_note}: ΔE2000 {est:.2g} {cmp} {ESTIMATE_SHARE:g} × target {e.delta_e:g}"
+                 + ("" if e.diffracts else ", so only the microfacet model runs"))
 
 
 
@@ -193,13 +193,13 @@ def decide_diffraction_model(e: Entry) -> None:
     """The scene's model when it names one; else Kirchhoff, the model whose limits are measured (flat patch = F,
     exp(−g), grating orders, the Beckmann limit), with a note when the light comes near grazing incidence, where
     its factor K grows as 1/cosθ_i (docs/physics.md §10; docs/wave-optics.md compares the models)."""
-    if not e.diffraction:
+    if not e.diffracts:
         return
     if e.spec.diffraction != "auto":
-        e.diffraction_model = e.spec.diffraction
+        e.diffraction = e.spec.diffraction
         e.decide("diffraction model", e.spec.diffraction, "set by the scene")
         return
-    e.diffraction_model = "kirchhoff"
+    e.diffraction = request_default("diffraction")
     thetas = [t for t, _ in e.light.directions_deg] if not e.sphere else list(np.linspace(0.0, 88.0, 45))
     theta_max = max(thetas)
     # first order holds at an incidence while g = (k σ_rel (cosθ_i + 1))², the largest over its outgoing directions,
@@ -207,7 +207,7 @@ def decide_diffraction_model(e: Entry) -> None:
     g_any = (first_order_g(e.proxy, thetas, e.lam_min) if e.spec.nano.kind == "statistics"
              else float(roughness_g(e.proxy.sigma, 2.0, e.lam_min)))
     if theta_max > KIRCHHOFF_GRAZING_DEG and e.spec.nano.kind == "statistics" and g_any <= RAYLEIGH_RICE_G_MAX:
-        e.diffraction_model = "rayleigh-rice"
+        e.diffraction = "rayleigh-rice"
         e.decide("diffraction model", "rayleigh-rice",
                  f"light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}° on a surface smooth at these "
                  f"incidences (g = (kσ_rel(cosθ_i + 1))² ≤ {g_any:.2g} ≤ {RAYLEIGH_RICE_G_MAX:g}, first-order "
@@ -221,7 +221,7 @@ def decide_diffraction_model(e: Entry) -> None:
     if e.spec.nano.kind == "statistics":
         choice = _map_choice(e, thetas)
         if choice.model == "rayleigh-rice" and g_any <= RAYLEIGH_RICE_G_MAX:
-            e.diffraction_model = "rayleigh-rice"
+            e.diffraction = "rayleigh-rice"
             e.decide("diffraction model", "rayleigh-rice",
                      "first-order perturbation theory measured closer to the rigorous solution than Kirchhoff by more "
                      f"than the map's noise, and the surface is smooth at these incidences (g ≤ {g_any:.2g}): "
@@ -281,7 +281,7 @@ def decide_wavelengths(e: Entry) -> None:
         e.lam_min = float(np.min(e.w_colour))
     if e.spd.lines:
         e.w_sim = e.w_colour = colour.simulation_wavelengths(e.spd)
-        e.lam_independent = (not e.diffraction) and _constant_over(e.mat, e.w_sim) and e.w_sim.size > 1
+        e.lam_independent = (not e.diffracts) and _constant_over(e.mat, e.w_sim) and e.w_sim.size > 1
         if e.lam_independent:
             e.w_sim = np.array([])
             e.decide("wavelengths", "none (1 evaluation)",
@@ -289,7 +289,7 @@ def decide_wavelengths(e: Entry) -> None:
                      "one evaluation serves every line")
         else:
             e.decide("wavelengths", fmt_nm(e.w_sim), f"line source {e.spd.name}: only its visible lines carry light")
-    elif not e.diffraction and _constant_over(e.mat, e.w_colour):
+    elif not e.diffracts and _constant_over(e.mat, e.w_colour):
         e.lam_independent = True
         e.w_sim = np.array([])
         e.decide("wavelengths", "none (1 evaluation)",
@@ -303,7 +303,7 @@ def decide_wavelengths(e: Entry) -> None:
         e.lam_independent = False
         e.w_sim = e.w_colour
         e.decide("wavelengths", fmt_nm(e.w_sim), f"smooth spectra under {e.spd.name}: the coarsest grid whose "
-                                                  f"colour error on smooth reflectances stays ≤ ΔE {e.dE:g}"
+                                                  f"colour error on smooth reflectances stays ≤ ΔE {e.delta_e:g}"
                                                   + (f"; {film[1]}" if film is not None else ""))
     e.metrics["wavelength_count"] = int(max(e.w_sim.size, 1))
 
@@ -312,7 +312,7 @@ def decide_nano_route(e: Entry) -> None:
     """The PSD series for Gaussian statistics within its range; a height field (fft or direct, chosen by cost
     later) otherwise."""
     e.nano, e.solver = None, "none"
-    if not e.diffraction:
+    if not e.diffracts:
         e.decide("solver", "none", "no diffraction: closed-form microfacet model")
         return
     want = e.force.get("solver")
@@ -336,7 +336,7 @@ def decide_nano_route(e: Entry) -> None:
 def refine_wavelengths_for_grating(e: Entry) -> None:
     """A periodic nano surface under a continuous source: its orders move by m Δλ / Λ in direction cosine; keep
     that within one grid cell so the rainbow has no gaps (grating equation, docs/physics.md §5)."""
-    periodic = e.diffraction and e.spec.nano.kind == "generator" and e.spec.nano.params["model"] == "sinusoid"
+    periodic = e.diffracts and e.spec.nano.kind == "generator" and e.spec.nano.params["model"] == "sinusoid"
     if not periodic or e.spd.lines:
         return
     du = 2.0 / e.resolution

@@ -56,7 +56,7 @@ def decide_resolution(e: Entry) -> None:
     """The grid resolves the narrowest lobe within the colour target (or the height field's specular spike)."""
     if e.micro.alpha > 0:
         e.widths["micro lobe"] = lobe_width(min(e.micro.alpha, e.micro.alpha_y or e.micro.alpha), min(e.cos_i))
-    if e.diffraction and e.nano is not None and e.nano.model is not None:
+    if e.diffracts and e.nano is not None and e.nano.model is not None:
         e.widths["nano lobe"] = diffraction_lobe_width(e.nano.model, e.lam_min)
     hi = min(RESOLUTION_RANGE[1], e.max_resolution or RESOLUTION_RANGE[1])
     lo = min(RESOLUTION_RANGE[0], hi)
@@ -64,8 +64,8 @@ def decide_resolution(e: Entry) -> None:
         e.resolution = int(e.force.get("resolution", e.scene.output.resolution))
         e.decide("resolution", e.resolution, "set by the scene's output.resolution")
         return
-    need = {k: int(math.ceil(2.0 / grid_step(s, e.dE))) for k, s in e.widths.items() if s > 0}
-    if e.hf is not None and e.diffraction:
+    need = {k: int(math.ceil(2.0 / grid_step(s, e.delta_e))) for k, s in e.widths.items() if s > 0}
+    if e.hf is not None and e.diffracts:
         L = max(e.hf.extent)
         need["the height field's specular spike"] = int(math.ceil(2.0 * L / (e.lam_min * 1e-9)))
     if not need:
@@ -76,7 +76,7 @@ def decide_resolution(e: Entry) -> None:
     e.resolution = int(np.clip(need[key], lo, hi))
     note = f"{key} needs {need[key]} cells per side " + (
         f"(du ≤ λ_min/L, L = {L * 1e6:.3g} µm)" if key.startswith("the height") else
-        f"(linear interpolation within ΔE {e.dE:g}: du ≤ {grid_step(e.widths[key], e.dE):.3g})")
+        f"(linear interpolation within ΔE {e.delta_e:g}: du ≤ {grid_step(e.widths[key], e.delta_e):.3g})")
     if need[key] > hi:
         note += f"; capped at {hi} (narrower lobes keep their energy and colour, not their shape)"
     elif need[key] < lo:
@@ -113,7 +113,7 @@ def _costs(e: Entry, options: dict) -> tuple[dict, dict]:
     if terms is not None:
         t_band = band_table_time(e.nano.model, e.lam_min, e.mat, e.light.directions_deg[0][0])
         e.metrics.update(band_table_s=t_band)
-    hf_solvers = e.diffraction and e.solver in (None, "fft", "direct")
+    hf_solvers = e.diffracts and e.solver in (None, "fft", "direct")
     hf_info = {"hf_solvers": hf_solvers}
     if hf_solvers:
         smp = scatter.samples(e.hf)
@@ -206,7 +206,7 @@ def decide_precision(e: Entry) -> None:
         return
     h_max = float(np.max(np.abs(e.hf.heights - e.hf.heights.mean())))
     floor = float32_floor(e.hf.heights.size, h_max, e.lam_min)
-    level = weakest_level(e.dE, max(e.hf.extent), e.lam_min)
+    level = weakest_level(e.delta_e, max(e.hf.extent), e.lam_min)
     e.metrics.update(float32_floor=floor, weakest_level=level)
     if "precision" in e.force:
         e.precision = e.force["precision"]

@@ -10,6 +10,7 @@ import numpy as np
 from .. import colour
 from ..brdf import twoscale
 from ..materials import Material
+from ..request import SimulationRequest, request_default
 from ..planning.scene import MaterialSpec, Scene
 from ..simulate import sphere_evaluations
 from .costmodel import CostModel
@@ -44,7 +45,8 @@ class EntryPlan:
     decisions: list = field(default_factory=list)  # (decision, value, reason)
     metrics: dict = field(default_factory=dict)
     forced: dict = field(default_factory=dict)
-    diffraction: str = "kirchhoff"           # diffraction model of the nano lobe
+    diffraction: str = request_default("diffraction")   # diffraction model of the nano lobe
+    request: SimulationRequest | None = None  # the scene's request with the decisions applied (the runner's input)
 
     @property
     def name(self) -> str:
@@ -91,7 +93,7 @@ class Plan:
 
     def as_dict(self) -> dict:
         return {"scene": self.scene.name, "path": str(self.scene.path) if self.scene.path else None,
-                "accuracy_delta_e": self.scene.delta_e, "force": self.force,
+                "delta_e": self.scene.delta_e, "force": self.force,
                 "materials": [e.as_dict() for e in self.entries],
                 "estimated_time_s": self.estimated_time_s, "planning_time_s": self.planning_time_s,
                 "cost_model": self.cost_model.as_dict()}

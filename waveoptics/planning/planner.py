@@ -63,6 +63,7 @@ References
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -70,7 +71,8 @@ import numpy as np
 
 from .. import colour
 from ..materials import get_material
-from ..planning.scene import MaterialSpec, Scene
+from ..planning.scene import MaterialSpec, Scene, request_of
+from ..vocabulary import NANO_SOLVERS
 from .costmodel import CostModel, calibration
 from .effects import (decide_diffraction, decide_diffraction_model, decide_diffuse, decide_multiple_scattering,
                       decide_nano_route, decide_wavelengths, Entry, refine_wavelengths_for_grating)
@@ -89,17 +91,22 @@ DECISIONS = (decide_diffuse, decide_diffraction, decide_diffraction_model, decid
 def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostModel, device,
                 max_resolution: int | None) -> EntryPlan:
     """Plan one (material, light) pair: take every decision of :data:`DECISIONS` in turn."""
+    req = request_of(scene, spec.name, light.name)
     e = Entry(scene, spec, light, force, cm, device, max_resolution)
-    e.mat = get_material(spec.material)
-    e.spd = colour.illuminant(light.spd)
+    e.mat = get_material(req.material)
+    e.spd = colour.illuminant(req.illuminant)
     e.micro = spec.micro()
     e.cos_i = [math.cos(math.radians(t)) for t, _ in light.directions_deg]
     e.cos_max = 1.0 if e.sphere else max(e.cos_i)
-    e.w_colour = colour.simulation_wavelengths(e.spd, e.dE)
+    e.w_colour = colour.simulation_wavelengths(e.spd, e.delta_e)
     e.lam_min = float(np.min(e.w_colour))
     for decide in DECISIONS:
         decide(e)
-    effects = {"specular": True, "diffraction": bool(e.diffraction), "diffuse": bool(e.diffuse),
+    decided = dataclasses.replace(   # the request the runner evaluates: the scene's, with the decisions applied
+        req, solver=e.solver if e.solver in NANO_SOLVERS else "auto", kd=float(e.kd), precision=e.precision,
+        diffraction=e.diffraction, resolution=int(e.resolution),
+        wavelengths_nm=tuple(float(x) for x in (e.w_sim if e.w_sim.size else e.w_colour)))
+    effects = {"specular": True, "diffraction": bool(e.diffracts), "diffuse": bool(e.diffuse),
                "multiple_scattering": bool(e.spec.multiple_scattering),
                "spectral": not e.lam_independent, "sphere": e.sphere}
     return EntryPlan(spec=spec, light_name=light.name, spd=e.spd, material=e.mat,
@@ -107,7 +114,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
                      solver=e.solver, resolution=e.resolution, directions=e.directions, view_directions_deg=e.views,
                      wavelengths_nm=e.w_sim, colour_wavelengths_nm=e.w_colour, precision=e.precision, kd=e.kd,
                      sphere=e.sphere, estimated_time_s=float(e.time_s), patches=e.patches, decisions=e.decisions,
-                     metrics=e.metrics, forced=dict(force), diffraction=e.diffraction_model)
+                     metrics=e.metrics, forced=dict(force), diffraction=e.diffraction, request=decided)
 
 
 def plan_scene(scene: Scene, *, force: dict | None = None, device=None, max_resolution: int | None = None,

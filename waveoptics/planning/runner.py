@@ -84,13 +84,15 @@ class EntryResult:
 
 
 def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
-    """Evaluate the planned two-scale (or microfacet) BRDF of one entry."""
+    """Evaluate the planned two-scale (or microfacet) BRDF of one entry: its request (the scene's, with the
+    planner's decisions applied) on the entry's directions."""
 
     t0 = time.perf_counter()
+    req = e.request
     w = e.wavelengths_nm if e.wavelengths_nm.size else np.array([LAMBDA_REF_NM])
-    kw = dict(solver=e.solver if e.nano is not None else "auto", kd=e.kd, diffuse="lambert" if e.kd > 0 else "none",
-              device=device, precision=e.precision, diffraction=e.diffraction,
-              multiple_scattering=e.effects.get("multiple_scattering", False))
+    kw = dict(solver=req.solver if e.nano is not None else "auto", kd=req.kd,
+              diffuse="lambert" if req.kd > 0 else "none", device=device, precision=req.precision,
+              diffraction=req.diffraction, multiple_scattering=req.multiple_scattering)
     nano = e.nano if e.effects["diffraction"] else None
     hemi = DirectionGrid.hemisphere(e.resolution)
 
@@ -108,12 +110,12 @@ def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
     brdfs = None
     if e.sphere:   # BRDF functions for per-pixel renders: diffracted lobes tabulated over incidence by ev
         thetas, n_phi = sphere_nodes(e.micro.alpha_y is None and (nano is None or nano.model is not None))
-        wave = TabulatedTwoScaleBRDF(material=e.material, micro=e.micro, nano=nano, kd=e.kd,
-                                     diffuse="lambert" if e.kd > 0 else "none",
+        wave = TabulatedTwoScaleBRDF(material=e.material, micro=e.micro, nano=nano, kd=req.kd,
+                                     diffuse=kw["diffuse"],
                                      wavelengths_nm=tuple(e.colour_wavelengths_nm), thetas_deg=thetas, n_phi=n_phi,
-                                     diffraction=e.diffraction, lobes_at=lambda wi: ev(wi, hemi),
+                                     diffraction=req.diffraction, lobes_at=lambda wi: ev(wi, hemi),
                                      progress=progress, multiple_scattering=kw["multiple_scattering"])
-        brdfs = (wave, MicrofacetBRDF(e.material, e.micro, kd=e.kd, diffuse="lambert" if e.kd > 0 else "none",
+        brdfs = (wave, MicrofacetBRDF(e.material, e.micro, kd=req.kd, diffuse=kw["diffuse"],
                                       multiple_scattering=kw["multiple_scattering"]))
     return EntryResult(e, lobes, brdfs, time.perf_counter() - t0)
 

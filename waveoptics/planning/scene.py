@@ -18,8 +18,8 @@ Schema (``examples/scenes/*.toml`` are worked examples)::
     [[materials]]
     name = "gold"                        # unique
     material = "Au"                      # preset, shelf/book/page or f0:...   (or: ior = 1.5 / "0.2+3.1j")
-    roughness = 0.1                      # micro NDF alpha >= 0
-    ndf = "ggx"                          # ggx | beckmann | blinn-phong | abc | epd | sgd
+    roughness = 0.1                      # micro NDF alpha >= 0, default 0.05
+    ndf = "ggx"                          # ggx | beckmann (default) | blinn-phong | abc | epd | sgd
     # ndf_shape = 1.5                    # abc's C, epd's or sgd's p (default: the NDF's own)
     # micro_surface = "micro.npy"        # or {path, spacing, units, channel}: the NDF is this height field's
     #                                    #   slope law (tabulated; instead of roughness, ndf and ndf_shape)
@@ -65,7 +65,7 @@ from ..colour.illuminants import illuminant
 from ..vocabulary import DIFFRACTION, PARAMETRIC_NDF_NAMES
 from ..errors import WaveopticsError, did_you_mean
 from ..materials.database import get_material
-from ..request import parse_nano
+from ..request import NO_NANO, SimulationRequest, parse_nano, request_default
 from ..units import parse_length
 
 try:  # Python >= 3.11
@@ -74,7 +74,7 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 
-__all__ = ['KEYS', 'CAMERAS', 'DEFAULT_DELTA_E', 'DEFAULT_LIGHT_DIRECTIONS', 'NanoSpec', 'MaterialSpec', 'LightSpec', 'ViewSpec', 'OutputSpec', 'Scene', 'parse', 'load']
+__all__ = ['KEYS', 'CAMERAS', 'DEFAULT_DELTA_E', 'DEFAULT_LIGHT_DIRECTIONS', 'NanoSpec', 'MaterialSpec', 'LightSpec', 'ViewSpec', 'OutputSpec', 'Scene', 'parse', 'load', 'request_of']
 
 #: allowed keys per table (the schema); values are checked by the parsers below
 KEYS = {
@@ -89,7 +89,8 @@ KEYS = {
     "output": ("spectral_brdf", "rgb_images", "tables", "resolution", "sphere_size"),
 }
 CAMERAS = ("sphere",)
-DEFAULT_DELTA_E = 1.0
+#: defaults of scene keys that are request fields: the :class:`~waveoptics.request.SimulationRequest` field's
+DEFAULT_DELTA_E = request_default("delta_e")
 DEFAULT_LIGHT_DIRECTIONS = ((30.0, 0.0),)
 
 
@@ -129,15 +130,15 @@ class MaterialSpec:
 
     name: str
     material: str
-    roughness: float = 0.05
-    ndf: str = "ggx"
-    shadowing: str = "smith-correlated"
-    diffuse_albedo: float = 0.5
+    roughness: float = request_default("micro_alpha")
+    ndf: str = request_default("ndf")
+    shadowing: str = request_default("shadowing")
+    diffuse_albedo: float = request_default("kd")
     nano: NanoSpec | None = None
     ndf_shape: float | None = None   # the NDF's shape parameter (ABC's C, EPD's/SGD's p); None: its default
     diffraction: str = "auto"        # a model of waveoptics.vocabulary.DIFFRACTION, or auto (the planner picks)
     micro_surface: NanoSpec | None = None   # a height-field file whose slope law is the NDF (kind "file")
-    multiple_scattering: bool = False       # add the Kulla-Conty compensation lobe
+    multiple_scattering: bool = request_default("multiple_scattering")   # add the Kulla-Conty compensation lobe
 
     def micro(self):
         """The micro roughness (:class:`waveoptics.brdf.Micro`): the slope law of *micro_surface* when given, else
@@ -186,7 +187,7 @@ class Scene:
     output: OutputSpec = OutputSpec()
     delta_e: float = DEFAULT_DELTA_E
     description: str = ""
-    seed: int = 0
+    seed: int = request_default("seed")
     path: Path | None = None
 
     def material(self, name: str) -> MaterialSpec:
@@ -382,13 +383,13 @@ def _material(ctx, t, key, base) -> MaterialSpec:
         micro_surface = NanoSpec("file", path=path, params=opts)
     return MaterialSpec(
         name=name, material=spec, micro_surface=micro_surface,
-        multiple_scattering=_bool(ctx, t.get("multiple_scattering", False), key + ".multiple_scattering"),
-        roughness=_number(ctx, t.get("roughness", 0.05), key + ".roughness", lo=0.0, hi=2.0),
-        ndf=_choice(ctx, t.get("ndf", "ggx"), key + ".ndf", PARAMETRIC_NDF_NAMES),
+        multiple_scattering=_bool(ctx, t.get("multiple_scattering", request_default("multiple_scattering")), key + ".multiple_scattering"),
+        roughness=_number(ctx, t.get("roughness", request_default("micro_alpha")), key + ".roughness", lo=0.0, hi=2.0),
+        ndf=_choice(ctx, t.get("ndf", request_default("ndf")), key + ".ndf", PARAMETRIC_NDF_NAMES),
         ndf_shape=_ndf_shape(ctx, t, key),
-        shadowing=_choice(ctx, t.get("shadowing", "smith-correlated"), key + ".shadowing",
+        shadowing=_choice(ctx, t.get("shadowing", request_default("shadowing")), key + ".shadowing",
                           tuple(brdf.SHADOWINGS)),
-        diffuse_albedo=_number(ctx, t.get("diffuse_albedo", 0.5), key + ".diffuse_albedo", lo=0.0, hi=1.0),
+        diffuse_albedo=_number(ctx, t.get("diffuse_albedo", request_default("kd")), key + ".diffuse_albedo", lo=0.0, hi=1.0),
         nano=_nano(ctx, t["nano"], key + ".nano", base) if "nano" in t else None,
         diffraction=_choice(ctx, t.get("diffraction", "auto"), key + ".diffraction", ("auto",) + DIFFRACTION))
 
@@ -397,11 +398,11 @@ def _ndf_shape(ctx, t, key):
     """materials.ndf_shape: a number in the NDF's range, only for an NDF that has a shape parameter."""
     if "ndf_shape" not in t:
         return None
-    spec = brdf.NDFS.get(t.get("ndf", "ggx"))
+    spec = brdf.NDFS.get(t.get("ndf", request_default("ndf")))
     if spec is None or spec.shape is None:
         raise ctx.err(key + ".ndf_shape", f"applies to NDFs with a shape parameter "
                                           f"({', '.join(k for k, v in brdf.NDFS.items() if v.shape)}), not "
-                                          f"{t.get('ndf', 'ggx')!r}")
+                                          f"{t.get('ndf', request_default('ndf'))!r}")
     lo, hi = brdf.ndf.SHAPE_RANGE[spec.name]
     return _number(ctx, t["ndf_shape"], key + ".ndf_shape", lo=lo, hi=None if math.isinf(hi) else hi, lo_open=True)
 
@@ -477,7 +478,7 @@ def parse(data: dict, *, where: str = "scene", base: Path | None = None, name: s
     return Scene(name=_string(ctx, data.get("name", name), "name"), materials=mats, lights=lights, view=view,
                  output=output, delta_e=delta_e,
                  description=str(data.get("description", "")),
-                 seed=_int(ctx, data.get("seed", 0), "seed", 0, 2**63 - 1))
+                 seed=_int(ctx, data.get("seed", request_default("seed")), "seed", 0, 2**63 - 1))
 
 
 def load(path) -> Scene:
@@ -493,3 +494,54 @@ def load(path) -> Scene:
         raise WaveopticsError(f"{p}: not a UTF-8 text file") from None
     sc = parse(data, where=str(p), base=p.parent, name=p.stem)
     return Scene(**{**sc.__dict__, "path": p})
+
+
+def request_of(sc: Scene, material: str | None = None, light: str | None = None, **overrides) -> SimulationRequest:
+    """The :class:`~waveoptics.request.SimulationRequest` of one (material, light) pair of a scene: the request
+    that the planner, tables and sweeps start from (scene keys left out keep the fields' defaults).
+
+    Parameters
+    ----------
+    sc : Scene
+        A validated scene.
+    material, light : str, optional
+        Names of the scene material and light; default the first of each. The light gives the illuminant and
+        the incident direction (its first one); the scene's ``accuracy.delta_e``, ``output.resolution`` and
+        ``seed`` are used too.
+    **overrides
+        Request fields that replace the scene's values (e.g. ``resolution=32``); None values are ignored.
+
+    Returns
+    -------
+    SimulationRequest
+        A nano ``file`` or ``generator`` is named by *surface* (a path or a description): its height field is
+        read or generated by the caller; statistics stay text (*nano*). A *micro_surface* is its path.
+    """
+    mat = sc.material(material) if material is not None else sc.materials[0]
+    if light is None:
+        li = sc.lights[0]
+    else:
+        found = [x for x in sc.lights if x.name == light]
+        if not found:
+            raise WaveopticsError(f"scene {sc.name!r} has no light {light!r}; it has "
+                                  f"{', '.join(x.name for x in sc.lights)}")
+        li = found[0]
+    kw = dict(material=mat.material, micro_alpha=mat.roughness, ndf=mat.ndf, ndf_shape=mat.ndf_shape,
+              shadowing=mat.shadowing, kd=mat.diffuse_albedo, illuminant=li.spd,
+              incident_deg=tuple(li.directions_deg[0]), delta_e=sc.delta_e, seed=sc.seed, nano=NO_NANO,
+              surface=None, multiple_scattering=mat.multiple_scattering)
+    if mat.diffraction != "auto":
+        kw["diffraction"] = mat.diffraction
+    if mat.micro_surface is not None:   # the NDF is the field's slope law: the parametric keys keep their defaults
+        kw.update(micro_surface=str(mat.micro_surface.path), micro_alpha=request_default("micro_alpha"),
+                  ndf=request_default("ndf"), ndf_shape=None)
+    if sc.output.resolution is not None:
+        kw["resolution"] = sc.output.resolution
+    if mat.nano is not None and mat.nano.kind == "statistics":
+        kw["nano"] = mat.nano.text
+    elif mat.nano is not None and mat.nano.kind == "file":
+        kw.update(nano=None, surface=str(mat.nano.path))
+    elif mat.nano is not None:
+        kw.update(nano=None, surface=f"{sc.path or sc.name}: material {mat.name!r} nano {mat.nano.describe()}")
+    kw.update({k: v for k, v in overrides.items() if v is not None})
+    return SimulationRequest(**kw)

@@ -60,9 +60,9 @@ from ..io.files import atomic_path, prepare_outdir, write_json
 from ..runtime import get_runtime
 from ..surfaces.heightfield import HeightField
 from ..units import split_spec
-from ..vocabulary import COST_BUDGET_S, COST_TARGET_ERROR
+from ..vocabulary import COST_BUDGET_S, COST_DELTA_E, COST_TARGET_ERROR
 
-__all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_COLOUR_DE', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'REFERENCE_SOLVERS', 'DEFAULT_TARGET_ERROR', 'DEFAULT_BUDGET_S', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
+__all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_DELTA_E', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'REFERENCE_SOLVERS', 'DEFAULT_TARGET_ERROR', 'DEFAULT_BUDGET_S', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
 
 #: setting solver name -> keyword arguments of :func:`waveoptics.scatter.scatter`
 SOLVERS = {
@@ -76,7 +76,7 @@ PRECISIONS = ("float32", "float64")
 #: default ladder
 DEFAULT_SOLVERS = ("fft0", "fft", "direct")
 DEFAULT_RESOLUTIONS = (32, 64, 128)
-DEFAULT_COLOUR_DE = (4.0, 1.0, 0.5)
+DEFAULT_DELTA_E = COST_DELTA_E
 DEFAULT_PRECISIONS = ("float32", "float64")
 #: realizations of the reference for random surfaces (at least twice the ladder's largest)
 REFERENCE_REALIZATIONS = 4
@@ -167,7 +167,7 @@ class Setting:
 
     solver: str = "fft"
     resolution: int = 64
-    colour_de: float = 1.0
+    delta_e: float = 1.0
     realizations: int = 1
     precision: str = "float32"
 
@@ -179,8 +179,8 @@ class Setting:
         for name, v in (("resolution", self.resolution), ("realizations", self.realizations)):
             if isinstance(v, bool) or int(v) != v or v < 1:
                 raise WaveopticsError(f"{name}={v!r} is not allowed; it must be an integer >= 1")
-        if not (math.isfinite(self.colour_de) and self.colour_de > 0):
-            raise WaveopticsError(f"colour accuracy {self.colour_de!r} is not allowed; it must be > 0 (ΔE2000)")
+        if not (math.isfinite(self.delta_e) and self.delta_e > 0):
+            raise WaveopticsError(f"colour accuracy {self.delta_e!r} is not allowed; it must be > 0 (ΔE2000)")
 
     def scatter_kwargs(self) -> dict:
         kw = dict(SOLVERS[self.solver], resolution=int(self.resolution), realizations=int(self.realizations))
@@ -191,7 +191,7 @@ class Setting:
     def label(self) -> str:
         p = f" {self.precision}" if self.solver == "direct" else ""
         r = f" x{self.realizations}" if self.realizations > 1 else ""
-        return f"{self.solver}{p} {self.resolution}² ΔE{self.colour_de:g}{r}"
+        return f"{self.solver}{p} {self.resolution}² ΔE{self.delta_e:g}{r}"
 
     def sentence(self) -> str:
         """The setting in words (for the recommendation a user acts on)."""
@@ -200,16 +200,16 @@ class Setting:
         p = f" in {self.precision}" if self.solver == "direct" else ""
         r = f", averaged over {self.realizations} surface realizations" if self.realizations > 1 else ""
         return (f"{solver}{p}, resolution {self.resolution} ({self.resolution}² directions), wavelengths spaced "
-                f"for a colour error below ΔE2000 {self.colour_de:g}{r}")
+                f"for a colour error below ΔE2000 {self.delta_e:g}{r}")
 
 
-def ladder(solvers=DEFAULT_SOLVERS, resolutions=DEFAULT_RESOLUTIONS, colour_de=DEFAULT_COLOUR_DE,
+def ladder(solvers=DEFAULT_SOLVERS, resolutions=DEFAULT_RESOLUTIONS, delta_e=DEFAULT_DELTA_E,
            realizations=(1,), precisions=DEFAULT_PRECISIONS) -> list[Setting]:
     """All combinations of the given choices; the precision varies only for the ``direct`` solver (the ``fft``
     solvers run in float64 on the host), float64 ``direct`` only at the densest wavelength grid."""
     out = []
-    finest = min(colour_de)
-    for s, r, d, n in itertools.product(solvers, resolutions, colour_de, realizations):
+    finest = min(delta_e)
+    for s, r, d, n in itertools.product(solvers, resolutions, delta_e, realizations):
         if s == "direct":
             out += [Setting(s, r, d, n, p) for p in precisions if p == "float32" or d == finest]
         else:
@@ -351,7 +351,7 @@ def reference_setting(settings, cfg: Config, solver: str = "fft", precision: str
     if solver not in REFERENCE_SOLVERS:
         raise unknown("reference solver", solver, REFERENCE_SOLVERS)
     res = max(s.resolution for s in settings)
-    de = min(s.colour_de for s in settings) / 2
+    de = min(s.delta_e for s in settings) / 2
     n = max(REFERENCE_REALIZATIONS, 2 * max(s.realizations for s in settings)) if cfg.random else 1
     if solver == "direct" and precision == "float64" and runtime is not None and not runtime.fp64:
         solver = "fft"
@@ -408,7 +408,7 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
     dict
         ``{"config", "reference", "settings": [...], "pareto": [indices], "metric", "target_error",
         "recommendation", "skipped": [...], "budget_s", "time_s"}``; each setting row holds ``solver``,
-        ``resolution``, ``wavelengths`` (count), ``wavelengths_nm``, ``colour_de``, ``realizations``,
+        ``resolution``, ``wavelengths`` (count), ``wavelengths_nm``, ``delta_e``, ``realizations``,
         ``precision``, ``error_rel_l2``, ``error_albedo``, ``delta_e2000``, ``time_s``, ``warnings``,
         ``same_as_reference`` (the reference's own solver, precision, grid and wavelengths: error 0 by
         construction, so never on the Pareto front nor recommended), ``skipped`` (why, or None), and for random
@@ -443,20 +443,20 @@ def study(cfg: Config, settings: list[Setting] | None = None, *, budget_s: float
         return wl_of[de]
 
     _warm_up(settings + [ref_s], runtime)
-    wl_ref = wavelengths(ref_s.colour_de)
+    wl_ref = wavelengths(ref_s.delta_e)
     ref_runs, ref, ref_row = _reference_run(cfg, ref_s, wl_ref, runtime)
     if progress is not None:
         progress(1)
 
     order = sorted(range(len(settings)), key=lambda i: (settings[i].solver != "fft0", settings[i].solver == "direct",
-                                                        _units(settings[i], wavelengths(settings[i].colour_de).size)))
+                                                        _units(settings[i], wavelengths(settings[i].delta_e).size)))
     rows: list[dict] = [None] * len(settings)
     rate: dict = {}
     skipped = []
     spent = 0.0
     for i in order:
         s = settings[i]
-        wl = wavelengths(s.colour_de)
+        wl = wavelengths(s.delta_e)
         row = {**dataclasses.asdict(s), "wavelengths": int(wl.size), "wavelengths_nm": wl}
         # a setting that computes what the reference computes has error 0 by construction: it is timed, but kept
         # out of the Pareto front and the recommendation
