@@ -21,7 +21,7 @@ SCENES = ROOT / "examples" / "scenes"
 
 #: the planner's thresholds in the order of the page's table (their meaning is in the template)
 THRESHOLDS = ("ESTIMATE_RESOLUTION", "ESTIMATE_STEP_NM", "ESTIMATE_SPHERE_THETAS", "ESTIMATE_SHARE", "FLAT_SCATTER",
-              "PSD_G_MAX", "DE_PER_RELATIVE_Y", "RESOLUTION_RANGE", "PATCH_SIGMAS", "LAMBDA_REF_NM", "F_FLAT_TOL",
+              "PSD_G_MAX", "DE_PER_RELATIVE_Y", "PLAN_RESOLUTION_RANGE", "PATCH_SIGMAS", "LAMBDA_REF_NM", "F_FLAT_TOL",
               "ORDER_EFFICIENCY_MIN", "LSTAR_SLOPE_BLACK", "FLOOR_MARGIN")
 
 

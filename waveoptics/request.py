@@ -44,7 +44,7 @@ from .units import check_optical_range, check_theta, check_wavelengths, parse_le
 from .vocabulary import (DEFAULT_MATERIAL, DEFAULT_NANO, DEFAULT_NDF, DIFFRACTION, NANO_SOLVERS,
                          PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS, SHADOWING_NAMES)
 
-__all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "SOLVERS", "PRECISIONS", "RESOLUTION_RANGE",
+__all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "request_default", "parse_nano", "nano_surface_size",
            "make_nano", "crop"]
 
@@ -64,9 +64,6 @@ NANO_ALIASES = {"corr": "T", "corr_length": "T", "corr-length": "T", "a": "ampli
                  "b": "B", "c": "C", "rms": "sigma"}
 _NANO_OPTIONAL = ("orientation", "spread")
 _NANO_ZERO_OK = ("sigma", "depth", "amplitude")
-
-#: nano-lobe solvers a request may name, and OpenCL precisions (:mod:`waveoptics.vocabulary`)
-SOLVERS, PRECISIONS = NANO_SOLVERS, PRECISIONS
 
 #: allowed direction-grid resolutions (cells per axis)
 RESOLUTION_RANGE = (8, 2048)
@@ -246,7 +243,7 @@ class SimulationRequest:
     resolution : int
         Direction-grid cells per axis, in :data:`RESOLUTION_RANGE`.
     solver : str
-        Nano-lobe solver, one of :data:`SOLVERS`.
+        Nano-lobe solver, one of :data:`waveoptics.vocabulary.NANO_SOLVERS`.
     kd : float
         Diffuse albedo of a dielectric substrate, in [0, 1] (metals have none).
     precision : str
@@ -328,7 +325,7 @@ class SimulationRequest:
         if not 0 < acc < 100:
             raise FieldError(f"{{delta_e}} {self.delta_e!r} is not allowed; use a ΔE2000 in (0, 100)",
                              "delta_e")
-        for field, allowed in (("solver", SOLVERS), ("precision", PRECISIONS), ("ndf", PARAMETRIC_NDF_NAMES),
+        for field, allowed in (("solver", NANO_SOLVERS), ("precision", PRECISIONS), ("ndf", PARAMETRIC_NDF_NAMES),
                                ("shadowing", SHADOWING_NAMES), ("diffraction", DIFFRACTION),
                                ("polarization", POLARIZATIONS)):
             if getattr(self, field) not in allowed:

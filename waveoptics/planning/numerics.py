@@ -25,7 +25,7 @@ from .costmodel import best_of, band_table_time, direct_calibration, fft_solver_
 from .decisions import LAMBDA_REF_NM, diffraction_lobe_width, float32_floor, grid_step, lobe_width, weakest_level
 from .effects import Entry
 from .report import fmt_s
-from .thresholds import FLOOR_MARGIN, PATCH_SIGMAS, PSD_G_MAX, RESOLUTION_RANGE
+from .thresholds import FLOOR_MARGIN, PATCH_SIGMAS, PSD_G_MAX, PLAN_RESOLUTION_RANGE
 
 #: the decisions are private steps of :func:`waveoptics.planning.plan_scene`
 __all__ = []
@@ -58,8 +58,8 @@ def decide_resolution(e: Entry) -> None:
         e.widths["micro lobe"] = lobe_width(min(e.micro.alpha, e.micro.alpha_y or e.micro.alpha), min(e.cos_i))
     if e.diffracts and e.nano is not None and e.nano.model is not None:
         e.widths["nano lobe"] = diffraction_lobe_width(e.nano.model, e.lam_min)
-    hi = min(RESOLUTION_RANGE[1], e.max_resolution or RESOLUTION_RANGE[1])
-    lo = min(RESOLUTION_RANGE[0], hi)
+    hi = min(PLAN_RESOLUTION_RANGE[1], e.max_resolution or PLAN_RESOLUTION_RANGE[1])
+    lo = min(PLAN_RESOLUTION_RANGE[0], hi)
     if e.scene.output.resolution is not None or "resolution" in e.force:
         e.resolution = int(e.force.get("resolution", e.scene.output.resolution))
         e.decide("resolution", e.resolution, "set by the scene's output.resolution")

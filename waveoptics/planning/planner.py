@@ -33,7 +33,7 @@ For every (material, light) pair of a :class:`waveoptics.planning.scene.Scene` t
     deviation s (direction cosines) at spacing du errs by at most du² / (8 s²) of its peak, and a relative
     luminance error ε moves CIEDE2000 by about :data:`DE_PER_RELATIVE_Y` · ε at mid grey, so
     du ≤ s √(8 ΔE / DE_PER_RELATIVE_Y). Height-field solvers also need du ≤ λ_min / L to sample the specular
-    spike of a patch of length L. The result is clipped to :data:`RESOLUTION_RANGE`.
+    spike of a patch of length L. The result is clipped to :data:`PLAN_RESOLUTION_RANGE`.
 ``directions``
     The whole hemisphere when the outputs show it (images, spectral BRDF, sphere camera); otherwise only
     patches around the view directions (:data:`PATCH_SIGMAS` lobe widths wide, so that the micro-facet

@@ -4,7 +4,7 @@ decisions they drive; :mod:`waveoptics.planning.planner` says why each has its v
 from __future__ import annotations
 
 __all__ = ['ESTIMATE_RESOLUTION', 'ESTIMATE_STEP_NM', 'ESTIMATE_SPHERE_THETAS', 'ESTIMATE_SHARE', 'PSD_G_MAX',
-           'FLAT_SCATTER', 'RESOLUTION_RANGE', 'PATCH_SIGMAS', 'F_FLAT_TOL', 'FLOOR_MARGIN', 'KIRCHHOFF_GRAZING_DEG',
+           'FLAT_SCATTER', 'PLAN_RESOLUTION_RANGE', 'PATCH_SIGMAS', 'F_FLAT_TOL', 'FLOOR_MARGIN', 'KIRCHHOFF_GRAZING_DEG',
            'RAYLEIGH_RICE_G_MAX', 'FILM_NODES_PER_FRINGE']
 
 #: cells per side of the coarse grid on which the colour shift of diffraction is estimated
@@ -20,7 +20,7 @@ PSD_G_MAX = 30.0
 #: scattered fractions below this are "flat" (no estimate is run)
 FLAT_SCATTER = 1e-9
 #: smallest and largest direction grid (cells per side) the planner picks
-RESOLUTION_RANGE = (32, 256)
+PLAN_RESOLUTION_RANGE = (32, 256)
 #: view patches span this many lobe standard deviations around each view direction
 PATCH_SIGMAS = 3.0
 #: relative spread of F over the spectrum below which a material counts as wavelength-independent

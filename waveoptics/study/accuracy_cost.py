@@ -62,10 +62,10 @@ from ..surfaces.heightfield import HeightField
 from ..units import split_spec
 from ..vocabulary import COST_BUDGET_S, COST_DELTA_E, COST_TARGET_ERROR
 
-__all__ = ['SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_DELTA_E', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'REFERENCE_SOLVERS', 'DEFAULT_TARGET_ERROR', 'DEFAULT_BUDGET_S', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
+__all__ = ['STUDY_SOLVERS', 'METRICS', 'PRECISIONS', 'DEFAULT_SOLVERS', 'DEFAULT_RESOLUTIONS', 'DEFAULT_DELTA_E', 'DEFAULT_PRECISIONS', 'REFERENCE_REALIZATIONS', 'REFERENCE_SOLVERS', 'DEFAULT_TARGET_ERROR', 'DEFAULT_BUDGET_S', 'Config', 'model_config', 'parse_model', 'Setting', 'ladder', 'Run', 'errors', 'pareto_front', 'recommend', 'reference_setting', 'study', 'table', 'plot', 'FILES', 'write']
 
 #: setting solver name -> keyword arguments of :func:`waveoptics.scatter.scatter`
-SOLVERS = {
+STUDY_SOLVERS = {
     "fft0": {"solver": "fft", "order": 0},
     "fft": {"solver": "fft", "order": "auto"},
     "direct": {"solver": "direct"},
@@ -172,8 +172,8 @@ class Setting:
     precision: str = "float32"
 
     def __post_init__(self):
-        if self.solver not in SOLVERS:
-            raise unknown("solver", self.solver, SOLVERS)
+        if self.solver not in STUDY_SOLVERS:
+            raise unknown("solver", self.solver, STUDY_SOLVERS)
         if self.precision not in PRECISIONS:
             raise unknown("precision", self.precision, PRECISIONS)
         for name, v in (("resolution", self.resolution), ("realizations", self.realizations)):
@@ -183,7 +183,7 @@ class Setting:
             raise WaveopticsError(f"colour accuracy {self.delta_e!r} is not allowed; it must be > 0 (ΔE2000)")
 
     def scatter_kwargs(self) -> dict:
-        kw = dict(SOLVERS[self.solver], resolution=int(self.resolution), realizations=int(self.realizations))
+        kw = dict(STUDY_SOLVERS[self.solver], resolution=int(self.resolution), realizations=int(self.realizations))
         if self.solver == "direct":
             kw["precision"] = self.precision
         return kw
