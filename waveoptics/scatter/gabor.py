@@ -79,7 +79,7 @@ class GaborKernels:
     a_j = P⁻¹ A r_j, so that φ_j − r_jᵀ A P⁻¹ g_j = k s·p_j; and c_j = (P⁻¹ ∇h_j, ½ ∇h_jᵀ P⁻¹ ∇h_j), so that
     −½ g_jᵀ P⁻¹ g_j = −k² (½ s_xyᵀ P⁻¹ s_xy + (s_z s_x, s_z s_y, s_z²)·c_j); and the 2 × 2 matrix P⁻¹."""
 
-    def __init__(self, w, p, c, P_inv):
+    def __init__(self, w, p, c, P_inv):       # w (N,), p and c (3, N), P_inv (2, 2)
         self.w, self.p, self.c, self.P_inv = w, p, c, P_inv
 
     @property
@@ -134,13 +134,15 @@ def gabor_kernels(field, fp: Footprint, *, kernel_sigma: float = KERNEL_SIGMA,
     B = np.linalg.inv(Sk)
     P_inv = np.linalg.inv(A + B)
     Q = np.linalg.inv(S + Sk)                      # A − A P⁻¹ A (Woodbury): the footprint widened by the kernel
-    r = np.stack([rx.ravel(), ry.ravel()], axis=1)
-    grad = np.stack([gx.ravel(), gy.ravel()], axis=1)
-    w = dx * dy * math.sqrt(np.linalg.det(B) * np.linalg.det(P_inv)) * np.exp(-0.5 * np.einsum("ni,ij,nj->n", r, Q, r))
-    a = r @ (P_inv @ A).T                          # a_j = P⁻¹ A r_j
-    p = np.column_stack([r - a, hc.ravel() - np.sum(a * grad, axis=1)])
-    Pg = grad @ P_inv
-    c = np.column_stack([Pg, 0.5 * np.sum(Pg * grad, axis=1)])
+    rx, ry = rx.ravel(), ry.ravel()
+    gx, gy = gx.ravel(), gy.ravel()
+    quad = Q[0, 0] * rx * rx + 2 * Q[0, 1] * rx * ry + Q[1, 1] * ry * ry
+    w = dx * dy * math.sqrt(np.linalg.det(B) * np.linalg.det(P_inv)) * np.exp(-0.5 * quad)
+    M = P_inv @ A                                  # a_j = P⁻¹ A r_j
+    ax, ay = M[0, 0] * rx + M[0, 1] * ry, M[1, 0] * rx + M[1, 1] * ry
+    p = np.stack([rx - ax, ry - ay, hc.ravel() - ax * gx - ay * gy])
+    cx, cy = P_inv[0, 0] * gx + P_inv[0, 1] * gy, P_inv[1, 0] * gx + P_inv[1, 1] * gy
+    c = np.stack([cx, cy, 0.5 * (cx * gx + cy * gy)])
     return GaborKernels(w, p, c, P_inv)
 
 
@@ -152,10 +154,10 @@ def _U(kern: GaborKernels, s, k) -> np.ndarray:
     Pi = kern.P_inv
     for a in range(0, n, step):
         sc = s[a:a + step]
-        phase = k * (sc @ kern.p.T)                                        # (chunk, texels)
+        phase = k * (sc @ kern.p)                                       # (chunk, texels)
         t = np.column_stack([sc[:, 2] * sc[:, 0], sc[:, 2] * sc[:, 1], sc[:, 2] ** 2])
         base = 0.5 * (Pi[0, 0] * sc[:, 0] ** 2 + 2 * Pi[0, 1] * sc[:, 0] * sc[:, 1] + Pi[1, 1] * sc[:, 1] ** 2)
-        amp = kern.w[None, :] * np.exp(-(k * k) * (base[:, None] + t @ kern.c.T))
+        amp = kern.w[None, :] * np.exp(-(k * k) * (base[:, None] + t @ kern.c))
         out[a:a + step] = np.sum(amp * np.cos(phase), axis=1) + 1j * np.sum(amp * np.sin(phase), axis=1)
     return out
 
