@@ -18,6 +18,10 @@ and ``scripts/docs_performance.py`` turns them into ``docs/performance.md``):
   grid, frozen v_z and banded Taylor series) against the NumPy FFT pipeline a user would write (zero-padded
   ``numpy.fft.fft2`` of w·exp(i v_z h), bilinear interpolation of the field onto the grid), over four patch sizes,
   with errors against the direct sum on a subset of cells.
+* :func:`footprint_evaluations` — one Gaussian footprint (σ = 2, 5, 10 µm at 0.1 µm spacing) at a few direction
+  pairs by the direct sum (:func:`waveoptics.scatter.pixel_brdf`, NumPy twin and OpenCL kernel) and by Yan et
+  al. 2018's Gabor kernels (:func:`waveoptics.scatter.gabor_footprint_brdf`): time per pair, and the errors of
+  energy and peak against an exact float64 sum over ±5σ (:func:`footprint_exact_brdf`).
 * :func:`math_errors` — largest absolute error of the device's sin/cos/sinpi/cospi/native_/half_ built-ins and of
   the kernels' own sin/cos polynomial (``kernels/wo_sincos.h``) against float64 NumPy, on reduced (|x| ≤ π) and
   large (|x| ≤ 10⁴) arguments.
@@ -34,9 +38,9 @@ References
 .. [2] M. Frigo, S. G. Johnson, "The design and implementation of FFTW3", Proc. IEEE 93(2), 2005.
 """
 from .common import (WAVELENGTH_NM, best_time, machine)
-from .baselines import (numpy_direct_sum, NAIVE, kirchhoff_U_sinpi_cl, kirchhoff_U_naive_cl, numpy_fft_pipeline)
+from .baselines import (numpy_direct_sum, footprint_exact_brdf, NAIVE, kirchhoff_U_sinpi_cl, kirchhoff_U_naive_cl, numpy_fft_pipeline)
 from .measures import (MATH_FUNCTIONS, large_patch_errors, direct_kernels, direct_scaling, fft_backends,
-    fft_pipeline, math_errors, brdf_eval_rates, fft_threads, run_all)
+    fft_pipeline, math_errors, brdf_eval_rates, fft_threads, footprint_evaluations, run_all)
 from .tables import (report)
 from . import common, baselines, measures, tables  # noqa: F401
 

@@ -17,7 +17,7 @@ from scipy.interpolate import RegularGridInterpolator
 from .. import scatter
 from ..scatter.direct import exact_phase_args, launch_pairs
 
-__all__ = ['numpy_direct_sum', 'NAIVE', 'kirchhoff_U_sinpi_cl', 'kirchhoff_U_naive_cl', 'numpy_fft_pipeline']
+__all__ = ['numpy_direct_sum', 'footprint_exact_brdf', 'NAIVE', 'kirchhoff_U_sinpi_cl', 'kirchhoff_U_naive_cl', 'numpy_fft_pipeline']
 
 
 def numpy_direct_sum(smp: scatter.Samples, wi, wo, wavelength_nm: float, chunk_terms: int = 2**22) -> np.ndarray:
@@ -33,6 +33,31 @@ def numpy_direct_sum(smp: scatter.Samples, wi, wo, wavelength_nm: float, chunk_t
     for a in range(0, len(s), step):
         out[a:a + step] = np.exp(1j * k * (s[a:a + step] @ r)) @ smp.w
     return out * (smp.dx * smp.dy)
+
+
+def footprint_exact_brdf(heights, dx: float, fp, wi, wo, wavelength_nm: float, n_sigma: float = 5.0,
+                         chunk_terms: int = 2**22) -> np.ndarray:
+    """The wave BRDF of Gaussian footprint *fp* (σ, centre in m from the first sample of *heights*, spacing *dx*)
+    at the direction pairs (ω_i, ω_o (n, 3)) by a plain float64 sum over its samples within *n_sigma* widths:
+    f = K |ΔxΔy Σ G e^{ik s·(x − c, h)}|² / (Σ G² ΔxΔy), K = |s|⁴ / (4 λ² cos θ_i cos θ_o (cos θ_i + cos θ_o)²)
+    (docs/physics.md §1; Beckmann & Spizzichino 1963 ch. 3), np.exp of complex128; the reference of
+    :func:`waveoptics.bench.footprint_evaluations`."""
+    sig = fp.sigma
+    i0, i1 = math.floor((fp.x - n_sigma * sig) / dx), math.ceil((fp.x + n_sigma * sig) / dx) + 1
+    j0, j1 = math.floor((fp.y - n_sigma * sig) / dx), math.ceil((fp.y + n_sigma * sig) / dx) + 1
+    X, Y = np.meshgrid(np.arange(i0, i1) * dx - fp.x, np.arange(j0, j1) * dx - fp.y)
+    G = np.exp(-(X * X + Y * Y) / (2 * sig * sig)).ravel()
+    r = np.stack([X.ravel(), Y.ravel(), np.asarray(heights[j0:j1, i0:i1], dtype=float).ravel()])
+    lam = wavelength_nm * 1e-9
+    s = np.asarray(wi, dtype=float) + np.asarray(wo, dtype=float)
+    U = np.empty(len(s), np.complex128)
+    step = max(1, chunk_terms // G.size)
+    for a in range(0, len(s), step):
+        U[a:a + step] = np.exp(2j * np.pi / lam * (s[a:a + step] @ r)) @ G
+    U *= dx * dx
+    ci, co = np.broadcast_to(np.asarray(wi, float), s.shape)[:, 2], np.asarray(wo, float)[:, 2]
+    K = np.sum(s * s, axis=1) ** 2 / (4 * lam ** 2 * ci * co * (ci + co) ** 2)
+    return K * np.abs(U) ** 2 / (np.sum(G * G) * dx * dx)
 
 
 #: the baseline's row name

@@ -22,11 +22,12 @@ from .. import scatter
 from ..runtime import build_options, build_program, get_runtime
 from ..surfaces.heightfield import HeightField
 from ..units import direction_from_angles
-from .baselines import NAIVE, naive_sum, kirchhoff_U_sinpi_cl, numpy_direct_sum, numpy_fft_pipeline
+from .baselines import (NAIVE, footprint_exact_brdf, naive_sum, kirchhoff_U_sinpi_cl, numpy_direct_sum,
+                        numpy_fft_pipeline)
 from .common import WAVELENGTH_NM, bench_problem, best_time, machine
 
 __all__ = ['MATH_FUNCTIONS', 'large_patch_errors', 'direct_kernels', 'direct_scaling', 'fft_backends', 'fft_pipeline',
-           'math_errors', 'brdf_eval_rates', 'fft_threads', 'run_all']
+           'math_errors', 'brdf_eval_rates', 'fft_threads', 'footprint_evaluations', 'run_all']
 
 #: OpenCL math functions measured by :func:`math_errors`, in the row order of ``kernels/bench_math.cl``
 MATH_FUNCTIONS = ("sin", "cos", "sinpi", "cospi", "wo_sin_2pi", "wo_cos_2pi", "native_sin", "native_cos",
@@ -340,6 +341,51 @@ def fft_threads(n: int = 256, n_wavelengths: int = 8, repeat: int = 2) -> dict:
     return out
 
 
+def footprint_evaluations(rt, sigmas_um=(2.0, 5.0, 10.0), grid: int = 5, repeat: int = 2) -> dict:
+    """One Gaussian footprint's wave BRDF at 0.1 µm spacing (a Gaussian random field, σ = 20 nm, T = 1 µm;
+    λ = 500 nm; ω_i at direction cosines (0.3, 0.1); *grid* × *grid* ω_o about the mirror direction, a step of half
+    the speckle width λ/(2πσ)) by the library's direct sum (:func:`waveoptics.scatter.pixel_brdf`, NumPy twin and
+    OpenCL kernel) and by Yan et al. 2018's Gabor kernels (:func:`waveoptics.scatter.gabor_footprint_brdf`):
+    time per direction pair (the Gabor kernels built once per footprint, counted) and the errors of energy (Σ f
+    over the grid) and peak against the exact float64 sum over ±5σ (:func:`footprint_exact_brdf`)."""
+    from ..surfaces import Footprint, generators
+
+    dx = 0.1e-6
+    n = int(math.ceil(2 * 5.2 * max(sigmas_um) * 1e-6 / dx)) + 8
+    hf = generators.gaussian(20e-9, 1e-6, (n * dx, n * dx), (n, n), seed=32)
+    precision = "float64" if rt.fp64 else "float32"
+    rows = []
+    for sig_um in sigmas_um:
+        fp = Footprint((n / 2 + 0.3) * dx, (n / 2 - 0.4) * dx, sig_um * 1e-6)
+        wi = _direction(0.3, 0.1)
+        m = (np.arange(grid) - (grid - 1) / 2) * 0.5 * WAVELENGTH_NM * 1e-9 / (2 * np.pi * fp.sigma)
+        wo = np.array([_direction(-0.3 + u, -0.1 + v) for v in m for u in m])
+        ref = footprint_exact_brdf(hf.heights, dx, fp, wi, wo, WAVELENGTH_NM)
+        runs = {"numpy": lambda: scatter.pixel_brdf(hf, [fp] * len(wo), wi, wo, [WAVELENGTH_NM],
+                                                    backend="numpy").wave[:, 0],
+                "opencl": lambda: scatter.pixel_brdf(hf, [fp] * len(wo), wi, wo, [WAVELENGTH_NM], precision=precision,
+                                                     runtime=rt).wave[:, 0],
+                "gabor": lambda: scatter.gabor_footprint_brdf(hf, fp, wi, wo, [WAVELENGTH_NM])[:, 0]}
+        box = scatter.gabor_kernels(hf, fp).size
+        row = {"sigma_um": sig_um, "samples": box, "pairs": len(wo), "opencl_precision": precision}
+        for name, fn in runs.items():
+            row[f"{name}_s_per_pair"] = best_time(fn, repeat) / len(wo)
+            f = fn()
+            row[f"{name}_energy_error"] = float(abs(np.sum(f) / np.sum(ref) - 1))
+            row[f"{name}_peak_error"] = float(abs(f.max() / ref.max() - 1))
+        row["gabor_vs_numpy_time"] = row["gabor_s_per_pair"] / row["numpy_s_per_pair"]
+        row["gabor_vs_opencl_time"] = row["gabor_s_per_pair"] / row["opencl_s_per_pair"]
+        row["gabor_vs_numpy_peak_error"] = row["gabor_peak_error"] / max(row["numpy_peak_error"], 1e-300)
+        rows.append(row)
+    return {"rows": rows, "wavelength_nm": WAVELENGTH_NM, "spacing_um": dx * 1e6,
+            "kernel_sigma": scatter.KERNEL_SIGMA}
+
+
+def _direction(u: float, v: float) -> np.ndarray:
+    """The unit direction (u, v, √(1 − u² − v²)) of direction cosines u, v."""
+    return np.array([u, v, math.sqrt(1.0 - u * u - v * v)])
+
+
 def run_all(rt=None, quick: bool = False, progress=None) -> dict:
     """Every benchmark (smaller sizes with *quick*), with :func:`machine`."""
 
@@ -362,6 +408,8 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         out["brdf_eval"] = brdf_eval_rates(n=5_000, loop=50)
         step(1)
         out["fft_threads"] = fft_threads(n=64, n_wavelengths=4, repeat=1)
+        step(1)
+        out["footprints"] = footprint_evaluations(rt, sigmas_um=(2.0, 5.0), grid=3, repeat=1)
     else:
         out["math_errors"] = math_errors(rt)
         step(1)
@@ -376,6 +424,8 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         out["brdf_eval"] = brdf_eval_rates()
         step(1)
         out["fft_threads"] = fft_threads()
+        step(1)
+        out["footprints"] = footprint_evaluations(rt)
     step(1)
     out["machine"]["load_average_1min_after"] = machine()["load_average_1min"] if hasattr(os, "getloadavg") else None
     out["time_s"] = time.perf_counter() - t0

@@ -73,6 +73,21 @@ def report(res: dict) -> str:
                   "| threads | wall (s) | CPU (s) | speed-up |", "|---|---|---|---|"]
         for r in ft["rows"]:
             lines.append(f"| {r['threads']} | {r['wall_s']:.3g} | {r['cpu_s']:.3g} | {r['speedup']:.3g} |")
+    if "footprints" in res:
+        fe = res["footprints"]
+        lines += ["", f"### One footprint at {fe['spacing_um']:.3g} µm spacing: the direct sum (NumPy twin, OpenCL) "
+                  f"against Yan et al. 2018's Gabor kernels (σ_k = {fe['kernel_sigma']:g} Δ), λ = "
+                  f"{fe['wavelength_nm']:g} nm; errors of energy / peak against an exact float64 sum over ±5σ", "",
+                  "| σ (µm) | samples | pairs | NumPy (ms/pair) | OpenCL (ms/pair) | Gabor (ms/pair) | Gabor ÷ NumPy "
+                  "| Gabor ÷ OpenCL | NumPy error | OpenCL error | Gabor error | Gabor ÷ NumPy peak error |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for r in fe["rows"]:
+            err = {k: f"{r[k + '_energy_error']:.1e} / {r[k + '_peak_error']:.1e}" for k in ("numpy", "opencl", "gabor")}
+            lines.append(f"| {r['sigma_um']:g} | {r['samples']} | {r['pairs']} | {r['numpy_s_per_pair'] * 1e3:.3g} "
+                         f"| {r['opencl_s_per_pair'] * 1e3:.3g} ({r['opencl_precision']}) "
+                         f"| {r['gabor_s_per_pair'] * 1e3:.3g} | {r['gabor_vs_numpy_time']:.3g} "
+                         f"| {r['gabor_vs_opencl_time']:.3g} | {err['numpy']} | {err['opencl']} | {err['gabor']} "
+                         f"| {r['gabor_vs_numpy_peak_error']:.3g} |")
     me = res["math_errors"]
     lines += ["", "### Math built-ins: largest absolute error against float64 NumPy", "",
               "| function | " + " | ".join(f"{p} {lab}" for p in me for lab in next(iter(me[p].values()))) + " |",

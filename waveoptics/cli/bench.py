@@ -30,7 +30,7 @@ def run(args) -> int:
 
     out = prepare_outdir(args.output, overwrite=args.overwrite, expected=FILES) if args.output else None
     rt = get_runtime(args.device)
-    bar = progress(total=7, desc="bench", args=args)
+    bar = progress(total=8, desc="bench", args=args)
     res = bench.run_all(rt, quick=args.quick, progress=bar.update)
     bar.close()
     text = bench.report(res)

@@ -9,7 +9,8 @@ perturbation (Rayleigh-Rice
 with the polarization factor Q), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
 Rayleigh-Rice for 1-D Gaussian surfaces), solvers (the :data:`SOLVERS` registry, :func:`brdf`,
 :func:`scatter`), footprint (the BRDF of a pixel footprint on a large field), pixel (per-pixel
-footprint BRDFs at one direction pair, OpenCL), output (the files of a scatter run).
+footprint BRDFs at one direction pair, OpenCL), gabor (one footprint by Yan et al. 2018's Gabor kernels, an
+independent check of pixel), output (the files of a scatter run).
 """
 from .grid import (HORIZON_SIN, DirectionGrid, integrate, COS_I_MIN)
 from .patch import (DEFAULT_WINDOW, window, window_area, Samples, samples)
@@ -37,7 +38,8 @@ from .solvers import (ENERGY_TOL, DiffractionWarning, Solver, SOLVERS, BACKENDS,
 from .footprint import (footprint_scatter, coherence_centres, incoherent_sum)
 from .pixel import (PIXEL_BACKENDS, MAX_REGION_SAMPLES, PixelBRDF, footprint_sums, footprint_sums_numpy,
     pixel_brdf, footprint_brdf)
+from .gabor import (KERNEL_SIGMA, GaborKernels, gabor_kernels, gabor_footprint_field, gabor_footprint_brdf)
 from .output import (plot_scatter, SCATTER_FILES, write_scatter, brdf_exr_header)
-from . import grid, patch, models, kirchhoff, direct, fft, series, polar, band_energy, band, perturbation, mom, models1d, solvers, footprint, pixel, output  # noqa: F401
+from . import grid, patch, models, kirchhoff, direct, fft, series, polar, band_energy, band, perturbation, mom, models1d, solvers, footprint, pixel, gabor, output  # noqa: F401
 
-__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + pixel.__all__ + output.__all__
+__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + pixel.__all__ + gabor.__all__ + output.__all__
