@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ._common import add_common, add_output, emit
-from ._renderer import add_model, model_description, model_from_args
+from ._renderer import add_model, model_fields
 
 #: export formats → (what it is, file suffix)
 FORMATS = {"rgl": ("RGL tabulated BSDF (Dupuy & Jakob 2018) for Mitsuba 3's and pbrt-v4's 'measured' models",
@@ -38,6 +38,8 @@ def run(args):
     from .. import __version__
     from ..errors import WaveopticsError
     from ..renderers import rgl
+    from ..renderers.jobs import build_model, describe_model
+    from ..renderers.requests import RendererModel
 
     out = Path(args.output)
     suffix = FORMATS[args.format][1]
@@ -48,9 +50,10 @@ def run(args):
     grid = rgl.RGLGrid(n_theta_i=args.incidence_nodes, resolution=args.table_resolution,
                        n_phi_i=args.azimuth_nodes)
     t0 = time.perf_counter()
-    model, params = model_from_args(args)
+    request = RendererModel(**model_fields(args))
+    model, params = build_model(request)
     t1 = time.perf_counter()
-    desc = model_description(args, params)
+    desc = describe_model(request, params)
     text = f"waveoptics {__version__} two-scale BRDF: " + ", ".join(f"{k}={v}" for k, v in desc.items()
                                                                       if v is not None)
     fields = rgl.export_rgl(model, out, grid=grid, description=text, overwrite=args.overwrite)
