@@ -200,3 +200,15 @@ def test_the_brdf_command_sets_models_up_through_the_registry(monkeypatch):
                                                fresnel="exact", multiple_scattering=None))]
     f = json.loads(out)["values"][0]["brdf"]
     assert f == pytest.approx(0.04 / (4 * np.pi * 0.25 ** 2), rel=1e-9)
+
+
+def test_export_job_errors_name_fields(tmp_path):
+    from waveoptics.renderers.jobs import export_job
+
+    with pytest.raises(FieldError) as err:
+        export_job(requests.RendererModel(), tmp_path / "m.txt")
+    assert err.value.fields == ("output", "format") and "--" not in str(err.value)
+    (tmp_path / "m.bsdf").write_bytes(b"")
+    with pytest.raises(FieldError) as err:
+        export_job(requests.RendererModel(), tmp_path / "m.bsdf")
+    assert err.value.field == "output" and "overwrite=True" in str(err.value)

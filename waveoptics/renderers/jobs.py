@@ -5,6 +5,8 @@ the summary out.
 * :func:`model_parameters`, :func:`build_model`, :func:`describe_model`, :func:`plugin_parameters`: the
   :class:`~waveoptics.renderers.requests.RendererModel` as keywords of :func:`waveoptics.renderers.renderer_brdf`,
   as the built model, as the description summaries echo, and as the Mitsuba plugin's parameters;
+* :func:`export_job`: the model written as a file a renderer reads (the RGL ``.bsdf`` of
+  :mod:`waveoptics.renderers.rgl`);
 * :func:`render_job`: the model rendered by Mitsuba 3 on a sphere under an environment map beside Mitsuba's own
   rough model (:mod:`waveoptics.renderers.scene`), their CIEDE2000 map and its noise floor; writes wave.exr,
   reference.exr, delta_e.exr, render.png, summary.json (last: it says the set is complete) and, for the
@@ -27,12 +29,16 @@ from ..errors import FieldError
 from ..vocabulary import DEFAULT_NANO
 from .requests import RendererModel, RenderRequest
 
-__all__ = ["OUTPUTS", "RenderResult", "load_height_field", "model_parameters", "build_model", "describe_model",
-           "plugin_parameters", "render_job"]
+__all__ = ["OUTPUTS", "EXPORT_FORMATS", "RenderResult", "load_height_field", "model_parameters", "build_model",
+           "describe_model", "plugin_parameters", "export_job", "render_job"]
 
 #: files of one sphere render (summary.json last: it says the set is complete); the ``measured`` BSDF adds
 #: material.bsdf
 OUTPUTS = ("wave.exr", "reference.exr", "delta_e.exr", "render.png", "summary.json")
+
+#: export formats → (what it is, file suffix)
+EXPORT_FORMATS = {"rgl": ("RGL tabulated BSDF (Dupuy & Jakob 2018) for Mitsuba 3's and pbrt-v4's 'measured' models",
+                          ".bsdf")}
 
 #: model fields a scene's material replaces
 _SCENE_REPLACES = ("material", "alpha", "alpha_y", "ndf", "nano", "surface", "kd")
@@ -137,6 +143,42 @@ def describe_model(model: RendererModel, kw: dict) -> dict:
     else:
         d["nano"] = model.nano or DEFAULT_NANO
     return d
+
+
+def export_job(model: RendererModel, output, *, format: str = "rgl", incidence_nodes: int = 18,
+               table_resolution: int = 32, azimuth_nodes: int = 9, overwrite: bool = False) -> dict:
+    """Write the BRDF of *model* to the file *output* in *format* (:data:`EXPORT_FORMATS`): the RGL tensor format
+    tabulated at *incidence_nodes* incidences over 0-89°, *table_resolution* × *table_resolution* sample-space
+    cells per incidence and *azimuth_nodes* light azimuths (an anisotropic BRDF); an existing file only with
+    *overwrite*. Returns the summary: the file, the model's description, the table's wavelengths (nm), incidences
+    (deg), array shapes, its size in bytes and the times (s) of the model and of the table."""
+    import numpy as np
+
+    from .. import __version__
+    from . import rgl
+
+    out = Path(output)
+    suffix = EXPORT_FORMATS[format][1]
+    if out.suffix.lower() != suffix:
+        raise FieldError(f"{{output}} {str(output)!r} must end in {suffix} for {{format}} {format}", "output", "format")
+    if out.exists() and not overwrite:
+        raise FieldError(f"{{output}} {str(output)!r} exists; give {{overwrite}} to replace it", "output", "overwrite",
+                         python={"overwrite": "overwrite=True"})
+    grid = rgl.RGLGrid(n_theta_i=incidence_nodes, resolution=table_resolution, n_phi_i=azimuth_nodes)
+    t0 = time.perf_counter()
+    brdf, params = build_model(model)
+    t1 = time.perf_counter()
+    desc = describe_model(model, params)
+    text = f"waveoptics {__version__} two-scale BRDF: " + ", ".join(f"{k}={v}" for k, v in desc.items()
+                                                                      if v is not None)
+    fields = rgl.export_rgl(brdf, out, grid=grid, description=text, overwrite=overwrite)
+    t2 = time.perf_counter()
+    return {"output": str(out), "format": format, "model": desc,
+            "isotropic": int(fields["phi_i"].size) == 2,
+            "wavelengths_nm": [float(x) for x in fields["wavelengths"]],
+            "theta_i_deg": [round(float(x), 6) for x in np.degrees(fields["theta_i"])],
+            "shape": {k: list(v.shape) for k, v in fields.items() if hasattr(v, "shape")},
+            "bytes": out.stat().st_size, "time_model_s": round(t1 - t0, 3), "time_export_s": round(t2 - t1, 3)}
 
 
 @dataclass(frozen=True)
