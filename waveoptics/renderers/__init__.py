@@ -2,7 +2,7 @@
 and pbrt-v4's ``measured`` models read, and rendered scenes (``waveoptics render``).
 
 Modules: model (the BRDF a renderer receives), requests (the typed requests of the render jobs, which own their
-defaults), jobs (the sphere render job: model, Mitsuba renders, outputs written whole), glint_job (the footprint
+defaults), jobs (the sphere render and export jobs: model, Mitsuba renders, outputs written whole), glint_job (the footprint
 render job), mitsuba (loading Mitsuba 3 and the ``waveoptics`` plugin, NumPy in
 wavefront mode), mitsuba_native (the ``waveoptics_native`` plugin, in Dr.Jit), drjit_twoscale and drjit_lobes (the
 model's tables and formulas in Dr.Jit), rgl (export to the RGL ``.bsdf`` tensor format), scene (Mitsuba scenes),
@@ -23,6 +23,7 @@ _WHERE = {
     "RendererModel": "requests", "RenderRequest": "requests", "GlintRequest": "requests",
     "field_default": "requests",
     "render_job": "jobs", "RenderResult": "jobs", "build_model": "jobs", "describe_model": "jobs",
+    "export_job": "jobs",
     "glints_job": "glint_job", "GlintResult": "glint_job",
 }
 

@@ -118,6 +118,12 @@ class RenderRequest(RendererModel):
         Most samples per pixel *target_noise* doubles to.
     budget_s : float, s, optional
         Time budget of the *target_noise* renders (None: none); a doubling predicted to pass it is not started.
+
+    Examples
+    --------
+    >>> r = RenderRequest(material="gold", spp=64)
+    >>> r.spp, r.alpha, field_default(RenderRequest, "max_spp")
+    (64, 0.1, 4096)
     """
 
     environment: str = "sky"
