@@ -224,3 +224,35 @@ def test_no_import_cycles_inside_a_sub_package():
         if v not in state:
             visit(v, [v])
     assert not cycles, f"import cycles inside sub-packages: {cycles}"
+
+
+#: calls that write a result file: the library's writers and the primitives they are built from
+RESULT_WRITERS = {"write_exr", "write_rgb_exr", "write_json", "savefig", "save_figure", "staged_outputs",
+                  "atomic_path", "write_text", "write_bytes", "plot_spheres", "save", "savez", "savez_compressed",
+                  "to_csv", "dump"}
+
+
+def _writes(tree):
+    """(line, name) of each call in *tree* that writes a file: a :data:`RESULT_WRITERS` call, or ``open`` with a
+    mode that writes."""
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Call):
+            continue
+        f = node.func
+        name = f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else ""
+        if name in RESULT_WRITERS and not (isinstance(f, ast.Attribute) and name == "save"
+                                           and isinstance(f.value, ast.Name) and f.value.id == "surfaces"):
+            yield node.lineno, name
+        elif name == "open":
+            modes = [a for a in node.args[1:2]] + [k.value for k in node.keywords if k.arg == "mode"]
+            if any(isinstance(m, ast.Constant) and set(str(m.value)) & set("wax+") for m in modes):
+                yield node.lineno, "open"
+
+
+@pytest.mark.parametrize("path", [p for p in MODULES if "cli" in p.relative_to(PKG).parts], ids=_rel)
+def test_the_command_line_writes_no_result_files_itself(path):
+    """The CLI parses its options, calls one library function and prints (issue 30): the outputs of a job are
+    written by the library (a set whole or not at all), never by a command module. A library function that
+    writes one named output (``surfaces.save``, ``rgl.export_rgl``) is the job itself."""
+    found = list(_writes(ast.parse(path.read_text())))
+    assert not found, f"{_rel(path)} writes files itself: {found}"

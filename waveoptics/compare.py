@@ -21,7 +21,7 @@ from .io.figures import save_figure
 from .scatter.grid import integrate
 from .units import direction_from_angles
 
-__all__ = ['lobe_fwhm_deg', 'compare', 'plot', 'table_text']
+__all__ = ['lobe_fwhm_deg', 'compare', 'plot', 'table_text', 'OUTPUTS', 'write_outputs']
 
 
 
@@ -168,3 +168,28 @@ def table_text(rows, tail_deg=10.0) -> str:
                      f"{r['tail_fraction_microfacet']:9.4f} {r['delta_e2000_albedo']:9.2f} "
                      f"{r['delta_e2000_sphere_mean']:6.2f} / {r['delta_e2000_sphere_max']:6.2f}")
     return "\n".join(lines)
+
+
+#: files of ``compare -o DIR`` (compare.json, the manifest, last)
+OUTPUTS = ("compare.csv", "compare.png", "compare.json")
+
+
+def write_outputs(rows, data: dict, directory, *, tail_deg=10.0, title="") -> None:
+    """Write the rows of :func:`compare` as compare.csv, their :func:`plot` as compare.png and *data* as
+    compare.json into *directory*, as a set: the three files appear together, compare.json last
+    (:func:`waveoptics.io.staged_outputs`)."""
+    import csv
+    import io as _io
+    from pathlib import Path
+
+    from . import io
+
+    buf = _io.StringIO()
+    wr = csv.DictWriter(buf, fieldnames=list(rows[0]))
+    wr.writeheader()
+    wr.writerows(rows)
+    with io.staged_outputs(Path(directory), OUTPUTS, last="compare.json") as out:
+        with io.atomic_path(out / "compare.csv") as tmp:
+            tmp.write_text(buf.getvalue())
+        plot(rows, out / "compare.png", tail_deg=tail_deg, title=title)
+        io.write_json(out / "compare.json", data)

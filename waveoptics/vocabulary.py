@@ -3,6 +3,8 @@ imports so that the command line can build its parsers without loading the numer
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
            "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO",
            "DEFAULT_MATERIAL", "DEFAULT_NDF", "COST_TARGET_ERROR", "COST_BUDGET_S", "COST_DELTA_E",
@@ -53,3 +55,94 @@ RENDER_WAVELENGTH_STEP_NM = 20.0
 RENDER_BSDFS = ("measured", "plugin")
 #: what a glint render's height field textures (:data:`waveoptics.renderers.glints.SHAPES`)
 GLINT_SHAPES = ("plane", "sphere")
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# BRDF models by name (the factories of :data:`waveoptics.brdf.BRDF_MODELS`, what ``waveoptics brdf --model`` runs):
+# each model's parameters with their unit, default and meaning, here so that a front end builds its options from
+# them without loading the numerical library (a test holds them to the factories' signatures)
+
+__all__ += ["ModelParameter", "REQUIRED", "BRDF_MODEL_HELP", "BRDF_MODEL_PARAMETERS"]
+
+
+@dataclass(frozen=True)
+class ModelParameter:
+    """A keyword argument of a BRDF model factory: its *name*, *unit* ("1" dimensionless, "" for names and
+    objects), *default* (:data:`REQUIRED` when it has none) and *meaning*."""
+
+    name: str
+    unit: str
+    default: object
+    meaning: str
+
+
+#: the default of a parameter that must be given
+REQUIRED = "required"
+
+_ALPHA = (ModelParameter("alpha", "1", None, "the NDF's slope scale α (α_x if anisotropic), in [0, 2]; or roughness"),
+          ModelParameter("roughness", "1", None, "perceptual roughness r, α = r² (instead of alpha)"),
+          ModelParameter("alpha_y", "1", None, "α_y of an anisotropic NDF (ggx, beckmann, epd, sgd)"),
+          ModelParameter("ndf", "", DEFAULT_NDF, "microfacet normal distribution (NDF_NAMES)"),
+          ModelParameter("ndf_shape", "1", None, "shape parameter of abc (C), epd and sgd (p); None: its default"))
+_SLOPES = ModelParameter("slope_table", "", None, "the NDF of a micro height field's slopes (a SlopeTable); "
+                                                  "replaces alpha, roughness, ndf and ndf_shape")
+_SHADOWING = ModelParameter("shadowing", "", "smith-correlated", "masking-shadowing term (SHADOWING_NAMES)")
+_INDEX = (ModelParameter("material", "", None, "the substrate: a material name (or ior)"),
+          ModelParameter("ior", "1", None, "the substrate as a constant complex index 'N+Kj' (or material)"),
+          ModelParameter("fresnel", "", "exact", "Fresnel factor: exact, schlick or one (F = 1, white furnace)"))
+_DIFFUSE = (ModelParameter("diffuse", "", "lambert", "diffuse model (DIFFUSE_NAMES)"),
+            ModelParameter("kd", "1", 0.0, "diffuse albedo"),
+            ModelParameter("diffuse_sigma_deg", "deg", 0.0, "Oren-Nayar roughness σ, in [0, 90]"))
+_MS = ModelParameter("multiple_scattering", "", False, "add the Kulla-Conty multiple-scattering compensation")
+_KERNEL = (ModelParameter("backend", "", "numpy", "numpy or opencl (the evaluation; the albedo uses NumPy)"),
+           ModelParameter("precision", "", "float32", "OpenCL floating-point precision (PRECISIONS)"))
+_DEVICE = ModelParameter("device", "", None, "OpenCL device (None: the default)")
+_DIFFRACTION = ModelParameter("diffraction", "", "kirchhoff", "diffraction model of the nano lobe (DIFFRACTION)")
+_POLARIZATION = ModelParameter("polarization", "", "unpolarized", "polarization of the incident light "
+                                                                  "(POLARIZATIONS)")
+
+#: one-line description of each BRDF model
+BRDF_MODEL_HELP = {
+    "microfacet": "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term",
+    "kirchhoff": "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.scatter)",
+    "rayleigh-rice": "first-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the "
+                     "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)",
+    "twoscale": "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski 2017), evaluated "
+                "at the given directions; JSON also gives its coherent, diffraction and diffuse parts",
+    "rough-dielectric": "BSDF of a rough dielectric interface (Walter et al. 2007): reflection and transmission "
+                        "(air above, the material below; the command's directions are above the surface, so it "
+                        "gives the reflection and the albedo R + T); JSON also gives its reflection, transmission "
+                        "and multiple parts",
+    "table": "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated between "
+             "incidences relative to the specular direction, coherent and diffuse parts exact; at the table's "
+             "wavelengths",
+}
+
+#: the parameters of each BRDF model factory besides ``wavelengths_nm`` (nm), in the factory's order
+BRDF_MODEL_PARAMETERS = {
+    "microfacet": (*_ALPHA[:3], _ALPHA[3], _ALPHA[4], _SLOPES, _SHADOWING, *_INDEX, *_DIFFUSE,
+                   ModelParameter("diffuse_roughness", "1", 0.5, "Burley diffuse roughness r, in [0, 1]"),
+                   ModelParameter("tradeoff", "", True, "weight the diffuse term by (1 - F(θi))(1 - F(θo)) / "
+                                                        "(1 - F̄)"),
+                   _MS, *_KERNEL, _DEVICE),
+    "kirchhoff": (ModelParameter("surface", "m", REQUIRED, "the height field (heights and spacing in m)"), *_INDEX,
+                  ModelParameter("solver", "", "direct", "direct Kirchhoff sum or fft on a hemisphere grid"),
+                  *_KERNEL, ModelParameter("window", "", "hann", "taper over the patch (a scipy window name)"),
+                  ModelParameter("resolution", "", None, "cells per side of the fft grid and of the albedo "
+                                                         "quadrature (None: resolves the specular spike; 256)"),
+                  ModelParameter("realizations", "", 1, "tiles of the height field averaged"),
+                  _DIFFRACTION, _POLARIZATION, _DEVICE),
+    "rayleigh-rice": (ModelParameter("psd", "m", REQUIRED, "the surface's power spectral density (a PSD model or "
+                                                           "a height field's periodogram; heights in m)"),
+                      *_INDEX[:2], _POLARIZATION,
+                      ModelParameter("resolution", "", None, "cells per side of the albedo quadrature (None: "
+                                                             "512)")),
+    "twoscale": (ModelParameter("nano", "", None, "the nano-roughness statistics (a Nano), or surface"),
+                 ModelParameter("surface", "m", None, "a nano height field (heights and spacing in m), or nano"),
+                 *_ALPHA, _SLOPES, _SHADOWING, *_INDEX, *_DIFFUSE, _DIFFRACTION, _MS,
+                 ModelParameter("resolution", "", None, "direction grid of the lobes tabulated from surface "
+                                                        "(None: 128)")),
+    "rough-dielectric": (*_ALPHA, _SHADOWING, *_INDEX, _MS),
+    "table": (ModelParameter("table", "", REQUIRED, "a BRDF table as a function (waveoptics.distributed.table."
+                                                    "open_table)"),),
+}

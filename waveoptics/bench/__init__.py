@@ -30,7 +30,7 @@ Times are the best of several repeats (wall clock, after a warm-up call that bui
 the machine and on its load; :func:`machine` records what it was.
 
 Files: common (timer, machine record, test problem), baselines (what a user would otherwise write, and the launch code
-of the benchmark-only kernels), measures (the benchmarks and :func:`run_all`), tables (:func:`report`).
+of the benchmark-only kernels), measures (the benchmarks and :func:`run_all`), tables (:func:`report`, :func:`write_report`).
 
 References
 ----------
@@ -41,7 +41,7 @@ from .common import (WAVELENGTH_NM, best_time, machine)
 from .baselines import (numpy_direct_sum, footprint_exact_brdf, NAIVE, kirchhoff_U_sinpi_cl, kirchhoff_U_naive_cl, numpy_fft_pipeline)
 from .measures import (MATH_FUNCTIONS, large_patch_errors, direct_kernels, direct_scaling, fft_backends,
     fft_pipeline, math_errors, brdf_eval_rates, fft_threads, footprint_evaluations, run_all)
-from .tables import (report)
+from .tables import (report, REPORT_FILES, write_report)
 from . import common, baselines, measures, tables  # noqa: F401
 
 __all__ = common.__all__ + baselines.__all__ + measures.__all__ + tables.__all__

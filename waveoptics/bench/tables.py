@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from .measures import MATH_FUNCTIONS
 
-__all__ = ['report']
+__all__ = ['report', 'REPORT_FILES', 'write_report']
 
 
 def _g(v, fmt=".3g"):
@@ -99,3 +99,20 @@ def report(res: dict) -> str:
                 cells.append(_g(me[p].get(name, {}).get(lab), ".2e"))
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+#: files of ``bench -o DIR``
+REPORT_FILES = ("bench.json", "bench.md")
+
+
+def write_report(directory, res: dict, text: str, *, overwrite: bool = False) -> None:
+    """Write the benchmark results *res* as bench.json and their :func:`report` *text* as bench.md into
+    *directory* (each file whole: :func:`waveoptics.io.files.atomic_path`)."""
+    from pathlib import Path
+
+    from ..io.files import atomic_path, write_json
+
+    out = Path(directory)
+    write_json(out / "bench.json", res, overwrite=overwrite)
+    with atomic_path(out / "bench.md", overwrite=overwrite) as tmp:
+        tmp.write_text(text + "\n")

@@ -8,7 +8,7 @@ twins), twoscale (micro facets carrying nano-roughness: coherent lobe plus diffr
 sampling (microfacet normal samplers), protocol (the BRDF as a function: eval / pdf / sample / albedo; the
 microfacet model), pointwise (the two-scale model as a function), tabulated (the same from diffracted lobes tabulated over
 incidence, any nano-roughness), measured_ndf (an NDF tabulated from a height field's slopes), chi2 (goodness-of-fit test of samplers), multiscatter (Kulla-Conty energy compensation), btdf (the rough dielectric: reflection and transmission over the sphere, with its energy compensation), spectral (a BRDF known at wavelength nodes, evaluated at any λ and in RGB), ndf_fit (the α of any NDF that matches a surface's slopes), models (the BRDF models by name, from keyword arguments:
-BRDF_MODELS).
+BRDF_MODELS, their parameters BRDF_MODEL_PARAMETERS, build_brdf_model).
 """
 from .measured_ndf import (SlopeTable, slope_table, footprint_ndf, D_tabulated, Lambda_tabulated)
 from .roughness import (alpha_from_roughness, roughness_from_alpha, blinn_phong_exponent, alpha_from_blinn_phong)
@@ -51,7 +51,8 @@ from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
 from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, refract, half_vector_refraction, DielectricTables,
     dielectric_tables, RoughDielectricBSDF)
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,
-    twoscale_model, rough_dielectric_model, BRDF_MODELS)
+    twoscale_model, rough_dielectric_model, table_model, BRDF_MODELS, BRDF_MODEL_PARAMETERS, BRDF_MODEL_HELP,
+    build_brdf_model)
 from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, field_lobe, roughness_scales, scale_split, twoscale_grid, nano_grid, twoscale_paraxial, twoscale_frame, twoscale_coherent, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, btdf, spectral, ndf_fit, models  # noqa: F401
 
 __all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + field_lobe.__all__ + roughness_scales.__all__ + scale_split.__all__ + twoscale_grid.__all__ + nano_grid.__all__ + twoscale_paraxial.__all__ + twoscale_frame.__all__ + twoscale_coherent.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + btdf.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__

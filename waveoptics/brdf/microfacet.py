@@ -50,6 +50,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import WaveopticsError, unknown
+from ..vocabulary import DEFAULT_NDF
 from ..materials.database import get_material
 from ..units import check_wavelengths
 from .diffuse import DIFFUSES, diffuse_tradeoff
@@ -68,7 +69,7 @@ __all__ = ['specular', 'brdf', 'fresnel_inputs', 'spectral_brdf']
 # the specular term
 
 
-def specular(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated", fresnel="exact",
+def specular(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-correlated", fresnel="exact",
              eta=None, F0=None, ndf_shape=None):
     """Microfacet specular BRDF F(v·h) G(l, v, h) D(h) / (4 (n·l)(n·v)) in 1/sr.
 
@@ -126,7 +127,7 @@ def specular_term(wi, wo, spec, ax, ay, c, gfn, F_fn):
 # the whole BRDF
 
 
-def brdf(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated", fresnel="exact", eta=None,
+def brdf(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-correlated", fresnel="exact", eta=None,
          F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True):
     """Microfacet BRDF f = f_s + w f_d: specular lobe plus an optional diffuse term, in 1/sr (not × cos).
 

@@ -1,4 +1,7 @@
-"""BRDF models by name (:data:`BRDF_MODELS`), each set up from plain keyword arguments.
+"""BRDF models by name (:data:`BRDF_MODELS`), each set up from plain keyword arguments; each model's parameters,
+with their unit, default and meaning, are :data:`BRDF_MODEL_PARAMETERS` (kept in :mod:`waveoptics.vocabulary`, so
+that a front end builds its options from them without loading this package), and :func:`build_brdf_model` sets a
+model up by name.
 
 Each factory validates its parameters and returns a :class:`ModelEvaluation`, the model ready to evaluate at any
 directions at the wavelengths it was set up for (``waveoptics brdf --model NAME`` parses its options into these
@@ -23,11 +26,12 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import FieldError
-from ..vocabulary import DEFAULT_MATERIAL
+from ..errors import FieldError, unknown
+from ..vocabulary import BRDF_MODEL_HELP, BRDF_MODEL_PARAMETERS, DEFAULT_MATERIAL, DEFAULT_NDF
 
 __all__ = ['ModelEvaluation', 'function_evaluation', 'microfacet_model', 'kirchhoff_model', 'rayleigh_rice_model',
-           'twoscale_model', 'rough_dielectric_model', 'BRDF_MODELS']
+           'twoscale_model', 'rough_dielectric_model', 'table_model', 'BRDF_MODELS', 'BRDF_MODEL_PARAMETERS',
+           'BRDF_MODEL_HELP', 'build_brdf_model']
 
 
 def _each(iterable, desc):
@@ -139,7 +143,7 @@ def _ms_brdf(kw, material, ior, fresnel, backend):
                           fresnel=fresnel, diffuse_sigma=kw["sigma"], multiple_scattering=True)
 
 
-def microfacet_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None, ndf="ggx", ndf_shape=None,
+def microfacet_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF, ndf_shape=None,
                      slope_table=None, shadowing="smith-correlated", material=None, ior=None, fresnel="exact",
                      diffuse="lambert", kd=0.0, diffuse_sigma_deg=0.0, diffuse_roughness=0.5, tradeoff=True,
                      multiple_scattering=False, backend="numpy", precision="float32", device=None) -> ModelEvaluation:
@@ -349,7 +353,7 @@ def function_evaluation(setup: Callable, wavelengths_nm) -> ModelEvaluation:
     return ModelEvaluation(evaluate, albedo, components)
 
 
-def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, roughness=None, alpha_y=None, ndf="ggx",
+def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF,
                    ndf_shape=None, slope_table=None, shadowing="smith-correlated", material=None, ior=None,
                    fresnel="exact", diffuse="lambert", kd=0.0, diffuse_sigma_deg=0.0, diffraction="kirchhoff",
                    multiple_scattering=False, resolution=None) -> ModelEvaluation:
@@ -420,7 +424,7 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
     return function_evaluation(build, wavelengths_nm)
 
 
-def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None, ndf="ggx", ndf_shape=None,
+def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF, ndf_shape=None,
                            shadowing="smith-correlated", material=None, ior=None, fresnel="exact",
                            multiple_scattering=False) -> ModelEvaluation:
     """The BSDF of a rough dielectric interface, reflection and transmission over the whole sphere (Walter et al.
@@ -458,12 +462,44 @@ def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_
     return function_evaluation(lambda wi: bsdf, wavelengths_nm)
 
 
-#: BRDF model factories by name; each takes keyword arguments (``wavelengths_nm`` and the model's parameters)
-#: and returns a :class:`ModelEvaluation`
+def table_model(*, wavelengths_nm, table) -> ModelEvaluation:
+    """A BRDF table as a function (:func:`waveoptics.distributed.table.open_table` opens a table file as one):
+    evaluation, parts and albedo come from the table object.
+
+    Parameters
+    ----------
+    wavelengths_nm : ndarray (n_λ,)
+        Wavelengths in nm (the table's own).
+    table : BRDF function
+        An object with ``eval``, ``eval_parts`` and ``albedo`` (:mod:`waveoptics.brdf.protocol`).
+    """
+    if table is None:
+        raise FieldError("the table model needs {table} (a BRDF table as a function)", "table")
+    return function_evaluation(lambda wi: table, wavelengths_nm)
+
+
+#: BRDF model factories by name; each takes keyword arguments (``wavelengths_nm`` and the model's parameters,
+#: :data:`BRDF_MODEL_PARAMETERS`) and returns a :class:`ModelEvaluation`
 BRDF_MODELS: dict[str, Callable] = {
     "microfacet": microfacet_model,
     "kirchhoff": kirchhoff_model,
     "rayleigh-rice": rayleigh_rice_model,
     "twoscale": twoscale_model,
     "rough-dielectric": rough_dielectric_model,
+    "table": table_model,
 }
+
+
+def build_brdf_model(name: str, wavelengths_nm, **params) -> ModelEvaluation:
+    """The BRDF model *name* (:data:`BRDF_MODELS`) set up at *wavelengths_nm* (nm) with *params*, its parameters
+    (:data:`BRDF_MODEL_PARAMETERS`; a parameter left out takes its default). A parameter the model does not take
+    is refused, naming the models that take it."""
+    if name not in BRDF_MODELS:
+        raise unknown("BRDF model", name, BRDF_MODELS, field="model")
+    own = {p.name for p in BRDF_MODEL_PARAMETERS[name]}
+    extra = [k for k in params if k not in own]
+    if extra:
+        takers = [m for m, ps in BRDF_MODEL_PARAMETERS.items() if any(p.name == extra[0] for p in ps)]
+        raise FieldError(f"{{{extra[0]}}} is not a parameter of the {name} model" +
+                         (f" (it is one of {', '.join(takers)})" if takers else ""), extra[0])
+    return BRDF_MODELS[name](wavelengths_nm=wavelengths_nm, **params)

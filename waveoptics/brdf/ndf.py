@@ -17,6 +17,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import WaveopticsError, unknown
+from ..vocabulary import DEFAULT_NDF
 from .directions import as_dirs, reflect  # noqa: F401  (reflect: imported from here by pointwise, issue 28)
 from .measured_ndf import D_tabulated, Lambda_tabulated, SlopeTable
 from .ndf_closed import D_beckmann, D_blinn_phong, D_ggx, Lambda_beckmann, Lambda_blinn_phong, Lambda_ggx
@@ -117,7 +118,7 @@ def check_alpha(alpha, alpha_y, ndf: NDF, ndf_shape):
     return ax, ay
 
 
-def D(m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
+def D(m, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, ndf_shape=None):
     """Normal distribution function D(m) in 1/sr (``ndf`` one of :data:`NDFS`).
 
     Parameters
@@ -148,7 +149,7 @@ def D(m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     return spec.D(as_dirs(m, "m"), ax, ay, ndf_shape)
 
 
-def Lambda(w, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
+def Lambda(w, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, ndf_shape=None):
     """Smith's Λ(w) of an NDF (dimensionless, ≥ 0; +inf for w_z <= 0, where G1 = 0).
 
     Parameters are those of :func:`D`; *w* are unit directions (..., 3).
@@ -162,7 +163,7 @@ def Lambda(w, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
     return spec.Lambda(as_dirs(w, "w"), ax, ay, ndf_shape)
 
 
-def G1(w, m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None):
+def G1(w, m, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, ndf_shape=None):
     """Smith masking function G1(w, m) = χ⁺(w·m) / (1 + Λ(w)), in [0, 1].
 
     References

@@ -7,6 +7,7 @@ import pyopencl as cl
 import pyopencl.array as cla
 
 from ..errors import WaveopticsError, unknown
+from ..vocabulary import DEFAULT_NDF
 from ..materials import fresnel as _fresnel
 from ..runtime import build_options, build_program, get_runtime
 from .diffuse import DIFFUSES
@@ -92,17 +93,17 @@ def _ndf_kernel(kname, w, alpha, alpha_y, ndf, ndf_shape, runtime, precision):
     return d_out.get()[:n].reshape(w.shape[:-1]).astype(np.float64)
 
 
-def D_cl(m, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None, runtime=None, precision="float32"):
+def D_cl(m, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, ndf_shape=None, runtime=None, precision="float32"):
     """OpenCL twin of :func:`D` (kernel ``D_eval`` in ``kernels/microfacet.cl``)."""
     return _ndf_kernel("D_eval", m, alpha, alpha_y, ndf, ndf_shape, runtime, precision)
 
 
-def Lambda_cl(w, alpha, alpha_y=None, *, ndf="ggx", ndf_shape=None, runtime=None, precision="float32"):
+def Lambda_cl(w, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, ndf_shape=None, runtime=None, precision="float32"):
     """OpenCL twin of :func:`Lambda` (kernel ``Lambda_eval``); +inf below the surface like the NumPy one."""
     return _ndf_kernel("Lambda_eval", w, alpha, alpha_y, ndf, ndf_shape, runtime, precision)
 
 
-def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf="ggx", shadowing="smith-correlated", fresnel="exact", eta=None,
+def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-correlated", fresnel="exact", eta=None,
             F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True, runtime=None,
             precision="float32"):
     """OpenCL twin of :func:`brdf` for N direction pairs at M wavelengths (kernel ``brdf_eval``).

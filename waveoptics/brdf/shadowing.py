@@ -12,6 +12,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import unknown
+from ..vocabulary import DEFAULT_NDF
 from .directions import as_dirs, dot_last
 from .ndf import check_alpha, ndf_by_name
 from .smith import G1_from_lambda
@@ -86,7 +87,7 @@ def shadowing_by_name(name):
     return SHADOWINGS[name]
 
 
-def G(wi, wo, m, alpha, alpha_y=None, *, ndf="ggx", shadowing="smith-correlated", ndf_shape=None):
+def G(wi, wo, m, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, shadowing="smith-correlated", ndf_shape=None):
     """Masking-shadowing G(l, v, m) in [0, 1] (``shadowing`` one of :data:`SHADOWINGS`).
 
     Parameters

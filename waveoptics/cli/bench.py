@@ -5,9 +5,11 @@ FFTs and a NumPy FFT pipeline, plus the measured error of the device's math buil
 """
 from __future__ import annotations
 
-from ..io.files import atomic_path, prepare_outdir, write_json
+from ..io.files import prepare_outdir
 from ._common import add_common, add_output, emit, progress
 
+#: files of ``bench -o DIR`` (:data:`waveoptics.bench.REPORT_FILES`, kept here so that building the parser
+#: imports nothing heavy)
 FILES = ("bench.json", "bench.md")
 
 
@@ -35,8 +37,6 @@ def run(args) -> int:
     bar.close()
     text = bench.report(res)
     if out is not None:
-        write_json(out / "bench.json", res, overwrite=args.overwrite)
-        with atomic_path(out / "bench.md", overwrite=args.overwrite) as tmp:
-            tmp.write_text(text + "\n")
+        bench.write_report(out, res, text, overwrite=args.overwrite)
     emit(args, res, text)
     return 0

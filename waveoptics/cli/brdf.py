@@ -1,11 +1,13 @@
 """``waveoptics brdf``: evaluate a BRDF model at given directions and wavelengths, or its directional albedo.
 
-The command is shared by all BRDF models. Each model is one entry of :data:`MODELS`: a function adding its
-options (in its own argument group), a function turning the parsed options into the model's keyword arguments
-and calling its factory in :data:`waveoptics.brdf.BRDF_MODELS` (the library part: validation and evaluation), and
-a description of its parameters; direction and wavelength parsing, looping and the text/JSON output live here
-once. Adding a model (e.g. ``kirchhoff`` with ``--surface FILE --solver ...``) means adding one :class:`Model`
-entry.
+The command is shared by all BRDF models. The models, their parameters (unit, default, meaning) and their
+factories are the library's registry (:data:`waveoptics.vocabulary.BRDF_MODEL_PARAMETERS`,
+:data:`waveoptics.brdf.BRDF_MODELS`): the options take their defaults from it, and a model is set up by
+:func:`waveoptics.brdf.build_brdf_model` with each of its parameters read from the option of the same dest
+(:data:`_DEST` where they differ). Each model is one entry of :data:`MODELS`: a function adding its own options,
+a function reading its input files into the parameters that are objects (a height field, a slope table, a PSD, a
+table), and a description of its parameters; direction and wavelength parsing, looping and the text/JSON output
+live here once.
 
 JSON output: ``{"model": ..., "values": [{"incident": [θ, φ], "outgoing": [θ, φ], "wavelength_nm": λ,
 "brdf": f}, ...]}`` with f in 1/sr (not multiplied by cos θ_o), or with ``--albedo``
@@ -21,32 +23,89 @@ from typing import Callable
 
 
 from ..errors import WaveopticsError
-from ..vocabulary import DIFFRACTION, DIFFUSE_ALIASES, DIFFUSE_NAMES, FRESNEL_NAMES, NDF_NAMES, POLARIZATIONS, SHADOWING_NAMES
+from ..vocabulary import (BRDF_MODEL_HELP, BRDF_MODEL_PARAMETERS, DIFFRACTION, DIFFUSE_ALIASES, DIFFUSE_NAMES,
+                          FRESNEL_NAMES, NDF_NAMES, POLARIZATIONS, SHADOWING_NAMES)
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
 from ._common import add_common, add_surface, emit, load_surface, progress
 from ._options import option, renamed
 
 
+#: model parameters whose option has another dest
+_DEST = {"diffuse_sigma_deg": "sigma", "tradeoff": "no_tradeoff"}
+#: model parameters that are objects read from files (by the model's *inputs*), with the options they read
+_INPUTS = {"slope_table": ("micro_surface", "footprint", "spacing", "units", "channel"),
+           "surface": ("surface", "spacing", "units", "channel"),
+           "nano": ("nano",),
+           "psd": ("nano", "surface", "spacing", "units", "channel"),
+           "table": ("table",)}
+
+
+def _default(name: str, model: str = "microfacet"):
+    """The registry's default of parameter *name* of *model* (:data:`waveoptics.vocabulary.BRDF_MODEL_PARAMETERS`)."""
+    return next(p.default for p in BRDF_MODEL_PARAMETERS[model] if p.name == name)
+
+
+def _uses(model: str, extra: tuple = ()) -> tuple:
+    """The dests of the options *model* reads: one per registry parameter (the input files' options for those
+    read from files), and *extra*."""
+    dests = []
+    for p in BRDF_MODEL_PARAMETERS[model]:
+        dests += _INPUTS.get(p.name, (_DEST.get(p.name, p.name),))
+    return tuple(dict.fromkeys(dests + list(extra)))
+
+
+def _parameters(name: str, args, inputs: dict) -> dict:
+    """The parameters of model *name* from the options (:data:`_DEST`) and the objects *inputs* read from files."""
+    kw = {}
+    for p in BRDF_MODEL_PARAMETERS[name]:
+        if p.name in inputs:
+            kw[p.name] = inputs[p.name]
+        elif p.name == "tradeoff":
+            kw[p.name] = not args.no_tradeoff
+        elif p.name not in _INPUTS:
+            kw[p.name] = getattr(args, _DEST.get(p.name, p.name))
+    return kw
+
+
 @dataclass(frozen=True)
 class Model:
-    """A BRDF model offered by ``waveoptics brdf --model NAME``.
+    """A BRDF model offered by ``waveoptics brdf --model NAME`` (a model of the library's registry).
 
     Attributes
     ----------
+    name : str
+        The model (a key of :data:`waveoptics.brdf.BRDF_MODELS`).
     add_arguments : callable(group)
-        Adds the model's options to an argparse argument group.
-    build : callable(args, wavelength_nm) -> waveoptics.brdf.ModelEvaluation
-        The model set up from the options at these wavelengths (its evaluation, albedo and named parts).
+        Adds the model's own options to an argparse argument group.
+    inputs : callable(args, wavelength_nm) -> dict
+        Checks the options and reads the model's input files: the parameters that are objects.
     describe : callable(args) -> dict
         Model parameters echoed in the JSON output.
-    help : str
+    extra : tuple
+        Options the model reads beyond its parameters' (to refuse them with a message of its own).
     """
 
+    name: str
     add_arguments: Callable
-    build: Callable
+    inputs: Callable
     describe: Callable
-    help: str
-    uses: tuple = ()   #: destinations of the options this model reads (beyond the command's own)
+    extra: tuple = ()
+
+    @property
+    def help(self) -> str:
+        return BRDF_MODEL_HELP[self.name]
+
+    @property
+    def uses(self) -> tuple:
+        """Destinations of the options this model reads (beyond the command's own)."""
+        return _uses(self.name, self.extra)
+
+    def build(self, args, wavelength_nm):
+        """The model set up from the options at these wavelengths (:func:`waveoptics.brdf.build_brdf_model`)."""
+        from .. import brdf
+
+        inputs = self.inputs(args, wavelength_nm)
+        return brdf.build_brdf_model(self.name, wavelength_nm, **_parameters(self.name, args, inputs))
 
 
 def _bar(args):
@@ -69,12 +128,12 @@ def _index(args, wavelength_nm, note: bool = True) -> None:
 def _microfacet_arguments(g) -> None:
 
 
-    option(g, "--ndf", choices=sorted(NDF_NAMES), default="ggx")
+    option(g, "--ndf", choices=sorted(NDF_NAMES), default=_default("ndf"))
     option(g, "--micro-surface", note="--spacing/--units/--channel describe it when no --surface is given")
     option(g, "--footprint", note="with --micro-surface: the NDF of that footprint only (a glint); a .npy "
                                   "file is memory-mapped")
-    g.add_argument("--shadowing", choices=sorted(SHADOWING_NAMES), default="smith-correlated",
-                   help="masking-shadowing term (default smith-correlated)")
+    g.add_argument("--shadowing", choices=sorted(SHADOWING_NAMES), default=_default("shadowing"),
+                   help=f"masking-shadowing term (default {_default('shadowing')})")
     option(g, "--micro-alpha", short="--alpha", dest="alpha",
            note="in [0, 2]; α_x if anisotropic; 0 = sharpest representable")
     g.add_argument("--roughness", type=float, metavar="R", help="perceptual roughness r, α = r² (instead of --alpha)")
@@ -83,41 +142,34 @@ def _microfacet_arguments(g) -> None:
     renamed(g, "brdf", "--abc-c", dest="ndf_shape", type=float)
     option(g, "--material", note="or --ior")
     g.add_argument("--ior", metavar="N+Kj", help="constant complex index, e.g. 1.5 or 0.2+3.1j")
-    g.add_argument("--fresnel", choices=sorted(FRESNEL_NAMES), default="exact",
+    g.add_argument("--fresnel", choices=sorted(FRESNEL_NAMES), default=_default("fresnel"),
                    help="Fresnel factor: exact, schlick, or one (F = 1, white furnace)")
-    option(g, "--diffuse", choices=sorted(DIFFUSE_NAMES + tuple(DIFFUSE_ALIASES)), default="lambert",
+    option(g, "--diffuse", choices=sorted(DIFFUSE_NAMES + tuple(DIFFUSE_ALIASES)), default=_default("diffuse"),
            note="disney is burley")
-    option(g, "--kd", default=0.0, note="applied as given, to metals too")
-    g.add_argument("--diffuse-sigma", dest="sigma", type=float, default=0.0, metavar="DEG",
-                   help="Oren-Nayar roughness σ in degrees (--diffuse oren-nayar; separate from the specular α; "
-                        "default 0)")
+    option(g, "--kd", default=_default("kd"), note="applied as given, to metals too")
+    g.add_argument("--diffuse-sigma", dest="sigma", type=float, default=_default("diffuse_sigma_deg"),
+                   metavar="DEG", help="Oren-Nayar roughness σ in degrees (--diffuse oren-nayar; separate from the "
+                                       f"specular α; default {_default('diffuse_sigma_deg'):g})")
     renamed(g, "brdf", "--sigma", dest="sigma", type=float)
-    g.add_argument("--diffuse-roughness", type=float, default=0.5, metavar="R",
-                   help="Burley diffuse roughness r in [0, 1] (--diffuse burley; default 0.5)")
+    g.add_argument("--diffuse-roughness", type=float, default=_default("diffuse_roughness"), metavar="R",
+                   help=f"Burley diffuse roughness r in [0, 1] (--diffuse burley; default "
+                        f"{_default('diffuse_roughness'):g})")
     option(g, "--multiple-scattering", action="store_true",
            note="microfacet, twoscale and rough-dielectric; NumPy, exact or one Fresnel; off by "
                 "default")
     g.add_argument("--no-tradeoff", action="store_true",
                    help="do not weight the diffuse term by (1 - F(θi))(1 - F(θo)) / (1 - F̄)")
-    option(g, "--backend", choices=["numpy", "opencl"], default="numpy", note="albedo always uses NumPy")
-    option(g, "--precision", choices=["float32", "float64"], default="float32")
+    option(g, "--backend", choices=["numpy", "opencl"], default=_default("backend"), note="albedo always uses NumPy")
+    option(g, "--precision", choices=["float32", "float64"], default=_default("precision"))
 
 
-def _microfacet_build(args, wavelength_nm):
-    """:func:`waveoptics.brdf.microfacet_model` of the options."""
-    from .. import brdf
-
+def _microfacet_inputs(args, wavelength_nm) -> dict:
+    """The slope table of :func:`waveoptics.brdf.microfacet_model` (--micro-surface or --ndf tabulated)."""
     table = None
     if args.micro_surface is not None or args.ndf == "tabulated":
         table = _measured_ndf(args)
     _index(args, wavelength_nm)
-    return brdf.microfacet_model(wavelengths_nm=wavelength_nm, alpha=args.alpha, roughness=args.roughness,
-                                 alpha_y=args.alpha_y, ndf=args.ndf, ndf_shape=args.ndf_shape, slope_table=table,
-                                 shadowing=args.shadowing, material=args.material, ior=args.ior,
-                                 fresnel=args.fresnel, diffuse=args.diffuse, kd=args.kd,
-                                 diffuse_sigma_deg=args.sigma, diffuse_roughness=args.diffuse_roughness,
-                                 tradeoff=not args.no_tradeoff, multiple_scattering=args.multiple_scattering,
-                                 backend=args.backend, precision=args.precision, device=args.device)
+    return {"slope_table": table}
 
 
 def _measured_ndf(args):
@@ -201,28 +253,22 @@ def _microfacet_describe(args) -> dict:
 
 def _kirchhoff_arguments(g) -> None:
     add_surface(g)
-    option(g, "--solver", choices=("direct", "fft"), default="direct",
+    option(g, "--solver", choices=("direct", "fft"), default=_default("solver", "kirchhoff"),
            note="direct Kirchhoff sum (--backend numpy|opencl) or fft on a hemisphere grid (interpolated at the "
                 "outgoing directions)")
     option(g, "--resolution", note="of the fft grid and the --albedo quadrature (default: resolves the specular "
                                    "spike; albedo 256)")
-    option(g, "--realizations", default=1)
-    option(g, "--window", default="hann")
-    option(g, "--diffraction", default="kirchhoff", choices=DIFFRACTION)
+    option(g, "--realizations", default=_default("realizations", "kirchhoff"))
+    option(g, "--window", default=_default("window", "kirchhoff"))
+    option(g, "--diffraction", default=_default("diffraction", "kirchhoff"), choices=DIFFRACTION)
 
 
-def _kirchhoff_build(args, wavelength_nm):
-    """:func:`waveoptics.brdf.kirchhoff_model` of the options."""
-    from .. import brdf
-
+def _kirchhoff_inputs(args, wavelength_nm) -> dict:
+    """The height field of :func:`waveoptics.brdf.kirchhoff_model` (--surface)."""
     if not args.surface:
         raise WaveopticsError("--model kirchhoff needs --surface FILE")
     _index(args, wavelength_nm, note=args.fresnel != "one")
-    return brdf.kirchhoff_model(wavelengths_nm=wavelength_nm, surface=load_surface(args), material=args.material,
-                                ior=args.ior, fresnel=args.fresnel, solver=args.solver, backend=args.backend,
-                                precision=args.precision, window=args.window, resolution=args.resolution,
-                                realizations=args.realizations, diffraction=args.diffraction,
-                                polarization=args.polarization, device=args.device)
+    return {"surface": load_surface(args)}
 
 
 def _kirchhoff_describe(args) -> dict:
@@ -237,13 +283,14 @@ def _kirchhoff_describe(args) -> dict:
 def _rayleigh_rice_arguments(g) -> None:
     option(g, "--nano", note="rayleigh-rice: statistics, or --surface FILE whose periodogram is the PSD; "
                              "twoscale: default " + _default_nano())
-    option(g, "--polarization", choices=POLARIZATIONS, default="unpolarized", note="rayleigh-rice and kirchhoff")
+    option(g, "--polarization", choices=POLARIZATIONS, default=_default("polarization", "rayleigh-rice"),
+           note="rayleigh-rice and kirchhoff")
 
 
-def _rayleigh_rice_build(args, wavelength_nm):
-    """:func:`waveoptics.brdf.rayleigh_rice_model` of the options: the PSD is a model from --nano statistics or a
-    height field's periodogram from --surface."""
-    from .. import brdf, surfaces
+def _rayleigh_rice_inputs(args, wavelength_nm) -> dict:
+    """The PSD of :func:`waveoptics.brdf.rayleigh_rice_model`: a model from --nano statistics or a height field's
+    periodogram from --surface."""
+    from .. import surfaces
     from ..request import parse_nano
 
     if bool(args.nano) == bool(args.surface):
@@ -258,8 +305,7 @@ def _rayleigh_rice_build(args, wavelength_nm):
                                   f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
         psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"), C=p.get("C"))
     _index(args, wavelength_nm)
-    return brdf.rayleigh_rice_model(wavelengths_nm=wavelength_nm, psd=psd, material=args.material, ior=args.ior,
-                                    polarization=args.polarization, resolution=args.resolution)
+    return {"psd": psd}
 
 
 def _rayleigh_rice_describe(args) -> dict:
@@ -281,10 +327,9 @@ def _twoscale_arguments(g) -> None:
     --diffraction; nothing of its own."""
 
 
-def _twoscale_build(args, wavelength_nm):
-    """:func:`waveoptics.brdf.twoscale_model` of the options, built once per command (evaluation, parts and albedo
-    share it)."""
-    from .. import brdf
+def _twoscale_inputs(args, wavelength_nm) -> dict:
+    """The nano-roughness (--nano statistics or a --surface height field) and the slope table of
+    :func:`waveoptics.brdf.twoscale_model`."""
     from ..request import make_nano
 
     if args.surface and args.nano:
@@ -298,12 +343,7 @@ def _twoscale_build(args, wavelength_nm):
     _index(args, wavelength_nm)
     surface = load_surface(args) if args.surface else None
     nano = None if surface is not None else make_nano(args.nano or _default_nano(), wavelength_nm)
-    return brdf.twoscale_model(wavelengths_nm=wavelength_nm, nano=nano, surface=surface, alpha=args.alpha,
-                               roughness=args.roughness, alpha_y=args.alpha_y, ndf=args.ndf,
-                               ndf_shape=args.ndf_shape, slope_table=table, shadowing=args.shadowing,
-                               material=args.material, ior=args.ior, fresnel=args.fresnel, diffuse=args.diffuse,
-                               kd=args.kd, diffuse_sigma_deg=args.sigma, diffraction=args.diffraction,
-                               multiple_scattering=args.multiple_scattering, resolution=args.resolution)
+    return {"nano": nano, "surface": surface, "slope_table": table}
 
 
 def _twoscale_describe(args) -> dict:
@@ -327,15 +367,10 @@ def _rough_dielectric_arguments(g) -> None:
     --multiple-scattering); nothing of its own."""
 
 
-def _rough_dielectric_build(args, wavelength_nm):
-    """:func:`waveoptics.brdf.rough_dielectric_model` of the options."""
-    from .. import brdf
-
+def _rough_dielectric_inputs(args, wavelength_nm) -> dict:
+    """:func:`waveoptics.brdf.rough_dielectric_model` reads no file."""
     _index(args, wavelength_nm)
-    return brdf.rough_dielectric_model(wavelengths_nm=wavelength_nm, alpha=args.alpha, roughness=args.roughness,
-                                       alpha_y=args.alpha_y, ndf=args.ndf, ndf_shape=args.ndf_shape,
-                                       shadowing=args.shadowing, material=args.material, ior=args.ior,
-                                       fresnel=args.fresnel, multiple_scattering=args.multiple_scattering)
+    return {}
 
 
 def _rough_dielectric_describe(args) -> dict:
@@ -351,57 +386,28 @@ def _table_arguments(g) -> None:
     g.add_argument("--table", metavar="FILE", help="BRDF table written by 'waveoptics table' (.h5)")
 
 
-def _table_build(args, wavelength_nm):
+def _table_inputs(args, wavelength_nm) -> dict:
     """A BRDF table file as a function (:func:`waveoptics.distributed.table.open_table`)."""
-    from .. import brdf
     from ..distributed.table import open_table
 
     if not args.table:
         raise WaveopticsError("--model table needs --table FILE (a table written by 'waveoptics table')")
-    table = open_table(args.table)
-    return brdf.function_evaluation(lambda wi: table, wavelength_nm)
+    return {"table": open_table(args.table)}
 
 
 def _table_describe(args) -> dict:
     return {"table": args.table}
 
 
-#: options of the micro-scale facets (NDF, index, diffuse term) and of a file's metadata
-_MICRO = ("ndf", "micro_surface", "footprint", "shadowing", "alpha", "roughness", "alpha_y", "ndf_shape", "material",
-          "ior", "fresnel", "diffuse", "kd", "sigma", "multiple_scattering", "spacing", "units", "channel")
-_INDEX = ("material", "ior", "fresnel")
-
-#: BRDF models offered by ``waveoptics brdf --model``
-MODELS: dict[str, Model] = {
-    "microfacet": Model(_microfacet_arguments, _microfacet_build, _microfacet_describe,
-                        "geometric-optics microfacet BRDF (Cook-Torrance / Walter et al. 2007) with a diffuse term",
-                        _MICRO + ("diffuse_roughness", "no_tradeoff", "backend", "precision")),
-    "kirchhoff": Model(_kirchhoff_arguments, _kirchhoff_build, _kirchhoff_describe,
-                       "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.scatter)",
-                       _INDEX + ("surface", "spacing", "units", "channel", "solver", "resolution", "realizations",
-                                 "window", "diffraction", "backend", "precision", "polarization")),
-    "rayleigh-rice": Model(_rayleigh_rice_arguments, _rayleigh_rice_build, _rayleigh_rice_describe,
-                           "first-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the "
-                           "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp)",
-                           ("material", "ior", "nano", "surface", "spacing", "units", "channel", "polarization",
-                            "resolution")),
-    "twoscale": Model(_twoscale_arguments, _twoscale_build, _twoscale_describe,
-                      "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski "
-                      "2017), evaluated at the given directions; JSON also gives its coherent, diffraction "
-                      "and diffuse parts",
-                      _MICRO + ("nano", "surface", "diffraction", "resolution", "polarization")),
-    "rough-dielectric": Model(_rough_dielectric_arguments, _rough_dielectric_build, _rough_dielectric_describe,
-                              "BSDF of a rough dielectric interface (Walter et al. 2007): reflection and "
-                              "transmission (air above, the material below; the command's directions are above "
-                              "the surface, so it gives the reflection and the albedo R + T); JSON also gives its "
-                              "reflection, transmission and multiple parts",
-                              ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "ndf_shape", "material", "ior",
-                               "fresnel", "multiple_scattering")),
-    "table": Model(_table_arguments, _table_build, _table_describe,
-                   "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated "
-                   "between incidences relative to the specular direction, coherent and diffuse parts "
-                   "exact; at the table's wavelengths", ("table",)),
-}
+#: BRDF models offered by ``waveoptics brdf --model`` (the library's registry, in its order)
+MODELS: dict[str, Model] = {m.name: m for m in (
+    Model("microfacet", _microfacet_arguments, _microfacet_inputs, _microfacet_describe),
+    Model("kirchhoff", _kirchhoff_arguments, _kirchhoff_inputs, _kirchhoff_describe),
+    Model("rayleigh-rice", _rayleigh_rice_arguments, _rayleigh_rice_inputs, _rayleigh_rice_describe),
+    Model("twoscale", _twoscale_arguments, _twoscale_inputs, _twoscale_describe, extra=("polarization",)),
+    Model("rough-dielectric", _rough_dielectric_arguments, _rough_dielectric_inputs, _rough_dielectric_describe),
+    Model("table", _table_arguments, _table_inputs, _table_describe),
+)}
 
 #: options every model takes (the command's own)
 _COMMON = {"model", "wavelengths", "incident", "outgoing", "albedo", "device", "json", "debug", "quiet", "func",

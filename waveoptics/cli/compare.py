@@ -3,10 +3,6 @@ from __future__ import annotations
 
 import os
 
-import csv
-import io as _io
-from pathlib import Path
-
 from ..errors import WaveopticsError
 from ..units import check_theta, parse_number_list
 from ._common import add_common, add_output, emit
@@ -48,11 +44,10 @@ def run(args):
         raise WaveopticsError("--incident-angles must stay below 90 degrees (the light must be above the horizon)")
     if not (0 < args.tail < 90):
         raise WaveopticsError(f"--tail {args.tail!r} is not allowed; use an angle in (0, 90) degrees")
-    files = ("compare.csv", "compare.png", "compare.json")
     req = request_from_args(args)
     sim_mod.check_request_memory(req, max_memory=args.max_memory)   # before anything is created
     if args.output:
-        io.prepare_outdir(args.output, overwrite=args.overwrite, expected=files)
+        io.prepare_outdir(args.output, overwrite=args.overwrite, expected=cmp.OUTPUTS)
     sim = simulation_from_args(args, req=req)
     rows = cmp.compare(sim, angles, tail_deg=args.tail)
     data = {"parameters": sim.params, "tail_deg": args.tail, "rows": rows,
@@ -61,19 +56,9 @@ def run(args):
                       "fwhm_deg_microfacet": "deg", "tail_fraction_wave": "1 (share of the albedo)",
                       "tail_fraction_microfacet": "1", "delta_e2000_albedo": "CIEDE2000",
                       "delta_e2000_sphere_mean": "CIEDE2000", "delta_e2000_sphere_max": "CIEDE2000"}}
-    if args.output:
-
-        buf = _io.StringIO()
-        wr = csv.DictWriter(buf, fieldnames=list(rows[0]))
-        wr.writeheader()
-        wr.writerows(rows)
-        # the three files appear as a set, compare.json (the manifest) last (io.staged_outputs)
-        with io.staged_outputs(Path(args.output), files, last="compare.json") as out:
-            with io.atomic_path(out / "compare.csv") as tmp:
-                tmp.write_text(buf.getvalue())
-            cmp.plot(rows, out / "compare.png", tail_deg=args.tail,
-                     title=f"{sim.params['material']}: two-scale vs microfacet ({sim.params['illuminant']})")
-            io.write_json(out / "compare.json", data)
+    if args.output:   # the three files appear as a set, compare.json (the manifest) last
+        cmp.write_outputs(rows, data, args.output, tail_deg=args.tail,
+                          title=f"{sim.params['material']}: two-scale vs microfacet ({sim.params['illuminant']})")
     emit(args, data, cmp.table_text(rows, args.tail) + (f"\nwrote {os.path.join(os.path.normpath(args.output), 'compare')}.{{json,csv,png}}"
                                                          if args.output else ""))
     return 0

@@ -1,12 +1,9 @@
 """``waveoptics export --format rgl -o material.bsdf``: the two-scale BRDF as a file a renderer reads."""
 from __future__ import annotations
 
+from ..renderers.jobs import EXPORT_FORMATS as FORMATS
 from ._common import add_common, add_output, emit
-from ._renderer import add_model, model_description, model_from_args
-
-#: export formats → (what it is, file suffix)
-FORMATS = {"rgl": ("RGL tabulated BSDF (Dupuy & Jakob 2018) for Mitsuba 3's and pbrt-v4's 'measured' models",
-                   ".bsdf")}
+from ._renderer import add_model, model_fields
 
 
 def register(sub):
@@ -32,35 +29,14 @@ def register(sub):
 
 
 def run(args):
-    import time
-    from pathlib import Path
+    """``export``: :func:`waveoptics.renderers.jobs.export_job` of the options."""
+    from ..renderers.jobs import export_job
+    from ..renderers.requests import RendererModel
 
-    from .. import __version__
-    from ..errors import WaveopticsError
-    from ..renderers import rgl
-
-    out = Path(args.output)
-    suffix = FORMATS[args.format][1]
-    if out.suffix.lower() != suffix:
-        raise WaveopticsError(f"--output {args.output!r} must end in {suffix} for --format {args.format}")
-    if out.exists() and not args.overwrite:
-        raise WaveopticsError(f"--output {args.output!r} exists; give --overwrite to replace it")
-    grid = rgl.RGLGrid(n_theta_i=args.incidence_nodes, resolution=args.table_resolution,
-                       n_phi_i=args.azimuth_nodes)
-    t0 = time.perf_counter()
-    model, params = model_from_args(args)
-    t1 = time.perf_counter()
-    desc = model_description(args, params)
-    text = f"waveoptics {__version__} two-scale BRDF: " + ", ".join(f"{k}={v}" for k, v in desc.items()
-                                                                      if v is not None)
-    fields = rgl.export_rgl(model, out, grid=grid, description=text, overwrite=args.overwrite)
-    t2 = time.perf_counter()
-    data = {"output": str(out), "format": args.format, "model": desc,
-            "isotropic": int(fields["phi_i"].size) == 2,
-            "wavelengths_nm": [float(x) for x in fields["wavelengths"]],
-            "theta_i_deg": [round(float(x), 6) for x in __import__("numpy").degrees(fields["theta_i"])],
-            "shape": {k: list(v.shape) for k, v in fields.items() if hasattr(v, "shape")},
-            "bytes": out.stat().st_size, "time_model_s": round(t1 - t0, 3), "time_export_s": round(t2 - t1, 3)}
+    data = export_job(RendererModel(**model_fields(args)), args.output, format=args.format,
+                      incidence_nodes=args.incidence_nodes, table_resolution=args.table_resolution,
+                      azimuth_nodes=args.azimuth_nodes, overwrite=args.overwrite)
+    out = data["output"]
     emit(args, data, f"wrote {out} ({data['bytes'] / 1e6:.2f} MB; {'isotropic' if data['isotropic'] else 'anisotropic'}"
                      f", {len(data['wavelengths_nm'])} wavelengths {data['wavelengths_nm'][0]:g}-"
                      f"{data['wavelengths_nm'][-1]:g} nm, {len(data['theta_i_deg'])} incidences; model "

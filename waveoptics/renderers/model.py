@@ -30,6 +30,7 @@ from .. import brdf
 from ..errors import FieldError, WaveopticsError
 from ..request import make_nano
 from ..vocabulary import RENDER_WAVELENGTH_STEP_NM
+from .requests import RendererModel as _M
 
 __all__ = ['SPECTRAL_RANGE_NM', 'DEFAULT_WAVELENGTH_STEP_NM', 'TABLE_CACHE_KIND', 'wavelength_nodes',
            'renderer_brdf', 'cached_renderer_brdf', 'table_key']
@@ -52,13 +53,14 @@ def wavelength_nodes(step_nm: float = DEFAULT_WAVELENGTH_STEP_NM, span_nm=SPECTR
     return tuple(float(x) for x in np.linspace(lo, hi, n))
 
 
-def renderer_brdf(material: str = "aluminium", alpha: float = 0.1, alpha_y: float | None = None,
-                  ndf: str = "ggx", nano: str | None = None, surface=None,
-                  diffraction: str = "kirchhoff", kd: float = 0.0, diffuse: str = "lambert",
-                  wavelength_step_nm: float = DEFAULT_WAVELENGTH_STEP_NM, resolution: int = 128,
-                  exact: bool = False, shadowing: str = "smith-correlated",
-                  multiple_scattering: bool = False, cache: bool = True) -> brdf.SpectralNodes:
-    """The two-scale BRDF of these parameters at the renderer's wavelength nodes (see the module doc).
+def renderer_brdf(material: str = _M.material, alpha: float = _M.alpha, alpha_y: float | None = _M.alpha_y,
+                  ndf: str = _M.ndf, nano: str | None = _M.nano, surface=_M.surface,
+                  diffraction: str = _M.diffraction, kd: float = _M.kd, diffuse: str = _M.diffuse,
+                  wavelength_step_nm: float = DEFAULT_WAVELENGTH_STEP_NM, resolution: int = _M.resolution,
+                  exact: bool = _M.exact, shadowing: str = "smith-correlated",
+                  multiple_scattering: bool = _M.multiple_scattering, cache: bool = True) -> brdf.SpectralNodes:
+    """The two-scale BRDF of these parameters at the renderer's wavelength nodes (see the module doc); the
+    defaults are those of :class:`waveoptics.renderers.requests.RendererModel`.
 
     Parameters
     ----------

@@ -37,6 +37,7 @@ import numpy as np
 from .. import colour
 from ..errors import FieldError, WaveopticsError
 from ..vocabulary import RENDER_BSDFS
+from .requests import RenderRequest
 
 __all__ = ["WAVE_BSDFS", "REFERENCE_NDFS", "RenderSettings", "reference_bsdf", "wave_bsdf", "scene_dict",
            "render_image", "delta_e_map", "sphere_mask", "CAMERA", "SEED_STREAMS", "Progressive", "Comparison",
@@ -70,10 +71,10 @@ class RenderSettings:
         The spp are split over this many passes (different seeds, averaged) to report progress.
     """
 
-    size: int = 256
-    spp: int = 32
-    variant: str = "llvm_ad_spectral"
-    ground: bool = True
+    size: int = RenderRequest.sphere_size
+    spp: int = RenderRequest.spp
+    variant: str = RenderRequest.variant
+    ground: bool = RenderRequest.ground
     max_depth: int = 6
     passes: int = 8
 
@@ -198,7 +199,7 @@ def _split(spp: int, passes: int) -> list[int]:
 #: scalar variants render seed 2^24 as seed 0 (measured, Mitsuba 3.9)
 SEED_STREAMS = {"wave": 0, "wave_repeat": 1 << 20, "reference": 0}
 #: most samples per pixel a --target-noise render doubles to by default
-MAX_SPP_DEFAULT = 4096
+MAX_SPP_DEFAULT = RenderRequest.max_spp
 
 
 class Progressive:
