@@ -135,12 +135,16 @@ def energy_tables():
     return loss, shadow, emax
 
 
-def tradeoff_excess():
+def tradeoff_excess() -> dict:
+    """Largest total albedo − 1 of a dielectric (η = 1.5) with kd = 1, per NDF (GGX, Beckmann)."""
     th = np.array([0.0, 20.0, 40.0, 50.0, 60.0, 70.0, 80.0, 85.0, 89.0])
-    ex = -np.inf
-    for a in (0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 0.5):
-        ex = max(ex, float(np.max(brdf.albedo(_dirs(th), alpha=a, eta=1.5, kd=1.0) - 1)))
-    return ex
+    out = {}
+    for ndf in ("ggx", "beckmann"):
+        ex = -np.inf
+        for a in (0.001, 0.003, 0.01, 0.03, 0.1, 0.2, 0.3, 0.5):
+            ex = max(ex, float(np.max(brdf.albedo(_dirs(th), alpha=a, eta=1.5, kd=1.0, ndf=ndf) - 1)))
+        out[ndf] = ex
+    return out
 
 
 def oren_nayar_max():

@@ -237,7 +237,7 @@ def test_cli_twoscale_values_and_parts(capsys):
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["units"]["brdf"] == "1/sr" and len(doc["values"]) == 4
-    b = TwoScaleBRDF("gold", Micro(alpha=0.1, ndf="ggx"), nano=make_nano("gaussian:sigma=10nm,T=2um", [450.0]))
+    b = TwoScaleBRDF("gold", Micro(alpha=0.1), nano=make_nano("gaussian:sigma=10nm,T=2um", [450.0]))
     v = doc["values"][1]
     assert v["brdf"] == pytest.approx(float(b.eval(_dir(30), _dir(30, 180), v["wavelength_nm"])), rel=1e-9)
     assert sum(v["components"].values()) == pytest.approx(v["brdf"], rel=1e-12)
@@ -256,7 +256,7 @@ def test_cli_twoscale_with_a_height_field(capsys, tmp_path):
     assert code == 0
     v = json.loads(capsys.readouterr().out)["values"][0]
     grid = DirectionGrid.hemisphere(64)
-    L = brdf.evaluate(_dir(30), [550.0], "gold", Micro(alpha=0.05, ndf="ggx"), brdf.Nano(surface=hf), grid, solver="fft")
+    L = brdf.evaluate(_dir(30), [550.0], "gold", Micro(alpha=0.05), brdf.Nano(surface=hf), grid, solver="fft")
     wo = _dir(40, 180)
     assert v["components"]["diffraction"] == pytest.approx(float(grid.interpolate(L.diffraction[0], wo[0], wo[1])),
                                                            rel=1e-6)

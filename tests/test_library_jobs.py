@@ -195,7 +195,7 @@ def test_the_brdf_command_sets_models_up_through_the_registry(monkeypatch):
     rc, out, err, _ = run_cli(["brdf", "--model", "rough-dielectric", "--alpha", "0.25", "--ior", "1.5",
                                "--incident", "0", "--outgoing", "0,0", "--json"])
     assert rc == 0, err
-    assert calls == [("rough-dielectric", dict(alpha=0.25, roughness=None, alpha_y=None, ndf="ggx", ndf_shape=None,
+    assert calls == [("rough-dielectric", dict(alpha=0.25, roughness=None, alpha_y=None, ndf="beckmann", ndf_shape=None,
                                                shadowing="smith-correlated", material=None, ior="1.5",
                                                fresnel="exact", multiple_scattering=None))]
     f = json.loads(out)["values"][0]["brdf"]

@@ -219,7 +219,7 @@ def test_mitsubas_chi2_accepts_the_spectral_sampler():
     assert chi2.run(), chi2.messages
 
 
-ROUGH = dict(material="0.2+3j", alpha=0.3, nano="none", shadowing="smith", wavelength_step=94.0)
+ROUGH = dict(material="0.2+3j", alpha=0.3, ndf="ggx", nano="none", shadowing="smith", wavelength_step=94.0)
 
 
 def test_without_nano_roughness_it_is_mitsubas_roughconductor_pointwise():

@@ -98,7 +98,7 @@ def test_cli_multiple_scattering_white_furnace_and_values():
                                "--incident", "30", "--outgoing", "50,180", "--wavelengths", "450,650",
                                "--multiple-scattering", "--json"])
     assert rc == 0, err
-    b = MicrofacetBRDF("Au", Micro(alpha=0.6, ndf="ggx"), multiple_scattering=True)
+    b = MicrofacetBRDF("Au", Micro(alpha=0.6), multiple_scattering=True)
     wi = np.array([np.sin(np.radians(30)), 0, np.cos(np.radians(30))])
     wo = np.array([-np.sin(np.radians(50)), 0, np.cos(np.radians(50))])
     for row in json.loads(out)["values"]:
