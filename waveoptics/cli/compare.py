@@ -8,7 +8,7 @@ import io as _io
 from pathlib import Path
 
 from ..errors import WaveopticsError
-from ..units import check_theta, parse_number_list
+from ..units import ANGLE_UNITS, check_theta, parse_number_list
 from ._common import add_common, add_output, emit
 from ._options import option, renamed
 
@@ -41,7 +41,7 @@ def run(args):
     from .. import simulate as sim_mod
     from .simulate import request_from_args, simulation_from_args
 
-    angles = parse_number_list(args.incident_angles, name="angles_deg")
+    angles = parse_number_list(args.incident_angles, name="angles_deg", units=ANGLE_UNITS)
     check_theta(angles, name="--incident-angles")
     if (angles >= 90).any():
         raise WaveopticsError("--incident-angles must stay below 90 degrees (the light must be above the horizon)")
