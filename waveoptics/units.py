@@ -260,10 +260,9 @@ def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False)
     -------
     (theta_deg, phi_deg) : tuple of float
     """
-    try:
-        vals = [parse_angle(p, name=name) for p in str(text).split(",")]
-    except FieldError:
-        raise _error(name, f" {text!r} is not THETA[,PHI] in degrees (each may end in deg or °)") from None
+    vals = [_angle_value(p) for p in str(text).split(",")]
+    if any(v is None for v in vals):
+        raise _error(name, f" {text!r} is not THETA[,PHI] in degrees (each may end in deg or °)")
     if len(vals) not in ((2,) if need_phi else (1, 2)):
         raise _error(name, f" {text!r}: give {'THETA,PHI' if need_phi else 'THETA[,PHI]'} in degrees")
     theta = vals[0]
@@ -276,6 +275,16 @@ def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False)
     return theta, phi
 
 
+def _angle_value(text):
+    """Degrees from a number or a number with a unit of :data:`ANGLE_UNITS` (NaN and Inf pass, for the caller's
+    range check to name); None for anything else."""
+    if isinstance(text, (int, float, np.floating, np.integer)) and not isinstance(text, bool):
+        return float(text)
+    m = re.fullmatch(rf"\s*({_NUM})\s*(\S*?)\s*", str(text), flags=re.IGNORECASE)
+    factor = (1.0 if not m.group(2) else unit_factor(m.group(2), ANGLE_UNITS)) if m else None
+    return None if factor is None else float(m.group(1)) * factor
+
+
 def parse_angle(text, *, name: str = "angle_deg") -> float:
     """An angle in degrees from ``"30"``, ``"30deg"``, ``"30 °"``, ``"30 degrees"`` or ``"0.5rad"``
     (:data:`ANGLE_UNITS`); numbers pass through. Not range-checked (callers know their range); NaN and Inf are
@@ -286,14 +295,9 @@ def parse_angle(text, *, name: str = "angle_deg") -> float:
     .. [1] BIPM, *The International System of Units (SI)*, 9th ed., 2019, table 8 (the degree, ° = π/180 rad,
        written without a space or with one).
     """
-    if isinstance(text, (int, float, np.floating, np.integer)) and not isinstance(text, bool):
-        value = float(text)
-    else:
-        m = re.fullmatch(rf"\s*({_NUMBER})\s*(\S*?)\s*", str(text))
-        factor = (1.0 if not m.group(2) else unit_factor(m.group(2), ANGLE_UNITS)) if m else None
-        if factor is None:
-            raise _error(name, f" {text!r} is not an angle; write degrees, e.g. 30, 30deg or 30°")
-        value = float(m.group(1)) * factor
+    value = _angle_value(text)
+    if value is None:
+        raise _error(name, f" {text!r} is not an angle; write degrees, e.g. 30, 30deg or 30°")
     if not math.isfinite(value):
         raise _error(name, f" {text!r} is not finite")
     return value
