@@ -132,6 +132,18 @@ def test_npz_spacing_as_scalar_pair_text_or_coordinates(tmp_path, arrays, dx, dy
     assert (hf.dx, hf.dy) == pytest.approx((dx, dy), rel=1e-12)
 
 
+def test_npy_sidecar_spacing_with_a_unit(tmp_path):
+    import json
+
+    from waveoptics.surfaces import load
+
+    np.save(tmp_path / "h.npy", np.array(GRID))
+    (tmp_path / "h.npy.json").write_text(json.dumps({"units": "nm", "dx": "0.05 micron", "dy": 60}))
+    hf = load(tmp_path / "h.npy")
+    np.testing.assert_allclose(hf.heights, np.array(GRID) * 1e-9, rtol=1e-14)
+    assert (hf.dx, hf.dy) == pytest.approx((50e-9, 60e-9), rel=1e-12)
+
+
 def test_npz_integer_mask_of_zeros_and_ones_is_the_valid_samples(tmp_path):
     from waveoptics.surfaces import load
 

@@ -339,7 +339,9 @@ class ScatterResult:
     coherent_specular_fraction : ndarray (n_wl,)
         |⟨χ̂⟩|², the fraction of the specular reflectance that stays coherent (exp(−g) for Gaussian heights).
     scattered_fraction : ndarray (n_wl,)
-        albedo − |⟨χ̂⟩|² · flat_albedo: the diffusely scattered reflectance (TIS = F (1 − exp(−g))).
+        The diffusely scattered reflectance (TIS = F (1 − exp(−g))): the integral of the incoherent lobe
+        |U − χ̂ U_flat|² of each patch plus the spread of the patches' coherent amplitudes (:func:`coherent_split`);
+        equal to albedo − |⟨χ̂⟩|² · flat_albedo up to the quadrature of the mirror spike, and never negative.
     flat_albedo : ndarray (n_wl,)
         Albedo of the same window without heights on the same grid (≈ F(θ_i); the quadrature reference).
     fresnel_specular : ndarray (n_wl,)

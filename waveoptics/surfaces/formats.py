@@ -268,11 +268,9 @@ def npy_parts(p, sp, units, nan_is_mask, *, mmap: bool = False):
         scale = unit_scale(units)
         meta = info.get("meta", {}) if isinstance(info.get("meta"), dict) else {}
         allow_nan = allow_nan or info.get("mask") == "nan"
-        if sp is None and "dx" in info:
-            try:
-                sp = (float(info["dx"]) * scale, float(info.get("dy", info["dx"])) * scale)
-            except (TypeError, ValueError):
-                raise WaveopticsError(f"sidecar {side.name!r} spacing {info['dx']!r} is not a number") from None
+        if sp is None and "dx" in info:   # numbers in the heights' units, or lengths with a unit ("50nm")
+            sp = (header_length(info["dx"], scale, f"sidecar {side.name!r} spacing dx"),
+                  header_length(info.get("dy", info["dx"]), scale, f"sidecar {side.name!r} spacing dy"))
     else:
         scale = unit_scale(units or "m")
     return a, scale, sp, meta, allow_nan
@@ -300,12 +298,8 @@ def _load_exr(p, sp, units, nan_is_mask):
     scale = unit_scale(u, "EXR units")
     meta = _json_meta(header["waveoptics_meta"], "EXR header") if "waveoptics_meta" in header else {}
     if sp is None and "spacing_x" in header:
-        try:
-            dx = float(header["spacing_x"])
-            dy = float(header.get("spacing_y", header["spacing_x"]))
-        except (TypeError, ValueError):
-            raise WaveopticsError(f"EXR header spacing_x={header['spacing_x']!r} is not a number") from None
-        sp = (dx * scale, dy * scale)
+        sp = (header_length(header["spacing_x"], scale, "EXR header spacing_x"),
+              header_length(header.get("spacing_y", header["spacing_x"]), scale, "EXR header spacing_y"))
     h, mask = _nan_mask(h, nan_is_mask or header.get("mask") == "nan", f"EXR channel {name!r}")
     return _finish(h * scale, sp, mask, meta, "the EXR header")
 
