@@ -329,3 +329,20 @@ def test_scattered_fraction_of_an_ensemble_adds_the_spread_of_the_coherent_ampli
     per_patch = np.mean([np.sum(w2 * np.abs(e - c) ** 2) / np.sum(w2) for e, c in zip(es, chis)])
     ref = F * (per_patch + np.mean(np.abs(chis - chis.mean()) ** 2))
     assert res.scattered_fraction[0] == pytest.approx(ref, rel=2e-3), (res.scattered_fraction[0], ref)
+
+
+# ------------------------------------------------------------------------------------------------------------
+# Command line: an angle option with a unit, a wrong one refused with exit 2
+
+
+def test_compare_tail_and_incident_angles_take_degree_suffixes():
+    from waveoptics.cli import shared_parser
+
+    args = shared_parser().parse_args(["compare", "--tail", "12.5°", "--incident-angles", "0deg:60deg:30deg"])
+    assert args.tail == 12.5
+    from waveoptics.units import ANGLE_UNITS
+
+    np.testing.assert_allclose(parse_number_list(args.incident_angles, units=ANGLE_UNITS), [0, 30, 60])
+    with pytest.raises(SystemExit) as ex:
+        shared_parser().parse_args(["compare", "--tail", "ten"])
+    assert ex.value.code == 2

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import WaveopticsError
 from ..units import ANGLE_UNITS, check_theta, parse_number_list
-from ._common import add_common, add_output, emit
+from ._common import add_common, add_output, angle_arg, emit
 from ._options import option, renamed
 
 
@@ -25,7 +25,7 @@ def register(sub):
     add_scene_options(p)
     option(p, "--incident-angles", default="0:80:10")
     renamed(p, "compare", "--angles", dest="incident_angles")
-    p.add_argument("--tail", type=float, default=10.0, metavar="DEG",
+    p.add_argument("--tail", type=angle_arg, default=10.0, metavar="DEG",
                    help="tail = energy farther than this from the mirror direction (default 10°)")
     add_output(p, required=False, note="a directory: also write compare.json, compare.csv and compare.png")
     option(p, "--max-memory")
