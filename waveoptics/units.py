@@ -8,18 +8,70 @@ from __future__ import annotations
 
 import math
 import re
+import unicodedata
 
 import numpy as np
 
 from .errors import FieldError
 
-__all__ = ['LENGTH_UNITS', 'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'OPTICAL_RANGE_NM', 'check_optical_range', 'parse_direction', 'check_theta', 'direction_from_angles', 'split_spec']
+__all__ = ['LENGTH_UNITS', 'LENGTH_UNIT_NAMES', 'ANGLE_UNITS', 'length_unit', 'unit_factor', 'parse_angle',
+           'MAX_LIST_VALUES', 'parse_length', 'parse_number_list', 'parse_wavelengths', 'check_wavelengths', 'OPTICAL_RANGE_NM', 'WAVELENGTH_UNITS', 'check_optical_range', 'parse_direction', 'check_theta', 'direction_from_angles', 'split_spec']
 
-#: metres per unit
-LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12, "A": 1e-10}
+#: metres per unit symbol (SI: BIPM SI Brochure, 9th ed. 2019, tables 5 and 7; the ångström: ISO 80000-3 and the
+#: SI Brochure table 8 footnote, 1 Å = 0.1 nm, written ``A`` where Å cannot be typed)
+LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9, "pm": 1e-12,
+                "A": 1e-10, "Å": 1e-10}
+
+#: spelled-out names of the units of :data:`LENGTH_UNITS` (British and American spellings, plural), the micron
+#: (the name of the micrometre until the 13th CGPM, 1967, still the word of surface metrology) and the ångström;
+#: matched without regard to case
+LENGTH_UNIT_NAMES = {
+    **{f"{p}{stem}{s}": sym for p, sym in (("", "m"), ("centi", "cm"), ("milli", "mm"), ("micro", "µm"),
+                                           ("nano", "nm"), ("pico", "pm"))
+       for stem in ("metre", "meter") for s in ("", "s")},
+    "micron": "µm", "microns": "µm", "angstrom": "A", "angstroms": "A", "ångström": "A", "ångströms": "A"}
+
+#: degrees per angle unit: every angle field is in degrees; a suffix may say so (``30deg``, ``30°``) or give
+#: radians (``0.5rad``)
+ANGLE_UNITS = {"deg": 1.0, "°": 1.0, "degree": 1.0, "degrees": 1.0, "rad": 180.0 / math.pi}
+
+
+def unit_factor(suffix: str, units: dict):
+    """The factor of unit *suffix* in *units* ({symbol: factor}), or None when it is not one of them.
+
+    An exact symbol wins; otherwise the suffix is compared without regard to case (µ U+00B5 and μ U+03BC are the
+    same letter under case folding) where that names one unit of several letters: ``NM`` is nm, ``UM`` µm, ``DEG``
+    deg, while a single letter keeps its case (``A`` ångström, ``m`` metre; ``M`` is no unit).
+    """
+    if suffix in units:
+        return units[suffix]
+    s = unicodedata.normalize("NFKC", suffix)   # compatibility forms: the ångström sign U+212B is Å U+00C5
+    exact = {unicodedata.normalize("NFKC", k): v for k, v in units.items()}
+    if s in exact:
+        return exact[s]
+    fold = {k.casefold(): v for k, v in exact.items() if len(k) > 1}
+    return fold.get(s.casefold())
+
+
+def length_unit(symbol: str):
+    """Metres per length unit *symbol*: a symbol of :data:`LENGTH_UNITS` (case folded as in :func:`unit_factor`)
+    or a name of :data:`LENGTH_UNIT_NAMES`; None for anything else.
+
+    References
+    ----------
+    .. [1] BIPM, *The International System of Units (SI)*, 9th ed., 2019, tables 5 and 7 (unit symbols and
+       prefixes; symbols are case-sensitive, so only spellings that name a single unit here are folded).
+    .. [2] ISO 80000-3:2019, *Quantities and units, Part 3: Space and time* (the ångström, 10⁻¹⁰ m).
+    """
+    s = str(symbol).strip()
+    f = unit_factor(s, LENGTH_UNITS)
+    if f is None and s.casefold() in LENGTH_UNIT_NAMES:
+        f = LENGTH_UNITS[LENGTH_UNIT_NAMES[s.casefold()]]
+    return f
+
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-_QTY = re.compile(rf"^\s*({_NUMBER})\s*([a-zA-Zµμ]*)\s*$")
+_QTY = re.compile(rf"^\s*({_NUMBER})\s*([^\d\s.,;:+-]\S*)?\s*$")
 
 
 def _error(name: str, text: str) -> FieldError:
@@ -69,9 +121,10 @@ def parse_length(text, *, default_unit: str | None = None, name: str = "length",
         value, unit = float(m.group(1)), m.group(2) or default_unit
         if unit is None:
             raise _error(name, f" {text!r} needs a unit (e.g. 5nm, 1.2um, 0.5mm)")
-        if unit not in LENGTH_UNITS:
-            raise _error(name, f" {text!r} has unknown unit {unit!r}; allowed: {', '.join(LENGTH_UNITS)}")
-    metres = value * LENGTH_UNITS[unit]
+        if length_unit(unit) is None:
+            raise _error(name, f" {text!r} has unknown unit {unit!r}; allowed: {', '.join(LENGTH_UNITS)} "
+                               "(or micron, nanometre, ...)")
+    metres = value * length_unit(unit)
     if not math.isfinite(metres):
         raise _error(name, f" {text!r} is not finite")
     if metres < 0 and not allow_negative:
@@ -88,15 +141,21 @@ MAX_LIST_VALUES = 100_000
 _NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?inf|nan"
 
 
+def _symbols(units) -> str:
+    """The unit symbols of *units* for an error message (spelled-out names left out)."""
+    short = [u for u in units if len(u) <= 3]
+    return ", ".join(short) + (", ..." if len(short) < len(units) else "")
+
+
 def _number(token, name, text, units=None) -> float:
-    """One finite number, optionally with a unit suffix from *units* ({suffix: factor}); anything else is refused."""
-    suffixes = "|".join(sorted((re.escape(u) for u in (units or {})), key=len, reverse=True))
-    m = re.fullmatch(rf"\s*({_NUM})\s*({suffixes})?\s*" if suffixes else rf"\s*({_NUM})\s*", str(token),
-                     flags=re.IGNORECASE)
-    if not m:
+    """One finite number, optionally with a unit suffix from *units* ({suffix: factor}, looked up by
+    :func:`unit_factor`); anything else is refused."""
+    m = re.fullmatch(rf"\s*({_NUM})\s*(\S*?)\s*", str(token), flags=re.IGNORECASE)
+    factor = 1.0 if m and not m.group(2) else (unit_factor(m.group(2), units or {}) if m else None)
+    if factor is None:
         raise _error(name, f" {text!r} is not a number list; write START:STOP:STEP or A,B,C"
-                           + (f" (units: {', '.join(units)})" if units else ""))
-    value = float(m.group(1)) * ((units or {}).get(m.group(2), 1.0) if suffixes and m.group(2) else 1.0)
+                           + (f" (units: {_symbols(units)})" if units else ""))
+    value = float(m.group(1)) * factor
     if not math.isfinite(value):
         raise _error(name, f" {text!r}: {token.strip()!r} is not a finite number")
     return value
@@ -131,16 +190,22 @@ def parse_number_list(text, *, name: str = "value", units=None, max_values: int 
     return np.array([_number(p, name, text, units) for p in tokens], dtype=float)
 
 
+#: nanometres per unit a wavelength may carry: every length unit (``0.45um``, ``5500A``: the ångström of
+#: spectroscopy), by symbol or name (:data:`LENGTH_UNIT_NAMES`)
+WAVELENGTH_UNITS = {u: f / 1e-9 for u, f in LENGTH_UNITS.items()} | {
+    n: LENGTH_UNITS[u] / 1e-9 for n, u in LENGTH_UNIT_NAMES.items()}
+
+
 def parse_wavelengths(text, *, name: str = "wavelengths_nm") -> np.ndarray:
-    """Parse wavelengths in nm (``"400:700:10"``, ``"450,550,650"``, ``"550"``); each value may carry the unit
-    ``nm`` or ``um``/``µm`` (``"0.45um,550nm"``).
+    """Parse wavelengths in nm (``"400:700:10"``, ``"450, 550, 650"``, ``"550"``); each value may carry a length
+    unit (``"0.45um,550nm"``, ``"0.45 μm"``, ``"5500A"``; :data:`WAVELENGTH_UNITS`).
 
     Returns
     -------
     numpy.ndarray
         Wavelengths in nanometres, each > 0 and finite.
     """
-    vals = parse_number_list(text, name=name, units={"nm": 1.0, "um": 1e3, "µm": 1e3})
+    vals = parse_number_list(text, name=name, units=WAVELENGTH_UNITS)
     check_wavelengths(vals, name=name)
     check_optical_range(vals, name=name)
     return vals
@@ -195,11 +260,9 @@ def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False)
     -------
     (theta_deg, phi_deg) : tuple of float
     """
-    parts = [p.strip().replace("deg", "") for p in str(text).split(",")]
-    try:
-        vals = [float(p) for p in parts]
-    except ValueError:
-        raise _error(name, f" {text!r} is not THETA[,PHI] in degrees") from None
+    vals = [_angle_value(p) for p in str(text).split(",")]
+    if any(v is None for v in vals):
+        raise _error(name, f" {text!r} is not THETA[,PHI] in degrees (each may end in deg or °)")
     if len(vals) not in ((2,) if need_phi else (1, 2)):
         raise _error(name, f" {text!r}: give {'THETA,PHI' if need_phi else 'THETA[,PHI]'} in degrees")
     theta = vals[0]
@@ -210,6 +273,34 @@ def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False)
     if not -180.0 <= phi < 360.0:   # one turn of azimuth: 400° is 40°, said once in its canonical form
         phi = math.fmod(phi, 360.0) % 360.0
     return theta, phi
+
+
+def _angle_value(text):
+    """Degrees from a number or a number with a unit of :data:`ANGLE_UNITS` (NaN and Inf pass, for the caller's
+    range check to name); None for anything else."""
+    if isinstance(text, (int, float, np.floating, np.integer)) and not isinstance(text, bool):
+        return float(text)
+    m = re.fullmatch(rf"\s*({_NUM})\s*(\S*?)\s*", str(text), flags=re.IGNORECASE)
+    factor = (1.0 if not m.group(2) else unit_factor(m.group(2), ANGLE_UNITS)) if m else None
+    return None if factor is None else float(m.group(1)) * factor
+
+
+def parse_angle(text, *, name: str = "angle_deg") -> float:
+    """An angle in degrees from ``"30"``, ``"30deg"``, ``"30 °"``, ``"30 degrees"`` or ``"0.5rad"``
+    (:data:`ANGLE_UNITS`); numbers pass through. Not range-checked (callers know their range); NaN and Inf are
+    refused.
+
+    References
+    ----------
+    .. [1] BIPM, *The International System of Units (SI)*, 9th ed., 2019, table 8 (the degree, ° = π/180 rad,
+       written without a space or with one).
+    """
+    value = _angle_value(text)
+    if value is None:
+        raise _error(name, f" {text!r} is not an angle; write degrees, e.g. 30, 30deg or 30°")
+    if not math.isfinite(value):
+        raise _error(name, f" {text!r} is not finite")
+    return value
 
 
 def check_theta(theta_deg, *, name: str = "theta") -> None:

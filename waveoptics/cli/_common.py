@@ -5,8 +5,19 @@ import argparse
 import sys
 
 
+from ..errors import FieldError
 from ..io.files import to_json
+from ..units import parse_angle
 from ._options import option
+
+
+def angle_arg(text) -> float:
+    """argparse type of an angle option in degrees: ``30``, ``30deg``, ``30°`` or ``0.5rad``
+    (:func:`waveoptics.units.parse_angle`); anything else is the option's one-line error, exit 2."""
+    try:
+        return parse_angle(text, name="angle")
+    except FieldError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 #: request fields whose option has another name (the dest of the option that carries the field); every other
 #: field is carried by the option of the same dest (``micro_alpha`` → ``--micro-alpha``)

@@ -4,8 +4,8 @@ from __future__ import annotations
 import os
 
 from ..errors import WaveopticsError
-from ..units import check_theta, parse_number_list
-from ._common import add_common, add_output, emit
+from ..units import ANGLE_UNITS, check_theta, parse_number_list
+from ._common import add_common, add_output, angle_arg, emit
 from ._options import option, renamed, retired
 
 
@@ -22,7 +22,7 @@ def register(sub):
     retired(p, "compare", "--accuracy")
     option(p, "--incident-angles", default="0:80:10")
     renamed(p, "compare", "--angles", dest="incident_angles")
-    p.add_argument("--tail", type=float, default=10.0, metavar="DEG",
+    p.add_argument("--tail", type=angle_arg, default=10.0, metavar="DEG",
                    help="tail = energy farther than this from the mirror direction (default 10°)")
     add_output(p, required=False, note="a directory: also write compare.json, compare.csv and compare.png")
     option(p, "--max-memory")
@@ -38,7 +38,7 @@ def run(args):
     from .. import simulate as sim_mod
     from .simulate import request_from_args, simulation_from_args
 
-    angles = parse_number_list(args.incident_angles, name="angles_deg")
+    angles = parse_number_list(args.incident_angles, name="angles_deg", units=ANGLE_UNITS)
     check_theta(angles, name="--incident-angles")
     if (angles >= 90).any():
         raise WaveopticsError("--incident-angles must stay below 90 degrees (the light must be above the horizon)")

@@ -17,7 +17,7 @@ import colour
 import numpy as np
 
 from ..errors import WaveopticsError, unknown
-from ..units import check_wavelengths
+from ..units import WAVELENGTH_UNITS, check_wavelengths, parse_number_list
 
 __all__ = ['ILLUMINANT_NAMES', 'SPD', 'laser', 'blackbody', 'standard_illuminant', 'spd_from_csv', 'illuminant']
 
@@ -116,10 +116,43 @@ def standard_illuminant(name: str) -> SPD:
 MAX_SPD_ROWS = 100_000
 
 
+_DECIMAL_COMMA = re.compile(r"^([-+]?\d+),(\d+(?:[eE][-+]?\d+)?)$")
+
+
+def _spd_delimiter(lines) -> str | None:
+    """The separator of a spectrum file, from its first data line: ',' (CSV), ';' (spreadsheets in locales
+    whose decimal mark is the comma), a tab, or None for runs of blanks (the two-column text files spectrometer
+    software writes)."""
+    for line in lines:
+        for d in (",", ";", "\t"):
+            if d in line:
+                return d
+        if line.strip():
+            return None
+    return ","
+
+
+def _spd_lines(fh):
+    """(line number, text) of the lines that hold data or the header: blank lines and '#' comments (whole lines or
+    after the values) left out."""
+    for n, line in enumerate(fh, 1):
+        text = line.split("#", 1)[0].strip()
+        if text:
+            yield n, text
+
+
 def _read_spd_rows(p: Path):
-    """(column names, rows of floats) of a CSV spectrum: a header row (wavelength, then one name per spectrum; a
-    file without one gets the names 1, 2, ...), a UTF-8 byte-order mark and blank lines ignored. One line errors:
-    no data, a ragged or non-numeric row, more than :data:`MAX_SPD_ROWS` rows."""
+    """(column names, rows of floats) of a spectrum file: a header row (wavelength, then one name per spectrum; a
+    file without one gets the names 1, 2, ...), values separated by ',', ';', a tab or blanks; a UTF-8
+    byte-order mark, Windows line ends, blank lines, '#' comments and an empty last cell (a trailing separator, as
+    spreadsheets export) ignored. One line errors: no data, a ragged or non-numeric row, more than
+    :data:`MAX_SPD_ROWS` rows.
+
+    References
+    ----------
+    .. [1] Y. Shafranovich, "Common Format and MIME Type for Comma-Separated Values (CSV) Files", RFC 4180 (2005)
+       (the comma, CRLF line ends, quoted fields; other separators are the common variants of the format).
+    """
     import csv
 
     try:
@@ -129,17 +162,21 @@ def _read_spd_rows(p: Path):
     names, rows = None, []
     with fh:
         try:
-            for n, row in enumerate(csv.reader(fh), 1):
-                cells = [c.strip() for c in row]
-                if not any(cells):
-                    continue
+            lines = list(_spd_lines(fh))
+            delim = _spd_delimiter(t for _, t in lines)
+            for n, text in lines:
+                cells = [c.strip() for c in (next(csv.reader([text], delimiter=delim)) if delim else text.split())]
+                if len(cells) > 1 and cells[-1] == "":
+                    cells = cells[:-1]
+                if delim == ";":   # '400;1,25': with ';' between values a comma between digits is a decimal mark
+                    cells = [_DECIMAL_COMMA.sub(r"\1.\2", c) for c in cells]
                 try:
                     vals = [float(c) for c in cells]
                 except ValueError:
                     if names is None and not rows:
                         names = cells[1:]
                         continue
-                    raise WaveopticsError(f"SPD file {str(p)!r} line {n}: {','.join(cells)[:60]!r} is not numbers "
+                    raise WaveopticsError(f"SPD file {str(p)!r} line {n}: {text[:60]!r} is not numbers "
                                           "(wavelength,value,...)") from None
                 if len(rows) >= MAX_SPD_ROWS:
                     raise WaveopticsError(f"SPD file {str(p)!r} holds more than {MAX_SPD_ROWS} rows; at most "
@@ -232,10 +269,12 @@ def illuminant(spec) -> SPD:
             raise WaveopticsError(f"illuminant {s!r}: write blackbody:TEMPERATUREK, e.g. blackbody:5500K")
         return blackbody(float(m.group(1)))
     if low.startswith("laser:") or low.startswith("rgb-laser:"):
-        text = s.split(":", 1)[1].replace("nm", "")
-        try:
-            lines = [float(x) for x in text.split(",") if x.strip()]
-        except ValueError:
+        text = s.split(":", 1)[1]
+        try:   # each line in nm, or with a length unit (532nm, 0.532um: waveoptics.units.WAVELENGTH_UNITS)
+            if ":" in text:
+                raise WaveopticsError("a range is no list of lines")
+            lines = list(parse_number_list(text, name="illuminant", units=WAVELENGTH_UNITS))
+        except WaveopticsError:
             raise WaveopticsError(f"illuminant {s!r}: write laser:NM[,NM...], e.g. laser:465,532,638") from None
         if low.startswith("rgb-laser:"):
             return _registered("rgb-laser")(lines)

@@ -38,7 +38,7 @@ from ..errors import FieldError, WaveopticsError, unknown
 from ..materials import fresnel
 from ..units import check_wavelengths
 
-__all__ = ['PolarizedFresnel', 'RelativeFacetFresnel', 'MAX_CLAMP_NM', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'category_from_f0', 'get_material', 'data_sets', 'VISIBLE_NM', 'search', 'fresnel_function']
+__all__ = ['PolarizedFresnel', 'RelativeFacetFresnel', 'MAX_CLAMP_NM', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'ior_text', 'alias_key', 'category_from_f0', 'get_material', 'data_sets', 'VISIBLE_NM', 'search', 'fresnel_function']
 
 #: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
 MAX_CLAMP_NM = 100.0
@@ -89,11 +89,17 @@ PRESETS: dict[str, Preset] = {
 }
 
 
+def alias_key(name: str) -> str:
+    """How a preset name or alias is looked up: case folded, blanks and underscores written as the hyphen of the
+    database's names (``"Fused Silica"``, ``"fused_silica"`` and ``"fused-silica"`` are one preset)."""
+    return re.sub(r"[\s_]+", "-", str(name).strip()).lower()
+
+
 def _alias_table() -> dict[str, str]:
     table = {}
     for name, p in PRESETS.items():
         for a in (name, *p.aliases):
-            table[a.lower()] = name
+            table[alias_key(a)] = name
     return table
 
 
@@ -249,11 +255,34 @@ def _has_quantity(m, q) -> bool:
 _CONST = re.compile(r"^\s*([0-9.eE+-]+)\s*(?:([+-])\s*([0-9.eE+-]*)\s*[ij])?\s*$")
 
 
+_IMAG_FIRST = re.compile(r"^([0-9.eE+-]*?[0-9.])([+-])j([0-9.][0-9.eE+-]*)$")
+
+
+def ior_text(text: str) -> str:
+    """A constant index as Python's :func:`complex` reads it: blanks and one pair of enclosing parentheses dropped,
+    the imaginary unit ``i``, ``I`` or ``J`` written ``j``, and the engineering order ``1.5+j0.01`` (unit before
+    the number) turned into ``1.5+0.01j``.
+
+    References
+    ----------
+    .. [1] IEEE Std 280-1985, *Letter symbols for quantities used in electrical science and electrical
+       engineering* (j for the imaginary unit, written before the number); Python's ``complex()`` grammar (``j`` or
+       ``J`` after it, parentheses allowed).
+    """
+    s = re.sub(r"\s+", "", str(text))
+    if s.startswith("(") and s.endswith(")"):
+        s = s[1:-1]
+    s = s.replace("i", "j").replace("I", "j").replace("J", "j")
+    return _IMAG_FIRST.sub(r"\1\2\3j", s)
+
+
 def parse_ior(text: str) -> complex:
-    """Parse a constant index ``"1.5"``, ``"0.2+3.1j"`` or ``"0.2+3.1i"`` into n + ik."""
-    s = str(text).replace(" ", "")
+    """Parse a constant index ``"1.5"``, ``"0.2+3.1j"``, ``"0.2+3.1i"``, ``"(0.2 + 3.1j)"`` or ``"0.2+j3.1"``
+    (:func:`ior_text`) into n + ik; k >= 0 is absorption (the exp(−iωt) convention of optics; ``n − ik`` is the
+    same medium in the engineering exp(+jωt) convention and is refused as ambiguous)."""
+    s = ior_text(text)
     try:
-        value = complex(s.replace("i", "j"))
+        value = complex(s)
     except ValueError:
         raise WaveopticsError(f"IOR {text!r} is not a number like 1.5 or 0.2+3.1j") from None
     if not np.isfinite(value) or value.real <= 0 or value.imag < 0:
@@ -340,9 +369,9 @@ def get_material(spec) -> Material:
     table = _alias_table()
     if "@" in s:   # PRESET@PAGE: another measured data set of the preset's book ("Au@Babar")
         base, _, page = s.partition("@")
-        if base.strip().lower() not in table:
+        if alias_key(base) not in table:
             raise unknown("material", base.strip(), list(PRESETS), field="material")
-        name = table[base.strip().lower()]
+        name = table[alias_key(base)]
         p = PRESETS[name]
         pages = {d["page"].lower(): d["page"] for d in data_sets(name)}
         if page.strip().lower() not in pages:
@@ -352,8 +381,8 @@ def get_material(spec) -> Material:
         nk, rng = _database_material(p.shelf, p.book, pg)
         return Material(name=f"{name}@{pg}", source=f"refractiveindex.info {p.shelf}/{p.book}/{pg}",
                         category=p.category, _nk=nk, wavelength_range_nm=rng)
-    if s.lower() in table:
-        name = table[s.lower()]
+    if alias_key(s) in table:
+        name = table[alias_key(s)]
         p = PRESETS[name]
         nk, rng = _database_material(p.shelf, p.book, p.page)
         return Material(name=name, source=f"refractiveindex.info {p.shelf}/{p.book}/{p.page} ({p.description})",
@@ -364,7 +393,7 @@ def get_material(spec) -> Material:
         mid = nk(np.array([550.0]).clip(*rng))[0]
         cat = "metal" if mid.imag > mid.real else category_from_f0(float(fresnel.F0(mid)))
         return Material(name=s, source=f"refractiveindex.info {s}", category=cat, _nk=nk, wavelength_range_nm=rng)
-    if _CONST.match(s) or re.match(r"^[0-9.eE+-]+[ij]?$", s):
+    if _CONST.match(ior_text(s)) or re.match(r"^[0-9.eE+-]+[ij]?$", s):
         eta = parse_ior(s)
         cat = "metal" if eta.imag > eta.real else category_from_f0(float(fresnel.F0(eta)))
         return Material(name=s, source="constant index", category=cat,
@@ -391,9 +420,9 @@ def data_sets(name: str) -> list[dict]:
     Data sets whose range is too far from the visible to be used (:data:`MAX_CLAMP_NM`) are kept and flagged.
     """
     table = _alias_table()
-    if str(name).lower() not in table:
+    if alias_key(name) not in table:
         raise unknown("material preset", name, list(PRESETS), field="material")
-    key = table[str(name).lower()]
+    key = table[alias_key(name)]
     p = PRESETS[key]
     out = []
     for page, title, divider in _book_pages(p.shelf, p.book):

@@ -66,7 +66,7 @@ from ..vocabulary import DIFFRACTION, PARAMETRIC_NDF_NAMES
 from ..errors import WaveopticsError, did_you_mean
 from ..materials.database import get_material
 from ..request import NO_NANO, SimulationRequest, parse_nano, request_default
-from ..units import parse_length
+from ..units import parse_angle, parse_length
 
 try:  # Python >= 3.11
     import tomllib
@@ -263,12 +263,27 @@ def _choice(ctx, value, key, choices) -> str:
     return value
 
 
+def _angle(ctx, value, key, *, lo=None) -> float:
+    """An angle in degrees: a TOML number, or a string with the unit (``"30deg"``, ``"30°"``; as on the command
+    line, :func:`waveoptics.units.parse_angle`)."""
+    if isinstance(value, str):
+        try:
+            value = parse_angle(value, name="angle")
+        except WaveopticsError:
+            raise ctx.err(key, f"= {value!r} is not allowed; use a number of degrees (30, or \"30deg\")") from None
+    return _number(ctx, value, key, lo=lo)
+
+
+def _is_angle(v) -> bool:
+    return isinstance(v, (int, float, str)) and not isinstance(v, bool)
+
+
 def _directions(ctx, value, key, *, theta_max: float) -> tuple:
-    """[[θ, φ], ...], [θ, φ] or θ (degrees) -> tuple of (θ, φ) with 0 <= θ < theta_max (or <=)."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+    """[[θ, φ], ...], [θ, φ] or θ (degrees, numbers or strings with deg/°) -> tuple of (θ, φ) with
+    0 <= θ < theta_max (or <=)."""
+    if _is_angle(value):
         value = [[value, 0.0]]
-    if isinstance(value, list) and len(value) == 2 and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                                           for v in value):
+    if isinstance(value, list) and len(value) == 2 and all(_is_angle(v) for v in value):
         value = [value]
     if not isinstance(value, list) or not value:
         raise ctx.err(key, f"= {value!r} is not allowed; write [[theta, phi], ...] in degrees")
@@ -277,8 +292,8 @@ def _directions(ctx, value, key, *, theta_max: float) -> tuple:
         k = f"{key}[{i}]"
         if not (isinstance(d, list) and len(d) in (1, 2)):
             raise ctx.err(k, f"= {d!r} is not allowed; write [theta, phi] in degrees")
-        th = _number(ctx, d[0], k + " theta", lo=0.0)
-        ph = _number(ctx, d[1], k + " phi") if len(d) == 2 else 0.0
+        th = _angle(ctx, d[0], k + " theta", lo=0.0)
+        ph = _angle(ctx, d[1], k + " phi") if len(d) == 2 else 0.0
         if th >= theta_max:
             raise ctx.err(k, f"theta = {th:g} deg is not allowed; use 0 <= theta < {theta_max:g}")
         out.append((th, ph))
@@ -487,7 +502,7 @@ def load(path) -> Scene:
     if not p.is_file():
         raise WaveopticsError(f"scene file {str(p)!r} does not exist")
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        data = tomllib.loads(p.read_text(encoding="utf-8-sig"))   # a byte-order mark (Windows editors) is no key
     except tomllib.TOMLDecodeError as exc:
         raise WaveopticsError(f"{p}: not valid TOML: {exc}") from None
     except UnicodeDecodeError:

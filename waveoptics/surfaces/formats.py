@@ -14,9 +14,9 @@ import numpy as np
 
 from ..errors import FieldError, OutputExistsError, WaveopticsError, unknown
 from ..io.files import atomic_path, read_exr, to_json, write_exr
-from ..units import LENGTH_UNITS
 from .generators import length_value
 from .heightfield import HeightField
+from .metadata import header_length, npz_heights_key, npz_mask, npz_spacing, unit_scale
 from . import instruments
 from .instruments import INSTRUMENT_EXTS, WRITERS
 
@@ -81,13 +81,6 @@ def _spacing_arg(spacing):
         return length_value(spacing[0], "spacing dx"), length_value(spacing[1], "spacing dy")
     d = length_value(spacing, "spacing")
     return d, d
-
-
-def _unit_scale(units, what="units") -> float:
-
-    if units not in LENGTH_UNITS:
-        raise unknown(what, units, LENGTH_UNITS)
-    return LENGTH_UNITS[units]
 
 
 def _real_heights(a, what: str) -> np.ndarray:
@@ -183,7 +176,7 @@ def load(path, spacing=None, *, units=None, layout=None, nan_is_mask=False, chan
         raise WaveopticsError(f"{str(p)!r} is not {what} (its content looks like {kind})")
     sp = _spacing_arg(spacing)
     if units is not None:
-        _unit_scale(units)  # refuse an unknown unit even where the file states its own
+        unit_scale(units)  # refuse an unknown unit even where the file states its own
     try:
         if ext == ".npz":
             hf = _load_npz(p, sp, units, nan_is_mask)
@@ -211,26 +204,6 @@ def _finish(h, sp, mask, meta, what):
     return HeightField(h, sp[0], sp[1], mask, meta)
 
 
-def _npz_spacing(data: dict, name: str, scale: float):
-    """(dx, dy) in metres stated by a .npz archive, or None: ``dx`` (and ``dy``, default dx), or a ``spacing`` /
-    ``dx`` array of one value (square cells) or two (dx, dy), as numpy users write a grid's spacing."""
-    key = "dx" if "dx" in data else ("spacing" if "spacing" in data else None)
-    if key is None:
-        return None
-    v = np.asarray(data[key], dtype=float).ravel()
-    if key == "dx" and "dy" in data:
-        dy = np.asarray(data["dy"], dtype=float).ravel()
-        if v.size != 1 or dy.size != 1:
-            bad, n = ("dx", v.size) if v.size != 1 else ("dy", dy.size)
-            raise WaveopticsError(f"{bad} in {name!r} holds {n} values; with both dx and dy each must be one "
-                                  "spacing in metres")
-        v = np.concatenate([v, dy])
-    if v.size not in (1, 2):
-        raise WaveopticsError(f"{key} in {name!r} holds {v.size} values; it must be one spacing in metres or two "
-                              "(dx, dy)")
-    return float(v[0]) * scale, float(v[-1]) * scale
-
-
 def _load_npz(p, sp, units, nan_is_mask):
 
     try:
@@ -239,23 +212,16 @@ def _load_npz(p, sp, units, nan_is_mask):
             data = {k: z[k] for k in z.files}
     except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
         raise WaveopticsError(f"is truncated or not a valid .npz archive ({str(exc).splitlines()[0]})") from None
-    if "heights" in data:
-        key = "heights"
-    elif len(data) == 1:
-        key = next(iter(data))
-    else:
-        raise WaveopticsError(f"has arrays {sorted(data)} but no 'heights'")
+    key = npz_heights_key(data)
     h = _real_heights(data[key], f"array {key!r}")
     u = str(data["units"]) if "units" in data else (units or "m")
-    scale = _unit_scale(u)
+    scale = unit_scale(u)
     meta = _json_meta(str(data["meta"]), ".npz") if "meta" in data else {}
     if sp is None:
-        sp = _npz_spacing(data, p.name, scale)
+        sp = npz_spacing(data, p.name, scale)
     mask = None
     if "mask" in data:
-        mask = np.asarray(data["mask"])
-        if mask.dtype != bool or mask.shape != h.shape:
-            raise WaveopticsError(f"mask is {mask.dtype} {mask.shape}; it must be bool with the heights' shape {h.shape}")
+        mask = npz_mask(data["mask"], h.shape)
         h = np.where(mask, h, 0.0)
     h, nmask = _nan_mask(h, nan_is_mask, f"array {key!r}")
     mask = nmask if mask is None else (mask if nmask is None else mask & nmask)
@@ -299,16 +265,14 @@ def npy_parts(p, sp, units, nan_is_mask, *, mmap: bool = False):
             raise WaveopticsError(f"sidecar {side.name!r} was written for other heights than {p.name!r} (a write of "
                                   "the pair interrupted between its two renames?); write the field again")
         units = units or info.get("units", "m")
-        scale = _unit_scale(units)
+        scale = unit_scale(units)
         meta = info.get("meta", {}) if isinstance(info.get("meta"), dict) else {}
         allow_nan = allow_nan or info.get("mask") == "nan"
-        if sp is None and "dx" in info:
-            try:
-                sp = (float(info["dx"]) * scale, float(info.get("dy", info["dx"])) * scale)
-            except (TypeError, ValueError):
-                raise WaveopticsError(f"sidecar {side.name!r} spacing {info['dx']!r} is not a number") from None
+        if sp is None and "dx" in info:   # numbers in the heights' units, or lengths with a unit ("50nm")
+            sp = (header_length(info["dx"], scale, f"sidecar {side.name!r} spacing dx"),
+                  header_length(info.get("dy", info["dx"]), scale, f"sidecar {side.name!r} spacing dy"))
     else:
-        scale = _unit_scale(units or "m")
+        scale = unit_scale(units or "m")
     return a, scale, sp, meta, allow_nan
 
 
@@ -331,15 +295,11 @@ def _load_exr(p, sp, units, nan_is_mask):
         raise WaveopticsError(f"has channels {sorted(chans)}; a height field needs one channel (or one named 'Z')")
     h = _real_heights(chans[name], f"EXR channel {name!r}")
     u = units or str(header.get("units", "m"))
-    scale = _unit_scale(u, "EXR units")
+    scale = unit_scale(u, "EXR units")
     meta = _json_meta(header["waveoptics_meta"], "EXR header") if "waveoptics_meta" in header else {}
     if sp is None and "spacing_x" in header:
-        try:
-            dx = float(header["spacing_x"])
-            dy = float(header.get("spacing_y", header["spacing_x"]))
-        except (TypeError, ValueError):
-            raise WaveopticsError(f"EXR header spacing_x={header['spacing_x']!r} is not a number") from None
-        sp = (dx * scale, dy * scale)
+        sp = (header_length(header["spacing_x"], scale, "EXR header spacing_x"),
+              header_length(header.get("spacing_y", header["spacing_x"]), scale, "EXR header spacing_y"))
     h, mask = _nan_mask(h, nan_is_mask or header.get("mask") == "nan", f"EXR channel {name!r}")
     return _finish(h * scale, sp, mask, meta, "the EXR header")
 
@@ -363,7 +323,7 @@ def _parse_text(p):
                     header[k.strip().lower()] = v.strip()
                     break
             continue
-        lines.append((i, s))
+        lines.append((i, s.split("#", 1)[0].strip()))   # a '#' after the values starts a comment
     decimal_comma = _decimal_comma(lines)
     rows = []
     for i, s in lines:
@@ -437,13 +397,11 @@ def _grid_axis(v, what, origin=None, step=None):
     return idx, d
 
 
-def _float_header(header, key):
+def _float_header(header, key, scale: float):
+    """Header value *key* in the file's units (*scale* metres each; a value with its own unit is converted)."""
     if key not in header:
         return None
-    try:
-        return float(header[key])
-    except ValueError:
-        raise WaveopticsError(f"header {key} = {header[key]!r} is not a number") from None
+    return header_length(header[key], scale, f"header {key}") / scale
 
 
 def _int_header(header, key) -> int:
@@ -461,7 +419,7 @@ def _load_text(p, sp, units, layout, nan_is_mask):
     if units is None:
         raise FieldError("does not state its units; pass {units}, e.g. 'um', or add a '# units = um' header line",
                          "units")
-    scale = _unit_scale(units)
+    scale = unit_scale(units)
     layout = layout or header.get("layout")
     if layout is None:
         layout = "xyz" if p.suffix.lower() == ".xyz" else "matrix"
@@ -476,10 +434,8 @@ def _load_text(p, sp, units, layout, nan_is_mask):
         raise unknown("text layout", layout, ("matrix", "xyz"))
     allow_nan = nan_is_mask or header.get("nan") == "mask"
     if sp is None and "dx" in header:
-        try:
-            sp = (float(header["dx"]) * scale, float(header.get("dy", header["dx"])) * scale)
-        except ValueError:
-            raise WaveopticsError(f"header spacing dx = {header['dx']!r} is not a number") from None
+        sp = (header_length(header["dx"], scale, "header spacing dx"),
+              header_length(header.get("dy", header["dx"]), scale, "header spacing dy"))
     if sp is None and "spacing" in header:
         sp = _spacing_arg(header["spacing"])
     if layout == "matrix":
@@ -489,9 +445,9 @@ def _load_text(p, sp, units, layout, nan_is_mask):
         raise WaveopticsError(f"xyz layout needs 3 columns (x y z), found {a.shape[1]}")
     if not np.all(np.isfinite(a[:, :2])):
         raise WaveopticsError("x/y columns hold NaN or Inf")
-    hdr_dx = _float_header(header, "dx")
-    ix, dx = _grid_axis(a[:, 0], "x", _float_header(header, "x0"), hdr_dx)
-    iy, dy = _grid_axis(a[:, 1], "y", _float_header(header, "y0"), _float_header(header, "dy") or hdr_dx)
+    hdr_dx = _float_header(header, "dx", scale)
+    ix, dx = _grid_axis(a[:, 0], "x", _float_header(header, "x0", scale), hdr_dx)
+    iy, dy = _grid_axis(a[:, 1], "y", _float_header(header, "y0", scale), _float_header(header, "dy", scale) or hdr_dx)
     if dx is None and dy is None and sp is None:
         raise WaveopticsError("holds a single point; no grid")
     nx, ny = int(ix.max()) + 1, int(iy.max()) + 1
