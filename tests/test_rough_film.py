@@ -1,0 +1,189 @@
+"""First-order scatter of a thin-film stack with rough interfaces (waveoptics.scatter.rough_film, issue 33).
+
+References held against the code: today's single-interface Rayleigh-Rice (Germer's q factors, a different formula)
+in every single-interface limit; the translation identity of conformal roughness at the mirror direction
+(identical displacement of every interface = a shift of the whole stack, δr = 2ik cosθ h r, with r from the
+Rouard recurrence of waveoptics.materials.stack, a different algorithm); the closed-form period λ/(2 n cosθ_f)
+of the film's interference; the Davies/Bennett-Porteus TIS R (4πσ/λ)² of a long-correlation surface; and a
+second implementation written here for one film, from plane waves and Airy multiple-beam sums (Elson 1976's
+single overlayer) rather than characteristic matrices.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import minimize_scalar
+
+from waveoptics.errors import WaveopticsError
+from waveoptics.materials import get_material, stack
+from waveoptics.scatter import rayleigh_rice_brdf, rayleigh_rice_components, rough_stack_brdf
+from waveoptics.scatter.rough_film import rough_stack_components, rough_stack_tis
+from waveoptics.surfaces import PSDModel
+
+TOL_LIMIT = 1e-10          # single-interface limits (the brief's 1e-10 relative)
+LAM = 550.0
+PSD = PSDModel("gaussian", 1e-9, T=1e-6)
+SUBSTRATES = {"glass": 1.52 + 0j, "metal": 0.96 + 6.69j}
+POLS = ("s", "p", "unpolarized")
+
+
+def _dir(theta_deg, phi_deg):
+    t, p = np.radians(theta_deg), np.radians(phi_deg)
+    return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+
+
+# several (θi, θo, φo): in plane forward/back, out of plane, normal incidence, normal exit, grazing-ish
+WI = _dir(np.array([30.0, 10.0, 0.0, 60.0, 45.0, 75.0]), np.zeros(6))
+WO = _dir(np.array([40.0, 70.0, 20.0, 5.0, 0.0, 80.0]), np.array([140.0, 20.0, 90.0, 250.0, 0.0, 180.0]))
+
+
+def _rr(n, pol):
+    return rayleigh_rice_brdf(WI, WO, LAM, PSD, n * n, pol)
+
+
+def _rel(a, b):
+    return np.max(np.abs(a / b - 1.0))
+
+
+@pytest.mark.parametrize("name", SUBSTRATES)
+@pytest.mark.parametrize("pol", POLS)
+def test_bare_substrate_is_rayleigh_rice(name, pol):
+    n = SUBSTRATES[name]
+    f = rough_stack_brdf(WI, WO, LAM, (n, [], []), PSD, polarization_in=pol)
+    assert _rel(f, _rr(n, pol)) < TOL_LIMIT
+
+
+@pytest.mark.parametrize("name", SUBSTRATES)
+def test_analyzed_components_are_rayleigh_rice(name):
+    n = SUBSTRATES[name]
+    ref = rayleigh_rice_components(WI, WO, LAM, PSD, n * n)
+    for a in "sp":
+        for b in "sp":
+            f = rough_stack_brdf(WI, WO, LAM, (n, [], []), PSD, polarization_in=a, polarization_out=b)
+            nz = ref[a + b] > 1e-30 * ref["ss"].max()          # sp, ps vanish in the plane of incidence
+            np.testing.assert_allclose(f[nz], ref[a + b][nz], rtol=TOL_LIMIT)
+            assert np.all(np.abs(f[~nz]) < 1e-12 * ref["ss"].max())
+
+
+@pytest.mark.parametrize("name", SUBSTRATES)
+@pytest.mark.parametrize("pol", POLS)
+def test_film_of_air_with_smooth_top_is_the_bare_substrate(name, pol):
+    """(b) a 137 nm film of index 1 (the ambient's) whose top is smooth: only air/substrate scatters."""
+    n = SUBSTRATES[name]
+    f = rough_stack_brdf(WI, WO, LAM, (n, [1.0], [137.0]), [PSD, None], polarization_in=pol)
+    assert _rel(f, _rr(n, pol)) < TOL_LIMIT
+
+
+@pytest.mark.parametrize("name", SUBSTRATES)
+@pytest.mark.parametrize("pol", POLS)
+def test_film_of_substrate_with_smooth_bottom_is_the_bare_substrate(name, pol):
+    """(c) a 137 nm film of the substrate's index, bottom smooth: only the top (air/substrate) scatters."""
+    n = SUBSTRATES[name]
+    f = rough_stack_brdf(WI, WO, LAM, (n, [n], [137.0]), [None, PSD], polarization_in=pol)
+    assert _rel(f, _rr(n, pol)) < TOL_LIMIT
+
+
+@pytest.mark.parametrize("name", SUBSTRATES)
+@pytest.mark.parametrize("pol", POLS)
+def test_vanishing_film_with_correlated_roughness_is_one_interface(name, pol):
+    """(d) MgF2-like film (1.38) of thickness 0 and 1e-3 nm, identical roughness on both interfaces."""
+    n = SUBSTRATES[name]
+    ref = _rr(n, pol)
+    f0 = rough_stack_brdf(WI, WO, LAM, (n, [1.38], [0.0]), PSD, "correlated", pol)
+    assert _rel(f0, ref) < TOL_LIMIT
+    f1 = rough_stack_brdf(WI, WO, LAM, (n, [1.38], [1e-3]), PSD, "correlated", pol)
+    assert _rel(f1, ref) < 1e-4                  # O(k d) away from the limit
+    funcorr = rough_stack_brdf(WI, WO, LAM, (n, [1.38], [0.0]), PSD, "uncorrelated", pol)
+    assert _rel(funcorr, ref) > 1e-2             # the limit needs the correlation: not a trivial identity
+
+
+FILM = (0.96 + 6.69j, [1.46], [180.0])          # silica on a metal
+
+
+@pytest.mark.parametrize("pol", POLS)
+def test_uncorrelated_is_the_sum_of_single_interfaces(pol):
+    psd2 = PSDModel("exponential", 0.7e-9, T=0.3e-6)
+    f = rough_stack_brdf(WI, WO, LAM, FILM, [PSD, psd2], "uncorrelated", pol)
+    f0 = rough_stack_brdf(WI, WO, LAM, FILM, [PSD, None], "correlated", pol)
+    f1 = rough_stack_brdf(WI, WO, LAM, FILM, [None, psd2], "correlated", pol)
+    np.testing.assert_allclose(f, f0 + f1, rtol=1e-12)
+    # partial correlation c: uncorrelated + c × the cross terms
+    fc = rough_stack_brdf(WI, WO, LAM, FILM, [PSD, psd2], "correlated", pol)
+    fh = rough_stack_brdf(WI, WO, LAM, FILM, [PSD, psd2], 0.5, pol)
+    np.testing.assert_allclose(fh, f + 0.5 * (fc - f), rtol=1e-12, atol=1e-12 * np.max(fc))
+    assert np.max(np.abs(fc - f) / f) > 1e-2     # the cross terms are not negligible here
+
+
+@pytest.mark.parametrize("theta", [0.0, 40.0])
+@pytest.mark.parametrize("pol", ["s", "p"])
+def test_cross_terms_oscillate_with_the_film_period(theta, pol):
+    """correlated − uncorrelated at the mirror direction, swept over the film thickness: its maxima are spaced
+    by λ / (2 n_f cosθ_f) (the closed form of the film's interference)."""
+    n_f, n_s = 1.46, 0.96 + 6.69j
+    wi = _dir(theta, 0.0)
+    wo = np.array([-wi[0], -wi[1], wi[2]])
+    cos_f = np.sqrt(1.0 - (np.sin(np.radians(theta)) / n_f) ** 2)
+    period = LAM / (2.0 * n_f * cos_f)
+
+    def cross(d):
+        layers = (n_s, [n_f], [d])
+        return float(rough_stack_brdf(wi, wo, LAM, layers, PSD, "correlated", pol)
+                     - rough_stack_brdf(wi, wo, LAM, layers, PSD, "uncorrelated", pol))
+
+    d = np.linspace(0.0, 4.2 * period, 841)
+    c = np.array([cross(x) for x in d])
+    assert c.max() - c.min() > 0.1 * np.abs(c).max()   # it oscillates (not always through zero: p on a metal)
+    peaks = [i for i in range(1, len(d) - 1) if c[i] > c[i - 1] and c[i] >= c[i + 1]]
+    assert len(peaks) >= 3
+    step = d[1] - d[0]
+    refined = [minimize_scalar(lambda x: -cross(x), bounds=(d[i] - step, d[i] + step), method="bounded",
+                               options={"xatol": 1e-9}).x for i in peaks]
+    spacing = np.diff(refined)
+    np.testing.assert_allclose(spacing, period, rtol=1e-6)
+
+
+MULTI = (0.96 + 6.69j, [1.46, 2.35, 1.46, 2.35 + 0.02j], [95.0, 61.0, 120.0, 40.0])
+
+
+@pytest.mark.parametrize("theta", [0.0, 35.0, 70.0])
+@pytest.mark.parametrize("pol", ["s", "p"])
+def test_conformal_stack_at_the_mirror_direction_is_a_shifted_stack(theta, pol):
+    """Identical roughness on every interface = the whole stack displaced by h: at the mirror direction (f = 0)
+    the first-order field is δr = 2ik cosθ h r, so f = (16π²/λ⁴) cos²θ |r_stack|² S(0), with r from the Rouard
+    recurrence (a different algorithm), for a four-film stack with an absorbing film on a metal."""
+    wi = _dir(theta, 0.0)
+    wo = np.array([-wi[0], -wi[1], wi[2]])
+    f = rough_stack_brdf(wi, wo, LAM, MULTI, PSD, "correlated", pol, pol)
+    r, _ = stack.amplitudes(np.cos(np.radians(theta)), LAM, MULTI[0], MULTI[1], MULTI[2], pol)
+    lam = LAM * 1e-9
+    ref = 16 * np.pi ** 2 / lam ** 4 * np.cos(np.radians(theta)) ** 2 * abs(r) ** 2 * PSD.S(0.0)
+    np.testing.assert_allclose(f, ref, rtol=1e-10)
+    cross = rough_stack_brdf(wi, wo, LAM, MULTI, PSD, "correlated", pol, "p" if pol == "s" else "s")
+    assert abs(cross) < 1e-12 * ref
+
+
+def test_stack_material_is_its_layers():
+    m = get_material("Al|Al2O3:120nm")
+    ns, nf = m.indices(LAM)
+    f = rough_stack_brdf(WI, WO, LAM, m, PSD, "uncorrelated")
+    g = rough_stack_brdf(WI, WO, LAM, (ns, nf, [120.0]), PSD, "uncorrelated")
+    np.testing.assert_allclose(f, g, rtol=1e-13)
+
+
+def test_below_the_horizon_is_zero():
+    wi = _dir(30.0, 0.0)
+    wo = np.array([0.3, 0.0, -0.95])
+    assert rough_stack_brdf(wi, wo, LAM, FILM, PSD) == 0.0
+
+
+def test_bad_inputs_name_their_fields():
+    with pytest.raises(WaveopticsError, match="correlation.*'partial'"):
+        rough_stack_brdf(WI, WO, LAM, FILM, PSD, "partial")
+    with pytest.raises(WaveopticsError, match=r"correlation 1.5 is not allowed"):
+        rough_stack_brdf(WI, WO, LAM, FILM, PSD, 1.5)
+    with pytest.raises(WaveopticsError, match="interface_psds: 3 PSDs for a stack of 2 interfaces"):
+        rough_stack_brdf(WI, WO, LAM, FILM, [PSD, PSD, PSD])
+    with pytest.raises(WaveopticsError, match="polarization_in"):
+        rough_stack_brdf(WI, WO, LAM, FILM, PSD, polarization_in="x")
+    with pytest.raises(WaveopticsError, match="stack: 1 film indices but 2 thicknesses"):
+        rough_stack_brdf(WI, WO, LAM, (1.5, [1.38], [1.0, 2.0]), PSD)
