@@ -187,3 +187,35 @@ def test_bad_inputs_name_their_fields():
         rough_stack_brdf(WI, WO, LAM, FILM, PSD, polarization_in="x")
     with pytest.raises(WaveopticsError, match="stack: 1 film indices but 2 thicknesses"):
         rough_stack_brdf(WI, WO, LAM, (1.5, [1.38], [1.0, 2.0]), PSD)
+
+
+def test_total_integrated_scatter_of_a_quarter_wave_antireflection_coating():
+    """TIS at normal incidence, 550 nm, σ = 1 nm on every interface: bare glass (1.52) against a quarter-wave MgF2
+    (1.38) coating. With a long correlation length (T = 5 µm, every frequency scatters near the mirror) the bare
+    TIS tends to Davies' R (4πσ/λ)² and the conformal coating's to R_AR (4πσ/λ)² (the shifted-stack argument):
+    comparable, not zero, as R_AR = 1.26 % is not 0. Measured (printed with -s): T = 5 µm: bare 2.2232e-5,
+    correlated 6.579e-6, uncorrelated 1.885e-5; T = 0.2 µm: bare 1.568e-5, correlated 4.838e-6, uncorrelated
+    1.339e-5; an ideal coating (n = √1.52) at T = 0.2 µm: correlated 3.56e-7, uncorrelated 1.266e-5."""
+    lam, ng, nf = 550.0, 1.52, 1.38
+    ar = (ng, [nf], [lam / (4 * nf)])
+    g = (4 * np.pi * 1.0 / lam) ** 2
+    R_bare = ((ng - 1) / (ng + 1)) ** 2
+    R_ar = ((ng - nf * nf) / (ng + nf * nf)) ** 2          # quarter wave: admittance nf²/ng (Macleod ch. 4)
+    for T in (5e-6, 0.2e-6):
+        psd = PSDModel("gaussian", 1e-9, T=T)
+        bare = rough_stack_tis(0.0, lam, (ng, [], []), psd)
+        corr = rough_stack_tis(0.0, lam, ar, psd, "correlated")
+        unc = rough_stack_tis(0.0, lam, ar, psd, "uncorrelated")
+        print(f"T = {T * 1e6:g} um: TIS bare {bare:.4e}, AR correlated {corr:.4e}, AR uncorrelated {unc:.4e}, "
+              f"ratio correlated/bare {corr / bare:.3f}")
+        assert 0 < corr < bare and 0 < unc < bare
+        if T == 5e-6:
+            assert abs(bare / (R_bare * g) - 1) < 1e-3
+            assert abs(corr / (R_ar * g) - 1) < 1e-3
+    nf_ideal = np.sqrt(ng)
+    ideal = (ng, [nf_ideal], [lam / (4 * nf_ideal)])
+    psd = PSDModel("gaussian", 1e-9, T=0.2e-6)
+    corr = rough_stack_tis(0.0, lam, ideal, psd, "correlated")
+    unc = rough_stack_tis(0.0, lam, ideal, psd, "uncorrelated")
+    print(f"ideal AR (n = {nf_ideal:.4f}), T = 0.2 um: TIS correlated {corr:.4e}, uncorrelated {unc:.4e}")
+    assert 0 < corr < unc

@@ -148,10 +148,15 @@ def interface_fields(kappa, wavelength_nm, eps, d_nm, polarization: str):
         c, s = np.cos(b), np.sin(b)
         U, V = c * U + 1j * s / eta[j] * V, 1j * eta[j] * s * U + c * V
         at.append((U, V))
-    A = 0.5 * (U - V / eta[-1])                          # incident amplitude in the ambient
+    # guard: at grazing incidence (q_0 = 0) the incident and reflected waves cancel (r = −1, the limit that
+    # :func:`waveoptics.materials.stack.amplitudes` takes): every interface field is 0 there, not 0/0
+    grazing = np.broadcast_to(k2 >= 1.0, U.shape)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        A = 0.5 * (U - V / eta[-1])                      # incident amplitude in the ambient
+        inv = np.where(grazing, 0.0, 1.0 / np.where(grazing, 1.0, A))
     if polarization == "s":
-        return [(u / A, np.zeros_like(u)) for u, _ in at]
-    return [(v / A, -np.asarray(kappa) * u / A) for u, v in at]
+        return [(u * inv, np.zeros_like(u)) for u, _ in at]
+    return [(v * inv, -np.asarray(kappa) * u * inv) for u, v in at]
 
 
 def _planes(wi, wo):
