@@ -306,3 +306,12 @@ def test_single_film_against_a_plane_wave_implementation(n2):
                 ref = _film_brdf(wi, wo, LAM, n2, n1, d, PSD, a, b)
                 # measured: within 1e-14 (glass), 2e-10 (metal) relative; the issue asks 1e-3
                 assert abs(f - ref) <= 1e-8 * abs(ref) + 1e-16, (a, b, f, ref)
+
+
+def test_wavelengths_broadcast_against_directions():
+    m = get_material("Al|Al2O3:120nm")
+    lams = np.array([450.0, 550.0, 650.0])
+    wi, wo = WI[:1], WO[:1]
+    f = rough_stack_brdf(wi, wo, lams, m, PSD, "correlated", "p")
+    one = [float(rough_stack_brdf(wi[0], wo[0], x, m, PSD, "correlated", "p")) for x in lams]
+    np.testing.assert_allclose(f, one, rtol=1e-13)
