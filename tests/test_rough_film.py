@@ -174,6 +174,9 @@ def test_below_the_horizon_is_zero():
     wi = _dir(30.0, 0.0)
     wo = np.array([0.3, 0.0, -0.95])
     assert rough_stack_brdf(wi, wo, LAM, FILM, PSD) == 0.0
+    grazing = np.array([-1.0, 0.0, 0.0])               # the limit at the horizon is 0 (r = −1), not 0/0
+    assert rough_stack_brdf(wi, grazing, LAM, FILM, PSD) == 0.0
+    assert rough_stack_brdf(grazing, wi, LAM, FILM, PSD, polarization_in="p") == 0.0
 
 
 def test_bad_inputs_name_their_fields():

@@ -13,12 +13,12 @@ so it does not depend on which side they are taken)
 
     p_j(x, y) = ε₀ h_j(x, y) [ (ε_below − ε_above) E_t + (1/ε_above − 1/ε_below) D_z ẑ / ε₀ ]
 
-(Johnson et al. 2002, eq. (12) there: Δε |E_∥|² − Δ(ε⁻¹) |D_⊥|²; Elson 1984 derives the same polarization sheet
-for a rough interface of an inhomogeneous stack). By reciprocity, the far field that a dipole p at depth z in the
-stack radiates into the ambient along ω_o with polarization ê_b is (k²/4πε₀) (e^{ikr}/r) p · E'_b(z), where E'_b is
-the total field of the flat stack when a unit plane wave of polarization ê_b comes in from ω_o (Sipe 1987; the
-reciprocity route of SCATMECH's stack models, Germer). Integrating over the sheet gives the Fourier transform of
-h_j at the Bragg frequency f = (ω_i + ω_o)_xy / λ, and with ⟨H_j H_k*⟩ = A S_jk(f):
+(the first-order perturbation of a displaced boundary, Δε E_∥ − Δ(ε⁻¹) D_⊥, Johnson et al. 2002; Elson's
+theory of rough stacks, 1976–1984, is this first order in h). By reciprocity, the far field that a dipole p at
+depth z in the stack radiates into the ambient along ω_o with polarization ê_b is (k²/4πε₀) (e^{ikr}/r)
+p · E'_b(z), where E'_b is the total field of the flat stack when a unit plane wave of polarization ê_b comes in
+from ω_o (Lorentz reciprocity; Sipe 1987). Integrating over the sheet gives the Fourier transform of h_j at the
+Bragg frequency f = (ω_i + ω_o)_xy / λ, and with ⟨H_j H_k*⟩ = A S_jk(f):
 
     f_ab(ω_i, ω_o) = k⁴ / (16 π² cosθ_i cosθ_o) Σ_j Σ_k G_j^{ab} G_k^{ab*} S_jk(f),
     G_j^{ab} = (ε_below − ε_above) [ E_t^a · E'_t^b + D_z^a D'_z^b / (ε_above ε_below) ]          (1)
@@ -28,7 +28,8 @@ displacement over ε₀. S_jj is the PSD of interface j; for identical profiles 
 (correlated roughness) S_jk = S, for independent ones S_jk = 0 (j ≠ k), and a cross-correlation coefficient c_jk
 gives S_jk = c_jk √(S_j S_k) (Elson, Rahn & Bennett 1983). For one interface (a bare substrate, ε_below = ε,
 ε_above = 1) the fields are Fresnel's and (1) is exactly the Rayleigh-Rice BRDF (16π²/λ⁴) cosθ_i cosθ_o |q_ab|² S
-with Germer's q factors (:func:`waveoptics.scatter.q_factors`): q_ab = G^{ab} / (4 cosθ_i cosθ_o) up to a phase.
+with Germer's q factors (:func:`waveoptics.scatter.q_factors`): q_ab = G^{ab} / (4 cosθ_i cosθ_o) up to a
+phase.
 Two conformal interfaces with a film of zero thickness add to that one interface:
 (ε_s − ε_f)[…/ε_f ε_s] + (ε_f − 1)[…/ε_f] = (ε_s − 1)[E_t·E'_t + D_z D'_z/ε_s].
 
@@ -49,8 +50,11 @@ wave). Numerical range: the upward product grows as e^{Σ Im β_j}, harmless for
 (e^{709} overflows).
 
 Where it holds: the smooth-surface limit, (4π σ_j cosθ / λ)² ≪ 1 at every interface and slopes ≪ 1, as for one
-interface; no guided-wave resonance broadening beyond first order (Elson 1995), reflection hemisphere only,
-ambient air.
+interface. Only the reflection hemisphere is evaluated (light scattered into the substrate or into guided modes
+of the films, Elson 1995, is not), the ambient is air, and each profile's PSD is taken at the same Bragg
+frequency (interfaces are laterally stationary). No equation numbers of Elson's papers are quoted: eq. (1) was
+derived here and is checked against Germer's single-interface q factors and the limits in
+tests/test_rough_film.py.
 
 References
 ----------
