@@ -15,7 +15,9 @@ Films and the single-interface models
 -------------------------------------
 A stack has no single interface index: :meth:`Stack.eta` refuses (naming the ``material`` field), so the first-order
 perturbation (Rayleigh-Rice) models, whose polarization factor Q needs the permittivity of one rough interface,
-refuse a stack in one line instead of silently using the substrate. Geometric-optics and Kirchhoff models take
+refuse a stack in one line instead of silently using the substrate; the first-order scatter of a stack whose
+interfaces are rough (correlated or not) is :func:`waveoptics.scatter.rough_stack_brdf` (Elson's theory, which
+takes the stack itself). Geometric-optics and Kirchhoff models take
 the stack's reflectance of each facet (``F``, ``F_facet``): the films are taken to follow the micro- and
 nano-roughness conformally, each facet a flat stack.
 

@@ -1,0 +1,340 @@
+"""First-order (Rayleigh-Rice / Elson) scatter from a thin-film stack whose interfaces are slightly rough, with
+correlated, uncorrelated or partly correlated interface roughness (docs/physics.md §4 for one interface).
+
+Model
+-----
+Interfaces are numbered from the substrate outwards: interface 0 lies between the substrate (ε_0 = n_sub²) and
+film 0, interface N (N films) between the top film and the ambient (air, ε = 1); interface j separates
+ε_below = ε_j from ε_above = ε_{j+1}. Interface j is displaced to z_j + h_j(x, y), h_j ≪ λ. To first order the
+displacement is a sheet of induced dipoles: where h_j > 0 a slab of height h_j of the medium below replaces the
+medium above. The surface dipole density that radiates, from the unperturbed (flat-stack) field E, D of the
+incident wave at the interface, is the boundary-perturbation form (tangential E and normal D are continuous there,
+so it does not depend on which side they are taken)
+
+    p_j(x, y) = ε₀ h_j(x, y) [ (ε_below − ε_above) E_t + (1/ε_above − 1/ε_below) D_z ẑ / ε₀ ]
+
+(the first-order perturbation of a displaced boundary, Δε E_∥ − Δ(ε⁻¹) D_⊥, Johnson et al. 2002; Elson's
+theory of rough stacks, 1976–1984, is this first order in h). By reciprocity, the far field that a dipole p at
+depth z in the stack radiates into the ambient along ω_o with polarization ê_b is (k²/4πε₀) (e^{ikr}/r)
+p · E'_b(z), where E'_b is the total field of the flat stack when a unit plane wave of polarization ê_b comes in
+from ω_o (Lorentz reciprocity; Sipe 1987). Integrating over the sheet gives the Fourier transform of h_j at the
+Bragg frequency f = (ω_i + ω_o)_xy / λ, and with ⟨H_j H_k*⟩ = A S_jk(f):
+
+    f_ab(ω_i, ω_o) = k⁴ / (16 π² cosθ_i cosθ_o) Σ_j Σ_k G_j^{ab} G_k^{ab*} S_jk(f),
+    G_j^{ab} = (ε_below − ε_above) [ E_t^a · E'_t^b + D_z^a D'_z^b / (ε_above ε_below) ]          (1)
+
+with E^a the flat-stack field of a unit incident wave of polarization a (s, p) at interface j and D_z its normal
+displacement over ε₀. S_jj is the PSD of interface j; for identical profiles replicated through the stack
+(correlated roughness) S_jk = S, for independent ones S_jk = 0 (j ≠ k), and a cross-correlation coefficient c_jk
+gives S_jk = c_jk √(S_j S_k) (Elson, Rahn & Bennett 1983). For one interface (a bare substrate, ε_below = ε,
+ε_above = 1) the fields are Fresnel's and (1) is exactly the Rayleigh-Rice BRDF (16π²/λ⁴) cosθ_i cosθ_o |q_ab|² S
+with Germer's q factors (:func:`waveoptics.scatter.q_factors`): q_ab = G^{ab} / (4 cosθ_i cosθ_o) up to a
+phase.
+Two conformal interfaces with a film of zero thickness add to that one interface:
+(ε_s − ε_f)[…/ε_f ε_s] + (ε_f − 1)[…/ε_f] = (ε_s − 1)[E_t·E'_t + D_z D'_z/ε_s].
+
+Fields in the stack
+-------------------
+Each wave is carried by its plane of incidence (lateral unit vector û along its lateral wave vector k₀κ,
+ŝ = ẑ × û) and two quantities continuous at every interface, propagated with Abelès' characteristic matrix of
+each film (Born & Wolf §1.6.2; Macleod §2.2): for s, U = E_y (along ŝ) and V = (1/ik₀) ∂_z E_y; for p, U = H_y
+(along ŝ, in units of the ambient's wave impedance) and V = (1/ik₀ε) ∂_z H_y, for which E_t = V û and
+D_z/ε₀ = −κ U. In a film of index n_j with q_j = √(ε_j − κ²) (Im q_j ≥ 0), thickness d_j, β_j = k₀ q_j d_j and
+η_j = q_j (s) or q_j/ε_j (p):
+
+    (U, V)(z + d_j) = [[cos β_j, i sin β_j / η_j], [i η_j sin β_j, cos β_j]] (U, V)(z).
+
+Starting from the substrate's transmitted wave (U, V) = (1, −η_sub) at interface 0 and carrying it up to the
+ambient, the incident amplitude there is A = (U − V/η_0)/2; every interface field is divided by A (unit incident
+wave). Numerical range: the upward product grows as e^{Σ Im β_j}, harmless for films below a few µm of metal
+(e^{709} overflows).
+
+Where it holds: the smooth-surface limit, (4π σ_j cosθ / λ)² ≪ 1 at every interface and slopes ≪ 1, as for one
+interface. Only the reflection hemisphere is evaluated (light scattered into the substrate or into guided modes
+of the films, Elson 1995, is not), the ambient is air, and each profile's PSD is taken at the same Bragg
+frequency (interfaces are laterally stationary). No equation numbers of Elson's papers are quoted: eq. (1) was
+derived here and is checked against Germer's single-interface q factors and the limits in
+tests/test_rough_film.py.
+
+References
+----------
+.. [1] J. M. Elson, "Light scattering from surfaces with a single dielectric overlayer", J. Opt. Soc. Am. 66(7),
+   682–694, 1976.
+.. [2] J. M. Elson, "Infrared light scattering from surfaces covered with multiple dielectric overlayers",
+   Appl. Opt. 16(11), 2872–2881, 1977.
+.. [3] J. M. Elson, J. M. Bennett, "Vector scattering theory", Opt. Eng. 18(2), 116–124, 1979.
+.. [4] J. M. Elson, J. P. Rahn, J. M. Bennett, "Relationship of the total integrated scattering from
+   multilayer-coated optics to angle of incidence, polarization, correlation length, and roughness
+   cross-correlation properties", Appl. Opt. 22(20), 3207–3219, 1983.
+.. [5] J. M. Elson, "Theory of light scattering from a rough surface with an inhomogeneous dielectric
+   permittivity", Phys. Rev. B 30(10), 5460–5480, 1984.
+.. [6] J. M. Elson, "Multilayer-coated optics: guided-wave coupling and scattering by means of interface random
+   roughness", J. Opt. Soc. Am. A 12(4), 729–742, 1995; and "Theory and software for light scattering from
+   multilayer optical components with interfacial roughness", NAWCWPNS TP 8084, 1992.
+.. [7] S. G. Johnson, M. Ibanescu, M. A. Skorobogatiy, O. Weisberg, J. D. Joannopoulos, Y. Fink, "Perturbation
+   theory for Maxwell's equations with shifting material boundaries", Phys. Rev. E 65, 066611, 2002.
+.. [8] J. E. Sipe, "New Green-function formalism for surface optics", J. Opt. Soc. Am. B 4(4), 481–489, 1987.
+.. [9] T. A. Germer, SCATMECH (NIST): Roughness_Stack_BRDF_Model, Correlated_ and Uncorrelated_Roughness_Stack_
+   BRDF_Model documentation (single rough interface of a stack after Elson; all interfaces correlated or not).
+.. [10] M. Born, E. Wolf, *Principles of Optics*, 7th ed., Cambridge 1999, §1.6.2 (characteristic matrix).
+.. [11] J. C. Stover, *Optical Scattering: Measurement and Analysis*, 3rd ed., SPIE 2012, eq. (4.1) (the
+   Rayleigh-Rice BRDF of one interface).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import FieldError, unknown
+from ..vocabulary import POLARIZATIONS
+from .perturbation import scattering_angles
+from .polar import polar_albedo
+
+__all__ = ["CORRELATIONS", "stack_layers", "interface_fields", "interface_amplitudes", "cross_psd_weights",
+           "rough_stack_components", "rough_stack_brdf", "rough_stack_tis"]
+
+#: named interface-roughness correlations: identical replicated profiles, or independent ones
+CORRELATIONS = ("correlated", "uncorrelated")
+
+
+def stack_layers(stack_or_layers, wavelength_nm):
+    """(ε of the media from the substrate up to the ambient, film thicknesses in nm) of a stack.
+
+    *stack_or_layers*: a :class:`~waveoptics.materials.Stack`, a bare material (has ``eta``), or a tuple
+    ``(n_substrate, n_films, d_films_nm)`` with the films from the substrate outwards (complex indices n + ik).
+    """
+    w = np.asarray(wavelength_nm, dtype=float)
+    if hasattr(stack_or_layers, "films") and hasattr(stack_or_layers, "substrate"):
+        ns, nf = stack_or_layers.indices(w)
+        d = list(stack_or_layers.thicknesses_nm)
+    elif hasattr(stack_or_layers, "eta"):
+        ns, nf, d = stack_or_layers.eta(w), [], []
+    else:
+        try:
+            ns, nf, d = stack_or_layers
+        except (TypeError, ValueError):
+            raise FieldError("{stack} must be a Stack, a material or (n_substrate, n_films, d_films_nm); got "
+                             f"{stack_or_layers!r}", "stack") from None
+        nf, d = list(nf), [float(x) for x in d]
+    if len(nf) != len(d):
+        raise FieldError(f"{{stack}}: {len(nf)} film indices but {len(d)} thicknesses", "stack")
+    if any(not np.isfinite(x) or x < 0 for x in d):
+        raise FieldError(f"{{stack}}: film thicknesses {d!r} nm must be finite and >= 0", "stack")
+    eps = [np.asarray(n, dtype=np.complex128) ** 2 for n in (ns, *nf)] + [np.complex128(1.0)]
+    return eps, d
+
+
+def _qz(eps, kappa2):
+    """q = √(ε − κ²) on the branch Im q ≥ 0 (decaying downwards into an absorbing or evanescent medium)."""
+    q = np.sqrt(eps - kappa2)
+    # guard: a rounding −0.0 imaginary part would put an evanescent q on the growing branch
+    return np.where(q.imag < 0, -q, q)
+
+
+def interface_fields(kappa, wavelength_nm, eps, d_nm, polarization: str):
+    """Flat-stack fields at every interface for a unit plane wave from the ambient with lateral index *kappa*
+    (sinθ in air): a list, interface 0 (substrate) first, of (E_t, D_z) where E_t is the tangential field along ŝ
+    (s) or û (p) and D_z the normal displacement over ε₀ (0 for s). See the module docstring.
+
+    References
+    ----------
+    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.6.2 (characteristic matrix of a film).
+    .. [2] H. A. Macleod, *Thin-Film Optical Filters*, 4th ed., CRC Press 2010, §2.2.
+    """
+    k2 = np.asarray(kappa, dtype=float) ** 2
+    k0 = 2.0 * np.pi / np.asarray(wavelength_nm, dtype=float)        # 1/nm
+    q = [_qz(e, k2) for e in eps]
+    eta = q if polarization == "s" else [qj / e for qj, e in zip(q, eps)]
+    U = np.ones(np.broadcast(k2, *eps).shape, dtype=np.complex128)
+    V = -eta[0] * U
+    at = [(U, V)]
+    for j, d in enumerate(d_nm, start=1):               # film j sits on interface j−1, under interface j
+        b = k0 * q[j] * d
+        c, s = np.cos(b), np.sin(b)
+        U, V = c * U + 1j * s / eta[j] * V, 1j * eta[j] * s * U + c * V
+        at.append((U, V))
+    # guard: at grazing incidence (q_0 = 0) the incident and reflected waves cancel (r = −1, the limit that
+    # :func:`waveoptics.materials.stack.amplitudes` takes): every interface field is 0 there, not 0/0
+    grazing = np.broadcast_to(k2 >= 1.0, U.shape)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        A = 0.5 * (U - V / eta[-1])                      # incident amplitude in the ambient
+        inv = np.where(grazing, 0.0, 1.0 / np.where(grazing, 1.0, A))
+    if polarization == "s":
+        return [(u * inv, np.zeros_like(u)) for u, _ in at]
+    return [(v * inv, -np.asarray(kappa) * u * inv) for u, v in at]
+
+
+def _planes(wi, wo):
+    """Lateral unit vectors (û_i, ŝ_i, û_o, ŝ_o), each (..., 2), of the incident wave (travelling along −ω_i) and
+    of the reciprocal wave (travelling along −ω_o), with the planes of :func:`scattering_angles` at normal
+    incidence (x–z) and normal exit (φ_s = 0)."""
+    wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
+    si = np.hypot(wi[..., 0], wi[..., 1])
+    so = np.hypot(wo[..., 0], wo[..., 1])
+    # guard: undefined azimuths take the x axis (incidence) and the specular side (exit)
+    e = np.stack([np.where(si > 0, wi[..., 0] / np.where(si > 0, si, 1.0), 1.0),
+                  np.where(si > 0, wi[..., 1] / np.where(si > 0, si, 1.0), 0.0)], axis=-1)
+    o = np.stack([np.where(so > 0, wo[..., 0] / np.where(so > 0, so, 1.0), -e[..., 0]),
+                  np.where(so > 0, wo[..., 1] / np.where(so > 0, so, 1.0), -e[..., 1])], axis=-1)
+
+    def perp(u):                                         # ẑ × û in the plane
+        return np.stack([-u[..., 1], u[..., 0]], axis=-1)
+
+    return -e, perp(-e), -o, perp(-o)
+
+
+def interface_amplitudes(wi, wo, wavelength_nm, eps, d_nm) -> dict:
+    """G_j^{ab} of eq. (1) of the module docstring for ab in ss, sp, ps, pp: a dict of lists over interfaces
+    (substrate first), each an array of the directions' shape (unitless)."""
+    ci, si, co, so, _, _ = scattering_angles(wi, wo)
+    ui, vi, uo, vo = _planes(wi, wo)
+    basis_i = {"s": vi, "p": ui}
+    basis_o = {"s": vo, "p": uo}
+    fi = {a: interface_fields(si, wavelength_nm, eps, d_nm, a) for a in ("s", "p")}
+    fo = {b: interface_fields(so, wavelength_nm, eps, d_nm, b) for b in ("s", "p")}
+    out = {}
+    for a in ("s", "p"):
+        for b in ("s", "p"):
+            dot = np.sum(basis_i[a] * basis_o[b], axis=-1)
+            G = []
+            for j in range(len(eps) - 1):
+                below, above = eps[j], eps[j + 1]
+                (Et, Dz), (Et2, Dz2) = fi[a][j], fo[b][j]
+                G.append((below - above) * (Et * Et2 * dot + Dz * Dz2 / (above * below)))
+            out[a + b] = G
+    return out
+
+
+def _psd_values(model, wi, wo, wavelength_nm):
+    """S(f) (m⁴) of one interface at the Bragg frequency f = (ω_i + ω_o)_xy / λ; 0 for a smooth one (None)."""
+    s = np.asarray(wi, dtype=float) + np.asarray(wo, dtype=float)
+    lam = np.asarray(wavelength_nm, dtype=float) * 1e-9
+    if model is None:
+        return np.zeros(np.broadcast(s[..., 0], lam).shape)
+    if hasattr(model, "S_xy"):
+        return model.S_xy(s[..., 0] / lam, s[..., 1] / lam)
+    return model.S(np.hypot(s[..., 0], s[..., 1]) / lam)
+
+
+def cross_psd_weights(correlation, n: int) -> np.ndarray:
+    """The n × n cross-correlation coefficients c_jk of the interfaces (S_jk = c_jk √(S_j S_k)): 1 everywhere for
+    ``"correlated"``, the identity for ``"uncorrelated"``, c off the diagonal for a number c in [0, 1], or a
+    symmetric n × n array with a unit diagonal.
+
+    References
+    ----------
+    .. [1] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (partly correlated
+       interfaces).
+    """
+    if isinstance(correlation, str):
+        if correlation not in CORRELATIONS:
+            raise unknown("correlation", correlation, CORRELATIONS, field="correlation")
+        return np.ones((n, n)) if correlation == "correlated" else np.eye(n)
+    c = np.asarray(correlation, dtype=float)
+    if c.ndim == 0:
+        if not 0.0 <= float(c) <= 1.0:
+            raise FieldError(f"{{correlation}} {float(c)!r} is not allowed; a coefficient must lie in [0, 1]",
+                             "correlation")
+        return np.where(np.eye(n, dtype=bool), 1.0, float(c))
+    if c.shape != (n, n) or not np.allclose(c, c.T) or not np.allclose(np.diag(c), 1.0) or np.any(np.abs(c) > 1):
+        raise FieldError(f"{{correlation}} must be a symmetric {n}x{n} array with a unit diagonal and |c| <= 1; "
+                         f"got shape {c.shape}", "correlation")
+    return c
+
+
+def _interface_psds(interface_psds, n: int) -> list:
+    if interface_psds is None or hasattr(interface_psds, "S") or hasattr(interface_psds, "S_xy"):
+        return [interface_psds] * n
+    psds = list(interface_psds)
+    if len(psds) != n:
+        raise FieldError(f"{{interface_psds}}: {len(psds)} PSDs for a stack of {n} interfaces (one per interface, "
+                         "substrate first; None for a smooth one)", "interface_psds")
+    return psds
+
+
+def rough_stack_components(wi, wo, wavelength_nm, stack_or_layers, interface_psds,
+                           correlation="correlated") -> dict:
+    """The four polarized BRDFs f_ss, f_sp, f_ps, f_pp (1/sr; first index incident, second scattered) of eq. (1)
+    of the module docstring; 0 below the horizon."""
+    eps, d = stack_layers(stack_or_layers, wavelength_nm)
+    n = len(eps) - 1
+    psds = _interface_psds(interface_psds, n)
+    c = cross_psd_weights(correlation, n)
+    S = [_psd_values(m, wi, wo, wavelength_nm) for m in psds]
+    G = interface_amplitudes(wi, wo, wavelength_nm, eps, d)
+    ci, _, co, _, _, _ = scattering_angles(wi, wo)
+    ok = (ci > 0) & (co > 0)
+    k = 2.0 * np.pi / (np.asarray(wavelength_nm, dtype=float) * 1e-9)
+    pre = k ** 4 / (16.0 * np.pi ** 2 * np.where(ok, ci * co, 1.0))
+    out = {}
+    for ab, Gab in G.items():
+        total = 0.0
+        for j in range(n):
+            for m in range(n):
+                if c[j, m] != 0.0:
+                    total = total + c[j, m] * np.sqrt(S[j] * S[m]) * (Gab[j] * np.conj(Gab[m])).real
+        out[ab] = np.where(ok, pre * total, 0.0)
+    return out
+
+
+def rough_stack_brdf(wi, wo, wavelength_nm, stack_or_layers, interface_psds, correlation="correlated",
+                     polarization_in: str = "unpolarized", polarization_out: str | None = None):
+    """First-order BRDF (1/sr) of a thin-film stack with rough interfaces (Elson; module docstring eq. (1)).
+
+    Parameters
+    ----------
+    wi, wo : array_like (..., 3)
+        Unit vectors towards the light and the viewer (macro normal +z; air above the stack).
+    wavelength_nm : array_like, nm
+        Vacuum wavelength (broadcast against the directions).
+    stack_or_layers : Stack, Material or (n_substrate, n_films, d_films_nm)
+        The stack: films from the substrate outwards, thicknesses in nm (:func:`stack_layers`).
+    interface_psds : PSDModel, PeriodogramPSD, None or sequence of them
+        Height PSD of each interface (m⁴ at f in 1/m), substrate interface first, the top (air) interface last;
+        one model stands for every interface, None for a smooth one.
+    correlation : {'correlated', 'uncorrelated'}, float or (n, n) array
+        Cross-correlation of the interfaces' profiles: S_jk = c_jk √(S_j S_k) (:func:`cross_psd_weights`).
+    polarization_in : {'unpolarized', 's', 'p'}
+        Incident polarization ('unpolarized': the mean of s and p).
+    polarization_out : {None, 's', 'p'}
+        Analyzed scattered polarization (None: not analyzed, the sum of s and p).
+
+    References
+    ----------
+    .. [1] J. M. Elson, Appl. Opt. 16(11), 2872–2881, 1977; Phys. Rev. B 30(10), 5460–5480, 1984.
+    .. [2] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983.
+    .. [3] S. G. Johnson et al., Phys. Rev. E 65, 066611, 2002 (the boundary-perturbation dipole sheet).
+    """
+    if polarization_in not in POLARIZATIONS:
+        raise unknown("polarization", polarization_in, POLARIZATIONS, field="polarization_in")
+    if polarization_out not in (None, "s", "p"):
+        raise unknown("polarization", polarization_out, ("s", "p"), field="polarization_out")
+    f = rough_stack_components(wi, wo, wavelength_nm, stack_or_layers, interface_psds, correlation)
+    outs = ("s", "p") if polarization_out is None else (polarization_out,)
+    ins = ("s", "p") if polarization_in == "unpolarized" else (polarization_in,)
+    total = sum(f[a + b] for a in ins for b in outs)
+    return total / len(ins)
+
+
+def rough_stack_tis(theta_deg, wavelength_nm, stack_or_layers, interface_psds, correlation="correlated",
+                    polarization: str = "unpolarized") -> float:
+    """Total integrated scatter ∫ f cosθ_o dω_o (unitless, a share of the incident power) of the rough stack
+    into the reflection hemisphere at incidence *theta_deg* (deg), by the polar quadrature of
+    :func:`waveoptics.scatter.polar_albedo`.
+
+    References
+    ----------
+    .. [1] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (TIS of multilayers).
+    """
+    lam = float(wavelength_nm)
+    t = np.radians(float(theta_deg))
+    k = 2.0 * np.pi / (lam * 1e-9)
+    eps, _ = stack_layers(stack_or_layers, lam)
+    psds = [m for m in _interface_psds(interface_psds, len(eps) - 1) if m is not None]
+    if not psds:
+        return 0.0
+    scale = min(m.length_scale for m in psds)
+
+    def lobe(wi_b, wo, q):
+        return rough_stack_brdf(wi_b, wo, lam, stack_or_layers, interface_psds, correlation, polarization)
+
+    return polar_albedo(float(t), k, scale, lobe)
