@@ -101,8 +101,12 @@ def band_table() -> list:
             F = float(np.ravel(mat.F(np.array([c]), lam))[0])
             lost = F * (np.exp(-k2 * rel) - np.exp(-k2 * m.sigma ** 2))
             bs = scatter.band_series(m, lam)
-    L = twoscale.evaluate(wi, w, "Au", twoscale.Micro(alpha=0.2, ndf="ggx"), zero, grid)
-    out["sigma0_max_abs"] = float(np.abs(L.total - L.microfacet).max())
+            L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0, ndf="ggx"), twoscale.Nano(model=m), grid, kd=0)
+            rows.append({"surface": name, "kind": m.kind, "sigma_nm": m.sigma * 1e9, "wavelength_nm": lam,
+                         "sigma_rel_nm": np.sqrt(rel) * 1e9, "beyond": scatter.beyond_band_fraction(m.sigma ** 2, rel),
+                         "withheld": lost, "E": float(bs.scattered_albedo(30.0, material=mat)),
+                         "returned": bs.redistributed_share(s, 2 * c), "albedo_over_F": L.albedo()[0] / F})
+    return rows
 
 
 #: the nano height fields of the energy tables: 128² samples over 17.6 µm, σ = 40 nm (λ/10 at 400 nm)
@@ -113,7 +117,8 @@ FIELDS = (("Gaussian T = 1.5 µm", lambda: surfaces.gaussian(40e-9, 1.5e-6, 128 
 
 
 def field_table() -> list:
-    """Per height field and λ at θ_i = 30°, micro α = 0: σ² beyond the band, the share 1 − |χ̂|² the whole variance
+    """Per height field and λ at θ_i = 30°, micro α = 0: the share of σ² the grid holds (the generator keeps the PSD
+    there and does not rescale), the field's rms height, σ² beyond the band, the share 1 − |χ̂|² the whole variance
     would take from the specular light, E_field (what the lobe scatters), and the albedo over F."""
     mat = materials.get_material("1+6j")
     grid = DirectionGrid.hemisphere(128)
@@ -133,7 +138,8 @@ def field_table() -> list:
                 L = twoscale.evaluate(wi, [lam], mat, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, grid, kd=0)
             F = float(mat.F(wi[2], lam))
             old = (L.albedo("diffraction")[0] + F * chi2) / F
-            rows.append({"field": name, "wavelength_nm": lam, "beyond": scatter.beyond_band_fraction(var, rel),
+            rows.append({"field": name, "wavelength_nm": lam, "resolved": hf.meta["psd_variance_fraction"],
+                         "sigma_nm": np.sqrt(var) * 1e9, "beyond": scatter.beyond_band_fraction(var, rel),
                          "incoherent_chi": 1 - chi2, "E": E, "albedo_over_F": L.albedo()[0] / F, "before": old})
     return rows
 
