@@ -170,15 +170,15 @@ def test_build_by_name_refuses_another_models_parameter():
 def test_brdf_options_show_the_registry_defaults():
     """The brdf command's options default to the registry's defaults, and each model reads the options of its
     registry parameters."""
-    from waveoptics.cli.brdf import _DEST, _INPUTS, MODELS
+    from waveoptics.cli.brdf import DEST, INPUTS, MODELS
 
     args = _parsed(["brdf", "--incident", "30"])
     for name, params in vocabulary.BRDF_MODEL_PARAMETERS.items():
         for p in params:
-            if p.name in _INPUTS or p.name in ("tradeoff", "device"):
+            if p.name in INPUTS or p.name in ("tradeoff", "device"):
                 continue
-            assert _same_default(getattr(args, _DEST.get(p.name, p.name)), p.default), (name, p.name)
-            assert _DEST.get(p.name, p.name) in MODELS[name].uses
+            assert _same_default(getattr(args, DEST.get(p.name, p.name)), p.default), (name, p.name)
+            assert DEST.get(p.name, p.name) in MODELS[name].uses
     assert args.no_tradeoff is (not vocabulary.BRDF_MODEL_PARAMETERS["microfacet"][14].default)
 
 

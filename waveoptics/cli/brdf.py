@@ -4,7 +4,7 @@ The command is shared by all BRDF models. The models, their parameters (unit, de
 factories are the library's registry (:data:`waveoptics.vocabulary.BRDF_MODEL_PARAMETERS`,
 :data:`waveoptics.brdf.BRDF_MODELS`): the options take their defaults from it, and a model is set up by
 :func:`waveoptics.brdf.build_brdf_model` with each of its parameters read from the option of the same dest
-(:data:`_DEST` where they differ). Each model is one entry of :data:`MODELS`: a function adding its own options,
+(:data:`DEST` where they differ). Each model is one entry of :data:`MODELS`: a function adding its own options,
 a function reading its input files into the parameters that are objects (a height field, a slope table, a PSD, a
 table), and a description of its parameters; direction and wavelength parsing, looping and the text/JSON output
 live here once.
@@ -31,9 +31,9 @@ from ._options import option, renamed
 
 
 #: model parameters whose option has another dest
-_DEST = {"diffuse_sigma_deg": "sigma", "tradeoff": "no_tradeoff"}
+DEST = {"diffuse_sigma_deg": "sigma", "tradeoff": "no_tradeoff"}
 #: model parameters that are objects read from files (by the model's *inputs*), with the options they read
-_INPUTS = {"slope_table": ("micro_surface", "footprint", "spacing", "units", "channel"),
+INPUTS = {"slope_table": ("micro_surface", "footprint", "spacing", "units", "channel"),
            "surface": ("surface", "spacing", "units", "channel"),
            "nano": ("nano",),
            "psd": ("nano", "surface", "spacing", "units", "channel"),
@@ -50,20 +50,20 @@ def _uses(model: str, extra: tuple = ()) -> tuple:
     read from files), and *extra*."""
     dests = []
     for p in BRDF_MODEL_PARAMETERS[model]:
-        dests += _INPUTS.get(p.name, (_DEST.get(p.name, p.name),))
+        dests += INPUTS.get(p.name, (DEST.get(p.name, p.name),))
     return tuple(dict.fromkeys(dests + list(extra)))
 
 
 def _parameters(name: str, args, inputs: dict) -> dict:
-    """The parameters of model *name* from the options (:data:`_DEST`) and the objects *inputs* read from files."""
+    """The parameters of model *name* from the options (:data:`DEST`) and the objects *inputs* read from files."""
     kw = {}
     for p in BRDF_MODEL_PARAMETERS[name]:
         if p.name in inputs:
             kw[p.name] = inputs[p.name]
         elif p.name == "tradeoff":
             kw[p.name] = not args.no_tradeoff
-        elif p.name not in _INPUTS:
-            kw[p.name] = getattr(args, _DEST.get(p.name, p.name))
+        elif p.name not in INPUTS:
+            kw[p.name] = getattr(args, DEST.get(p.name, p.name))
     return kw
 
 
