@@ -65,6 +65,8 @@ BASE = {
 #: options not drawn: help, tracebacks, and those that start worker processes or clusters (covered elsewhere)
 SKIP = {"-h", "--help", "--debug", "--workers", "--scheduler", "--version"}
 
+#: the grammars of issue 34's legal inputs (units by name and case, angle suffixes, complex-index notations, stacks)
+#: are in VALUES beside their refused neighbours, so the draws meet both sides of each rule
 JUNK = ["", " ", "nan", "inf", "-inf", "-1", "0", "1e308", "-1e308", "1e-308", "abc", ",", ":", "1,,2",
         "0:inf:1", "550:400:10", "4nm00", "5", "1+6j", "1.5+1e308j", "99:99", "1e9", "-0", "☃", "10 nm",
         "--", "%s", "1_000"]
@@ -72,12 +74,13 @@ JUNK = ["", " ", "nan", "inf", "-inf", "-1", "0", "1e308", "-1e308", "1e-308", "
 #: valid and edge values of options that take a value, by flag (others get JUNK and the generic numbers)
 VALUES = {
     "--wavelengths": ["550", "450,650", "500:600:50", "0.55um", "380", "830", "200", "100000", "550nm", "550,,650",
-                      "1e300"],
-    "--incident": ["30", "30,45", "0", "89.9", "90", "-10", "30,400", "45,nan"],
+                      "1e300", "450, 650", "0.45μm,550NM", "5500Å", "550;650"],
+    "--incident": ["30", "30,45", "0", "89.9", "90", "-10", "30,400", "45,nan", "30°", "30deg,45deg", "0.5rad"],
     "--outgoing": ["40,180", "0", "89,0", "95,0"],
-    "--incident-angles": ["0,40", "0:80:40", "89.99", "90", "0:80:0.00001"],
+    "--incident-angles": ["0,40", "0:80:40", "89.99", "90", "0:80:0.00001", "0°:60°:30°", "0deg,40deg"],
     "--resolution": ["8", "16", "32", "7", "0", "100000"],
-    "--material": ["Au", "Al", "1.5", "1+6j", "f0:0.9", "f0:1.5", "nosuch", "1e-300", "Au@Babar"],
+    "--material": ["Au", "Al", "1.5", "1+6j", "f0:0.9", "f0:1.5", "nosuch", "1e-300", "Au@Babar", "(1.5+0.01j)",
+                   "1.5 + 0.01i", "Fused Silica", "Al|Al2O3:120nm", "Al|Al2O3:120", "1.5-0.01j"],
     "--nano": ["gaussian:sigma=5nm,T=1um", "abc:sigma=10nm,B=2um,C=2.6", "abc:sigma=10nm,B=2um,C=1.5",
                "gaussian:sigma=-5nm,T=1um", "gaussian:sigma=5,T=1um", "exponential:sigma=1um,T=1um",
                "sinusoid:amplitude=40nm,period=2um", "gaussian:sigma=5nm", "Gaussian:sigma=5nm,T=1um",
@@ -89,10 +92,11 @@ VALUES = {
     "--sphere-size": ["16", "24", "15", "5000"],
     "--spp": ["1", "4", "0"],
     "--samples": ["16", "32", "32x16", "1", "100000"],
-    "--size": ["8um", "8um,4um", "8", "0um", "1km"],
-    "--spacing": ["50nm", "50nm,80nm", "50", "0nm"],
+    "--size": ["8um", "8um,4um", "8", "0um", "1km", "8 microns", "8UM", "0.008mm"],
+    "--spacing": ["50nm", "50nm,80nm", "50", "0nm", "500Å", "50 nanometres"],
     "--seed": ["1", "-1", "2**70"],
-    "--illuminant": ["D65", "A", "blackbody:5500K", "laser:532", "blackbody:-5K", "F13"],
+    "--illuminant": ["D65", "A", "blackbody:5500K", "laser:532", "blackbody:-5K", "F13", "laser:532NM",
+                     "laser:0.638um", "laser:532:600:1"],
     "--delta-e": ["1", "0.1", "0", "-1"],
     "--ndf-shape": ["2.5", "1.5", "0.5"],
     "--max-memory": ["1GB", "1kB", "0", "lots"],

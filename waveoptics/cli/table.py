@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import WaveopticsError
 from ..request import request_default
-from ..units import parse_number_list, parse_wavelengths
+from ..units import ANGLE_UNITS, parse_number_list, parse_wavelengths
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, PRECISIONS
 from ._common import SURFACE_FORMATS_HELP, add_common, add_workers, emit, progress
 from ._options import option, retired
@@ -142,7 +142,7 @@ def run(args):
     import numpy as np
 
     case, surface = case_from_args(args, source=args.source)
-    thetas = parse_number_list(args.incident_angles, name="--incident-angles")
+    thetas = parse_number_list(args.incident_angles, name="thetas_deg", units=ANGLE_UNITS)
     spec = distributed.TableSpec(case, thetas_deg=tuple(thetas), phi_deg=args.phi, realizations=args.realizations,
                                  batch=args.batch if args.batch is not None else distributed.DEFAULT_BATCH)
     plan = distributed.table_plan(spec, args.output, resume=args.resume)
