@@ -66,7 +66,7 @@ from .quadrature import directional_albedo
 from .roughness_scales import Micro, Nano
 from .scale_split import split_scales  # noqa: F401 (re-exported: twoscale.split_scales)
 from .twoscale_coherent import coherent_lobe
-from .twoscale_frame import facet_frame_diffraction, facet_route
+from .twoscale_frame import facet_frame_diffraction, facet_route, paraxial_reason
 from .twoscale_grid import sharp_micro_lobe
 from .twoscale_paraxial import paraxial_diffraction
 
@@ -206,6 +206,8 @@ def diffracted_lobe(route, wi, w, mat, micro, nano, grid, F, dm, polarization, r
     else:
         energy_scale = np.ones(w.size)
     used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")
+    if route == "frame" and nano.surface is not None:   # a height field's facet tables come from the fft solver
+        used = "fft"
     return diffraction, used, energy_scale, beyond
 
 
@@ -327,7 +329,17 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
                        "diffraction_beyond_horizon": (beyond if reference_grid is None
                                                       else np.full(w.size, np.nan)).tolist(),
                        "diffraction_model": dm.name, "facet_integration": route,
+                       "facet_integration_reason": _route_reason(route, facet, micro, nano, grid, w),
                        "polarization": polarization, "multiple_scattering": bool(multiple_scattering)})
+
+
+def _route_reason(route, facet, micro, nano, grid, w) -> str | None:
+    """Why :func:`evaluate` carried the nano lobe paraxially (``info["facet_integration_reason"]``), None otherwise."""
+    if route != "paraxial":
+        return None
+    if facet == "paraxial":
+        return "asked by name (facet 'paraxial')"
+    return paraxial_reason(micro, nano, grid, w)
 
 
 def multiple_scattering_lobe(wi, wo, wavelengths_nm, material, micro: Micro):
