@@ -5,7 +5,9 @@ Reference: tests/twoscale_reference.py's Monte-Carlo facet integral (its own Bec
 balance heuristic) of the field's lobe computed at each facet's exact local incidence by the direct Kirchhoff sum
 (:func:`waveoptics.scatter.direct.kirchhoff_U_cl`: U − χ̂ U_flat, χ̂ the window-weighted mean of exp(i v_z h), K of
 Kirchhoff's tangent plane written here): no tables, no turning, no FFT. One realization's lobe is speckle, so
-lobes are compared as averages over 4 × 4 cell blocks (the reference at the 16 cell centres).
+lobes are compared as averages over 8 × 8 cell blocks (the reference at the 64 cell centres): per 4 × 4 block
+the tables' turned speckle and the exact one differ by about 5 % rms (up to 12 %), as two reads of one speckle
+pattern at other grains do.
 """
 import dataclasses
 
@@ -25,9 +27,9 @@ FIELD = surfaces.gaussian(sigma=15e-9, corr_length=1e-6, size=128 * LAM / 4 * 1e
 #: the nano lobe's width λ/(π T) in direction cosines, for the reference's half-vector technique
 WIDTH = LAM / (np.pi * 1000.0)
 GRID = DirectionGrid.hemisphere(96)
-BLOCK = 4
+BLOCK = 8
 #: |package − reference| ≤ TOL × reference + K_SE standard errors, per block average
-TOL, K_SE = 0.05, 3.0
+TOL, K_SE = 0.03, 3.0
 
 
 def _exact_lobe(hf):
@@ -91,10 +93,11 @@ def test_route_choice():
 
 @pytest.mark.parametrize("alpha,theta", [(0.1, 30.0), (0.1, 60.0), (0.3, 30.0), (0.3, 60.0)])
 def test_grid_lobes_are_the_facet_frame_integral(alpha, theta):
-    """evaluate's diffracted lobe averaged over 8 blocks of 4 × 4 cells (θ_o ≤ 70°, lobe > 5 % of its peak) within
-    5 % + 3 s.e. of the reference (measured ≤ 8 % off, mostly ≤ 5 %, with 2-5 % s.e.; the paraxial route 5-12 %
-    off on the same blocks). Energy: the diffracted albedo before the energy guard within 5 % of the light the
-    coherent part gives up (measured +3.5 to +4 %: the guard scales it by 0.96)."""
+    """evaluate's diffracted lobe averaged over 6 blocks of 8 × 8 cells (θ_o ≤ 70°, lobe > 5 % of its peak) within
+    3 % + 3 s.e. of the reference (measured ≤ 6.1 % off with 1-1.7 % s.e.; the paraxial route on the same blocks:
+    ≤ 5.6 % at θ_i = 30°, up to 9.9 % (α 0.1) and 15.6 % (α 0.3) at 60°, 7 of 24 blocks outside the tolerance).
+    Energy: the diffracted albedo within 3 % of the light the coherent part gives up, the energy guard idle
+    (measured -0.1 to +2.1 %; the paraxial route -0.1 to -3.4 %)."""
     wi = R.direction(theta)
     L = brdf.evaluate(wi, [LAM], "aluminium", Micro(alpha=alpha, ndf="beckmann"), Nano(surface=FIELD), GRID)
     assert L.info["facet_integration"] == "frame" and L.info["facet_integration_reason"] is None
@@ -103,7 +106,7 @@ def test_grid_lobes_are_the_facet_frame_integral(alpha, theta):
     wo = GRID.directions().reshape(nb, BLOCK, nb, BLOCK, 3)
     ok = (wo[..., 2] > np.cos(np.radians(70))).all(axis=(1, 3)) & (D.min(axis=(1, 3)) > 0.05 * D.max())
     cand = np.argwhere(ok)
-    sel = cand[np.random.default_rng(5).choice(len(cand), 8, replace=False)]
+    sel = cand[np.random.default_rng(5).choice(len(cand), 6, replace=False)]
     wos = np.concatenate([wo[i, :, j, :].reshape(-1, 3) for i, j in sel])
     ref, se = R.facet_integral(_f_nano, np.broadcast_to(wi, wos.shape), wos, LAM, alpha, "beckmann",
                                nano_width=WIDTH, n_samples=400, seed=3)
