@@ -276,7 +276,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     drawn through the nano lobe's radial law (they hold a heavy-tailed NDF's far facets and a nano lobe narrower
     than the micro lobe); (N_a, N_b) = *nodes* or :func:`facet_nodes`. Each facet's nano lobe is read from tables
     over local incidence (:data:`FACET_THETAS_DEG`, :func:`_facet_read`) on *table_grid* (default *grid*, a
-    hemisphere); F(θ_d), the same in every facet's frame, multiplies the sum.
+    hemisphere); F(θ_d), the same in every facet's frame, multiplies the sum. A nano height field's tables are its
+    own lobe at azimuth 0 (:func:`_field_table`), read for facets of every azimuth: for a statistically isotropic
+    field only (:func:`facet_route` keeps anisotropic ones paraxial); its half-vector normals are placed by the
+    lobe width of its rms height and correlation length (:func:`nano_statistics`).
 
     Returns
     -------
