@@ -26,7 +26,8 @@ from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
 from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albedo)
 from .opencl import (D_cl, Lambda_cl, brdf_cl)
 from .field_lobe import (kirchhoff_scattered_lobe, FIELD_THETAS_DEG, FIELD_GRID_OVERSAMPLING, field_scattered_albedo,
-    bracketing_nodes)
+    bracketing_nodes, ISOTROPIC_FIELD_MODELS, ANISOTROPIC_FIELD_MODELS, ISOTROPY_SECTORS, ISOTROPY_MAX_RATIO,
+    field_anisotropy, field_proposal_model)
 from .roughness_scales import (SERIES_MIN_CAPTURED, check_series, Micro, Nano, isotropic)
 from .scale_split import (SPLIT_PERIODS_OF_LAMBDA, split_scales)
 from .twoscale_grid import (mirror_direction, fresnel_at_mirror, mirror_cell, sharp_micro_lobe, azimuth_deg,
@@ -34,8 +35,8 @@ from .twoscale_grid import (mirror_direction, fresnel_at_mirror, mirror_cell, sh
 from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP, CORE_MAX_SUBSAMPLES)
 from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, facet_scatter_weights, facet_incidences_deg,
     field_albedo_evaluations, paraxial_diffraction)
-from .twoscale_frame import (FACET_THETAS_DEG, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODE_SPLIT,
-    FACET_REFERENCE_NM, FACET_ROUTES, facet_route, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
+from .twoscale_frame import (FACET_THETAS_DEG, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_NODE_SPLIT,
+    FACET_REFERENCE_NM, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
 from .twoscale_coherent import (coherent_lobe)
 from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, multiple_scattering_lobe, evaluate)
 from .sampling import (NormalSampler, NORMAL_SAMPLERS, sample_normal, pdf_normal, pdf_reflected, sample_reflected)

@@ -20,8 +20,9 @@ Lobes live on a :class:`waveoptics.scatter.DirectionGrid` over (u, v) = (sinθ c
 cosθ_o dω_o = du dv. For PSD statistics the diffracted part is the facet integral itself
 (:func:`facet_frame_diffraction`): per cell, a balance-heuristic quadrature over facet normals drawn from the micro
 NDF and about the cell's half-vector, each facet's nano lobe read from tables over local incidence
-(:data:`waveoptics.brdf.FACET_THETAS_DEG`) in that facet's frame. For a nano height field, and for a PSD lobe
-narrower than the cells, it is the paraxial form (:func:`facet_route`; ``facet="paraxial"`` by name): the nano lobe
+(:data:`waveoptics.brdf.FACET_THETAS_DEG`) in that facet's frame; so it is for a statistically isotropic nano height
+field, whose tables are its own lobe by the FFT solver at azimuth 0. For an anisotropic height field, and for a PSD
+lobe narrower than the cells, it is the paraxial form (:func:`facet_route`; ``facet="paraxial"`` by name): the nano lobe
 at the macro incidence is convolved with the *micro kernel* K, the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the
 mirror direction, i.e. shifted to each facet's mirror direction instead of being turned with the facet (accurate
 where each facet's lobe is narrow; docs/physics.md §7 gives its error on wide lobes). Both limits hold on the grid:
@@ -66,7 +67,7 @@ from .quadrature import directional_albedo
 from .roughness_scales import Micro, Nano
 from .scale_split import split_scales  # noqa: F401 (re-exported: twoscale.split_scales)
 from .twoscale_coherent import coherent_lobe
-from .twoscale_frame import facet_frame_diffraction, facet_route
+from .twoscale_frame import facet_frame_diffraction, facet_route, paraxial_reason
 from .twoscale_grid import sharp_micro_lobe
 from .twoscale_paraxial import paraxial_diffraction
 
@@ -206,6 +207,8 @@ def diffracted_lobe(route, wi, w, mat, micro, nano, grid, F, dm, polarization, r
     else:
         energy_scale = np.ones(w.size)
     used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")
+    if route == "frame" and nano.surface is not None:   # a height field's facet tables come from the fft solver
+        used = "fft"
     return diffraction, used, energy_scale, beyond
 
 
@@ -279,7 +282,12 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         How the facets carry the nano lobe (:func:`facet_route`): ``frame`` evaluates each facet's lobe in its own
         frame (:func:`facet_frame_diffraction`), ``paraxial`` shifts the macro-incidence lobe to each facet's
         mirror direction (an FFT convolution, fast; docs/two-scale.md gives its error); ``auto`` (default) takes
-        ``frame`` for PSD statistics the grid resolves. The route taken is ``info["facet_integration"]``.
+        ``frame`` for PSD statistics and isotropic height fields whose lobe the grid resolves. The route taken is
+        ``info["facet_integration"]``, and why it is paraxial ``info["facet_integration_reason"]`` (None for the
+        frame route). A height field's frame route costs 21 field lobes per wavelength once (its tables, on a grid
+        fine enough for the patch's speckle) and a quadrature of 64 + 128 normals per cell per incidence
+        (:data:`waveoptics.brdf.FACET_NODES_FIELD`): about 1.3 s per incidence on 96² cells and 3 wavelengths,
+        where the paraxial convolution takes 0.1 s.
 
     Returns
     -------
@@ -327,7 +335,17 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
                        "diffraction_beyond_horizon": (beyond if reference_grid is None
                                                       else np.full(w.size, np.nan)).tolist(),
                        "diffraction_model": dm.name, "facet_integration": route,
+                       "facet_integration_reason": _route_reason(route, facet, micro, nano, grid, w),
                        "polarization": polarization, "multiple_scattering": bool(multiple_scattering)})
+
+
+def _route_reason(route, facet, micro, nano, grid, w) -> str | None:
+    """Why :func:`evaluate` carried the nano lobe paraxially (``info["facet_integration_reason"]``), None otherwise."""
+    if route != "paraxial":
+        return None
+    if facet == "paraxial":
+        return "asked by name (facet 'paraxial')"
+    return paraxial_reason(micro, nano, grid, w)
 
 
 def multiple_scattering_lobe(wi, wo, wavelengths_nm, material, micro: Micro):
