@@ -303,7 +303,7 @@ def _rayleigh_rice_inputs(args, wavelength_nm) -> dict:
         if model not in surfaces.PSD_MODELS:
             raise WaveopticsError(f"--nano {args.nano!r}: rayleigh-rice needs height statistics "
                                   f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
-        psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"), C=p.get("C"))
+        psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"), C=p.get("C"))
     _index(args, wavelength_nm)
     return {"psd": psd}
 
