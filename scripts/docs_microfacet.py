@@ -155,7 +155,7 @@ def oren_nayar_max():
         i = int(np.argmax(E))
         if E[i] > best[0]:
             best = (float(E[i]), float(s), float(th[i]))
-    total = brdf.albedo(_dirs(th), alpha=0.3, eta=1.5, kd=1.0, diffuse="oren-nayar", sigma=best[1])
+    total = brdf.albedo(_dirs(th), alpha=0.3, eta=1.5, kd=1.0, diffuse="oren-nayar", diffuse_sigma=best[1])
     return best + (float(np.max(total)),)
 
 

@@ -27,7 +27,7 @@ IMG = ROOT / "docs" / "img"
 CASES = {   # label → renderer_brdf keywords
     "gold, GGX α 0.2, ABC σ 10 nm": dict(material="gold", alpha=0.2, nano="abc:sigma=10nm,B=2um,C=2.6"),
     "aluminium, GGX α 0.15 × 0.4, Gaussian σ 15 nm": dict(material="aluminium", alpha=0.15, alpha_y=0.4,
-                                                           nano="gaussian:sigma=15nm,T=1.5um"),
+                                                           nano="gaussian:sigma=15nm,corr_length=1.5um"),
     "dielectric 1.5 + kd 0.6, α 0.25, ABC σ 20 nm": dict(material="1.5", alpha=0.25, kd=0.6,
                                                           nano="abc:sigma=20nm,B=2um,C=2.6"),
     "copper, GGX α 0.05, ABC σ 40 nm": dict(material="copper", alpha=0.05, nano="abc:sigma=40nm,B=2um,C=2.6"),

@@ -212,7 +212,7 @@ def _measure() -> tuple:
         fine = _per_task(SimulationRequest(**{**BENCH_CASE.__dict__,
                                               "wavelengths_nm": tuple(np.arange(400.0, 701.0, 5.0)),
                                               "resolution": 256}), THETAS)
-        hf_case = SimulationRequest(material="Au", nano="gaussian:sigma=20nm,T=1um", micro_alpha=0.05, solver="fft",
+        hf_case = SimulationRequest(material="Au", nano="gaussian:sigma=20nm,corr_length=1um", micro_alpha=0.05, solver="fft",
                                     wavelengths_nm=BENCH_CASE.wavelengths_nm, resolution=128)
         hfield = _per_task(hf_case, THETAS, realizations=8)
     return [load0[0], os.getloadavg()[0]], malloc, bench, fine, hfield

@@ -905,8 +905,8 @@ def _bad_inputs() -> list[BadInput]:
                                    "1um", "--samples", "32", "-o", str(tmp / "g.npz")], same=True))
     add(BadInput("nano-sigma-negative", "parameter", "negative σ_nano (simulate --nano)",
                  r"--nano sigma '-5nm' is negative",
-                 api=lambda tmp: parse_nano("gaussian:sigma=-5nm,T=1um"),
-                 argv=lambda tmp: _simulate_argv(tmp, "--nano", "gaussian:sigma=-5nm,T=1um"), same=True))
+                 api=lambda tmp: parse_nano("gaussian:sigma=-5nm,corr_length=1um"),
+                 argv=lambda tmp: _simulate_argv(tmp, "--nano", "gaussian:sigma=-5nm,corr_length=1um"), same=True))
     add(BadInput("psd-sigma-negative", "parameter", "negative σ (PSD model)", r"sigma=-1e-09 m is not allowed",
                  api=lambda tmp: surfaces.PSDModel("gaussian", sigma=-1e-9, T=1e-6)))
     for w in ("0", "-5"):
@@ -973,7 +973,7 @@ def _bad_inputs() -> list[BadInput]:
                  api=lambda tmp: surfaces.PSDModel("abc", sigma=5e-9, B=1e-6, C=1.5),
                  argv=lambda tmp: _simulate_argv(tmp, "--nano", "abc:sigma=5nm,B=1um,C=1.5"), same=True))
     add(BadInput("nano-too-rough", "parameter", "σ_nano = 5 µm for the PSD series", r"too rough for the PSD series",
-                 argv=lambda tmp: _simulate_argv(tmp, "--nano", "gaussian:sigma=5um,T=10um"),
+                 argv=lambda tmp: _simulate_argv(tmp, "--nano", "gaussian:sigma=5um,corr_length=10um"),
                  fixed="twoscale.py: the truncated series returned almost no diffracted light without a word"))
     add(BadInput("scratch-count-fraction", "parameter", "scratches:count=2.5", r"count=2\.5 is not allowed",
                  argv=lambda tmp: _simulate_argv(tmp, "--nano", "scratches:count=2.5,width=1um,depth=5nm"),
@@ -1019,8 +1019,8 @@ def _bad_inputs() -> list[BadInput]:
                  same=True))
     add(BadInput("nano-model-unknown", "name", "unknown nano model 'gausian'", r"unknown nano model 'gausian' \(did "
                  r"you mean 'gaussian'\?\)",
-                 api=lambda tmp: parse_nano("gausian:sigma=5nm,T=1um"),
-                 argv=lambda tmp: _simulate_argv(tmp, "--nano", "gausian:sigma=5nm,T=1um"), same=True))
+                 api=lambda tmp: parse_nano("gausian:sigma=5nm,corr_length=1um"),
+                 argv=lambda tmp: _simulate_argv(tmp, "--nano", "gausian:sigma=5nm,corr_length=1um"), same=True))
     add(BadInput("ndf-unknown", "name", "unknown NDF 'ggz'", r"ggz.*ggx",
                  api=lambda tmp: brdf.D(_dirs(10.0), 0.1, ndf="ggz"), argv=lambda tmp: _brdf_argv("--ndf", "ggz")))
     add(BadInput("solver-unknown", "name", "unknown solver 'ray'", r"unknown solver 'ray'",

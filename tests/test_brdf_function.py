@@ -91,7 +91,7 @@ def test_series_sum_equals_the_term_by_term_series():
     wi, wo = _random_dirs(rng, 2000), _random_dirs(rng, 2000)
     k = 2 * np.pi / 450e-9
     q = k * np.hypot(wi[:, 0] + wo[:, 0], wi[:, 1] + wo[:, 1])
-    for spec in ("abc:sigma=20nm,B=2um,C=2.6", "gaussian:sigma=60nm,T=1um"):
+    for spec in ("abc:sigma=20nm,B=2um,C=2.6", "gaussian:sigma=60nm,corr_length=1um"):
         model = make_nano(spec, [450.0]).model
         ref = scatter.scattered_lobe(wi, wo, 450.0, model, band_limited=False)
         got = scatter.series_sum(model, 450.0)(q, wi[:, 2] + wo[:, 2]) * scatter.obliquity(wi, wo, 450.0)
@@ -108,9 +108,9 @@ def test_series_sum_equals_the_term_by_term_series():
 
 
 @pytest.mark.parametrize("alpha,spec,theta", [(0.1, "abc:sigma=10nm,B=2um,C=2.6", 30),
-                                              (0.02, "gaussian:sigma=20nm,T=1um", 20),
+                                              (0.02, "gaussian:sigma=20nm,corr_length=1um", 20),
                                               (0.3, "abc:sigma=20nm,B=4um,C=2.3", 45),
-                                              (0.3, "gaussian:sigma=15nm,T=8um", 10)])
+                                              (0.3, "gaussian:sigma=15nm,corr_length=8um", 10)])
 def test_eval_on_grid_nodes_equals_the_grid_lobes(alpha, spec, theta):
     """The function against the grid model (FFT convolution on a 192² direction grid, another code path):
     coherent part to 1e-3, diffracted part within 4 % (L1) and its energy within 2 %, both at the peak and over the
@@ -199,8 +199,8 @@ def test_anisotropic_sampling_passes_chi2(ndf):
 
 
 TWO_SCALE_CASES = [(0.05, "abc:sigma=20nm,B=2um,C=2.6", 0), (0.05, "abc:sigma=20nm,B=2um,C=2.6", 80),
-                   (0.3, "abc:sigma=20nm,B=2um,C=2.6", 45), (0.3, "gaussian:sigma=15nm,T=8um", 30),
-                   (0.1, "gaussian:sigma=40nm,T=0.8um", 60)]
+                   (0.3, "abc:sigma=20nm,B=2um,C=2.6", 45), (0.3, "gaussian:sigma=15nm,corr_length=8um", 30),
+                   (0.1, "gaussian:sigma=40nm,corr_length=0.8um", 60)]
 
 
 @pytest.mark.parametrize("alpha,spec,theta", TWO_SCALE_CASES)
@@ -215,7 +215,7 @@ def test_two_scale_sampling_passes_chi2(alpha, spec, theta):
 
 def test_pdf_integrates_to_one_where_the_lobe_is_inside_the_hemisphere():
     for b in (MicrofacetBRDF("gold", Micro(alpha=0.05, ndf="ggx")),
-              TwoScaleBRDF("gold", Micro(alpha=0.05, ndf="ggx"), nano=make_nano("gaussian:sigma=10nm,T=4um", [550.0]))):
+              TwoScaleBRDF("gold", Micro(alpha=0.05, ndf="ggx"), nano=make_nano("gaussian:sigma=10nm,corr_length=4um", [550.0]))):
         r = _chi2(b, 20, sample_count=20_000, res=41, ires=6)
         assert r.pdf_integral == pytest.approx(1.0, abs=1e-2), r.message
 
@@ -232,12 +232,12 @@ def test_a_wrong_pdf_is_rejected():
 
 def test_cli_twoscale_values_and_parts(capsys):
     code = cli_main(["brdf", "--model", "twoscale", "--material", "gold", "--micro-alpha", "0.1",
-                     "--nano", "gaussian:sigma=10nm,T=2um", "--incident", "30", "--outgoing", "30,180",
+                     "--nano", "gaussian:sigma=10nm,corr_length=2um", "--incident", "30", "--outgoing", "30,180",
                      "--outgoing", "40,180", "--wavelengths", "450,650", "--json"])
     assert code == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["units"]["brdf"] == "1/sr" and len(doc["values"]) == 4
-    b = TwoScaleBRDF("gold", Micro(alpha=0.1), nano=make_nano("gaussian:sigma=10nm,T=2um", [450.0]))
+    b = TwoScaleBRDF("gold", Micro(alpha=0.1), nano=make_nano("gaussian:sigma=10nm,corr_length=2um", [450.0]))
     v = doc["values"][1]
     assert v["brdf"] == pytest.approx(float(b.eval(_dir(30), _dir(30, 180), v["wavelength_nm"])), rel=1e-9)
     assert sum(v["components"].values()) == pytest.approx(v["brdf"], rel=1e-12)
@@ -261,6 +261,6 @@ def test_cli_twoscale_with_a_height_field(capsys, tmp_path):
     assert v["components"]["diffraction"] == pytest.approx(float(grid.interpolate(L.diffraction[0], wo[0], wo[1])),
                                                            rel=1e-6)
     code = cli_main(["brdf", "--model", "twoscale", "--material", "gold", "--alpha", "0.1", "--nano",
-                     "gaussian:sigma=5nm,T=1um", "--surface", str(tmp_path / "h.npz"), "--incident", "30", "--albedo"])
+                     "gaussian:sigma=5nm,corr_length=1um", "--surface", str(tmp_path / "h.npz"), "--incident", "30", "--albedo"])
     err = capsys.readouterr().err
     assert code == 2 and "only one of" in err and err.count("\n") == 1

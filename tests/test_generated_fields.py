@@ -125,7 +125,7 @@ def test_mean_periodogram_is_the_psd_at_every_resolved_frequency(case):
 #: nano roughness of the two-scale comparison: σ = 5 nm, so the lobe is nearly first order at 500 nm
 NANOS = {"abc B=2um C=2.6": ("abc:sigma=5nm,B=2um,C=2.6", surfaces.PSDModel("abc", sigma=SIG, B=2e-6, C=2.6)),
          "abc B=4um C=2.2": ("abc:sigma=5nm,B=4um,C=2.2", surfaces.PSDModel("abc", sigma=SIG, B=4e-6, C=2.2)),
-         "gaussian T=0.4um": ("gaussian:sigma=5nm,T=0.4um", surfaces.PSDModel("gaussian", sigma=SIG, T=0.4e-6))}
+         "gaussian T=0.4um": ("gaussian:sigma=5nm,corr_length=0.4um", surfaces.PSDModel("gaussian", sigma=SIG, T=0.4e-6))}
 #: rings of distance from the mirror direction (direction cosines): the mirror's neighbourhood holds the
 #: variance below the grid's lowest frequency, which the PSD route scatters and a periodic field cannot
 RINGS = [(0.07, 0.15), (0.15, 0.3), (0.3, 0.6), (0.6, 1.0), (1.0, 1.9)]

@@ -108,7 +108,7 @@ def _tour(tmp_path):
          "Au", *base, "-o", str(tmp_path / "laser")],
         ["simulate", "--diffraction", "rayleigh-rice", "--nano", "abc:sigma=4nm,B=3um,C=2.8", "--incident", "80",
          "--wavelengths", "450,650", *base, "-o", str(tmp_path / "rr")],
-        ["simulate", "--nano", "Gaussian: sigma=5nm, T=1um", "--wavelengths", "450,650", *base,
+        ["simulate", "--nano", "Gaussian: sigma=5nm, corr_length=1um", "--wavelengths", "450,650", *base,
          "-o", str(tmp_path / "upper")],
         ["scatter", "--surface", str(nano), "--material", "Al", "--incident", "30", "--wavelengths", "400,700",
          "--resolution", "16", "-o", str(tmp_path / "scat"), "--quiet"],
@@ -156,10 +156,10 @@ def test_the_cost_model_and_the_memory_check_see_every_nano_kind(monkeypatch):
     from waveoptics.request import SimulationRequest
 
     req = lambda nano, **kw: SimulationRequest(nano=nano, resolution=16, wavelengths_nm=(550.0,), **kw)  # noqa: E731
-    psd = simulate.memory_estimate(req("gaussian:sigma=5nm,T=1um"))
+    psd = simulate.memory_estimate(req("gaussian:sigma=5nm,corr_length=1um"))
     for nano in ("sinusoid:amplitude=40nm,period=2um", "scratches:count=20,width=200nm,depth=30nm"):
         assert simulate.memory_estimate(req(nano)) >= psd + 10 * 16 * 512 ** 2
-    assert simulate.memory_estimate(req("gaussian:sigma=5nm,T=1um", solver="fft")) > psd
+    assert simulate.memory_estimate(req("gaussian:sigma=5nm,corr_length=1um", solver="fft")) > psd
     # the fft solver's expansion grows with the heights: 1 mm of amplitude is orders of magnitude dearer
     low = simulation_time(req("sinusoid:amplitude=40nm,period=2um"), sphere=False)
     high = simulation_time(req("sinusoid:amplitude=1mm,period=2um"), sphere=False)

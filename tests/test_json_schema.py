@@ -50,7 +50,7 @@ def test_scatter_summary_file_and_stdout(surface_file, tmp_path):
 
 @pytest.mark.slow
 def test_simulate_and_compare(surface_file, tmp_path):
-    common = ["--nano", "gaussian:sigma=5nm,T=1um", "--wavelengths", "450,550,650", "--resolution", "32"]
+    common = ["--nano", "gaussian:sigma=5nm,corr_length=1um", "--wavelengths", "450,550,650", "--resolution", "32"]
     _json(["simulate", *common, "--sphere-size", "32", "-o", str(tmp_path / "sim")])
     validate(json.loads((tmp_path / "sim" / "summary.json").read_text()), "simulate_summary")
     validate(_json(["compare", *common, "--incident-angles", "0,40"]), "compare")

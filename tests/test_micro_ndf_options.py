@@ -36,7 +36,7 @@ def _dir(theta):
 def test_grid_white_furnace_with_compensation(alpha):
     """F = 1 (f0:1): on the direction grid the microfacet model with the compensation lobe reflects 1 within 1e-3
     and the two-scale model within 1e-2 (its own lobe's shortfall), where single scattering keeps 0.30-0.88."""
-    nano = make_nano("gaussian:sigma=15nm,T=1.5um", [550.0])
+    nano = make_nano("gaussian:sigma=15nm,corr_length=1.5um", [550.0])
     grid = DirectionGrid.hemisphere(96)
     for th in (0.0, 60.0):
         L = twoscale.evaluate(_dir(th), [550.0], "f0:1", twoscale.Micro(alpha=alpha, ndf="ggx"), nano, grid,
@@ -70,7 +70,7 @@ def test_grid_lobe_matches_the_brdf_function():
 def test_simulate_with_a_tabulated_micro_ndf_is_beckmann_for_a_gaussian_surface(micro_file):
     """A Gaussian micro surface's slope law is Beckmann's with α = 2σ/T: the simulated two-scale and microfacet
     albedos through ``micro_surface`` agree with the closed-form Beckmann NDF of that α within 1 %."""
-    kw = dict(material="Au", nano="gaussian:sigma=8nm,T=1um", incident=(40.0, 0.0), wavelengths=[450.0, 650.0],
+    kw = dict(material="Au", nano="gaussian:sigma=8nm,corr_length=1um", incident=(40.0, 0.0), wavelengths=[450.0, 650.0],
               resolution=64, sphere=False)
     tab = simulate(micro_surface=micro_file, **kw)
     ref = simulate(micro_alpha=2 * SIGMA / T, ndf="beckmann", **kw)
@@ -95,7 +95,7 @@ def test_simulate_with_a_tabulated_micro_ndf_is_beckmann_for_a_gaussian_surface(
 
 
 def test_simulate_multiple_scattering_is_said_and_adds_the_lost_light():
-    kw = dict(material="Al", micro_alpha=0.8, ndf="ggx", nano="gaussian:sigma=5nm,T=1um", incident=(30.0, 0.0),
+    kw = dict(material="Al", micro_alpha=0.8, ndf="ggx", nano="gaussian:sigma=5nm,corr_length=1um", incident=(30.0, 0.0),
               wavelengths=[550.0], resolution=48)
     on = simulate(multiple_scattering=True, **kw)
     off = simulate(**kw)
@@ -176,7 +176,7 @@ def test_compare_reuses_the_simulations_micro_roughness(micro_file, tmp_path):
     slope table) and options: at the simulation's incidence it reproduces the simulation's albedo."""
     from waveoptics import compare
 
-    sim = simulate("Au", micro_surface=micro_file, multiple_scattering=True, nano="gaussian:sigma=8nm,T=1um",
+    sim = simulate("Au", micro_surface=micro_file, multiple_scattering=True, nano="gaussian:sigma=8nm,corr_length=1um",
                    incident=(30.0, 0.0), wavelengths=[550.0], resolution=32)
     L = compare._lobes_at(sim, _dir(30.0))
     np.testing.assert_allclose(L.albedo("total"), sim.lobes.albedo("total"), rtol=1e-12)

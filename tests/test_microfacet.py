@@ -252,8 +252,8 @@ def test_oren_nayar_limits():
 
 MODEL_CASES = [dict(ndf=n, shadowing=s) for n in PARAM_NDFS for s in brdf.SHADOWINGS] + [
     dict(ndf="ggx", alpha_y=0.05), dict(ndf="beckmann", alpha_y=0.6, shadowing="smith"),
-    dict(ndf="ggx", diffuse="oren-nayar", kd=0.7, sigma=0.4), dict(ndf="beckmann", kd=0.5, fresnel="schlick"),
-    dict(ndf="ggx", diffuse="burley", kd=0.6, sigma=0.8)]
+    dict(ndf="ggx", diffuse="oren-nayar", kd=0.7, diffuse_sigma=0.4), dict(ndf="beckmann", kd=0.5, fresnel="schlick"),
+    dict(ndf="ggx", diffuse="burley", kd=0.6, diffuse_roughness=0.8)]
 
 
 @pytest.mark.parametrize("case", MODEL_CASES, ids=lambda c: "-".join(f"{v}" for v in c.values()))
@@ -285,7 +285,7 @@ def test_hard_cases_finite_nonnegative(ndf):
 def test_below_surface_is_zero():
     up, down = dirs(30.0), -dirs(40.0, 20.0)
     for ndf in PARAM_NDFS:
-        kw = dict(alpha=0.3, ndf=ndf, eta=1.5, kd=0.9, diffuse="oren-nayar", sigma=0.3)
+        kw = dict(alpha=0.3, ndf=ndf, eta=1.5, kd=0.9, diffuse="oren-nayar", diffuse_sigma=0.3)
         assert brdf.brdf(up, down, **kw) == 0 and brdf.brdf(down, up, **kw) == 0 and brdf.brdf(down, down, **kw) == 0
         assert brdf.Lambda(down, 0.3, ndf=ndf) == np.inf
         assert brdf.G1(down, np.array([0, 0, 1.0]), 0.3, ndf=ndf) == 0
@@ -350,8 +350,8 @@ def _kernel_close(fc, fn, precision):
 #: NDFs with an OpenCL kernel (EPD and SGD are NumPy only; the kernel route refuses them, tested below)
 KERNEL_NDFS = [n for n, v in brdf.NDFS.items() if v.cl_id is not None]
 KERNEL_CASES = [dict(ndf=n, shadowing=s) for n in KERNEL_NDFS for s in brdf.SHADOWINGS] + [
-    dict(fresnel="schlick"), dict(fresnel="one"), dict(diffuse="oren-nayar", sigma=0.4),
-    dict(diffuse="burley", sigma=0.7), dict(diffuse="burley", sigma=0.0, tradeoff=False),
+    dict(fresnel="schlick"), dict(fresnel="one"), dict(diffuse="oren-nayar", diffuse_sigma=0.4),
+    dict(diffuse="burley", diffuse_roughness=0.7), dict(diffuse="burley", diffuse_roughness=0.0, tradeoff=False),
     dict(diffuse="none"), dict(tradeoff=False), dict(ndf="beckmann", alpha_y=0.1),
     dict(ndf="abc", ndf_shape=0.7)]
 

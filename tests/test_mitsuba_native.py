@@ -63,10 +63,13 @@ def _model(case):
         base = brdf.TabulatedTwoScaleBRDF(material="gold", micro=brdf.Micro(alpha=0.1, alpha_y=0.3, ndf="ggx"),
                                           nano=make_nano("abc:sigma=15nm,B=2um,C=2.6", NODES),
                                           multiple_scattering=True, **common)
-    else:
+    else:   # dielectric; burley and oren-nayar: its diffuse substrate with each model's own roughness
+        rough = {"burley": dict(diffuse="burley", diffuse_roughness=0.8),
+                 "oren-nayar": dict(diffuse="oren-nayar", diffuse_sigma=0.5)}.get(case, {})
         base = brdf.TabulatedTwoScaleBRDF(material="1.5+0j", micro=brdf.Micro(alpha=0.15, ndf="beckmann",
                                                                              shadowing="smith"),
-                                          kd=0.5, nano=make_nano("abc:sigma=20nm,B=2um,C=2.6", NODES), **common)
+                                          kd=0.5, nano=make_nano("abc:sigma=20nm,B=2um,C=2.6", NODES), **rough,
+                                          **common)
     return brdf.SpectralNodes(base, NODES)
 
 
@@ -131,7 +134,8 @@ def _assert_close(got, want, what):
 @pytest.mark.parametrize("variant,case", [("llvm_ad_rgb", "metal"), ("llvm_ad_rgb", "anisotropic"),
                                           ("llvm_ad_rgb", "dielectric"), ("scalar_rgb", "metal"),
                                           ("scalar_rgb", "dielectric"), ("llvm_ad_spectral", "anisotropic"),
-                                          ("scalar_spectral", "dielectric")])
+                                          ("scalar_spectral", "dielectric"), ("scalar_rgb", "burley"),
+                                          ("scalar_rgb", "oren-nayar")])
 def test_eval_and_pdf_equal_the_numpy_model(variant, case):
     mi, name = _plugin(variant, case)
     model = _model(case)

@@ -59,7 +59,7 @@ def test_two_scale_functions_take_the_option():
     from waveoptics.brdf import TabulatedTwoScaleBRDF, TwoScaleBRDF
     from waveoptics.request import make_nano
 
-    nano = make_nano("gaussian:sigma=5nm,T=1um", [550.0])
+    nano = make_nano("gaussian:sigma=5nm,corr_length=1um", [550.0])
     wi, wo = _dir(30), _dir(50) * np.array([-1.0, 1.0, 1.0])
     for cls, kw in ((TwoScaleBRDF, {}), (TabulatedTwoScaleBRDF, dict(wavelengths_nm=(550.0,), resolution=64))):
         on = cls("Au", Micro(alpha=0.5, ndf="ggx"), nano=nano, multiple_scattering=True, **kw)

@@ -32,7 +32,7 @@ def _expected(medium, ks, kl, theta):
 
 
 def _scene(material, sigma_nm, theta):
-    mat = {"name": "m", "roughness": 0.05, "ndf": "ggx", "nano": {"statistics": f"gaussian:sigma={sigma_nm}nm,T=2um"}}
+    mat = {"name": "m", "roughness": 0.05, "ndf": "ggx", "nano": {"statistics": f"gaussian:sigma={sigma_nm}nm,corr_length=2um"}}
     mat.update(material)
     return parse({"name": "t", "materials": [mat],
                   "lights": [{"name": "l", "spd": "D65", "directions_deg": [[theta, 0]]}],

@@ -26,7 +26,7 @@ def plastic(**over):
     """The smooth-plastic example as a dict (small grid), with overrides."""
     d = {"name": "plastic", "accuracy": {"delta_e": 1.0},
          "materials": [{"name": "plastic", "ior": 1.5, "roughness": 0.05, "ndf": "ggx", "diffuse_albedo": 0.5,
-                        "nano": {"statistics": "gaussian:sigma=0.5nm,T=1um"}}],
+                        "nano": {"statistics": "gaussian:sigma=0.5nm,corr_length=1um"}}],
          "lights": [{"name": "sun", "spd": "D65", "directions_deg": [[30, 0]]}],
          "view": {"directions_deg": [[0, 0], [30, 180], [60, 180]]},
          "output": {"rgb_images": False, "tables": True, "resolution": RES}}
@@ -65,7 +65,7 @@ def test_diffraction_model_is_the_scenes_or_kirchhoff_with_its_reason(tmp_path):
     """A scene may name the diffraction model of a material; otherwise the planner picks Kirchhoff and says why,
     and the run uses the model the plan names."""
     mat = {"name": "plastic", "ior": 1.5, "roughness": 0.05, "ndf": "ggx", "diffuse_albedo": 0.5,
-           "nano": {"statistics": "gaussian:sigma=20nm,T=1um"}}
+           "nano": {"statistics": "gaussian:sigma=20nm,corr_length=1um"}}
     auto = planning.plan_scene(plastic(materials=[mat]))
     e = auto.entries[0]
     assert e.diffraction == "kirchhoff" and e.effects["diffraction"]

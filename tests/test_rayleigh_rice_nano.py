@@ -90,7 +90,7 @@ def test_first_order_agreement_with_kirchhoff_near_specular():
 
 
 def test_every_model_keeps_the_coherent_lobe_as_sigma_vanishes():
-    nano = make_nano("gaussian:sigma=0.01nm,T=1um", [LAM])
+    nano = make_nano("gaussian:sigma=0.01nm,corr_length=1um", [LAM])
     for model in ("kirchhoff", "ghs", "rayleigh-rice"):
         for c in (1.0, 0.5, 0.1):
             assert nano.coherent_fraction(c, LAM, model, AL) > 1 - 1e-5, (model, c)
@@ -101,7 +101,7 @@ def test_height_field_route_uses_the_periodogram():
     the two halves still add up to F."""
     hf = surfaces.generate("gaussian", sigma="3nm", corr_length="1um", size="32um", samples=256, seed=1)
     nano = twoscale.Nano(surface=hf)
-    stats = make_nano("gaussian:sigma=3nm,T=1um", [LAM])
+    stats = make_nano("gaussian:sigma=3nm,corr_length=1um", [LAM])
     grid = DirectionGrid.hemisphere(128)
     for theta in (20.0, 70.0):
         L = twoscale.evaluate(_dir(theta), [LAM], AL, twoscale.Micro(alpha=0.0, ndf="ggx"), nano, grid,

@@ -124,7 +124,7 @@ BAD = [
     ("seed", 1.5, "seed 1.5 is not allowed"),
     ("incident_deg", (90.0, 0.0), "incident_deg θ=90° is not allowed"),
     ("incident_deg", (10.0, 0.0, 0.0), "incident_deg .* is not"),
-    ("nano", "gaussian:sigma=5nm", "nano 'gaussian:sigma=5nm' lacks T"),
+    ("nano", "gaussian:sigma=5nm", "nano 'gaussian:sigma=5nm' lacks corr_length"),
     ("nano", "fractal:sigma=5nm", "unknown nano model 'fractal'"),
     ("multiple_scattering", "yes", "multiple_scattering 'yes' is not allowed"),
     ("ndf_shape", 50.0, r"ndf_shape is not allowed for epd; its p must be in \(0, 20\]"),
@@ -189,13 +189,13 @@ def test_a_scene_file_is_a_request(tmp_path):
         ndf = "ggx"
         diffuse_albedo = 0.1
         [materials.nano]
-        statistics = "gaussian:sigma=4nm,T=1.5um"
+        statistics = "gaussian:sigma=4nm,corr_length=1.5um"
         """)
     req, hf = case_from_scene(scene.load(path))
     assert hf is None
     assert req == SimulationRequest(material="Au", micro_alpha=0.2, ndf="ggx", kd=0.1, illuminant="A",
                                     incident_deg=(20.0, 45.0), delta_e=2.5, seed=3,
-                                    nano="gaussian:sigma=4nm,T=1.5um")
+                                    nano="gaussian:sigma=4nm,corr_length=1.5um")
 
 
 def test_a_scene_material_without_keys_takes_the_request_defaults(tmp_path):

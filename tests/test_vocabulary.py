@@ -82,12 +82,40 @@ def test_surface_generate_old_model_flag(tmp_path):
     assert rc == 2 and "--generator" in err
 
 
-def test_cost_generator_takes_the_nano_spelling_of_the_correlation_length():
-    from waveoptics.study.accuracy_cost import parse_model
-    from waveoptics.request import parse_nano
+def test_the_correlation_length_is_corr_length_and_old_T_warns_once():
+    """One name (corr_length) in nano text, cost's generator text and the sweep's nano.KEY; the old ``T=`` still
+    parses to the same value, with one RenamedWarning naming the new spelling."""
+    import warnings
 
-    assert parse_model("gaussian:sigma=5nm,T=1um") == parse_model("gaussian:sigma=5nm,corr_length=1um")
-    assert parse_nano("gaussian:sigma=5nm,corr_length=1um") == parse_nano("gaussian:sigma=5nm,T=1um")
+    from waveoptics.distributed.sweep import parse_vary
+    from waveoptics.errors import RenamedWarning
+    from waveoptics.request import NANO_ALIASES, NANO_RENAMED, parse_nano
+    from waveoptics.study.accuracy_cost import parse_model
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")   # the one name parses without a warning
+        new = parse_nano("gaussian:sigma=5nm,corr_length=1um")
+        assert parse_nano("exponential:sigma=5nm,corr=1um") == ("exponential", new[1])
+        new_model = parse_model("gaussian:sigma=5nm,corr_length=1um")
+    assert new == ("gaussian", {"sigma": 5e-9, "corr_length": 1e-6})
+    for parse, text, expected in ((parse_nano, "gaussian:sigma=5nm,T=1um", new),
+                                  (parse_model, "gaussian:sigma=5nm,T=1um", new_model),
+                                  (parse_vary, "nano.T=1um,2um", ("nano.T", [1e-6, 2e-6]))):
+        with pytest.warns(RenamedWarning) as caught:
+            assert parse(text) == expected
+        assert len(caught) == 1 and "T= is deprecated" in str(caught[0].message) and "corr_length=" in str(
+            caught[0].message)
+    # the alias tables point one way: every target is a canonical name, never itself an alias
+    for table in (NANO_ALIASES, NANO_RENAMED):
+        assert not set(table.values()) & (set(NANO_ALIASES) | set(NANO_RENAMED))
+
+
+def test_old_T_in_nano_text_is_one_cli_warning_line(tmp_path):
+    rc, out, err, _ = run_cli(["brdf", "--model", "twoscale", "--material", "Au", "--alpha", "0.1", "--nano",
+                               "gaussian:sigma=5nm,T=1um", "--incident", "30", "--outgoing", "30,180",
+                               "--wavelengths", "550", "--resolution", "16"])
+    lines = [ln for ln in err.splitlines() if "T= is deprecated" in ln]
+    assert rc == 0 and len(lines) == 1 and "corr_length=" in lines[0], err
 
 
 

@@ -8,11 +8,16 @@ from __future__ import annotations
 
 import difflib
 
-__all__ = ['WaveopticsError', 'FieldError', 'NoOpenCLError', 'OutputExistsError', 'did_you_mean', 'unknown']
+__all__ = ['WaveopticsError', 'FieldError', 'RenamedWarning', 'NoOpenCLError', 'OutputExistsError', 'did_you_mean', 'unknown']
 
 
 class WaveopticsError(ValueError):
     """A bad value given by the user: the message names the value and what is allowed."""
+
+
+class RenamedWarning(UserWarning):
+    """An old spelling in a user's input that still works for one release (e.g. the nano parameter ``T=``, now
+    ``corr_length=``): shown to users (the CLI prints it as one line), unlike :class:`DeprecationWarning`."""
 
 
 class FieldError(WaveopticsError):

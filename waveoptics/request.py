@@ -8,18 +8,20 @@ naming the field (``micro_alpha``, ``nano``, ``incident_deg`` ...); only the CLI
 
 Nano roughness is written ``MODEL:key=value,...`` with lengths in units (docs/physics.md §4 for the PSDs):
 
-    abc:sigma=10nm,B=2um,C=2.6        gaussian:sigma=5nm,T=1um        exponential:sigma=5nm,T=1um
+    abc:sigma=10nm,B=2um,C=2.6
+    gaussian:sigma=5nm,corr_length=1um        exponential:sigma=5nm,corr_length=1um
     sinusoid:amplitude=40nm,period=2um[,orientation=DEG]
     scratches:count=20,width=200nm,depth=30nm[,orientation=DEG,spread=DEG]
 
-Statistics models (gaussian, exponential, abc) run on the PSD series when the solver allows it; the others (and
+``corr_length`` is the correlation length (the PSD formulas' T); the old spelling ``T=`` is accepted with a
+one-line deprecation warning until waveoptics 0.3. Statistics models (gaussian, exponential, abc) run on the PSD series when the solver allows it; the others (and
 statistics with ``solver='fft'|'direct'``) are generated as height fields sized by :func:`nano_surface_size`.
 
 Examples
 --------
 >>> from waveoptics.request import SimulationRequest, parse_nano
->>> parse_nano("gaussian:sigma=5nm,T=1um")
-('gaussian', {'sigma': 5e-09, 'T': 1e-06})
+>>> parse_nano("gaussian:sigma=5nm,corr_length=1um")
+('gaussian', {'sigma': 5e-09, 'corr_length': 1e-06})
 >>> req = SimulationRequest(material="Au", micro_alpha=0.1, wavelengths_nm=(450, 550, 650))
 >>> req.wavelengths().tolist()
 [450.0, 550.0, 650.0]
@@ -33,35 +35,39 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 # the numerical sub-packages (colour, surfaces, brdf, materials) are imported where they are used, so that the
 # command line can read the fields' defaults (:func:`request_default`) without loading them
-from .errors import FieldError, WaveopticsError, unknown
+from .errors import FieldError, RenamedWarning, WaveopticsError, unknown
 from .units import check_optical_range, check_theta, check_wavelengths, parse_length, split_spec
 from .vocabulary import (DEFAULT_MATERIAL, DEFAULT_NANO, DEFAULT_NDF, DIFFRACTION, NANO_SOLVERS,
                          PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS, SHADOWING_NAMES)
 
-__all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "RESOLUTION_RANGE",
+__all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "NANO_ALIASES", "NANO_RENAMED", "nano_key", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "request_default", "parse_nano", "nano_surface_size",
            "make_nano", "crop"]
 
 #: the documented way to say "no nano roughness" (σ = 0)
-NO_NANO = "gaussian:sigma=0nm,T=1um"
+NO_NANO = "gaussian:sigma=0nm,corr_length=1um"
 
 #: parameter names accepted by ``MODEL:...`` nano text (lengths take units)
 NANO_PARAMS = {
-    "gaussian": {"sigma": "length", "T": "length"},
-    "exponential": {"sigma": "length", "T": "length"},
+    "gaussian": {"sigma": "length", "corr_length": "length"},
+    "exponential": {"sigma": "length", "corr_length": "length"},
     "abc": {"sigma": "length", "B": "length", "C": "number"},
     "sinusoid": {"amplitude": "length", "period": "length", "orientation": "number"},
     "scratches": {"count": "number", "width": "length", "depth": "length", "orientation": "number",
                   "spread": "number"},
 }
-NANO_ALIASES = {"corr": "T", "corr_length": "T", "corr-length": "T", "a": "amplitude", "amp": "amplitude",
-                 "b": "B", "c": "C", "rms": "sigma"}
+#: other spellings of a nano parameter → its one name (old → new)
+NANO_ALIASES = {"corr": "corr_length", "corr-length": "corr_length", "a": "amplitude", "amp": "amplitude",
+                "b": "B", "c": "C", "rms": "sigma"}
+#: retired spellings still accepted for one release with a one-line warning (old → new)
+NANO_RENAMED = {"T": "corr_length"}
 _NANO_OPTIONAL = ("orientation", "spread")
 _NANO_ZERO_OK = ("sigma", "depth", "amplitude")
 
@@ -91,7 +97,7 @@ def parse_nano(text: str) -> tuple[str, dict]:
         raise unknown("nano model", model, NANO_PARAMS, field="nano")
     params = {}
     for key, val, item in items:
-        key = NANO_ALIASES.get(key, key)
+        key = nano_key(key)
         if not key or key not in NANO_PARAMS[model]:
             raise FieldError(f"{{nano}} {text!r}: parameter {item!r} is not allowed for {model}; "
                              f"use {', '.join(k + '=...' for k in NANO_PARAMS[model])}", "nano")
@@ -110,6 +116,17 @@ def parse_nano(text: str) -> tuple[str, dict]:
     if missing:
         raise FieldError(f"{{nano}} {text!r} lacks {', '.join(missing)} (units: 5nm, 1.2um)", "nano")
     return model, params
+
+
+def nano_key(key: str) -> str:
+    """The one name of the nano parameter spelled *key* (:data:`NANO_ALIASES`); a retired spelling
+    (:data:`NANO_RENAMED`: ``T`` → ``corr_length``) is accepted with a one-line :class:`RenamedWarning`."""
+    if key in NANO_RENAMED:
+        new = NANO_RENAMED[key]
+        warnings.warn(f"nano parameter {key}= is deprecated and will be removed in waveoptics 0.3; use {new}=",
+                      RenamedWarning, stacklevel=3)
+        return new
+    return NANO_ALIASES.get(key, key)
 
 
 def nano_surface_size(wavelengths_nm, length_scale_m, *, max_samples=MAX_NANO_SAMPLES) -> tuple[float, int]:
@@ -144,8 +161,8 @@ def crop(hf, n: int):
 
 def _generator_args(model: str, p: dict, seed: int) -> dict:
     """Keyword arguments of :func:`waveoptics.surfaces.generate` for parsed nano text."""
-    args = {"gaussian": dict(sigma=p.get("sigma"), corr_length=p.get("T")),
-            "exponential": dict(sigma=p.get("sigma"), corr_length=p.get("T")),
+    args = {"gaussian": dict(sigma=p.get("sigma"), corr_length=p.get("corr_length")),
+            "exponential": dict(sigma=p.get("sigma"), corr_length=p.get("corr_length")),
             "abc": dict(sigma=p.get("sigma"), B=p.get("B"), C=p.get("C")),
             "sinusoid": dict(amplitude=p.get("amplitude"), period=p.get("period"),
                              orientation_deg=p.get("orientation", 0.0)),
@@ -183,11 +200,11 @@ def make_nano(spec, wavelengths_nm, *, solver="auto", seed=0, surface=None):
     if p.get("sigma", p.get("amplitude", p.get("depth", 1.0))) == 0:
         return None
     if model in surfaces.PSD_MODELS and solver in ("auto", "psd"):
-        return twoscale.Nano(model=surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"),
+        return twoscale.Nano(model=surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"),
                                                      C=p.get("C")))
     if solver == "psd":
         raise FieldError(f"{{solver}} 'psd' has no formula for {model!r}; use fft or direct", "solver")
-    scale = p.get("T") or p.get("period") or (p.get("B", 0) / (2 * np.pi)) or p.get("width") or 1e-6
+    scale = p.get("corr_length") or p.get("period") or (p.get("B", 0) / (2 * np.pi)) or p.get("width") or 1e-6
     size, n = nano_surface_size(wavelengths_nm, scale)
     return twoscale.Nano(surface=surfaces.generate(model, size=size, samples=n, **_generator_args(model, p, seed)))
 

@@ -18,7 +18,7 @@ from ..errors import WaveopticsError
 from .fresnel_terms import F_mean
 from .directions import as_dirs
 
-__all__ = ['lambert', 'oren_nayar', 'burley', 'diffuse_tradeoff', 'DIFFUSES']
+__all__ = ['lambert', 'oren_nayar', 'burley', 'diffuse_tradeoff', 'diffuse_parameter', 'DIFFUSES']
 
 # ----------------------------------------------------------------------------------------------------------
 # diffuse terms
@@ -40,6 +40,23 @@ def lambert(wi, wo, kd=1.0):
     wo = as_dirs(wo, "wo")
     up = (wi[..., 2] > 0) & (wo[..., 2] > 0)
     return np.where(up, np.asarray(kd, dtype=float) / np.pi, 0.0)
+
+
+def diffuse_parameter(diffuse: str, diffuse_sigma: float, diffuse_roughness: float) -> float:
+    """The roughness the diffuse model *diffuse* takes (:data:`DIFFUSES`): Burley's r (*diffuse_roughness*, in
+    [0, 1]) for ``"burley"``, else Oren-Nayar's σ (*diffuse_sigma*, radians ≥ 0; Lambert ignores it).
+
+    References
+    ----------
+    .. [1] M. Oren, S. K. Nayar, SIGGRAPH 1994 (σ). B. Burley, SIGGRAPH 2012 course notes (r).
+    """
+    sigma, r = float(diffuse_sigma), float(diffuse_roughness)
+    if not np.isfinite(sigma) or sigma < 0:
+        raise WaveopticsError(f"diffuse_sigma={sigma!r} is not allowed; the Oren-Nayar roughness σ must be >= 0 "
+                              "radians")
+    if not np.isfinite(r) or not 0 <= r <= 1:
+        raise WaveopticsError(f"diffuse_roughness={r!r} is not allowed; Burley's roughness r must be in [0, 1]")
+    return r if diffuse == "burley" else sigma
 
 
 def oren_nayar(wi, wo, kd=1.0, sigma=0.0):

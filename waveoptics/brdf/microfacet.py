@@ -53,7 +53,7 @@ from ..errors import WaveopticsError, unknown
 from ..vocabulary import DEFAULT_NDF
 from ..materials.database import get_material
 from ..units import check_wavelengths
-from .diffuse import DIFFUSES, diffuse_tradeoff
+from .diffuse import DIFFUSES, diffuse_parameter, diffuse_tradeoff
 from .fresnel_terms import FRESNELS, MaterialFresnel, fresnel_fn
 from .directions import as_dirs, dot_last, half_vector
 from .ndf import COS_MIN, check_alpha, ndf_by_name
@@ -128,7 +128,7 @@ def specular_term(wi, wo, spec, ax, ay, c, gfn, F_fn):
 
 
 def brdf(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-correlated", fresnel="exact", eta=None,
-         F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True):
+         F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, diffuse_sigma=0.0, diffuse_roughness=0.0, tradeoff=True):
     """Microfacet BRDF f = f_s + w f_d: specular lobe plus an optional diffuse term, in 1/sr (not × cos).
 
     Parameters
@@ -150,8 +150,10 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-corre
         ``"none"``, ``"lambert"``, ``"oren-nayar"`` or ``"burley"`` (Burley 2012).
     kd : array_like
         Diffuse albedo in [0, 1] (0: no diffuse term; metals have none).
-    sigma : float
-        Diffuse roughness, separate from the specular α: Oren-Nayar σ in radians, or Burley's r in [0, 1].
+    diffuse_sigma : float, rad
+        Oren-Nayar's roughness σ (the slope angle of its V-grooves, ≥ 0; ``diffuse="oren-nayar"`` only).
+    diffuse_roughness : float
+        Burley's roughness r in [0, 1] (``diffuse="burley"`` only). Both are separate from the specular α.
     tradeoff : bool
         Weight the diffuse term by :func:`diffuse_tradeoff` (energy conservation between the two terms).
 
@@ -165,6 +167,7 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-corre
     .. [1] B. Walter et al., EGSR 2007 (specular term).
     .. [2] P. Shirley et al., Pacific Graphics 1997 (diffuse-specular coupling).
     .. [3] M. Oren, S. K. Nayar, SIGGRAPH 1994 (rough diffuse).
+    .. [4] B. Burley, "Physically-Based Shading at Disney", SIGGRAPH 2012 course notes (r).
     """
     spec = ndf_by_name(ndf)
     ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
@@ -175,12 +178,7 @@ def brdf(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-corre
     kd = np.asarray(kd, dtype=float)
     if np.any(~np.isfinite(kd) | (kd < 0) | (kd > 1)):
         raise WaveopticsError(f"kd={np.asarray(kd).tolist()!r} is not allowed; the diffuse albedo must be in [0, 1]")
-    sigma = float(sigma)
-    if not np.isfinite(sigma) or sigma < 0:
-        raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")
-    if diffuse == "burley" and sigma > 1:
-        raise WaveopticsError(f"sigma={sigma!r} is not allowed for the burley diffuse term; its roughness r must be "
-                              "in [0, 1]")
+    sigma = diffuse_parameter(diffuse, diffuse_sigma, diffuse_roughness)
     wi = as_dirs(wi, "wi")
     wo = as_dirs(wo, "wo")
     wi, wo = np.broadcast_arrays(wi, wo)

@@ -119,9 +119,10 @@ def _microfacet_params(wavelengths_nm, *, alpha, roughness, alpha_y, ndf, ndf_sh
     if diffuse == "burley" and not 0 <= diffuse_roughness <= 1:
         raise FieldError(f"{{diffuse_roughness}} {diffuse_roughness!r} is not allowed; it must be in [0, 1]",
                          "diffuse_roughness")
-    sigma = diffuse_roughness if diffuse == "burley" else float(np.radians(diffuse_sigma_deg))
+    burley = diffuse == "burley"   # each model gets its own roughness only (the other stays 0)
     return dict(alpha=alpha, alpha_y=alpha_y, ndf=ndf, shadowing=shadowing, ndf_shape=ndf_shape,
-                diffuse=diffuse, kd=kd, sigma=sigma, tradeoff=tradeoff, **fi)
+                diffuse=diffuse, kd=kd, diffuse_sigma=0.0 if burley else float(np.radians(diffuse_sigma_deg)),
+                diffuse_roughness=diffuse_roughness if burley else 0.0, tradeoff=tradeoff, **fi)
 
 
 def _ms_brdf(kw, material, ior, fresnel, backend):
@@ -140,7 +141,8 @@ def _ms_brdf(kw, material, ior, fresnel, backend):
                   ndf_shape=kw["ndf_shape"])
     # with fresnel one and no material the index is never used (F = 1); a dielectric keeps the diffuse term
     return MicrofacetBRDF(spec if spec is not None else "1.5", micro, kd=kw["kd"], diffuse=kw["diffuse"],
-                          fresnel=fresnel, diffuse_sigma=kw["sigma"], multiple_scattering=True)
+                          fresnel=fresnel, diffuse_sigma=kw["diffuse_sigma"],
+                          diffuse_roughness=kw["diffuse_roughness"], multiple_scattering=True)
 
 
 def microfacet_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF, ndf_shape=None,

@@ -10,7 +10,7 @@ from ..errors import WaveopticsError, unknown
 from ..vocabulary import DEFAULT_NDF
 from ..materials import fresnel as _fresnel
 from ..runtime import build_options, build_program, get_runtime
-from .diffuse import DIFFUSES
+from .diffuse import DIFFUSES, diffuse_parameter
 from .fresnel_terms import F_mean
 from .microfacet import FRESNELS, fresnel_fn
 from .directions import as_dirs
@@ -104,7 +104,8 @@ def Lambda_cl(w, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, ndf_shape=None, runtim
 
 
 def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-correlated", fresnel="exact", eta=None,
-            F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, sigma=0.0, tradeoff=True, runtime=None,
+            F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, diffuse_sigma=0.0, diffuse_roughness=0.0,
+            tradeoff=True, runtime=None,
             precision="float32"):
     """OpenCL twin of :func:`brdf` for N direction pairs at M wavelengths (kernel ``brdf_eval``).
 
@@ -136,9 +137,7 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-co
     kd_a = np.atleast_1d(np.asarray(kd, dtype=float))
     if np.any(~np.isfinite(kd_a) | (kd_a < 0) | (kd_a > 1)):
         raise WaveopticsError(f"kd={np.asarray(kd).tolist()!r} is not allowed; the diffuse albedo must be in [0, 1]")
-    sigma = float(sigma)
-    if not np.isfinite(sigma) or sigma < 0:
-        raise WaveopticsError(f"sigma={sigma!r} is not allowed; the Oren-Nayar roughness must be >= 0 radians")
+    sigma = diffuse_parameter(diffuse, diffuse_sigma, diffuse_roughness)   # the kernel's one diffuse roughness
     wi = as_dirs(wi, "wi").reshape(-1, 3)
     wo = as_dirs(wo, "wo").reshape(-1, 3)
     wi, wo = np.broadcast_arrays(wi, wo)

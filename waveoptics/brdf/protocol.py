@@ -35,7 +35,7 @@ from ..errors import FieldError, unknown
 from ..materials import Material, get_material
 from ..units import check_wavelengths
 from ..vocabulary import DEFAULT_MATERIAL
-from .diffuse import DIFFUSES, diffuse_tradeoff
+from .diffuse import DIFFUSES, diffuse_parameter, diffuse_tradeoff
 from .fresnel_terms import FRESNELS
 from .microfacet import specular_term
 from .directions import as_dirs
@@ -198,11 +198,14 @@ class MicrofacetBRDF(BRDF):
         ``exact`` (the material's F) or ``one`` (F = 1, white furnace).
     ndf_shape : float
         Tail exponent of the ABC NDF.
-    diffuse_sigma : float
-        Diffuse roughness, separate from the specular α: Oren-Nayar σ in radians, Burley's r in [0, 1].
+    diffuse_sigma : float, rad
+        Oren-Nayar's roughness σ in [0, π/2] (``diffuse="oren-nayar"``; separate from the specular α).
     multiple_scattering : bool
         Add Kulla & Conty's (2017) compensation lobe for light that bounces between facets
         (:mod:`waveoptics.brdf.multiscatter`): the white furnace then holds at every incidence.
+    diffuse_roughness : float
+        Burley's roughness r in [0, 1] (``diffuse="burley"``; default 0, as before the split from
+        *diffuse_sigma*).
 
     Sampling: visible normals for GGX, D cos θ_m for the other NDFs (:mod:`waveoptics.brdf.sampling`), cosine
     sampling for the diffuse term, mixed in proportion F(θ_i) : kd (1 − F(θ_i)).
@@ -212,6 +215,7 @@ class MicrofacetBRDF(BRDF):
     .. [1] B. Walter et al., EGSR 2007, eq. (20) (specular term) and §5.3 (sampling).
     .. [2] E. Heitz, JCGT 7(4), 2018 (visible normals).
     .. [3] P. Shirley et al., Pacific Graphics 1997 (the diffuse-specular coupling).
+    .. [4] M. Oren, S. K. Nayar, SIGGRAPH 1994 (σ); B. Burley, SIGGRAPH 2012 course notes (r).
     """
 
     material: Material | str = DEFAULT_MATERIAL
@@ -222,10 +226,17 @@ class MicrofacetBRDF(BRDF):
     ndf_shape: float | None = None
     diffuse_sigma: float = 0.0
     multiple_scattering: bool = False
+    diffuse_roughness: float = 0.0
 
     def __post_init__(self):
         if not (np.isfinite(self.diffuse_sigma) and 0 <= self.diffuse_sigma <= np.pi / 2):
             raise FieldError(f"diffuse_sigma={self.diffuse_sigma!r} rad is not allowed; it must be in [0, π/2]",
+                             "diffuse_sigma")
+        if not (np.isfinite(self.diffuse_roughness) and 0 <= self.diffuse_roughness <= 1):
+            raise FieldError(f"diffuse_roughness={self.diffuse_roughness!r} is not allowed; Burley's r must be in "
+                             "[0, 1]", "diffuse_roughness")
+        if self.diffuse == "burley" and self.diffuse_sigma != 0:
+            raise FieldError("diffuse_sigma is Oren-Nayar's σ; Burley's roughness is diffuse_roughness",
                              "diffuse_sigma")
         object.__setattr__(self, "material", get_material(self.material))
         if self.diffuse not in DIFFUSES:
@@ -265,7 +276,8 @@ class MicrofacetBRDF(BRDF):
     def _f_diffuse(self, wi, wo, F_fn):
         if not self._has_diffuse():
             return np.zeros(wi.shape[0])
-        return DIFFUSES[self.diffuse][0](wi, wo, self.kd, self.diffuse_sigma) * diffuse_tradeoff(wi, wo, F_fn)
+        rough = diffuse_parameter(self.diffuse, self.diffuse_sigma, self.diffuse_roughness)
+        return DIFFUSES[self.diffuse][0](wi, wo, self.kd, rough) * diffuse_tradeoff(wi, wo, F_fn)
 
     def _p_diffuse(self, wi, lam):
         """Probability of sampling the diffuse lobe: kd (1 − F(θ_i)) / (F(θ_i) + kd (1 − F(θ_i)))."""

@@ -28,7 +28,6 @@ FIELD_DESTS = {
     "phi_deg": ("phi",),
     "angles_deg": ("incident_angles",),
     "vary": ("vary",),
-    "diffuse_sigma_deg": ("sigma",),
 }
 
 

@@ -54,7 +54,7 @@ OPTIONS = {o.flag: o for o in (
     Option("--ndf-shape", "shape parameter of the NDFs that have one: abc's tail exponent C (default 2), epd's and "
                           "sgd's exponent p (default 1)", "S", float, "1"),
     Option("--nano", "nano-roughness MODEL:key=value,... with units, e.g. abc:sigma=10nm,B=2um,C=2.6, "
-                     "gaussian:sigma=5nm,T=1um (T or corr_length), sinusoid:amplitude=40nm,period=2um",
+                     "gaussian:sigma=5nm,corr_length=1um, sinusoid:amplitude=40nm,period=2um",
            "MODEL:PARAMS"),
     Option("--diffraction", "diffraction model of the nano lobe: kirchhoff, ghs, rghs, ohs, rohs or rayleigh-rice "
                             "(first-order perturbation, two-scale lobes only) (docs/physics.md §10)"),

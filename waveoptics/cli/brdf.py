@@ -26,12 +26,12 @@ from ..errors import WaveopticsError
 from ..vocabulary import (BRDF_MODEL_HELP, BRDF_MODEL_PARAMETERS, DIFFRACTION, DIFFUSE_ALIASES, DIFFUSE_NAMES,
                           FRESNEL_NAMES, NDF_NAMES, POLARIZATIONS, SHADOWING_NAMES)
 from ..units import direction_from_angles, parse_direction, parse_wavelengths
-from ._common import add_common, add_surface, emit, load_surface, progress
+from ._common import add_common, add_surface, angle_arg, emit, load_surface, progress
 from ._options import option, renamed
 
 
 #: model parameters whose option has another dest
-DEST = {"diffuse_sigma_deg": "sigma", "tradeoff": "no_tradeoff"}
+DEST = {"tradeoff": "no_tradeoff"}
 #: model parameters that are objects read from files (by the model's *inputs*), with the options they read
 INPUTS = {"slope_table": ("micro_surface", "footprint", "spacing", "units", "channel"),
            "surface": ("surface", "spacing", "units", "channel"),
@@ -147,10 +147,11 @@ def _microfacet_arguments(g) -> None:
     option(g, "--diffuse", choices=sorted(DIFFUSE_NAMES + tuple(DIFFUSE_ALIASES)), default=_default("diffuse"),
            note="disney is burley")
     option(g, "--kd", default=_default("kd"), note="applied as given, to metals too")
-    g.add_argument("--diffuse-sigma", dest="sigma", type=float, default=_default("diffuse_sigma_deg"),
-                   metavar="DEG", help="Oren-Nayar roughness σ in degrees (--diffuse oren-nayar; separate from the "
-                                       f"specular α; default {_default('diffuse_sigma_deg'):g})")
-    renamed(g, "brdf", "--sigma", dest="sigma", type=float)
+    g.add_argument("--diffuse-sigma", dest="diffuse_sigma_deg", type=angle_arg, default=_default("diffuse_sigma_deg"),
+                   metavar="ANGLE", help="Oren-Nayar roughness σ, an angle: 20, 20deg or 0.35rad (--diffuse "
+                                         "oren-nayar; separate from the specular α; default "
+                                         f"{_default('diffuse_sigma_deg'):g} deg)")
+    renamed(g, "brdf", "--sigma", dest="diffuse_sigma_deg")
     g.add_argument("--diffuse-roughness", type=float, default=_default("diffuse_roughness"), metavar="R",
                    help=f"Burley diffuse roughness r in [0, 1] (--diffuse burley; default "
                         f"{_default('diffuse_roughness'):g})")
@@ -242,7 +243,7 @@ def _microfacet_describe(args) -> dict:
     elif spec.shape is not None and spec.name != "tabulated":
         d["ndf_shape"] = spec.shape_default if args.ndf_shape is None else args.ndf_shape
     if args.diffuse == "oren-nayar":
-        d["sigma_deg"] = args.sigma
+        d["diffuse_sigma_deg"] = args.diffuse_sigma_deg
     d["tradeoff"] = not args.no_tradeoff
     return d
 
@@ -303,7 +304,7 @@ def _rayleigh_rice_inputs(args, wavelength_nm) -> dict:
         if model not in surfaces.PSD_MODELS:
             raise WaveopticsError(f"--nano {args.nano!r}: rayleigh-rice needs height statistics "
                                   f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
-        psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"), C=p.get("C"))
+        psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"), C=p.get("C"))
     _index(args, wavelength_nm)
     return {"psd": psd}
 

@@ -19,7 +19,7 @@ def add_scene_options(p) -> None:
     src = p.add_mutually_exclusive_group()
     add_surface(p, group=src, note="the nano height field (fft or direct solver)")
     option(p, "--nano", group=src, note=f"default {d('nano')}; sigma=0 disables it; also "
-                                         "exponential:sigma=5nm,T=1um, scratches:count=20,width=200nm,depth=30nm")
+                                         "exponential:sigma=5nm,corr_length=1um, scratches:count=20,width=200nm,depth=30nm")
     # micro α, NDF and shape stay None when not given (--micro-surface refuses them), the request fills them in
     option(p, "--micro-alpha", note=f"default {d('micro_alpha'):g}")
     option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note=f"default {d('ndf')}")

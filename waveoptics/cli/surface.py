@@ -253,13 +253,13 @@ def run_stats(args):
              f"rms height      {nm(st['rms_height_m'])}",
              f"rms slope       {num(st['rms_slope'])} (x {num(st['rms_slope_x'])}, y {num(st['rms_slope_y'])})",
              f"corr. length    {nm(st['corr_length_m'])} (1/e of the autocovariance)",
-             f"Beckmann alpha  {num(st['beckmann_alpha'])} (2 sigma / T)"]
+             f"Beckmann alpha  {num(st['beckmann_alpha'])} (2 sigma / corr_length)"]
     for f in fits:
         if f["model"] == "abc":
             lines.append(f"fit abc         A {f['A_m4']:.4g} m^4, B {nm(f['B_m'])}, C {f['C']:.4g}, "
                          f"sigma {nm(f['sigma_m'])}")
         else:
-            lines.append(f"fit {f['model']:<12}sigma {nm(f['sigma_m'])}, T {nm(f['corr_length_m'])}")
+            lines.append(f"fit {f['model']:<12}sigma {nm(f['sigma_m'])}, corr_length {nm(f['corr_length_m'])}")
     info = st["surface_info"]
     if "source_format" in info:
         inst = info.get("instrument", {}).get("name") if isinstance(info.get("instrument"), dict) else None

@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import colour, io, simulate, surfaces
 from ..errors import FieldError, WaveopticsError, unknown
-from ..request import NANO_ALIASES, NANO_PARAMS, SimulationRequest, parse_nano
+from ..request import NANO_PARAMS, SimulationRequest, nano_key, parse_nano
 from ..units import LENGTH_UNITS, parse_length, parse_number_list
 from .cases import case_token, surface_digest
 from .cluster import DEFAULT_RETRIES, check_cluster_args, Job, run_timed, warm_workers
@@ -58,7 +58,7 @@ def _set_nano_param(case: SimulationRequest, key: str, value) -> SimulationReque
         raise FieldError(f"{{vary}} {key}: the nano roughness is a height-field file; vary {{nano}} parameters "
                               "only with {nano} MODEL:params", 'vary', 'nano')
     model, p = parse_nano(case.nano)
-    key = NANO_ALIASES.get(key, key)
+    key = nano_key(key)
     if key not in NANO_PARAMS[model]:
         raise FieldError(f"{{vary}} nano.{key}: {model} has no parameter {key!r}; allowed: "
                               f"{', '.join(NANO_PARAMS[model])}", 'vary')
@@ -109,9 +109,9 @@ def parse_vary(text: str, base: SimulationRequest | None = None) -> tuple[str, l
     if not eq or not values.strip():
         raise FieldError(f"{{vary}} {text!r} is not NAME=VALUES (e.g. material=Au,Ag,Cu or sigma_nano=1nm:20nm:5)", 'vary')
     if name.startswith("nano."):
-        key = NANO_ALIASES.get(name[5:], name[5:])
+        key = nano_key(name[5:])
         model = parse_nano(base.nano)[0] if base is not None and base.nano else None
-        kind = NANO_PARAMS.get(model, {}).get(key, "length" if key in ("sigma", "T", "B") else "number")
+        kind = NANO_PARAMS.get(model, {}).get(key, "length" if key in ("sigma", "corr_length", "B") else "number")
         vals = _vary_nano(key)(values, kind)
     elif name in VARY:
         vals = VARY[name][1](values)

@@ -31,7 +31,7 @@ def proxy_model(spec: MaterialSpec, hf) -> surfaces.PSDModel:
     n = spec.nano
     if n.kind == "statistics":
         model, p = parse_nano(n.text)
-        return surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("T"), B=p.get("B"), C=p.get("C"))
+        return surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"), C=p.get("C"))
     p = n.params
     if n.kind == "generator" and p["model"] in surfaces.PSD_MODELS:
         sig = surfaces.rms_height(hf)

@@ -132,7 +132,8 @@ class DrJitTwoScale(DiffractedLobes):
         from ..brdf.fresnel_terms import F_mean
 
         self.diffuse = base.diffuse if base._has_diffuse() else "none"
-        self.kd, self.diffuse_sigma = float(base.kd), float(base.diffuse_sigma)
+        self.kd, self.diffuse_sigma = float(base.kd), float(base.diffuse_sigma)   # Oren-Nayar σ, rad
+        self.diffuse_roughness = float(base.diffuse_roughness)                     # Burley's r
         self.Fbar = np.array([float(F_mean(base._F(float(lam)))) for lam in nodes])
         self.ms = bool(base.multiple_scattering)
         if self.ms:
@@ -354,7 +355,7 @@ class DrJitTwoScale(DiffractedLobes):
             return None
         kd = self.kd
         if self.diffuse == "burley":
-            r = self.diffuse_sigma
+            r = self.diffuse_roughness
             fd90 = 0.5 + 2.0 * r * g.cos_d * g.cos_d
             val = kd / math.pi * (1.0 + (fd90 - 1.0) * (1.0 - g.ci) ** 5) * (1.0 + (fd90 - 1.0) * (1.0 - g.co) ** 5)
             return dr.select(g.up, val, 0.0)

@@ -57,6 +57,7 @@ from ..errors import WaveopticsError, unknown
 from ..io import figures
 from ..io.figures import save_figure
 from ..io.files import atomic_path, prepare_outdir, write_json
+from ..request import NANO_RENAMED, nano_key
 from ..runtime import get_runtime
 from ..surfaces.heightfield import HeightField
 from ..units import split_spec
@@ -141,15 +142,15 @@ def model_config(model: str, size="12.8um", samples=128, *, material=None, incid
 
 
 def parse_model(text: str) -> tuple[str, dict]:
-    """``MODEL:key=value,...`` -> (model, {key: value}); values stay strings where they carry units. ``T`` is
-    accepted for ``corr_length``, as in ``--nano`` text."""
+    """``MODEL:key=value,...`` -> (model, {key: value}); values stay strings where they carry units. The old
+    spelling ``T`` of ``corr_length`` is accepted with a one-line warning, as in nano text."""
     kind, items = split_spec(text)
     params = {}
     for key, val, item in items:
         if not key:
             raise WaveopticsError(f"surface model parameter {item!r} is not allowed; write key=value, e.g. "
                                   "gaussian:sigma=20nm,corr_length=1um")
-        key = _GENERATOR_ALIASES.get(key, key)
+        key = nano_key(key) if key in NANO_RENAMED else _GENERATOR_ALIASES.get(key, key)
         try:
             params[key] = float(val)
         except ValueError:
@@ -157,8 +158,8 @@ def parse_model(text: str) -> tuple[str, dict]:
     return kind, params
 
 
-#: the --nano spelling of generator parameters (one vocabulary: T is the correlation length everywhere)
-_GENERATOR_ALIASES = {"T": "corr_length", "corr": "corr_length", "corr-length": "corr_length"}
+#: other spellings of generator parameters, as in nano text (old → new; ``T`` is retired: request.NANO_RENAMED)
+_GENERATOR_ALIASES = {"corr": "corr_length", "corr-length": "corr_length"}
 
 
 @dataclass(frozen=True)

@@ -112,11 +112,15 @@ def c_abc(r, B, C):
 
 @dataclass(frozen=True)
 class PSDModel:
-    """An isotropic height PSD: ``kind`` in PSD_MODELS, σ (m) and shape parameters (m or unitless)."""
+    """An isotropic height PSD: ``kind`` in PSD_MODELS, σ (m) and shape parameters (m or unitless).
+
+    ``T`` is the formulas' symbol for the correlation length, which nano text, :func:`~waveoptics.surfaces.generate`,
+    the CLI and JSON call ``corr_length``.
+    """
 
     kind: str
     sigma: float
-    T: float | None = None  # correlation length (gaussian, exponential), m
+    T: float | None = None  # T, the correlation length (corr_length) of gaussian and exponential, m
     B: float | None = None  # ABC: m
     C: float | None = None  # ABC: exponent > 2
 
