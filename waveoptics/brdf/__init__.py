@@ -25,7 +25,7 @@ from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES)
 from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
 from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albedo)
 from .opencl import (D_cl, Lambda_cl, brdf_cl)
-from .field_lobe import (band_limited_field, kirchhoff_scattered_lobe, FIELD_THETAS_DEG, FIELD_GRID_OVERSAMPLING, field_scattered_albedo,
+from .field_lobe import (BAND_MARGIN_BINS, band_limited_field, kirchhoff_scattered_lobe, FIELD_THETAS_DEG, FIELD_GRID_OVERSAMPLING, field_scattered_albedo,
     bracketing_nodes)
 from .roughness_scales import (SERIES_MIN_CAPTURED, check_series, Micro, Nano, isotropic)
 from .scale_split import (SPLIT_PERIODS_OF_LAMBDA, split_scales)
