@@ -23,7 +23,7 @@ from .brdf.tabulated import PHI_NODES_ANISOTROPIC, THETA_NODES_DEG
 from .io import figures
 from .io.figures import save_figure
 from .errors import FieldError
-from .materials import get_material
+from .materials import get_material, with_roughness_correlation
 from .request import MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano, parse_nano
 from .scatter.grid import DirectionGrid, integrate
 from .units import direction_from_angles
@@ -209,6 +209,7 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
     check_request_memory(req, sphere=sphere, max_memory=max_memory)
     t0 = time.perf_counter()
     mat = get_material(req.material if material is None else material)
+    mat = with_roughness_correlation(mat, req.roughness_correlation)   # a stack's rough interfaces (rayleigh-rice)
     spd = colour.illuminant(req.illuminant)
     w = req.wavelengths()
     theta, phi = req.incident_deg

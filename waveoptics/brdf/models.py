@@ -287,7 +287,7 @@ def kirchhoff_model(*, wavelengths_nm, surface, material=None, ior=None, fresnel
 
 
 def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polarization="unpolarized",
-                        resolution=None) -> ModelEvaluation:
+                        resolution=None, roughness_correlation="correlated") -> ModelEvaluation:
     """First-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the polarization factor Q.
 
     Parameters
@@ -297,13 +297,25 @@ def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polariz
     psd : PSDModel or PeriodogramPSD
         The surface's power spectral density (heights in m).
     material, ior : str
-        The substrate's complex index: a material with index data, or ``"N+Kj"`` (exactly one).
+        The substrate's complex index: a material with index data, or ``"N+Kj"`` (exactly one); or a thin-film
+        stack ``"SUBSTRATE|FILM:THICKNESS|..."``: Elson's first-order BRDF of the stack with *psd* on every
+        interface (:func:`waveoptics.scatter.rough_stack_brdf`).
     polarization : str
         ``"s"``, ``"p"`` or ``"unpolarized"``.
     resolution : int, optional
         Cells per side of the albedo quadrature grid (default 512).
+    roughness_correlation : str or float
+        Of a stack's interface profiles: ``"correlated"`` (default, a film replicating its substrate),
+        ``"uncorrelated"`` or a coefficient in [0, 1] (:func:`waveoptics.materials.roughness_correlation`);
+        unused for a bare material.
+
+    References
+    ----------
+    .. [1] T. A. Germer, Appl. Opt. 36(33), 8798–8805, 1997 (one interface).
+    .. [2] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (rough stacks).
     """
     from ..materials.database import get_material
+    from ..materials.thinfilm import with_roughness_correlation
     from .. import scatter
 
     spec = _one_index(material, ior)
@@ -313,27 +325,34 @@ def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polariz
     if mat.schlick_only:
         raise FieldError(f"{{material}} {spec!r} gives only F0; rayleigh-rice needs a complex index "
                          "(a preset, shelf/book/page or an index N+Kj)", "material")
-    eps = scatter.permittivity(mat, wavelengths_nm)   # refuses a thin-film stack (no single interface)
+    mat = with_roughness_correlation(mat, roughness_correlation)
+    # a thin-film stack stands in for ε: the Rayleigh-Rice functions take it to Elson's rough-stack BRDF
+    eps = mat if scatter.is_stack(mat) else scatter.permittivity(mat, wavelengths_nm)
     w3 = wavelengths_nm[:, None, None]
 
     def evaluate(wi, wo, progress=None):
-        return scatter.rayleigh_rice_brdf(wi[None, :, None, :], wo[None, None, :, :], w3, psd, eps[:, None, None],
+        return scatter.rayleigh_rice_brdf(wi[None, :, None, :], wo[None, None, :, :], w3, psd, _per_lambda(eps),
                                           polarization)
 
     def components(wi, wo):
         return scatter.rayleigh_rice_components(wi[None, :, None, :], wo[None, None, :, :], w3, psd,
-                                                eps[:, None, None])
+                                                _per_lambda(eps))
 
     def albedo(wi, progress=None):
         grid = scatter.DirectionGrid.hemisphere(resolution or 512)
         wo = grid.directions()
         out = np.empty((len(wavelengths_nm), len(wi)))
         for i, w in enumerate(wi):
-            f = scatter.rayleigh_rice_brdf(w, wo[None], w3, psd, eps[:, None, None], polarization)
+            f = scatter.rayleigh_rice_brdf(w, wo[None], w3, psd, _per_lambda(eps), polarization)
             out[:, i] = scatter.integrate(np.where(grid.inside, f, 0.0), grid)
         return out
 
     return ModelEvaluation(evaluate, albedo, components)
+
+
+def _per_lambda(eps):
+    """ε per wavelength shaped (n_λ, 1, 1) against (λ, ω_i, ω_o); a stack as it is (it takes λ itself)."""
+    return eps if not isinstance(eps, np.ndarray) else eps[:, None, None]
 
 
 def function_evaluation(setup: Callable, wavelengths_nm) -> ModelEvaluation:

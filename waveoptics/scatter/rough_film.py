@@ -86,7 +86,7 @@ import numpy as np
 
 from ..errors import FieldError, unknown
 from ..vocabulary import POLARIZATIONS
-from .perturbation import scattering_angles
+from .angles import scattering_angles
 from .polar import polar_albedo
 
 __all__ = ["CORRELATIONS", "stack_layers", "interface_fields", "interface_amplitudes", "cross_psd_weights",
