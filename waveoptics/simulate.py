@@ -354,8 +354,9 @@ def nano_polarized(sim: Simulation) -> dict:
     mat = sim.brdf_microfacet.material
     out = {c: np.zeros((sim.wavelengths_nm.size,) + wo.shape[:2]) for c in scatter.COMPONENTS}
     for i, lam in enumerate(sim.wavelengths_nm):
-        comps = scatter.rayleigh_rice_components(sim.lobes.wi[None, None, :], wo, lam, psd,
-                                                 scatter.permittivity(mat, lam))
+        # a thin-film stack stands for ε: Elson's rough-stack components (scatter.rough_stack_components)
+        eps = mat if scatter.is_stack(mat) else scatter.permittivity(mat, lam)
+        comps = scatter.rayleigh_rice_components(sim.lobes.wi[None, None, :], wo, lam, psd, eps)
         for c in scatter.COMPONENTS:
             out[c][i] = np.where(sim.grid.inside, comps[c], 0.0)
     return out
