@@ -102,6 +102,9 @@ _KERNEL = (ModelParameter("backend", "", "numpy", "numpy or opencl (the evaluati
            ModelParameter("precision", "", "float32", "OpenCL floating-point precision (PRECISIONS)"))
 _DEVICE = ModelParameter("device", "", None, "OpenCL device (None: the default)")
 _DIFFRACTION = ModelParameter("diffraction", "", "kirchhoff", "diffraction model of the nano lobe (DIFFRACTION)")
+_CORRELATION = ModelParameter("roughness_correlation", "", ROUGHNESS_CORRELATIONS[0],
+                              "of a thin-film stack's interface roughness under rayleigh-rice: correlated, "
+                              "uncorrelated or a coefficient in [0, 1] (ROUGHNESS_CORRELATIONS)")
 _POLARIZATION = ModelParameter("polarization", "", "unpolarized", "polarization of the incident light "
                                                                   "(POLARIZATIONS)")
 
@@ -141,12 +144,10 @@ BRDF_MODEL_PARAMETERS = {
                       *_INDEX[:2], _POLARIZATION,
                       ModelParameter("resolution", "", None, "cells per side of the albedo quadrature (None: "
                                                              "512)"),
-                      ModelParameter("roughness_correlation", "", ROUGHNESS_CORRELATIONS[0],
-                                     "of a thin-film stack's interface roughness: correlated, uncorrelated or a "
-                                     "coefficient in [0, 1] (ROUGHNESS_CORRELATIONS)")),
+                      _CORRELATION),
     "twoscale": (ModelParameter("nano", "", None, "the nano-roughness statistics (a Nano), or surface"),
                  ModelParameter("surface", "m", None, "a nano height field (heights and spacing in m), or nano"),
-                 *_ALPHA, _SLOPES, _SHADOWING, *_INDEX, *_DIFFUSE, _DIFFRACTION, _MS,
+                 *_ALPHA, _SLOPES, _SHADOWING, *_INDEX, *_DIFFUSE, _DIFFRACTION, _CORRELATION, _MS,
                  ModelParameter("resolution", "", None, "direction grid of the lobes tabulated from surface "
                                                         "(None: 128)")),
     "rough-dielectric": (*_ALPHA, _SHADOWING, *_INDEX, _MS),

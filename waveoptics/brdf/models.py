@@ -375,7 +375,7 @@ def function_evaluation(setup: Callable, wavelengths_nm) -> ModelEvaluation:
 def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF,
                    ndf_shape=None, slope_table=None, shadowing="smith-correlated", material=None, ior=None,
                    fresnel="exact", diffuse="lambert", kd=0.0, diffuse_sigma_deg=0.0, diffraction="kirchhoff",
-                   multiple_scattering=False, resolution=None) -> ModelEvaluation:
+                   multiple_scattering=False, resolution=None, roughness_correlation="correlated") -> ModelEvaluation:
     """The two-scale BRDF: a micro NDF carrying nano-roughness (Holzschuch & Pacanowski 2017), as a function.
 
     With *nano* (a :class:`waveoptics.brdf.Nano` of PSD statistics) it is :class:`waveoptics.brdf.TwoScaleBRDF`
@@ -403,7 +403,12 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
         Kulla-Conty compensation of the micro lobe.
     resolution : int, optional
         Direction grid of the tabulated lobes (default 128; *surface* only).
+    roughness_correlation : str or float
+        Of a thin-film stack's interface roughness under ``diffraction="rayleigh-rice"`` (default correlated;
+        :func:`waveoptics.materials.roughness_correlation`).
     """
+    from ..materials.database import get_material
+    from ..materials.thinfilm import with_roughness_correlation
     from .pointwise import TwoScaleBRDF
     from .tabulated import TabulatedTwoScaleBRDF
     from .roughness_scales import Micro, Nano
@@ -422,7 +427,10 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
     else:
         micro = Micro(alpha=_alpha(alpha, roughness, "twoscale"), alpha_y=alpha_y, ndf=ndf, shadowing=shadowing,
                       ndf_shape=ndf_shape)
-    common = dict(material=spec if spec is not None else DEFAULT_MATERIAL, micro=micro, kd=kd, diffuse=diffuse,
+    # a stack carries its interfaces' roughness correlation to the Rayleigh-Rice nano lobe and coherent fraction
+    mat = with_roughness_correlation(get_material(spec if spec is not None else DEFAULT_MATERIAL),
+                                     roughness_correlation)
+    common = dict(material=mat, micro=micro, kd=kd, diffuse=diffuse,
                   fresnel=fresnel, diffuse_sigma=float(np.radians(diffuse_sigma_deg)), diffraction=diffraction,
                   multiple_scattering=multiple_scattering)
     cache = {}

@@ -351,7 +351,8 @@ def _twoscale_inputs(args, wavelength_nm) -> dict:
 
 def _twoscale_describe(args) -> dict:
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
-                                       "fresnel", "diffuse", "kd", "diffraction", "multiple_scattering")}
+                                       "fresnel", "diffuse", "kd", "diffraction", "multiple_scattering",
+                                       "roughness_correlation")}
     if args.surface:
         d["surface"] = args.surface
     else:

@@ -13,11 +13,12 @@ with a complex index that :func:`~waveoptics.materials.get_material` accepts (a 
 
 Films and the single-interface models
 -------------------------------------
-A stack has no single interface index: :meth:`Stack.eta` refuses (naming the ``material`` field), so the first-order
-perturbation (Rayleigh-Rice) models, whose polarization factor Q needs the permittivity of one rough interface,
-refuse a stack in one line instead of silently using the substrate; the first-order scatter of a stack whose
-interfaces are rough (correlated or not) is :func:`waveoptics.scatter.rough_stack_brdf` (Elson's theory, which
-takes the stack itself). Geometric-optics and Kirchhoff models take
+A stack has no single interface index: :meth:`Stack.eta` refuses (naming the ``material`` field) rather than
+silently using the substrate. The first-order perturbation (Rayleigh-Rice) entry points therefore take a stack to
+Elson's first-order scatter of a stack whose interfaces are rough (:func:`waveoptics.scatter.rough_stack_brdf`,
+the one PSD on every interface), correlated as :attr:`Stack.roughness_correlation` says (set it with
+:func:`with_roughness_correlation`; Elson, Rahn & Bennett 1983). Code that needs one interface's permittivity
+(:func:`waveoptics.scatter.permittivity`) refuses a stack in one line. Geometric-optics and Kirchhoff models take
 the stack's reflectance of each facet (``F``, ``F_facet``): the films are taken to follow the micro- and
 nano-roughness conformally, each facet a flat stack.
 
@@ -27,6 +28,8 @@ References
 .. [2] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.6.
 .. [3] O. S. Heavens, *Optical Properties of Thin Solid Films*, Butterworths 1955, ch. 4.
 .. [4] H. A. Macleod, *Thin-Film Optical Filters*, 4th ed., CRC Press 2010, ch. 2.
+.. [5] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (rough multilayers with
+   correlated and uncorrelated interfaces).
 """
 from __future__ import annotations
 

@@ -144,8 +144,8 @@ def permittivity(material, wavelength_nm):
         raise FieldError(f"{{material}} {material.name!r} gives only F0; rayleigh-rice needs a complex index "
                          "(a preset, shelf/book/page or n+kj)", "material")
     if not getattr(material, "has_index", True):
-        raise FieldError(f"{{material}} {material.name!r} is a thin-film stack; rayleigh-rice's polarization factor Q "
-                         "needs the permittivity of one rough interface (a bare material)", "material")
+        raise FieldError(f"{{material}} {material.name!r} is a thin-film stack and has no single permittivity (the "
+                         "Rayleigh-Rice functions take the stack itself: rough_stack_brdf)", "material")
     return np.asarray(material.eta(wavelength_nm), dtype=np.complex128) ** 2
 
 
