@@ -153,3 +153,21 @@ def test_cli_simulate_a_coated_metal_under_rayleigh_rice(tmp_path, capsys):
                 for k in z.files:
                     if z[k].dtype.kind in "fc":
                         assert np.all(np.isfinite(z[k])), (p.name, k)
+
+
+def test_scene_key_reaches_the_request():
+    from pathlib import Path
+
+    from waveoptics.planning import scene
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "coated-aluminium.toml"
+    sc = scene.load(path)
+    req = scene.request_of(sc)
+    assert req.material == SPEC and req.diffraction == "rayleigh-rice" and req.roughness_correlation == "correlated"
+    doc = {"materials": [{"name": "m", "material": SPEC, "roughness_correlation": 0.4,
+                          "nano": {"statistics": "gaussian:sigma=2nm,T=1um"}}],
+           "lights": [{"name": "l", "spd": "D65"}]}
+    assert scene.request_of(scene.parse(doc, name="t")).roughness_correlation == 0.4
+    doc["materials"][0]["roughness_correlation"] = "sometimes"
+    with pytest.raises(Exception, match=r"materials\[0\]\.roughness_correlation = 'sometimes' is not allowed"):
+        scene.parse(doc, name="t")
