@@ -375,7 +375,8 @@ def function_evaluation(setup: Callable, wavelengths_nm) -> ModelEvaluation:
 def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF,
                    ndf_shape=None, slope_table=None, shadowing="smith-correlated", material=None, ior=None,
                    fresnel="exact", diffuse="lambert", kd=0.0, diffuse_sigma_deg=0.0, diffraction="kirchhoff",
-                   multiple_scattering=False, resolution=None, roughness_correlation="correlated") -> ModelEvaluation:
+                   multiple_scattering=False, resolution=None,
+                   roughness_correlation="correlated") -> ModelEvaluation:
     """The two-scale BRDF: a micro NDF carrying nano-roughness (Holzschuch & Pacanowski 2017), as a function.
 
     With *nano* (a :class:`waveoptics.brdf.Nano` of PSD statistics) it is :class:`waveoptics.brdf.TwoScaleBRDF`
