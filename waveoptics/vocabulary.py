@@ -147,9 +147,10 @@ BRDF_MODEL_PARAMETERS = {
                       _CORRELATION),
     "twoscale": (ModelParameter("nano", "", None, "the nano-roughness statistics (a Nano), or surface"),
                  ModelParameter("surface", "m", None, "a nano height field (heights and spacing in m), or nano"),
-                 *_ALPHA, _SLOPES, _SHADOWING, *_INDEX, *_DIFFUSE, _DIFFRACTION, _CORRELATION, _MS,
+                 *_ALPHA, _SLOPES, _SHADOWING, *_INDEX, *_DIFFUSE, _DIFFRACTION, _MS,
                  ModelParameter("resolution", "", None, "direction grid of the lobes tabulated from surface "
-                                                        "(None: 128)")),
+                                                        "(None: 128)"),
+                 _CORRELATION),
     "rough-dielectric": (*_ALPHA, _SHADOWING, *_INDEX, _MS),
     "table": (ModelParameter("table", "", REQUIRED, "a BRDF table as a function (waveoptics.distributed.table."
                                                     "open_table)"),),
