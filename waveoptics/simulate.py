@@ -247,7 +247,7 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
               "resolution": req.resolution, "solver": lobes.info["solver"], "kd": 0.0 if mat.is_metal else req.kd,
               "precision": req.precision, "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": req.seed,
               "split": split_info, "micro_alpha_used": [micro.alpha, micro.alpha_y], "diffraction": req.diffraction,
-              "polarization": req.polarization,
+              "polarization": req.polarization, "roughness_correlation": req.roughness_correlation,
               "surface_info": None if nano_obj is None or nano_obj.surface is None else nano_obj.surface.provenance(),
               "sphere_render": {"light": "unpolarized", "diffraction_table": None if brdf_wave is None else {
                   "thetas_deg": list(brdf_wave.thetas_deg), "azimuths": int(brdf_wave.table.shape[0])}},
