@@ -20,7 +20,7 @@ DOCUMENTED = {"material": "Al", "micro_alpha": 0.05, "ndf": "beckmann", "shadowi
               "kd": 0.5, "precision": "float32", "seed": 0, "diffraction": "kirchhoff",
               "polarization": "unpolarized", "nano": "abc:sigma=10nm,B=2um,C=2.6", "split": False,
               "multiple_scattering": False, "ndf_shape": None, "micro_surface": None, "surface": None,
-              "wavelengths_nm": None}
+              "wavelengths_nm": None, "roughness_correlation": "correlated"}
 
 FIELDS = {f.name: f.default for f in dataclasses.fields(SimulationRequest)}
 

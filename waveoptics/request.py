@@ -45,7 +45,8 @@ import numpy as np
 from .errors import FieldError, RenamedWarning, WaveopticsError, unknown
 from .units import check_optical_range, check_theta, check_wavelengths, parse_length, split_spec
 from .vocabulary import (DEFAULT_MATERIAL, DEFAULT_NANO, DEFAULT_NDF, DIFFRACTION, NANO_SOLVERS,
-                         PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS, SHADOWING_NAMES)
+                         PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS, ROUGHNESS_CORRELATIONS,
+                         SHADOWING_NAMES)
 
 __all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "NANO_ALIASES", "NANO_RENAMED", "nano_key", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "request_default", "parse_nano", "nano_surface_size",
@@ -282,6 +283,11 @@ class SimulationRequest:
     multiple_scattering : bool
         Add Kulla & Conty's (2017) compensation for light that bounces between micro facets, to both models
         (off by default).
+    roughness_correlation : str or float
+        Of the interface roughness of a thin-film stack *material* under ``diffraction='rayleigh-rice'``:
+        ``"correlated"`` (default: a thin evaporated film replicates its substrate's roughness, Elson 1979;
+        Stover ch. 6), ``"uncorrelated"`` or a coefficient in [0, 1]
+        (:func:`waveoptics.materials.roughness_correlation`; Elson, Rahn & Bennett 1983).
     """
 
     material: str = DEFAULT_MATERIAL
@@ -305,6 +311,7 @@ class SimulationRequest:
     ndf_shape: float | None = None
     micro_surface: str | None = None
     multiple_scattering: bool = False
+    roughness_correlation: str | float = ROUGHNESS_CORRELATIONS[0]
 
     def __post_init__(self):
         set_ = lambda k, v: object.__setattr__(self, k, v)  # noqa: E731 - frozen dataclass normalization
@@ -360,6 +367,10 @@ class SimulationRequest:
             raise FieldError(f"{{multiple_scattering}} {self.multiple_scattering!r} is not allowed; use true or false",
                              "multiple_scattering")
         set_("multiple_scattering", bool(self.multiple_scattering))
+        if self.roughness_correlation not in ROUGHNESS_CORRELATIONS:   # a coefficient (or a typo): parse it
+            from .materials.thinfilm import roughness_correlation
+
+            set_("roughness_correlation", roughness_correlation(self.roughness_correlation))
         if self.micro_surface is not None:
             if self.ndf_shape is not None:
                 raise FieldError("{micro_surface} sets the NDF from the field's slopes; drop {ndf_shape}",

@@ -23,7 +23,7 @@ from .brdf.tabulated import PHI_NODES_ANISOTROPIC, THETA_NODES_DEG
 from .io import figures
 from .io.figures import save_figure
 from .errors import FieldError
-from .materials import get_material
+from .materials import get_material, with_roughness_correlation
 from .request import MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano, parse_nano
 from .scatter.grid import DirectionGrid, integrate
 from .units import direction_from_angles
@@ -209,6 +209,7 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
     check_request_memory(req, sphere=sphere, max_memory=max_memory)
     t0 = time.perf_counter()
     mat = get_material(req.material if material is None else material)
+    mat = with_roughness_correlation(mat, req.roughness_correlation)   # a stack's rough interfaces (rayleigh-rice)
     spd = colour.illuminant(req.illuminant)
     w = req.wavelengths()
     theta, phi = req.incident_deg
@@ -246,7 +247,7 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
               "resolution": req.resolution, "solver": lobes.info["solver"], "kd": 0.0 if mat.is_metal else req.kd,
               "precision": req.precision, "sigma_nano_m": lobes.info["sigma_nano_m"], "seed": req.seed,
               "split": split_info, "micro_alpha_used": [micro.alpha, micro.alpha_y], "diffraction": req.diffraction,
-              "polarization": req.polarization,
+              "polarization": req.polarization, "roughness_correlation": req.roughness_correlation,
               "surface_info": None if nano_obj is None or nano_obj.surface is None else nano_obj.surface.provenance(),
               "sphere_render": {"light": "unpolarized", "diffraction_table": None if brdf_wave is None else {
                   "thetas_deg": list(brdf_wave.thetas_deg), "azimuths": int(brdf_wave.table.shape[0])}},
@@ -353,8 +354,9 @@ def nano_polarized(sim: Simulation) -> dict:
     mat = sim.brdf_microfacet.material
     out = {c: np.zeros((sim.wavelengths_nm.size,) + wo.shape[:2]) for c in scatter.COMPONENTS}
     for i, lam in enumerate(sim.wavelengths_nm):
-        comps = scatter.rayleigh_rice_components(sim.lobes.wi[None, None, :], wo, lam, psd,
-                                                 scatter.permittivity(mat, lam))
+        # a thin-film stack stands for ε: Elson's rough-stack components (scatter.rough_stack_components)
+        eps = mat if scatter.is_stack(mat) else scatter.permittivity(mat, lam)
+        comps = scatter.rayleigh_rice_components(sim.lobes.wi[None, None, :], wo, lam, psd, eps)
         for c in scatter.COMPONENTS:
             out[c][i] = np.where(sim.grid.inside, comps[c], 0.0)
     return out

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
            "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO",
            "DEFAULT_MATERIAL", "DEFAULT_NDF", "COST_TARGET_ERROR", "COST_BUDGET_S", "COST_DELTA_E",
-           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "GLINT_SHAPES"]
+           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -19,6 +19,10 @@ PRECISIONS = ("float32", "float64")
 
 #: polarizations of the incident light (the scattered light is not analyzed)
 POLARIZATIONS = ("unpolarized", "s", "p")
+
+#: named correlations of a thin-film stack's interface roughness (a coefficient in [0, 1] is also taken):
+#: profiles replicated through the films, or independent (Elson, Rahn & Bennett 1983)
+ROUGHNESS_CORRELATIONS = ("correlated", "uncorrelated")
 
 #: diffraction models of the nano lobe (:data:`waveoptics.scatter.DIFFRACTION_MODELS`); rayleigh-rice is a
 #: perturbation model the two-scale model takes, not the Kirchhoff field solvers
@@ -98,6 +102,9 @@ _KERNEL = (ModelParameter("backend", "", "numpy", "numpy or opencl (the evaluati
            ModelParameter("precision", "", "float32", "OpenCL floating-point precision (PRECISIONS)"))
 _DEVICE = ModelParameter("device", "", None, "OpenCL device (None: the default)")
 _DIFFRACTION = ModelParameter("diffraction", "", "kirchhoff", "diffraction model of the nano lobe (DIFFRACTION)")
+_CORRELATION = ModelParameter("roughness_correlation", "", ROUGHNESS_CORRELATIONS[0],
+                              "of a thin-film stack's interface roughness under rayleigh-rice: correlated, "
+                              "uncorrelated or a coefficient in [0, 1] (ROUGHNESS_CORRELATIONS)")
 _POLARIZATION = ModelParameter("polarization", "", "unpolarized", "polarization of the incident light "
                                                                   "(POLARIZATIONS)")
 
@@ -136,12 +143,14 @@ BRDF_MODEL_PARAMETERS = {
                                                            "a height field's periodogram; heights in m)"),
                       *_INDEX[:2], _POLARIZATION,
                       ModelParameter("resolution", "", None, "cells per side of the albedo quadrature (None: "
-                                                             "512)")),
+                                                             "512)"),
+                      _CORRELATION),
     "twoscale": (ModelParameter("nano", "", None, "the nano-roughness statistics (a Nano), or surface"),
                  ModelParameter("surface", "m", None, "a nano height field (heights and spacing in m), or nano"),
                  *_ALPHA, _SLOPES, _SHADOWING, *_INDEX, *_DIFFUSE, _DIFFRACTION, _MS,
                  ModelParameter("resolution", "", None, "direction grid of the lobes tabulated from surface "
-                                                        "(None: 128)")),
+                                                        "(None: 128)"),
+                 _CORRELATION),
     "rough-dielectric": (*_ALPHA, _SHADOWING, *_INDEX, _MS),
     "table": (ModelParameter("table", "", REQUIRED, "a BRDF table as a function (waveoptics.distributed.table."
                                                     "open_table)"),),

@@ -289,7 +289,7 @@ def kirchhoff_model(*, wavelengths_nm, surface, material=None, ior=None, fresnel
 
 
 def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polarization="unpolarized",
-                        resolution=None) -> ModelEvaluation:
+                        resolution=None, roughness_correlation="correlated") -> ModelEvaluation:
     """First-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the polarization factor Q.
 
     Parameters
@@ -299,13 +299,25 @@ def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polariz
     psd : PSDModel or PeriodogramPSD
         The surface's power spectral density (heights in m).
     material, ior : str
-        The substrate's complex index: a material with index data, or ``"N+Kj"`` (exactly one).
+        The substrate's complex index: a material with index data, or ``"N+Kj"`` (exactly one); or a thin-film
+        stack ``"SUBSTRATE|FILM:THICKNESS|..."``: Elson's first-order BRDF of the stack with *psd* on every
+        interface (:func:`waveoptics.scatter.rough_stack_brdf`).
     polarization : str
         ``"s"``, ``"p"`` or ``"unpolarized"``.
     resolution : int, optional
         Cells per side of the albedo quadrature grid (default 512).
+    roughness_correlation : str or float
+        Of a stack's interface profiles: ``"correlated"`` (default, a film replicating its substrate),
+        ``"uncorrelated"`` or a coefficient in [0, 1] (:func:`waveoptics.materials.roughness_correlation`);
+        unused for a bare material.
+
+    References
+    ----------
+    .. [1] T. A. Germer, Appl. Opt. 36(33), 8798–8805, 1997 (one interface).
+    .. [2] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (rough stacks).
     """
     from ..materials.database import get_material
+    from ..materials.thinfilm import with_roughness_correlation
     from .. import scatter
 
     spec = _one_index(material, ior)
@@ -315,27 +327,34 @@ def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polariz
     if mat.schlick_only:
         raise FieldError(f"{{material}} {spec!r} gives only F0; rayleigh-rice needs a complex index "
                          "(a preset, shelf/book/page or an index N+Kj)", "material")
-    eps = scatter.permittivity(mat, wavelengths_nm)   # refuses a thin-film stack (no single interface)
+    mat = with_roughness_correlation(mat, roughness_correlation)
+    # a thin-film stack stands in for ε: the Rayleigh-Rice functions take it to Elson's rough-stack BRDF
+    eps = mat if scatter.is_stack(mat) else scatter.permittivity(mat, wavelengths_nm)
     w3 = wavelengths_nm[:, None, None]
 
     def evaluate(wi, wo, progress=None):
-        return scatter.rayleigh_rice_brdf(wi[None, :, None, :], wo[None, None, :, :], w3, psd, eps[:, None, None],
+        return scatter.rayleigh_rice_brdf(wi[None, :, None, :], wo[None, None, :, :], w3, psd, _per_lambda(eps),
                                           polarization)
 
     def components(wi, wo):
         return scatter.rayleigh_rice_components(wi[None, :, None, :], wo[None, None, :, :], w3, psd,
-                                                eps[:, None, None])
+                                                _per_lambda(eps))
 
     def albedo(wi, progress=None):
         grid = scatter.DirectionGrid.hemisphere(resolution or 512)
         wo = grid.directions()
         out = np.empty((len(wavelengths_nm), len(wi)))
         for i, w in enumerate(wi):
-            f = scatter.rayleigh_rice_brdf(w, wo[None], w3, psd, eps[:, None, None], polarization)
+            f = scatter.rayleigh_rice_brdf(w, wo[None], w3, psd, _per_lambda(eps), polarization)
             out[:, i] = scatter.integrate(np.where(grid.inside, f, 0.0), grid)
         return out
 
     return ModelEvaluation(evaluate, albedo, components)
+
+
+def _per_lambda(eps):
+    """ε per wavelength shaped (n_λ, 1, 1) against (λ, ω_i, ω_o); a stack as it is (it takes λ itself)."""
+    return eps if not isinstance(eps, np.ndarray) else eps[:, None, None]
 
 
 def function_evaluation(setup: Callable, wavelengths_nm) -> ModelEvaluation:
@@ -358,7 +377,8 @@ def function_evaluation(setup: Callable, wavelengths_nm) -> ModelEvaluation:
 def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF,
                    ndf_shape=None, slope_table=None, shadowing="smith-correlated", material=None, ior=None,
                    fresnel="exact", diffuse="lambert", kd=0.0, diffuse_sigma_deg=0.0, diffraction="kirchhoff",
-                   multiple_scattering=False, resolution=None) -> ModelEvaluation:
+                   multiple_scattering=False, resolution=None,
+                   roughness_correlation="correlated") -> ModelEvaluation:
     """The two-scale BRDF: a micro NDF carrying nano-roughness (Holzschuch & Pacanowski 2017), as a function.
 
     With *nano* (a :class:`waveoptics.brdf.Nano` of PSD statistics) it is :class:`waveoptics.brdf.TwoScaleBRDF`
@@ -386,7 +406,12 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
         Kulla-Conty compensation of the micro lobe.
     resolution : int, optional
         Direction grid of the tabulated lobes (default 128; *surface* only).
+    roughness_correlation : str or float
+        Of a thin-film stack's interface roughness under ``diffraction="rayleigh-rice"`` (default correlated;
+        :func:`waveoptics.materials.roughness_correlation`).
     """
+    from ..materials.database import get_material
+    from ..materials.thinfilm import with_roughness_correlation
     from .pointwise import TwoScaleBRDF
     from .tabulated import TabulatedTwoScaleBRDF
     from .roughness_scales import Micro, Nano
@@ -405,7 +430,10 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
     else:
         micro = Micro(alpha=_alpha(alpha, roughness, "twoscale"), alpha_y=alpha_y, ndf=ndf, shadowing=shadowing,
                       ndf_shape=ndf_shape)
-    common = dict(material=spec if spec is not None else DEFAULT_MATERIAL, micro=micro, kd=kd, diffuse=diffuse,
+    # a stack carries its interfaces' roughness correlation to the Rayleigh-Rice nano lobe and coherent fraction
+    mat = with_roughness_correlation(get_material(spec if spec is not None else DEFAULT_MATERIAL),
+                                     roughness_correlation)
+    common = dict(material=mat, micro=micro, kd=kd, diffuse=diffuse,
                   fresnel=fresnel, diffuse_sigma=float(np.radians(diffuse_sigma_deg)), diffraction=diffraction,
                   multiple_scattering=multiple_scattering)
     cache = {}

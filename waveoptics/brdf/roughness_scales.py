@@ -198,7 +198,7 @@ class Nano:
         c_b, lam_b = np.broadcast_arrays(c, lam)
         out = np.empty(c_b.shape)
         for l_val in np.unique(lam_b):
-            key = ("rr", float(l_val), None if material is None else material.name)
+            key = ("rr", float(l_val), None if material is None else getattr(material, "cache_name", material.name))
             if key not in cache:
                 cache[key] = np.array([scatter.rayleigh_rice_albedo(t, float(l_val), self.periodogram(), material)
                                        for t in RR_THETAS_DEG])
@@ -244,7 +244,7 @@ class Nano:
         c_b, lam_b = np.broadcast_arrays(c, lam)
         out = np.empty(c_b.shape)
         for l_val in np.unique(lam_b):
-            key = ("rr-tis", float(l_val), None if material is None else material.name, polarization)
+            key = ("rr-tis", float(l_val), None if material is None else getattr(material, "cache_name", material.name), polarization)
             if key not in cache:
                 cache[key] = np.array([scatter.rayleigh_rice_tis(t, float(l_val), self.periodogram(), material,
                                                                  polarization) for t in RR_THETAS_DEG])

@@ -60,6 +60,9 @@ OPTIONS = {o.flag: o for o in (
                             "(first-order perturbation, two-scale lobes only) (docs/physics.md §10)"),
     Option("--polarization", "polarization of the incident light relative to the plane of incidence: unpolarized, "
                              "s or p (the scattered light is not analyzed)"),
+    Option("--roughness-correlation", "correlation of the interface roughness of a thin-film stack under "
+                                      "rayleigh-rice: correlated (a film replicating its substrate), uncorrelated "
+                                      "or a coefficient in [0, 1] (Elson, Rahn & Bennett 1983)", "C"),
     Option("--precision", "OpenCL floating-point precision of the height-field solvers"),
     Option("--solver", "solver of the diffracted (nano) lobe"),
     Option("--backend", "where the direct Kirchhoff sum runs: the OpenCL kernel or its float64 NumPy twin"),

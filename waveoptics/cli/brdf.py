@@ -286,6 +286,8 @@ def _rayleigh_rice_arguments(g) -> None:
                              "twoscale: default " + _default_nano())
     option(g, "--polarization", choices=POLARIZATIONS, default=_default("polarization", "rayleigh-rice"),
            note="rayleigh-rice and kirchhoff")
+    option(g, "--roughness-correlation", default=_default("roughness_correlation", "rayleigh-rice"),
+           note="of a --material stack's interfaces")
 
 
 def _rayleigh_rice_inputs(args, wavelength_nm) -> dict:
@@ -310,7 +312,8 @@ def _rayleigh_rice_inputs(args, wavelength_nm) -> dict:
 
 
 def _rayleigh_rice_describe(args) -> dict:
-    return {k: getattr(args, k) for k in ("nano", "surface", "material", "ior", "polarization")}
+    return {k: getattr(args, k) for k in ("nano", "surface", "material", "ior", "polarization",
+                                          "roughness_correlation")}
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -349,7 +352,8 @@ def _twoscale_inputs(args, wavelength_nm) -> dict:
 
 def _twoscale_describe(args) -> dict:
     d = {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
-                                       "fresnel", "diffuse", "kd", "diffraction", "multiple_scattering")}
+                                       "fresnel", "diffuse", "kd", "diffraction", "multiple_scattering",
+                                       "roughness_correlation")}
     if args.surface:
         d["surface"] = args.surface
     else:

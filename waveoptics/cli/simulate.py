@@ -41,6 +41,8 @@ def add_scene_options(p) -> None:
     option(p, "--diffraction", default=d("diffraction"), choices=DIFFRACTION)
     option(p, "--polarization", default=d("polarization"), choices=POLARIZATIONS,
            note="each facet reflects its own s/p split")
+    option(p, "--roughness-correlation", default=d("roughness_correlation"),
+           note="of a --material stack's interfaces when --diffraction is rayleigh-rice")
     p.add_argument("--split", action="store_true", default=d("split"),
                    help="--surface holds both scales: split it at a cut-off period of 10 λmax; the micro α comes "
                         "from the long-period slopes, the short-period part diffracts")
@@ -69,7 +71,8 @@ def request_from_args(args):
         wavelengths_nm=None if args.wavelengths is None else tuple(parse_wavelengths(args.wavelengths)),
         delta_e=args.delta_e, resolution=args.resolution, solver=args.solver, kd=args.kd,
         precision=args.precision, seed=args.seed, split=args.split, diffraction=args.diffraction,
-        polarization=args.polarization, **{k: v for k, v in optional.items() if v is not None})
+        polarization=args.polarization, roughness_correlation=args.roughness_correlation,
+        **{k: v for k, v in optional.items() if v is not None})
 
 
 def _surface(args):

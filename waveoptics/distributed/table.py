@@ -18,7 +18,7 @@ import numpy as np
 from .. import colour, io, surfaces
 from ..brdf import twoscale
 from ..errors import FieldError, WaveopticsError
-from ..materials import get_material
+from ..materials import get_material, with_roughness_correlation
 from ..request import SimulationRequest, make_nano
 from ..scatter.grid import DirectionGrid
 from ..scatter.solvers import split_patch
@@ -162,7 +162,8 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
     nano = case_nano(case, task.r, w, surface)
     wi = direction_from_angles(spec.thetas_deg[task.t], spec.phi_deg)
     grid = DirectionGrid.hemisphere(case.resolution)
-    L = twoscale.evaluate(wi, w[task.lo:task.hi], get_material(case.material), case.micro(), nano, grid,
+    mat = with_roughness_correlation(get_material(case.material), case.roughness_correlation)
+    L = twoscale.evaluate(wi, w[task.lo:task.hi], mat, case.micro(), nano, grid,
                           solver=case.solver, kd=case.kd, device=device, precision=case.precision,
                           diffraction=case.diffraction, polarization=case.polarization)
     total, mf = L.total, L.microfacet
@@ -538,7 +539,8 @@ def open_table(path, *, surface=None):
                      surface=surface if surface is not None else case.surface)
     order = np.argsort(t.thetas_deg)
     lobes = np.asarray(t.diffraction, dtype=float)[order][None]
-    return TabulatedTwoScaleBRDF(material=get_material(case.material), micro=case.micro(), nano=nano, kd=case.kd,
+    mat = with_roughness_correlation(get_material(case.material), case.roughness_correlation)
+    return TabulatedTwoScaleBRDF(material=mat, micro=case.micro(), nano=nano, kd=case.kd,
                                  wavelengths_nm=tuple(w), thetas_deg=tuple(np.asarray(t.thetas_deg)[order]),
                                  diffraction=case.diffraction, table_lobes=lobes, table_grid=t.grid,
                                  table_phis_deg=(float(p.get("incident_phi_deg", 0.0)),))

@@ -8,7 +8,8 @@ grammar ``SUBSTRATE|FILM:THICKNESS``).
 from .fresnel import (F_sp, F_facet_polarized, F_facet_sp, F, F0, F_schlick, brewster_angle, F_sp_cl, F_schlick_cl)
 from .database import (PolarizedFresnel, RelativeFacetFresnel, MAX_CLAMP_NM, IOR_MODULUS, Preset, PRESETS, Material,
     parse_ior, category_from_f0, get_material, data_sets, VISIBLE_NM, search, fresnel_function)
-from .thinfilm import (Stack, parse_stack, GRAMMAR)
+from .thinfilm import (Stack, parse_stack, GRAMMAR, ROUGHNESS_CORRELATIONS, roughness_correlation,
+    with_roughness_correlation)
 from . import fresnel, database, stack, thinfilm  # noqa: F401
 
 __all__ = fresnel.__all__ + database.__all__ + thinfilm.__all__

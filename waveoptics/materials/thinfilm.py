@@ -13,11 +13,12 @@ with a complex index that :func:`~waveoptics.materials.get_material` accepts (a 
 
 Films and the single-interface models
 -------------------------------------
-A stack has no single interface index: :meth:`Stack.eta` refuses (naming the ``material`` field), so the first-order
-perturbation (Rayleigh-Rice) models, whose polarization factor Q needs the permittivity of one rough interface,
-refuse a stack in one line instead of silently using the substrate; the first-order scatter of a stack whose
-interfaces are rough (correlated or not) is :func:`waveoptics.scatter.rough_stack_brdf` (Elson's theory, which
-takes the stack itself). Geometric-optics and Kirchhoff models take
+A stack has no single interface index: :meth:`Stack.eta` refuses (naming the ``material`` field) rather than
+silently using the substrate. The first-order perturbation (Rayleigh-Rice) entry points therefore take a stack to
+Elson's first-order scatter of a stack whose interfaces are rough (:func:`waveoptics.scatter.rough_stack_brdf`,
+the one PSD on every interface), correlated as :attr:`Stack.roughness_correlation` says (set it with
+:func:`with_roughness_correlation`; Elson, Rahn & Bennett 1983). Code that needs one interface's permittivity
+(:func:`waveoptics.scatter.permittivity`) refuses a stack in one line. Geometric-optics and Kirchhoff models take
 the stack's reflectance of each facet (``F``, ``F_facet``): the films are taken to follow the micro- and
 nano-roughness conformally, each facet a flat stack.
 
@@ -27,19 +28,24 @@ References
 .. [2] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.6.
 .. [3] O. S. Heavens, *Optical Properties of Thin Solid Films*, Butterworths 1955, ch. 4.
 .. [4] H. A. Macleod, *Thin-Film Optical Filters*, 4th ed., CRC Press 2010, ch. 2.
+.. [5] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (rough multilayers with
+   correlated and uncorrelated interfaces).
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import FieldError, WaveopticsError
 from ..units import LENGTH_UNITS, parse_length
+from ..vocabulary import ROUGHNESS_CORRELATIONS
 from . import fresnel, stack
 from .database import SPEC_PARSERS, Material, get_material
 
-__all__ = ['Stack', 'parse_stack', 'GRAMMAR']
+__all__ = ['Stack', 'parse_stack', 'GRAMMAR', 'ROUGHNESS_CORRELATIONS', 'roughness_correlation',
+           'with_roughness_correlation']
 
 #: the stack grammar, as errors write it
 GRAMMAR = "SUBSTRATE|FILM:THICKNESS|... (films from the substrate outwards, e.g. Al|Al2O3:120nm)"
@@ -55,10 +61,21 @@ class Stack(Material):
         The semi-infinite substrate.
     films : tuple of (Material, float)
         The films and their thicknesses in nm, **from the substrate outwards**.
+    roughness_correlation : str or float
+        Cross-correlation of the interfaces' roughness profiles when the stack is rough (first-order scatter,
+        :func:`waveoptics.scatter.rough_stack_brdf`): ``"correlated"`` (default: a thin evaporated film replicates
+        its substrate's roughness, Elson 1979; Stover ch. 6), ``"uncorrelated"`` or a coefficient in [0, 1]
+        (:func:`roughness_correlation`). The flat stack's reflectance does not depend on it.
     """
 
     substrate: Material = None
     films: tuple = ()
+    roughness_correlation: object = "correlated"
+
+    @property
+    def cache_name(self) -> str:
+        """The name with the roughness correlation: a key for caches of rough-stack quantities."""
+        return f"{self.name}~{self.roughness_correlation}"
 
     @property
     def has_index(self) -> bool:
@@ -192,6 +209,51 @@ def parse_stack(spec: str) -> Stack:
         [f"substrate {substrate.name}: {substrate.source}"] + [f"{d:g} nm {m.name}: {m.source}" for m, d in films])
     return Stack(name=name, source=source, category=substrate.category,
                  wavelength_range_nm=(max(los), min(his)), substrate=substrate, films=tuple(films))
+
+
+def roughness_correlation(value, field: str = "roughness_correlation"):
+    """A roughness correlation as a stack holds it: ``"correlated"``, ``"uncorrelated"`` or a float in [0, 1]
+    (text such as ``"0.5"`` is read as a number; 1 and 0 stay numbers: the same as the names).
+
+    Raises
+    ------
+    FieldError
+        Naming *field*, for any other value.
+
+    References
+    ----------
+    .. [1] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (partly correlated
+       interfaces: S_jk = c √(S_j S_k)).
+    """
+    if isinstance(value, str):
+        text = value.strip().lower()
+        if text in ROUGHNESS_CORRELATIONS:
+            return text
+        try:
+            value = float(text)
+        except ValueError:
+            raise FieldError(f"{{{field}}} {value!r} is not allowed; use one of {', '.join(ROUGHNESS_CORRELATIONS)} "
+                             "or a coefficient in [0, 1]", field) from None
+    if isinstance(value, (bool, np.bool_)):
+        raise FieldError(f"{{{field}}} {value!r} is not allowed; use one of {', '.join(ROUGHNESS_CORRELATIONS)} "
+                         "or a coefficient in [0, 1]", field)
+    try:
+        c = float(value)
+    except (TypeError, ValueError):
+        raise FieldError(f"{{{field}}} {value!r} is not allowed; use one of {', '.join(ROUGHNESS_CORRELATIONS)} "
+                         "or a coefficient in [0, 1]", field) from None
+    if not 0.0 <= c <= 1.0:   # also refuses nan
+        raise FieldError(f"{{{field}}} {value!r} is not allowed; a correlation coefficient lies in [0, 1]", field)
+    return c
+
+
+def with_roughness_correlation(material, correlation):
+    """*material* with the interface-roughness *correlation* (:func:`roughness_correlation`) when it is a
+    :class:`Stack`; any other material unchanged (one rough interface has nothing to correlate with)."""
+    c = roughness_correlation(correlation)
+    if isinstance(material, Stack):
+        return dataclasses.replace(material, roughness_correlation=c)
+    return material
 
 
 SPEC_PARSERS["stack"] = parse_stack

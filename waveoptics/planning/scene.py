@@ -27,6 +27,9 @@ Schema (``examples/scenes/*.toml`` are worked examples)::
     shadowing = "smith-correlated"       # see waveoptics.brdf.SHADOWINGS
     diffuse_albedo = 0.5                 # dielectric substrate's diffuse albedo in [0, 1] (metals: none)
     diffraction = "auto"                 # nano-lobe model: auto (the planner picks) | kirchhoff | ghs | rghs | ohs | rohs
+    #                                    #   | rayleigh-rice
+    roughness_correlation = "correlated" # a thin-film stack's interface roughness under rayleigh-rice: correlated
+    #                                    #   (default) | uncorrelated | a coefficient in [0, 1]
     [materials.nano]                     # optional nano surface, exactly one of:
     statistics = "abc:sigma=2nm,B=2um,C=2.6"      #   height statistics (gaussian | exponential | abc)
     # generator = {model = "sinusoid", amplitude = "40nm", period = "1.6um", size = "24um", samples = 256}
@@ -81,7 +84,7 @@ KEYS = {
     "": ("name", "description", "seed", "accuracy", "materials", "lights", "view", "output"),
     "accuracy": ("delta_e",),
     "materials": ("name", "material", "ior", "roughness", "ndf", "ndf_shape", "shadowing", "diffuse_albedo",
-                  "nano", "diffraction", "micro_surface", "multiple_scattering"),
+                  "nano", "diffraction", "micro_surface", "multiple_scattering", "roughness_correlation"),
     "nano": ("statistics", "generator", "file"),
     "file": ("path", "spacing", "units", "channel"),
     "lights": ("name", "spd", "directions_deg"),
@@ -139,6 +142,7 @@ class MaterialSpec:
     diffraction: str = "auto"        # a model of waveoptics.vocabulary.DIFFRACTION, or auto (the planner picks)
     micro_surface: NanoSpec | None = None   # a height-field file whose slope law is the NDF (kind "file")
     multiple_scattering: bool = request_default("multiple_scattering")   # add the Kulla-Conty compensation lobe
+    roughness_correlation: str | float = request_default("roughness_correlation")   # of a stack's interfaces
 
     def micro(self):
         """The micro roughness (:class:`waveoptics.brdf.Micro`): the slope law of *micro_surface* when given, else
@@ -406,7 +410,20 @@ def _material(ctx, t, key, base) -> MaterialSpec:
                           tuple(brdf.SHADOWINGS)),
         diffuse_albedo=_number(ctx, t.get("diffuse_albedo", request_default("kd")), key + ".diffuse_albedo", lo=0.0, hi=1.0),
         nano=_nano(ctx, t["nano"], key + ".nano", base) if "nano" in t else None,
-        diffraction=_choice(ctx, t.get("diffraction", "auto"), key + ".diffraction", ("auto",) + DIFFRACTION))
+        diffraction=_choice(ctx, t.get("diffraction", "auto"), key + ".diffraction", ("auto",) + DIFFRACTION),
+        roughness_correlation=_correlation(ctx, t, key))
+
+
+def _correlation(ctx, t, key):
+    """The roughness correlation of a stack's interfaces (:func:`waveoptics.materials.roughness_correlation`)."""
+    from ..materials.thinfilm import roughness_correlation
+
+    value = t.get("roughness_correlation", request_default("roughness_correlation"))
+    try:
+        return roughness_correlation(value)
+    except WaveopticsError:
+        raise ctx.err(key + ".roughness_correlation", f"= {value!r} is not allowed; use correlated, uncorrelated "
+                      "or a number in [0, 1]") from None
 
 
 def _ndf_shape(ctx, t, key):
@@ -544,7 +561,8 @@ def request_of(sc: Scene, material: str | None = None, light: str | None = None,
     kw = dict(material=mat.material, micro_alpha=mat.roughness, ndf=mat.ndf, ndf_shape=mat.ndf_shape,
               shadowing=mat.shadowing, kd=mat.diffuse_albedo, illuminant=li.spd,
               incident_deg=tuple(li.directions_deg[0]), delta_e=sc.delta_e, seed=sc.seed, nano=NO_NANO,
-              surface=None, multiple_scattering=mat.multiple_scattering)
+              surface=None, multiple_scattering=mat.multiple_scattering,
+              roughness_correlation=mat.roughness_correlation)
     if mat.diffraction != "auto":
         kw["diffraction"] = mat.diffraction
     if mat.micro_surface is not None:   # the NDF is the field's slope law: the parametric keys keep their defaults

@@ -3,7 +3,7 @@
 Files: grid (the direction-cosine grid), patch (window and detrend of a height-field patch), models (the
 diffraction models: Kirchhoff, GHS, RGHS, OHS, ROHS), kirchhoff (the Kirchhoff
 factor and BRDF of a field), direct (the direct sum, NumPy and OpenCL), fft (the chirp-z solver), series (the
-Beckmann-Spizzichino series from a PSD), band (the propagating band and the relevant roughness), band_energy
+Beckmann-Spizzichino series from a PSD), band (the propagating band and the relevant roughness), angles (the angles of a scattering geometry), band_energy
 (the band lobe's albedo and coherent fraction),
 perturbation (Rayleigh-Rice
 with the polarization factor Q), rough_film (first-order scatter of a film stack with rough interfaces, Elson), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
@@ -23,13 +23,14 @@ from .fft import (FFT_TOL, FFT_BAND_X, FFT_MAX_ORDER, fft_plan, field_fft)
 from .series import (M_MAX, SeriesTables, series_tables, SeriesSum, series_sum, poisson_weights, roughness_g,
     series_terms, debye_waller, obliquity, rayleigh_rice)
 from .polar import (polar_albedo)
+from .angles import (scattering_angles)
 from .band_energy import (TANGENT_PLANE_MAX_DEG, is_conductor, ALBEDO_THETAS_DEG, RR_THETAS_DEG, rr_interp,
     BandAlbedos)
 from .band import (band_arc, relevant_variance, relevant_variance_of_field, beyond_band_fraction, SIN_NODES,
     relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series, scattered_lobe)
-from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, scattering_angles, q_factors, Q,
+from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factors, Q,
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
-    rayleigh_rice_tis)
+    rayleigh_rice_tis, is_stack, stack_correlation)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
     rough_stack_components, rough_stack_brdf, rough_stack_tis)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,
@@ -42,6 +43,6 @@ from .pixel import (PIXEL_BACKENDS, MAX_REGION_SAMPLES, PixelBRDF, footprint_sum
     pixel_brdf, footprint_brdf)
 from .gabor import (KERNEL_SIGMA, GaborKernels, gabor_kernels, gabor_footprint_field, gabor_footprint_brdf)
 from .output import (plot_scatter, SCATTER_FILES, write_scatter, brdf_exr_header)
-from . import grid, patch, models, kirchhoff, direct, fft, series, polar, band_energy, band, perturbation, rough_film, mom, models1d, solvers, footprint, pixel, gabor, output  # noqa: F401
+from . import grid, patch, models, kirchhoff, direct, fft, series, polar, angles, band_energy, band, perturbation, rough_film, mom, models1d, solvers, footprint, pixel, gabor, output  # noqa: F401
 
-__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + rough_film.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + pixel.__all__ + gabor.__all__ + output.__all__
+__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + angles.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + rough_film.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + pixel.__all__ + gabor.__all__ + output.__all__

@@ -65,7 +65,9 @@ class BandAlbedos:
         reflectance or *absolute* (a share of the incident light), as computed and with the grazing continuation
         of :meth:`scattered_albedo` (the same for Rayleigh-Rice)."""
         pol = polarization if material is not None else "unpolarized"   # F = 1 has no polarization
-        key = (dm.name, None if material is None else getattr(material, "name", str(material)), pol, bool(absolute))
+        # a rough stack's tables also depend on its interfaces' roughness correlation (cache_name holds it)
+        mkey = None if material is None else getattr(material, "cache_name", getattr(material, "name", str(material)))
+        key = (dm.name, mkey, pol, bool(absolute))
         tab = self._albedos.get(key)
         if tab is not None:
             return tab

@@ -41,12 +41,14 @@ import numpy as np
 from ..errors import FieldError, unknown
 from ..surfaces.psd import PSDModel
 from ..vocabulary import POLARIZATIONS
+from .angles import scattering_angles
 from .polar import polar_albedo
+from .rough_film import rough_stack_brdf, rough_stack_components, rough_stack_tis
 from .series import rayleigh_rice
 
-__all__ = ["POLARIZATIONS", "COMPONENTS", "PEC_PERMITTIVITY", "scattering_angles", "q_factors", "Q",
+__all__ = ["POLARIZATIONS", "COMPONENTS", "PEC_PERMITTIVITY", "q_factors", "Q",
            "rayleigh_rice_components", "rayleigh_rice_brdf", "permittivity", "rayleigh_rice_lobe",
-           "rayleigh_rice_albedo", "rayleigh_rice_tis"]
+           "rayleigh_rice_albedo", "rayleigh_rice_tis", "is_stack", "stack_correlation"]
 
 #: relative permittivity standing for a perfect conductor (|ε| → ∞: every q tends to Rice's limit, reflectance 1)
 PEC_PERMITTIVITY = -1e12 + 0j
@@ -54,26 +56,6 @@ PEC_PERMITTIVITY = -1e12 + 0j
 
 #: incident → scattered polarization pairs of the Jones-matrix elements
 COMPONENTS = ("ss", "sp", "ps", "pp")
-
-
-def scattering_angles(wi, wo):
-    """(cosθ_i, sinθ_i, cosθ_o, sinθ_o, cosφ_s, sinφ_s) of unit directions (..., 3), φ_s measured from the specular
-    side of the plane of incidence (φ_s = 0 at the mirror direction). At normal incidence the plane of incidence
-    is taken as the x–z plane; for an outgoing direction along the normal, φ_s = 0 (the unpolarized sums do not
-    depend on it there)."""
-    wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
-    ci, co = wi[..., 2], wo[..., 2]
-    si = np.hypot(wi[..., 0], wi[..., 1])
-    so = np.hypot(wo[..., 0], wo[..., 1])
-    # guard: an undefined azimuth (normal incidence / normal outgoing) gets the x axis / φ_s = 0
-    ex = np.where(si > 0, wi[..., 0] / np.where(si > 0, si, 1.0), 1.0)
-    ey = np.where(si > 0, wi[..., 1] / np.where(si > 0, si, 1.0), 0.0)
-    ox = np.where(so > 0, wo[..., 0] / np.where(so > 0, so, 1.0), -ex)
-    oy = np.where(so > 0, wo[..., 1] / np.where(so > 0, so, 1.0), -ey)
-    # the specular side is −(e_x, e_y): cosφ_s = −e·o, sinφ_s = (−e) × o
-    cos_phi = -(ex * ox + ey * oy)
-    sin_phi = -(ex * oy - ey * ox)
-    return ci, si, co, so, cos_phi, sin_phi
 
 
 def q_factors(wi, wo, eps) -> dict:
@@ -105,8 +87,23 @@ def Q(wi, wo, eps, polarization: str = "unpolarized"):
     return {"s": s, "p": p, "unpolarized": 0.5 * (s + p)}[polarization]
 
 
+def is_stack(material) -> bool:
+    """Whether *material* is a thin-film stack (:class:`~waveoptics.materials.Stack`): its first-order scatter is
+    Elson's rough-stack theory (:func:`waveoptics.scatter.rough_stack_brdf`), not one interface's Q."""
+    return material is not None and hasattr(material, "films") and hasattr(material, "substrate")
+
+
+def stack_correlation(material):
+    """The interface-roughness correlation a stack carries (``"correlated"`` unless it says otherwise)."""
+    return getattr(material, "roughness_correlation", "correlated")
+
+
 def rayleigh_rice_components(wi, wo, wavelength_nm, model: PSDModel, eps) -> dict:
-    """The four polarized BRDFs f_ss, f_sp, f_ps, f_pp (1/sr) of the rough surface."""
+    """The four polarized BRDFs f_ss, f_sp, f_ps, f_pp (1/sr) of the rough surface (*eps* a
+    :class:`~waveoptics.materials.Stack`: of the stack with the PSD on every interface,
+    :func:`waveoptics.scatter.rough_stack_components`)."""
+    if is_stack(eps):
+        return rough_stack_components(wi, wo, wavelength_nm, eps, model, stack_correlation(eps))
     pre = rayleigh_rice(wi, wo, wavelength_nm, model)   # Q = 1: (16π²/λ⁴) cosθ_i cosθ_o S
     return {k: pre * np.abs(v) ** 2 for k, v in q_factors(wi, wo, eps).items()}
 
@@ -121,10 +118,20 @@ def rayleigh_rice_brdf(wi, wo, wavelength_nm, model: PSDModel, eps, polarization
     wavelength_nm : array_like, nm
     model : PSDModel
         The surface's height statistics.
-    eps : complex or array
-        Relative permittivity of the substrate, (n + iκ)².
+    eps : complex, array or Stack
+        Relative permittivity of the substrate, (n + iκ)²; or a thin-film
+        :class:`~waveoptics.materials.Stack`: the first-order BRDF of the stack with *model* on every interface and
+        the stack's ``roughness_correlation`` (Elson; :func:`waveoptics.scatter.rough_stack_brdf`).
     polarization : {'unpolarized', 's', 'p'}
+
+    References
+    ----------
+    .. [1] Germer 1997; Elson & Bennett 1979 (one interface, module references).
+    .. [2] J. M. Elson, Appl. Opt. 16(11), 2872–2881, 1977; J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt.
+       22(20), 3207–3219, 1983 (rough stacks, correlated and uncorrelated interfaces).
     """
+    if is_stack(eps):
+        return rough_stack_brdf(wi, wo, wavelength_nm, eps, model, stack_correlation(eps), polarization)
     return rayleigh_rice(wi, wo, wavelength_nm, model, Q=Q(wi, wo, eps, polarization))
 
 
@@ -137,8 +144,8 @@ def permittivity(material, wavelength_nm):
         raise FieldError(f"{{material}} {material.name!r} gives only F0; rayleigh-rice needs a complex index "
                          "(a preset, shelf/book/page or n+kj)", "material")
     if not getattr(material, "has_index", True):
-        raise FieldError(f"{{material}} {material.name!r} is a thin-film stack; rayleigh-rice's polarization factor Q "
-                         "needs the permittivity of one rough interface (a bare material)", "material")
+        raise FieldError(f"{{material}} {material.name!r} is a thin-film stack and has no single permittivity (the "
+                         "Rayleigh-Rice functions take the stack itself: rough_stack_brdf)", "material")
     return np.asarray(material.eta(wavelength_nm), dtype=np.complex128) ** 2
 
 
@@ -146,7 +153,19 @@ def rayleigh_rice_lobe(wi, wo, wavelength_nm, psd, material=None, polarization: 
     """The Rayleigh-Rice lobe (1/sr) of a PSD (:class:`~waveoptics.surfaces.PSDModel` or a height field's
     :class:`~waveoptics.surfaces.PeriodogramPSD`) on *material* (None: a perfect conductor) as the two-scale
     model's nano lobe: it carries its own polarization factor Q, which plays the part of the Kirchhoff lobe's
-    F(θ_d) (they agree at the mirror direction, to first order near it)."""
+    F(θ_d) (they agree at the mirror direction, to first order near it).
+
+    A thin-film :class:`~waveoptics.materials.Stack` gives Elson's first-order BRDF of the stack with *psd* on
+    every interface, correlated as the stack's ``roughness_correlation`` says
+    (:func:`waveoptics.scatter.rough_stack_brdf`); its factor plays the part of the stack's F(θ_d).
+
+    References
+    ----------
+    .. [1] Germer 1997 (one interface, module references).
+    .. [2] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (rough stacks).
+    """
+    if is_stack(material):
+        return rough_stack_brdf(wi, wo, wavelength_nm, material, psd, stack_correlation(material), polarization)
     eps = permittivity(material, wavelength_nm)
     return rayleigh_rice_brdf(wi, wo, wavelength_nm, psd, eps, polarization)
 
@@ -171,7 +190,8 @@ def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization
 
     *scalar*: the first order of the scalar problem with a reflection coefficient of modulus 1 (the Dirichlet
     problem, Q = 1; the Kirchhoff lobe with F = 1 is the tangent-plane approximation of that problem) in place of
-    the vector Q of the *material*.
+    the vector Q of the *material*. A thin-film :class:`~waveoptics.materials.Stack` gives the TIS of the stack
+    with *psd* on every interface (:func:`waveoptics.scatter.rough_stack_tis`).
 
     References
     ----------
@@ -189,6 +209,8 @@ def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization
     if scalar:
         def lobe(wi_b, wo, q):
             return rayleigh_rice(wi_b, wo, lam, psd)
+    elif is_stack(material):
+        return rough_stack_tis(theta_deg, lam, material, psd, stack_correlation(material), polarization)
     else:
         eps = complex(np.ravel(permittivity(material, lam))[0])
 

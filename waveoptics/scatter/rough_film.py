@@ -85,15 +85,15 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import FieldError, unknown
-from ..vocabulary import POLARIZATIONS
-from .perturbation import scattering_angles
+from ..vocabulary import POLARIZATIONS, ROUGHNESS_CORRELATIONS
+from .angles import scattering_angles
 from .polar import polar_albedo
 
 __all__ = ["CORRELATIONS", "stack_layers", "interface_fields", "interface_amplitudes", "cross_psd_weights",
            "rough_stack_components", "rough_stack_brdf", "rough_stack_tis"]
 
 #: named interface-roughness correlations: identical replicated profiles, or independent ones
-CORRELATIONS = ("correlated", "uncorrelated")
+CORRELATIONS = ROUGHNESS_CORRELATIONS
 
 
 def stack_layers(stack_or_layers, wavelength_nm):
