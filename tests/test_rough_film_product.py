@@ -171,3 +171,13 @@ def test_scene_key_reaches_the_request():
     doc["materials"][0]["roughness_correlation"] = "sometimes"
     with pytest.raises(Exception, match=r"materials\[0\]\.roughness_correlation = 'sometimes' is not allowed"):
         scene.parse(doc, name="t")
+
+
+def test_a_correlation_for_a_material_without_films_is_refused_naming_both_fields():
+    """An option the model does not use is refused, not ignored (issue 34): a bare material has one interface."""
+    from waveoptics.errors import FieldError
+    from waveoptics.request import SimulationRequest
+
+    with pytest.raises(FieldError) as err:
+        SimulationRequest(material="Al", roughness_correlation="uncorrelated").resolved()
+    assert err.value.field == "roughness_correlation" and "material 'Al' has one interface" in str(err.value)

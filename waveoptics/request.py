@@ -371,6 +371,11 @@ class SimulationRequest:
             from .materials.thinfilm import roughness_correlation
 
             set_("roughness_correlation", roughness_correlation(self.roughness_correlation))
+        if self.roughness_correlation != ROUGHNESS_CORRELATIONS[0] and "|" not in str(self.material):
+            # an option the model does not use is refused, not ignored (a bare material has one interface)
+            raise FieldError(f"{{roughness_correlation}} {self.roughness_correlation!r} applies to a thin-film stack "
+                             f"(e.g. 'Al|Al2O3:120nm'); {{material}} {self.material!r} has one interface",
+                             "roughness_correlation", "material")
         if self.micro_surface is not None:
             if self.ndf_shape is not None:
                 raise FieldError("{micro_surface} sets the NDF from the field's slopes; drop {ndf_shape}",
