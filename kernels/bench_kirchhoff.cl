@@ -1,4 +1,4 @@
-/* Direct-sum kernels kept only for the benchmark (waveoptics bench, waveoptics/bench.py; docs/performance.md):
+/* Direct-sum kernels kept only for the benchmark (waveoptics bench, waveoptics/bench/baselines.py; docs/performance.md):
  *   kirchhoff_U_sinpi  the kernel before the speed work (before/after figures): exact phase, SLEEF sinpi/cospi per
  *                      term, one pair per work-item;
  *   kirchhoff_U_naive  the straightforward kernel a user would write first (one pair per work-item, scalar loop,

@@ -1,6 +1,6 @@
 /* Math built-ins of the OpenCL implementation, evaluated on given arguments so that their error can be measured
- * against float64 NumPy (waveoptics/bench.py, math_errors; the brief: "measure math built-ins' error on PoCL before
- * relying on them"). Row k of out holds function k for all n arguments; the order is MATH_FUNCTIONS in bench.py:
+ * against float64 NumPy (waveoptics/bench/measures.py, math_errors; the brief: "measure math built-ins' error on PoCL before
+ * relying on them"). Row k of out holds function k for all n arguments; the order is MATH_FUNCTIONS in waveoptics/bench/measures.py:
  *   sin(x), cos(x), sinpi(x), cospi(x), wo_sincos_2pi(x) (sin 2 pi x, cos 2 pi x)
  *   float32 only: native_sin(x), native_cos(x), half_sin(x), half_cos(x)
  */
