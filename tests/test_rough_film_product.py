@@ -102,17 +102,17 @@ def test_coherent_plus_diffracted_is_the_stack_reflectance(theta):
 
 def test_request_field_and_validation():
     assert SimulationRequest().roughness_correlation == "correlated"
-    assert SimulationRequest(roughness_correlation="0.5").roughness_correlation == 0.5
-    assert SimulationRequest(roughness_correlation="Uncorrelated").roughness_correlation == "uncorrelated"
+    assert SimulationRequest(material=SPEC, roughness_correlation="0.5").roughness_correlation == 0.5
+    assert SimulationRequest(material=SPEC, roughness_correlation="Uncorrelated").roughness_correlation == "uncorrelated"
     for bad in ("partly", 1.5, -0.1, float("nan"), True):
         with pytest.raises(FieldError) as e:
-            SimulationRequest(roughness_correlation=bad)
+            SimulationRequest(material=SPEC, roughness_correlation=bad)
         assert e.value.field == "roughness_correlation"
         assert str(e.value).startswith("roughness_correlation")
 
 
 def test_cli_brdf_rayleigh_rice_of_a_stack(capsys):
-    args = ["brdf", "--model", "rayleigh-rice", "--material", SPEC, "--nano", "gaussian:sigma=2nm,T=1um",
+    args = ["brdf", "--model", "rayleigh-rice", "--material", SPEC, "--nano", "gaussian:sigma=2nm,corr_length=1um",
             "--incident", "30", "--outgoing", "20,180", "--outgoing", "45,90", "--wavelengths", "450,550,650",
             "--json"]
     for corr in ("correlated", "uncorrelated"):
@@ -129,7 +129,7 @@ def test_cli_brdf_rayleigh_rice_of_a_stack(capsys):
 def test_cli_simulate_a_coated_metal_under_rayleigh_rice(tmp_path, capsys):
     out = tmp_path / "s"
     assert cli_main(["simulate", "--material", SPEC, "--diffraction", "rayleigh-rice", "--resolution", "16", "--sphere-size", "32",
-                     "--wavelengths", "450,550,650", "--nano", "gaussian:sigma=2nm,T=1um", "--micro-alpha", "0.1",
+                     "--wavelengths", "450,550,650", "--nano", "gaussian:sigma=2nm,corr_length=1um", "--micro-alpha", "0.1",
                      "--roughness-correlation", "uncorrelated", "-o", str(out), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["parameters"]["diffraction"] == "rayleigh-rice"
@@ -165,7 +165,7 @@ def test_scene_key_reaches_the_request():
     req = scene.request_of(sc)
     assert req.material == SPEC and req.diffraction == "rayleigh-rice" and req.roughness_correlation == "correlated"
     doc = {"materials": [{"name": "m", "material": SPEC, "roughness_correlation": 0.4,
-                          "nano": {"statistics": "gaussian:sigma=2nm,T=1um"}}],
+                          "nano": {"statistics": "gaussian:sigma=2nm,corr_length=1um"}}],
            "lights": [{"name": "l", "spd": "D65"}]}
     assert scene.request_of(scene.parse(doc, name="t")).roughness_correlation == 0.4
     doc["materials"][0]["roughness_correlation"] = "sometimes"
