@@ -20,8 +20,8 @@ from waveoptics.renderers.requests import RenderRequest, field_default  # noqa: 
 HAVE_LLVM = (wm.llvm_library()[1] or 0) >= wm.LLVM_MIN or bool(os.environ.get("DRJIT_LIBLLVM_PATH"))
 needs_llvm = pytest.mark.skipif(not HAVE_LLVM, reason="no libLLVM >= 17 for Mitsuba's JIT")
 
-#: a small rough-nano model (3 wavelength nodes, a 24² lobe grid) on a 16² sphere: the diffracted lobes take part
-TINY = dict(material="copper", alpha=0.3, nano="abc:sigma=20nm,B=2um,C=2.6", wavelength_step="235nm",
+#: a small rough-nano model (2 wavelength nodes, a 24² lobe grid) on a 16² sphere: the diffracted lobes take part
+TINY = dict(material="copper", alpha=0.3, nano="abc:sigma=20nm,B=2um,C=2.6", wavelength_step="470nm",
             resolution=24, sphere_size=16, spp=16, environment="studio", ground=False)
 
 
