@@ -175,5 +175,5 @@ def run_render(args):
     emit(args, s, f"wrote {r.outdir}/ ({', '.join(s['outputs'])}); mean ΔE2000 on the sphere {model_de['mean']:.2f} "
                   f"(p95 {model_de['p95']:.2f}), noise floor {floor['mean']:.2f} at {s['spp']} spp; render "
                   f"{t['render_wave_s']:.1f} s + {t['render_wave_repeat_s']:.1f} s (noise floor) "
-                  f"+ {t['render_reference_s']:.1f} s, model {t['model_s']:.1f} s")
+                  f"+ {t['render_reference_s']:.1f} s, model {t['model_s']:.1f} s; wave-optics BSDF {s['bsdf']}")
     return 0

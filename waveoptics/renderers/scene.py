@@ -136,6 +136,8 @@ def wave_bsdf(mi, how: str, *, bsdf_file=None, plugin_parameters=None, model=Non
     (:func:`waveoptics.renderers.mitsuba_native.register_native`), whose kernels run in Dr.Jit's symbolic mode
     (turned back on here: the NumPy plugin's registration turns it off)."""
     if how == "native":
+        if model is None:
+            raise ValueError("wave_bsdf('native') renders a built model; pass model=")
         import drjit as dr
 
         from .mitsuba_native import register_native
