@@ -23,7 +23,8 @@ $(STAMP): pyproject.toml scripts/install-opencl.sh scripts/install-llvm.sh
 demo: $(STAMP)
 	$(VENV)/bin/waveoptics info
 	$(VENV)/bin/waveoptics simulate -o out/demo --overwrite
-	$(VENV)/bin/waveoptics render --material gold --micro-alpha 0.2 -o out/render --overwrite
+	$(VENV)/bin/waveoptics render --material gold --micro-alpha 0.05 --nano abc:sigma=50nm,B=1um,C=2.6 \
+		--environment studio --no-ground --sphere-size 128 --spp 256 -o out/render --overwrite
 
 test: $(STAMP)
 	$(PY) -m pytest -q -ra -n $(JOBS)

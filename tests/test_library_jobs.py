@@ -62,7 +62,8 @@ def test_render_job_errors_name_fields_not_flags(tmp_path):
 
     for request, fields in ((requests.RenderRequest(target_noise=0.0), ("target_noise",)),
                             (requests.RenderRequest(max_spp=8), ("max_spp", "spp")),
-                            (requests.RenderRequest(variant="scalar_rgb"), ("bsdf", "variant")),
+                            (requests.RenderRequest(variant="scalar_rgb", bsdf="measured"), ("bsdf", "variant")),
+                            (requests.RenderRequest(bsdf="nope"), ("bsdf",)),
                             (requests.RenderRequest(nano="none", surface="x.npz"), ("nano", "surface")),
                             (requests.RenderRequest(spacing="5nm"), ("spacing", "surface"))):
         with pytest.raises(FieldError) as err:

@@ -272,9 +272,9 @@ def test_export_cli_writes_a_file_mitsuba_loads(tmp_path):
 
 
 @needs_llvm
-@pytest.mark.parametrize("bsdf", ["measured", "plugin"])
+@pytest.mark.parametrize("bsdf", ["measured", "plugin", "native"])
 def test_render_without_nano_roughness_agrees_with_mitsubas_rough_conductor(tmp_path, bsdf):
-    """With σ = 0 the two-scale model is the microfacet model: its render (through the RGL export, or the plugin)
+    """With σ = 0 the two-scale model is the microfacet model: its render (through the RGL export, or a plugin)
     and Mitsuba's roughconductor of the same α and η, k agree (mean ΔE2000 < 1)."""
     import json
 

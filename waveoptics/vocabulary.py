@@ -8,7 +8,7 @@ from dataclasses import dataclass
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
            "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO",
            "DEFAULT_MATERIAL", "DEFAULT_NDF", "COST_TARGET_ERROR", "COST_BUDGET_S", "COST_DELTA_E",
-           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS"]
+           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "RENDER_BSDF_AUTO", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -54,9 +54,11 @@ COST_BUDGET_S = 35.0
 COST_DELTA_E = (4.0, 1.0, 0.5)
 
 #: renderers (waveoptics.renderers): default largest step (nm) between the wavelength nodes of the BRDF handed to a
-#: renderer, and how the wave-optics BRDF enters Mitsuba 3 (its RGL export read by 'measured', or the plugin)
+#: renderer, and how the wave-optics BRDF enters Mitsuba 3 (its RGL export read by 'measured', the NumPy plugin, or
+#: the Dr.Jit plugin 'native'); RENDER_BSDF_AUTO lets the render job choose (waveoptics.renderers.jobs.choose_bsdf)
 RENDER_WAVELENGTH_STEP_NM = 20.0
-RENDER_BSDFS = ("measured", "plugin")
+RENDER_BSDFS = ("measured", "plugin", "native")
+RENDER_BSDF_AUTO = "auto"
 #: what a glint render's height field textures (:data:`waveoptics.renderers.glints.SHAPES`)
 GLINT_SHAPES = ("plane", "sphere")
 

@@ -18,13 +18,14 @@ MAX_SPP_DEFAULT = _d("max_spp")
 
 def register(sub):
     from ..vocabulary import GLINT_SHAPES
+    from ..vocabulary import RENDER_BSDF_AUTO
     from ..vocabulary import RENDER_BSDFS as WAVE_BSDFS
 
     p = sub.add_parser(
         "render", help="render a sphere with the wave-optics BRDF and with Mitsuba 3's own rough model",
         description="Mitsuba 3 renders a sphere (on a ground plane unless --no-ground) under an environment map "
-                    "twice: (a) with the two-scale wave-optics BRDF (Mitsuba's 'measured' model reading its RGL "
-                    "export, or the waveoptics plugin), (b) with Mitsuba's roughconductor (metals) or roughplastic "
+                    "twice: (a) with the two-scale wave-optics BRDF (the Dr.Jit plugin, Mitsuba's 'measured' model "
+                    "reading its RGL export, or the NumPy plugin), (b) with Mitsuba's roughconductor (metals) or roughplastic "
                     "(dielectrics) of the same micro roughness and index. Writes linear sRGB EXRs of both, their "
                     "CIEDE2000 map, a labelled PNG and summary.json. Needs the 'render' extra.")
     add_model(p)
@@ -34,9 +35,12 @@ def register(sub):
     g.add_argument("--variant", default=_d("variant"), metavar="NAME",
                    help="Mitsuba 3 variant, e.g. llvm_ad_spectral, llvm_ad_rgb, scalar_spectral (default "
                         f"{_d('variant')})")
-    g.add_argument("--bsdf", choices=WAVE_BSDFS, default=_d("bsdf"),
-                   help="how the wave-optics BRDF enters Mitsuba: measured (its RGL export, native and fast; "
-                        "spectral variants) or plugin (the model itself through NumPy; slower) "
+    g.add_argument("--bsdf", choices=WAVE_BSDFS + (RENDER_BSDF_AUTO,), default=_d("bsdf"),
+                   help="how the wave-optics BRDF enters Mitsuba: measured (its RGL export read by Mitsuba's "
+                        "measured model; spectral variants), plugin (the model itself through NumPy; slow), native "
+                        "(the model itself in Dr.Jit; fast in LLVM and CUDA variants; GGX and Beckmann, tabulated "
+                        "lobes) or auto (native where it runs compiled and takes the model, else measured in "
+                        "spectral variants, else plugin; summary.json says which and why) "
                         f"(default {_d('bsdf')})")
     option(g, "--sphere-size", default=_d("sphere_size"), note="the image is PX x PX")
     option(g, "--spp", default=_d("spp"), note="of each render; with --target-noise the first round's")
@@ -171,5 +175,5 @@ def run_render(args):
     emit(args, s, f"wrote {r.outdir}/ ({', '.join(s['outputs'])}); mean ΔE2000 on the sphere {model_de['mean']:.2f} "
                   f"(p95 {model_de['p95']:.2f}), noise floor {floor['mean']:.2f} at {s['spp']} spp; render "
                   f"{t['render_wave_s']:.1f} s + {t['render_wave_repeat_s']:.1f} s (noise floor) "
-                  f"+ {t['render_reference_s']:.1f} s, model {t['model_s']:.1f} s")
+                  f"+ {t['render_reference_s']:.1f} s, model {t['model_s']:.1f} s; wave-optics BSDF {s['bsdf']}")
     return 0

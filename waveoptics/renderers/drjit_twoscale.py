@@ -41,7 +41,7 @@ import numpy as np
 from ..errors import FieldError
 from .drjit_lobes import DiffractedLobes
 
-__all__ = ['A_NODES', 'NATIVE_NDFS', 'NATIVE_SHADOWINGS', 'DrJitTwoScale']
+__all__ = ['A_NODES', 'NATIVE_NDFS', 'NATIVE_SHADOWINGS', 'DrJitTwoScale', 'unsupported']
 
 #: angles of the uniform grid (0-90°, every 0.05°) on which A(θ_d) is uploaded: it holds the library's own albedo
 #: nodes (:data:`waveoptics.scatter.band.ALBEDO_THETAS_DEG`, multiples of 0.05°), between which a conductor's A is
@@ -52,6 +52,22 @@ NATIVE_NDFS = ("ggx", "beckmann")
 NATIVE_SHADOWINGS = ("smith", "smith-correlated")
 _COS_MIN = 1e-7          # the library's COS_MIN (waveoptics.brdf.ndf): floor of the specular denominator's cosines
 _TINY = 1e-30            # float32 stand-in for the library's 1e-300 floors
+
+
+def unsupported(base):
+    """None when :class:`DrJitTwoScale` evaluates the two-scale model *base* (``SpectralNodes.base``), else (why,
+    the request field that decides it)."""
+    from ..brdf import TabulatedTwoScaleBRDF
+    from ..brdf.protocol import TwoScaleParts
+
+    if not isinstance(base, TwoScaleParts) or (base._rough and not isinstance(base, TabulatedTwoScaleBRDF)):
+        return "the Dr.Jit BSDF needs the tabulated model or no nano-roughness (not exact)", "exact"
+    if base.micro.ndf not in NATIVE_NDFS:
+        return f"ndf={base.micro.ndf!r} is not in the Dr.Jit BSDF; it has: {', '.join(NATIVE_NDFS)}", "ndf"
+    if base.micro.shadowing not in NATIVE_SHADOWINGS:
+        return (f"shadowing={base.micro.shadowing!r} is not in the Dr.Jit BSDF; it has: "
+                f"{', '.join(NATIVE_SHADOWINGS)}", "shadowing")
+    return None
 
 
 class _G:
@@ -97,17 +113,9 @@ class DrJitTwoScale(DiffractedLobes):
     # -- upload --------------------------------------------------------------------------------------------
     @staticmethod
     def _check(base):
-        from ..brdf import TabulatedTwoScaleBRDF
-        from ..brdf.protocol import TwoScaleParts
-
-        if not isinstance(base, TwoScaleParts) or (base._rough and not isinstance(base, TabulatedTwoScaleBRDF)):
-            raise FieldError("the Dr.Jit BSDF needs the tabulated model or no nano-roughness (not exact)", "exact")
-        if base.micro.ndf not in NATIVE_NDFS:
-            raise FieldError(f"ndf={base.micro.ndf!r} is not in the Dr.Jit BSDF; it has: {', '.join(NATIVE_NDFS)}",
-                             "ndf")
-        if base.micro.shadowing not in NATIVE_SHADOWINGS:
-            raise FieldError(f"shadowing={base.micro.shadowing!r} is not in the Dr.Jit BSDF; it has: "
-                             f"{', '.join(NATIVE_SHADOWINGS)}", "shadowing")
+        why = unsupported(base)
+        if why is not None:
+            raise FieldError(why[0], why[1])
 
     def _upload(self, a):
         a = np.ascontiguousarray(np.asarray(a, dtype=np.float64).ravel())

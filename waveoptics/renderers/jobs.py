@@ -10,7 +10,9 @@ the summary out.
 * :func:`render_job`: the model rendered by Mitsuba 3 on a sphere under an environment map beside Mitsuba's own
   rough model (:mod:`waveoptics.renderers.scene`), their CIEDE2000 map and its noise floor; writes wave.exr,
   reference.exr, delta_e.exr, render.png, summary.json (last: it says the set is complete) and, for the
-  ``measured`` BSDF, material.bsdf.
+  ``measured`` BSDF, material.bsdf;
+* :func:`choose_bsdf`: how the model enters Mitsuba when the request says ``auto`` (the Dr.Jit plugin where it
+  runs compiled and takes the model, else the RGL export in spectral variants, else the NumPy plugin).
 
 Errors are :class:`waveoptics.errors.FieldError` naming the request's fields.
 
@@ -26,11 +28,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import FieldError
-from ..vocabulary import DEFAULT_NANO
+from ..vocabulary import DEFAULT_NANO, RENDER_BSDF_AUTO, RENDER_BSDFS
 from .requests import RendererModel, RenderRequest
 
 __all__ = ["OUTPUTS", "EXPORT_FORMATS", "RenderResult", "load_height_field", "model_parameters", "build_model",
-           "describe_model", "plugin_parameters", "export_job", "render_job"]
+           "describe_model", "plugin_parameters", "export_job", "choose_bsdf", "render_job"]
 
 #: files of one sphere render (summary.json last: it says the set is complete); the ``measured`` BSDF adds
 #: material.bsdf
@@ -194,9 +196,44 @@ class RenderResult:
 
 def _check(request: RenderRequest) -> None:
     """Validate the render fields before any work (the model's are checked where it is built)."""
+    if request.bsdf not in RENDER_BSDFS + (RENDER_BSDF_AUTO,):
+        raise FieldError(f"{{bsdf}} {request.bsdf!r} is not allowed; use one of "
+                         f"{', '.join(RENDER_BSDFS + (RENDER_BSDF_AUTO,))}", "bsdf")
     if request.bsdf == "measured" and "spectral" not in request.variant:
         raise FieldError(f"{{bsdf}} measured needs a spectral {{variant}} (Mitsuba's measured model), not "
                          f"{request.variant!r}; use {{bsdf}} plugin for RGB variants", "bsdf", "variant")
+
+
+#: Mitsuba variants whose kernels Dr.Jit compiles (the native plugin runs there in symbolic mode; in scalar variants
+#: it runs per sample in Python)
+_JIT_PREFIXES = ("llvm_", "cuda_")
+
+
+def choose_bsdf(request: RenderRequest, model) -> tuple[str, str]:
+    """(how the built *model* enters Mitsuba, why): the request's :attr:`~RenderRequest.bsdf` when it names one
+    (``native`` checked against the model and variant), else ``native`` (the Dr.Jit plugin,
+    :mod:`waveoptics.renderers.mitsuba_native`) in LLVM and CUDA variants where it takes the model, else
+    ``measured`` (Mitsuba's C++ model reading the RGL export) in spectral variants, else ``plugin`` (NumPy)."""
+    from .mitsuba_native import native_unsupported
+
+    variant = request.variant
+    if request.bsdf != RENDER_BSDF_AUTO:
+        if request.bsdf == "native":
+            why = native_unsupported(model, variant)
+            if why is not None:
+                raise FieldError(f"{{bsdf}} native: {why[0]}; use {{bsdf}} plugin or measured", "bsdf", why[1])
+        return request.bsdf, "given"
+    if variant.startswith(_JIT_PREFIXES):
+        why = native_unsupported(model, variant)
+        if why is None:
+            return "native", (f"auto: {variant} compiles the Dr.Jit plugin's kernels and the plugin takes this "
+                              "model")
+        not_native = f"the Dr.Jit plugin does not take this model ({why[0]})"
+    else:
+        not_native = f"{variant} is not an LLVM or CUDA variant (the Dr.Jit plugin would run per sample in Python)"
+    if "spectral" in variant:
+        return "measured", f"auto: {not_native}; Mitsuba's measured model reads the RGL export in spectral variants"
+    return "plugin", f"auto: {not_native}; the NumPy plugin (measured needs a spectral variant)"
 
 
 def render_job(request: RenderRequest, output, *, overwrite: bool = False, progress=None) -> RenderResult:
@@ -231,9 +268,13 @@ def render_job(request: RenderRequest, output, *, overwrite: bool = False, progr
     t0 = time.perf_counter()
     model, params = build_model(request)
     timings["model_s"] = time.perf_counter() - t0
+    bsdf = choose_bsdf(request, model)
+    if bsdf[0] == "measured" and "material.bsdf" not in outputs:       # chosen by auto: check its file too
+        outputs += ("material.bsdf",)
+        files.prepare_outdir(outdir, overwrite=overwrite, expected=outputs)
     desc = describe_model(request, params)
     with files.staged_outputs(outdir, outputs, last="summary.json") as stage:
-        summary, cmp = _render(request, mi, model, params, desc, env, settings, stage, timings, progress)
+        summary, cmp = _render(request, bsdf, mi, model, params, desc, env, settings, stage, timings, progress)
         summary["outputs"] = list(outputs)
         files.write_json(stage / "summary.json", summary)
     for note in summary["reference_notes"]:
@@ -241,9 +282,9 @@ def render_job(request: RenderRequest, output, *, overwrite: bool = False, progr
     return RenderResult(summary, outdir, cmp.stop, timings)
 
 
-def _render(request, mi, model, params, desc, env, settings, stage, timings, progress):
-    """The renders of :func:`render_job` and every output but summary.json, written into *stage*; (the summary,
-    the :class:`waveoptics.renderers.scene.Comparison`)."""
+def _render(request, bsdf, mi, model, params, desc, env, settings, stage, timings, progress):
+    """The renders of :func:`render_job` and every output but summary.json, written into *stage*, with the BSDF
+    *bsdf* of :func:`choose_bsdf`; (the summary, the :class:`waveoptics.renderers.scene.Comparison`)."""
     import json
 
     from ..io import files
@@ -260,12 +301,13 @@ def _render(request, mi, model, params, desc, env, settings, stage, timings, pro
 
     on = scene.sphere_mask(settings.size)
     t0 = time.perf_counter()
-    if request.bsdf == "measured":
+    how = bsdf[0]
+    if how == "measured":
         rgl.export_rgl(model, stage / "material.bsdf", description="waveoptics render: " + json.dumps(desc))
     timings["export_s"] = time.perf_counter() - t0
-    wave = scene.wave_bsdf(mi, request.bsdf, bsdf_file=stage / "material.bsdf",
-                           plugin_parameters=plugin_parameters(request, params) if request.bsdf == "plugin"
-                           else None)
+    wave = scene.wave_bsdf(mi, how, bsdf_file=stage / "material.bsdf",
+                           plugin_parameters=plugin_parameters(request, params) if how == "plugin" else None,
+                           model=model)
     ref, notes = scene.reference_bsdf(mi, model, **{k: params[k] for k in ("material", "alpha", "alpha_y", "ndf",
                                                                            "kd")})
     scenes = {k: scene.scene_dict(mi, b, env.radiance, settings) for k, b in (("wave", wave), ("reference", ref))}
@@ -285,21 +327,23 @@ def _render(request, mi, model, params, desc, env, settings, stage, timings, pro
     floor, model_de = _stats(cmp.noise_floor, on), _stats(de, on)
     exposure = key_exposure(images["reference"], on)
     plot_spheres([tonemap(images["wave"], exposure), tonemap(images["reference"], exposure)],
-                 [f"wave optics ({request.bsdf})\n{params['material']}, α = {params['alpha']:g}, "
+                 [f"wave optics ({how})\n{params['material']}, α = {params['alpha']:g}, "
                   f"{desc.get('nano') or 'surface'}", f"Mitsuba {ref['type']}\nsame α and index"],
                  stage / "render.png", diff=de,
                  diff_title=f"ΔE2000 (sphere mean {model_de['mean']:.2f}; noise floor {floor['mean']:.2f})",
                  exposure=exposure,
                  caption=f"environment {env.name}; Mitsuba 3 {request.variant}, {cmp.spp} spp, "
                          f"{settings.size}² px; camera looks down −z, y up")
-    summary = _render_summary(request, desc, ref["type"], notes, env, settings, cmp, de, model_de, floor, timings)
+    summary = _render_summary(request, bsdf, desc, ref["type"], notes, env, settings, cmp, de, model_de, floor,
+                              timings)
     return summary, cmp
 
 
-def _render_summary(request, desc, ref_name, notes, env, settings, cmp, de, model_de, floor, timings) -> dict:
-    """summary.json of a render: the model, both ΔE2000 statistics (model vs reference, and the noise floor) with
-    their meaning, the stopping rule, timings and outputs."""
-    return {"model": desc, "bsdf": request.bsdf, "reference": ref_name, "reference_notes": notes,
+def _render_summary(request, bsdf, desc, ref_name, notes, env, settings, cmp, de, model_de, floor, timings) -> dict:
+    """summary.json of a render: the model, the BSDF used (and why), both ΔE2000 statistics (model vs reference,
+    and the noise floor) with their meaning, the stopping rule, timings and outputs."""
+    return {"model": desc, "bsdf": bsdf[0], "bsdf_requested": request.bsdf, "bsdf_reason": bsdf[1],
+            "reference": ref_name, "reference_notes": notes,
             "variant": request.variant, "environment": env.name, "ground": request.ground,
             "size_px": settings.size, "spp": cmp.spp,
             "delta_e2000": dict(model_de, pixels="sphere", mean_image=float(de.mean()),

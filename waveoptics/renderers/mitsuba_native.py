@@ -31,15 +31,33 @@ References
 from __future__ import annotations
 
 from ..errors import WaveopticsError
-from .drjit_twoscale import DrJitTwoScale
+from .drjit_twoscale import DrJitTwoScale, unsupported
 from .mitsuba import model_from, load_mitsuba
 
-__all__ = ['NATIVE_PLUGIN_NAME', 'register_native', 'native_tables']
+__all__ = ['NATIVE_PLUGIN_NAME', 'register_native', 'native_tables', 'native_unsupported']
 
 #: name of the Dr.Jit BSDF plugin in scene descriptions
 NATIVE_PLUGIN_NAME = "waveoptics_native"
 
 _TABLES: dict = {}
+
+
+def native_unsupported(model, variant: str):
+    """None when this plugin renders *model* (a :func:`waveoptics.renderers.renderer_brdf` model) in the Mitsuba
+    *variant* (by name), else (why, the request field that decides it): the model's NDF, shadowing and tabulation
+    (:func:`waveoptics.renderers.drjit_twoscale.unsupported`), and in polarized variants a spectral variant and a
+    material with a complex index."""
+    why = unsupported(model.base)
+    if why is not None:
+        return why
+    if "polarized" in variant:
+        if "spectral" not in variant:
+            return f"the {NATIVE_PLUGIN_NAME} BSDF has no polarized monochrome form ({variant})", "variant"
+        base = model.base
+        if base.fresnel == "one" or base.material.schlick_only:
+            return (f"the polarized {NATIVE_PLUGIN_NAME} BSDF needs a material with a complex index (its Fresnel "
+                    "amplitudes), not F0 only", "material")
+    return None
 
 
 def native_tables(model, mi) -> DrJitTwoScale:

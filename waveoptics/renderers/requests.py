@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from ..vocabulary import DEFAULT_MATERIAL, DEFAULT_NDF, RENDER_WAVELENGTH_STEP_NM
+from ..vocabulary import DEFAULT_MATERIAL, DEFAULT_NDF, RENDER_BSDF_AUTO, RENDER_WAVELENGTH_STEP_NM
 
 __all__ = ["RendererModel", "RenderRequest", "GlintRequest", "field_default"]
 
@@ -106,7 +106,9 @@ class RenderRequest(RendererModel):
         Mitsuba 3 variant (``measured`` needs a spectral one).
     bsdf : str
         How the wave-optics BRDF enters Mitsuba (:data:`waveoptics.vocabulary.RENDER_BSDFS`): ``measured`` (its
-        RGL export) or ``plugin`` (the model through NumPy).
+        RGL export), ``plugin`` (the model through NumPy), ``native`` (the model in Dr.Jit,
+        :mod:`waveoptics.renderers.mitsuba_native`) or ``auto``: native in LLVM and CUDA variants where it takes the
+        model, else measured in spectral variants, else plugin (:func:`waveoptics.renderers.jobs.choose_bsdf`).
     sphere_size : int, px
         The image is *sphere_size* × *sphere_size* pixels.
     spp : int
@@ -129,7 +131,7 @@ class RenderRequest(RendererModel):
     environment: str = "sky"
     ground: bool = True
     variant: str = "llvm_ad_spectral"
-    bsdf: str = "measured"
+    bsdf: str = RENDER_BSDF_AUTO
     sphere_size: int = 256
     spp: int = 32
     target_noise: float | None = None

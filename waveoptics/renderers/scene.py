@@ -8,7 +8,8 @@ the origin, the ground (grey Lambertian, reflectance 0.4) is the plane y = −1.
 
 The wave-optics BSDF is either Mitsuba's native ``measured`` model reading the RGL export of the model
 (:mod:`waveoptics.renderers.rgl`; fast, spectral variants only) or the ``waveoptics`` plugin
-(:mod:`waveoptics.renderers.mitsuba`; the model itself, evaluated with NumPy in wavefront mode). The reference is
+(:mod:`waveoptics.renderers.mitsuba`; the model itself, evaluated with NumPy in wavefront mode) or the Dr.Jit plugin
+(:mod:`waveoptics.renderers.mitsuba_native`; the model itself, compiled by Dr.Jit). The reference is
 ``roughconductor`` for metals (its η and k spectra from the same material data) and ``roughplastic`` for
 dielectrics (its index at 550 nm, diffuse reflectance k_d), with the same GGX or Beckmann α; these are Mitsuba's
 single-scattering microfacet models, like the coherent part of the two-scale model.
@@ -39,7 +40,8 @@ from ..errors import FieldError, WaveopticsError
 from ..vocabulary import RENDER_BSDFS
 from .requests import RenderRequest
 
-__all__ = ["WAVE_BSDFS", "REFERENCE_NDFS", "RenderSettings", "reference_bsdf", "wave_bsdf", "scene_dict",
+__all__ = ["WAVE_BSDFS", "NATIVE_RENDER_NAME", "REFERENCE_NDFS", "RenderSettings", "reference_bsdf", "wave_bsdf",
+           "scene_dict",
            "render_image", "delta_e_map", "sphere_mask", "CAMERA", "SEED_STREAMS", "Progressive", "Comparison",
            "render_comparison", "MAX_SPP_DEFAULT"]
 
@@ -124,8 +126,27 @@ def reference_bsdf(mi, model, *, material, alpha, alpha_y, ndf, kd) -> tuple[dic
             "diffuse_reflectance": {"type": "rgb", "value": [float(kd)] * 3}, **rough}, notes
 
 
-def wave_bsdf(mi, how: str, *, bsdf_file=None, plugin_parameters=None) -> dict:
-    """The wave-optics BSDF as a Mitsuba dict: ``measured`` from an RGL file or the ``waveoptics`` plugin."""
+#: name under which :func:`wave_bsdf` registers the Dr.Jit plugin holding a render's model
+NATIVE_RENDER_NAME = "waveoptics_native_render"
+
+
+def wave_bsdf(mi, how: str, *, bsdf_file=None, plugin_parameters=None, model=None) -> dict:
+    """The wave-optics BSDF as a Mitsuba dict: ``measured`` from an RGL file, the ``waveoptics`` plugin (NumPy,
+    from *plugin_parameters*) or ``native``, the Dr.Jit plugin holding the built *model*
+    (:func:`waveoptics.renderers.mitsuba_native.register_native`), whose kernels run in Dr.Jit's symbolic mode
+    (turned back on here: the NumPy plugin's registration turns it off)."""
+    if how == "native":
+        if model is None:
+            raise ValueError("wave_bsdf('native') renders a built model; pass model=")
+        import drjit as dr
+
+        from .mitsuba_native import register_native
+
+        register_native(model=model, name=NATIVE_RENDER_NAME)
+        if not mi.variant().startswith("scalar"):
+            dr.set_flag(dr.JitFlag.SymbolicLoops, True)
+            dr.set_flag(dr.JitFlag.SymbolicCalls, True)
+        return {"type": NATIVE_RENDER_NAME}
     if how == "measured":
         if not mi.is_spectral:
             raise FieldError(f"Mitsuba's measured model needs a spectral variant, not {mi.variant()!r}; use the "
