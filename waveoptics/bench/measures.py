@@ -281,12 +281,13 @@ def math_errors(rt, n: int = 200_001) -> dict:
     return out
 
 
-def brdf_eval_rates(n: int = 100_000, loop: int = 300) -> dict:
+def brdf_eval_rates(n: int = 100_000, loop: int = 300, resolution: int = 128) -> dict:
     """Evaluations per second of ``eval()`` (:mod:`waveoptics.brdf.protocol`) for the microfacet model and the
     two-scale PSD model (gold, micro GGX α = 0.1, the default nano statistics, 550 nm) by quadrature and from its
     tabulated diffracted lobes, batched against a plain Python loop calling it one (ω_i, ω_o, λ) at a time; with one
     shared ω_i and with every pair its own ω_i (as a renderer asks); ``vs_microfacet``: the own-ω_i rate relative to
-    the microfacet model's in the same run."""
+    the microfacet model's in the same run. *resolution*: the tabulated lobes' grid (its build dominates the
+    measure's own cost; a look-up's cost barely depends on it)."""
     from .. import brdf
     from ..request import DEFAULT_NANO, make_nano
 
@@ -301,8 +302,8 @@ def brdf_eval_rates(n: int = 100_000, loop: int = 300) -> dict:
     nano = make_nano(DEFAULT_NANO, [550.0])
     models = {"microfacet": brdf.MicrofacetBRDF("gold", micro),
               "twoscale (PSD, quadrature)": brdf.TwoScaleBRDF("gold", micro, nano=nano),
-              "twoscale (PSD, tabulated 128²)": brdf.TabulatedTwoScaleBRDF("gold", micro, nano=nano,
-                                                                          wavelengths_nm=(550.0,))}
+              f"twoscale (PSD, tabulated {resolution}²)": brdf.TabulatedTwoScaleBRDF(
+                  "gold", micro, nano=nano, wavelengths_nm=(550.0,), resolution=resolution)}
     wo = dirs(n)
     wi_one = np.array([0.5, 0.0, np.sqrt(0.75)])
     wi_many = dirs(n)
@@ -405,7 +406,7 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         step(1)
         out["fft_pipeline"] = fft_pipeline(sizes=(32, 48, 64, 96), repeat=1, check_cells=50, rt=rt)
         step(1)
-        out["brdf_eval"] = brdf_eval_rates(n=5_000, loop=50)
+        out["brdf_eval"] = brdf_eval_rates(n=5_000, loop=50, resolution=32)
         step(1)
         out["fft_threads"] = fft_threads(n=64, n_wavelengths=4, repeat=1)
         step(1)
