@@ -25,7 +25,7 @@ needs_llvm = pytest.mark.skipif(not (HAVE_MITSUBA and HAVE_LLVM), reason="no lib
 GOLD = dict(material="gold", alpha=0.3, nano="abc:sigma=10nm,B=2um,C=2.6", wavelength_step_nm=50.0,
             resolution=64)
 ANISO = dict(material="aluminium", alpha=0.15, alpha_y=0.4, nano="gaussian:sigma=15nm,corr_length=1.5um",
-             wavelength_step_nm=94.0, resolution=64)
+             wavelength_step_nm=157.0, resolution=64)   # 4 nodes: the anisotropic table is 4 azimuths deep
 PLASTIC = dict(material="1.5", alpha=0.25, kd=0.6, nano="abc:sigma=20nm,B=2um,C=2.6", wavelength_step_nm=94.0,
                resolution=64)
 
