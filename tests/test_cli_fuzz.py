@@ -219,8 +219,9 @@ def _run(argv, capsys):
 EXAMPLES = 30
 
 #: fewer draws for the commands whose base invocation alone runs a whole scene or sweep (~1 s a draw on 2 cores);
-#: run has 7 drawable options (15 draws of up to four reach each several times), sweep 27 (each about twice)
-HEAVY_EXAMPLES = {"run": 15, "sweep": 15}
+#: run and plan have 7 and 6 drawable options (10 and 15 draws of up to four reach each several times), sweep 27
+#: (each about twice)
+HEAVY_EXAMPLES = {"run": 10, "sweep": 15, "plan": 15}
 
 
 #: the memory budget every draw runs under: legal but huge requests (``--resolution 1_000``: 1.6 GB) are refused by
