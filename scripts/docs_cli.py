@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from waveoptics.cli import build_parser
-from waveoptics.cli._options import OPTIONS, REMOVED_IN, RENAMED, RETIRED
+from waveoptics.cli._options import OPTIONS, REMOVED_IN, RENAMED
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -62,7 +62,6 @@ def compute() -> dict:
                     for o in sorted(OPTIONS.values(), key=lambda o: o.flag)],
         "removed_in": REMOVED_IN,
         "renamed": [{"command": cmd, "old": old, "new": new} for (cmd, old), new in sorted(RENAMED.items())],
-        "retired": [{"command": cmd, "old": old, "new": new} for (cmd, old), new in sorted(RETIRED.items())],
         "scene_keys": [{"option": f, "scene": k, "field": fld} for f, k, fld in SCENE_KEYS],
         "commands": [{"name": name, "description": p.description or "",
                       "options": [r for r in (_option(a) for a in p._actions) if r]}

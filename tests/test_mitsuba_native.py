@@ -16,6 +16,7 @@ import importlib.util
 
 import numpy as np
 import pytest
+from mitsuba_helpers import eval_pdf
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("mitsuba") is None,
                                 reason="Mitsuba 3 (extra 'render') is not installed")
@@ -98,32 +99,6 @@ def _pairs(n, seed):
     return f32(wi), f32(wo), f32(lam)
 
 
-def _eval_pdf(mi, plugin, wi, wo, lam):
-    """(f cos θ_o (n, channels), pdf (n,)) from the plugin, per point in scalar variants."""
-    import drjit as dr
-
-    ctx = mi.BSDFContext()
-    n = wi.shape[0]
-    if mi.variant().startswith("scalar"):
-        got, pdf = [], []
-        for j in range(n):
-            si = dr.zeros(mi.SurfaceInteraction3f)
-            si.wi = mi.Vector3f(*[float(x) for x in wi[j]])
-            if mi.is_spectral:
-                si.wavelengths = mi.Spectrum(*[float(x) for x in lam[j]])
-            w = mi.Vector3f(*[float(x) for x in wo[j]])
-            got.append(np.array(plugin.eval(ctx, si, w), dtype=float).ravel())
-            pdf.append(float(plugin.pdf(ctx, si, w)))
-        return np.array(got), np.array(pdf)
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.wi = mi.Vector3f(np.ascontiguousarray(wi.T.astype(np.float32)))
-    if mi.is_spectral:
-        si.wavelengths = mi.Spectrum(np.ascontiguousarray(lam.T.astype(np.float32)))
-    w = mi.Vector3f(np.ascontiguousarray(wo.T.astype(np.float32)))
-    got = np.array(plugin.eval(ctx, si, w), dtype=float).reshape(-1, n).T
-    return got, np.array(plugin.pdf(ctx, si, w), dtype=float).ravel()
-
-
 def _assert_close(got, want, what):
     scale = np.maximum(np.abs(want), 1e-3 * np.abs(want).max())
     rel = np.abs(got - want) / scale
@@ -141,7 +116,7 @@ def test_eval_and_pdf_equal_the_numpy_model(variant, case):
     model = _model(case)
     plugin = mi.load_dict({"type": name})
     wi, wo, lam = _pairs(300, seed=len(case) + len(variant))
-    got, pdf = _eval_pdf(mi, plugin, wi, wo, lam)
+    got, pdf = eval_pdf(mi, plugin, wi, wo, lam)
     if mi.is_spectral:
         want = model.eval(wi[:, None, :], wo[:, None, :], lam) * wo[:, 2:3]
         want_pdf = model.pdf(wi, wo, lam[:, 0])
@@ -236,8 +211,8 @@ def test_without_nano_roughness_it_is_mitsubas_roughconductor_pointwise():
     ours = mi.load_dict({"type": NATIVE_PLUGIN_NAME, **ROUGH})
     ref = mi.load_dict({"type": "roughconductor", "distribution": "ggx", "alpha": 0.3, "eta": 0.2, "k": 3.0})
     wi, wo, lam = _pairs(400, seed=9)
-    got, pdf = _eval_pdf(mi, ours, wi, wo, lam)
-    want, want_pdf = _eval_pdf(mi, ref, wi, wo, lam)
+    got, pdf = eval_pdf(mi, ours, wi, wo, lam)
+    want, want_pdf = eval_pdf(mi, ref, wi, wo, lam)
     np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-6 * want.max())
     np.testing.assert_allclose(pdf, want_pdf, rtol=1e-4, atol=1e-6 * want_pdf.max())
 
@@ -321,7 +296,7 @@ def test_mono_variant_gives_the_luminance_of_the_rgb_value():
     mi, name = _plugin("llvm_ad_mono", "dielectric")
     model = _model("dielectric")
     wi, wo, lam = _pairs(200, seed=2)
-    got, pdf = _eval_pdf(mi, mi.load_dict({"type": name}), wi, wo, lam)
+    got, pdf = eval_pdf(mi, mi.load_dict({"type": name}), wi, wo, lam)
     want = (model.eval_rgb(wi, wo) * wo[:, 2:3]) @ np.array([0.212671, 0.715160, 0.072169])
     _assert_close(got[:, 0], want, "mono eval")
     _assert_close(pdf, model.pdf_rgb(wi, wo), "mono pdf")

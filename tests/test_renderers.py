@@ -11,6 +11,7 @@ import os
 
 import numpy as np
 import pytest
+from mitsuba_helpers import eval_pdf
 
 from waveoptics import brdf
 from waveoptics.errors import WaveopticsError
@@ -146,34 +147,13 @@ def test_plugin_passes_mitsubas_chi2(variant, case, theta_deg):   # each case on
                                                                           if HAVE_LLVM else []))
 def test_plugin_eval_equals_library_eval(variant):
     mi = wm.register(variant)
-    import drjit as dr
-
     model = renderer_brdf(**GOLD)
     plugin = mi.load_dict(_plugin_dict(GOLD))
     rng = np.random.default_rng(11)
     n = 40
     wi, wo = _dirs(rng, n, 85.0), _dirs(rng, n, 85.0)
     lam = rng.uniform(360.0, 830.0, (n, 4))
-    ctx = mi.BSDFContext()
-    if variant.startswith("scalar"):
-        got, pdf = [], []
-        for j in range(n):
-            si = dr.zeros(mi.SurfaceInteraction3f)
-            si.wi = mi.Vector3f(*[float(x) for x in wi[j]])
-            if mi.is_spectral:
-                si.wavelengths = mi.Spectrum(*[float(x) for x in lam[j]])
-            w = mi.Vector3f(*[float(x) for x in wo[j]])
-            got.append(np.array(plugin.eval(ctx, si, w), dtype=float).ravel())
-            pdf.append(float(plugin.pdf(ctx, si, w)))
-        got, pdf = np.array(got), np.array(pdf)
-    else:
-        si = dr.zeros(mi.SurfaceInteraction3f, n)
-        si.wi = mi.Vector3f(np.ascontiguousarray(wi.T.astype(np.float32)))
-        if mi.is_spectral:
-            si.wavelengths = mi.Spectrum(np.ascontiguousarray(lam.T.astype(np.float32)))
-        w = mi.Vector3f(np.ascontiguousarray(wo.T.astype(np.float32)))
-        got = np.array(plugin.eval(ctx, si, w), dtype=float).reshape(-1, n).T
-        pdf = np.array(plugin.pdf(ctx, si, w), dtype=float)
+    got, pdf = eval_pdf(mi, plugin, wi, wo, lam)
     if mi.is_spectral:
         want = model.eval(wi[:, None, :], wo[:, None, :], lam) * wo[:, 2:3]
         want_pdf = model.pdf(wi, wo, lam[:, 0])

@@ -4,15 +4,14 @@ and, where needed, a note on what that command does with it. A test holds every 
 ``docs/cli.md`` is generated from the parsers.
 
 Renamed options keep working for one release as hidden aliases that print a one-line deprecation warning
-(:data:`RENAMED`; the changelog lists them). Names retired for one name per quantity (:data:`RETIRED`) are refused
-with a one-line error naming the new option.
+(:data:`RENAMED`; the changelog lists them), also those renamed so that a quantity has one name everywhere.
 """
 from __future__ import annotations
 
 import argparse
 from dataclasses import dataclass
 
-__all__ = ["Option", "OPTIONS", "RENAMED", "RETIRED", "REMOVED_IN", "option", "renamed", "retired", "now_default",
+__all__ = ["Option", "OPTIONS", "RENAMED", "REMOVED_IN", "option", "renamed", "now_default",
            "deprecations"]
 
 #: the release that drops the aliases of :data:`RENAMED`
@@ -112,15 +111,10 @@ RENAMED = {
     ("cost", "--model"): "--generator",
     ("cost", "--realizations"): "--realization-counts",
     ("surface generate", "--model"): "--generator",
-}
-
-#: (command, old flag) → new flag: options renamed so that a quantity has one name everywhere (issue 30); the old
-#: flag is refused with a one-line error naming the new one (it would otherwise keep a second name alive)
-RETIRED = {
+    # one name per quantity (issue 30): colour accuracy is ΔE2000, --delta-e, in every command
     **{(cmd, "--accuracy"): "--delta-e" for cmd in ("simulate", "compare", "table", "sweep")},
     ("cost", "--colour-accuracy"): "--delta-e",
 }
-
 
 def _help(meaning: str, note: str | None, default) -> str:
     text = meaning + (f"; {note}" if note else "")
@@ -176,23 +170,6 @@ def renamed(parser, command: str, old: str, *, dest: str, type=None, append: boo
         type = target.type
     parser.add_argument(old, dest=dest, action=_Renamed, new_flag=new, type=type, default=argparse.SUPPRESS,
                         store="append" if append else None, help=argparse.SUPPRESS, choices=choices)
-
-
-class _Retired(argparse.Action):
-    """A retired option's old flag: refused with one line naming its new name."""
-
-    def __init__(self, option_strings, dest, new_flag=None, **kwargs):
-        self.new_flag = new_flag
-        super().__init__(option_strings, dest, nargs="?", **kwargs)
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        parser.error(f"{option_string} is renamed {self.new_flag} (one name per quantity); use {self.new_flag}")
-
-
-def retired(parser, command: str, old: str) -> None:
-    """Refuse the old flag *old* of *command* (:data:`RETIRED`) with a one-line error naming the new flag."""
-    parser.add_argument(old, dest="_retired_" + old.strip("-").replace("-", "_"), action=_Retired,
-                        new_flag=RETIRED[(command, old)], default=argparse.SUPPRESS, help=argparse.SUPPRESS)
 
 
 class _NowDefault(argparse.Action):

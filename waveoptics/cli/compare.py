@@ -6,7 +6,7 @@ import os
 from ..errors import WaveopticsError
 from ..units import ANGLE_UNITS, check_theta, parse_number_list
 from ._common import add_common, add_output, angle_arg, emit
-from ._options import option, renamed, retired
+from ._options import option, renamed
 
 
 def register(sub):
@@ -19,7 +19,7 @@ def register(sub):
                                    "colour and of rendered spheres. Same surface options as 'simulate'.")
 
     add_scene_options(p)
-    retired(p, "compare", "--accuracy")
+    renamed(p, "compare", "--accuracy", dest="delta_e")
     option(p, "--incident-angles", default="0:80:10")
     renamed(p, "compare", "--angles", dest="incident_angles")
     p.add_argument("--tail", type=angle_arg, default=10.0, metavar="DEG",

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from ..errors import WaveopticsError
 from ..io.files import prepare_outdir
-from ..units import parse_direction
+from ..units import parse_direction, parse_number_list
 from ..vocabulary import COST_BUDGET_S, COST_DELTA_E, COST_TARGET_ERROR, DEFAULT_MATERIAL
 from ._common import add_common, add_output, add_surface, emit, load_surface, parse_budget, progress
-from ._options import option, renamed, retired
+from ._options import option, renamed
 
 
 def _list(text, conv, name):
@@ -46,7 +46,8 @@ def register(sub) -> None:
                    help="direction-grid resolutions; each must divide the largest (default 32,64,128)")
     option(p, "--delta-e", default=list(COST_DELTA_E), nargs="+",
            note="one rung of the ladder per value, e.g. --delta-e 4 1 0.5 (default 4 1 0.5)")
-    retired(p, "cost", "--colour-accuracy")
+    # the old flag took a comma list (4,1,0.5); the new one takes values apart (--delta-e 4 1 0.5)
+    renamed(p, "cost", "--colour-accuracy", dest="delta_e", type=lambda s: parse_number_list(s, name="delta_e"))
     p.add_argument("--realization-counts", default=None, metavar="N,...",
                    help="numbers of surface realizations averaged, one ladder step each (default 1,2 for random "
                         "models, 1 otherwise)")

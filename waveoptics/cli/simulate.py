@@ -9,7 +9,7 @@ from ..request import SimulationRequest, request_default
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
 from ._common import add_common, add_output, add_surface, emit, load_surface, progress, warn_if_long
-from ._options import option, retired
+from ._options import option, renamed
 
 
 def add_scene_options(p) -> None:
@@ -107,7 +107,7 @@ def register(sub):
                     "previews, sphere renders of both models and their ΔE2000, lobe cross-sections and "
                     "summary.json. With no options it runs a nano-rough aluminium under D65.")
     add_scene_options(p)
-    retired(p, "simulate", "--accuracy")
+    renamed(p, "simulate", "--accuracy", dest="delta_e")
     option(p, "--sphere-size", default=256)
     option(p, "--environment", note="also render both spheres lit by it (multiple importance sampling at "
                                     "--sphere-size; sphere_env_*.exr and sphere_env.png)")

@@ -12,7 +12,7 @@ from ..request import request_default
 from ..units import ANGLE_UNITS, parse_number_list, parse_wavelengths
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, PRECISIONS
 from ._common import SURFACE_FORMATS_HELP, add_common, add_workers, emit, progress
-from ._options import option, retired
+from ._options import option, renamed
 
 SCENE_SUFFIXES = (".toml",)
 
@@ -39,7 +39,7 @@ def add_case_options(p, *, command: str, resolution: int) -> None:
     option(p, "--wavelengths", note="default: chosen from the illuminant and --delta-e")
     option(p, "--illuminant", note=f"for RGB and the default wavelengths (default {d('illuminant')})")
     option(p, "--delta-e", note=f"default {d('delta_e')}")
-    retired(p, command, "--accuracy")
+    renamed(p, command, "--accuracy", dest="delta_e")
     option(p, "--resolution", note=f"default {resolution}")
     p.set_defaults(default_resolution=resolution)
     option(p, "--solver", default=d("solver"), choices=NANO_SOLVERS,
