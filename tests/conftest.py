@@ -38,13 +38,25 @@ def rng():
     return np.random.default_rng(12345)
 
 
+#: a cost model timed by ``planning.costmodel.calibrate`` on a quiet 2-core machine (10 s to time), seeded into the
+#: tests' cache so that each pytest-xdist worker does not spend that time re-timing it, and the planner's estimates
+#: are the same on every run; the tests of the calibration itself time their own (tests/test_cache.py,
+#: test_planning.py::test_estimate_tracks_measured_time)
+SEEDED_COST_MODEL = {"call": 0.00357, "cell": 1.004e-06, "cell_wl": 0.0, "diffuse_cell_wl": 8.69e-07,
+                     "psd_wl": 0.00121, "psd_cell_wl": 2.44e-05, "psd_term": 7.09e-07, "fft_unit": 4.55e-09,
+                     "band_wl": 0.830, "calibration_s": 9.84}
+
+
 @pytest.fixture(autouse=True, scope="session")
 def _private_cache(tmp_path_factory):
     """The per-user cache (cost-model calibration, plans) lives in a temporary directory during the tests."""
     import os
 
+    from waveoptics import cache
+
     old = os.environ.get("WAVEOPTICS_CACHE_DIR")
     os.environ["WAVEOPTICS_CACHE_DIR"] = str(tmp_path_factory.mktemp("wocache"))
+    cache.put("calibration", "cost_model", SEEDED_COST_MODEL)
     yield
     if old is None:
         os.environ.pop("WAVEOPTICS_CACHE_DIR", None)

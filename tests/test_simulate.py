@@ -82,8 +82,8 @@ def test_no_nano_roughness_gives_identical_models(tmp_path):
 
 
 def test_split_surface_run(tmp_path, capsys):
-    micro = surfaces.gaussian(sigma=150e-9, corr_length=15e-6, size=64e-6, samples=512, seed=1)
-    nano = surfaces.gaussian(sigma=8e-9, corr_length=0.5e-6, size=64e-6, samples=512, seed=2)
+    micro = surfaces.gaussian(sigma=150e-9, corr_length=15e-6, size=32e-6, samples=256, seed=1)
+    nano = surfaces.gaussian(sigma=8e-9, corr_length=0.5e-6, size=32e-6, samples=256, seed=2)
     surfaces.save(micro + nano, tmp_path / "both.npz")
     out = tmp_path / "split"
     # one wavelength on a 16² grid: the split's anisotropic micro NDF makes the sphere table 44 field lobes
