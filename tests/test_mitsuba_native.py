@@ -7,7 +7,8 @@
 * Mitsuba's own χ² test accepts sample and pdf (metal at 30° and 80°, dielectric with diffuse at 0° and 80°);
 * without nano-roughness it is Mitsuba's ``roughconductor`` (another program): eval and pdf pointwise (measured
   1.2e-6), a rendered sphere (mean relative pixel difference measured 0.7 % at 128 spp, 0.34 % at 512: Monte Carlo
-  noise; bound 2 %), and in polarized variants every element of its Mueller matrix (measured 5e-7 of the largest).
+  noise; bound 2 %), and in polarized variants every element of its Mueller matrix (measured 5e-7 of the largest);
+* the polarized diffracted part: tests/test_mitsuba_polarized.py.
 """
 from __future__ import annotations
 
@@ -260,8 +261,8 @@ def test_polarized_without_nano_roughness_is_mitsubas_polarized_roughconductor()
 
 
 def test_polarized_intensity_is_the_unpolarized_model():
-    """M₀₀ of the polarized BSDF is the NumPy model's f cos θ_o (the parts other than the coherent one are
-    depolarizers)."""
+    """M₀₀ of the polarized BSDF is the NumPy model's f cos θ_o (the polarization of the diffracted part, normalized
+    by its own M₀₀, leaves the intensity unchanged; tests/test_mitsuba_polarized.py tests the rest)."""
     mi, name = _plugin("llvm_ad_spectral_polarized", "metal")
     model = _model("metal")
     wi, wo, lam = _pairs(300, seed=13)

@@ -15,10 +15,17 @@ those of the ``waveoptics`` plugin:
 As in the ``waveoptics`` plugin, sampling draws on ``sample2`` only (its first number chooses the node and the lobe,
 remapped each time); ``sample1`` is not used.
 
-* polarized spectral variants: a Mueller matrix whose (0, 0) element is the unpolarized f cos θ_o: the coherent
-  part polarizes as a mirror facet does (Fresnel amplitudes of the complex index, in roughconductor's frames, so
-  without nano-roughness it is Mitsuba's polarized roughconductor), the other parts are depolarizers (the
-  polarization of the diffracted lobe is not modelled here).
+* polarized spectral variants: a Mueller matrix whose (0, 0) element is the unpolarized f cos θ_o.
+
+  - The coherent part polarizes as a mirror facet does (Fresnel amplitudes of the complex index, in roughconductor's
+    frames), so without nano-roughness it is Mitsuba's polarized roughconductor.
+  - The diffracted part is its scalar lobe times the normalized Mueller matrix M(J)/M(J)₀₀ of the first-order
+    (Rayleigh-Rice) Jones matrix J = [[q_ss, q_ps], [q_sp, q_pp]] at (ω_i, ω_o) in the macro s/p frames
+    (s = ẑ × ω, p = k × s), rotated onto Mitsuba's Stokes bases (:mod:`waveoptics.renderers.drjit_polar`): a
+    non-depolarizing Mueller matrix, the same for a Kirchhoff or a Rayleigh-Rice table (the small-slope
+    polarization kernel; see :func:`_diffracted_mueller`). On a dielectric its p light vanishes at the mirror
+    direction at Brewster's angle, as the coherent part's does.
+  - The diffuse substrate and the multiple-scattering lobe stay depolarizers (their polarization is not modelled).
 
 Mitsuba's ``eval`` is f cos θ_o; ``si.wi`` is the first direction, ``wo`` the second.
 
@@ -27,6 +34,9 @@ References
 .. [1] W. Jakob, S. Speierer, N. Roussel, M. Nimier-David et al., *Mitsuba 3 renderer*, 2022,
    https://mitsuba-renderer.org (``mi.BSDF``, ``mi.register_bsdf``, ``mitsuba.chi2``).
 .. [2] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., 2023, §2.4 (sample remapping).
+.. [3] T. A. Germer, Appl. Opt. 36(33), 8798–8805, 1997 (the first-order Jones matrix of a rough surface);
+   R. A. Chipman, W. S. T. Lam, G. Young, *Polarized Light and Optical Systems*, CRC 2018, §6.9 (its Mueller
+   matrix).
 """
 from __future__ import annotations
 
