@@ -1,8 +1,9 @@
 """The polarization of the diffracted lobe for Mitsuba's polarized variants: the Mueller matrix of a 2×2 complex Jones
 matrix, and the first-order (Rayleigh-Rice) Jones matrix of a rough interface with the s/p frames it is written in.
 
-Everything here is plain arithmetic on (real, imaginary) pairs, so the same code runs on Python floats, NumPy arrays
-and Dr.Jit arrays (scalar, LLVM and CUDA variants); only the square roots take the Dr.Jit module ``dr``.
+Complex numbers are (real, imaginary) pairs: :func:`mueller_from_jones` is plain arithmetic (Python floats, NumPy or
+Dr.Jit arrays); the other functions take the Dr.Jit module ``dr`` for square roots and selects, so they run in the
+scalar, LLVM and CUDA variants alike.
 
 Conventions (those of :func:`waveoptics.scatter.q_factors` and of Mitsuba 3's ``mueller.h``):
 
@@ -10,8 +11,11 @@ Conventions (those of :func:`waveoptics.scatter.q_factors` and of Mitsuba 3's ``
   travels along k_i = −ω_i and then k_o = ω_o.
 * s = ẑ × ω / |ẑ × ω| for each of the two directions, p = k × s (k the direction of travel). Mitsuba's Stokes frame
   of a beam travelling along k is (x = its basis vector, y = k × x), so (s, p) is a Stokes frame of Mitsuba with s
-  as its basis vector. At normal incidence the plane of incidence is the x–z plane, for ω_o along the normal
-  o = −(ω_i's azimuth), as :func:`waveoptics.scatter.angles.scattering_angles` takes them.
+  as its basis vector (the example in ``rotate_stokes_basis``'s documentation fixes y = k × x). At normal
+  incidence the plane of incidence is the x–z plane, for ω_o along the normal o = −(ω_i's azimuth), as
+  :func:`waveoptics.scatter.angles.scattering_angles` takes them. That Germer's q factors are written in these
+  frames (p = k × s for both beams, not s × k) is what makes the first-order field at normal incidence keep the
+  incident polarization in the laboratory frame, as rotational symmetry requires (tests/test_mitsuba_polarized.py).
 * Jones matrix J = [[J_ss, J_sp], [J_ps, J_pp]] as E_out = J E_in in those frames (row: scattered polarization,
   column: incident), so J = [[q_ss, q_ps], [q_sp, q_pp]] with the library's q_ab (a incident, b scattered).
 * Stokes vector (S0, S1, S2, S3) = (|E_s|² + |E_p|², |E_s|² − |E_p|², 2 Re E_s E_p*, 2 Im E_s E_p*) for the
