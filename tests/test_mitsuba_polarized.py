@@ -8,7 +8,7 @@ References written here, not taken from the library:
 * the plugin's diffracted Mueller matrix, normalized, against one built here from Germer's (1997, eqs. 17–20)
   q_ss, q_sp, q_ps, q_pp, the s/p frames (s = ẑ × ω, p = k × s), A (J ⊗ J*) A⁻¹ and the rotation onto Mitsuba's
   Stokes bases (Duff et al. 2017's orthonormal basis, Mitsuba's rotator), for glass and aluminium, both transport
-  modes;
+  modes (measured 1.4e-6), and in the scalar variant;
 * at normal incidence the first-order field keeps the incident polarization in the laboratory frame (rotational
   symmetry), so the diffracted Mueller matrix is Mitsuba's ``specular_reflection(1, η)`` with one s axis for both
   beams (another program, and independent of the s/p conventions above);
