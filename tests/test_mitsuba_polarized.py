@@ -234,7 +234,7 @@ def test_scalar_variant_gives_the_same_diffracted_mueller_matrix():
 @pytest.mark.parametrize("material", ["1.5+0j", "aluminium"])
 def test_at_normal_incidence_the_diffracted_light_keeps_the_incident_polarization(material):
     """Light along −ẑ, viewed 1° off the normal at N_PAIRS azimuths: Mitsuba's normal-incidence mirror,
-    ``specular_reflection(1, η)``, with the same s axis for both beams, to O(θ_o²) = 3e-4."""
+    ``specular_reflection(1, η)``, with the same s axis for both beams, to O(θ_o²) = 3e-4 (measured 1.5e-4)."""
     mi, plugin = _plugin(material)
     phi = np.linspace(0.0, 2 * np.pi, N_PAIRS, endpoint=False) + 0.1
     t = np.radians(1.0)
@@ -249,7 +249,7 @@ def test_at_normal_incidence_the_diffracted_light_keeps_the_incident_polarizatio
         mirror = np.array(mi.mueller.specular_reflection(mi.Float(1.0), e)).reshape(4, 4)
         want = _normalized(in_mitsubas_frames(np.broadcast_to(mirror, (N_PAIRS, 4, 4)), light, view, x, x))
         err = np.abs(_normalized(got[i]) - want).max()
-        assert err < 2e-3, (i, err)
+        assert err < 5e-4, (i, err)
 
 
 @pytest.mark.parametrize("material", ["1.5+0j", "aluminium"])
