@@ -26,3 +26,16 @@ def eval_pdf(mi, plugin, wi, wo, lam):
     w = mi.Vector3f(np.ascontiguousarray(wo.T.astype(np.float32)))
     got = np.array(plugin.eval(ctx, si, w), dtype=float).reshape(-1, n).T
     return got, np.array(plugin.pdf(ctx, si, w), dtype=float).ravel()
+
+
+def mueller_matrices(mi, plugin, wi, wo, lam, mode):
+    """The plugin's Mueller matrices f cos θ_o (4, 4, 4 wavelengths, n) in an LLVM polarized variant; *mode* a
+    ``mi.TransportMode``."""
+    import drjit as dr
+
+    n = wi.shape[0]
+    si = dr.zeros(mi.SurfaceInteraction3f, n)
+    si.wi = mi.Vector3f(np.ascontiguousarray(wi.T.astype(np.float32)))
+    si.wavelengths = mi.UnpolarizedSpectrum(np.ascontiguousarray(lam.T.astype(np.float32)))
+    m = plugin.eval(mi.BSDFContext(mode), si, mi.Vector3f(np.ascontiguousarray(wo.T.astype(np.float32))))
+    return np.array([[np.array(m[r][c], dtype=float).reshape(4, n) for c in range(4)] for r in range(4)])

@@ -7,7 +7,8 @@
 * Mitsuba's own χ² test accepts sample and pdf (metal at 30° and 80°, dielectric with diffuse at 0° and 80°);
 * without nano-roughness it is Mitsuba's ``roughconductor`` (another program): eval and pdf pointwise (measured
   1.2e-6), a rendered sphere (mean relative pixel difference measured 0.7 % at 128 spp, 0.34 % at 512: Monte Carlo
-  noise; bound 2 %), and in polarized variants every element of its Mueller matrix (measured 5e-7 of the largest).
+  noise; bound 2 %), and in polarized variants every element of its Mueller matrix (measured 5e-7 of the largest);
+* the polarized diffracted part: tests/test_mitsuba_polarized.py.
 """
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ import importlib.util
 
 import numpy as np
 import pytest
-from mitsuba_helpers import eval_pdf
+from mitsuba_helpers import eval_pdf, mueller_matrices
 
 pytestmark = pytest.mark.skipif(importlib.util.find_spec("mitsuba") is None,
                                 reason="Mitsuba 3 (extra 'render') is not installed")
@@ -245,18 +246,6 @@ def test_without_nano_roughness_the_render_is_mitsubas_roughconductor():
     assert diff < 0.02, diff
 
 
-def _mueller(mi, plugin, wi, wo, lam, mode):
-    """The plugin's Mueller matrices (4, 4, 4 wavelengths, n) in an LLVM polarized variant."""
-    import drjit as dr
-
-    n = wi.shape[0]
-    si = dr.zeros(mi.SurfaceInteraction3f, n)
-    si.wi = mi.Vector3f(np.ascontiguousarray(wi.T.astype(np.float32)))
-    si.wavelengths = mi.UnpolarizedSpectrum(np.ascontiguousarray(lam.T.astype(np.float32)))
-    m = plugin.eval(mi.BSDFContext(mode), si, mi.Vector3f(np.ascontiguousarray(wo.T.astype(np.float32))))
-    return np.array([[np.array(m[r][c], dtype=float).reshape(4, n) for c in range(4)] for r in range(4)])
-
-
 def test_polarized_without_nano_roughness_is_mitsubas_polarized_roughconductor():
     """Every Mueller element, in both transport modes (the frames of the Stokes vectors follow the light)."""
     from waveoptics.renderers.mitsuba_native import NATIVE_PLUGIN_NAME, register_native
@@ -266,18 +255,18 @@ def test_polarized_without_nano_roughness_is_mitsubas_polarized_roughconductor()
     ref = mi.load_dict({"type": "roughconductor", "distribution": "ggx", "alpha": 0.3, "eta": 0.2, "k": 3.0})
     wi, wo, lam = _pairs(300, seed=12)
     for mode in (mi.TransportMode.Radiance, mi.TransportMode.Importance):
-        got, want = _mueller(mi, ours, wi, wo, lam, mode), _mueller(mi, ref, wi, wo, lam, mode)
+        got, want = mueller_matrices(mi, ours, wi, wo, lam, mode), mueller_matrices(mi, ref, wi, wo, lam, mode)
         assert np.abs(want[0, 1]).max() > 0.05 * want[0, 0].max()          # it does polarize
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-5 * np.abs(want).max())
 
 
 def test_polarized_intensity_is_the_unpolarized_model():
-    """M₀₀ of the polarized BSDF is the NumPy model's f cos θ_o (the parts other than the coherent one are
-    depolarizers)."""
+    """M₀₀ of the polarized BSDF is the NumPy model's f cos θ_o (the polarization of the diffracted part, normalized
+    by its own M₀₀, leaves the intensity unchanged; tests/test_mitsuba_polarized.py tests the rest)."""
     mi, name = _plugin("llvm_ad_spectral_polarized", "metal")
     model = _model("metal")
     wi, wo, lam = _pairs(300, seed=13)
-    got = _mueller(mi, mi.load_dict({"type": name}), wi, wo, lam, mi.TransportMode.Radiance)[0, 0].T
+    got = mueller_matrices(mi, mi.load_dict({"type": name}), wi, wo, lam, mi.TransportMode.Radiance)[0, 0].T
     want = model.eval(wi[:, None, :], wo[:, None, :], lam) * wo[:, 2:3]
     _assert_close(got, want, "M00")
 

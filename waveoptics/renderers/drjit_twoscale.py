@@ -379,6 +379,12 @@ class DrJitTwoScale(DiffractedLobes):
     def f_parts(self, g, j):
         """(c, F(θ_d), rest) of node j: f = c F(θ_d) + rest, c = G D A / (4 cos θ_i cos θ_o) the coherent part
         without its Fresnel factor, rest the diffracted, diffuse and multiple-scattering parts (1/sr)."""
+        coh, F, rest, diffracted = self.f_terms(g, j)
+        return coh, F, rest + diffracted
+
+    def f_terms(self, g, j):
+        """(c, F(θ_d), rest, diffracted) of node j: f = c F(θ_d) + rest + diffracted, as :meth:`f_parts` with the
+        diffracted part (0 without nano-roughness) apart from the diffuse and multiple-scattering ones (1/sr)."""
         dr = self.dr
         coh = g.spec * self.A(g.theta_d, j)
         rest = g.spec * 0.0
@@ -388,9 +394,8 @@ class DrJitTwoScale(DiffractedLobes):
             rest = rest + g.diffuse * dr.select(t > 0, (1.0 - Fi) * (1.0 - Fo) / dr.select(t > 0, t, 1.0), 0.0)
         if self.ms:
             rest = rest + g.ms * self._node_value("Fms", j)
-        if self.rough:
-            rest = rest + self.f_diffraction(g, j)
-        return coh, self.F(g.cos_d, j), rest
+        diffracted = self.f_diffraction(g, j) if self.rough else g.spec * 0.0
+        return coh, self.F(g.cos_d, j), rest, diffracted
 
     def f_node(self, g, j):
         """f (1/sr) of node j at the pairs of *g* (library ``TwoScaleParts._parts``)."""

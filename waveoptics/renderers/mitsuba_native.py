@@ -15,10 +15,17 @@ those of the ``waveoptics`` plugin:
 As in the ``waveoptics`` plugin, sampling draws on ``sample2`` only (its first number chooses the node and the lobe,
 remapped each time); ``sample1`` is not used.
 
-* polarized spectral variants: a Mueller matrix whose (0, 0) element is the unpolarized f cos θ_o: the coherent
-  part polarizes as a mirror facet does (Fresnel amplitudes of the complex index, in roughconductor's frames, so
-  without nano-roughness it is Mitsuba's polarized roughconductor), the other parts are depolarizers (the
-  polarization of the diffracted lobe is not modelled here).
+* polarized spectral variants: a Mueller matrix whose (0, 0) element is the unpolarized f cos θ_o.
+
+  - The coherent part polarizes as a mirror facet does (Fresnel amplitudes of the complex index, in roughconductor's
+    frames), so without nano-roughness it is Mitsuba's polarized roughconductor.
+  - The diffracted part is its scalar lobe times the normalized Mueller matrix M(J)/M(J)₀₀ of the first-order
+    (Rayleigh-Rice) Jones matrix J = [[q_ss, q_ps], [q_sp, q_pp]] at (ω_i, ω_o) in the macro s/p frames
+    (s = ẑ × ω, p = k × s), rotated onto Mitsuba's Stokes bases (:mod:`waveoptics.renderers.drjit_polar`): a
+    non-depolarizing Mueller matrix, the same for a Kirchhoff or a Rayleigh-Rice table (the small-slope
+    polarization kernel; see :func:`_diffracted_mueller`). On a dielectric its p light vanishes at the mirror
+    direction at Brewster's angle, as the coherent part's does.
+  - The diffuse substrate and the multiple-scattering lobe stay depolarizers (their polarization is not modelled).
 
 Mitsuba's ``eval`` is f cos θ_o; ``si.wi`` is the first direction, ``wo`` the second.
 
@@ -27,10 +34,14 @@ References
 .. [1] W. Jakob, S. Speierer, N. Roussel, M. Nimier-David et al., *Mitsuba 3 renderer*, 2022,
    https://mitsuba-renderer.org (``mi.BSDF``, ``mi.register_bsdf``, ``mitsuba.chi2``).
 .. [2] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 4th ed., 2023, §2.4 (sample remapping).
+.. [3] T. A. Germer, Appl. Opt. 36(33), 8798–8805, 1997 (the first-order Jones matrix of a rough surface);
+   R. A. Chipman, W. S. T. Lam, G. Young, *Polarized Light and Optical Systems*, CRC 2018, §6.9 (its Mueller
+   matrix).
 """
 from __future__ import annotations
 
 from ..errors import WaveopticsError
+from .drjit_polar import mueller_from_jones, rayleigh_rice_jones, sp_frames
 from .drjit_twoscale import DrJitTwoScale, unsupported
 from .mitsuba import model_from, load_mitsuba
 
@@ -70,10 +81,15 @@ def native_tables(model, mi) -> DrJitTwoScale:
 
 
 def _mueller(mi, dr, tab, ctx, g, si, wo):
-    """Polarized variants: the Mueller matrix of f (cos θ_o not applied). The coherent part polarizes by the complex
-    Fresnel amplitudes of each node (``mi.mueller.specular_reflection``), in the frames Mitsuba's roughconductor
-    uses (s axes normal to the facet's plane of reflection, rotated onto the Stokes bases of −ŵ_o and ŵ_i); the
-    diffracted, diffuse and multiple-scattering parts are depolarizers (their polarization is not modelled here).
+    """Polarized variants: the Mueller matrix of f (cos θ_o not applied).
+
+    * The coherent part polarizes by the complex Fresnel amplitudes of each node
+      (``mi.mueller.specular_reflection``), in the frames Mitsuba's roughconductor uses (s axes normal to the facet's
+      plane of reflection, rotated onto the Stokes bases of −ŵ_o and ŵ_i).
+    * The diffracted part is its scalar value times the normalized Mueller matrix M(J)/M(J)₀₀ of the first-order
+      Jones matrix J of each node's permittivity at the pair (:func:`_diffracted_mueller`), in the macro s/p frames
+      rotated onto the same Stokes bases.
+    * The diffuse and multiple-scattering parts are depolarizers (their polarization is not modelled here).
 
     References
     ----------
@@ -89,16 +105,23 @@ def _mueller(mi, dr, tab, ctx, g, si, wo):
     collinear = dr.all(s_in == mi.Vector3f(0.0))
     s_in = dr.select(collinear, mi.Vector3f(1.0, 0.0, 0.0), dr.normalize(s_in))
     s_out = dr.select(collinear, mi.Vector3f(1.0, 0.0, 0.0), dr.normalize(s_out))
+    in_basis, out_basis = mi.mueller.stokes_basis(-wo_hat), mi.mueller.stokes_basis(wi_hat)
+    jones = _jones_parts(mi, dr, wo_hat, wi_hat) if tab.rough else None
     entries = [[[] for _ in range(4)] for _ in range(4)]
     for i in range(4):
         a, b, t = tab.lambda_bracket(si.wavelengths[i])
-        M = 0.0
+        Mc, Md, dep = 0.0, 0.0, 0.0
         for j, w in ((a, 1.0 - t), (b, t)):
-            coh, _, rest = tab.f_parts(g, j)
+            coh, _, rest, diffracted = tab.f_terms(g, j)
             eta = mi.Complex2f(tab._node_value("eta_re", j), tab._node_value("eta_im", j))
-            M = M + mi.mueller.specular_reflection(cos_d, eta) * (w * coh) + mi.mueller.depolarizer(w * rest)
-        M = mi.mueller.rotate_mueller_basis(M, -wo_hat, s_in, mi.mueller.stokes_basis(-wo_hat),
-                                            wi_hat, s_out, mi.mueller.stokes_basis(wi_hat))
+            Mc = Mc + mi.mueller.specular_reflection(cos_d, eta) * (w * coh)
+            dep = dep + w * rest
+            if jones is not None:
+                Md = Md + _diffracted_mueller(mi, dr, tab, jones, j) * (w * diffracted)
+        M = mi.mueller.rotate_mueller_basis(Mc, -wo_hat, s_in, in_basis, wi_hat, s_out, out_basis)
+        if jones is not None:
+            M = M + mi.mueller.rotate_mueller_basis(Md, -wo_hat, jones[1], in_basis, wi_hat, jones[2], out_basis)
+        M = M + mi.mueller.depolarizer(dep)
         for r in range(4):
             for c in range(4):
                 entries[r][c].append(M[r][c])
@@ -107,6 +130,47 @@ def _mueller(mi, dr, tab, ctx, g, si, wo):
         for c in range(4):
             out[r, c] = mi.UnpolarizedSpectrum(*entries[r][c])
     return out
+
+
+def _jones_parts(mi, dr, w_light, w_view):
+    """The node-independent inputs of :func:`_diffracted_mueller`: (the pair in the library's order (ω_i towards
+    the light, ω_o towards the viewer), its :func:`waveoptics.renderers.drjit_polar.sp_frames`), and the s axes of
+    the incident and scattered frames as ``mi.Vector3f``."""
+    frames = sp_frames(dr, w_light, w_view)
+    (six, siy, _), (sox, soy, _), _ = frames
+    return (w_light, w_view, frames), mi.Vector3f(six, siy, 0.0), mi.Vector3f(sox, soy, 0.0)
+
+
+def _diffracted_mueller(mi, dr, tab, jones, j):
+    """Normalized Mueller matrix M(J)/M(J)₀₀ of node j's first-order Jones matrix J at the pair (frames: the s axes
+    of :func:`waveoptics.renderers.drjit_polar.sp_frames`, p = k × s).
+
+    The diffracted lobe of the two-scale model is first order in the nano heights: its field is the deterministic
+    Jones matrix J(ω_i, ω_o) times one random scalar (the height spectrum at the Bragg frequency), so its Mueller
+    matrix is the (PSD-weighted) pure Mueller matrix of J, and the scalar lobe (Kirchhoff or Rayleigh-Rice tables)
+    keeps its own (0, 0) value. J is Rayleigh-Rice's (Germer's q factors) for both lobes: the first order of the
+    small-slope approximation, which describes nano-roughness, has perturbation theory's polarization kernel;
+    Kirchhoff's tangent-plane polarization (the Fresnel amplitudes of the stationary facet) is only right near the
+    mirror direction, where the two agree in the plane of incidence (both vanish for p light at Brewster's angle).
+
+    References
+    ----------
+    .. [1] T. A. Germer, Appl. Opt. 36(33), 8798–8805, 1997 (q factors); J. M. Elson, J. M. Bennett, Opt. Eng.
+       18(2), 116–124, 1979.
+    .. [2] A. G. Voronovich, *Wave Scattering from Rough Surfaces*, 2nd ed., Springer 1999, ch. 6 (small-slope
+       approximation; its first order is perturbation theory's kernel).
+    .. [3] R. A. Chipman, W. S. T. Lam, G. Young, *Polarized Light and Optical Systems*, CRC 2018, §6.9
+       (Mueller matrix of a Jones matrix).
+    """
+    (wi, wo, frames), _, _ = jones
+    n, k = tab._node_value("eta_re", j), tab._node_value("eta_im", j)
+    eps = (n * n - k * k, 2.0 * n * k)                          # ε = (n + iκ)², κ ≥ 0 (e^{−iωt})
+    M = mueller_from_jones(rayleigh_rice_jones(dr, wi, wo, eps, frames))
+    m00 = M[0][0]
+    ok = m00 > 0
+    inv = 1.0 / dr.select(ok, m00, 1.0)      # guard: a vanishing J (not for ε ≠ 1) is left a depolarizer
+    vals = [dr.select(ok, M[r][c] * inv, 1.0 if r == c == 0 else 0.0) for r in range(4) for c in range(4)]
+    return mi.Matrix4f(*vals)
 
 
 def _spectrum(mi, tab, g, si):
