@@ -15,7 +15,9 @@ import numpy as np
 
 from .. import scatter
 from ..errors import FieldError, unknown
+from ..materials import cos2_eta_i, facet_sp_mix
 from ..scatter.grid import DirectionGrid
+from .facet_polarization import facet_scattered_share
 from .field_lobe import FIELD_GRID_OVERSAMPLING, field_anisotropy, field_proposal_model, kirchhoff_scattered_lobe
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
@@ -326,6 +328,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     gfn, _ = shadowing_by_name(micro.shadowing)
     visible = sampler_for(ndf).visible
     stack = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
+    # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
+    other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
+    stack_other = None if other is None else _facet_stack(nano, w, table_grid or grid, dm, material, other)
     out = np.zeros((wo.shape[0], w.size))
 
     tgrid = table_grid or grid
@@ -357,7 +362,11 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         ux, uy = np.sum(wok * t, axis=-1), np.sum(wok * b, axis=-1)   # turned so that ω_i^m lies in x–z
         lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, om[ok]], axis=-1)
         theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
-        out[ok] += weight[:, None] * _facet_read(stack, tgrid, theta, lo)
+        g = _facet_read(stack, tgrid, theta, lo)
+        if stack_other is not None:   # cos²η_i g_pol + sin²η_i g_other (the s-p term is odd about the facet plane)
+            g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo)}
+            g = facet_sp_mix(g_sp["s"], g_sp["p"], cos2_eta_i(wi, mk)[:, None], polarization)
+        out[ok] += weight[:, None] * g
 
     for j in range(na):
         add(m_a[j], np.ones(wo.shape[0], bool))
@@ -372,28 +381,41 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
              + np.sqrt(1 - s_k ** 2)[:, None] * h)
         add(m, ok)
     diffraction = np.zeros((w.size, grid.n_v, grid.n_u))
-    im_a = m_a @ wi
-    p_a = pdf_normal(np.broadcast_to(wi, (na, 3)), m_a, ndf=ndf, ax=ax, ay=ay, c=c)
-    node_w = np.where((im_a > 0) & (p_a > 0), im_a * spec.D(m_a, ax, ay, c)
-                      / (wi[2] * na * np.where(p_a > 0, p_a, 1.0)), 0.0)
-    mirror = 2 * im_a[:, None] * m_a - wi
-    scattered, reflected = np.zeros(w.size), np.zeros(w.size)
     for i, lam in enumerate(w):
         if dm.perturbative:
             Fc = np.ones(wo.shape[0])
         else:
             Fc = F.at(np.broadcast_to(wi, wo.shape), wo, lam) if hasattr(F, "at") else F(np.clip(h @ wi, 0, 1), lam)
         diffraction[i][inside] = out[:, i] * Fc
+    p_a = pdf_normal(np.broadcast_to(wi, (na, 3)), m_a, ndf=ndf, ax=ax, ay=ay, c=c)
+    scattered, reflected = _facet_budget(wi, w, m_a, spec.D(m_a, ax, ay, c) / np.where(p_a > 0, p_a, np.inf), nano, F,
+                                         dm, material, polarization)
+    return diffraction, scattered, reflected
+
+
+def _facet_budget(wi, w, m_a, d_over_p, nano: Nano, F, dm, material, polarization):
+    """(scattered, reflected) of :func:`facet_frame_diffraction` (n_λ,) each: the facets' scattered light and
+    reflectance averaged over the NDF nodes *m_a* (n, 3), weighted by (ω_i·m) D / p (*d_over_p*: D/p, 0 where p
+    = 0) normalized by their sum. For s or p light each facet takes the mix of its own s and p light
+    (:func:`waveoptics.brdf.facet_scattered_share`), as its F at the mirror direction does."""
+    na = m_a.shape[0]
+    im_a = m_a @ wi
+    node_w = np.where(im_a > 0, im_a * d_over_p / (wi[2] * na), 0.0)
+    mirror = 2 * im_a[:, None] * m_a - wi
+    c2_a = cos2_eta_i(wi, m_a)   # each NDF facet's rotation of the macro s/p basis into its own
+    scattered, reflected = np.zeros(w.size), np.zeros(w.size)
+    for i, lam in enumerate(w):
         Fm = (F.at(np.broadcast_to(wi, (na, 3)), mirror, lam) if hasattr(F, "at")
               else F(np.clip(im_a, 0.0, 1.0), lam)) * np.ones(na)
         # per facet: F (1 − A) on a conductor, the lobe's own absolute albedo on a dielectric
-        share = np.asarray(nano.scattered_share(np.clip(im_a, 0.0, 1.0), lam, dm, material, polarization))
+        share = np.asarray(facet_scattered_share(nano, np.clip(im_a, 0.0, 1.0), c2_a, lam, dm, material,
+                                                 polarization))
         lost = Fm * share if scatter.is_conductor(material) else share * np.ones(na)
         # Σ node_w G1 estimates ∫ G1 (ω_i·m) D dm / cos θ_i = 1 (Smith); normalized by it, so that near grazing
         # incidence, where few NDF nodes face the light, the facets' share is not over-counted
         total_w = float(np.sum(node_w))
         scattered[i] = float(np.sum(node_w * lost) / total_w) if total_w > 0 else 0.0
         reflected[i] = float(np.sum(node_w * Fm) / total_w) if total_w > 0 else 0.0
-    return diffraction, scattered, reflected
+    return scattered, reflected
 
 
