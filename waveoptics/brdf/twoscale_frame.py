@@ -127,8 +127,8 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     """g = f_nano cos θ_o of the nano lobe at local incidence :data:`FACET_THETAS_DEG` [k] (azimuth 0) at the cell
     centres of *grid*, (n_v, n_u, n_λ) float32: F = 1 for the Kirchhoff family (its F(θ_d) is frame-independent
     and applied afterwards), the Rayleigh-Rice lobe with its own factor Q of *material* and *polarization* (for s or
-    p light Q is taken relative to the facet's own plane of incidence, not the macro one: exact for unpolarized
-    light and for facets tilted in the plane of incidence).
+    p light Q of the facet's own s or p light: :func:`facet_frame_diffraction` mixes the s and p tables of each
+    facet by cos²η_i, sin²η_i, its rotation of the macro basis).
 
     g is finite up to the horizon (f grows like 1/cos θ_o there); cells beyond the rim of the disc hold g of the
     rim direction on their radius, so that bilinear reads within a cell of the rim are not pulled towards 0.
@@ -286,6 +286,18 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     field only (:func:`facet_route` keeps anisotropic ones paraxial); its half-vector normals are placed by the
     lobe width of its rms height and correlation length (:func:`nano_statistics`).
 
+    Polarized light (s or p of the macro plane of incidence): each facet sees cos²η_i of its own s or p light and
+    sin²η_i of the other (:func:`waveoptics.materials.cos2_eta_i`, Priest & Germer 2000). The Kirchhoff family's F
+    is that of the nano facet h ∝ ω_i + ω_o rotated by η(ω_i, h) (:func:`waveoptics.materials.F_facet_polarized`),
+    exact for the stationary-phase reflection in every facet frame; integrated over a facet's isotropic lobe its
+    s–p term, odd about the facet's plane of incidence, vanishes, so the facet scatters cos²η_i S_pol + sin²η_i
+    S_other, the mix the budget *scattered* takes (:func:`waveoptics.brdf.facet_scattered_share`). The
+    Rayleigh-Rice lobe mixes the facet's s and p tables the same way (its s–p interference term, odd in the facet's
+    azimuth, is left out: exact in energy, not pointwise). The grazing continuation beyond
+    :data:`waveoptics.scatter.band_energy.TANGENT_PLANE_MAX_DEG` of the Kirchhoff tables is that of the macro
+    polarization, not the facet's mix (on glass the s and p factors differ by 2 % at 81°, 10 % at 88°; the lobe's
+    energy is off by that difference times sin²η_i).
+
     Returns
     -------
     diffraction : ndarray (n_λ, n_v, n_u), 1/sr
@@ -303,6 +315,8 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     ----------
     .. [1] B. Walter et al., EGSR 2007, eq. (14) (a BRDF carried by each facet); §5.3 (sampling normals).
     .. [2] E. Veach, PhD thesis, 1997, §9.2 (balance heuristic of several techniques).
+    .. [3] R. G. Priest, T. A. Germer, Proc. 2000 MSS Specialty Group on Passive Sensors, 2000 (facet frames of
+       polarized light).
     """
     from .facet import NanoRadial, facet_basis, unit_nodes
     from .ndf import ndf_by_name
