@@ -5,6 +5,7 @@ smith (Smith masking; Λ by radial quadrature), anisotropy (stretched NDFs), ndf
 ndf_shaped (ABC, EPD, SGD), ndf (the NDF registry: D, Λ, G1 by name), shadowing (G terms), fresnel_terms (exact, Schlick or unit F; mean F), diffuse (Lambert, Oren-Nayar, trade-off),
 microfacet (the Cook-Torrance specular term and the full BRDF), quadrature (directional albedo), opencl (kernel
 twins), twoscale (micro facets carrying nano-roughness: coherent lobe plus diffracted lobe on a direction grid),
+facet_polarization (macro s/p light on tilted facets: each facet's own s/p mix),
 sampling (microfacet normal samplers), protocol (the BRDF as a function: eval / pdf / sample / albedo; the
 microfacet model), pointwise (the two-scale model as a function), tabulated (the same from diffracted lobes tabulated over
 incidence, any nano-roughness), measured_ndf (an NDF tabulated from a height field's slopes), chi2 (goodness-of-fit test of samplers), multiscatter (Kulla-Conty energy compensation), btdf (the rough dielectric: reflection and transmission over the sphere, with its energy compensation), spectral (a BRDF known at wavelength nodes, evaluated at any λ and in RGB), ndf_fit (the α of any NDF that matches a surface's slopes), models (the BRDF models by name, from keyword arguments:
@@ -33,7 +34,8 @@ from .scale_split import (SPLIT_PERIODS_OF_LAMBDA, split_scales)
 from .twoscale_grid import (mirror_direction, fresnel_at_mirror, mirror_cell, sharp_micro_lobe, azimuth_deg,
     FACET_TAIL_SHARE, significant_cells)
 from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP, CORE_MAX_SUBSAMPLES)
-from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, facet_scatter_weights, facet_incidences_deg,
+from .facet_polarization import (facet_scattered_share, facet_coherent_fraction)
+from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, kernel_half_vectors, facet_scatter_weights, facet_incidences_deg,
     field_albedo_evaluations, paraxial_diffraction)
 from .twoscale_frame import (FACET_THETAS_DEG, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_NODE_SPLIT,
     FACET_REFERENCE_NM, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
@@ -54,6 +56,6 @@ from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, refract, half_vec
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,
     twoscale_model, rough_dielectric_model, table_model, BRDF_MODELS, BRDF_MODEL_PARAMETERS, BRDF_MODEL_HELP,
     build_brdf_model)
-from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, field_lobe, roughness_scales, scale_split, twoscale_grid, nano_grid, twoscale_paraxial, twoscale_frame, twoscale_coherent, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, btdf, spectral, ndf_fit, models  # noqa: F401
+from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, field_lobe, roughness_scales, scale_split, twoscale_grid, nano_grid, facet_polarization, twoscale_paraxial, twoscale_frame, twoscale_coherent, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, btdf, spectral, ndf_fit, models  # noqa: F401
 
-__all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + field_lobe.__all__ + roughness_scales.__all__ + scale_split.__all__ + twoscale_grid.__all__ + nano_grid.__all__ + twoscale_paraxial.__all__ + twoscale_frame.__all__ + twoscale_coherent.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + btdf.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__
+__all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + field_lobe.__all__ + roughness_scales.__all__ + scale_split.__all__ + twoscale_grid.__all__ + nano_grid.__all__ + facet_polarization.__all__ + twoscale_paraxial.__all__ + twoscale_frame.__all__ + twoscale_coherent.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + btdf.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__

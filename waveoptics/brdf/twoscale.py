@@ -271,8 +271,9 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         :data:`waveoptics.scatter.DIFFRACTION_MODELS` (default ``kirchhoff``).
     polarization : {'unpolarized', 's', 'p'}
         Of the incident light relative to the macro plane of incidence: every facet (micro and nano) reflects its
-        own s/p split (:func:`waveoptics.materials.fresnel.F_facet_polarized`); the diffuse substrate is
-        unpolarized.
+        own s/p split (:func:`waveoptics.materials.fresnel.F_facet_polarized`), and each micro facet's scattered
+        light and coherent fraction are the same mix of its own s and p ones
+        (:mod:`waveoptics.brdf.facet_polarization`); the diffuse substrate is unpolarized.
     multiple_scattering : bool
         Add Kulla & Conty's (2017) compensation lobe of the micro NDF (:mod:`waveoptics.brdf.multiscatter`) to
         both models, as :class:`waveoptics.brdf.TwoScaleBRDF` does: nano-roughness only redistributes singly

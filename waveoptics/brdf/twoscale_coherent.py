@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..materials import cos2_eta_i
 from ..scatter.grid import DirectionGrid
+from .facet_polarization import facet_coherent_fraction
 from .microfacet import specular
 from .quadrature import albedo
 from .roughness_scales import Micro, Nano
@@ -31,11 +33,13 @@ def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: 
     a patch of it): near grazing a narrow lobe is squeezed against the rim of the (u, v) disc and the cell
     quadrature over- or under-counts it. A is evaluated per cell at the facet's local incidence θ_d = ∠(ω_i, h);
     a height field's facets beyond the lobe's main light (:func:`waveoptics.brdf.twoscale_grid.significant_cells`)
-    keep the coherent fraction of θ_i, as their diffracted weights do.
+    keep the coherent fraction of θ_i, as their diffracted weights do. For s or p light a conductor's A is that
+    of the facet's mix of its own s and p light (:func:`waveoptics.brdf.facet_coherent_fraction`), as its F is.
 
     References
     ----------
     .. [1] N. Holzschuch, R. Pacanowski, ACM TOG 36(4), 66, 2017 (f_c = A F G D / (4 cosθ_i cosθ_o)).
+    .. [2] R. G. Priest, T. A. Germer, Proc. 2000 MSS Specialty Group on Passive Sensors, 2000 (facet frame).
     """
     w = np.asarray(wavelengths_nm, dtype=float)
     shape = (w.size, grid.n_v, grid.n_u)
@@ -58,6 +62,7 @@ def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: 
     h = wi[None, None, :] + wo
     h = h / np.linalg.norm(h, axis=-1, keepdims=True)
     cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
+    c2 = cos2_eta_i(wi, h)   # each cell's facet turns the macro s/p basis by η_i (Priest & Germer 2000)
     mf = np.empty(shape)
     coherent = np.empty(shape)
     f1 = np.where(inside, specular(wi, wo, fresnel="one", **micro.kw()), 0.0)
@@ -76,7 +81,8 @@ def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: 
         if sigma_nano > 0:
             A[:] = nano.coherent_fraction(wi[2], lam, diffraction, material, polarization, phi)
             if used.any():
-                A[used] = nano.coherent_fraction(cos_d[used], lam, diffraction, material, polarization, phi)
+                A[used] = facet_coherent_fraction(nano, cos_d[used], c2[used], lam, diffraction, material,
+                                                  polarization, phi)
         coherent[i] = mf[i] * A
     return (np.where(inside, mf, 0.0), np.broadcast_to(np.where(inside, f1, 0.0), shape),
             np.where(inside, coherent, 0.0))

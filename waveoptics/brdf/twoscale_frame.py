@@ -15,7 +15,9 @@ import numpy as np
 
 from .. import scatter
 from ..errors import FieldError, unknown
+from ..materials import cos2_eta_i, facet_sp_mix
 from ..scatter.grid import DirectionGrid
+from .facet_polarization import facet_scattered_share
 from .field_lobe import FIELD_GRID_OVERSAMPLING, field_anisotropy, field_proposal_model, kirchhoff_scattered_lobe
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
@@ -125,8 +127,8 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     """g = f_nano cos θ_o of the nano lobe at local incidence :data:`FACET_THETAS_DEG` [k] (azimuth 0) at the cell
     centres of *grid*, (n_v, n_u, n_λ) float32: F = 1 for the Kirchhoff family (its F(θ_d) is frame-independent
     and applied afterwards), the Rayleigh-Rice lobe with its own factor Q of *material* and *polarization* (for s or
-    p light Q is taken relative to the facet's own plane of incidence, not the macro one: exact for unpolarized
-    light and for facets tilted in the plane of incidence).
+    p light Q of the facet's own s or p light: :func:`facet_frame_diffraction` mixes the s and p tables of each
+    facet by cos²η_i, sin²η_i, its rotation of the macro basis).
 
     g is finite up to the horizon (f grows like 1/cos θ_o there); cells beyond the rim of the disc hold g of the
     rim direction on their radius, so that bilinear reads within a cell of the rim are not pulled towards 0.
@@ -284,6 +286,18 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     field only (:func:`facet_route` keeps anisotropic ones paraxial); its half-vector normals are placed by the
     lobe width of its rms height and correlation length (:func:`nano_statistics`).
 
+    Polarized light (s or p of the macro plane of incidence): each facet sees cos²η_i of its own s or p light and
+    sin²η_i of the other (:func:`waveoptics.materials.cos2_eta_i`, Priest & Germer 2000). The Kirchhoff family's F
+    is that of the nano facet h ∝ ω_i + ω_o rotated by η(ω_i, h) (:func:`waveoptics.materials.F_facet_polarized`),
+    exact for the stationary-phase reflection in every facet frame; integrated over a facet's isotropic lobe its
+    s–p term, odd about the facet's plane of incidence, vanishes, so the facet scatters cos²η_i S_pol + sin²η_i
+    S_other, the mix the budget *scattered* takes (:func:`waveoptics.brdf.facet_scattered_share`). The
+    Rayleigh-Rice lobe mixes the facet's s and p tables the same way (its s–p interference term, odd in the facet's
+    azimuth, is left out: exact in energy, not pointwise). The grazing continuation beyond
+    :data:`waveoptics.scatter.band_energy.TANGENT_PLANE_MAX_DEG` of the Kirchhoff tables is that of the macro
+    polarization, not the facet's mix (on glass the s and p factors differ by 2 % at 81°, 10 % at 88°; the lobe's
+    energy is off by that difference times sin²η_i).
+
     Returns
     -------
     diffraction : ndarray (n_λ, n_v, n_u), 1/sr
@@ -301,6 +315,8 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     ----------
     .. [1] B. Walter et al., EGSR 2007, eq. (14) (a BRDF carried by each facet); §5.3 (sampling normals).
     .. [2] E. Veach, PhD thesis, 1997, §9.2 (balance heuristic of several techniques).
+    .. [3] R. G. Priest, T. A. Germer, Proc. 2000 MSS Specialty Group on Passive Sensors, 2000 (facet frames of
+       polarized light).
     """
     from .facet import NanoRadial, facet_basis, unit_nodes
     from .ndf import ndf_by_name
@@ -326,6 +342,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     gfn, _ = shadowing_by_name(micro.shadowing)
     visible = sampler_for(ndf).visible
     stack = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
+    # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
+    other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
+    stack_other = None if other is None else _facet_stack(nano, w, table_grid or grid, dm, material, other)
     out = np.zeros((wo.shape[0], w.size))
 
     tgrid = table_grid or grid
@@ -357,7 +376,11 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         ux, uy = np.sum(wok * t, axis=-1), np.sum(wok * b, axis=-1)   # turned so that ω_i^m lies in x–z
         lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, om[ok]], axis=-1)
         theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
-        out[ok] += weight[:, None] * _facet_read(stack, tgrid, theta, lo)
+        g = _facet_read(stack, tgrid, theta, lo)
+        if stack_other is not None:   # cos²η_i g_pol + sin²η_i g_other (the s-p term is odd about the facet plane)
+            g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo)}
+            g = facet_sp_mix(g_sp["s"], g_sp["p"], cos2_eta_i(wi, mk)[:, None], polarization)
+        out[ok] += weight[:, None] * g
 
     for j in range(na):
         add(m_a[j], np.ones(wo.shape[0], bool))
@@ -372,28 +395,41 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
              + np.sqrt(1 - s_k ** 2)[:, None] * h)
         add(m, ok)
     diffraction = np.zeros((w.size, grid.n_v, grid.n_u))
-    im_a = m_a @ wi
-    p_a = pdf_normal(np.broadcast_to(wi, (na, 3)), m_a, ndf=ndf, ax=ax, ay=ay, c=c)
-    node_w = np.where((im_a > 0) & (p_a > 0), im_a * spec.D(m_a, ax, ay, c)
-                      / (wi[2] * na * np.where(p_a > 0, p_a, 1.0)), 0.0)
-    mirror = 2 * im_a[:, None] * m_a - wi
-    scattered, reflected = np.zeros(w.size), np.zeros(w.size)
     for i, lam in enumerate(w):
         if dm.perturbative:
             Fc = np.ones(wo.shape[0])
         else:
             Fc = F.at(np.broadcast_to(wi, wo.shape), wo, lam) if hasattr(F, "at") else F(np.clip(h @ wi, 0, 1), lam)
         diffraction[i][inside] = out[:, i] * Fc
+    p_a = pdf_normal(np.broadcast_to(wi, (na, 3)), m_a, ndf=ndf, ax=ax, ay=ay, c=c)
+    scattered, reflected = _facet_budget(wi, w, m_a, spec.D(m_a, ax, ay, c) / np.where(p_a > 0, p_a, np.inf), nano, F,
+                                         dm, material, polarization)
+    return diffraction, scattered, reflected
+
+
+def _facet_budget(wi, w, m_a, d_over_p, nano: Nano, F, dm, material, polarization):
+    """(scattered, reflected) of :func:`facet_frame_diffraction` (n_λ,) each: the facets' scattered light and
+    reflectance averaged over the NDF nodes *m_a* (n, 3), weighted by (ω_i·m) D / p (*d_over_p*: D/p, 0 where p
+    = 0) normalized by their sum. For s or p light each facet takes the mix of its own s and p light
+    (:func:`waveoptics.brdf.facet_scattered_share`), as its F at the mirror direction does."""
+    na = m_a.shape[0]
+    im_a = m_a @ wi
+    node_w = np.where(im_a > 0, im_a * d_over_p / (wi[2] * na), 0.0)
+    mirror = 2 * im_a[:, None] * m_a - wi
+    c2_a = cos2_eta_i(wi, m_a)   # each NDF facet's rotation of the macro s/p basis into its own
+    scattered, reflected = np.zeros(w.size), np.zeros(w.size)
+    for i, lam in enumerate(w):
         Fm = (F.at(np.broadcast_to(wi, (na, 3)), mirror, lam) if hasattr(F, "at")
               else F(np.clip(im_a, 0.0, 1.0), lam)) * np.ones(na)
         # per facet: F (1 − A) on a conductor, the lobe's own absolute albedo on a dielectric
-        share = np.asarray(nano.scattered_share(np.clip(im_a, 0.0, 1.0), lam, dm, material, polarization))
+        share = np.asarray(facet_scattered_share(nano, np.clip(im_a, 0.0, 1.0), c2_a, lam, dm, material,
+                                                 polarization))
         lost = Fm * share if scatter.is_conductor(material) else share * np.ones(na)
         # Σ node_w G1 estimates ∫ G1 (ω_i·m) D dm / cos θ_i = 1 (Smith); normalized by it, so that near grazing
         # incidence, where few NDF nodes face the light, the facets' share is not over-counted
         total_w = float(np.sum(node_w))
         scattered[i] = float(np.sum(node_w * lost) / total_w) if total_w > 0 else 0.0
         reflected[i] = float(np.sum(node_w * Fm) / total_w) if total_w > 0 else 0.0
-    return diffraction, scattered, reflected
+    return scattered, reflected
 
 

@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
+from ..materials import cos2_eta_i
 from ..scatter.grid import DirectionGrid, integrate
+from .facet_polarization import facet_scattered_share
 from .field_lobe import FIELD_THETAS_DEG, bracketing_nodes
 from .microfacet import specular
 from .nano_grid import nano_lobe
@@ -18,7 +20,7 @@ from .quadrature import albedo
 from .roughness_scales import Micro, Nano
 from .twoscale_grid import azimuth_deg, mirror_direction, sharp_micro_lobe, significant_cells
 
-__all__ = ['micro_kernel', 'kernel_cos_theta_d', 'facet_scatter_weights', 'facet_incidences_deg',
+__all__ = ['micro_kernel', 'kernel_cos_theta_d', 'kernel_half_vectors', 'facet_scatter_weights', 'facet_incidences_deg',
            'field_albedo_evaluations', 'paraxial_diffraction']
 
 
@@ -53,6 +55,11 @@ def micro_kernel(wi, micro: Micro, grid: DirectionGrid) -> np.ndarray:
 def kernel_cos_theta_d(wi, grid: DirectionGrid) -> np.ndarray:
     """cos θ_d = ω_i · h of the facet behind each cell of :func:`micro_kernel` (the facet that reflects ω_i into the
     mirror direction shifted by that cell): the local incidence angle of its nano-roughness."""
+    return np.clip(kernel_half_vectors(wi, grid) @ np.asarray(wi, dtype=float), 0.0, 1.0)
+
+
+def kernel_half_vectors(wi, grid: DirectionGrid) -> np.ndarray:
+    """The unit normal h (2n_v − 1, 2n_u − 1, 3) of the facet behind each cell of :func:`micro_kernel`."""
     wi = np.asarray(wi, dtype=float)
     n_v, n_u = grid.n_v, grid.n_u
     m = mirror_direction(wi)
@@ -60,8 +67,7 @@ def kernel_cos_theta_d(wi, grid: DirectionGrid) -> np.ndarray:
                        m[1] + (np.arange(2 * n_v - 1) - (n_v - 1)) * grid.dv)
     wo = np.stack([U, V, np.sqrt(np.clip(1 - U * U - V * V, 0, 1))], axis=-1)
     h = wi + wo
-    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
-    return np.clip(h @ wi, 0.0, 1.0)
+    return h / np.linalg.norm(h, axis=-1, keepdims=True)
 
 
 def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, diffraction="kirchhoff",
@@ -74,9 +80,17 @@ def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, d
     lobe gives up (Holzschuch & Pacanowski 2017, per-facet split; docs/physics.md §7, §9). Weighting the kernel
     by this ratio makes the diffracted light of every facet equal to the light its coherent lobe lost (measured
     without it: micro α = 0.3 at normal incidence put 6.5 % more light in the diffracted lobe than the coherent lobe
-    gave up).
+    gave up). For s or p light each facet scatters the mix of its own s and p shares
+    (:func:`waveoptics.brdf.facet_scattered_share`).
+
+    References
+    ----------
+    .. [1] N. Holzschuch, R. Pacanowski, ACM TOG 36(4), 66, 2017 (per-facet split).
+    .. [2] R. G. Priest, T. A. Germer, Proc. 2000 MSS Specialty Group on Passive Sensors, 2000 (facet frame).
     """
-    cos_d = kernel_cos_theta_d(wi, grid)
+    h = kernel_half_vectors(wi, grid)
+    cos_d = np.clip(h @ wi, 0.0, 1.0)
+    c2 = cos2_eta_i(wi, h)   # each facet turns the macro s/p basis by η_i (Priest & Germer 2000)
     out = np.ones((len(wavelengths_nm),) + cos_d.shape)
     phi = azimuth_deg(wi)
     # a height field's facet shares cost a lobe per table node: only the facets holding all but
@@ -89,7 +103,8 @@ def facet_scatter_weights(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, d
         lost_i = float(nano.scattered_share(wi[2], lam, diffraction, material, polarization, phi))
         # guard: a nano surface that scatters nothing at θ_i has no lobe to weight
         if lost_i > 1e-12 and used.any():
-            out[i][used] = nano.scattered_share(cos_d[used], lam, diffraction, material, polarization, phi) / lost_i
+            out[i][used] = facet_scattered_share(nano, cos_d[used], c2[used], lam, diffraction, material,
+                                                 polarization, phi) / lost_i
     return out
 
 

@@ -22,7 +22,7 @@ import pyopencl.array as cla
 from ..errors import WaveopticsError
 from ..runtime import build_options, build_program, get_runtime
 
-__all__ = ['F_sp', 'F_facet_polarized', 'F_facet_sp', 'F', 'F0', 'F_schlick', 'brewster_angle', 'F_sp_cl', 'F_schlick_cl']
+__all__ = ['F_sp', 'cos2_eta_i', 'facet_sp_mix', 'F_facet_polarized', 'F_facet_sp', 'F', 'F0', 'F_schlick', 'brewster_angle', 'F_sp_cl', 'F_schlick_cl']
 
 
 def _as_eta(eta) -> np.ndarray:
@@ -127,17 +127,75 @@ def F_facet_sp(wi, wo, R_sp, polarization: str = "unpolarized"):
         return 0.5 * (Rs + Rp)
     if polarization not in ("s", "p"):
         raise WaveopticsError(f"polarization {polarization!r} is not allowed; use unpolarized, s or p")
-    z = np.array([0.0, 0.0, 1.0])
-    s_mac = np.cross(np.broadcast_to(z, wi.shape), wi)
+    return facet_sp_mix(Rs, Rp, cos2_eta_i(wi, h), polarization)
+
+
+def cos2_eta_i(wi, m):
+    """cos²η_i: the rotation of the macro s/p basis of the incident light into the frame of the facet with normal m.
+
+    η_i is the angle between the macro plane of incidence (ω_i, z) and the facet's (ω_i, m), measured between
+    their s directions z × ω_i and m × ω_i (Priest & Germer 2000: the facet's Fresnel Mueller matrix is taken
+    between the rotations R(η_r) and R(η_i); docs/physics.md §10). A unit macro s field carries cos η_i of the
+    facet's s field and sin η_i of its p field. cos²η_i = 1 for a facet tilted in the macro plane of incidence.
+
+    Parameters
+    ----------
+    wi : array_like (..., 3)
+        Unit vector towards the light (z = macro normal).
+    m : array_like (..., 3)
+        Unit facet normal, broadcast against *wi*.
+
+    Returns
+    -------
+    ndarray (...)
+        cos²η_i in [0, 1].
+
+    Notes
+    -----
+    guard: at normal incidence the macro plane is undefined; it is taken as x–z (s along y). For m parallel to
+    ω_i (back-reflection) the facet plane is undefined; it is taken as the macro plane (cos²η_i = 1).
+
+    References
+    ----------
+    .. [1] R. G. Priest, T. A. Germer, "Polarimetric BRDF in the microfacet model: theory and measurements",
+       Proc. 2000 Meeting of the Military Sensing Symposia Specialty Group on Passive Sensors, 2000.
+    .. [2] K. E. Torrance, E. M. Sparrow, "Theory for off-specular reflection from roughened surfaces", JOSA
+       57(9), 1105–1114, 1967 (the facet frame).
+    """
+    wi = np.asarray(wi, dtype=float)
+    m = np.asarray(m, dtype=float)
+    wi, m = np.broadcast_arrays(wi, m)
+    s_mac = np.cross(np.broadcast_to(np.array([0.0, 0.0, 1.0]), wi.shape), wi)
     n_mac = np.linalg.norm(s_mac, axis=-1, keepdims=True)
-    # guard: at normal incidence the plane of incidence is undefined: take x–z (s along y)
     s_mac = np.where(n_mac > 1e-12, s_mac / np.maximum(n_mac, 1e-300), np.array([0.0, 1.0, 0.0]))
-    s_loc = np.cross(h, np.broadcast_to(wi, h.shape))
+    s_loc = np.cross(m, wi)
     n_loc = np.linalg.norm(s_loc, axis=-1, keepdims=True)
-    # guard: h parallel to ω_i (back-reflection) leaves the facet plane undefined: it is the macro plane there
     s_loc = np.where(n_loc > 1e-12, s_loc / np.maximum(n_loc, 1e-300), s_mac)
-    c2 = np.sum(s_mac * s_loc, axis=-1) ** 2
-    return Rs * c2 + Rp * (1 - c2) if polarization == "s" else Rs * (1 - c2) + Rp * c2
+    return np.clip(np.sum(s_mac * s_loc, axis=-1) ** 2, 0.0, 1.0)
+
+
+def facet_sp_mix(X_s, X_p, cos2_eta, polarization: str):
+    """The incoherent (energy) response of a facet to macro s or p light from its responses X_s, X_p to its own s
+    and p light: cos²η_i X_pol + sin²η_i X_other (:func:`cos2_eta_i`); (X_s + X_p)/2 for unpolarized light.
+
+    X is any energy a facet returns that is linear in the incident Stokes vector and has no s–p cross term after
+    integration: its reflectance R_s, R_p (Born & Wolf §1.5) or the albedo of its scattered lobe, whose s–p
+    interference term is odd in the azimuth about the facet's plane of incidence and integrates to 0 over an
+    isotropic lobe.
+
+    References
+    ----------
+    .. [1] R. G. Priest, T. A. Germer, Proc. 2000 MSS Specialty Group on Passive Sensors, 2000 (rotation into the
+       facet frame).
+    .. [2] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5 (s and p reflect independently).
+    """
+    if polarization == "unpolarized":
+        return 0.5 * (np.asarray(X_s) + np.asarray(X_p))
+    if polarization not in ("s", "p"):
+        raise WaveopticsError(f"polarization {polarization!r} is not allowed; use unpolarized, s or p")
+    c2 = np.asarray(cos2_eta, dtype=float)
+    own, other = (X_s, X_p) if polarization == "s" else (X_p, X_s)
+    return c2 * np.asarray(own) + (1.0 - c2) * np.asarray(other)
 
 
 def F(cos_theta_i, eta):
