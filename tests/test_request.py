@@ -166,6 +166,16 @@ def test_a_renamed_colour_accuracy_still_works_with_one_deprecation_line(argv, o
     assert len(notes) == 1 and old in notes[0] and "use --delta-e" in notes[0], notes
 
 
+def test_the_python_keyword_accuracy_names_its_new_name():
+    """Python keywords are renamed outright (only the command line's old flags keep working until 0.3): the old
+    keyword is refused in one line naming delta_e, before any work."""
+    from waveoptics.simulate import simulate
+
+    with pytest.raises(TypeError, match=r"^simulate\(\) got an unexpected keyword argument 'accuracy': it was renamed; "
+                                        r"use delta_e= \(the colour accuracy, ΔE2000\)$"):
+        simulate("Al", accuracy=2.0)
+
+
 def _scene(tmp_path, material_table):
     p = tmp_path / "s.toml"
     p.write_text(textwrap.dedent("""

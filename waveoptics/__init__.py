@@ -30,6 +30,8 @@ except PackageNotFoundError:  # running from a checkout without install
 #: entry point -> (module, attribute or None for the module itself)
 _ENTRY_POINTS = {
     "SimulationRequest": ("waveoptics.request", "SimulationRequest"),
+    "ScatterRequest": ("waveoptics.scatter_job", "ScatterRequest"),
+    "scatter_job": ("waveoptics.scatter_job", "scatter_job"),
     "HeightField": ("waveoptics.surfaces", "HeightField"),
     "get_material": ("waveoptics.materials", "get_material"),
     "MicrofacetBRDF": ("waveoptics.brdf", "MicrofacetBRDF"),
