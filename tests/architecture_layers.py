@@ -19,7 +19,7 @@ LAYERS = (
     ("scatter", ("scatter",)),
     ("brdf", ("brdf",)),
     ("request", ("request",)),
-    ("jobs", ("simulate", "compare", "study", "bench", "renderers")),
+    ("jobs", ("simulate", "compare", "study", "bench", "renderers", "scatter_job")),
     ("planning", ("planning",)),
     ("distributed", ("distributed",)),
     ("interface", ("cli", "__main__", "")),

@@ -4,8 +4,10 @@ library, an angle on the command line), ``diffuse_roughness`` is Burley's r; eac
 References: M. Oren, S. K. Nayar, SIGGRAPH 1994 (qualitative model, A and B); B. Burley, "Physically-Based
 Shading at Disney", SIGGRAPH 2012 course notes, §5.3 — both written out here, not taken from the library.
 """
+import inspect
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -90,3 +92,20 @@ def test_cli_diffuse_sigma_is_an_angle():
         assert v - spec == pytest.approx(ref, rel=1e-9)
     rc, out, err, _ = run_cli(base + ["--diffuse", "oren-nayar", "--diffuse-sigma", "20 parsecs"])
     assert rc == 2 and "--diffuse-sigma" in err
+
+
+@pytest.mark.parametrize("diffuse, new", [("oren-nayar", "diffuse_sigma="), ("burley", "diffuse_roughness="),
+                                          ("lambert", "diffuse_sigma=.* or diffuse_roughness=")])
+def test_the_removed_sigma_keyword_names_its_new_name(diffuse, new):
+    """Python keywords are renamed outright (the CLI's old flags warn until 0.3): the old sigma= is refused, not taken,
+    in one line that names the keyword of the call's diffuse model."""
+    wi, wo = _dir(30.0, 0.0), _dir(50.0, 160.0)
+    for fn in (brdf.brdf, brdf.brdf_cl):
+        with pytest.raises(TypeError) as err:
+            fn(wi, wo, alpha=0.3, eta=1.5, diffuse=diffuse, kd=0.5, sigma=0.3)
+        msg = str(err.value)
+        assert "\n" not in msg and msg.startswith(f"{fn.__name__}() got an unexpected keyword argument 'sigma': it "
+                                                  "was renamed; use ")
+        assert re.search(new, msg), msg
+    # the new keywords keep the signature a reader (and inspect) sees
+    assert "diffuse_sigma" in inspect.signature(brdf.brdf).parameters

@@ -166,6 +166,16 @@ def test_a_renamed_colour_accuracy_still_works_with_one_deprecation_line(argv, o
     assert len(notes) == 1 and old in notes[0] and "use --delta-e" in notes[0], notes
 
 
+def test_the_python_keyword_accuracy_names_its_new_name():
+    """Python keywords are renamed outright (only the command line's old flags keep working until 0.3): the old
+    keyword is refused in one line naming delta_e, before any work."""
+    from waveoptics.simulate import simulate
+
+    with pytest.raises(TypeError, match=r"^simulate\(\) got an unexpected keyword argument 'accuracy': it was renamed; "
+                                        r"use delta_e= \(the colour accuracy, ΔE2000\)$"):
+        simulate("Al", accuracy=2.0)
+
+
 def _scene(tmp_path, material_table):
     p = tmp_path / "s.toml"
     p.write_text(textwrap.dedent("""
@@ -235,3 +245,158 @@ def test_the_planner_hands_the_runner_the_scene_request(tmp_path):
                                                                         e.diffraction)
     simulated = e.wavelengths_nm if e.wavelengths_nm.size else e.colour_wavelengths_nm
     assert req.wavelengths_nm == tuple(simulated)
+
+
+# --- scatter's request (waveoptics.scatter_job.ScatterRequest) ----------------------------------------------------
+
+#: the defaults of ``waveoptics scatter`` as docs/cli.md states them, written out here
+SCATTER_DOCUMENTED = {"spacing": None, "units": None, "channel": None, "wavelengths_nm": "400:700:10",
+                      "diffraction": "kirchhoff", "polarization": "unpolarized", "solver": "fft", "resolution": 256,
+                      "max_memory": None, "realizations": 1, "order": "auto", "window": "hann", "footprint": None,
+                      "coherence": None, "detrend": "mean", "precision": "float32", "backend": "opencl",
+                      "device": None}
+
+
+def _scatter_fields():
+    from waveoptics.scatter_job import ScatterRequest
+
+    return {f.name: f.default for f in dataclasses.fields(ScatterRequest)}
+
+
+def test_the_scatter_fields_hold_the_documented_defaults():
+    from waveoptics import scatter, surfaces
+    from waveoptics.scatter_job import scatter_default
+
+    fields = _scatter_fields()
+    assert [k for k, v in fields.items() if v is dataclasses.MISSING] == ["surface", "material", "incident_deg"]
+    assert {k: v for k, v in fields.items() if v is not dataclasses.MISSING} == SCATTER_DOCUMENTED
+    assert {k: scatter_default(k) for k in SCATTER_DOCUMENTED} == SCATTER_DOCUMENTED
+    # the names the request takes are the registries' (the CLI's choices come from the same vocabulary)
+    assert fields["window"] == scatter.DEFAULT_WINDOW
+    assert set(vocabulary.FIELD_SOLVERS) == set(scatter.SOLVERS)
+    assert set(vocabulary.FIELD_BACKENDS) == set(scatter.BACKENDS)
+    assert set(vocabulary.DETRENDS) == set(surfaces.DETRENDS)
+    with pytest.raises(ValueError, match="unknown scatter request field 'resolutoin'.*did you mean 'resolution'"):
+        scatter_default("resolutoin")
+
+
+def test_each_scatter_option_default_is_the_field_default():
+    """Every field of the request is an option of ``waveoptics scatter`` whose default is the field's (the three
+    without a default are required options); the parser reads them from the request (no default restated)."""
+    from waveoptics.cli.scatter import DEST_FIELD
+
+    fields = _scatter_fields()
+    seen = {}
+    for a in command_parser(build_parser(), "scatter")._actions:
+        field = DEST_FIELD.get(a.dest, a.dest)
+        if a.option_strings and field in fields:
+            seen[field] = a
+    assert set(seen) == set(fields)
+    for field, a in seen.items():
+        if fields[field] is dataclasses.MISSING:
+            assert a.required, field
+        else:
+            assert a.default == fields[field] and not a.required, (field, a.default)
+    assert set(seen["solver"].choices) == set(vocabulary.FIELD_SOLVERS)
+    assert set(seen["detrend"].choices) == set(vocabulary.DETRENDS)
+
+
+def test_scatter_with_only_the_required_options_is_the_default_request():
+    from waveoptics.cli.scatter import request_from_args
+    from waveoptics.scatter_job import ScatterRequest
+
+    args = command_parser(build_parser(), "scatter").parse_args(
+        ["--surface", "h.npz", "--material", "Au", "--incident", "30", "-o", "unused"])
+    req = request_from_args(args)
+    assert req == ScatterRequest(surface="h.npz", material="Au", incident_deg=(30.0, 0.0))
+    assert req.wavelengths_nm == tuple(float(x) for x in range(400, 701, 10)) and req.order == "auto"
+
+
+SCATTER_BAD = [
+    ({"order": "2.5"}, "order", r"order '2\.5' is not allowed; use 'auto' or an integer >= 0"),
+    ({"order": True}, "order", "order True is not allowed"),
+    ({"coherence": "1um"}, "coherence", "coherence is the coherence area inside a footprint; give one"),
+    ({"footprint": "20um,20um,2um", "realizations": 2}, "realizations", "footprint is one patch; drop realizations"),
+    ({"footprint": "20um,20um,2um", "window": "boxcar"}, "window",
+     r"footprint sets the window \(its Gaussian\); drop window"),
+    ({"footprint": "20um,20um,2um", "coherence": "1 furlong"}, "coherence", "coherence '1 furlong' has unknown unit"),
+    ({"solver": "ftt"}, "solver", "unknown solver 'ftt' .*did you mean 'fft'"),
+    ({"backend": "cuda"}, "backend", "unknown backend 'cuda'"),
+    ({"detrend": "linear"}, "detrend", "unknown detrend 'linear'"),
+    ({"precision": "float16"}, "precision", "unknown precision 'float16'"),
+    ({"diffraction": "kirchoff"}, "diffraction", "unknown diffraction 'kirchoff'"),
+    ({"polarization": "circular"}, "polarization", "unknown polarization 'circular'"),
+    ({"incident_deg": (95.0, 0.0)}, "incident_deg", "incident_deg θ=95.0° is outside the allowed range"),
+    ({"incident_deg": "abc"}, "incident_deg", "incident_deg 'abc' is not THETA"),
+    ({"wavelengths_nm": "700:400:10"}, "wavelengths_nm", "STEP > 0 and STOP >= START"),
+    ({"wavelengths_nm": (0.0,)}, "wavelengths_nm", "wavelengths_nm 0.0 nm is not allowed"),
+    ({"surface": None}, "surface", "a scatter request needs a height field: surface"),
+    ({"material": None}, "material", "a scatter request needs a material"),
+]
+
+
+@pytest.mark.parametrize("change, field, message", SCATTER_BAD, ids=[repr(c) for c, _, _ in SCATTER_BAD])
+def test_a_bad_scatter_value_is_a_field_error_naming_the_field(change, field, message):
+    from waveoptics.scatter_job import ScatterRequest
+
+    with pytest.raises(FieldError, match=message) as info:
+        ScatterRequest(**{"surface": "h.npz", "material": "Au", "incident_deg": 30, **change})
+    assert info.value.field == field
+    assert "--" not in str(info.value)   # the library names fields, never flags
+
+
+def test_file_metadata_of_a_height_field_object_is_refused():
+    from waveoptics import surfaces
+    from waveoptics.scatter_job import ScatterRequest
+
+    hf = surfaces.HeightField(np.zeros((8, 8)), 1e-7, 1e-7)
+    with pytest.raises(FieldError, match="spacing describes a surface file, not a height field") as info:
+        ScatterRequest(surface=hf, material="Au", incident_deg=30, spacing="50nm")
+    assert info.value.field == "spacing"
+
+
+def test_the_scatter_command_writes_the_request_fields_as_its_flags(tmp_path):
+    out = tmp_path / "x"
+    rc, _, err, _ = run_cli(["scatter", "--surface", "h.npz", "--material", "Al", "--incident", "30", "--order",
+                             "2.5", "-o", str(out)])
+    assert rc == 2 and err.strip() == ("waveoptics scatter: error: --order '2.5' is not allowed; use 'auto' or an "
+                                       "integer >= 0")
+    rc, _, err, _ = run_cli(["scatter", "--surface", "h.npz", "--material", "Al", "--incident", "30",
+                             "--footprint", "20um,20um,2um", "--window", "boxcar", "-o", str(out)])
+    assert rc == 2 and err.strip() == ("waveoptics scatter: error: --footprint sets the window (its Gaussian); drop "
+                                       "--window")
+    assert not out.exists()
+
+
+def test_the_scatter_job_of_a_height_field_object(tmp_path):
+    """Python callers pass the field itself: the outputs name it, and the job's coherent fraction of a lightly rough
+    patch is the Davies / Bennett-Porteus exp(−g), g = (4π σ cos θ_i / λ)², written here from the patch's rms
+    height (F = 1)."""
+    import json
+
+    from waveoptics import surfaces
+    from waveoptics.scatter_job import ScatterRequest, scatter_job
+
+    hf = surfaces.gaussian(2e-9, 1e-6, 12e-6, 96, seed=3)
+    wl = np.array([450.0, 550.0, 650.0])
+    run = scatter_job(ScatterRequest(surface=hf, material="one", incident_deg=30, wavelengths_nm=tuple(wl),
+                                     resolution=32), tmp_path / "o")
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["surface"] == run.summary()["surface"] == "height field" and summary["material"] == "one"
+    assert sorted(p.name for p in (tmp_path / "o").iterdir()) == ["lobes.exr", "lobes.png", "summary.json"]
+    sigma = float(np.std(hf.heights))
+    g = (4 * np.pi * sigma * np.cos(np.radians(30.0)) / (wl * 1e-9)) ** 2
+    np.testing.assert_allclose(summary["coherent_specular_fraction"], np.exp(-g), atol=2e-4)
+
+
+def test_a_refused_scatter_job_creates_nothing(tmp_path):
+    from waveoptics import surfaces
+    from waveoptics.errors import WaveopticsError
+    from waveoptics.scatter_job import ScatterRequest, scatter_job
+
+    hf = surfaces.HeightField(np.zeros((8, 8)), 1e-7, 1e-7)
+    with pytest.raises(WaveopticsError, match="unobtainium"):
+        scatter_job(ScatterRequest(surface=hf, material="unobtainium", incident_deg=30), tmp_path / "o")
+    with pytest.raises(WaveopticsError, match="cannot split a 8x8 patch into 64 tiles"):
+        scatter_job(ScatterRequest(surface=hf, material="Al", incident_deg=30, realizations=64), tmp_path / "o")
+    assert not (tmp_path / "o").exists()

@@ -101,12 +101,13 @@ def test_coherent_plus_diffracted_is_the_stack_reflectance(theta):
 
 
 def test_request_field_and_validation():
+    rr = dict(material=SPEC, diffraction="rayleigh-rice")
     assert SimulationRequest().roughness_correlation == "correlated"
-    assert SimulationRequest(material=SPEC, roughness_correlation="0.5").roughness_correlation == 0.5
-    assert SimulationRequest(material=SPEC, roughness_correlation="Uncorrelated").roughness_correlation == "uncorrelated"
+    assert SimulationRequest(**rr, roughness_correlation="0.5").roughness_correlation == 0.5
+    assert SimulationRequest(**rr, roughness_correlation="Uncorrelated").roughness_correlation == "uncorrelated"
     for bad in ("partly", 1.5, -0.1, float("nan"), True):
         with pytest.raises(FieldError) as e:
-            SimulationRequest(material=SPEC, roughness_correlation=bad)
+            SimulationRequest(**rr, roughness_correlation=bad)
         assert e.value.field == "roughness_correlation"
         assert str(e.value).startswith("roughness_correlation")
 
@@ -164,7 +165,7 @@ def test_scene_key_reaches_the_request():
     sc = scene.load(path)
     req = scene.request_of(sc)
     assert req.material == SPEC and req.diffraction == "rayleigh-rice" and req.roughness_correlation == "correlated"
-    doc = {"materials": [{"name": "m", "material": SPEC, "roughness_correlation": 0.4,
+    doc = {"materials": [{"name": "m", "material": SPEC, "roughness_correlation": 0.4, "diffraction": "rayleigh-rice",
                           "nano": {"statistics": "gaussian:sigma=2nm,corr_length=1um"}}],
            "lights": [{"name": "l", "spd": "D65"}]}
     assert scene.request_of(scene.parse(doc, name="t")).roughness_correlation == 0.4
@@ -181,3 +182,77 @@ def test_a_correlation_for_a_material_without_films_is_refused_naming_both_field
     with pytest.raises(FieldError) as err:
         SimulationRequest(material="Al", roughness_correlation="uncorrelated").resolved()
     assert err.value.field == "roughness_correlation" and "material 'Al' has one interface" in str(err.value)
+
+
+# --- a correlation the nano lobe does not use is refused (named model) or skipped with a line (planner) ------------
+
+@pytest.mark.parametrize("model", ["kirchhoff", "ghs", "rghs", "ohs", "rohs"])
+def test_a_correlation_under_a_kirchhoff_family_lobe_is_refused_naming_both_fields(model):
+    """Only Rayleigh-Rice scatters from every interface of the stack; the tangent-plane lobes see the top surface, so
+    the option would have no effect: refused, not ignored, naming the field and the model's field."""
+    with pytest.raises(FieldError) as err:
+        SimulationRequest(material=SPEC, diffraction=model, roughness_correlation="uncorrelated")
+    assert err.value.fields == ("roughness_correlation", "diffraction")
+    assert str(err.value) == (f"roughness_correlation 'uncorrelated' applies under diffraction 'rayleigh-rice' "
+                              f"(first-order scatter from every interface of the stack); the {model} lobe scatters "
+                              "from the top surface only and does not use it")
+    # the default (a film replicating its substrate) is what every model assumes: taken everywhere
+    assert SimulationRequest(material=SPEC, diffraction=model).roughness_correlation == "correlated"
+
+
+def test_the_command_line_refuses_the_option_under_kirchhoff(tmp_path, capsys):
+    out = tmp_path / "s"
+    assert cli_main(["simulate", "--material", SPEC, "--roughness-correlation", "uncorrelated", "--resolution",
+                     "16", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == ("waveoptics simulate: error: --roughness-correlation 'uncorrelated' applies under --diffraction "
+                   "'rayleigh-rice' (first-order scatter from every interface of the stack); the kirchhoff lobe "
+                   "scatters from the top surface only and does not use it")
+    assert not out.exists()
+
+
+def test_a_scene_refuses_a_correlation_its_named_model_or_material_does_not_use():
+    from waveoptics.planning import scene
+
+    def doc(**mat):
+        return {"materials": [{"name": "m", "material": SPEC, "roughness_correlation": "uncorrelated",
+                               "nano": {"statistics": "gaussian:sigma=2nm,corr_length=1um"}, **mat}],
+                "lights": [{"name": "l", "spd": "D65"}]}
+
+    with pytest.raises(Exception, match=r"materials\[0\]\.roughness_correlation = 'uncorrelated' applies under "
+                                        r"diffraction = 'rayleigh-rice'.*the kirchhoff lobe"):
+        scene.parse(doc(diffraction="kirchhoff"), name="t")
+    with pytest.raises(Exception, match=r"materials\[0\]\.roughness_correlation = 'uncorrelated' applies to a "
+                                        r"thin-film stack.*material 'Al' has one interface"):
+        scene.parse(doc(material="Al"), name="t")
+    assert scene.parse(doc(diffraction="rayleigh-rice"), name="t").materials[0].roughness_correlation == "uncorrelated"
+    assert scene.parse(doc(), name="t").materials[0].diffraction == "auto"   # the planner decides
+
+
+def _plan(directions, diffraction=True):
+    """The plan entry of a coated aluminium with an uncorrelated interface roughness and diffraction = "auto" (the
+    diffraction decision forced on or off: the colour estimate that would take it costs seconds here)."""
+    from waveoptics.planning import plan_scene, scene
+
+    doc = {"materials": [{"name": "m", "material": SPEC, "roughness": 0.02, "roughness_correlation": "uncorrelated",
+                          "nano": {"statistics": "gaussian:sigma=5nm,corr_length=1um"}}],
+           "lights": [{"name": "l", "spd": "D65", "directions_deg": directions}], "output": {"resolution": 32}}
+    return plan_scene(scene.parse(doc, name="t"), force={"diffraction": diffraction}).entries[0]
+
+
+def test_the_planner_uses_the_correlation_where_it_picks_rayleigh_rice_and_says_when_it_skips_it():
+    """diffraction = "auto": at 80° on a smooth surface the planner picks Rayleigh-Rice, whose lobe takes the
+    correlation; at 20° it picks Kirchhoff and says in one line that the correlation is skipped; without a nano
+    lobe it says so too. The runner's request carries what is used."""
+    e = _plan([[80, 0]])
+    assert (e.diffraction, e.request.diffraction, e.request.roughness_correlation) == \
+        ("rayleigh-rice", "rayleigh-rice", "uncorrelated")
+    assert not [d for d in e.decisions if d[0] == "roughness correlation"]
+    for directions, diffraction, why in (([[20, 0]], True, "the kirchhoff lobe scatters from the stack's top surface "
+                                                             "only"),
+                                         ([[80, 0]], False, "no nano lobe is simulated")):
+        e = _plan(directions, diffraction)
+        lines = [d for d in e.decisions if d[0] == "roughness correlation"]
+        assert len(lines) == 1 and lines[0][1] == "skipped", e.decisions
+        assert lines[0][2].startswith("roughness_correlation = 'uncorrelated' is not used: " + why)
+        assert e.request.roughness_correlation == "correlated" and e.request.diffraction == "kirchhoff"

@@ -7,7 +7,7 @@ and integrated over the spectrum to colour. See the README for a tour and docs/a
 Sub-packages (bottom to top): ``materials`` (optical constants, Fresnel), ``colour`` (spectra to colour),
 ``surfaces`` (height fields, PSDs), ``scatter`` (Kirchhoff diffraction solvers, PSD series), ``brdf`` (microfacet
 and two-scale BRDFs), then ``request`` (one simulation request), the jobs ``simulate``, ``compare``, ``study``,
-``bench``, ``renderers``, ``planning`` (scene files, the effect planner) and ``distributed`` (tables and sweeps on Dask).
+``bench``, ``renderers``, ``scatter_job`` (``waveoptics scatter``'s request and run), ``planning`` (scene files, the effect planner) and ``distributed`` (tables and sweeps on Dask).
 
 The main entry points are attributes of the package, loaded on first use (PEP 562), so that ``import waveoptics``
 and the command line's parsers stay quick.
@@ -30,6 +30,7 @@ except PackageNotFoundError:  # running from a checkout without install
 #: entry point -> (module, attribute or None for the module itself)
 _ENTRY_POINTS = {
     "SimulationRequest": ("waveoptics.request", "SimulationRequest"),
+    "ScatterRequest": ("waveoptics.scatter_job", "ScatterRequest"),
     "HeightField": ("waveoptics.surfaces", "HeightField"),
     "get_material": ("waveoptics.materials", "get_material"),
     "MicrofacetBRDF": ("waveoptics.brdf", "MicrofacetBRDF"),

@@ -7,8 +7,10 @@ one line on stderr and exit code 2 (see :mod:`waveoptics.cli`).
 from __future__ import annotations
 
 import difflib
+import functools
 
-__all__ = ['WaveopticsError', 'FieldError', 'RenamedWarning', 'NoOpenCLError', 'OutputExistsError', 'did_you_mean', 'unknown']
+__all__ = ['WaveopticsError', 'FieldError', 'RenamedWarning', 'NoOpenCLError', 'OutputExistsError', 'did_you_mean', 'unknown',
+           'renamed_keywords']
 
 
 class WaveopticsError(ValueError):
@@ -95,3 +97,37 @@ def unknown(kind: str, value, choices, *, field: str | None = None) -> Waveoptic
             return FieldError("unknown {" + field + "}" + tail, field)
         return FieldError("{" + field + "}: unknown " + kind + tail, field)
     return WaveopticsError(f"unknown {kind}" + tail)
+
+
+def renamed_keywords(**hints):
+    """Decorator: a call that passes a keyword argument removed by a rename is refused in one line naming its new
+    name, instead of Python's plain "unexpected keyword argument". The old name is not accepted: Python keywords are
+    renamed outright (the command line's old flags keep working until 0.3 with a warning, :mod:`waveoptics.cli`).
+
+    Parameters
+    ----------
+    **hints : str or callable
+        Old keyword → what to use now, as text (``"diffuse_sigma="``) or as a function of the call's keyword
+        arguments returning that text (where the new name depends on another argument).
+
+    Examples
+    --------
+    >>> @renamed_keywords(sigma="diffuse_sigma=")
+    ... def f(*, diffuse_sigma=0.0):
+    ...     return diffuse_sigma
+    >>> f(sigma=0.3)
+    Traceback (most recent call last):
+    ...
+    TypeError: f() got an unexpected keyword argument 'sigma': it was renamed; use diffuse_sigma=
+    """
+    def wrap(fn):
+        @functools.wraps(fn)
+        def call(*args, **kwargs):
+            for old, hint in hints.items():
+                if old in kwargs:
+                    new = hint(kwargs) if callable(hint) else hint
+                    raise TypeError(f"{fn.__name__}() got an unexpected keyword argument {old!r}: it was renamed; "
+                                    f"use {new}")
+            return fn(*args, **kwargs)
+        return call
+    return wrap

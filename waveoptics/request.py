@@ -287,7 +287,8 @@ class SimulationRequest:
         Of the interface roughness of a thin-film stack *material* under ``diffraction='rayleigh-rice'``:
         ``"correlated"`` (default: a thin evaporated film replicates its substrate's roughness, Elson 1979;
         Stover ch. 6), ``"uncorrelated"`` or a coefficient in [0, 1]
-        (:func:`waveoptics.materials.roughness_correlation`; Elson, Rahn & Bennett 1983).
+        (:func:`waveoptics.materials.roughness_correlation`; Elson, Rahn & Bennett 1983). Another value than the
+        default is refused for a bare material and under the Kirchhoff-family models, which do not use it.
     """
 
     material: str = DEFAULT_MATERIAL
@@ -376,6 +377,12 @@ class SimulationRequest:
             raise FieldError(f"{{roughness_correlation}} {self.roughness_correlation!r} applies to a thin-film stack "
                              f"(e.g. 'Al|Al2O3:120nm'); {{material}} {self.material!r} has one interface",
                              "roughness_correlation", "material")
+        if self.roughness_correlation != ROUGHNESS_CORRELATIONS[0] and self.diffraction != "rayleigh-rice":
+            # refused, not ignored: only first-order perturbation scatters from every interface (Elson 1979)
+            raise FieldError(f"{{roughness_correlation}} {self.roughness_correlation!r} applies under {{diffraction}} "
+                             f"'rayleigh-rice' (first-order scatter from every interface of the stack); the "
+                             f"{self.diffraction} lobe scatters from the top surface only and does not use it",
+                             "roughness_correlation", "diffraction")
         if self.micro_surface is not None:
             if self.ndf_shape is not None:
                 raise FieldError("{micro_surface} sets the NDF from the field's slopes; drop {ndf_shape}",

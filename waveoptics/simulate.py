@@ -22,7 +22,7 @@ from .brdf.roughness_scales import isotropic
 from .brdf.tabulated import PHI_NODES_ANISOTROPIC, THETA_NODES_DEG
 from .io import figures
 from .io.figures import save_figure
-from .errors import FieldError
+from .errors import FieldError, renamed_keywords
 from .materials import get_material, with_roughness_correlation
 from .request import MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano, parse_nano
 from .scatter.grid import DirectionGrid, integrate
@@ -89,6 +89,7 @@ class Simulation:
         return colour.reflectance_to_rgb(a, self.wavelengths_nm, self.illuminant, space=space)
 
 
+@renamed_keywords(accuracy="delta_e= (the colour accuracy, ΔE2000)")
 def simulate(material=None, *, surface=None, incident=None, wavelengths=None, sphere=True, device=None,
              progress=None, **fields) -> Simulation:
     """Simulate a two-scale surface and the plain microfacet model (keyword form of :func:`run`).

@@ -8,7 +8,8 @@ from dataclasses import dataclass
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
            "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO",
            "DEFAULT_MATERIAL", "DEFAULT_NDF", "COST_TARGET_ERROR", "COST_BUDGET_S", "COST_DELTA_E",
-           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "RENDER_BSDF_AUTO", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS"]
+           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "RENDER_BSDF_AUTO", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS",
+           "FIELD_SOLVERS", "FIELD_BACKENDS", "DETRENDS"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
 #: else the fft solver on a height field)
@@ -16,6 +17,14 @@ NANO_SOLVERS = ("auto", "psd", "fft", "direct")
 
 #: OpenCL precisions of the height-field solvers
 PRECISIONS = ("float32", "float64")
+
+#: the Kirchhoff solvers of a height field (the keys of :data:`waveoptics.scatter.SOLVERS`), and where the direct
+#: sum runs (:data:`waveoptics.scatter.BACKENDS`)
+FIELD_SOLVERS = ("fft", "direct")
+FIELD_BACKENDS = ("opencl", "numpy")
+
+#: what is removed from a height field's heights first (:data:`waveoptics.surfaces.DETRENDS`)
+DETRENDS = ("mean", "plane", "none")
 
 #: polarizations of the incident light (the scattered light is not analyzed)
 POLARIZATIONS = ("unpolarized", "s", "p")

@@ -18,7 +18,7 @@ from ..errors import WaveopticsError
 from .fresnel_terms import F_mean
 from .directions import as_dirs
 
-__all__ = ['lambert', 'oren_nayar', 'burley', 'diffuse_tradeoff', 'diffuse_parameter', 'DIFFUSES']
+__all__ = ['lambert', 'oren_nayar', 'burley', 'diffuse_tradeoff', 'diffuse_parameter', 'sigma_renamed', 'DIFFUSES']
 
 # ----------------------------------------------------------------------------------------------------------
 # diffuse terms
@@ -57,6 +57,18 @@ def diffuse_parameter(diffuse: str, diffuse_sigma: float, diffuse_roughness: flo
     if not np.isfinite(r) or not 0 <= r <= 1:
         raise WaveopticsError(f"diffuse_roughness={r!r} is not allowed; Burley's roughness r must be in [0, 1]")
     return r if diffuse == "burley" else sigma
+
+
+def sigma_renamed(kwargs: dict) -> str:
+    """The keyword that replaced the old ``sigma=`` of :func:`waveoptics.brdf.brdf` and ``brdf_cl`` for the call's
+    *diffuse* model: it held Oren-Nayar's σ (radians) or Burley's r, now ``diffuse_sigma`` and ``diffuse_roughness``
+    (one name per quantity)."""
+    diffuse = kwargs.get("diffuse")
+    if diffuse == "burley":
+        return "diffuse_roughness= (Burley's r in [0, 1])"
+    if diffuse == "oren-nayar":
+        return "diffuse_sigma= (Oren-Nayar's σ in radians)"
+    return "diffuse_sigma= (Oren-Nayar's σ in radians) or diffuse_roughness= (Burley's r in [0, 1])"
 
 
 def oren_nayar(wi, wo, kd=1.0, sigma=0.0):

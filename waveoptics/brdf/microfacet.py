@@ -49,11 +49,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import WaveopticsError, unknown
+from ..errors import WaveopticsError, renamed_keywords, unknown
 from ..vocabulary import DEFAULT_NDF
 from ..materials.database import get_material
 from ..units import check_wavelengths
-from .diffuse import DIFFUSES, diffuse_parameter, diffuse_tradeoff
+from .diffuse import DIFFUSES, diffuse_parameter, diffuse_tradeoff, sigma_renamed
 from .fresnel_terms import FRESNELS, MaterialFresnel, fresnel_fn
 from .directions import as_dirs, dot_last, half_vector
 from .ndf import COS_MIN, check_alpha, ndf_by_name
@@ -127,6 +127,7 @@ def specular_term(wi, wo, spec, ax, ay, c, gfn, F_fn):
 # the whole BRDF
 
 
+@renamed_keywords(sigma=sigma_renamed)   # the old keyword held either diffuse roughness
 def brdf(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-correlated", fresnel="exact", eta=None,
          F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, diffuse_sigma=0.0, diffuse_roughness=0.0, tradeoff=True):
     """Microfacet BRDF f = f_s + w f_d: specular lobe plus an optional diffuse term, in 1/sr (not × cos).

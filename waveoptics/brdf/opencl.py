@@ -6,11 +6,11 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cla
 
-from ..errors import WaveopticsError, unknown
+from ..errors import WaveopticsError, renamed_keywords, unknown
 from ..vocabulary import DEFAULT_NDF
 from ..materials import fresnel as _fresnel
 from ..runtime import build_options, build_program, get_runtime
-from .diffuse import DIFFUSES, diffuse_parameter
+from .diffuse import DIFFUSES, diffuse_parameter, sigma_renamed
 from .fresnel_terms import F_mean
 from .microfacet import FRESNELS, fresnel_fn
 from .directions import as_dirs
@@ -103,6 +103,7 @@ def Lambda_cl(w, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, ndf_shape=None, runtim
     return _ndf_kernel("Lambda_eval", w, alpha, alpha_y, ndf, ndf_shape, runtime, precision)
 
 
+@renamed_keywords(sigma=sigma_renamed)   # the old keyword held either diffuse roughness
 def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-correlated", fresnel="exact", eta=None,
             F0=None, ndf_shape=None, diffuse="lambert", kd=0.0, diffuse_sigma=0.0, diffuse_roughness=0.0,
             tradeoff=True, runtime=None,

@@ -79,6 +79,7 @@ class Entry:
     time_s: float = 0.0
     precision: str = "float64"
     diffraction: str = request_default("diffraction")   # the nano lobe's model (the request field)
+    roughness_correlation: object = request_default("roughness_correlation")   # of a stack's interfaces, as used
 
     @property
     def delta_e(self) -> float:
@@ -233,6 +234,24 @@ def decide_diffraction_model(e: Entry) -> None:
                 "validity: there its lobe carries its 75° albedo continued with first-order perturbation theory's "
                 "incidence dependence (docs/physics.md §9)")
     e.decide("diffraction model", "kirchhoff", why)
+
+
+def decide_roughness_correlation(e: Entry) -> None:
+    """A thin-film stack's interface-roughness correlation enters only Rayleigh-Rice's nano lobe (first-order scatter
+    from every interface, Elson 1979; Elson, Rahn & Bennett 1983). A correlation the scene sets is used when the
+    plan runs that lobe; otherwise (no diffraction, or a Kirchhoff-family model) it is skipped and the plan says so
+    in one line."""
+    value = e.spec.roughness_correlation
+    if e.diffracts and e.diffraction == "rayleigh-rice":
+        e.roughness_correlation = value
+        return
+    e.roughness_correlation = request_default("roughness_correlation")
+    if value == e.roughness_correlation:
+        return
+    why = ("no nano lobe is simulated" if not e.diffracts else
+           f"the {e.diffraction} lobe scatters from the stack's top surface only; the correlation of its interfaces "
+           "enters only rayleigh-rice's first-order scatter from every interface (Elson 1979)")
+    e.decide("roughness correlation", "skipped", f"roughness_correlation = {value!r} is not used: {why}")
 
 
 def _map_choice(e: Entry, thetas):

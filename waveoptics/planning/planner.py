@@ -16,6 +16,10 @@ For every (material, light) pair of a :class:`waveoptics.planning.scene.Scene` t
     estimate's own error), or when g exceeds :data:`PSD_G_MAX` (no coherent reflection is left at all).
     Height fields without known statistics are estimated through a Gaussian-statistics proxy with their rms
     height and correlation length.
+``roughness correlation``
+    A thin-film stack's interface correlation (the scene key ``roughness_correlation``) enters only Rayleigh-Rice's
+    first-order scatter from every interface; when the plan runs another model, or no diffraction, a correlation the
+    scene sets is skipped with one line saying so.
 ``wavelengths``
     Line sources (lasers): their lines only. No diffraction and a Fresnel factor that is the same at every
     wavelength (constant index, grey F0): the BRDF does not depend on λ, so it is evaluated once and used for the
@@ -72,10 +76,12 @@ import numpy as np
 from .. import colour
 from ..materials import get_material
 from ..planning.scene import MaterialSpec, Scene, request_of
+from ..request import request_default
 from ..vocabulary import NANO_SOLVERS
 from .costmodel import CostModel, calibration
 from .effects import (decide_diffraction, decide_diffraction_model, decide_diffuse, decide_multiple_scattering,
-                      decide_nano_route, decide_wavelengths, Entry, refine_wavelengths_for_grating)
+                      decide_nano_route, decide_roughness_correlation, decide_wavelengths, Entry,
+                      refine_wavelengths_for_grating)
 from .numerics import decide_directions, decide_precision, decide_resolution
 from .plan import EntryPlan, Plan
 
@@ -83,15 +89,16 @@ __all__ = ['plan_scene']
 
 
 #: the decisions, in the order they are taken (each reads the outcomes of those before it)
-DECISIONS = (decide_diffuse, decide_diffraction, decide_diffraction_model, decide_wavelengths,
-             decide_nano_route, decide_resolution, refine_wavelengths_for_grating, decide_directions,
-             decide_precision, decide_multiple_scattering)
+DECISIONS = (decide_diffuse, decide_diffraction, decide_diffraction_model, decide_roughness_correlation,
+             decide_wavelengths, decide_nano_route, decide_resolution, refine_wavelengths_for_grating,
+             decide_directions, decide_precision, decide_multiple_scattering)
 
 
 def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostModel, device,
                 max_resolution: int | None) -> EntryPlan:
     """Plan one (material, light) pair: take every decision of :data:`DECISIONS` in turn."""
-    req = request_of(scene, spec.name, light.name)
+    # the interface correlation is the planner's to apply (decide_roughness_correlation): the model comes later
+    req = request_of(scene, spec.name, light.name, roughness_correlation=request_default("roughness_correlation"))
     e = Entry(scene, spec, light, force, cm, device, max_resolution)
     e.mat = get_material(req.material)
     e.spd = colour.illuminant(req.illuminant)
@@ -104,7 +111,7 @@ def _plan_entry(scene: Scene, spec: MaterialSpec, light, force: dict, cm: CostMo
         decide(e)
     decided = dataclasses.replace(   # the request the runner evaluates: the scene's, with the decisions applied
         req, solver=e.solver if e.solver in NANO_SOLVERS else "auto", kd=float(e.kd), precision=e.precision,
-        diffraction=e.diffraction, resolution=int(e.resolution),
+        diffraction=e.diffraction, roughness_correlation=e.roughness_correlation, resolution=int(e.resolution),
         wavelengths_nm=tuple(float(x) for x in (e.w_sim if e.w_sim.size else e.w_colour)))
     effects = {"specular": True, "diffraction": bool(e.diffracts), "diffuse": bool(e.diffuse),
                "multiple_scattering": bool(e.spec.multiple_scattering),

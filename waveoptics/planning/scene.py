@@ -411,19 +411,31 @@ def _material(ctx, t, key, base) -> MaterialSpec:
         diffuse_albedo=_number(ctx, t.get("diffuse_albedo", request_default("kd")), key + ".diffuse_albedo", lo=0.0, hi=1.0),
         nano=_nano(ctx, t["nano"], key + ".nano", base) if "nano" in t else None,
         diffraction=_choice(ctx, t.get("diffraction", "auto"), key + ".diffraction", ("auto",) + DIFFRACTION),
-        roughness_correlation=_correlation(ctx, t, key))
+        roughness_correlation=_correlation(ctx, t, key, spec))
 
 
-def _correlation(ctx, t, key):
-    """The roughness correlation of a stack's interfaces (:func:`waveoptics.materials.roughness_correlation`)."""
+def _correlation(ctx, t, key, material: str):
+    """The roughness correlation of a stack's interfaces (:func:`waveoptics.materials.roughness_correlation`): a
+    value other than the default is refused where no model can use it, a material with one interface or a named
+    diffraction model other than rayleigh-rice (with ``diffraction = "auto"`` the planner says whether it is used)."""
     from ..materials.thinfilm import roughness_correlation
 
     value = t.get("roughness_correlation", request_default("roughness_correlation"))
     try:
-        return roughness_correlation(value)
+        c = roughness_correlation(value)
     except WaveopticsError:
         raise ctx.err(key + ".roughness_correlation", f"= {value!r} is not allowed; use correlated, uncorrelated "
                       "or a number in [0, 1]") from None
+    model = t.get("diffraction", "auto")
+    if c != request_default("roughness_correlation"):
+        if "|" not in str(material):
+            raise ctx.err(key + ".roughness_correlation", f"= {value!r} applies to a thin-film stack (e.g. "
+                          f"'Al|Al2O3:120nm'); material {material!r} has one interface")
+        if model not in ("auto", "rayleigh-rice"):
+            raise ctx.err(key + ".roughness_correlation", f"= {value!r} applies under diffraction = "
+                          f"'rayleigh-rice' (first-order scatter from every interface); the {model} lobe scatters "
+                          "from the top surface only and does not use it")
+    return c
 
 
 def _ndf_shape(ctx, t, key):

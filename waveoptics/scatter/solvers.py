@@ -16,6 +16,7 @@ from ..materials import fresnel_function
 from ..runtime import check_memory
 from ..surfaces.heightfield import HeightField
 from ..units import check_wavelengths
+from ..vocabulary import FIELD_BACKENDS
 from .direct import kirchhoff_U, kirchhoff_U_cl, phase_coefficients
 from .fft import FFT_TOL, field_fft
 from .grid import HORIZON_SIN, DirectionGrid, incident_dirs, outgoing_dirs, integrate
@@ -145,7 +146,7 @@ SOLVERS = {
     "fft": Solver("fft", "chirp-z transforms on the direction-cosine grid, banded Taylor series in v_z "
                          "(order='auto') or frozen v_z (order=0)", _grid_field_fft, lobe_at_fft),
 }
-BACKENDS = ("opencl", "numpy")
+BACKENDS = FIELD_BACKENDS
 
 
 def _F_at(F, wi, wo, wavelengths_nm):

@@ -21,6 +21,7 @@ from scipy.signal.windows import hann
 from scipy.special import digamma, polygamma
 
 from ..errors import WaveopticsError, unknown
+from ..vocabulary import DETRENDS
 from .heightfield import HeightField
 from .psd import PSD_MODELS, abc_A
 
@@ -29,8 +30,6 @@ __all__ = ['PeriodogramPSD', 'DETRENDS', 'detrended', 'rms_height', 'rms_slopes'
 # ----------------------------------------------------------------------------------------------------------------
 # Statistics
 # ----------------------------------------------------------------------------------------------------------------
-
-DETRENDS = ("mean", "plane", "none")
 
 
 def detrended(hf: HeightField, detrend: str = "mean") -> np.ndarray:
