@@ -56,6 +56,7 @@ from .sampling import sampler_for, sample_normal
 from .ndf import ndf_by_name
 from .shadowing import shadowing_by_name
 from .facet import COS_LEVELS, RADIAL_BINS, NanoRadial, local_pair, facet_basis, from_facet, to_facet, unit_nodes
+from .directions import dot_last
 from .roughness_scales import check_series
 
 __all__ = ['QUADRATURE_NODES', 'RADIAL_BINS', 'COS_LEVELS', 'TwoScaleBRDF', 'unit_nodes', 'NanoRadial', 'facet_basis',
@@ -125,7 +126,7 @@ class TwoScaleBRDF(TwoScaleParts):
         factor at the half-vector angle; 0 where either direction is at or below that surface."""
         h = wi + wo
         h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
-        cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
+        cos_d = np.clip(dot_last(h, wi), 0.0, 1.0)
         up = (wi[..., 2] > 0) & (wo[..., 2] > 0)
         dm = scatter.get_model(self.diffraction, perturbative=True)
         if dm.perturbative:   # Rayleigh-Rice: its own polarization factor Q in place of F (F = 1: a perfect conductor)
@@ -191,7 +192,7 @@ class TwoScaleBRDF(TwoScaleParts):
         and what their density needs: the radial sampler, its level, h and cos θ_d = ω_i·h."""
         rad = self._radial(lam)
         h = _unit(wi + wo)
-        cos_d = np.maximum(np.sum(wi * h, axis=-1), 1e-6)
+        cos_d = np.maximum(dot_last(wi, h), 1e-6)
         level = rad.level(cos_d)
         u = unit_nodes(self.nodes // 2)
         # a facet tilted from h by s (sine of the tilt) sends ω_i to the grating vector q = 2k cosθ_d |s| of
@@ -230,8 +231,8 @@ class TwoScaleBRDF(TwoScaleParts):
         valid = np.concatenate([np.ones(ma.shape[:2], bool), ok_b], axis=1)
         wi_b = np.broadcast_to(wi[:, None, :], m.shape)
         wo_b = np.broadcast_to(wo[:, None, :], m.shape)
-        im = np.sum(wi_b * m, axis=-1)
-        om = np.sum(wo_b * m, axis=-1)
+        im = dot_last(wi_b, m)
+        om = dot_last(wo_b, m)
         D = spec.D(m, ax, ay, self.ndf_shape)
         Li = spec.Lambda(wi, ax, ay, self.ndf_shape)
         # densities of both node sets at every node (the micro sampler's: visible normals or D cos θ_m)
@@ -239,13 +240,13 @@ class TwoScaleBRDF(TwoScaleParts):
             pa = np.where(im > 0, D * im / (1.0 + Li[:, None]), 0.0) / wi[:, 2:3]
         else:
             pa = D * m[..., 2]
-        mh = np.clip(np.sum(m * h[:, None, :], axis=-1), 0.0, 1.0)
+        mh = np.clip(dot_last(m, h[:, None, :]), 0.0, 1.0)
         t = 2.0 * cos_d[:, None] * np.sqrt(np.maximum(1.0 - mh ** 2, 0.0))
         pb = np.where(mh > 0, rad.pdf_r(level[:, None], t) * 4.0 * cos_d[:, None] ** 2 * mh, 0.0)
         den = na * pa + nb * pb
         # the integrand |i·m||o·m| / (|i·n||o·n|) f_nano(i_m, o_m) G(i, o, m) D(m)
         ok = valid & (im > 0) & (om > 0) & (den > 0)
-        li, lo = local_pair(im, om, np.sum(wi * wo, axis=-1)[:, None])
+        li, lo = local_pair(im, om, dot_last(wi, wo)[:, None])
         fn = self._f_nano(li, lo, lam)
         Lo = spec.Lambda(wo, ax, ay, self.ndf_shape)
         shape = m.shape[:2]
