@@ -61,7 +61,8 @@ def test_two_scale_functions_take_the_option():
 
     nano = make_nano("gaussian:sigma=5nm,corr_length=1um", [550.0])
     wi, wo = _dir(30), _dir(50) * np.array([-1.0, 1.0, 1.0])
-    for cls, kw in ((TwoScaleBRDF, {}), (TabulatedTwoScaleBRDF, dict(wavelengths_nm=(550.0,), resolution=64))):
+    table = dict(wavelengths_nm=(550.0,), resolution=32, thetas_deg=(20.0, 40.0))   # θ_i = 30° between two nodes
+    for cls, kw in ((TwoScaleBRDF, {}), (TabulatedTwoScaleBRDF, table)):
         on = cls("Au", Micro(alpha=0.5, ndf="ggx"), nano=nano, multiple_scattering=True, **kw)
         off = cls("Au", Micro(alpha=0.5, ndf="ggx"), nano=nano, **kw)
         assert on.eval(wi, wo, 550.0) > off.eval(wi, wo, 550.0)
