@@ -33,7 +33,7 @@ from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factor
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
     rayleigh_rice_tis, is_stack, stack_correlation)
 from .transmission import (q_transmission, rr_psd, rr_btdf_components, rr_brdf_components, rr_bsdf_components,
-    rr_bsdf, rr_tis_transmission, rr_tis_reflection)
+    rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
     rough_stack_components, rough_stack_brdf, rough_stack_tis)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,

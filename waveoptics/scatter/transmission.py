@@ -66,7 +66,7 @@ from .perturbation import q_factors
 from .polar import polar_albedo
 
 __all__ = ["q_transmission", "rr_psd", "rr_btdf_components", "rr_brdf_components", "rr_bsdf_components",
-           "rr_bsdf", "rr_tis_transmission", "rr_tis_reflection"]
+           "rr_bsdf", "TIS_METHODS", "WIDE_LOBE", "hemisphere_albedo", "rr_tis_transmission", "rr_tis_reflection"]
 
 
 def _real_index(n, name: str) -> float:
@@ -219,59 +219,122 @@ def _incidence(theta_deg: float, from_above: bool):
     return np.array([math.sin(t), 0.0, math.cos(t) if from_above else -math.cos(t)]), t
 
 
-def rr_tis_transmission(theta_deg, wavelength_nm, model, n1, n2, polarization: str = "unpolarized",
-                        from_above: bool = True) -> float:
-    """Transmitted TIS ∫ f_t |cosθ_o| dω_o (unitless, a share of the incident power) at incidence *theta_deg*
-    (deg, in the medium of ω_i), by the polar quadrature about the specular transmission direction of
-    :func:`waveoptics.scatter.polar_albedo` in the direction cosines of the far side.
+#: methods of :func:`rr_tis_transmission`
+TIS_METHODS = ("auto", "polar", "hemisphere")
 
-    Light beyond the critical angle (n_i sinθ_i ≥ n_o) has no transmitted specular point and is refused.
+
+#: a lobe narrower than this in direction cosines (λ / (π ℓ n), ℓ the PSD's length scale) is integrated about its
+#: centre (:func:`waveoptics.scatter.polar_albedo`) by ``method="auto"``, a wider one over the hemisphere
+WIDE_LOBE = 0.05
+
+
+def hemisphere_albedo(lobe, breaks=(), n_theta: int = 64, n_psi: int = 257) -> float:
+    """∫ f cosθ dω over a hemisphere of a lobe ``lobe(wo)`` (1/sr; wo (..., 3) with z ≥ 0) symmetric about the
+    x–z plane.
+
+    θ is cut at *breaks* (rad: the critical angles where a normal wave number of the first-order factors turns
+    imaginary, a √ kink of the integrand); on each piece θ = θ_a + (θ_b − θ_a)(3τ² − 2τ³) with Gauss-Legendre
+    nodes in τ, whose Jacobian 6τ(1 − τ) vanishes at both ends and so smooths a √ there (and the integrand's
+    cosθ at the horizon); the trapezoid rule in ψ on [0, π], twice (the integrand is periodic and even in ψ).
+
+    References
+    ----------
+    .. [1] P. J. Davis, P. Rabinowitz, *Methods of Numerical Integration*, 2nd ed., Academic Press 1984, §2.7
+       (Gauss-Legendre), §2.9 (the trapezoid rule of periodic integrands), §2.12 (changes of variable that
+       smooth endpoint singularities).
+    """
+    edges = [0.0] + sorted(float(b) for b in breaks if 0.0 < b < 0.5 * np.pi) + [0.5 * np.pi]
+    x, w = np.polynomial.legendre.leggauss(n_theta)
+    tau, wt = 0.5 * (x + 1), 0.5 * w
+    psi = np.linspace(0.0, np.pi, n_psi)
+    wp = np.full(n_psi, np.pi / (n_psi - 1))
+    wp[[0, -1]] *= 0.5
+    total = 0.0
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        t = lo + (hi - lo) * tau * tau * (3.0 - 2.0 * tau)
+        jac = (hi - lo) * 6.0 * tau * (1.0 - tau)
+        st, ct = np.sin(t)[:, None], np.cos(t)[:, None]
+        wo = np.stack(np.broadcast_arrays(st * np.cos(psi), st * np.sin(psi), ct), axis=-1)
+        total += 2.0 * float(np.sum(lobe(wo) * (st * ct) * (wt * jac)[:, None] * wp[None, :]))
+    return total
+
+
+def _use_hemisphere(method, model, lam_nm, n) -> bool:
+    return method == "hemisphere" or (method == "auto" and lam_nm * 1e-9 / (np.pi * model.length_scale * n)
+                                      >= WIDE_LOBE)
+
+
+def rr_tis_transmission(theta_deg, wavelength_nm, model, n1, n2, polarization: str = "unpolarized",
+                        from_above: bool = True, method: str = "auto") -> float:
+    """Transmitted TIS ∫ f_t |cosθ_o| dω_o (unitless, a share of the incident power) at incidence *theta_deg*
+    (deg, in the medium of ω_i).
+
+    *method*: ``polar``, the polar quadrature about the specular transmission direction of
+    :func:`waveoptics.scatter.polar_albedo` in the direction cosines of the far side (for narrow lobes; needs that
+    direction, n_i sinθ_i < n_o; within about 3e-4); ``hemisphere``, :func:`hemisphere_albedo` over the far side,
+    cut at its critical angle (wide lobes, and light beyond the critical angle, whose lobe's centre lies outside
+    the far side's directions); ``auto``, the hemisphere for lobes wider than :data:`WIDE_LOBE` or beyond the
+    critical angle, else the polar quadrature.
 
     References
     ----------
     .. [1] J. C. Stover, *Optical Scattering*, 3rd ed., SPIE 2012, §4.4 (TIS as the integral of the BSDF).
     """
+    if method not in TIS_METHODS:
+        raise unknown("method", method, TIS_METHODS, field="method")
     n1, n2 = _real_index(n1, "n1"), _real_index(n2, "n2")
     ni, no = (n1, n2) if from_above else (n2, n1)
     wi, t = _incidence(theta_deg, from_above)
     a = ni * math.sin(t) / no                            # sine of the specular transmission angle
-    if a >= 1.0:
+    if method == "polar" and a >= 1.0:
         raise FieldError(f"{{theta_deg}} {float(theta_deg)!r} is beyond the critical angle "
-                         f"{math.degrees(math.asin(no / ni)):.4g}°: no transmitted specular direction to integrate "
-                         "about", "theta_deg")
+                         f"{math.degrees(math.asin(no / ni)):.4g}°: no transmitted specular direction for the "
+                         "polar quadrature (method='hemisphere' integrates there)", "theta_deg")
     lam = float(wavelength_nm)
     k = 2 * math.pi * no / (lam * 1e-9)                 # wave number on the far side
     s = -1.0 if from_above else 1.0                      # z sign of the far side
 
-    def lobe(wi_b, wo, q):
+    def lobe(wo):
         wo_t = wo * np.array([1.0, 1.0, s])
         f = rr_btdf_components(np.broadcast_to(wi, wo.shape), wo_t, lam, model, n1, n2)
         return _polarized(f, polarization)
 
-    return polar_albedo(math.asin(a), k, model.length_scale, lobe)
+    if a >= 1.0 or _use_hemisphere(method, model, lam, no):
+        # the reciprocal wave of a scattered direction beyond n_i / n_o on the far side is evanescent in medium i
+        return hemisphere_albedo(lobe, [math.asin(ni / no)] if no > ni else [])
+    return polar_albedo(math.asin(a), k, model.length_scale, lambda wi_b, wo, q: lobe(wo))
 
 
 def rr_tis_reflection(theta_deg, wavelength_nm, model, n1, n2, polarization: str = "unpolarized",
-                      from_above: bool = True) -> float:
+                      from_above: bool = True, method: str = "auto") -> float:
     """Reflected TIS ∫ f_r |cosθ_o| dω_o (unitless) on the incidence side at *theta_deg* (deg), by
-    :func:`waveoptics.scatter.polar_albedo` with the wave number of the incidence medium.
+    :func:`waveoptics.scatter.polar_albedo` with the wave number of the incidence medium (``polar``) or by
+    :func:`hemisphere_albedo` cut at the critical angle of total internal reflection (``hemisphere``); ``auto``
+    as :func:`rr_tis_transmission`.
 
     References
     ----------
     .. [1] J. C. Stover, *Optical Scattering*, 3rd ed., SPIE 2012, §4.4.
     """
+    if method not in TIS_METHODS:
+        raise unknown("method", method, TIS_METHODS, field="method")
     ni = _real_index(n1 if from_above else n2, "n1" if from_above else "n2")
     wi, t = _incidence(theta_deg, from_above)
     lam = float(wavelength_nm)
     k = 2 * math.pi * ni / (lam * 1e-9)
     s = 1.0 if from_above else -1.0
 
-    def lobe(wi_b, wo, q):
+    def lobe(wo):
         wo_r = wo * np.array([1.0, 1.0, s])
         f = rr_brdf_components(np.broadcast_to(wi, wo.shape), wo_r, lam, model, n1, n2)
         return _polarized(f, polarization)
 
-    return polar_albedo(t, k, model.length_scale, lobe)
+    if _use_hemisphere(method, model, lam, ni):
+        no = complex(np.ravel(np.asarray(n2 if from_above else n1, dtype=np.complex128))[0])
+        # total internal reflection of the reciprocal wave beyond sinθ_o = n_o / n_i: a √ kink there
+        brk = [math.asin(no.real / ni)] if no.imag == 0 and no.real < ni else []
+        return hemisphere_albedo(lobe, brk)
+    return polar_albedo(t, k, model.length_scale, lambda wi_b, wo, q: lobe(wo))
 
 
 def _polarized(f: dict, polarization: str):
