@@ -83,3 +83,40 @@ def grating_solve(n1, n2, alpha0, beta0, K, a, pol, M=3):
     kr = np.stack([alpha, np.full(N, beta0), g1], axis=-1)
     kt = np.stack([alpha, np.full(N, beta0), -g2], axis=-1)
     return {"orders": m, "R": R, "T": T, "kr": kr, "kt": kt}
+
+
+def specular_losses(n_i, n_o, wi, fx, fy, lam_m, pol, ka=2e-3):
+    """Rigorous losses (ΔR₀, ΔT₀) of the specular reflectance and transmittance (flat minus grating) of a grating of
+    spatial frequency (fx, fy) (1/m), per a²/4 (1/m²), for light from medium n_i along −ω_i (*wi* towards the
+    light, z > 0 in medium n_i); the amplitude a is *ka* / (k₀ max(n_i, n_o)). Only the ±1 orders carry the O(a²)
+    loss (M = 1)."""
+    k0 = 2 * np.pi / lam_m
+    kap = np.hypot(fx, fy) * lam_m                     # |K| / k₀
+    c, s = fx * lam_m / kap, fy * lam_m / kap
+    ax, ay = -n_i * wi[0], -n_i * wi[1]
+    a0, b0 = c * ax + s * ay, -s * ax + c * ay        # the incident lateral wave vector, grating vector along x
+    a = ka / max(n_i, n_o)
+    res = grating_solve(n_i, n_o, a0, b0, kap, a, pol, M=1)
+    flat = grating_solve(n_i, n_o, a0, b0, kap, 0.0, pol, M=1)
+    i0 = res["orders"] == 0
+    norm = (a / k0) ** 2 / 4
+    return ((flat["R"]["total"][i0][0] - res["R"]["total"][i0][0]) / norm,
+            (flat["T"]["total"][i0][0] - res["T"]["total"][i0][0]) / norm)
+
+
+def integrated_losses(n_i, n_o, wi, psd_S, length, lam_m, pol, n_rho=28, n_psi=20):
+    """(ΔR₀, ΔT₀) of a random surface of isotropic PSD *psd_S* (m⁴ at |f| in 1/m) with correlation length *length*
+    (m): ∫ S(f) ΔX(f) d²f over a half plane of f (each grating scatters into +f and −f), Gauss-Legendre in |f| on
+    [0, 4/(π length)] and in the azimuth."""
+    x, w = np.polynomial.legendre.leggauss(n_rho)
+    rho_max = 4.0 / (np.pi * length)
+    rho, wr = 0.5 * rho_max * (x + 1), 0.5 * rho_max * w
+    y, wy = np.polynomial.legendre.leggauss(n_psi)
+    psi, wp = 0.5 * np.pi * (y + 1), 0.5 * np.pi * wy
+    dR = dT = 0.0
+    for r, w1 in zip(rho, wr):
+        for p, w2 in zip(psi, wp):
+            lr, lt = specular_losses(n_i, n_o, wi, r * np.cos(p), r * np.sin(p), lam_m, pol)
+            dR += w1 * w2 * r * psd_S(r) * lr
+            dT += w1 * w2 * r * psd_S(r) * lt
+    return dR, dT
