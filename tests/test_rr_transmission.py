@@ -8,6 +8,8 @@ References held against the code:
   reduction of R + T) against the library's first-order scatter into both half-spaces (optical theorem);
 * the same specular loss integrated over a Gaussian PSD (grating solves on a polar grid of spatial frequencies)
   against the library's TIS_R + TIS_T of the random surface;
+* T. A. Germer's SCATMECH (NIST) Microroughness_BRDF_Model in transmission (after Elson 1995), its Jones matrix
+  transcribed into the test: equal to 1e-11 from air and from inside;
 * reciprocity with the η² factor of radiance (Veach 1997, §5.2), the n₂ → n₁ limit, and the smooth-surface
   transmitted TIS at normal incidence, (2π σ (n₂ − n₁) / λ)² T (Stover 2012; Duparré et al. 2002), written here.
 """
@@ -146,6 +148,52 @@ def test_tis_quadratures_agree(th, corr):
     crit = [math.asin(1 / 1.5)]
     assert hemisphere_albedo(lobe, crit, 64, 257) == pytest.approx(hemisphere_albedo(lobe, crit, 128, 513),
                                                                     rel=1e-9)
+
+
+def _scatmech_btdf(thi, ths, phs, n, lam_m, S_of_f, backward):
+    """The first-order BTDF of one rough interface as T. A. Germer's SCATMECH Microroughness_BRDF_Model gives it
+    (Jones matrix of the transmission case, after Elson 1995, code/urough.cpp; BRDF_Model type 1, light from above,
+    or type 3, from inside: ε → 1/ε, λ → λ/n), written here in its variables: q0 of the incident wave, q1 of the
+    scattered one, [0] in the substrate, [1] in the ambient. Returns {ab: |J_ab|²} (1/sr), first index incident."""
+    eps = n * n
+    lam = lam_m
+    if backward:
+        eps, lam = 1.0 / eps, lam_m / n
+    index = np.sqrt(eps + 0j)
+    k = np.sin(ths) * index
+    k0 = np.sin(thi)
+    q0 = (np.sqrt(eps - k0 * k0 + 0j), np.sqrt(1.0 - k0 * k0 + 0j))
+    q1 = (np.sqrt(eps - k * k + 0j), np.sqrt(1.0 - k * k + 0j))
+    f = np.hypot(np.sin(ths) * np.cos(phs) * index.real - np.sin(thi), np.sin(ths) * np.sin(phs) * index.real) / lam
+    J = {"pp": index * (k * k0 + np.cos(phs) * q0[0] * q1[1]) / (q0[0] + eps * q0[1]) / (q1[0] + eps * q1[1]),
+         "ss": np.cos(phs) / (q0[0] + q0[1]) / (q1[0] + q1[1]),
+         "sp": index * q1[1] * np.sin(phs) / (q0[0] + q0[1]) / (q1[0] + eps * q1[1]),
+         "ps": -q0[0] * np.sin(phs) / (q0[0] + eps * q0[1]) / (q1[0] + q1[1])}
+    common = 4 * np.pi * (1 - eps) * index * np.sqrt(q1[0] * q0[1] * S_of_f(f)) / lam ** 2
+    return {ab: np.abs(v * common) ** 2 for ab, v in J.items()}
+
+
+@pytest.mark.parametrize("backward", [False, True])
+def test_btdf_equals_scatmech_transmission(backward):
+    """SCATMECH's transmission Jones matrix (another program's formula, transcribed into the test) squared equals
+    the library's four polarized BTDFs at seeded random geometries (incidence from air, type 1, and from inside the
+    glass below the critical angle, type 3): the same Q_t, prefactor n₁ n₂³ and radiance convention."""
+    rng = np.random.default_rng(1995)
+    n = 1.52
+    psd = PSDModel("gaussian", 2e-9, T=0.4e-6)
+    m = 40
+    # from air, scattering angles in the glass up to 69° (beyond its 41° critical angle the reciprocal wave is
+    # evanescent in air); from inside, incidence below the critical angle
+    thi = rng.uniform(0.0, math.asin(1 / n) if backward else 1.5, m)
+    ths = rng.uniform(0.0, 1.5 if backward else 1.2, m)
+    phs = rng.uniform(-np.pi, np.pi, m)
+    ref = _scatmech_btdf(thi, ths, phs, n, LAM, psd.S, backward)
+    zi, zo = (-1.0, 1.0) if backward else (1.0, -1.0)
+    wi = np.stack([np.sin(thi), np.zeros(m), zi * np.cos(thi)], axis=-1)
+    wo = np.stack([-np.sin(ths) * np.cos(phs), -np.sin(ths) * np.sin(phs), zo * np.cos(ths)], axis=-1)
+    got = rr_btdf_components(wi, wo, LAM_NM, psd, 1.0, n)
+    for ab in ("ss", "sp", "ps", "pp"):
+        np.testing.assert_allclose(got[ab], ref[ab], rtol=1e-11, atol=1e-14 * float(np.max(ref[ab])))
 
 
 def test_reciprocity_with_the_eta_squared_factor():

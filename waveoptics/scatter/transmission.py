@@ -36,7 +36,8 @@ small scattering angles it gives Stover's smooth-surface transmitted TIS, (2π �
 Where it holds: the smooth-surface limit of Rayleigh-Rice, (4π n σ cosθ / λ)² ≪ 1 and slopes ≪ 1. The
 transmitted light needs transparent media (real n₁, n₂); the reflected part takes an absorbing medium 2. The
 coherent (specular) reduction is second order and not part of it; the energy it takes is the first-order scatter
-into both half-spaces (tests/test_rr_transmission.py measures that against a rigorous grating solve).
+into both half-spaces (tests/test_rr_transmission.py measures that against a rigorous grating solve, and the BTDF
+against SCATMECH's Microroughness_BRDF_Model in transmission).
 
 References
 ----------
