@@ -30,13 +30,25 @@ def _kz(eps, alpha, beta):
     return np.where(g.imag < 0, -g, g)
 
 
-def _basis(alpha, beta, gz, eps):
-    """(ŝ, p̂) of a plane wave of wave vector (α, β, γ) in a medium ε, with H = k × E (units of E / Z₀)."""
+def _bases(alpha, beta, gz, eps):
+    """(ŝ, p̂, k) of plane waves of wave vectors (α_j, β, γ_j) in a medium ε, each (N, 3), with H = k × E (units
+    of E / Z₀) and p̂ = ŝ × k / √ε (unit in the bilinear sense, also for evanescent waves)."""
     kap = np.hypot(alpha, beta)
-    s = np.array([-beta / kap, alpha / kap, 0.0], dtype=complex)
-    k = np.array([alpha, beta, gz], dtype=complex)
+    s = np.stack([-beta / kap, alpha / kap, np.zeros_like(alpha)], axis=-1).astype(complex)
+    k = np.stack([alpha + 0j, np.full_like(alpha, beta) + 0j, gz], axis=-1)
     p = np.cross(s, k) / np.sqrt(eps + 0j)
     return s, p, k
+
+
+def _blocks(E, H, gz, orders, m, a, K):
+    """(4N, n_waves) columns of waves with amplitude vectors E, H (n_waves, 3), z wave numbers gz and orders
+    *orders*: their contributions to E·ŷ, E·t₂, H·ŷ, H·t₂ at the harmonics m (t₂ = x̂ + h'(x) ẑ)."""
+    lval = m[:, None] - orders[None, :]                                   # (N, n_waves)
+    arg = gz[None, :] * a
+    C = (1j ** lval) * special.jv(lval, arg)
+    D = (1j ** lval) * 0.5 * a * K * (special.jv(lval - 1, arg) + special.jv(lval + 1, arg))
+    return np.concatenate([E[None, :, 1] * C, E[None, :, 0] * C + E[None, :, 2] * D,
+                           H[None, :, 1] * C, H[None, :, 0] * C + H[None, :, 2] * D], axis=0)
 
 
 def grating_solve(n1, n2, alpha0, beta0, K, a, pol, M=3):
@@ -48,48 +60,34 @@ def grating_solve(n1, n2, alpha0, beta0, K, a, pol, M=3):
     """
     e1, e2 = complex(n1) ** 2, complex(n2) ** 2
     m = np.arange(-M, M + 1)
-    N = len(m)
     alpha = alpha0 + m * K
     g1 = _kz(e1, alpha, beta0)
     g2 = _kz(e2, alpha, beta0)
     g10 = _kz(e1, alpha0, beta0)
-
-    def rows(E, H, gz, order):
-        """The 4 x N block of a wave of order *order* (amplitude vectors E, H, z wave number gz): its
-        contributions to E·ŷ, E·t₂, H·ŷ, H·t₂ at the harmonics m."""
-        lval = m - order
-        C = (1j ** lval) * special.jv(lval, gz * a)
-        D = (1j ** lval) * 0.5 * a * K * (special.jv(lval - 1, gz * a) + special.jv(lval + 1, gz * a))
-        return np.stack([E[1] * C, E[0] * C + E[2] * D, H[1] * C, H[0] * C + H[2] * D])   # (4, N)
-
-    A = np.zeros((4 * N, 4 * N), dtype=complex)
-    for j, n in enumerate(m):
-        sr, pr, kr = _basis(alpha[j], beta0, g1[j], e1)
-        st, pt, kt = _basis(alpha[j], beta0, -g2[j], e2)
-        for c, (E, k, gz, sign) in enumerate(((sr, kr, g1[j], 1.0), (pr, kr, g1[j], 1.0),
-                                             (st, kt, -g2[j], -1.0), (pt, kt, -g2[j], -1.0))):
-            blk = sign * rows(E, np.cross(k, E), gz, n)
-            A[:, 4 * j + c] = blk.reshape(-1)
-    si, pi_, ki = _basis(alpha0, beta0, -g10, e1)
+    sr, pr, kr = _bases(alpha, beta0, g1, e1)
+    st, pt, kt = _bases(alpha, beta0, -g2, e2)
+    cols = [_blocks(E, np.cross(k, E), gz, m, m, a, K) * sign
+            for E, k, gz, sign in ((sr, kr, g1, 1.0), (pr, kr, g1, 1.0), (st, kt, -g2, -1.0), (pt, kt, -g2, -1.0))]
+    A = np.stack(cols, axis=-1).reshape(4 * len(m), 4 * len(m))          # unknowns ordered (order, wave type)
+    si, pi_, ki = _bases(np.array([alpha0]), beta0, np.array([-g10]), e1)
     Ei = si if pol == "s" else pi_
-    b = -rows(Ei, np.cross(ki, Ei), -g10, 0).reshape(-1)
-    x = np.linalg.solve(A, b).reshape(N, 4)
-    R, T = {}, {}
-    R["s"] = np.where(np.abs(g1.imag) < 1e-14, g1.real, 0.0) / g10.real * np.abs(x[:, 0]) ** 2
-    R["p"] = np.where(np.abs(g1.imag) < 1e-14, g1.real, 0.0) / g10.real * np.abs(x[:, 1]) ** 2
-    T["s"] = np.where(np.abs(g2.imag) < 1e-14, g2.real, 0.0) / g10.real * np.abs(x[:, 2]) ** 2
-    T["p"] = np.where(np.abs(g2.imag) < 1e-14, g2.real, 0.0) / g10.real * np.abs(x[:, 3]) ** 2
+    b = -_blocks(Ei, np.cross(ki, Ei), np.array([-g10]), np.array([0]), m, a, K)[:, 0]
+    x = np.linalg.solve(A, b).reshape(len(m), 4)
+    prop1 = np.where(np.abs(g1.imag) < 1e-14, g1.real, 0.0) / g10.real
+    prop2 = np.where(np.abs(g2.imag) < 1e-14, g2.real, 0.0) / g10.real
+    R = {"s": prop1 * np.abs(x[:, 0]) ** 2, "p": prop1 * np.abs(x[:, 1]) ** 2}
+    T = {"s": prop2 * np.abs(x[:, 2]) ** 2, "p": prop2 * np.abs(x[:, 3]) ** 2}
     R["total"], T["total"] = R["s"] + R["p"], T["s"] + T["p"]
-    kr = np.stack([alpha, np.full(N, beta0), g1], axis=-1)
-    kt = np.stack([alpha, np.full(N, beta0), -g2], axis=-1)
-    return {"orders": m, "R": R, "T": T, "kr": kr, "kt": kt}
+    return {"orders": m, "R": R, "T": T, "kr": np.stack([alpha, np.full(len(m), beta0), g1], axis=-1),
+            "kt": np.stack([alpha, np.full(len(m), beta0), -g2], axis=-1)}
 
 
-def specular_losses(n_i, n_o, wi, fx, fy, lam_m, pol, ka=2e-3):
+def specular_losses(n_i, n_o, wi, fx, fy, lam_m, pol, ka=2e-3, flat=None):
     """Rigorous losses (ΔR₀, ΔT₀) of the specular reflectance and transmittance (flat minus grating) of a grating of
     spatial frequency (fx, fy) (1/m), per a²/4 (1/m²), for light from medium n_i along −ω_i (*wi* towards the
     light, z > 0 in medium n_i); the amplitude a is *ka* / (k₀ max(n_i, n_o)). Only the ±1 orders carry the O(a²)
-    loss (M = 1)."""
+    loss (M = 1). *flat*: the flat interface's specular (R, T), which does not depend on the grating (computed
+    when not given)."""
     k0 = 2 * np.pi / lam_m
     kap = np.hypot(fx, fy) * lam_m                     # |K| / k₀
     c, s = fx * lam_m / kap, fy * lam_m / kap
@@ -97,11 +95,12 @@ def specular_losses(n_i, n_o, wi, fx, fy, lam_m, pol, ka=2e-3):
     a0, b0 = c * ax + s * ay, -s * ax + c * ay        # the incident lateral wave vector, grating vector along x
     a = ka / max(n_i, n_o)
     res = grating_solve(n_i, n_o, a0, b0, kap, a, pol, M=1)
-    flat = grating_solve(n_i, n_o, a0, b0, kap, 0.0, pol, M=1)
     i0 = res["orders"] == 0
+    if flat is None:
+        f = grating_solve(n_i, n_o, a0, b0, kap, 0.0, pol, M=1)
+        flat = (f["R"]["total"][i0][0], f["T"]["total"][i0][0])
     norm = (a / k0) ** 2 / 4
-    return ((flat["R"]["total"][i0][0] - res["R"]["total"][i0][0]) / norm,
-            (flat["T"]["total"][i0][0] - res["T"]["total"][i0][0]) / norm)
+    return (flat[0] - res["R"]["total"][i0][0]) / norm, (flat[1] - res["T"]["total"][i0][0]) / norm
 
 
 def integrated_losses(n_i, n_o, wi, psd_S, length, lam_m, pol, n_rho=28, n_psi=20):
@@ -114,9 +113,11 @@ def integrated_losses(n_i, n_o, wi, psd_S, length, lam_m, pol, n_rho=28, n_psi=2
     y, wy = np.polynomial.legendre.leggauss(n_psi)
     psi, wp = 0.5 * np.pi * (y + 1), 0.5 * np.pi * wy
     dR = dT = 0.0
+    f = grating_solve(n_i, n_o, -n_i * wi[0], -n_i * wi[1], 0.5, 0.0, pol, M=1)
+    flat = (f["R"]["total"][1], f["T"]["total"][1])
     for r, w1 in zip(rho, wr):
         for p, w2 in zip(psi, wp):
-            lr, lt = specular_losses(n_i, n_o, wi, r * np.cos(p), r * np.sin(p), lam_m, pol)
+            lr, lt = specular_losses(n_i, n_o, wi, r * np.cos(p), r * np.sin(p), lam_m, pol, flat=flat)
             dR += w1 * w2 * r * psd_S(r) * lr
             dT += w1 * w2 * r * psd_S(r) * lt
     return dR, dT
