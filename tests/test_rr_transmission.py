@@ -196,6 +196,29 @@ def test_btdf_equals_scatmech_transmission(backward):
         np.testing.assert_allclose(got[ab], ref[ab], rtol=1e-11, atol=1e-14 * float(np.max(ref[ab])))
 
 
+def test_brdf_inside_equals_scatmech_type_2():
+    """Reflection inside the glass (SCATMECH BRDF_Model type 2: Germer's q factors with ε → 1/ε and λ → λ/n, from
+    code/urough.cpp, transcribed here) equals the library's BRDF from below, also beyond the critical angle."""
+    rng = np.random.default_rng(2)
+    n, m = 1.52, 40
+    psd = PSDModel("gaussian", 2e-9, T=0.4e-6)
+    thi, ths, phs = rng.uniform(0.0, 1.5, m), rng.uniform(0.0, 1.5, m), rng.uniform(-np.pi, np.pi, m)
+    e, lam = 1.0 / n ** 2, LAM / n
+    ri, rs = np.sqrt(e - np.sin(thi) ** 2 + 0j), np.sqrt(e - np.sin(ths) ** 2 + 0j)
+    q = {"pp": (e - 1) * (e * np.sin(thi) * np.sin(ths) - rs * ri * np.cos(phs)) / (e * np.cos(thi) + ri)
+         / (e * np.cos(ths) + rs),
+         "ss": (e - 1) * np.cos(phs) / (np.cos(thi) + ri) / (np.cos(ths) + rs),
+         "ps": -(e - 1) * ri * np.sin(phs) / (e * np.cos(thi) + ri) / (np.cos(ths) + rs),
+         "sp": -(e - 1) * rs * np.sin(phs) / (np.cos(thi) + ri) / (e * np.cos(ths) + rs)}
+    f = np.hypot(np.sin(ths) * np.cos(phs) - np.sin(thi), np.sin(ths) * np.sin(phs)) / lam
+    pre = 16 * np.pi ** 2 / lam ** 4 * np.cos(thi) * np.cos(ths) * psd.S(f)
+    wi = np.stack([np.sin(thi), np.zeros(m), -np.cos(thi)], axis=-1)
+    wo = np.stack([-np.sin(ths) * np.cos(phs), -np.sin(ths) * np.sin(phs), -np.cos(ths)], axis=-1)
+    got = rr_brdf_components(wi, wo, LAM_NM, psd, 1.0, n)
+    for ab in ("ss", "sp", "ps", "pp"):
+        np.testing.assert_allclose(got[ab], pre * np.abs(q[ab]) ** 2, rtol=1e-11, atol=0)
+
+
 def test_reciprocity_with_the_eta_squared_factor():
     """f^{ab}(ω_i → ω_o) / n_o² = f^{ba}(ω_o → ω_i) / n_i² for the BTDF (light either way) and the BRDF inside the
     glass, at seeded random directions."""

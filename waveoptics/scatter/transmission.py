@@ -145,8 +145,9 @@ def rr_btdf_components(wi, wo, wavelength_nm, model, n1, n2) -> dict:
 
 def rr_brdf_components(wi, wo, wavelength_nm, model, n1, n2) -> dict:
     """The four polarized BRDFs (1/sr) on either side of the interface: ω_i, ω_o on one side (0 elsewhere), the
-    Rayleigh-Rice BRDF of the medium of ω_i (index n_i, real) on the other (*n2* may be complex when light comes
-    from above): Germer's q of ε_o'/ε_i at the wavelength λ/n_i in the medium.
+    Rayleigh-Rice BRDF in the medium of ω_i (index n_i, real) over the medium across (index n_t; *n2* may be complex
+    when light comes from above): Germer's q of the relative permittivity n_t²/n_i² at the wavelength λ/n_i in the
+    medium, with f = n_i (ω_i + ω_o)_xy / λ.
 
     References
     ----------
