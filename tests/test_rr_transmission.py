@@ -11,7 +11,8 @@ References held against the code:
 * T. A. Germer's SCATMECH (NIST) Microroughness_BRDF_Model in transmission (after Elson 1995), its Jones matrix
   transcribed into the test: equal to 1e-11 from air and from inside;
 * reciprocity with the η² factor of radiance (Veach 1997, §5.2), the n₂ → n₁ limit, and the smooth-surface
-  transmitted TIS at normal incidence, (2π σ (n₂ − n₁) / λ)² T (Stover 2012; Duparré et al. 2002), written here.
+  transmitted TIS at normal incidence, (2π σ (n₂ − n₁) / λ)² T (Stover 2012; Duparré et al. 2002), and at oblique
+  incidence T (2π σ (n_i cosθ_i − n_o cosθ_t) / λ)² (Carniglia 1979), written here.
 """
 from __future__ import annotations
 
@@ -269,6 +270,28 @@ def test_normal_incidence_tis_closed_form(n1, n2):
     tis_r = rr_tis_reflection(0.0, LAM_NM, psd, n1, n2)
     assert tis_t == pytest.approx((2 * np.pi * sigma * (n2 - n1) / LAM) ** 2 * T, rel=1e-3)
     assert tis_r == pytest.approx((4 * np.pi * n1 * sigma / LAM) ** 2 * R, rel=1e-3)
+
+
+@pytest.mark.parametrize("n_i, n_o, th", [(1.0, 1.5, 30.0), (1.0, 1.5, 60.0), (1.5, 1.0, 20.0), (1.5, 1.0, 35.0)])
+@pytest.mark.parametrize("pol", ["s", "p"])
+def test_oblique_paraxial_tis_closed_form(n_i, n_o, th, pol):
+    """For a long correlation length the transmitted TIS at oblique incidence is the scalar smooth-surface
+    T (2π σ (n_i cosθ_i − n_o cosθ_t) / λ)² (C. K. Carniglia, Opt. Eng. 18(2), 104–115, 1979; Stover 2012), with
+    T = 1 − R of the polarization (Fresnel, Born & Wolf §1.5.2), written here."""
+    sigma = 2e-9
+    psd = PSDModel("gaussian", sigma, T=20e-6)
+    t = math.radians(th)
+    ci, st = math.cos(t), n_i * math.sin(t) / n_o
+    ct = math.sqrt(1 - st * st)
+    if pol == "s":
+        r = (n_i * ci - n_o * ct) / (n_i * ci + n_o * ct)
+    else:
+        r = (n_o * ci - n_i * ct) / (n_o * ci + n_i * ct)
+    T = 1 - r * r
+    above = n_i == 1.0
+    n1, n2 = (n_i, n_o) if above else (n_o, n_i)
+    got = rr_tis_transmission(th, LAM_NM, psd, n1, n2, pol, from_above=above)
+    assert got == pytest.approx(T * (2 * np.pi * sigma * (n_i * ci - n_o * ct) / LAM) ** 2, rel=1e-3)
 
 
 def test_q_transmission_normal_incidence():
