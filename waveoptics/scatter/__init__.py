@@ -6,7 +6,8 @@ factor and BRDF of a field), direct (the direct sum, NumPy and OpenCL), fft (the
 Beckmann-Spizzichino series from a PSD), band (the propagating band and the relevant roughness), angles (the angles of a scattering geometry), band_energy
 (the band lobe's albedo and coherent fraction),
 perturbation (Rayleigh-Rice
-with the polarization factor Q), rough_film (first-order scatter of a film stack with rough interfaces, Elson), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
+with the polarization factor Q), transmission (Rayleigh-Rice into both half-spaces of an interface between two
+media: the BTDF with Q_t), rough_film (first-order scatter of a film stack with rough interfaces, Elson), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
 Rayleigh-Rice for 1-D Gaussian surfaces), solvers (the :data:`SOLVERS` registry, :func:`brdf`,
 :func:`scatter`), footprint (the BRDF of a pixel footprint on a large field), pixel (per-pixel
 footprint BRDFs at one direction pair, OpenCL), gabor (one footprint by Yan et al. 2018's Gabor kernels, an
@@ -31,6 +32,8 @@ from .band import (band_arc, relevant_variance, relevant_variance_of_field, beyo
 from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factors, Q,
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
     rayleigh_rice_tis, is_stack, stack_correlation)
+from .transmission import (q_transmission, rr_psd, rr_btdf_components, rr_brdf_components, rr_bsdf_components,
+    rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
     rough_stack_components, rough_stack_brdf, rough_stack_tis)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,
@@ -43,6 +46,6 @@ from .pixel import (PIXEL_BACKENDS, MAX_REGION_SAMPLES, PixelBRDF, footprint_sum
     pixel_brdf, footprint_brdf)
 from .gabor import (KERNEL_SIGMA, GaborKernels, gabor_kernels, gabor_footprint_field, gabor_footprint_brdf)
 from .output import (plot_scatter, SCATTER_FILES, write_scatter, brdf_exr_header)
-from . import grid, patch, models, kirchhoff, direct, fft, series, polar, angles, band_energy, band, perturbation, rough_film, mom, models1d, solvers, footprint, pixel, gabor, output  # noqa: F401
+from . import grid, patch, models, kirchhoff, direct, fft, series, polar, angles, band_energy, band, perturbation, transmission, rough_film, mom, models1d, solvers, footprint, pixel, gabor, output  # noqa: F401
 
-__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + angles.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + rough_film.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + pixel.__all__ + gabor.__all__ + output.__all__
+__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + angles.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + transmission.__all__ + rough_film.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + pixel.__all__ + gabor.__all__ + output.__all__
