@@ -46,13 +46,26 @@ def test_a_second_build_reads_the_lobes_and_evaluates_the_same(cache_dir, monkey
         raise AssertionError("the lobes were computed again")
 
     monkeypatch.setattr(tabulated, "evaluate", boom)
-    second = rmodel.renderer_brdf(**SMALL)
     wi, wo = _pairs()
+    ref = {lam: first.eval(wi, wo, lam) for lam in (360.0, 595.0, 830.0)}
+    nodes = rmodel.wavelength_nodes(SMALL["wavelength_step_nm"])
+    tables = {lam: band.band_series(first.base.nano.model, lam).albedo_tables() for lam in nodes}
+    assert all(tables.values())
+    band.band_series_cached.cache_clear()   # the band series forgotten, as in a new process
+    second = rmodel.renderer_brdf(**SMALL)
     for lam in (360.0, 595.0, 830.0):
-        a, b = first.eval(wi, wo, lam), second.eval(wi, wo, lam)
+        a, b = ref[lam], second.eval(wi, wo, lam)
         assert np.all(np.isfinite(a)) and np.max(a) > 0
         # stored as float32, the precision of the facet tables the lobes are computed from
         np.testing.assert_allclose(b, a, rtol=1e-6, atol=1e-9 * np.max(a))
+    # the entry also holds the albedo tables of A(θ_d): the model read from it builds no band series' tables
+    # (~0.2 s CPU a wavelength node) and uses the very tables the first build computed
+    for lam in nodes:
+        bs = band.band_series(second.base.nano.model, lam)
+        assert "_arrays" not in bs.__dict__, "the band series' tables were built"
+        for key, tab in tables[lam].items():
+            for got, want in zip(bs.albedo_tables()[key], tab):
+                np.testing.assert_array_equal(got, want)
     np.testing.assert_allclose(second.base.table, first.base.table, rtol=1e-6, atol=0)
     with pytest.raises(AssertionError, match="computed again"):
         rmodel.renderer_brdf(**dict(SMALL, cache=False))

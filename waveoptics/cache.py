@@ -16,6 +16,7 @@ depend on it.
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -114,10 +115,11 @@ def put(kind: str, key: str, value, *, keep: int = 64) -> None:
         pass   # a cache only saves time: an unwritable one is skipped
 
 
+@functools.lru_cache(maxsize=1)
 def code_version() -> str:
     """The waveoptics version, NumPy's and SciPy's, and a SHA-256 of the bytes of every ``.py`` file of the
     package: a computed array depends on the code that computed it, which an editable install changes without a
-    new version."""
+    new version. Computed once per process (~15 ms: the code a process runs is the code it imported)."""
     h = hashlib.sha256()
     root = Path(__file__).resolve().parent
     for path in sorted(root.rglob("*.py")):

@@ -20,6 +20,7 @@ References
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -33,7 +34,11 @@ __all__ = ["slope_magnitude_cdf", "alpha_for_median_slope", "GGX_AXIS_MEDIAN"]
 #: median of |s_x| for the GGX slope law of α_x = 1 (its marginal CDF is s / √(1 + s²))
 GGX_AXIS_MEDIAN = 1.0 / math.sqrt(3.0)
 
-_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(256)
+@functools.lru_cache(maxsize=1)
+def _legendre_256():
+    """Gauss-Legendre nodes and weights of order 256, computed on first use (an eigenvalue problem: 0.2-0.5 s at
+    import time otherwise, paid by every command)."""
+    return np.polynomial.legendre.leggauss(256)
 
 
 def slope_magnitude_cdf(ndf: str, alpha: float, t: float, shape=None) -> float:
@@ -44,12 +49,13 @@ def slope_magnitude_cdf(ndf: str, alpha: float, t: float, shape=None) -> float:
         return 0.0
     edges = np.concatenate([[0.0], t * np.geomspace(1e-4, 1.0, 24)])
     total = 0.0
+    nodes, weights = _legendre_256()
     for a, b in zip(edges[:-1], edges[1:]):
-        s = 0.5 * (b - a) * _NODES + 0.5 * (a + b)
+        s = 0.5 * (b - a) * nodes + 0.5 * (a + b)
         c = 1.0 / np.sqrt(1.0 + s * s)
         m = np.stack([-s * c, np.zeros_like(s), c], axis=-1)           # a normal of slope s along x
         p22 = spec.D(m, alpha, alpha, shape) * c ** 4
-        total += 0.5 * (b - a) * float(np.sum(_WEIGHTS * 2 * np.pi * p22 * s))
+        total += 0.5 * (b - a) * float(np.sum(weights * 2 * np.pi * p22 * s))
     return total
 
 

@@ -244,7 +244,9 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
     facet is a turned lobe), blended linearly in θ; a node whose turned direction falls below its horizon drops
     out of the blend."""
     nodes = np.radians(FACET_THETAS_DEG)
-    theta = np.broadcast_to(np.asarray(theta, dtype=float), lo.shape[:1])
+    theta = np.asarray(theta, dtype=float)   # one incidence (an NDF node shared by all cells) stays a scalar
+    if theta.ndim:
+        theta = np.broadcast_to(theta, lo.shape[:1])
     f = np.interp(theta, nodes, np.arange(nodes.size))
     a = np.minimum(np.floor(f).astype(int), nodes.size - 1)
     b = np.minimum(a + 1, nodes.size - 1)
@@ -264,7 +266,9 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
         idx += [i00, i00 + 1, i00 + n_u, i00 + n_u + 1]
         wts += [wk * (1 - av) * (1 - au), wk * (1 - av) * au, wk * av * (1 - au), wk * av * au]
         den += wk
-    val = np.einsum("cj,cjl->cl", np.stack(wts, axis=1).astype(np.float32), flat[np.stack(idx, axis=1)])
+    # np.take gathers whole rows (n_λ values) ~3x faster than fancy indexing, the same values
+    rows = np.take(flat, np.stack(idx, axis=1), axis=0)
+    val = np.einsum("cj,cjl->cl", np.stack(wts, axis=1).astype(np.float32), rows)
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 

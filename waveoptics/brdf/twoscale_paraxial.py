@@ -8,7 +8,6 @@ References
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 
 from ..materials import cos2_eta_i
 from ..scatter.grid import DirectionGrid, integrate
@@ -112,6 +111,8 @@ def _convolve(lobe, K, grid):
     """Convolve lobes f (n_λ, n_v, n_u), which are energy densities on the (u, v) plane, with kernel K
     ((2n_v − 1, 2n_u − 1), or one per wavelength)."""
     n_v, n_u = grid.n_v, grid.n_u
+    from scipy import signal   # ~0.4 s to import: only where it is used
+
     out = signal.fftconvolve(lobe, K if K.ndim == 3 else K[None], mode="full", axes=(-2, -1))
     out = out[..., n_v - 1:2 * n_v - 1, n_u - 1:2 * n_u - 1]
     return np.maximum(out, 0.0)  # guard: FFT round-off gives tiny negatives

@@ -159,6 +159,10 @@ def _ndf_table(model, grid_n, wY, isotropic):
     return (1.0 - UNIFORM_NDF_SHARE) * D / norm + UNIFORM_NDF_SHARE / np.pi
 
 
+#: incidences per block of :func:`_sigma`'s matrix product (a block of 256 × 192² doubles is 75 MB)
+_SIGMA_BLOCK = 256
+
+
 def _sigma(D_warp_eval, mi, wi_dirs, n_quad=192):
     """σ(ω_i) = ∫ D(m) ⟨ω_i·m⟩ dm by the midpoint rule in u over the tabulated (interpolated) NDF."""
     uq = (np.arange(n_quad) + 0.5) / n_quad
@@ -167,7 +171,10 @@ def _sigma(D_warp_eval, mi, wi_dirs, n_quad=192):
     D = _map(mi, D_warp_eval, pts)
     m = _sph(u2theta(pts[:, 0]), u2phi(pts[:, 1]))
     w = D * 2 * np.pi ** 2 * pts[:, 0] * np.sin(u2theta(pts[:, 0])) / n_quad ** 2
-    return np.maximum(wi_dirs @ m.T, 0.0) @ w
+    # in blocks of incidences: the whole (n_i, n_quad²) matrix of ⟨ω_i·m⟩ would take GBs (each row is the same sum)
+    mt = np.ascontiguousarray(m.T)
+    return np.concatenate([np.maximum(wi_dirs[i:i + _SIGMA_BLOCK] @ mt, 0.0) @ w
+                           for i in range(0, wi_dirs.shape[0], _SIGMA_BLOCK)])
 
 
 def export_rgl(model, path, *, grid: RGLGrid = RGLGrid(), description: str = "waveoptics BRDF",

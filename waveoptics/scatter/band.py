@@ -46,7 +46,8 @@ from .models import get_model
 from .series import M_MAX, poisson_weights, roughness_g, series_tables, series_terms
 
 __all__ = ["band_arc", "relevant_variance", "relevant_variance_of_field", "beyond_band_fraction", "SIN_NODES",
-           "relevant_variances", "relevant_sigma2", "band_correlation", "BandSeries", "band_series", "scattered_lobe"]
+           "relevant_variances", "relevant_sigma2", "band_correlation", "BandSeries", "band_series", "series_arrays",
+           "scattered_lobe"]
 
 
 def band_arc(r, sin_theta_i, wavelength_nm):
@@ -234,13 +235,45 @@ class BandSeries(BandAlbedos):
     wavelength_nm: float
     sin_nodes: np.ndarray
     sigma2: np.ndarray          # σ_rel² at sin_nodes, m²
-    q: np.ndarray               # rad/m
-    H: np.ndarray               # H_m^b for m = 2..m_max (m_max − 1, n_q), m²
-    inband: np.ndarray          # B_m at sin_nodes (m_max − 1, n_nodes)
-    x: np.ndarray               # √g nodes of the look-up tables
-    rest: np.ndarray            # Σ_{m≥2} p_m(g) H_m^b(q) at (x, q), m²
-    K: np.ndarray               # K(g, θ_i) at (x, sin_nodes)
+    m_max: int | None = None    # series terms (None: those the largest g = (2kσ)² needs)
+    n_q: int = 512              # q nodes of the tables
     _albedos: dict = field(default_factory=dict, repr=False)   # diffraction model name -> E¹ at ALBEDO_THETAS_DEG
+
+    # The tables of the series, computed on first use (:func:`series_arrays`, ~0.2 s CPU a wavelength): the
+    # albedo tables (``_albedos``) of a series may be known without them (read from a cache by the caller).
+    @functools.cached_property
+    def _arrays(self) -> dict:
+        return series_arrays(self.model, self.wavelength_nm, self.sin_nodes, self.sigma2, self.m_max, self.n_q)
+
+    @property
+    def q(self) -> np.ndarray:
+        """Frequency nodes |q| (rad/m) of the tables."""
+        return self._arrays["q"]
+
+    @property
+    def H(self) -> np.ndarray:
+        """H_m^b for m = 2..m_max (m_max − 1, n_q), m²."""
+        return self._arrays["H"]
+
+    @property
+    def inband(self) -> np.ndarray:
+        """B_m at sin_nodes (m_max − 1, n_nodes)."""
+        return self._arrays["inband"]
+
+    @property
+    def x(self) -> np.ndarray:
+        """√g nodes of the look-up tables."""
+        return self._arrays["x"]
+
+    @property
+    def rest(self) -> np.ndarray:
+        """Σ_{m≥2} p_m(g) H_m^b(q) at (x, q), m²."""
+        return self._arrays["rest"]
+
+    @property
+    def K(self) -> np.ndarray:
+        """K(g, θ_i) at (x, sin_nodes)."""
+        return self._arrays["K"]
 
     @property
     def k(self) -> float:
@@ -361,7 +394,16 @@ BAND_CACHE_SIZE = 50
 
 @functools.lru_cache(maxsize=BAND_CACHE_SIZE)
 def band_series_cached(model: PSDModel, wavelength_nm: float, m_max: int | None, n_q: int) -> BandSeries:
-    """:class:`BandSeries` of *model* at *wavelength_nm* (nm), built once and cached.
+    """:class:`BandSeries` of *model* at *wavelength_nm* (nm), built once and cached; its tables
+    (:func:`series_arrays`) are computed on first use."""
+    lam = float(wavelength_nm)
+    return BandSeries(model=model, wavelength_nm=lam, sin_nodes=np.linspace(0.0, 1.0, SIN_NODES),
+                      sigma2=_sigma2_nodes(model, lam), m_max=m_max, n_q=int(n_q))
+
+
+def series_arrays(model: PSDModel, wavelength_nm: float, nodes, sigma2, m_max: int | None, n_q: int) -> dict:
+    """The tables of :class:`BandSeries` (``q``, ``H``, ``inband``, ``x``, ``rest``, ``K``) of *model* at
+    *wavelength_nm* (nm), with σ_rel² *sigma2* at the sinθ_i *nodes*.
 
     The tables hold H_m^b for m = 2..m_max (by default the terms the largest g = (2kσ)² needs), on q ≤ 2k (every
     reflected direction) from the trapezoid Hankel transform of c_b^m on r ≤ max(12 ℓ, 60 λ) (ℓ the PSD's length
@@ -371,8 +413,6 @@ def band_series_cached(model: PSDModel, wavelength_nm: float, m_max: int | None,
 
     lam = float(wavelength_nm)
     k = 2 * np.pi / (lam * 1e-9)
-    nodes = np.linspace(0.0, 1.0, SIN_NODES)
-    sigma2 = _sigma2_nodes(model, lam)
     g_max = (2 * k * model.sigma) ** 2
     m_use = _series_terms(g_max) if m_max is None else int(m_max)
     L = model.length_scale
@@ -408,8 +448,7 @@ def band_series_cached(model: PSDModel, wavelength_nm: float, m_max: int | None,
         Ktab = np.where(den > 0, num / np.where(den > 0, den, 1.0), 1.0)
     else:
         rest, Ktab = np.zeros((x.size, q.size)), np.ones((x.size, nodes.size))
-    return BandSeries(model=model, wavelength_nm=lam, sin_nodes=nodes, sigma2=sigma2, q=q, H=H, inband=inband,
-                      x=x, rest=rest, K=Ktab)
+    return dict(q=q, H=H, inband=inband, x=x, rest=rest, K=Ktab)
 
 
 def scattered_lobe(wi, wo, wavelength_nm, model: PSDModel, F=1.0, *, m_max: int = M_MAX, return_captured=False,

@@ -60,6 +60,19 @@ class BandAlbedos:
     """The scattered albedo, grazing continuation and coherent fraction of a band-limited lobe (module doc): the
     base class of :class:`waveoptics.scatter.BandSeries`."""
 
+    def albedo_tables(self) -> dict:
+        """The albedo tables computed so far: {(diffraction model, material key, polarization, absolute):
+        (nodes, raw, continued)} (:meth:`_tables`), for a caller that keeps them between processes."""
+        return dict(self._albedos)
+
+    def add_albedo_tables(self, tables: dict) -> None:
+        """Take albedo tables of :meth:`albedo_tables` computed earlier for this same series (same model,
+        wavelength and code; the caller's cache key holds them): a table known here is not computed again, and
+        the series' own tables are then not needed for it."""
+        for key, (nodes, raw, cont) in tables.items():
+            self._albedos.setdefault(tuple(key), (np.asarray(nodes, dtype=float), np.asarray(raw, dtype=float),
+                                                  np.asarray(cont, dtype=float)))
+
     def _tables(self, dm, material, polarization, absolute: bool):
         """(nodes, raw, continued): the lobe's scattered albedo at the nodes (degrees), relative to the specular
         reflectance or *absolute* (a share of the incident light), as computed and with the grazing continuation

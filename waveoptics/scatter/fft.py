@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.signal import ZoomFFT
 
 from ..errors import WaveopticsError
 from .grid import DirectionGrid
@@ -43,6 +42,8 @@ class _DTFT2:
         ay = (wi[1] + grid.v) * smp.dy / lam
         sx, sy = grid.du * smp.dx / lam, grid.dv * smp.dy / lam
         # zoom_fft computes Σ x[n] e^{-2πi n f}: ask for f = -a (steps may be negative)
+        from scipy.signal import ZoomFFT   # scipy.signal costs ~0.4 s to import: only where it is used
+
         self._zx = ZoomFFT(smp.nx, [-ax[0], -ax[0] - grid.n_u * sx], grid.n_u, fs=1, endpoint=False)
         self._zy = ZoomFFT(smp.ny, [-ay[0], -ay[0] - grid.n_v * sy], grid.n_v, fs=1, endpoint=False)
         cx, cy = (smp.nx - 1) / 2.0, (smp.ny - 1) / 2.0

@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal.windows import get_window
 
 from ..errors import FieldError, WaveopticsError, unknown
 from ..surfaces.heightfield import HeightField
@@ -68,6 +67,8 @@ def window(hf: HeightField, name=DEFAULT_WINDOW) -> np.ndarray:
         name_y = ("gaussian", sigma / hf.dy)
     else:
         name_y = name
+    from scipy.signal.windows import get_window   # scipy.signal costs ~0.4 s to import: only where it is used
+
     try:
         wx = get_window(name, nx, fftbins=False) if nx > 1 else np.ones(1)
         wy = get_window(name_y, ny, fftbins=False) if ny > 1 else np.ones(1)

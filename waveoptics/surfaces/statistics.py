@@ -17,7 +17,6 @@ from scipy.interpolate import RegularGridInterpolator
 from scipy.fft import next_fast_len
 from scipy.ndimage import uniform_filter1d
 from scipy.optimize import least_squares
-from scipy.signal.windows import hann
 from scipy.special import digamma, polygamma
 
 from ..errors import WaveopticsError, unknown
@@ -205,6 +204,8 @@ def _psd(hf: HeightField, window="auto", detrend: str = "mean"):
     ny, nx = hf.shape
     w = hf.valid.astype(float)
     if window == "hann":
+        from scipy.signal.windows import hann   # scipy.signal costs ~0.4 s to import: only where it is used
+
         w = w * np.outer(hann(ny, sym=False) if ny > 1 else [1.0], hann(nx, sym=False) if nx > 1 else [1.0])
     wsum2 = float(np.sum(w**2))
     if wsum2 <= 0:
@@ -237,6 +238,8 @@ class PeriodogramPSD:
         ny, nx = hf.shape
         w = hf.valid.astype(float)
         if window == "hann":
+            from scipy.signal.windows import hann   # ~0.4 s to import: only where it is used
+
             w = w * np.outer(hann(ny, sym=False) if ny > 1 else [1.0], hann(nx, sym=False) if nx > 1 else [1.0])
         elif window not in (None, "none"):
             raise unknown("PSD window", window, ("hann", "none"))
