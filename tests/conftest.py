@@ -55,7 +55,15 @@ def _private_cache(tmp_path_factory):
     from waveoptics import cache
 
     old = os.environ.get("WAVEOPTICS_CACHE_DIR")
-    os.environ["WAVEOPTICS_CACHE_DIR"] = str(tmp_path_factory.mktemp("wocache"))
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        # one cache for all pytest-xdist workers of this run (their base temps share a parent made for the run):
+        # a renderer model table one worker built is not built again by the other; entries are written
+        # atomically (a temporary file moved into place), so the workers cannot see half a file
+        shared = tmp_path_factory.getbasetemp().parent / "wocache"
+        shared.mkdir(exist_ok=True)
+        os.environ["WAVEOPTICS_CACHE_DIR"] = str(shared)
+    else:
+        os.environ["WAVEOPTICS_CACHE_DIR"] = str(tmp_path_factory.mktemp("wocache"))
     cache.put("calibration", "cost_model", SEEDED_COST_MODEL)
     yield
     if old is None:
