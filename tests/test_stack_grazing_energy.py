@@ -50,8 +50,9 @@ def airy_R(mat, cos_t, lam):
 
 
 def ggx_reflectance(mat, theta_deg, lam):
-    """∫ R(θ_d) G2 D (ω_i·h) / cos θ_i dω_h: the GGX microfacet lobe's albedo with the stack's R (Walter 2007 eq. 20
-    with dω_o = 4 (ω_i·h) dω_h), GGX D and height-correlated Smith G2 = 1 / (1 + Λ_i + Λ_o) (Heitz 2014)."""
+    """∫ R(θ_d) G2 D (ω_i·h) / cos θ_i dω_h: the GGX microfacet lobe's albedo with the stack's R (Walter 2007
+    eq. 20 with dω_o = 4 (ω_i·h) dω_h), GGX D and height-correlated Smith G2 = 1 / (1 + Λ_i + Λ_o)
+    (Heitz 2014)."""
     t = np.radians(theta_deg)
     wi = np.array([np.sin(t), 0.0, np.cos(t)])
     x = np.concatenate([np.linspace(0, 12, 1200, endpoint=False), np.geomspace(12, 2e3, 300)])

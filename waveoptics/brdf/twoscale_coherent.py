@@ -6,13 +6,13 @@ spike of height E/(du dv), which keeps albedo and colour exact on the grid.
 
 A thin-film stack's reflectance R(θ) has interference fringes and, towards grazing incidence, resonance dips a few
 degrees wide (Al|Al2O3:300nm at 560 nm: R = 0.715 at 80°, 0.606 at 86°, 0.719 at 89°), narrower than the cells of a
-coarse grid near the rim of the disc, where a grazing lobe is squeezed: read at the cell centres, F·A of a micro lobe
-(GGX α = 0.05) at 89° came out 0.673 on 32² cells (0.641 on 64², 0.617 on 128²) against 0.610 by the half-vector
-quadrature, above the light the facets reflect less what they scatter, and the diffracted budget
+coarse grid near the rim of the disc, where a grazing lobe is squeezed: read at the cell centres, F·A of a micro
+lobe (GGX α = 0.05) at 89° came out 0.673 on 32² cells (0.641 on 64², 0.617 on 128²) against 0.610 by the
+half-vector quadrature, above the light the facets reflect less what they scatter, and the diffracted budget
 (:func:`waveoptics.brdf.twoscale.cap_to_coherent_loss`) then removed 78 % of the diffracted lobe (issues 28/33). For
-a stack the factors F and F·A of the cells that hold the lobe's light are therefore their averages over each cell,
-weighted by the F = 1 lobe, and the F = 1 lobe itself is its cell average (:class:`SubCells`); a single interface's R(θ) is smooth on the scale of a
-cell and keeps the cell-centre value.
+a stack the factors F and F·A of every cell are therefore their averages over the cell,
+weighted by the F = 1 lobe, and the F = 1 lobe itself is its cell average (:class:`SubCells`); a single interface's
+R(θ) is smooth on the scale of a cell and keeps the cell-centre value.
 
 References
 ----------
@@ -124,8 +124,8 @@ def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: 
 class SubCells:
     """The sub-cells, at most :data:`STACK_SUBCELL` wide, of the cells *cells* (mask (n_v, n_u)) of *grid*, and
     the F = 1 micro lobe f_mf at their centres (composite midpoint rule): :meth:`mean` gives cell averages
-    ∫_cell f_mf X du dv / (du dv), :meth:`weighted` the lobe-weighted averages ∫_cell f_mf X / ∫_cell f_mf (0 where
-    f_mf vanishes in the whole cell). Sub-cells outside the unit disc weigh 0. Attributes ``cos_d`` and ``c2``
+    ∫_cell f_mf X du dv / (du dv), :meth:`weighted` the lobe-weighted averages ∫_cell f_mf X / ∫_cell f_mf (0
+    where f_mf vanishes in the whole cell). Sub-cells outside the unit disc weigh 0. Attributes ``cos_d`` and ``c2``
     (n_cells, s, s): cos θ_d and cos²η_i of each sub-cell's facet (half-vector).
 
     References
