@@ -35,9 +35,9 @@ from .twoscale_grid import azimuth_deg, fresnel_at_mirror, mirror_cell, sharp_mi
 __all__ = ['STACK_SUBCELL', 'coherent_lobe', 'SubCells']
 
 
-#: width (direction cosines) of the sub-cells over which :func:`cell_averaged_factors` averages a stack's F and F·A
-#: in each cell (32² cells: 16² sub-cells each)
-STACK_SUBCELL = 2.0 / 512
+#: width (direction cosines) of the sub-cells over which :class:`SubCells` averages a stack's F and F·A
+#: in each cell (32² cells: 8² sub-cells each)
+STACK_SUBCELL = 2.0 / 256
 
 
 def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: DirectionGrid, diffraction,
