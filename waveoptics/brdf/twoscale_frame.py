@@ -28,8 +28,13 @@ __all__ = ['FACET_THETAS_DEG', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_
 
 
 #: local incidences θ' (degrees) at which the facet-frame route tabulates the nano lobe on the direction grid: the
-#: nano lobe of a facet at any incidence is read between the two nodes around it, relative to the mirror direction
-FACET_THETAS_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 78, 81, 84, 86, 88])
+#: nano lobe of a facet at any incidence is read between the two nodes around it, relative to the mirror direction.
+#: The nodes reach 89.9°: every rough surface's scatter falls to 0 at grazing incidence (first-order TIS of
+#: Al|Al2O3:300nm, ABC σ 15 nm, 560 nm: 0.0206 at 88°, 0.0152 at 89°, 0.0094 at 89.5°, 0.0022 at 89.9°), and
+#: with 88° the last node the facets beyond it carried the 88° lobe: at θ_i = 89° (GGX α = 0.05, 32² cells) the
+#: diffracted part came out 4 % above the light the facets scatter (Al: 1.3 %), 0.3 % with these nodes
+FACET_THETAS_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 78, 81, 84, 86, 88,
+                             89, 89.5, 89.9])
 #: facet normals of the grid route's quadrature (:func:`facet_nodes`): (drawn through the micro NDF's sampler,
 #: shared by all cells; drawn about each cell's half-vector through the nano lobe's radial law), for a micro lobe
 #: narrower than :data:`FACET_NODE_SPLIT` nano lobe widths, and for a wider one. Measured per cell against the
