@@ -22,7 +22,7 @@ w^{*m} the m-fold convolution (the transform of c^m); σ is per radian of θₛ,
 
 Measured (MoM: perfect conductor, 40 λ surfaces, Thorsos beam g = 10 λ, 10 nodes per λ, seeded realizations;
 ring power = ∫σ_incoherent dθₛ over |sinθₛ − sinθᵢ| in the ring; ratio model/MoM ± MoM standard error): see the
-table in :func:`test_k_moves_the_outer_rings_away_from_the_mom_ensemble` and the report of issue 28.
+table in :func:`test_in_the_outer_ring_k_is_smaller_than_the_kirchhoff_polarization_error`.
 
 References
 ----------
@@ -38,7 +38,6 @@ import math
 import sys
 
 import numpy as np
-import pytest
 from scipy import signal, special
 
 from waveoptics.scatter.models1d import kirchhoff_1d
@@ -176,6 +175,65 @@ def test_convolutions_and_plain_series_match_the_closed_form():
         ref, _ = kirchhoff_1d(t, SCATTER_DEG, K0 * 0.08, K0 * ELL)
         got = model_sigma(s, K0 * 0.08, t, SCATTER_DEG, "plain")
         assert np.max(np.abs(got - ref)) < 1e-5 * ref.max()     # linear interpolation in u (Δu = 2e-3)
+
+
+TEST_REALIZATIONS = 48
+
+
+def test_in_the_outer_ring_k_is_smaller_than_the_kirchhoff_polarization_error():
+    """σ/λ = 0.08, ℓ/λ = 0.8 (kσ = 0.50, kℓ = 5.0; the case of the 2-D xfail), θᵢ = 0° and 20°, outer ring
+    0.6 ≤ |sinθₛ − sinθᵢ| < 1, 48 realizations per polarization (the same surfaces in s and p; seed 7, about 8 s
+    of one core). What this ensemble resolves, and asserts:
+
+    * K's factor on the ring, (band+K)/band = 1.118 at 0°, 1.067 at 20° (1.06/1.03 at σ/λ = 0.05, 1.19/1.12 at
+      0.12), is much smaller than the ring's polarization split on a perfect conductor, MoM p/s = 1.75 and 1.81
+      here (1.81/1.82 over 400 realizations), to which the Kirchhoff series (the same for s and p) is blind;
+    * s: the series is above the MoM already without K (band/MoM = 1.18 ± 0.065, 1.31 ± 0.083 here; 1.26 and 1.36
+      ± 0.02 over 560): K moves it away (1.32, 1.40 here; 1.41, 1.45 over 560);
+    * p: the series is below the MoM even with K (band+K/MoM = 0.753 ± 0.054, 0.769 ± 0.067 here; 0.78, 0.80
+      ± 0.02 over 560): K moves it towards, not there (band 0.67, 0.72 here; 0.69, 0.75 over 560).
+
+    Unpolarized (the mean of s and p per realization), pooled over 560 realizations (160 with seeds 1005/1008/1012
+    and 400 with 2005/2008/2012, ``python tests/test_band_renormalization_mom.py N SEED0``), ratio model/MoM,
+    band → band+K, ± the MoM standard error:
+
+    ============  ==============================  ==============================  ==============================
+    σ/λ, θᵢ       ring [0.3, 0.6)                 ring [0.6, 1.0)                 total diffuse reflectance
+    ============  ==============================  ==============================  ==============================
+    0.05, 0°      0.996 → 1.007 ± 0.017           0.911 → 0.965 ± 0.015           0.990 → 0.997 ± 0.012
+    0.05, 20°     0.986 → 1.002 ± 0.017           0.933 → 0.964 ± 0.019           0.988 → 0.998 ± 0.012
+    0.08, 0°      1.002 → 1.030 ± 0.013           0.895 → 1.001 ± 0.016           0.997 → 1.020 ± 0.008
+    0.08, 20°     0.992 → 1.032 ± 0.014           0.964 → 1.029 ± 0.019           0.998 → 1.029 ± 0.009
+    0.12, 0°      1.002 → 1.069 ± 0.011           0.859 → 1.021 ± 0.015           0.986 → 1.048 ± 0.004
+    0.12, 20°     0.988 → 1.080 ± 0.012           0.971 → 1.086 ± 0.016           0.989 → 1.065 ± 0.005
+    ============  ==============================  ==============================  ==============================
+
+    (the inner ring [0.07, 0.3): every version within 0.99-1.06; the plain series, not band-limited, is within 2 %
+    of ``band`` in the inner and middle rings and the total, and 2-13 % higher in the outer ring, most at 0°.)
+    So for unpolarized light K moves the outermost ring towards the MoM in four of the six cases, to the other
+    side by as much at σ/λ = 0.08, 20° (0.964 → 1.029 ± 0.019) and away at σ/λ = 0.12, 20° (0.971 → 1.086);
+    it moves the ring [0.3, 0.6) and the total diffuse reflectance away from it for
+    σ/λ ≥ 0.08 (total: without K within 1.4 %, with K 2-3 % high at 0.08 and 5-6.5 % high at 0.12). Where the
+    band series without K falls short of the MoM it does so in the outer ring only, while K returns the
+    beyond-band share to every ring in proportion to the series' shape. This 48-realization ensemble does not
+    resolve the unpolarized differences (its standard error in the outer ring is 6-7 %): it asserts only that
+    both stay within 20 %.
+    The two independent ensembles (160 and 400) differ by 3.5 standard errors in the inner ring at σ/λ = 0.12
+    (0.91 against 0.98 in s): the standard errors may understate the scatter of the ring powers somewhat.
+    """
+    res = {pol: measure(0.08, pol, TEST_REALIZATIONS, seed=7) for pol in ("s", "p")}
+    res["unpol"] = {t: unpolarized(res["s"][t], res["p"][t]) for t in res["s"]}
+    print(_table({(0.08, pol): r for pol, r in res.items()}))
+    j = 2                                                                    # the outer ring, 0.6 ≤ |Δu| < 1
+    for t in (0.0, 20.0):
+        (ms, ses), (mp, sep) = (res[pol][t]["mom"][:2] for pol in ("s", "p"))
+        mu = res["unpol"][t]["mom"][0]
+        band, band_k = res["s"][t]["band"][j], res["s"][t]["band+K"][j]
+        k_factor, split = band_k / band, mp[j] / ms[j]
+        assert 1.03 < k_factor < 1.15 and split > 1.4 and split > k_factor + 0.25, (t, k_factor, split)
+        assert band - ms[j] > 2 * ses[j], (t, band / ms[j], ses[j] / ms[j])          # s: K moves it away
+        assert mp[j] - band_k > 3 * sep[j], (t, band_k / mp[j], sep[j] / mp[j])      # p: K moves it towards
+        assert 0.8 < band / mu[j] < band_k / mu[j] < 1.2, (t, band / mu[j], band_k / mu[j])
 
 
 if __name__ == "__main__":    # the report's table: python tests/test_band_renormalization_mom.py N_REALIZATIONS SEED0
