@@ -28,6 +28,12 @@
 #define WO_NL 1
 #endif
 #define WO_NOUT (2 * WO_NL + 3)
+/* below this exp(x) is 0 in round-to-nearest (float64: exp(-745.2) is the least subnormal; float32: exp(-103.3), and below half of it) */
+#ifdef WO_DOUBLE
+#define WO_EXP_UNDERFLOW R(-746.0)
+#else
+#define WO_EXP_UNDERFLOW R(-105.0)
+#endif
 
 /* Rows of the region must hold WO_VW samples past every box (the host pads them with zeros, G masks them). */
 __kernel void footprint_sums(__global const real_t *h, __global const real_t *hx, __global const real_t *hy,
@@ -79,7 +85,14 @@ __kernel void footprint_sums(__global const real_t *h, __global const real_t *hx
             }
             ra += G * G;
             rw += G;
-            rp += G * exp(R(-0.5) * (gx * gx + gy * gy) * inv_slope_var);
+            /* the intrinsic-roughness kernel of a facet far from the half vector underflows to exactly 0:
+             * its exp is skipped where it does in every lane (the sum is unchanged, bit for bit) */
+            const realv_t e = R(-0.5) * (gx * gx + gy * gy) * inv_slope_var;
+#if WO_VW == 1
+            if (e > WO_EXP_UNDERFLOW) rp += G * exp(e);
+#else
+            if (any(isgreater(e, (realv_t)(WO_EXP_UNDERFLOW)))) rp += G * exp(e);
+#endif
         }
         real_t t[WO_VW];
         for (int l = 0; l < WO_NL; ++l) {

@@ -376,7 +376,7 @@ def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows, only: i
 
 
 #: pixel rows per task (a task of a 256² render is 1024 pixels, about 0.2-2 s)
-ROWS_PER_TASK = 4
+ROWS_PER_TASK = 8
 
 
 def render_glints(field, material, settings: GlintSettings = GlintSettings(), *, progress=None,

@@ -275,6 +275,8 @@ def _region(field, i0, j0, i1, j1):
     if hasattr(field, "region_slopes"):
         h, hx, hy = field.region_slopes(i0, j0, i1, j1)
         return h, (hx, hy)
+    if hasattr(field, "region_heights"):
+        return field.region_heights(i0, j0, i1, j1), None
     return field.region(i0, j0, i1, j1).heights, None
 
 

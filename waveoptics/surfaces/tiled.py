@@ -92,6 +92,12 @@ class _Tiled:
     def region(self, i0: int, j0: int, i1: int, j1: int) -> HeightField:
         return self.patch(i0, j0, i1 - i0, j1 - j0)
 
+    def region_heights(self, i0: int, j0: int, i1: int, j1: int) -> np.ndarray:
+        """Heights (m, float64) of samples [j0:j1, i0:i1], refused as :meth:`patch` when they leave the field; the
+        array alone, without a HeightField's checks of every sample (what a render's footprint sums read)."""
+        i0, j0, nx, ny = self._check(i0, j0, int(i1) - int(i0), int(j1) - int(j0))
+        return np.asarray(self._read(i0, j0, nx, ny), dtype=np.float64)
+
     def _check(self, i0, j0, nx, ny):
         """(i0, j0, nx, ny) as ints, refused when the patch leaves the field."""
         i0, j0, nx, ny = int(i0), int(j0), int(nx), int(ny)
