@@ -8,8 +8,10 @@
  *     P    = sum_j G_j exp(-1/2 |grad h_j - t|^2 / sigma_s^2)
  *
  * with s = omega_i + omega_o (the Kirchhoff integral over the footprint, Beckmann & Spizzichino 1963 ch. 3; Yan et
- * al. 2018 eq. 6), grad h by central differences and t the slope of the half vector (Yan et al. 2016's patch NDF
- * with intrinsic roughness sigma_s). The host multiplies by dx dy and the Kirchhoff / Fresnel factors.
+ * al. 2018 eq. 6), grad h by central differences (or, with -DWO_GIVEN_SLOPES, read from hx, hy: the field's own
+ * slopes, e.g. each flake's plane, where a difference across a step would invent a facet) and t the slope of the
+ * half vector (Yan et al. 2016's patch NDF with intrinsic roughness sigma_s). The host multiplies by dx dy and
+ * the Kirchhoff / Fresnel factors.
  *
  * Each row is summed WO_VW samples per SIMD step (explicit vectors, as kernels/kirchhoff.cl).
  * Work-item (p, c) sums rows j0 + c*step .. of footprint p (n_chunks work-items per footprint, so one large
@@ -26,9 +28,16 @@
 #define WO_NL 1
 #endif
 #define WO_NOUT (2 * WO_NL + 3)
+/* below this exp(x) is 0 in round-to-nearest (float64: exp(-745.2) is the least subnormal; float32: exp(-103.3), and below half of it) */
+#ifdef WO_DOUBLE
+#define WO_EXP_UNDERFLOW R(-746.0)
+#else
+#define WO_EXP_UNDERFLOW R(-105.0)
+#endif
 
 /* Rows of the region must hold WO_VW samples past every box (the host pads them with zeros, G masks them). */
-__kernel void footprint_sums(__global const real_t *h, const int pitch, const real_t dx, const real_t dy,
+__kernel void footprint_sums(__global const real_t *h, __global const real_t *hx, __global const real_t *hy,
+                             const int pitch, const real_t dx, const real_t dy,
                              __global const int *box, __global const real_t *geo,
                              __constant real_t *inv_lambda, const real_t inv_slope_var,
                              const int n_items, const int n_chunks, __global real_t *out)
@@ -60,8 +69,13 @@ __kernel void footprint_sums(__global const real_t *h, const int pitch, const re
             realv_t G = exp(R(-0.5) * (ca * rx * rx + R(2.0) * cb * rx * ry + cc * ry * ry));
             G = select((realv_t)(R(0.0)), G, isless(lane, (realv_t)((real_t)(i1 - i))));   /* lanes past i1 */
             const realv_t hj = WO_VLOAD(0, row + i);
+#ifdef WO_GIVEN_SLOPES
+            const realv_t gx = WO_VLOAD(0, hx + (long)j * pitch + i) - tx;
+            const realv_t gy = WO_VLOAD(0, hy + (long)j * pitch + i) - ty;
+#else
             const realv_t gx = (WO_VLOAD(0, row + i + 1) - WO_VLOAD(0, row + i - 1)) * hx2 - tx;
             const realv_t gy = (WO_VLOAD(0, row + i + pitch) - WO_VLOAD(0, row + i - pitch)) * hy2 - ty;
+#endif
             const realv_t base = sx * rx + sy * ry + sz * hj;          /* m */
             for (int l = 0; l < WO_NL; ++l) {
                 realv_t sn, cs;
@@ -71,7 +85,14 @@ __kernel void footprint_sums(__global const real_t *h, const int pitch, const re
             }
             ra += G * G;
             rw += G;
-            rp += G * exp(R(-0.5) * (gx * gx + gy * gy) * inv_slope_var);
+            /* the intrinsic-roughness kernel of a facet far from the half vector underflows to exactly 0:
+             * its exp is skipped where it does in every lane (the sum is unchanged, bit for bit) */
+            const realv_t e = R(-0.5) * (gx * gx + gy * gy) * inv_slope_var;
+#if WO_VW == 1
+            if (e > WO_EXP_UNDERFLOW) rp += G * exp(e);
+#else
+            if (any(isgreater(e, (realv_t)(WO_EXP_UNDERFLOW)))) rp += G * exp(e);
+#endif
         }
         real_t t[WO_VW];
         for (int l = 0; l < WO_NL; ++l) {

@@ -105,6 +105,7 @@ VALUES = {
     "--window": ["hann", "boxcar", "gaussian:1um", "gaussian:-1um", "nosuch"],
     "--footprint": ["2um,2um,0.5um", "0,0,1um", "1um,1um,-1um", "100um,100um,1um"],
     "--coherence": ["0.5um", "-1um"],
+    "--light-radius": ["0.5", "0.5deg", "0.01rad", "-1", "45"],
     "--order": ["0", "3", "auto", "1000"],
     "--units": ["nm", "um", "furlong"],
     "--vary": ["micro_alpha=0.1,0.2", "sigma_nano=1nm:1000000nm:1nm", "nosuch=1,2", "micro_alpha=0:1:0.5",

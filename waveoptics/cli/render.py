@@ -56,8 +56,8 @@ def register(sub):
     gl.add_argument("--glints", action="store_true",
                     help="render the --surface height field as a plane where every pixel's footprint gives its "
                          "own BRDF, wave optics beside geometric optics (an OpenCL sum per pixel; docs/glints.md); takes "
-                         "--material, --incident (the light), --view, --wavelengths, --sphere-size, --shape, "
-                         "--coherence; --surface may be a .npy (memory-mapped), .h5 (chunked) or "
+                         "--material, --incident (the light), --light-radius, --view, --wavelengths, --sphere-size, "
+                         "--shape, --coherence; --surface may be a .npy (memory-mapped), .h5 (chunked) or "
                          "procedural:NAME:SIZE:SPACING[:SEED] (brushed, scratched, flakes, psd: nothing stored); "
                          "prints its estimated cost before it starts")
     option(gl, "--incident",
@@ -70,6 +70,10 @@ def register(sub):
                     help="what the height field textures: a plane, or a sphere (latitude-longitude map about the "
                          f"camera) (default {_d('shape', GlintRequest)})")
     option(p, "--coherence", group=gl, note="default: each footprint coherent")
+    gl.add_argument("--light-radius", metavar="ANGLE",
+                    help="angular radius of the light (a disk seen from the field), degrees or an angle with unit "
+                         "(0.5, 0.5deg, 0.01rad); each pixel's BRDF is averaged over that cone (default: a point "
+                         "light)")
     add_workers(p, group=gl)
     add_output(p)
     add_common(p, device=False)
@@ -80,7 +84,7 @@ def register(sub):
 _SPHERE_ONLY = {"target_noise": _d("target_noise"), "max_spp": _d("max_spp"), "budget": f"{_d('budget_s'):g}"}
 #: --glints options and their defaults (their options default to None, so that a sphere render can tell them given)
 _GLINT_DEFAULTS = {k: _d(k, GlintRequest) for k in ("incident", "view", "wavelengths", "shape", "workers",
-                                                     "scheduler", "coherence")}
+                                                     "scheduler", "coherence", "light_radius")}
 #: model options that --glints does not take (the height field is the whole geometry), with their defaults
 _NOT_GLINTS = {k: _d(k, RendererModel) for k in ("alpha", "alpha_y", "nano", "kd", "scene", "exact")}
 
@@ -92,7 +96,8 @@ def run(args):
         return run_glints(args)
     given = [k for k, v in _GLINT_DEFAULTS.items() if getattr(args, k) is not None and getattr(args, k) != v]
     if given:
-        raise WaveopticsError(f"--{given[0]} belongs to --glints renders; the sphere render takes its light from "
+        raise WaveopticsError(f"--{given[0].replace('_', '-')} belongs to --glints renders; the sphere render takes "
+                              "its light from "
                               "--environment")
     return run_render(args)
 

@@ -76,15 +76,16 @@ def glint_field(request: GlintRequest):
 
 def glint_settings(request: GlintRequest):
     """The :class:`waveoptics.renderers.glints.GlintSettings` of *request* (its directions and lengths parsed)."""
-    from ..units import parse_direction, parse_length, parse_wavelengths
+    from ..units import parse_angle, parse_direction, parse_length, parse_wavelengths
     from .glints import GlintSettings
 
     lt, lp = parse_direction(request.incident, name="incident")
     vt, vp = parse_direction(request.view, name="view")
+    rho = 0.0 if request.light_radius is None else parse_angle(request.light_radius, name="light_radius")
     return GlintSettings(size=request.sphere_size, view_deg=vt, view_azimuth_deg=vp, light_deg=lt,
                          light_azimuth_deg=lp, wavelengths_nm=tuple(parse_wavelengths(request.wavelengths)),
                          shape=request.shape, coherence_m=None if request.coherence is None
-                         else parse_length(request.coherence, name="coherence"))
+                         else parse_length(request.coherence, name="coherence"), light_radius_deg=rho)
 
 
 def glints_job(request: GlintRequest, output, *, overwrite: bool = False, progress=None, executor=None,
@@ -160,7 +161,7 @@ def _summary(request, settings, r, de, est) -> dict:
             "shape": settings.shape, "workers": request.workers, "scheduler": request.scheduler,
             "light_deg": [settings.light_deg, settings.light_azimuth_deg],
             "view_deg": [settings.view_deg, settings.view_azimuth_deg],
-            "wavelengths_nm": list(settings.wavelengths_nm), "footprint_sigma_m": list(r.footprint_sigma_m),
+            "light_radius_deg": settings.light_radius_deg, "wavelengths_nm": list(settings.wavelengths_nm), "footprint_sigma_m": list(r.footprint_sigma_m),
             "pixels_on_field": int(on.sum()), "delta_e2000_mean": float(de[on].mean()),
             "timings_s": {k: (round(v, 6) if isinstance(v, float) else v) for k, v in r.timings_s.items()},
             "estimate": {"pixels": est.pixels, "samples": est.samples, "per_pixel_s": est.per_pixel_s,

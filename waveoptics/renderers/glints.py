@@ -28,7 +28,12 @@ Per pixel, with ω_i towards the light and ω_o towards the camera (both from th
   the histogram of a few hundred facets is otherwise a set of spikes), D = P22(s_h)/cos⁴θ_h (Heitz 2014); no
   shadowing (as Yan et al.).
 
-The radiance is L = f cos θ_i I / d² for a light of intensity I (W/sr per unit spectrum) at distance d, summed to
+The radiance is L = f cos θ_i I / d² for a point light of intensity I (W/sr per unit spectrum) at distance d; a
+light of angular radius ρ (``light_radius_deg``, a disk seen from every point) gives L = (I / d²) ⟨f cos θ_i⟩
+over the cone of ω_i about the direction to its centre (:mod:`waveoptics.renderers.light_cone`: a small product
+rule, each of its directions one footprint query; directions below the horizon add nothing), the per-pixel
+BRDF reported being ⟨f⟩ over the cone (the reflection integral of a uniform emitter, Kajiya 1986 [5]_). Radiance
+is summed to
 linear sRGB with the colour-matching functions (:func:`waveoptics.colour.reflectance_to_rgb_matrix`, the light's
 spectrum white). Wavelengths are few (the glint's colour comes from diffraction's λ dependence).
 
@@ -47,6 +52,8 @@ References
 .. [2] L.-Q. Yan, M. Hašan, S. Marschner, R. Ramamoorthi, ACM TOG 35(4), 56, 2016 (intrinsic roughness).
 .. [3] L.-Q. Yan, M. Hašan, B. Walter, S. Marschner, R. Ramamoorthi, ACM TOG 37(4), 75, 2018.
 .. [4] E. Heitz, JCGT 3(2), 2014 (D from the slope distribution).
+.. [5] J. T. Kajiya, "The rendering equation", SIGGRAPH 1986, Computer Graphics 20(4), 143-150 (L_o = ∫ f L_e
+   cos θ_i dω_i over the light's solid angle).
 """
 from __future__ import annotations
 
@@ -62,6 +69,7 @@ from ..materials import get_material
 from ..scatter.pixel import PIXEL_BACKENDS, pixel_brdf
 from ..surfaces.footprint import Footprint
 from ..vocabulary import GLINT_SHAPES
+from .light_cone import cone_directions
 
 __all__ = ["SHAPES", "GlintSettings", "GlintRender", "GlintEstimate", "Geometry", "camera_rays", "geometry",
            "footprints", "render_glints", "estimate_glints"]
@@ -91,6 +99,11 @@ class GlintSettings:
         What the field textures: ``plane`` or ``sphere`` (:data:`SHAPES`).
     coherence_m : float, m, optional
         Coherence width of the light (Yan et al. 2018); None: each footprint is coherent.
+    light_radius_deg : float
+        Angular radius ρ of the light, a disk seen from every point (degrees); 0: a point light. The BRDF is
+        averaged over the cone of ω_i (:mod:`waveoptics.renderers.light_cone`).
+    light_rings : int
+        Rings of that average's rule (rings × (2 rings + 2) directions per pixel when ρ > 0).
     backend, precision : str
         Evaluator of the footprint sums (:func:`waveoptics.scatter.footprint_sums`): ``opencl`` (default; float64
         where the device has it unless *precision* says float32) or ``numpy``.
@@ -107,6 +120,8 @@ class GlintSettings:
     wavelengths_nm: tuple = (450.0, 500.0, 550.0, 600.0, 650.0)
     shape: str = "plane"
     coherence_m: float | None = None
+    light_radius_deg: float = 0.0
+    light_rings: int = 2
     backend: str = "opencl"
     precision: str | None = None
 
@@ -125,6 +140,11 @@ class GlintSettings:
             raise unknown("footprint backend", self.backend, PIXEL_BACKENDS, field="backend")
         if self.precision not in (None, "float32", "float64"):
             raise FieldError(f"precision={self.precision!r} is not allowed; float32, float64 or None", "precision")
+        if not (math.isfinite(self.light_radius_deg) and 0 <= self.light_radius_deg <= 30):
+            raise FieldError(f"{{light_radius}} {self.light_radius_deg!r} degrees is not allowed; give 0 (a point "
+                             "light) to 30 degrees", "light_radius")
+        if not (isinstance(self.light_rings, (int, np.integer)) and 1 <= self.light_rings <= 16):
+            raise FieldError(f"{{light_rings}} {self.light_rings!r} is not allowed; give 1 to 16", "light_rings")
         if self.coherence_m is not None and not (math.isfinite(self.coherence_m) and self.coherence_m > 0):
             raise FieldError(f"coherence_m={self.coherence_m!r} m is not allowed; it must be > 0", "coherence_m")
 
@@ -294,56 +314,69 @@ def footprints(geo: Geometry, filter_px: float):
     return np.sqrt(np.maximum(vals[..., 1], 0.0)), np.sqrt(np.maximum(vals[..., 0], 1e-30)), angle
 
 
-def _local_directions(geo: Geometry, r, i):
-    """(ω_i, ω_o) in the shading frame of pixel (r, i), and the irradiance factor cos θ_i d²/|light − P|²."""
+def _local_directions(geo: Geometry, r, i, s: GlintSettings):
+    """The light's directions ω_i (m, 3) over its cone (:func:`waveoptics.renderers.light_cone.cone_directions`;
+    one for a point light) and their weights (m,), ω_o (3,) in the shading frame of pixel (r, i), and the falloff
+    d²/|light − P|²."""
     p = geo.P[r, i]
     a, b = geo.light - p, geo.eye - p
     r2 = float(a @ a)
-    wi, wo = geo.frame[r, i] @ (a / math.sqrt(r2)), geo.frame[r, i] @ (b / np.linalg.norm(b))
-    return wi, wo, wi[2] / r2 * geo.dist ** 2
+    d, w = cone_directions(a / math.sqrt(r2), math.radians(s.light_radius_deg), s.light_rings)
+    return d[0] @ geo.frame[r, i].T, w, geo.frame[r, i] @ (b / np.linalg.norm(b)), geo.dist ** 2 / r2
 
 
 def _render_rows(field, material, s: GlintSettings, geo: Geometry, rows, only: int | None = None) -> dict:
     """Render the pixel rows *rows* (a range) whose geometry is *geo* (:meth:`Geometry.take` of those rows): the
-    BRDFs of both models per pixel (:func:`waveoptics.scatter.pixel_brdf`, one batch for the task), the mask of
-    pixels shown, the footprints and the time of reading the field and of the sums (one task of
-    :func:`render_glints`; *only*: that pixel column alone)."""
+    BRDFs of both models per pixel averaged over the light's cone (:func:`waveoptics.scatter.pixel_brdf`, one
+    batch for the task: every direction of the cone is one footprint query), their radiance factors
+    Σ_k w_k f_k cos θ_k d²/r², the mask of pixels shown, the footprints and the time of reading the field and of
+    the sums (one task of :func:`render_glints`; *only*: that pixel column alone)."""
     lam = np.asarray(s.wavelengths_nm, dtype=float)
-    n = s.size
-    out = {"rows": rows, "wave": np.zeros((len(rows), n, lam.size)), "geo": np.zeros((len(rows), n, lam.size)),
-           "E": np.zeros((len(rows), n)), "on": np.zeros((len(rows), n), bool), "fp": np.zeros((len(rows), n, 5)),
-           "dirs": np.zeros((len(rows), n, 6)), "t_read": 0.0, "t_sums": 0.0, "samples": 0}
+    n, m = s.size, len(rows)
+    out = {"rows": rows, "E": np.zeros((m, n)), "on": np.zeros((m, n), bool), "fp": np.zeros((m, n, 5)),
+           "dirs": np.zeros((m, n, 6)), "t_read": 0.0, "t_sums": 0.0, "samples": 0, "queries": 0}
+    for key in ("wave", "geo", "wave_rad", "geo_rad"):
+        out[key] = np.zeros((m, n, lam.size))
     s1, s2, ang = footprints(geo, s.filter_px)
-    pix, fps, wis, wos = [], [], [], []
-    for r in range(len(rows)):
+    nodes, fps, wis, wos = [], [], [], []
+    for r in range(m):
         for i in range(n) if only is None else (only,):
             if not geo.hit[r, i]:
                 continue
-            wi, wo, E = _local_directions(geo, r, i)
+            wi, w, wo, fall = _local_directions(geo, r, i, s)
             fp = Footprint(float(geo.c[r, i, 0]), float(geo.c[r, i, 1]), float(s1[r, i]), float(s2[r, i]),
                            float(ang[r, i]))
             out["fp"][r, i] = (fp.x, fp.y, fp.sigma, fp.sigma_y, fp.angle_deg)
-            out["dirs"][r, i] = np.concatenate([wi, wo])
-            if wi[2] <= 0 or wo[2] <= 0:        # the light or the camera is below this point's horizon
-                out["on"][r, i] = True
+            centre = geo.frame[r, i] @ (geo.light - geo.P[r, i])
+            out["dirs"][r, i] = np.concatenate([centre / np.linalg.norm(centre), wo])
+            up = wi[:, 2] > 0                   # directions of the light below this point's horizon add nothing
+            out["on"][r, i] = True
+            if wo[2] <= 0 or not up.any():      # the light or the camera is below this point's horizon
                 continue
-            out["E"][r, i] = E
-            pix.append((r, i))
-            fps.append(fp)
-            wis.append(wi)
-            wos.append(wo)
-    if pix:
+            out["E"][r, i] = float(w[up] @ wi[up, 2]) * fall       # the cone's irradiance factor
+            for k in np.flatnonzero(up):
+                nodes.append((r, i, w[k], w[k] * wi[k, 2] * fall))
+                fps.append(fp)
+                wis.append(wi[k])
+                wos.append(wo)
+    if nodes:
         res = pixel_brdf(field, fps, np.array(wis), np.array(wos), lam, material, slope_sigma=s.intrinsic_slope,
                          coherence_m=s.coherence_m, backend=s.backend, precision=s.precision)
-        for k, (r, i) in enumerate(pix):
+        for k, (r, i, w, wl) in enumerate(nodes):
             if res.ok[k]:
-                out["wave"][r, i], out["geo"][r, i], out["on"][r, i] = res.wave[k], res.geometric[k], True
+                out["wave"][r, i] += w * res.wave[k]
+                out["geo"][r, i] += w * res.geometric[k]
+                out["wave_rad"][r, i] += wl * res.wave[k]
+                out["geo_rad"][r, i] += wl * res.geometric[k]
+            else:                               # the footprint's box leaves the field: the pixel stays black
+                out["on"][r, i] = False
         out["t_read"], out["t_sums"], out["samples"] = res.timings_s["read"], res.timings_s["sums"], res.samples
+        out["queries"] = len(nodes)
     return out
 
 
 #: pixel rows per task (a task of a 256² render is 1024 pixels, about 0.2-2 s)
-ROWS_PER_TASK = 4
+ROWS_PER_TASK = 8
 
 
 def render_glints(field, material, settings: GlintSettings = GlintSettings(), *, progress=None,
@@ -365,10 +398,11 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
     geo = geometry(field, settings)
     n = settings.size
     f_wave, f_geo = np.zeros((n, n, len(lam))), np.zeros((n, n, len(lam)))
+    wave, geo_img = np.zeros((n, n, len(lam))), np.zeros((n, n, len(lam)))
     E, on = np.zeros((n, n)), np.zeros((n, n), bool)
     fps, dirs = np.zeros((n, n, 5)), np.zeros((n, n, 6))
     t_read = t_sums = 0.0
-    samples = 0
+    samples = queries = 0
     tasks = [range(j, min(j + ROWS_PER_TASK, n)) for j in range(0, n, ROWS_PER_TASK)]
     t_start, cpu_start = time.perf_counter(), time.process_time()
     parts = [geo.take(rows) for rows in tasks]
@@ -380,10 +414,12 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
     for res in results:
         rows = list(res["rows"])
         f_wave[rows], f_geo[rows], E[rows], on[rows] = res["wave"], res["geo"], res["E"], res["on"]
+        wave[rows], geo_img[rows] = res["wave_rad"], res["geo_rad"]
         fps[rows], dirs[rows] = res["fp"], res["dirs"]
         t_read += res["t_read"]
         t_sums += res["t_sums"]
         samples += res["samples"]
+        queries += res["queries"]
         if progress is not None:
             progress(len(rows))
     wall, cpu = time.perf_counter() - t_start, time.process_time() - cpu_start
@@ -392,11 +428,11 @@ def render_glints(field, material, settings: GlintSettings = GlintSettings(), *,
         raise FieldError("no pixel's footprint lies inside the height field; use a larger field or image",
                          "surface")
     n_px = int(lit.sum())
-    wave, geo_img = f_wave * E[..., None], f_geo * E[..., None]
     return GlintRender(wave=wave @ M, geometric=geo_img @ M, on_field=on,
                        timings_s={"read": t_read, "sums": t_sums, "pixels": n_px, "wall": wall, "cpu": cpu,
                                   "per_pixel": wall / n_px, "sums_per_pixel": t_sums / n_px,
-                                  "footprints_per_s": n_px / max(t_sums, 1e-12), "samples": samples},
+                                  "footprints_per_s": queries / max(t_sums, 1e-12), "samples": samples,
+                                  "footprints": queries},
                        footprint_sigma_m=(float(np.median(fps[lit][:, 2])), float(np.median(fps[lit][:, 3]))),
                        wave_spectral=wave, geometric_spectral=geo_img, wave_brdf=f_wave, geometric_brdf=f_geo,
                        footprints=fps, directions=dirs)

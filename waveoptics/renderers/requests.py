@@ -163,6 +163,9 @@ class GlintRequest:
         What the field textures (:data:`waveoptics.vocabulary.GLINT_SHAPES`).
     coherence : str, optional
         Coherence width of the light, a length with unit; None: each footprint is coherent.
+    light_radius : str, optional
+        Angular radius of the light (a disk seen from the field), an angle (degrees unless a unit is given:
+        ``0.5``, ``0.5deg``, ``0.01rad``); None or 0: a point light. Each pixel's BRDF is averaged over that cone.
     workers, scheduler : int, str, optional
         The Dask cluster the pixel rows run on (echoed in the summary; the job receives its executor).
     """
@@ -178,5 +181,6 @@ class GlintRequest:
     wavelengths: str = "450:650:50"
     shape: str = "plane"
     coherence: str | None = None
+    light_radius: str | None = None
     workers: int | None = None
     scheduler: str | None = None

@@ -12,7 +12,10 @@ For a footprint G (:class:`waveoptics.surfaces.Footprint`, its box of ``N_SIGMA`
   normalized;
 * geometric optics (Yan et al. 2016's patch NDF with intrinsic roughness σ_s): D(h) = P22(t)/cos⁴θ_h with
   P22(t) = Σ_j G_j N(∇h_j − t; σ_s²) / Σ_j G_j, t = (−h_x/h_z, −h_y/h_z) the half vector's slope, ∇h by central
-  differences (Heitz 2014 for D from P22), f = F(θ_d) D / (4 cos θ_i cos θ_o), no shadowing.
+  differences, or the field's own slopes where it gives them (``region_slopes``, e.g.
+  :class:`waveoptics.surfaces.tiled.FlakeField`: each flake's plane, where a difference across the step between
+  two flakes would count a facet that is not there) (Heitz 2014 for D from P22), f = F(θ_d) D / (4 cos θ_i
+  cos θ_o), no shadowing.
 
 The sums run in one OpenCL kernel (``kernels/footprint.cl``, ``footprint_sums``; twin :func:`footprint_sums_numpy`)
 over regions of the field that each hold the boxes of many footprints: :func:`pixel_brdf` sorts the footprints,
@@ -76,7 +79,7 @@ def _geometry(fp: Footprint, box, s, t, dx, dy) -> np.ndarray:
                      s[0], s[1], s[2], t[0], t[1], 0.0, 0.0])
 
 
-def footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma) -> np.ndarray:
+def footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, slopes=None) -> np.ndarray:
     """NumPy twin (float64, np.sin/np.cos) of the ``footprint_sums`` kernel.
 
     Parameters
@@ -91,6 +94,8 @@ def footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma) -> np
     wavelengths_nm : array (n_λ,), nm
     slope_sigma : float
         Intrinsic slope σ_s.
+    slopes : tuple of ndarray (ny, nx), optional
+        (∂h/∂x, ∂h/∂y) of every region sample; None: central differences of *h*.
 
     Returns
     -------
@@ -105,8 +110,11 @@ def footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma) -> np
         ry = (np.arange(j1 - j0) * dy - g[1])[:, None]
         G = np.exp(-0.5 * (g[2] * rx * rx + 2 * g[3] * rx * ry + g[4] * ry * ry))
         hp = h[j0:j1, i0:i1]
-        gx = (h[j0:j1, i0 + 1:i1 + 1] - h[j0:j1, i0 - 1:i1 - 1]) / (2 * dx) - g[8]
-        gy = (h[j0 + 1:j1 + 1, i0:i1] - h[j0 - 1:j1 - 1, i0:i1]) / (2 * dy) - g[9]
+        if slopes is None:
+            gx = (h[j0:j1, i0 + 1:i1 + 1] - h[j0:j1, i0 - 1:i1 - 1]) / (2 * dx) - g[8]
+            gy = (h[j0 + 1:j1 + 1, i0:i1] - h[j0 - 1:j1 - 1, i0:i1]) / (2 * dy) - g[9]
+        else:
+            gx, gy = slopes[0][j0:j1, i0:i1] - g[8], slopes[1][j0:j1, i0:i1] - g[9]
         base = g[5] * rx + g[6] * ry + g[7] * hp
         for l, il in enumerate(inv_lam):
             ph = 2 * np.pi * base * il
@@ -118,12 +126,12 @@ def footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma) -> np
     return out
 
 
-def footprint_sums(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, *, backend: str = "opencl",
+def footprint_sums(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, *, slopes=None, backend: str = "opencl",
                    precision: str | None = None, runtime=None) -> np.ndarray:
     """The footprint sums of :func:`footprint_sums_numpy` by *backend* (``opencl``: ``kernels/footprint.cl`` in
-    *precision*, default float64 where the device has it, else float32)."""
+    *precision*, default float64 where the device has it, else float32); *slopes* as there."""
     if backend == "numpy":
-        return footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma)
+        return footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, slopes)
     if backend != "opencl":
         raise FieldError(f"footprint backend {backend!r} is not known; one of {', '.join(PIXEL_BACKENDS)}",
                          "backend")
@@ -138,7 +146,8 @@ def footprint_sums(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, *, backend:
     dt = rt.real_dtype(precision)
     nl = len(wavelengths_nm)
     pname = "float64" if dt == np.float64 else "float32"
-    prg = build_program(rt, "footprint.cl", build_options(dt, (f"-DWO_NL={nl}", f"-DWO_VW={_VW}")
+    given = ("-DWO_GIVEN_SLOPES",) if slopes is not None else ()
+    prg = build_program(rt, "footprint.cl", build_options(dt, (f"-DWO_NL={nl}", f"-DWO_VW={_VW}") + given
                                                           + sincos_options(pname)))
     box = np.ascontiguousarray(box, dtype=np.int32)
     n = len(box)
@@ -147,12 +156,17 @@ def footprint_sums(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, *, backend:
     q = rt.queue
     h = np.pad(np.asarray(h, dtype=dt), ((0, 0), (0, _VW)))       # vector reads past a box stay in the row
     d_h = cla.to_device(q, np.ascontiguousarray(h))
+    if slopes is None:
+        d_hx = d_hy = d_h                                       # not read without WO_GIVEN_SLOPES
+    else:
+        d_hx, d_hy = (cla.to_device(q, np.ascontiguousarray(np.pad(np.asarray(g, dtype=dt), ((0, 0), (0, _VW)))))
+                      for g in slopes)
     d_box = cla.to_device(q, box)
     d_geo = cla.to_device(q, np.ascontiguousarray(geo, dtype=dt))
     d_lam = cla.to_device(q, (1.0 / (np.asarray(wavelengths_nm, dtype=float) * 1e-9)).astype(dt))
     d_out = cla.empty(q, n * n_chunks * (2 * nl + 3), dt)
     lsz = default_local_size(rt)
-    cl.Kernel(prg, "footprint_sums")(q, (n * n_chunks,), None if lsz is None else (lsz,), d_h.data, np.int32(h.shape[1]), dt(dx), dt(dy),
+    cl.Kernel(prg, "footprint_sums")(q, (n * n_chunks,), None if lsz is None else (lsz,), d_h.data, d_hx.data, d_hy.data, np.int32(h.shape[1]), dt(dx), dt(dy),
                                      d_box.data, d_geo.data, d_lam.data, dt(1.0 / slope_sigma ** 2), np.int32(n),
                                      np.int32(n_chunks), d_out.data)
     return d_out.get().astype(np.float64).reshape(n, n_chunks, 2 * nl + 3).sum(axis=1)
@@ -239,13 +253,13 @@ def pixel_brdf(field, footprints, wi, wo, wavelengths_nm, material=None, *, slop
         b = boxes[idx]
         ri0, rj0 = int(b[:, 0].min()) - 1, int(b[:, 1].min()) - 1
         t0 = time.perf_counter()
-        region = _region(field, ri0, rj0, int(b[:, 2].max()) + 1, int(b[:, 3].max()) + 1)
+        region, slopes = _region(field, ri0, rj0, int(b[:, 2].max()) + 1, int(b[:, 3].max()) + 1)
         t1 = time.perf_counter()
         t_read += t1 - t0
         geo = np.array([_geometry(items[k][4], boxes[k], s_all[items[k][0]], t_all[items[k][0]],
                                   field.dx, field.dy) for k in idx])
         sums[idx] = footprint_sums(region, field.dx, field.dy, b - [ri0, rj0, ri0, rj0], geo, lam, slope_sigma,
-                                   backend=backend, precision=precision, runtime=runtime)
+                                   slopes=slopes, backend=backend, precision=precision, runtime=runtime)
         t_sums += time.perf_counter() - t1
     wave, geometric = _finish(sums, items, n, wi, wo, lam, material, slope_sigma, field.dx * field.dy)
     wave[~ok], geometric[~ok] = np.nan, np.nan
@@ -253,11 +267,17 @@ def pixel_brdf(field, footprints, wi, wo, wavelengths_nm, material=None, *, slop
     return PixelBRDF(wave, geometric, ok, samples, {"read": t_read, "sums": t_sums})
 
 
-def _region(field, i0, j0, i1, j1) -> np.ndarray:
-    """Heights (m) of samples [j0:j1, i0:i1] of a HeightField or of any field with ``region``."""
+def _region(field, i0, j0, i1, j1):
+    """(heights (m), slopes) of samples [j0:j1, i0:i1] of a HeightField or of any field with ``region``; slopes
+    are (∂h/∂x, ∂h/∂y) where the field gives them (``region_slopes``), else None (central differences)."""
     if isinstance(field, HeightField):
-        return field.heights[j0:j1, i0:i1]
-    return field.region(i0, j0, i1, j1).heights
+        return field.heights[j0:j1, i0:i1], None
+    if hasattr(field, "region_slopes"):
+        h, hx, hy = field.region_slopes(i0, j0, i1, j1)
+        return h, (hx, hy)
+    if hasattr(field, "region_heights"):
+        return field.region_heights(i0, j0, i1, j1), None
+    return field.region(i0, j0, i1, j1).heights, None
 
 
 def _half_vectors(wi, wo):

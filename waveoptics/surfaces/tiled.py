@@ -32,6 +32,10 @@ round-off in ``tests/test_tiled.py``).
   the primitives of every cell whose primitives can reach it (a scratch reaches half its length plus three
   widths from its cell's box; a flake's Voronoi cell, the nearest centre, is found among the 5 × 5 cells around).
 
+A field may also give exact slopes, ``region_slopes(i0, j0, i1, j1)`` → (heights, ∂h/∂x, ∂h/∂y):
+:class:`FlakeField` does (each sample takes its flake's plane), so that the patch NDF of
+:func:`waveoptics.scatter.pixel_brdf` does not take the steps between flakes for facets.
+
 References
 ----------
 .. [1] J. A. Ogilvy, *Theory of Wave Scattering from Random Rough Surfaces*, Adam Hilger, 1991, §4.2 (spectral
@@ -80,16 +84,27 @@ class _Tiled:
 
     def patch(self, i0: int, j0: int, nx: int, ny: int) -> HeightField:
         """Samples [j0:j0+ny, i0:i0+nx] as a HeightField in metres (refused when they leave the field)."""
-        i0, j0, nx, ny = int(i0), int(j0), int(nx), int(ny)
-        if nx < 1 or ny < 1 or i0 < 0 or j0 < 0 or i0 + nx > self.shape[1] or j0 + ny > self.shape[0]:
-            raise FieldError(f"patch [{j0}:{j0 + ny}, {i0}:{i0 + nx}] leaves the field of {self.shape[0]} x "
-                             f"{self.shape[1]} samples", "patch")
+        i0, j0, nx, ny = self._check(i0, j0, nx, ny)
         h = np.asarray(self._read(i0, j0, nx, ny), dtype=np.float64)
         return HeightField(h, self.dx, self.dy, None, {"source": self.describe(), "cropped": {
             "from_samples": [self.shape[1], self.shape[0]], "origin_samples": [i0, j0]}})
 
     def region(self, i0: int, j0: int, i1: int, j1: int) -> HeightField:
         return self.patch(i0, j0, i1 - i0, j1 - j0)
+
+    def region_heights(self, i0: int, j0: int, i1: int, j1: int) -> np.ndarray:
+        """Heights (m, float64) of samples [j0:j1, i0:i1], refused as :meth:`patch` when they leave the field; the
+        array alone, without a HeightField's checks of every sample (what a render's footprint sums read)."""
+        i0, j0, nx, ny = self._check(i0, j0, int(i1) - int(i0), int(j1) - int(j0))
+        return np.asarray(self._read(i0, j0, nx, ny), dtype=np.float64)
+
+    def _check(self, i0, j0, nx, ny):
+        """(i0, j0, nx, ny) as ints, refused when the patch leaves the field."""
+        i0, j0, nx, ny = int(i0), int(j0), int(nx), int(ny)
+        if nx < 1 or ny < 1 or i0 < 0 or j0 < 0 or i0 + nx > self.shape[1] or j0 + ny > self.shape[0]:
+            raise FieldError(f"patch [{j0}:{j0 + ny}, {i0}:{i0 + nx}] leaves the field of {self.shape[0]} x "
+                             f"{self.shape[1]} samples", "patch")
+        return i0, j0, nx, ny
 
     def describe(self) -> str:
         return type(self).__name__
@@ -467,7 +482,8 @@ class FlakeField(_Tiled):
         s = rng.normal(0.0, math.tan(math.radians(self.tilt_deg)), 2)
         return (cx + u[0]) * self.size_flake, (cy + u[1]) * self.size_flake, s[0], s[1]
 
-    def _read(self, i0, j0, nx, ny):
+    def _nearest(self, i0, j0, nx, ny):
+        """(flakes (m, 4) as :meth:`flake`, index (ny, nx) of each sample's flake, X, Y in m) of a patch."""
         from scipy.spatial import cKDTree
 
         c = self.size_flake
@@ -479,8 +495,26 @@ class FlakeField(_Tiled):
         F = np.array([self.flake(cx, cy) for cx, cy in cells])
         X, Y = np.meshgrid(x, y)
         _, idx = cKDTree(F[:, :2]).query(np.column_stack([X.ravel(), Y.ravel()]))
-        idx = idx.reshape(X.shape)
+        return F, idx.reshape(X.shape), X, Y
+
+    def _read(self, i0, j0, nx, ny):
+        F, idx, X, Y = self._nearest(i0, j0, nx, ny)
         return F[idx, 2] * (X - F[idx, 0]) + F[idx, 3] * (Y - F[idx, 1])
+
+    def region_slopes(self, i0: int, j0: int, i1: int, j1: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(heights, ∂h/∂x, ∂h/∂y) of samples [j0:j1, i0:i1]: each sample's slopes are those of its flake's plane
+        (exact; a finite difference across a flake border would see the step between two flakes as a steep facet
+        that is not on the surface — the patch NDF of Yan et al. 2016 then shows facets no flake has).
+
+        References
+        ----------
+        .. [1] L.-Q. Yan, M. Hašan, S. Marschner, R. Ramamoorthi, "Position-normal distributions for efficient
+           rendering of specular microstructure", ACM TOG 35(4), 56, 2016 (the patch NDF of a footprint's normals).
+        """
+        i0, j0, nx, ny = self._check(i0, j0, int(i1) - int(i0), int(j1) - int(j0))
+        F, idx, X, Y = self._nearest(i0, j0, nx, ny)
+        h = F[idx, 2] * (X - F[idx, 0]) + F[idx, 3] * (Y - F[idx, 1])
+        return h, F[idx, 2], F[idx, 3]
 
     def describe(self) -> str:
         return f"FlakeField(size={self.size_flake:g} m, tilt={self.tilt_deg:g} deg, seed={self.seed})"
