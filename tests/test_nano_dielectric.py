@@ -84,3 +84,33 @@ def test_coherent_split_limits():
 def test_psd_is_required():
     with pytest.raises(FieldError, match="psd"):
         NanoRoughDielectricBSDF("1.5", Micro(alpha=0.02, ndf="ggx", shadowing="smith-correlated"))
+
+
+# --- through the model registry and `waveoptics brdf` ---------------------------------------------------------
+
+def test_brdf_command_evaluates_nano_rough_glass_over_the_whole_sphere():
+    """`brdf --model rough-dielectric --nano STATS`: the nano-rough glass of the registry (the values of the
+    library object at the same directions, one reflected and two transmitted: θ > 90° lies in the glass), its
+    albedo R + T = 1 for a lossless dielectric (the law, not the code: within 1e-2), and the options it does not
+    take refused in one line."""
+    import json
+
+    from cli_helpers import run_cli
+    from waveoptics.units import direction_from_angles
+
+    base = ["brdf", "--model", "rough-dielectric", "--ior", "1.5", "--alpha", "0.05", "--incident", "30",
+            "--nano", "gaussian:sigma=20nm,corr_length=1um", "--json"]
+    rc, out, err, _ = run_cli(base + ["--outgoing", "40,180", "--outgoing", "150,180", "--outgoing", "140,0"])
+    assert rc == 0, err
+    got = [row["brdf"] for row in json.loads(out)["values"]]
+    b = NanoRoughDielectricBSDF(1.5, Micro(alpha=0.05), psd=PSDModel("gaussian", 20e-9, T=1e-6))
+    wo = direction_from_angles([40.0, 150.0, 140.0], [180.0, 180.0, 0.0])
+    want = b.eval(np.broadcast_to(direction_from_angles(30.0, 0.0), wo.shape), wo, 550.0)
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    assert want[2] > 0          # off the refracted peak: the nano lobe's transmitted light
+    rc, out, err, _ = run_cli(base + ["--albedo"])
+    assert rc == 0 and json.loads(out)["albedo"][0]["albedo"] == pytest.approx(1.0, abs=1e-2)
+    rc, _, err, _ = run_cli(base + ["--surface", "x.npz", "--outgoing", "40,0"])
+    assert rc == 2 and "--surface is not used by --model rough-dielectric" in err
+    rc, _, err, _ = run_cli(["brdf", "--incident", "30", "--outgoing", "150,0"])
+    assert rc == 2 and "outside the allowed range [0, 90]" in err and len(err.strip().splitlines()) == 1

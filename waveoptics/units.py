@@ -252,9 +252,11 @@ def check_wavelengths(wavelength_nm, *, name: str = "wavelength") -> np.ndarray:
     return w
 
 
-def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False) -> tuple[float, float]:
-    """Parse ``"THETA[,PHI]"`` in degrees; θ from the normal in [0, 90], φ about the normal (any finite value;
-    outside [−180, 360) it is brought into [0, 360)).
+def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False,
+                    max_theta_deg: float = 90.0) -> tuple[float, float]:
+    """Parse ``"THETA[,PHI]"`` in degrees; θ from the normal in [0, *max_theta_deg*] (90: above the surface; 180
+    for a BSDF over the whole sphere, θ > 90° below it), φ about the normal (any finite value; outside [−180, 360)
+    it is brought into [0, 360)).
 
     Returns
     -------
@@ -267,7 +269,7 @@ def parse_direction(text, *, name: str = "incident_deg", need_phi: bool = False)
         raise _error(name, f" {text!r}: give {'THETA,PHI' if need_phi else 'THETA[,PHI]'} in degrees")
     theta = vals[0]
     phi = vals[1] if len(vals) == 2 else 0.0
-    check_theta(theta, name=name)
+    check_theta(theta, name=name, max_theta_deg=max_theta_deg)
     if not math.isfinite(phi):
         raise _error(name, f" φ {phi!r} is not finite")
     if not -180.0 <= phi < 360.0:   # one turn of azimuth: 400° is 40°, said once in its canonical form
@@ -303,12 +305,13 @@ def parse_angle(text, *, name: str = "angle_deg") -> float:
     return value
 
 
-def check_theta(theta_deg, *, name: str = "theta") -> None:
-    """Refuse zenith angles outside [0°, 90°] (directions below the surface are not inputs)."""
+def check_theta(theta_deg, *, name: str = "theta", max_theta_deg: float = 90.0) -> None:
+    """Refuse zenith angles outside [0°, *max_theta_deg*] (90°: directions below the surface are not inputs,
+    except for a BSDF over the whole sphere, 180°)."""
     t = np.atleast_1d(np.asarray(theta_deg, dtype=float))
-    bad = t[~np.isfinite(t) | (t < 0) | (t > 90)]
+    bad = t[~np.isfinite(t) | (t < 0) | (t > max_theta_deg)]
     if bad.size:
-        raise _error(name, f" θ={float(bad[0])!r}° is outside the allowed range [0, 90] degrees")
+        raise _error(name, f" θ={float(bad[0])!r}° is outside the allowed range [0, {max_theta_deg:g}] degrees")
 
 
 def direction_from_angles(theta_deg, phi_deg=0.0) -> np.ndarray:

@@ -162,7 +162,10 @@ BRDF_MODEL_PARAMETERS = {
                  ModelParameter("resolution", "", None, "direction grid of the lobes tabulated from surface "
                                                         "(None: 128)"),
                  _CORRELATION),
-    "rough-dielectric": (*_ALPHA, _SHADOWING, *_INDEX, _MS),
+    "rough-dielectric": (*_ALPHA, _SHADOWING, *_INDEX, _MS,
+                         ModelParameter("psd", "m^4", None, "nano-roughness height statistics (a PSDModel): their "
+                                                            "first-order scatter into both half-spaces "
+                                                            "(NanoRoughDielectricBSDF); None: none")),
     "table": (ModelParameter("table", "", REQUIRED, "a BRDF table as a function (waveoptics.distributed.table."
                                                     "open_table)"),),
 }

@@ -456,7 +456,7 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
 
 def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF, ndf_shape=None,
                            shadowing="smith-correlated", material=None, ior=None, fresnel="exact",
-                           multiple_scattering=False) -> ModelEvaluation:
+                           multiple_scattering=False, psd=None) -> ModelEvaluation:
     """The BSDF of a rough dielectric interface, reflection and transmission over the whole sphere (Walter et al.
     2007; :class:`waveoptics.brdf.RoughDielectricBSDF`), as a function: directions with z < 0 lie in the
     dielectric; the albedo is R + T; its parts are ``reflection``, ``transmission`` and ``multiple``.
@@ -475,8 +475,13 @@ def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_
         ``exact`` only (the transmission is 1 − F).
     multiple_scattering : bool
         Kulla-Conty dielectric energy compensation.
+    psd : PSDModel, optional
+        Nano-roughness height statistics (m⁴): the interface also scatters their first-order (Rayleigh-Rice) light
+        into both half-spaces, which its coherent lobes give up (:class:`waveoptics.brdf.NanoRoughDielectricBSDF`,
+        right as α → 0); its extra part is ``nano``.
     """
     from .btdf import RoughDielectricBSDF
+    from .nano_dielectric import NanoRoughDielectricBSDF
     from .twoscale import Micro
 
     spec = _one_index(material, ior)
@@ -488,7 +493,10 @@ def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_
                          "exact dielectric Fresnel factor (transmission 1 − F)", "fresnel")
     micro = Micro(alpha=_alpha(alpha, roughness, "rough-dielectric"), alpha_y=alpha_y, ndf=ndf, shadowing=shadowing,
                   ndf_shape=ndf_shape)
-    bsdf = RoughDielectricBSDF(spec, micro, multiple_scattering=multiple_scattering)
+    if psd is None:
+        bsdf = RoughDielectricBSDF(spec, micro, multiple_scattering=multiple_scattering)
+    else:
+        bsdf = NanoRoughDielectricBSDF(spec, micro, multiple_scattering=multiple_scattering, psd=psd)
     return function_evaluation(lambda wi: bsdf, wavelengths_nm)
 
 

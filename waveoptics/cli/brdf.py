@@ -290,23 +290,27 @@ def _rayleigh_rice_arguments(g) -> None:
            note="of a --material stack's interfaces")
 
 
+def _psd_statistics(args, model_name):
+    """The PSDModel of --nano height statistics (first-order models need statistics, not a generator)."""
+    from .. import surfaces
+    from ..request import parse_nano
+
+    model, p = parse_nano(args.nano)
+    if model not in surfaces.PSD_MODELS:
+        raise WaveopticsError(f"--nano {args.nano!r}: {model_name} needs height statistics "
+                              f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
+    return surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"), C=p.get("C"))
+
+
 def _rayleigh_rice_inputs(args, wavelength_nm) -> dict:
     """The PSD of :func:`waveoptics.brdf.rayleigh_rice_model`: a model from --nano statistics or a height field's
     periodogram from --surface."""
     from .. import surfaces
-    from ..request import parse_nano
 
     if bool(args.nano) == bool(args.surface):
         raise WaveopticsError("--model rayleigh-rice needs exactly one of --nano MODEL:params (height statistics) "
                               "and --surface FILE (its periodogram is the PSD)")
-    if args.surface:
-        psd = surfaces.PeriodogramPSD(load_surface(args))
-    else:
-        model, p = parse_nano(args.nano)
-        if model not in surfaces.PSD_MODELS:
-            raise WaveopticsError(f"--nano {args.nano!r}: rayleigh-rice needs height statistics "
-                                  f"({', '.join(surfaces.PSD_MODELS)}), not {model!r}")
-        psd = surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"), C=p.get("C"))
+    psd = surfaces.PeriodogramPSD(load_surface(args)) if args.surface else _psd_statistics(args, "rayleigh-rice")
     _index(args, wavelength_nm)
     return {"psd": psd}
 
@@ -369,18 +373,21 @@ def _twoscale_describe(args) -> dict:
 
 def _rough_dielectric_arguments(g) -> None:
     """The rough dielectric takes the microfacet options (--alpha, --ndf, --shadowing, --material or --ior,
-    --multiple-scattering); nothing of its own."""
+    --multiple-scattering) and --nano statistics (nano-rough glass); nothing of its own."""
 
 
 def _rough_dielectric_inputs(args, wavelength_nm) -> dict:
-    """:func:`waveoptics.brdf.rough_dielectric_model` reads no file."""
+    """:func:`waveoptics.brdf.rough_dielectric_model` reads no file; --nano statistics become its PSD."""
+    if args.surface:
+        raise WaveopticsError("--surface is not used by --model rough-dielectric (its nano-roughness is --nano "
+                              "height statistics); drop it")
     _index(args, wavelength_nm)
-    return {}
+    return {"psd": _psd_statistics(args, "rough-dielectric")} if args.nano else {}
 
 
 def _rough_dielectric_describe(args) -> dict:
     return {k: getattr(args, k) for k in ("ndf", "shadowing", "alpha", "roughness", "alpha_y", "material", "ior",
-                                          "multiple_scattering")}
+                                          "multiple_scattering", "nano")}
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -413,6 +420,9 @@ MODELS: dict[str, Model] = {m.name: m for m in (
     Model("rough-dielectric", _rough_dielectric_arguments, _rough_dielectric_inputs, _rough_dielectric_describe),
     Model("table", _table_arguments, _table_inputs, _table_describe),
 )}
+
+#: models whose --outgoing directions cover the whole sphere (θ > 90°: transmitted, inside the material)
+SPHERE_MODELS = ("rough-dielectric",)
 
 #: options every model takes (the command's own)
 _COMMON = {"model", "wavelengths", "incident", "outgoing", "albedo", "device", "json", "debug", "quiet", "func",
@@ -450,7 +460,8 @@ def register(sub) -> None:
     renamed(p, "brdf", "--wavelength", dest="wavelengths")
     option(p, "--incident", action="append", required=True, note="repeat for several")
     p.add_argument("--outgoing", action="append", metavar="THETA,PHI",
-                   help="direction to the viewer in degrees (repeat for several)")
+                   help="direction to the viewer in degrees (repeat for several); θ up to 180 for "
+                        "--model rough-dielectric (θ > 90: transmitted into the dielectric)")
     p.add_argument("--albedo", action="store_true",
                    help="print the directional albedo ∫ f cos θo dωo of each incident direction instead")
     for name, model in MODELS.items():
@@ -488,7 +499,10 @@ def run(args) -> int:
         return 0
     if not args.outgoing:
         raise WaveopticsError("give at least one --outgoing THETA,PHI (or --albedo)")
-    out = [parse_direction(t, name="--outgoing", need_phi=True) for t in args.outgoing]
+    # a BSDF over the whole sphere (the rough dielectric) is also evaluated below the surface: θ > 90°
+    sphere = args.model in SPHERE_MODELS
+    out = [parse_direction(t, name="--outgoing", need_phi=True, max_theta_deg=180.0 if sphere else 90.0)
+           for t in args.outgoing]
     wo = direction_from_angles([t for t, _ in out], [p for _, p in out])
     m = model.build(args, wl)
     f = np.asarray(m.evaluate(wi, wo, progress=_bar(args)))
