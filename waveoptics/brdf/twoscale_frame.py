@@ -266,6 +266,72 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 
+#: azimuths of each ring of the NDF's quadrature normals (:func:`facet_frame_diffraction`): evenly spaced, exact for
+#: the integrand's harmonics in the azimuth about the half-vector's meridian below this order
+NDF_RING = 8
+
+
+def _ndf_nodes(n: int, kw: dict, e2):
+    """The NDF's quadrature normals of :func:`facet_frame_diffraction`: drawn with density D(m) cos θ_m
+    (:func:`waveoptics.brdf.sample_normal_dcos`), which does not depend on ω_i, so ω_i and ω_o swapped get the same
+    nodes. *n*/:data:`NDF_RING` rings: the radius of a Sobol point (u₁) with :data:`NDF_RING` azimuths evenly
+    spaced from its 2π u₂ (the trapezoidal rule on the circle, exact for azimuthal harmonics below its order
+    whatever the orientation of the integrand). For an isotropic NDF the nodes are turned about z to each cell's
+    half-vector azimuth (*e2* (n_cells, 3) = (−sin φ_h, cos φ_h, 0), :func:`waveoptics.brdf.facet.meridian_basis`),
+    so that a direction pair at any azimuth gets the same nodes relative to it (D(m) cos θ_m is unchanged by the
+    turn). Yields (3,) normals (anisotropic NDF: fixed in the surface's frame) or (n_cells, 3).
+
+    Measured against 4096 + 1024 normals (ABC σ = 10 nm, B = 2 µm, C = 2.6, Beckmann, 550 nm, 20 pairs θ 3-65°):
+    α = 0.1 with 64 + 16 normals rms 1.6 %, max 2.6 % (Sobol normals fixed in the surface's frame: 2.1 %, 4.9 %);
+    α = 0.3 with 64 + 64 rms 0.6 %, max 2.0 % (0.5 %, 1.2 %).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, §5.3 (sampling D(m) cos θ_m).
+    .. [2] P. J. Davis, P. Rabinowitz, *Methods of Numerical Integration*, 2nd ed., Academic Press 1984, §2.9
+       (the trapezoidal rule is exact for trigonometric polynomials of degree below its number of points).
+    """
+    from .facet import unit_nodes
+    from .sampling import sample_normal_dcos
+
+    ax = kw["alpha"]
+    ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
+    ring = min(NDF_RING, n)
+    base = unit_nodes(max(n // ring, 1))
+    u = np.concatenate([np.stack([base[:, 0], (base[:, 1] + j / ring) % 1.0], axis=-1) for j in range(ring)])
+    m0 = sample_normal_dcos(u, ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])
+    if ay != ax:
+        yield from m0
+        return
+    c, s = e2[:, 1], -e2[:, 0]
+    for mx, my, mz in m0:
+        yield np.stack([c * mx - s * my, s * mx + c * my, np.full(c.shape, mz)], axis=-1)
+
+
+def _half_vector_nodes(rad, level, n: int, cos_d):
+    """The half-vector quadrature nodes of :func:`facet_frame_diffraction`: for each of *n* nodes the tilt
+    sin(m, h) per cell (n_cells,) and the cosine and sine of its azimuth about h in
+    :func:`waveoptics.brdf.facet.meridian_basis`. Antithetic pairs: n/2 Sobol points (radius through the nano lobe's
+    radial law at each cell's cos θ_d *level*, azimuth 2π u₂), each at φ and φ + π, which cancels the integrand's
+    odd harmonics in the azimuth about h (the facets tilted towards and away from the light along the meridian);
+    the nodes depend on h and θ_d only, the same for ω_i and ω_o swapped.
+
+    References
+    ----------
+    .. [1] J. M. Hammersley, K. W. Morton, "A new Monte Carlo technique: antithetic variates", Proc. Cambridge
+       Philos. Soc. 52(3):449-475, 1956.
+    .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
+    """
+    from .facet import COS_LEVELS, unit_nodes
+
+    n_base = n // 2 if n % 2 == 0 else n
+    base = unit_nodes(n_base)
+    radii = rad.radius(np.arange(COS_LEVELS)[:, None], np.broadcast_to(base[:, 0], (COS_LEVELS, n_base)))[level]
+    for k in range(n):
+        phi = 2 * np.pi * base[k % n_base, 1] + np.pi * (k // n_base)
+        yield radii[:, k % n_base] / (2 * cos_d), np.cos(phi), np.sin(phi)
+
+
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
                             diffraction="kirchhoff", polarization: str = "unpolarized",
                             table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None):
@@ -302,9 +368,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     .. [1] B. Walter et al., EGSR 2007, eq. (14) (a BRDF carried by each facet); §5.3 (sampling normals).
     .. [2] E. Veach, PhD thesis, 1997, §9.2 (balance heuristic of several techniques).
     """
-    from .facet import NanoRadial, facet_basis, unit_nodes
+    from .facet import NanoRadial, facet_basis, meridian_basis, unit_nodes
     from .ndf import ndf_by_name
-    from .sampling import sampler_for, pdf_normal, sample_normal
+    from .sampling import pdf_normal, sample_normal
     from .shadowing import shadowing_by_name
 
     w = np.asarray(wavelengths_nm, dtype=float)
@@ -324,7 +390,6 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     level = rad.level(cos_d)
     Li, Lo = float(spec.Lambda(wi, ax, ay, c)), spec.Lambda(wo, ax, ay, c)
     gfn, _ = shadowing_by_name(micro.shadowing)
-    visible = sampler_for(ndf).visible
     stack = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
     out = np.zeros((wo.shape[0], w.size))
 
@@ -336,7 +401,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         om = wo @ m if m.ndim == 1 else np.sum(wo * m, axis=-1)
         im = m @ wi
         D = spec.D(m, ax, ay, c)
-        pa = np.where(im > 0, D * im / (1.0 + Li), 0.0) / wi[2] if visible else D * m[..., 2]
+        pa = D * m[..., 2]   # the NDF nodes' density D(m) cos θ_m, the same for ω_i and ω_o swapped
         mh = np.clip(h @ m if m.ndim == 1 else np.sum(m * h, axis=-1), 0.0, 1.0)
         pb = np.where(mh > 0, rad.pdf_r(level, 2 * cos_d * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
                       * 4 * cos_d ** 2 * mh, 0.0)
@@ -359,17 +424,13 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
         out[ok] += weight[:, None] * _facet_read(stack, tgrid, theta, lo)
 
-    for j in range(na):
-        add(m_a[j], np.ones(wo.shape[0], bool))
-    radii = rad.node_radii[level]                        # (n_cells, n_b)
-    phis = 2 * np.pi * unit_nodes(nb)[:, 1]
-    e1, e2 = facet_basis(h)
-    for k in range(nb):
-        s_k = radii[:, k] / (2 * cos_d)                   # a tilt s from h sends ω_i to q = 2k cosθ_d s
-        ok = s_k < 1
+    e1, e2 = meridian_basis(h)
+    for m in _ndf_nodes(na, kw, e2):
+        add(m, np.ones(wo.shape[0], bool))
+    for s_k, cp, sp in _half_vector_nodes(rad, level, nb, cos_d):
+        ok = s_k < 1                                      # a tilt s from h sends ω_i to q = 2k cosθ_d s
         s_k = np.where(ok, s_k, 0.0)
-        m = ((s_k * np.cos(phis[k]))[:, None] * e1 + (s_k * np.sin(phis[k]))[:, None] * e2
-             + np.sqrt(1 - s_k ** 2)[:, None] * h)
+        m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
         add(m, ok)
     diffraction = np.zeros((w.size, grid.n_v, grid.n_u))
     im_a = m_a @ wi
