@@ -309,13 +309,14 @@ def _ndf_nodes(n: int, kw: dict, e2):
         yield np.stack([c * mx - s * my, s * mx + c * my, np.full(c.shape, mz)], axis=-1)
 
 
-def _half_vector_nodes(rad, level, n: int, cos_d):
+def _half_vector_nodes(rad, level, n: int, cos_d, antithetic: bool = True):
     """The half-vector quadrature nodes of :func:`facet_frame_diffraction`: for each of *n* nodes the tilt
     sin(m, h) per cell (n_cells,) and the cosine and sine of its azimuth about h in
     :func:`waveoptics.brdf.facet.meridian_basis`. Antithetic pairs: n/2 Sobol points (radius through the nano lobe's
     radial law at each cell's cos θ_d *level*, azimuth 2π u₂), each at φ and φ + π, which cancels the integrand's
     odd harmonics in the azimuth about h (the facets tilted towards and away from the light along the meridian);
-    the nodes depend on h and θ_d only, the same for ω_i and ω_o swapped.
+    the nodes depend on h and θ_d only, the same for ω_i and ω_o swapped. *antithetic* False: n Sobol points, each
+    once (a height field's, in :func:`waveoptics.brdf.facet_basis` of h).
 
     References
     ----------
@@ -325,7 +326,7 @@ def _half_vector_nodes(rad, level, n: int, cos_d):
     """
     from .facet import COS_LEVELS, unit_nodes
 
-    n_base = n // 2 if n % 2 == 0 else n
+    n_base = n // 2 if antithetic and n % 2 == 0 else n
     base = unit_nodes(n_base)
     radii = rad.radius(np.arange(COS_LEVELS)[:, None], np.broadcast_to(base[:, 0], (COS_LEVELS, n_base)))[level]
     for k in range(n):
@@ -375,7 +376,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     """
     from .facet import NanoRadial, facet_basis, meridian_basis, unit_nodes
     from .ndf import ndf_by_name
-    from .sampling import pdf_normal, sample_normal
+    from .sampling import pdf_normal, sample_normal, sampler_for
     from .shadowing import shadowing_by_name
 
     w = np.asarray(wavelengths_nm, dtype=float)
@@ -395,6 +396,11 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     level = rad.level(cos_d)
     Li, Lo = float(spec.Lambda(wi, ax, ay, c)), spec.Lambda(wo, ax, ay, c)
     gfn, _ = shadowing_by_name(micro.shadowing)
+    # PSD statistics: nodes laid out about each cell's half-vector, reciprocal (:func:`_ndf_nodes`); a height
+    # field's speckle keeps the NDF sampler's nodes for ω_i shared by all cells and the Sobol half-vector nodes
+    # (FACET_NODES_FIELD was measured with them; the symmetric layout read its speckle 5-11 % off the reference)
+    symmetric = nano.surface is None
+    visible = sampler_for(ndf).visible
     stack = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
     out = np.zeros((wo.shape[0], w.size))
 
@@ -406,7 +412,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         om = wo @ m if m.ndim == 1 else np.sum(wo * m, axis=-1)
         im = m @ wi
         D = spec.D(m, ax, ay, c)
-        pa = D * m[..., 2]   # the NDF nodes' density D(m) cos θ_m, the same for ω_i and ω_o swapped
+        if symmetric:   # the NDF nodes' density D(m) cos θ_m, the same for ω_i and ω_o swapped
+            pa = D * m[..., 2]
+        else:           # a height field's: the micro NDF's sampler for ω_i
+            pa = np.where(im > 0, D * im / (1.0 + Li), 0.0) / wi[2] if visible else D * m[..., 2]
         mh = np.clip(h @ m if m.ndim == 1 else np.sum(m * h, axis=-1), 0.0, 1.0)
         pb = np.where(mh > 0, rad.pdf_r(level, 2 * cos_d * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
                       * 4 * cos_d ** 2 * mh, 0.0)
@@ -429,10 +438,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
         out[ok] += weight[:, None] * _facet_read(stack, tgrid, theta, lo)
 
-    e1, e2 = meridian_basis(h)
-    for m in _ndf_nodes(na, kw, e2):
+    e1, e2 = meridian_basis(h) if symmetric else facet_basis(h)
+    for m in (_ndf_nodes(na, kw, e2) if symmetric else m_a):
         add(m, np.ones(wo.shape[0], bool))
-    for s_k, cp, sp in _half_vector_nodes(rad, level, nb, cos_d):
+    for s_k, cp, sp in _half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):
         ok = s_k < 1                                      # a tilt s from h sends ω_i to q = 2k cosθ_d s
         s_k = np.where(ok, s_k, 0.0)
         m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
