@@ -267,40 +267,30 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 
-#: azimuths of each ring of the NDF's quadrature normals (:func:`facet_frame_diffraction`): evenly spaced, exact for
-#: the integrand's harmonics in the azimuth about the half-vector's meridian below this order
-NDF_RING = 8
-
-
 def _ndf_nodes(n: int, kw: dict, e2):
-    """The NDF's quadrature normals of :func:`facet_frame_diffraction`: drawn with density D(m) cos θ_m
-    (:func:`waveoptics.brdf.sample_normal_dcos`), which does not depend on ω_i, so ω_i and ω_o swapped get the same
-    nodes. *n*/:data:`NDF_RING` rings: the radius of a Sobol point (u₁) with :data:`NDF_RING` azimuths evenly
-    spaced from its 2π u₂ (the trapezoidal rule on the circle, exact for azimuthal harmonics below its order
-    whatever the orientation of the integrand). For an isotropic NDF the nodes are turned about z to each cell's
-    half-vector azimuth (*e2* (n_cells, 3) = (−sin φ_h, cos φ_h, 0), :func:`waveoptics.brdf.facet.meridian_basis`),
-    so that a direction pair at any azimuth gets the same nodes relative to it (D(m) cos θ_m is unchanged by the
-    turn). Yields (3,) normals (anisotropic NDF: fixed in the surface's frame) or (n_cells, 3).
+    """The NDF's quadrature normals of :func:`facet_frame_diffraction`: *n* Sobol points drawn with density
+    D(m) cos θ_m (:func:`waveoptics.brdf.sample_normal_dcos`), which does not depend on ω_i, so ω_i and ω_o swapped
+    get the same nodes. For an isotropic NDF they are turned about z to each cell's half-vector azimuth (*e2*
+    (n_cells, 3) = (−sin φ_h, cos φ_h, 0), :func:`waveoptics.brdf.facet.meridian_basis`), so that a direction pair
+    at any azimuth gets the same nodes relative to it (D(m) cos θ_m is unchanged by the turn). Yields (3,) normals
+    (anisotropic NDF: fixed in the surface's frame) or (n_cells, 3).
 
     Measured against 4096 + 1024 normals (ABC σ = 10 nm, B = 2 µm, C = 2.6, Beckmann, 550 nm, 20 pairs θ 3-65°):
-    α = 0.1 with 64 + 16 normals rms 1.6 %, max 2.6 % (Sobol normals fixed in the surface's frame: 2.1 %, 4.9 %);
-    α = 0.3 with 64 + 64 rms 0.6 %, max 2.0 % (0.5 %, 1.2 %).
+    α = 0.1 with 64 + 16 normals rms 1.2 %, max 1.7 % (the earlier normals fixed in the surface's frame: 2.1 %,
+    4.9 %); α = 0.3 with 64 + 64 rms 1.0 %, max 3.5 % (0.5 %, 1.2 %). Rings of 8 evenly spaced azimuths instead
+    were within 2.6 % and 2.0 % but lost 0.3 % of the albedo at 450 nm (tests/test_twoscale.py, Gaussian PSD).
 
     References
     ----------
     .. [1] B. Walter et al., EGSR 2007, §5.3 (sampling D(m) cos θ_m).
-    .. [2] P. J. Davis, P. Rabinowitz, *Methods of Numerical Integration*, 2nd ed., Academic Press 1984, §2.9
-       (the trapezoidal rule is exact for trigonometric polynomials of degree below its number of points).
+    .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
     """
     from .facet import unit_nodes
     from .sampling import sample_normal_dcos
 
     ax = kw["alpha"]
     ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
-    ring = min(NDF_RING, n)
-    base = unit_nodes(max(n // ring, 1))
-    u = np.concatenate([np.stack([base[:, 0], (base[:, 1] + j / ring) % 1.0], axis=-1) for j in range(ring)])
-    m0 = sample_normal_dcos(u, ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])
+    m0 = sample_normal_dcos(unit_nodes(n), ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])
     if ay != ax:
         yield from m0
         return
@@ -349,7 +339,8 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     about z: they are the same for ω_i and ω_o swapped and for the pair turned about the normal, so the discrete
     sum is reciprocal up to the tables' reads (the integrand is), and a table over incidence at azimuth 0 read
     turned (:class:`waveoptics.brdf.TabulatedTwoScaleBRDF`) keeps it: measured f(ω_i, ω_o)/f(ω_o, ω_i) − 1 ≤ 0.5 %
-    at θ ≤ 65° (α 0.05-0.1; normals fixed in the surface's frame: up to 5.6 %), the cost per incidence +7 %. Each facet's nano lobe is read from tables
+    at θ ≤ 65° (α 0.05-0.1; normals fixed in the surface's frame: up to 5.6 %), for 6-13 % more CPU time per
+    incidence (96² cells). Each facet's nano lobe is read from tables
     over local incidence (:data:`FACET_THETAS_DEG`, :func:`_facet_read`) on *table_grid* (default *grid*, a
     hemisphere); F(θ_d), the same in every facet's frame, multiplies the sum. A nano height field's tables are its
     own lobe at azimuth 0 (:func:`_field_table`), read for facets of every azimuth: for a statistically isotropic
