@@ -64,11 +64,14 @@ def test_between_nodes_the_lobe_follows_the_specular_direction(table, theta):
     wo_all = GRID.directions()[GRID.inside]
     assert table.eval_parts(wi, wo_all, 550.0)["diffraction"].sum() == pytest.approx(
         L.diffraction[0][GRID.inside].sum(), rel=0.02)
-    # the naive blend for comparison: the two node lobes at the same absolute directions
+    # the naive blend for comparison: the two node lobes at the same absolute directions, by the lobes' L1 distance
+    # to the direct lobe (measured 4.9, 4.1, 3.6, 2.4 times the table's at 15°, 32.5°, 47.5°, 55°). Not by the peak
+    # height: at 55° the broad lobe's naive peak is within 0.20 % of the direct peak's height (the table's 0.16 %),
+    # but a cell and a half off in place (θ_o 47.9° against 49.3°)
     k = int(theta // 10) - 1
     t = (theta % 10) / 10
     naive = ((1 - t) * table.table[0, k, 1] + t * table.table[0, k + 1, 1])[core]
-    assert abs(naive.max() / ref.max() - 1) > 3 * abs(d.max() / ref.max() - 1)
+    assert np.abs(naive - ref).sum() > 2 * np.abs(d - ref).sum()
 
 
 def test_isotropic_tables_follow_the_light_azimuth(table):

@@ -23,7 +23,8 @@ from scipy.stats import qmc
 from .. import scatter
 from .directions import dot_last
 
-__all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'to_facet', 'from_facet']
+__all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'meridian_basis', 'to_facet',
+           'from_facet']
 
 #: radial bins of the nano-lobe sampler (geometric in spatial frequency)
 RADIAL_BINS = 384
@@ -124,6 +125,22 @@ def facet_basis(m):
     t = np.stack([1.0 + sign * m[..., 0] ** 2 * a, sign * c, -sign * m[..., 0]], axis=-1)
     b = np.stack([c, sign + m[..., 1] ** 2 * a, -m[..., 1]], axis=-1)
     return t, b
+
+
+def meridian_basis(h):
+    """Tangent vectors (e1, e2) of the unit vectors *h* (..., 3) along and across their meridian:
+    e1 = (cos θ cos φ, cos θ sin φ, −sin θ), e2 = (−sin φ, cos φ, 0) for h = (sin θ cos φ, sin θ sin φ, cos θ).
+
+    Unlike :func:`facet_basis` it turns with h about the macro normal z (rotating h by ψ about z rotates e1, e2 by
+    ψ), so a quadrature laid out in it is the same for every azimuth of a direction pair; a function of h alone, it
+    is the same for ω_i and ω_o swapped when h is their half-vector (at h = z, φ = 0)."""
+    h = np.asarray(h, dtype=float)
+    phi = np.arctan2(h[..., 1], h[..., 0])
+    cp, sp = np.cos(phi), np.sin(phi)
+    sin_t = np.hypot(h[..., 0], h[..., 1])
+    e1 = np.stack([h[..., 2] * cp, h[..., 2] * sp, -sin_t], axis=-1)
+    e2 = np.stack([-sp, cp, np.zeros_like(cp)], axis=-1)
+    return e1, e2
 
 
 def to_facet(v, m):

@@ -33,7 +33,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import unknown
+from ..errors import WaveopticsError, unknown
 from scipy import special
 
 from .measured_ndf import sample_dcos_tabulated
@@ -45,7 +45,8 @@ from .ndf_shaped import (ABC_C_DEFAULT, EPD_P_DEFAULT, SGD_P_DEFAULT, abc_B, exp
                          gamma_upper)
 from .roughness import blinn_phong_exponent
 
-__all__ = ['NormalSampler', 'NORMAL_SAMPLERS', 'sample_normal', 'pdf_normal', 'pdf_reflected', 'sample_reflected']
+__all__ = ['NormalSampler', 'NORMAL_SAMPLERS', 'sample_normal', 'pdf_normal', 'pdf_reflected', 'sample_reflected',
+           'sample_normal_dcos']
 
 
 def _unit(v):
@@ -103,6 +104,17 @@ def sample_dcos_beckmann(wi, ax, ay, c, u):
     (Walter et al. 2007, eq. 28, anisotropic)."""
     r = np.sqrt(-np.log1p(-u[..., 0]))
     phi = 2.0 * np.pi * u[..., 1]
+    return _normal_from_slopes(ax * r * np.cos(phi), ay * r * np.sin(phi))
+
+
+def sample_dcos_ggx(wi, ax, ay, c, u):
+    """GGX normal with density D(m) cos θ_m (not the visible normals): its slopes follow the stretched
+    P22(x, y) = 1 / (π α_x α_y (1 + x²/α_x² + y²/α_y²)²), whose unit-α radius r has CDF r²/(1 + r²), so
+    r = √(u₁/(1 − u₁)) (Walter et al. 2007, §5.2: θ_m = arctan(α √ξ₁/√(1 − ξ₁)); Heitz 2014, §5.3 stretching)."""
+    u1 = np.clip(u[..., 0], 0.0, 1.0 - 1e-12)   # u₁ → 1 is a slope at infinity
+    r = np.sqrt(u1 / (1.0 - u1))
+    phi = 2.0 * np.pi * u[..., 1]
+    ay = ax if ay is None else ay
     return _normal_from_slopes(ax * r * np.cos(phi), ay * r * np.sin(phi))
 
 
@@ -251,6 +263,20 @@ def sampler_for(ndf) -> NormalSampler:
 def sample_normal(wi, u, *, ndf, ax, ay, c):
     """A microfacet normal (..., 3) for incident *wi* (..., 3) from uniform *u* (..., 2) (see module doc)."""
     return sampler_for(ndf).sample(np.asarray(wi, float), ax, ay, c, np.asarray(u, float))
+
+
+def sample_normal_dcos(u, *, ndf, ax, ay, c):
+    """A microfacet normal (..., 3) drawn with density D(m) cos θ_m (:func:`pdf_dcos`) from uniform *u* (..., 2),
+    whatever the light's direction: for GGX :func:`sample_dcos_ggx`, for the other NDFs their own sampler. Normals
+    that do not depend on ω_i serve a quadrature that must treat ω_i and ω_o alike (reciprocity)."""
+    u = np.asarray(u, float)
+    up = np.broadcast_to(np.array([0.0, 0.0, 1.0]), u.shape[:-1] + (3,))
+    if ndf == "ggx":
+        return sample_dcos_ggx(up, ax, ay, c, u)
+    spl = sampler_for(ndf)
+    if spl.visible:   # a visible-normal sampler added without its D cos θ_m twin
+        raise WaveopticsError(f"NDF {ndf!r} has no D(m) cos θ_m sampler")
+    return spl.sample(up, ax, ay, c, u)
 
 
 def pdf_normal(wi, m, *, ndf, ax, ay, c):
