@@ -68,11 +68,10 @@ from scipy import special
 from ..errors import FieldError, unknown
 from ..materials import Material, get_material
 from ..materials import fresnel as _fresnel
-from ..units import check_wavelengths
-from .directions import as_dirs, dot_last, reflect
+from .directions import dot_last, reflect
 from .fresnel_terms import F_mean
 from .ndf import COS_MIN, check_alpha, ndf_by_name
-from .protocol import BRDF, BRDFSample, broadcast_pair, check_uniform, lobe_choice
+from .protocol import BRDF, BRDFSample, broadcast_incidence, broadcast_pair, check_uniform, lobe_choice
 from .quadrature import normal_quadrature
 from .sampling import pdf_normal, sample_normal
 from .smith import gl01
@@ -460,12 +459,7 @@ class RoughDielectricBSDF(BRDF):
         """∫ f |cos θ_o| dω_o of each part (dimensionless): ``reflection`` and ``transmission`` by quadrature over
         microfacet normals (:func:`_albedo_single`), ``multiple_reflection`` and ``multiple_transmission`` by
         Gauss-Legendre quadrature in cos θ_o of the compensation lobes (which depend on θ_o only)."""
-        wi = as_dirs(wi, "wi")
-        lam = np.asarray(wavelength_nm, dtype=float)
-        check_wavelengths(lam.ravel() if lam.size else lam)
-        shape = np.broadcast_shapes(wi.shape[:-1], lam.shape)
-        wi_f = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
-        lam_f = np.broadcast_to(lam, shape).reshape(-1)
+        wi_f, lam_f, shape = broadcast_incidence(wi, wavelength_nm)
         keys = ("reflection", "transmission", "multiple_reflection", "multiple_transmission")
         out = {k: np.zeros(lam_f.size) for k in keys}
         spec, ndf, ax, ay, c = self._args()

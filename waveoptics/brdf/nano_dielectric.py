@@ -46,10 +46,8 @@ from ..errors import FieldError
 from ..materials import fresnel as _fresnel
 from ..scatter.transmission import rr_bsdf, rr_tis_reflection, rr_tis_transmission
 from ..surfaces.psd import PSDModel
-from ..units import check_wavelengths
 from .btdf import RoughDielectricBSDF
-from .directions import as_dirs
-from .protocol import broadcast_pair, lobe_choice
+from .protocol import broadcast_incidence, broadcast_pair, lobe_choice
 from .smith import gl01
 
 __all__ = ["NANO_MU_NODES", "NanoTables", "coherent_split", "nano_tables", "NanoRoughDielectricBSDF"]
@@ -214,12 +212,7 @@ class NanoRoughDielectricBSDF(RoughDielectricBSDF):
         """:meth:`RoughDielectricBSDF.albedo_parts` with the coherent factors, and ``nano_reflection``,
         ``nano_transmission`` (the TIS tables at μ_i; dimensionless)."""
         out = super().albedo_parts(wi, wavelength_nm)
-        wi = as_dirs(wi, "wi")
-        lam = np.asarray(wavelength_nm, dtype=float)
-        check_wavelengths(lam.ravel() if lam.size else lam)
-        shape = np.broadcast_shapes(wi.shape[:-1], lam.shape)
-        wi_f = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
-        lam_f = np.broadcast_to(lam, shape).reshape(-1)
+        wi_f, lam_f, shape = broadcast_incidence(wi, wavelength_nm)
         extra = {k: np.zeros(lam_f.size) for k in ("A_R", "A_T", "nano_reflection", "nano_transmission")}
         for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
             tab = self._nano(float(l1))

@@ -104,6 +104,15 @@ def broadcast_pair(wi, wo, wavelength_nm):
     return wi, wo, np.broadcast_to(lam, shape).reshape(-1), shape
 
 
+def broadcast_incidence(wi, wavelength_nm):
+    """Flatten broadcast (wi, λ) to (n, 3), (n,); returns them and the batch shape."""
+    wi = as_dirs(wi, "wi")
+    lam = np.asarray(wavelength_nm, dtype=float)
+    check_wavelengths(lam.ravel() if lam.size else lam)
+    shape = np.broadcast_shapes(wi.shape[:-1], lam.shape)
+    return np.broadcast_to(wi, shape + (3,)).reshape(-1, 3), np.broadcast_to(lam, shape).reshape(-1), shape
+
+
 class BRDF:
     """Base of every BRDF model (see the module doc). Subclasses implement the one-wavelength methods
     ``_eval1(wi, wo, lam)``, ``_pdf1(wi, wo, lam)``, ``_sample1(wi, u, lam)`` → (wo, pdf) on flat arrays and
@@ -138,12 +147,7 @@ class BRDF:
     def albedo(self, wi, wavelength_nm):
         """Directional albedo ∫ f cos θ_o dω_o (dimensionless) by quadrature of :meth:`eval` over half-vectors
         (:func:`waveoptics.brdf.directional_albedo`, nodes placed by each term's width)."""
-        wi = as_dirs(wi, "wi")
-        lam = np.asarray(wavelength_nm, dtype=float)
-        check_wavelengths(lam.ravel() if lam.size else lam)
-        shape = np.broadcast_shapes(wi.shape[:-1], lam.shape)
-        wi_f = np.broadcast_to(wi, shape + (3,)).reshape(-1, 3)
-        lam_f = np.broadcast_to(lam, shape).reshape(-1)
+        wi_f, lam_f, shape = broadcast_incidence(wi, wavelength_nm)
         out = np.zeros(lam_f.size)
         for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
             if w1[2] <= 0:
