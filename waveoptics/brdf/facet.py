@@ -3,7 +3,9 @@
 Each micro facet carries the nano-roughness in its own frame (z = the facet normal m): the two-scale model's
 diffracted part is Walter et al.'s (2007) integral of the nano BRDF evaluated at the facet's local incidence and
 exitance (docs/physics.md §7). These helpers give that frame (Duff et al. 2017's branch-free basis), the
-invariants of a direction pair in it, and the deterministic Sobol points the quadratures use.
+invariants of a direction pair in it, the deterministic Sobol points the quadratures use, and the two node rules
+of the facet-frame quadrature that the grid and pointwise forms share (:func:`ndf_nodes`, :func:`half_vector_nodes`:
+laid out about each pair's half-vector, the same for ω_i and ω_o swapped).
 
 References
 ----------
@@ -22,9 +24,10 @@ from scipy.stats import qmc
 
 from .. import scatter
 from .directions import dot_last
+from .sampling import sample_normal_dcos
 
 __all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'meridian_basis', 'to_facet',
-           'from_facet']
+           'from_facet', 'ndf_nodes', 'half_vector_nodes']
 
 #: radial bins of the nano-lobe sampler (geometric in spatial frequency)
 RADIAL_BINS = 384
@@ -168,3 +171,81 @@ def local_pair(cos_i, cos_o, cos_io):
     return (np.stack([si, np.zeros_like(si), ci], axis=-1), np.stack([x, y, co], axis=-1))
 
 
+
+
+def ndf_nodes(n: int, e2, *, ndf, ax, ay, c):
+    """The NDF's normals of the facet-frame quadratures (:func:`waveoptics.brdf.facet_frame_diffraction`, the
+    diffracted part of :class:`waveoptics.brdf.TwoScaleBRDF`): *n* Sobol points (:func:`unit_nodes`) drawn with
+    density D(m) cos θ_m (:func:`waveoptics.brdf.sample_normal_dcos`), which does not depend on ω_i, so ω_i and ω_o
+    swapped get the same nodes. For an isotropic NDF (*ax* = *ay*) they are turned about z to each direction pair's
+    half-vector azimuth (*e2* (n_pairs, 3) = (−sin φ_h, cos φ_h, 0), :func:`meridian_basis` of h), so that a pair
+    at any azimuth gets the same nodes relative to it (D(m) cos θ_m is unchanged by the turn). Yields, node by
+    node, (3,) normals (anisotropic NDF: fixed in the surface's frame) or (n_pairs, 3).
+
+    Measured on the grid route against 4096 + 1024 normals (ABC σ = 10 nm, B = 2 µm, C = 2.6, Beckmann, 550 nm,
+    20 pairs θ 3-65°): α = 0.1 with 64 + 16 normals rms 1.2 %, max 1.7 % (the earlier normals fixed in the
+    surface's frame: 2.1 %, 4.9 %); α = 0.3 with 64 + 64 rms 1.0 %, max 3.5 % (0.5 %, 1.2 %). Rings of 8 evenly
+    spaced azimuths instead were within 2.6 % and 2.0 % but lost 0.3 % of the albedo at 450 nm
+    (tests/test_twoscale.py, Gaussian PSD).
+
+    Parameters
+    ----------
+    n : int
+        Number of normals (a power of two).
+    e2 : ndarray (n_pairs, 3)
+        The across-meridian tangent of each pair's half-vector (:func:`meridian_basis`); not used for an
+        anisotropic NDF.
+    ndf, ax, ay, c
+        The micro NDF's name, roughness along x and y and shape parameter (:func:`waveoptics.brdf.D`).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, §5.3 (sampling D(m) cos θ_m).
+    .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
+    """
+    m0 = sample_normal_dcos(unit_nodes(n), ndf=ndf, ax=ax, ay=ay, c=c)
+    if ay != ax:
+        yield from m0
+        return
+    e2 = np.asarray(e2, dtype=float)
+    cs, sn = e2[..., 1], -e2[..., 0]
+    for mx, my, mz in m0:
+        yield np.stack([cs * mx - sn * my, sn * mx + cs * my, np.full(cs.shape, mz)], axis=-1)
+
+
+def half_vector_nodes(rad: NanoRadial, level, n: int, cos_d, antithetic: bool = True):
+    """The half-vector normals of the facet-frame quadratures (:func:`waveoptics.brdf.facet_frame_diffraction`,
+    :class:`waveoptics.brdf.TwoScaleBRDF`): for each of *n* nodes the tilt s = sin(m, h) per pair (n_pairs,) and the
+    cosine and sine of its azimuth about h in :func:`meridian_basis` (m = s cos φ e1 + s sin φ e2 + √(1 − s²) h;
+    s ≥ 1: no node). A facet tilted from h by s sends ω_i to the grating vector q = 2k cos θ_d s of the nano lobe
+    about its mirror direction, so s = t / (2 cos θ_d), t the radius drawn through the nano lobe's radial law
+    *rad* at each pair's cos θ_d *level* (:meth:`NanoRadial.level`).
+
+    Antithetic pairs: n/2 Sobol points (radius from u₁, azimuth 2π u₂), each at φ and φ + π, which cancels the
+    integrand's odd harmonics in the azimuth about h (the facets tilted towards and away from the light along the
+    meridian); the nodes depend on h and θ_d only, the same for ω_i and ω_o swapped. *antithetic* False: n Sobol
+    points, each once (a height field's, in :func:`facet_basis` of h).
+
+    Parameters
+    ----------
+    rad : NanoRadial
+        The nano lobe's radial law.
+    level : ndarray (n_pairs,) of int
+        Its cos θ_d level of each pair.
+    n : int
+        Number of nodes (a power of two).
+    cos_d : ndarray (n_pairs,)
+        cos θ_d = ω_i·h of each pair.
+
+    References
+    ----------
+    .. [1] J. M. Hammersley, K. W. Morton, "A new Monte Carlo technique: antithetic variates", Proc. Cambridge
+       Philos. Soc. 52(3):449-475, 1956.
+    .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
+    """
+    n_base = n // 2 if antithetic and n % 2 == 0 else n
+    base = unit_nodes(n_base)
+    radii = rad.radius(np.arange(COS_LEVELS)[:, None], np.broadcast_to(base[:, 0], (COS_LEVELS, n_base)))[level]
+    for k in range(n):
+        phi = 2 * np.pi * base[k % n_base, 1] + np.pi * (k // n_base)
+        yield radii[..., k % n_base] / (2 * cos_d), np.cos(phi), np.sin(phi)

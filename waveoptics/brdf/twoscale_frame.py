@@ -17,6 +17,7 @@ from .. import scatter
 from ..errors import FieldError, unknown
 from ..materials import cos2_eta_i, facet_sp_mix
 from ..scatter.grid import DirectionGrid
+from .facet import half_vector_nodes, ndf_nodes
 from .facet_polarization import facet_scattered_share
 from .field_lobe import FIELD_GRID_OVERSAMPLING, field_anisotropy, field_proposal_model, kirchhoff_scattered_lobe
 from .nano_grid import NARROW_CELLS
@@ -38,7 +39,7 @@ FACET_THETAS_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60,
 #: facet normals of the grid route's quadrature (:func:`facet_nodes`): (D(m) cos θ_m normals turned to each
 #: cell's half-vector azimuth; drawn about each cell's half-vector through the nano lobe's radial law), for a micro
 #: lobe narrower than :data:`FACET_NODE_SPLIT` nano lobe widths, and for a wider one. Measured per cell (with the
-#: earlier NDF normals fixed in the surface's frame; :func:`_ndf_nodes` gives the present rule's error) against the
+#: earlier NDF normals fixed in the surface's frame; :func:`.facet.ndf_nodes` gives the present rule's error) against the
 #: pointwise form (ABC σ = 10 nm, B = 2 µm, C = 2.6, 550 nm, Beckmann, 96²-128² grids): α = 0.05 at 30° with
 #: (64, 16) ≤ 2.7 % (32 + 16: 4.8 %); α = 0.3 at 60° with (64, 64) ≤ 2.1 % (64 + 16: 6.8 %, 32 + 64: 4.5 %)
 FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (64, 64)
@@ -278,63 +279,6 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 
-def _ndf_nodes(n: int, kw: dict, e2):
-    """The NDF's quadrature normals of :func:`facet_frame_diffraction`: *n* Sobol points drawn with density
-    D(m) cos θ_m (:func:`waveoptics.brdf.sample_normal_dcos`), which does not depend on ω_i, so ω_i and ω_o swapped
-    get the same nodes. For an isotropic NDF they are turned about z to each cell's half-vector azimuth (*e2*
-    (n_cells, 3) = (−sin φ_h, cos φ_h, 0), :func:`waveoptics.brdf.facet.meridian_basis`), so that a direction pair
-    at any azimuth gets the same nodes relative to it (D(m) cos θ_m is unchanged by the turn). Yields (3,) normals
-    (anisotropic NDF: fixed in the surface's frame) or (n_cells, 3).
-
-    Measured against 4096 + 1024 normals (ABC σ = 10 nm, B = 2 µm, C = 2.6, Beckmann, 550 nm, 20 pairs θ 3-65°):
-    α = 0.1 with 64 + 16 normals rms 1.2 %, max 1.7 % (the earlier normals fixed in the surface's frame: 2.1 %,
-    4.9 %); α = 0.3 with 64 + 64 rms 1.0 %, max 3.5 % (0.5 %, 1.2 %). Rings of 8 evenly spaced azimuths instead
-    were within 2.6 % and 2.0 % but lost 0.3 % of the albedo at 450 nm (tests/test_twoscale.py, Gaussian PSD).
-
-    References
-    ----------
-    .. [1] B. Walter et al., EGSR 2007, §5.3 (sampling D(m) cos θ_m).
-    .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
-    """
-    from .facet import unit_nodes
-    from .sampling import sample_normal_dcos
-
-    ax = kw["alpha"]
-    ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
-    m0 = sample_normal_dcos(unit_nodes(n), ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])
-    if ay != ax:
-        yield from m0
-        return
-    c, s = e2[:, 1], -e2[:, 0]
-    for mx, my, mz in m0:
-        yield np.stack([c * mx - s * my, s * mx + c * my, np.full(c.shape, mz)], axis=-1)
-
-
-def _half_vector_nodes(rad, level, n: int, cos_d, antithetic: bool = True):
-    """The half-vector quadrature nodes of :func:`facet_frame_diffraction`: for each of *n* nodes the tilt
-    sin(m, h) per cell (n_cells,) and the cosine and sine of its azimuth about h in
-    :func:`waveoptics.brdf.facet.meridian_basis`. Antithetic pairs: n/2 Sobol points (radius through the nano lobe's
-    radial law at each cell's cos θ_d *level*, azimuth 2π u₂), each at φ and φ + π, which cancels the integrand's
-    odd harmonics in the azimuth about h (the facets tilted towards and away from the light along the meridian);
-    the nodes depend on h and θ_d only, the same for ω_i and ω_o swapped. *antithetic* False: n Sobol points, each
-    once (a height field's, in :func:`waveoptics.brdf.facet_basis` of h).
-
-    References
-    ----------
-    .. [1] J. M. Hammersley, K. W. Morton, "A new Monte Carlo technique: antithetic variates", Proc. Cambridge
-       Philos. Soc. 52(3):449-475, 1956.
-    .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
-    """
-    from .facet import COS_LEVELS, unit_nodes
-
-    n_base = n // 2 if antithetic and n % 2 == 0 else n
-    base = unit_nodes(n_base)
-    radii = rad.radius(np.arange(COS_LEVELS)[:, None], np.broadcast_to(base[:, 0], (COS_LEVELS, n_base)))[level]
-    for k in range(n):
-        phi = 2 * np.pi * base[k % n_base, 1] + np.pi * (k // n_base)
-        yield radii[:, k % n_base] / (2 * cos_d), np.cos(phi), np.sin(phi)
-
-
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
                             diffraction="kirchhoff", polarization: str = "unpolarized",
                             table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None):
@@ -343,8 +287,8 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
 
         f_diff(ω_i, ω_o) = ∫ |ω_i·m| |ω_o·m| / (|ω_i·n| |ω_o·n|) f_nano(ω_i^m, ω_o^m) G(ω_i, ω_o, m) D(m) dm,
 
-    by the balance heuristic of two fixed node sets: N_a normals with density D(m) cos θ_m (:func:`_ndf_nodes`) and
-    N_b normals about the half-vector drawn through the nano lobe's radial law (:func:`_half_vector_nodes`; they
+    by the balance heuristic of two fixed node sets: N_a normals with density D(m) cos θ_m (:func:`.facet.ndf_nodes`) and
+    N_b normals about the half-vector drawn through the nano lobe's radial law (:func:`.facet.half_vector_nodes`; they
     hold a heavy-tailed NDF's far facets and a nano lobe narrower than the micro lobe); (N_a, N_b) = *nodes* or
     :func:`facet_nodes`. Both sets are laid out per cell about its half-vector h, in a frame that turns with h
     about z: they are the same for ω_i and ω_o swapped and for the pair turned about the normal, so the discrete
@@ -412,7 +356,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     level = rad.level(cos_d)
     Li, Lo = float(spec.Lambda(wi, ax, ay, c)), spec.Lambda(wo, ax, ay, c)
     gfn, _ = shadowing_by_name(micro.shadowing)
-    # PSD statistics: nodes laid out about each cell's half-vector, reciprocal (:func:`_ndf_nodes`); a height
+    # PSD statistics: nodes laid out about each cell's half-vector, reciprocal (:func:`.facet.ndf_nodes`); a height
     # field's speckle keeps the NDF sampler's nodes for ω_i shared by all cells and the Sobol half-vector nodes
     # (FACET_NODES_FIELD was measured with them; the symmetric layout read its speckle 5-11 % off the reference)
     symmetric = nano.surface is None
@@ -462,9 +406,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         out[ok] += weight[:, None] * g
 
     e1, e2 = meridian_basis(h) if symmetric else facet_basis(h)
-    for m in (_ndf_nodes(na, kw, e2) if symmetric else m_a):
+    for m in (ndf_nodes(na, e2, ndf=ndf, ax=ax, ay=ay, c=c) if symmetric else m_a):
         add(m, np.ones(wo.shape[0], bool))
-    for s_k, cp, sp in _half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):
+    for s_k, cp, sp in half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):
         ok = s_k < 1                                      # a tilt s from h sends ω_i to q = 2k cosθ_d s
         s_k = np.where(ok, s_k, 0.0)
         m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
