@@ -15,12 +15,17 @@
 
   f_n the PSD series (:mod:`waveoptics.scatter.band`, or Rayleigh-Rice) with its own F(θ_d) at the facet's local
   directions (:meth:`TwoScaleBRDF.facet_nano_brdf`), whose albedo at local incidence θ is F(θ)(1 − A(θ)) on a
-  conductor (each facet scatters what its coherent part gives up) and its own absolute albedo on a dielectric. The integral is a fixed quadrature over facet normals, the balance
-  heuristic of N/2 normals drawn from the micro NDF's sampler at fixed Sobol points (:data:`QUADRATURE_NODES`; good
-  where the micro lobe is the narrower) and N/2 normals about the half-vector h drawn through the nano lobe's radial
-  law (:class:`NanoRadial`: a tilt s from h moves the lobe's grating vector by q = 2k cosθ_d |s|; good where the
-  nano lobe is the narrower, and it reaches a heavy-tailed NDF's far facets). The nodes move smoothly with ω_o, so
-  the result is a smooth function of ω_o at every ω_i.
+  conductor (each facet scatters what its coherent part gives up) and its own absolute albedo on a dielectric. The
+  integral is a fixed quadrature over facet normals, the balance heuristic of N/2 normals with density D(m) cos θ_m
+  at fixed Sobol points (:func:`waveoptics.brdf.facet.ndf_nodes`; good where the micro lobe is the narrower) and
+  N/2 antithetic normals about the half-vector h drawn through the nano lobe's radial law
+  (:func:`waveoptics.brdf.facet.half_vector_nodes`, :class:`NanoRadial`: a tilt s from h moves the lobe's grating
+  vector by q = 2k cosθ_d |s|; good where the nano lobe is the narrower, and it reaches a heavy-tailed NDF's far
+  facets). Both sets are the grid route's (:func:`waveoptics.brdf.facet_frame_diffraction`), laid out about h in a
+  frame that turns with h about the normal (:func:`waveoptics.brdf.facet.meridian_basis`): they depend on h and
+  θ_d only, so the sum is the same for ω_i and ω_o swapped and for the pair turned about the normal (the integrand
+  is; tests/test_pointwise_reciprocity.py). The nodes move smoothly with ω_o, so the result is a smooth function of
+  ω_o at every ω_i.
 
 Beyond the tangent plane's validity (a facet's local θ > 75°) its nano lobe carries its albedo at 75° continued with
 first-order perturbation theory's incidence dependence (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`), as
@@ -29,9 +34,10 @@ guard (:func:`waveoptics.brdf.twoscale.cap_to_coherent_loss`, which needs the wh
 ≤ 1.01 at θ_i up to 89.5° (tests/test_grazing.py).
 
 Sampling is a mixture of the three parts in proportion F(θ_i)A(θ_i) : F(θ_i)(1 − A(θ_i)) : kd(1 − F(θ_i));
-the diffracted part picks one of the NDF's quadrature normals m_k and draws ω_o in that facet's frame (its local
-mirror direction plus a radial nano offset at its local incidence), so its density
-(1/N) Σ_k p_n(t_k(ω_o)) (ω_o·m_k) is exact, t_k the offset of ω_o from facet k's local mirror direction.
+the diffracted part picks one of N/2 normals m_k drawn by the micro NDF's sampler for ω_i at fixed Sobol points (a
+proposal of its own: the quadrature's nodes depend on h, hence on ω_o) and draws ω_o in that facet's frame (its
+local mirror direction plus a radial nano offset at its local incidence), so its density
+(2/N) Σ_k p_n(t_k(ω_o)) (ω_o·m_k) is exact, t_k the offset of ω_o from facet k's local mirror direction.
 
 References
 ----------
@@ -52,10 +58,11 @@ import numpy as np
 from .. import scatter
 from ..errors import FieldError
 from .protocol import TwoScaleParts
-from .sampling import sampler_for, sample_normal
+from .sampling import sample_normal
 from .ndf import ndf_by_name
 from .shadowing import shadowing_by_name
-from .facet import COS_LEVELS, RADIAL_BINS, NanoRadial, local_pair, facet_basis, from_facet, to_facet, unit_nodes
+from .facet import (COS_LEVELS, RADIAL_BINS, NanoRadial, local_pair, facet_basis, from_facet, half_vector_nodes,
+                    meridian_basis, ndf_nodes, to_facet, unit_nodes)
 from .directions import dot_last
 from .roughness_scales import check_series
 
@@ -95,8 +102,9 @@ class TwoScaleBRDF(TwoScaleParts):
         Diffraction model of the nano lobe and the coherent fraction (:data:`waveoptics.scatter.
         DIFFRACTION_MODELS`).
     nodes : int
-        Quadrature points over facet normals per evaluation (power of two ≥ 16): half drawn from the micro NDF,
-        half about the half-vector through the nano lobe's radial law.
+        Quadrature points over facet normals per evaluation (power of two ≥ 16): half with density D(m) cos θ_m,
+        half about the half-vector through the nano lobe's radial law (module doc); the sampler draws from half as
+        many normals of the micro NDF's sampler.
     """
 
     nodes: int = QUADRATURE_NODES
@@ -177,8 +185,9 @@ class TwoScaleBRDF(TwoScaleParts):
 
     # -- facet normals -------------------------------------------------------------------------------------
     def _ndf_normals(self, wi):
-        """The NDF's quadrature normals for each ω_i (n, N/2, 3): the micro sampler at fixed Sobol points,
-        computed once per distinct ω_i (a renderer's batch often shares them)."""
+        """The sampler's facet normals for each ω_i (n, N/2, 3): the micro NDF's sampler at fixed Sobol points,
+        computed once per distinct ω_i (a renderer's batch often shares them). Only :meth:`_sample_diffraction` and
+        :meth:`_pdf_diffraction` use them (eval's quadrature lays its nodes about h: :meth:`_quadrature_normals`)."""
         uniq, inv = np.unique(wi, axis=0, return_inverse=True)
         u = unit_nodes(self.nodes // 2)
         ndf, ax, ay = self._micro_args()
@@ -187,24 +196,25 @@ class TwoScaleBRDF(TwoScaleParts):
                           c=self.ndf_shape)
         return m[inv.reshape(-1)]
 
-    def _half_vector_normals(self, wi, wo, lam):
-        """Normals about the half-vector h drawn through the nano lobe's radial law (n, N/2, 3), their validity,
-        and what their density needs: the radial sampler, its level, h and cos θ_d = ω_i·h."""
-        rad = self._radial(lam)
-        h = _unit(wi + wo)
-        cos_d = np.maximum(dot_last(wi, h), 1e-6)
-        level = rad.level(cos_d)
-        u = unit_nodes(self.nodes // 2)
-        # a facet tilted from h by s (sine of the tilt) sends ω_i to the grating vector q = 2k cosθ_d |s| of
-        # the nano lobe about its mirror direction: s = t / (2 cosθ_d), t the sampler's offset
-        s = rad.node_radii[level] / (2.0 * cos_d[:, None])
-        phi = 2.0 * np.pi * u[:, 1]
-        e1, e2 = facet_basis(h)
-        ok = s < 1.0
-        sc = np.where(ok, s, 0.0)
-        m = ((sc * np.cos(phi))[..., None] * e1[:, None, :] + (sc * np.sin(phi))[..., None] * e2[:, None, :]
-             + np.sqrt(1.0 - sc ** 2)[..., None] * h[:, None, :])
-        return m, ok, rad, level, h, cos_d
+    def _quadrature_normals(self, h, cos_d, rad, level):
+        """The facet normals of the diffracted part's quadrature for pairs with half-vectors *h* (n, 3): the grid
+        route's reciprocal layout (:func:`waveoptics.brdf.facet.ndf_nodes`: N/2 normals with density D(m) cos θ_m
+        turned to h's azimuth; :func:`waveoptics.brdf.facet.half_vector_nodes`: N/2 antithetic normals about h
+        through the nano lobe's radial law *rad* at the pairs' cos θ_d *level*), both in
+        :func:`waveoptics.brdf.facet.meridian_basis` of h, so the same for ω_i and ω_o swapped and for the pair
+        turned about the normal. Returns the normals (n, N, 3) and their validity (n, N)."""
+        n = self.nodes // 2
+        ndf, ax, ay = self._micro_args()
+        e1, e2 = meridian_basis(h)
+        ma = np.stack([np.broadcast_to(m, h.shape) for m in ndf_nodes(n, e2, ndf=ndf, ax=ax, ay=ay,
+                                                                       c=self.ndf_shape)], axis=1)
+        s, cp, sp = zip(*half_vector_nodes(rad, level, n, cos_d))
+        s, cp, sp = np.stack(s, axis=1), np.asarray(cp), np.asarray(sp)
+        ok = s < 1.0                    # a tilt s from h sends ω_i to the grating vector q = 2k cosθ_d s
+        s = np.where(ok, s, 0.0)
+        mb = ((s * cp)[..., None] * e1[:, None, :] + (s * sp)[..., None] * e2[:, None, :]
+              + np.sqrt(1.0 - s ** 2)[..., None] * h[:, None, :])
+        return np.concatenate([ma, mb], axis=1), np.concatenate([np.ones(ma.shape[:2], bool), ok], axis=1)
 
     def _f_diffraction(self, wi, wo, lam):
         if not self._rough:
@@ -225,21 +235,19 @@ class TwoScaleBRDF(TwoScaleParts):
         na = nb = self.nodes // 2
         ndf, ax, ay = self._micro_args()
         spec = ndf_by_name(ndf)
-        ma = self._ndf_normals(wi)
-        mb, ok_b, rad, level, h, cos_d = self._half_vector_normals(wi, wo, lam)
-        m = np.concatenate([ma, mb], axis=1)
-        valid = np.concatenate([np.ones(ma.shape[:2], bool), ok_b], axis=1)
+        rad = self._radial(lam)
+        h = _unit(wi + wo)
+        # cos θ_d = ω_i·h = ω_o·h, taken as their mean so that ω_i and ω_o swapped give it to the last bit
+        cos_d = np.maximum(0.5 * (dot_last(wi, h) + dot_last(wo, h)), 1e-6)
+        level = rad.level(cos_d)
+        m, valid = self._quadrature_normals(h, cos_d, rad, level)
         wi_b = np.broadcast_to(wi[:, None, :], m.shape)
         wo_b = np.broadcast_to(wo[:, None, :], m.shape)
         im = dot_last(wi_b, m)
         om = dot_last(wo_b, m)
         D = spec.D(m, ax, ay, self.ndf_shape)
-        Li = spec.Lambda(wi, ax, ay, self.ndf_shape)
-        # densities of both node sets at every node (the micro sampler's: visible normals or D cos θ_m)
-        if sampler_for(ndf).visible:
-            pa = np.where(im > 0, D * im / (1.0 + Li[:, None]), 0.0) / wi[:, 2:3]
-        else:
-            pa = D * m[..., 2]
+        # densities of both node sets at every node, symmetric in ω_i and ω_o: D(m) cos θ_m and the radial law
+        pa = D * m[..., 2]
         mh = np.clip(dot_last(m, h[:, None, :]), 0.0, 1.0)
         t = 2.0 * cos_d[:, None] * np.sqrt(np.maximum(1.0 - mh ** 2, 0.0))
         pb = np.where(mh > 0, rad.pdf_r(level[:, None], t) * 4.0 * cos_d[:, None] ** 2 * mh, 0.0)
@@ -248,7 +256,7 @@ class TwoScaleBRDF(TwoScaleParts):
         ok = valid & (im > 0) & (om > 0) & (den > 0)
         li, lo = local_pair(im, om, dot_last(wi, wo)[:, None])
         fn = self._f_nano(li, lo, lam)
-        Lo = spec.Lambda(wo, ax, ay, self.ndf_shape)
+        Li, Lo = spec.Lambda(wi, ax, ay, self.ndf_shape), spec.Lambda(wo, ax, ay, self.ndf_shape)
         shape = m.shape[:2]
         gfn, _ = shadowing_by_name(self.micro.shadowing)
         G = gfn(wi_b, wo_b, m, lambda w: np.broadcast_to((Li if w is wi_b else Lo)[:, None], shape))
