@@ -150,8 +150,9 @@ def test_symmetric_facet_quadrature_is_reciprocal_at_any_azimuth():
                                        "at 30→75° and 60→80°, α 0.05); "
                                        "a reciprocal continuation that keeps the white furnace is open (issue 28)")
 def test_reciprocity_with_an_end_beyond_the_tangent_plane():
-    """f(ω_i, ω_o) = f(ω_o, ω_i) within 2 % with an end at 70-80° (measured now, f(i,o)/f(o,i) − 1: α 0.05:
-    +2.8 / +22 / +27 / 0.0 %, α 0.3: 0.1 / 0.0 / +3.4 / +6.6 % at 30→75°, 60→80°, 20→80°, 45→70°).
+    """f(ω_i, ω_o) = f(ω_o, ω_i) within 2 % with an end at 70-80° (measured with the pointwise form's reciprocal node
+    layout, exactly symmetric without the continuation, tests/test_pointwise_reciprocity.py; f(i,o)/f(o,i) − 1:
+    α 0.05: +2.8 / +22 / +27 / 0.0 %, α 0.3: 0.1 / 0.0 / +3.3 / +7.3 % at 30→75°, 60→80°, 20→80°, 45→70°).
 
     Why it is still open (measured on Al at 550 nm, 384²-512² direction grids): by reciprocity a continuation that
     lowers the lobe at grazing incidence towards the exits ≤ 75° lowers the lobes from θ_i ≤ 75° towards grazing
