@@ -27,9 +27,10 @@
   is; tests/test_pointwise_reciprocity.py). The nodes move smoothly with ω_o, so the result is a smooth function of
   ω_o at every ω_i.
 
-Beyond the tangent plane's validity (a facet's local θ > 75°) its nano lobe carries its albedo at 75° continued with
-first-order perturbation theory's incidence dependence (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`), as
-the grid model's does, so the white furnace (F = 1) holds up to grazing incidence without the grid model's energy
+Beyond the tangent plane's validity (a facet's local θ_i or θ_o past 70°) its nano lobe hands over to the first-order
+Rayleigh-Rice lobe of the same PSD, W f_K + (1 − W) f_RR with W = w(θ_i) w(θ_o) (w from 1 at 70° to 0 at 80°;
+:mod:`waveoptics.scatter.tangent_blend`): reciprocal, and its albedo is the one the coherent fraction is the
+complement of (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`), as the grid model's, so the white furnace (F = 1) holds up to grazing incidence without the grid model's energy
 guard (:func:`waveoptics.brdf.twoscale.cap_to_coherent_loss`, which needs the whole lobe and is not applied here):
 ≤ 1.01 at θ_i up to 89.5° (tests/test_grazing.py).
 
@@ -56,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import scatter
+from ..scatter.tangent_blend import blend_with_first_order
 from ..errors import FieldError
 from .protocol import TwoScaleParts
 from .sampling import sample_normal
@@ -143,10 +145,11 @@ class TwoScaleBRDF(TwoScaleParts):
         F = self._F(lam)(cos_d)
         # the series of the roughness inside the propagating band, as the grid model's (docs/physics.md §9)
         total = scatter.band_series(self.nano.model, lam)(wi, wo, dm.cos_sum(wi, wo))
-        # beyond the tangent plane's validity the lobe carries the continued albedo (BandSeries.scattered_albedo)
-        total = total * self.nano.lobe_energy_scale(wi[..., 2], lam, dm,
-                                                    self.material if self.fresnel == "exact" else None)
-        return np.where(up, F * dm.K(wi, wo, lam) * total, 0.0)
+        # beyond the tangent plane's validity the lobe hands over to first order, W f_K + (1 − W) f_RR with
+        # W = w(θ_i) w(θ_o) symmetric: reciprocal (waveoptics.scatter.tangent_blend; its albedo is the tables')
+        lobe = blend_with_first_order(dm.K(wi, wo, lam) * total, wi, wo, lam, self.nano.model,
+                                      self.material if self.fresnel == "exact" else None, "unpolarized", F)
+        return np.where(up, F * lobe, 0.0)
 
     def facet_nano_brdf(self, wi, wo, wavelength_nm):
         """The BRDF (1/sr) of one micro facet's nano-roughness in that facet's own frame.

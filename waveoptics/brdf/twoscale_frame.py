@@ -17,6 +17,7 @@ from .. import scatter
 from ..errors import FieldError, unknown
 from ..materials import cos2_eta_i, facet_sp_mix
 from ..scatter.grid import DirectionGrid
+from ..scatter.tangent_blend import blend_with_first_order, uses_vector_first_order
 from .facet import half_vector_nodes, ndf_nodes
 from .facet_polarization import facet_scattered_share
 from .field_lobe import FIELD_GRID_OVERSAMPLING, field_anisotropy, field_proposal_model, kirchhoff_scattered_lobe
@@ -163,8 +164,11 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
             else:
                 check_series(nano.model, lam)
                 f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
-                # beyond the tangent plane's validity the lobe carries its continued albedo (docs/physics.md §9)
-                f = f * float(np.ravel(nano.lobe_energy_scale(wi[2], lam, dm, material, polarization))[0])
+                # beyond the tangent plane's validity the lobe hands over to first order, reciprocal (W f_K +
+                # (1 − W) f_RR / F, F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9)
+                Fl = (material.F_facet(np.broadcast_to(wi, wo.shape), wo, lam, polarization)
+                      if uses_vector_first_order(material) else None)
+                f = blend_with_first_order(f, wi, wo, lam, nano.model, material, polarization, Fl)
             out[half, :, i] = f * wo[..., 2]
         if half.start > 0:
             out[:half.start] = out[grid.n_v - 1:grid.n_v - 1 - half.start:-1]
