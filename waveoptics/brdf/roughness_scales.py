@@ -157,9 +157,9 @@ class Nano:
 
     def lobe_energy_scale(self, cos_theta_i, wavelength_nm, diffraction="kirchhoff", material=None,
                           polarization: str = "unpolarized"):
-        """The factor that gives a statistics lobe at incidence θ_i its scattered albedo continued beyond the
-        tangent plane's validity (:meth:`waveoptics.scatter.BandSeries.lobe_energy_scale`; 1 up to
-        :data:`waveoptics.scatter.band_energy.TANGENT_PLANE_MAX_DEG`, for Rayleigh-Rice and for height fields)."""
+        """The factor that gives a statistics lobe of tangent-plane shape at incidence θ_i the scattered albedo of
+        the lobe handed over to first order towards grazing angles (:meth:`waveoptics.scatter.BandSeries.
+        lobe_energy_scale`; 1 for Rayleigh-Rice and for height fields)."""
         c = np.clip(np.asarray(cos_theta_i, dtype=float), 0.0, 1.0)
         if self.model is None:
             return np.ones(np.broadcast_shapes(c.shape, np.shape(wavelength_nm)))

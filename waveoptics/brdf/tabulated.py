@@ -26,8 +26,9 @@ diffracted part's peak is within 1 % and its energy within 2 % of a direct evalu
 for PSD statistics: f(ω_i, ω_o)/f(ω_o, ω_i) − 1 ≤ 0.5 % at θ ≤ 65° on and between the nodes (α 0.05-0.1, 96²
 cells; ``tests/test_twoscale_facet_frame.py``), because the facet route's quadrature is laid out about each cell's
 half-vector in a frame turning with it (:func:`waveoptics.brdf.facet_frame_diffraction`), so the tables at azimuth
-0 read turned hold the same sum for the pair and its swap; up to 2.4 % at α 0.3 with an end at 60-65°, from the
-grazing continuation of facets seen beyond 75° (an open part of issue 28).
+0 read turned hold the same sum for the pair and its swap. With an end at 70-80° (facets' nano lobes handed over to
+first order, :mod:`waveoptics.scatter.tangent_blend`) within 2.4 % at α 0.1 (the tables' reads near the horizon and
+the interpolation between incidence nodes; the earlier grazing scaling by local incidence only: up to 38 %).
 
 References
 ----------

@@ -313,10 +313,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     s–p term, odd about the facet's plane of incidence, vanishes, so the facet scatters cos²η_i S_pol + sin²η_i
     S_other, the mix the budget *scattered* takes (:func:`waveoptics.brdf.facet_scattered_share`). The
     Rayleigh-Rice lobe mixes the facet's s and p tables the same way (its s–p interference term, odd in the facet's
-    azimuth, is left out: exact in energy, not pointwise). The grazing continuation beyond
-    :data:`waveoptics.scatter.band_energy.TANGENT_PLANE_MAX_DEG` of the Kirchhoff tables is that of the macro
-    polarization, not the facet's mix (on glass the s and p factors differ by 2 % at 81°, 10 % at 88°; the lobe's
-    energy is off by that difference times sin²η_i).
+    azimuth, is left out: exact in energy, not pointwise). The first-order part of the Kirchhoff tables
+    towards grazing angles (:mod:`waveoptics.scatter.tangent_blend`) carries Q of the macro polarization, not the
+    facet's mix (on glass the s and p factors differ by 2 % at 81°, 10 % at 88°; that part is off by that
+    difference times sin²η_i).
 
     Returns
     -------

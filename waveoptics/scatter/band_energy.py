@@ -32,8 +32,8 @@ __all__ = ["TANGENT_PLANE_MAX_DEG", "is_conductor", "ALBEDO_THETAS_DEG", "RR_THE
 #: only, linear interpolation put the albedo at 78° 19 % above the lobe's, ABC σ = 55 nm, B = 1 µm, C = 4)
 ALBEDO_THETAS_DEG = np.concatenate([np.arange(0.0, 70.0, 5.0), np.arange(70.0, 80.5, 1.0),
                                     [83.0, 86.0, 88.0, 89.0, 89.5, 89.9]])
-#: incidence (degrees) beyond which the tangent-plane lobes' albedo is continued with the incidence dependence of
-#: first-order perturbation theory (:meth:`BandSeries.scattered_albedo`): up to it the Kirchhoff and Rayleigh-Rice
+#: incidence (degrees) up to which the tangent-plane lobe's own albedo is trusted (beyond it the two-scale lobe is
+#: first order: :mod:`.tangent_blend`, :meth:`BandSeries.scattered_albedo`): up to it the Kirchhoff and Rayleigh-Rice
 #: albedos agree within 5 % on Al (ABC σ = 20 nm, C = 2.6: 0.0449 and 0.0429 at 75°), beyond it they part
 #: (0.055 and 0.043 at 80°, 0.094 and 0.035 at 85°)
 TANGENT_PLANE_MAX_DEG = 75.0
@@ -121,15 +121,19 @@ class BandAlbedos:
         weighted by its facet's polarized reflectance relative to the specular one,
         F_pol(θ_h) / R_pol(θ) (:func:`waveoptics.materials.fresnel.F_facet_polarized`), as the lobe itself is.
 
-        **Grazing incidence.** Beyond :data:`TANGENT_PLANE_MAX_DEG` the tangent-plane lobes (Kirchhoff, the
-        Harvey-Shack family) are outside their validity: their factor K grows as 1/cosθ_i, so their albedo grows
-        without bound (Al, ABC σ = 20 nm, C = 2.6: 0.094 at 85°, 0.36 at 89°, where first-order Rayleigh-Rice
-        theory gives 0.035 and 0.0088). There the albedo is continued from its value at θ_T with the incidence
-        dependence of first-order perturbation theory, E(θ) = E(θ_T) · E_1(θ) / E_1(θ_T), E_1 the Rayleigh-Rice
-        share of the *material* and polarization (:func:`~waveoptics.scatter.rayleigh_rice_albedo`; without a
-        material the scalar problem of a modulus-1 reflection, Q = 1), which falls to 0 at grazing incidence as
-        every rough surface's scatter does (Tatarskii & Charnotskii 1998). The lobe keeps its shape and carries
-        this energy (:meth:`lobe_energy_scale`). Rayleigh-Rice itself is taken as it is.
+        **Grazing incidence.** Towards grazing angles the tangent-plane lobes (Kirchhoff, the Harvey-Shack family)
+        are outside their validity: their factor K grows as 1/cosθ_i, so their albedo grows without bound (Al, ABC
+        σ = 20 nm, C = 2.6: 0.094 at 85°, 0.36 at 89°, where first-order Rayleigh-Rice theory gives 0.035 and
+        0.0088). The lobe the two-scale model carries hands over to the first-order Rayleigh-Rice lobe of the same
+        PSD, W f_K + (1 − W) f_RR with W = w(θ_i) w(θ_o) (w 1 up to 70°, 0 from 80°;
+        :mod:`waveoptics.scatter.tangent_blend`): reciprocal, and first order where grazing light puts every
+        nano-roughness (kσ cosθ → 0), whose scatter falls to 0 at grazing incidence (Tatarskii & Charnotskii 1998).
+        f_RR carries the vector Q of a *material* with a complex index, else (F = 1, F0 only, thin-film stacks) it
+        is the scalar Q = 1 lobe times the Fresnel factor the tangent-plane lobe has. E here is the albedo of that
+        blended lobe (the tables' *continued* column; the *raw* one is the tangent-plane lobe's own, which
+        :meth:`lobe_energy_scale` scales to it). Rayleigh-Rice itself is taken as it is.
+        TANGENT_PLANE_MAX_DEG (75°) is the incidence up to which the tangent-plane lobe's own albedo is trusted
+        elsewhere (the planner, the validity docs).
 
         References
         ----------
@@ -149,9 +153,10 @@ class BandAlbedos:
 
     def lobe_energy_scale(self, theta_deg, diffraction="kirchhoff", material=None,
                           polarization: str = "unpolarized") -> np.ndarray:
-        """The factor (≤ 1 near grazing) that gives the lobe at incidence θ (degrees) the scattered albedo of
-        :meth:`scattered_albedo` (continued beyond :data:`TANGENT_PLANE_MAX_DEG`) instead of its own: 1 up to
-        θ_T and for Rayleigh-Rice."""
+        """The factor that gives the tangent-plane lobe at incidence θ (degrees) the scattered albedo of
+        :meth:`scattered_albedo` (the lobe handed over to first order towards grazing angles) instead of its own,
+        for a caller that keeps the tangent-plane lobe's shape (the paraxial grid route): ≤ 1 near grazing, within
+        a few % of 1 up to 60° (the share of the lobe beyond 70° exit), 1 for Rayleigh-Rice."""
         from .models import get_model
 
         dm = get_model(diffraction, perturbative=True)
