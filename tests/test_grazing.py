@@ -166,3 +166,38 @@ def test_planner_chooses_the_model_by_the_g_of_each_incidence():
     grazing = plan_scene(parse(_scene("10nm", theta=85)), force={"diffraction": True}).entries[0]
     assert grazing.diffraction == "rayleigh-rice"
     assert plan_scene(parse(_scene("10nm")), force={"diffraction": True}).entries[0].diffraction == "kirchhoff"
+
+
+def _rr_scalar(wi, wo):
+    """The scalar first-order (Q = 1) lobe (16π²/λ⁴) cosθ_i cosθ_o S(|ω_i + ω_o|_xy / λ) of SMOOTH, written here."""
+    lam = LAM * 1e-9
+    s = wi + wo
+    return 16 * math.pi ** 2 / lam ** 4 * wi[2] * wo[2] * abc_psd(math.hypot(s[0], s[1]) / lam)
+
+
+@pytest.mark.parametrize("fresnel", ["one", "exact"])
+def test_nano_lobe_hands_over_to_first_order_and_stays_reciprocal(fresnel):
+    """A facet's nano lobe (TwoScaleBRDF.facet_nano_brdf, in the facet's frame) is the first-order Rayleigh-Rice lobe
+    where either end is beyond 80° (F = 1: the scalar Q = 1 lobe; Al: the vector Q of Germer 1997, both written
+    here) within 1e-9, and f(ω_i, ω_o) = f(ω_o, ω_i) to rounding at pairs inside the hand-over (70-80°), where
+    the tangent-plane lobe's grazing scaling by its incidence alone was not reciprocal (issue 28)."""
+    b = brdf.TwoScaleBRDF(material="Al", micro=twoscale.Micro(alpha=0.05, ndf="ggx"),
+                          nano=twoscale.Nano(model=SMOOTH), fresnel=fresnel)
+    eps = complex(AL.eta(LAM)) ** 2
+
+    def wo_at(theta, phi):
+        t, p = math.radians(theta), math.radians(phi)
+        return np.array([math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t)])
+
+    for ti, to, phi in ((85.0, 30.0, 180.0), (82.0, 60.0, 120.0), (30.0, 84.0, 150.0), (89.0, 89.0, 170.0)):
+        wi, wo = _dir(ti), wo_at(to, phi)
+        ref = _rr_scalar(wi, wo)
+        if fresnel == "exact":
+            ref *= Q_unpolarized(ti, wo, eps)
+        got = float(b.facet_nano_brdf(wi[None], wo[None], LAM)[0])
+        assert got == pytest.approx(ref, rel=1e-9), (ti, to, phi, got, ref)
+    for ti, to, phi in ((72.0, 40.0, 180.0), (75.0, 78.0, 100.0), (60.0, 79.0, 140.0), (71.0, 71.0, 170.0)):
+        wi, wo = _dir(ti), wo_at(to, phi)
+        a = float(b.facet_nano_brdf(wi[None], wo[None], LAM)[0])
+        c = float(b.facet_nano_brdf(wo[None], wi[None], LAM)[0])
+        assert a > 0 and a == pytest.approx(c, rel=1e-12), (ti, to, phi, a, c)
