@@ -166,7 +166,7 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
                 f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
                 # beyond the tangent plane's validity the lobe hands over to first order, reciprocal (W f_K +
                 # (1 − W) f_RR / F, F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9)
-                Fl = (material.F_facet(np.broadcast_to(wi, wo.shape), wo, lam, polarization)
+                Fl = ((lambda a, b, lam=lam: material.F_facet(a, b, lam, polarization))
                       if uses_vector_first_order(material) else None)
                 f = blend_with_first_order(f, wi, wo, lam, nano.model, material, polarization, Fl)
             out[half, :, i] = f * wo[..., 2]

@@ -96,9 +96,8 @@ class BandAlbedos:
         else:
             # raw: the tangent-plane lobe's own albedo; continued: that of the lobe the two-scale model carries,
             # handed over to first order beyond the tangent plane's validity (waveoptics.scatter.tangent_blend)
-            raw = np.array([self._albedo_at(math.radians(t), dm, material, pol, absolute) for t in ALBEDO_THETAS_DEG])
-            cont = np.array([self._albedo_at(math.radians(t), dm, material, pol, absolute, blend=True)
-                             for t in ALBEDO_THETAS_DEG])
+            raw, cont = np.array([self._albedo_at(math.radians(t), dm, material, pol, absolute)
+                                  for t in ALBEDO_THETAS_DEG]).T
             tab = (ALBEDO_THETAS_DEG, raw, cont)
         self._albedos[key] = tab
         return tab
@@ -229,12 +228,13 @@ class BandAlbedos:
             return 1.0 - self.coherent_fraction(c, diffraction, material, polarization)
         return self.scattered_albedo(np.degrees(np.arccos(c)), diffraction, material, polarization, absolute=True)
 
-    def _albedo_at(self, theta, dm, material=None, polarization="unpolarized", absolute=False,
-                   blend=False) -> float:
-        """∫ f¹ du dv over the disc (:func:`polar_albedo`), each direction's Fresnel factor relative to F(θ)
-        (for s or p light the facet's polarized reflectance relative to the specular one), or the factor itself
-        (*absolute*); *blend*: of the lobe handed over to first order towards grazing angles
-        (:func:`waveoptics.scatter.tangent_blend.blend_with_first_order`)."""
+    def _albedo_at(self, theta, dm, material=None, polarization="unpolarized", absolute=False) -> tuple:
+        """(tangent-plane lobe, blended lobe): ∫ f¹ du dv over the disc (:func:`polar_albedo`) of the lobe and of
+        the lobe handed over to first order towards grazing angles
+        (:func:`waveoptics.scatter.tangent_blend.blend_with_first_order`), each direction's Fresnel factor relative
+        to F(θ) (for s or p light the facet's polarized reflectance relative to the specular one), or the factor
+        itself (*absolute*). The series is evaluated once: the second quadrature takes the first one's values at
+        the same nodes."""
         from ..materials import RelativeFacetFresnel, fresnel_function
 
         lam = self.wavelength_nm
@@ -254,11 +254,19 @@ class BandAlbedos:
             def weight(wi_b, wo):
                 return ratio.at(wi_b, wo, lam)
 
+        seen = []
+
         def lobe(wi_b, wo, q):
-            f = dm.K(wi_b, wo, lam) * self(wi_b, wo, dm.cos_sum(wi_b, wo), q=q)
-            if blend:   # the first-order lobe carries its own Q: over the facet's F, which weight() holds
-                Fh = material.F_facet(wi_b, wo, lam, polarization) if uses_vector_first_order(material) else None
-                f = blend_with_first_order(f, wi_b, wo, lam, self.model, material, polarization, Fh)
-            return f * weight(wi_b, wo)
-        return polar_albedo(theta, self.k, self.model.length_scale, lobe)
+            f, wgt = dm.K(wi_b, wo, lam) * self(wi_b, wo, dm.cos_sum(wi_b, wo), q=q), weight(wi_b, wo)
+            seen.append((f, wgt))
+            return f * wgt
+
+        def blended(wi_b, wo, q):
+            f, wgt = seen.pop(0)
+            # the first-order lobe carries its own Q: over the facet's F (at the pairs it is needed), which wgt holds
+            Fh = ((lambda a, b: material.F_facet(a, b, lam, polarization)) if uses_vector_first_order(material)
+                  else None)
+            return blend_with_first_order(f, wi_b, wo, lam, self.model, material, polarization, Fh) * wgt
+        own = polar_albedo(theta, self.k, self.model.length_scale, lobe)
+        return own, polar_albedo(theta, self.k, self.model.length_scale, blended)
 

@@ -85,9 +85,10 @@ def blend_with_first_order(f_k, wi, wo, wavelength_nm, psd, material=None, polar
         The tangent-plane lobe without its Fresnel factor (K × the PSD series), broadcast with the directions.
     wi, wo : ndarray (..., 3)
         Directions in the frame of the nano-rough surface.
-    fresnel : ndarray or None
-        F of each pair (the factor the caller applies); needed where :func:`uses_vector_first_order`: f_RR carries
-        its own Q, so it is divided by F here (0 where F = 0, where the caller's product is 0 whatever it holds).
+    fresnel : ndarray, callable or None
+        F of each pair (the factor the caller applies), or a function F(ω_i, ω_o) of the pairs (n, 3) where W < 1;
+        needed where :func:`uses_vector_first_order`: f_RR carries its own Q, so it is divided by F here (0 where
+        F = 0, where the caller's product is 0 whatever it holds).
 
     Returns
     -------
@@ -104,7 +105,8 @@ def blend_with_first_order(f_k, wi, wo, wavelength_nm, psd, material=None, polar
     wo_b = np.broadcast_to(wo, far.shape + (3,))[far]
     rr = np.asarray(first_order_lobe(wi_b, wo_b, wavelength_nm, psd, material, polarization), dtype=float)
     if uses_vector_first_order(material):
-        F = np.broadcast_to(np.asarray(fresnel, dtype=float), far.shape)[far]
+        F = (np.asarray(fresnel(wi_b, wo_b), dtype=float) if callable(fresnel)
+             else np.broadcast_to(np.asarray(fresnel, dtype=float), far.shape)[far])
         rr = np.where(F > 0, rr / np.where(F > 0, F, 1.0), 0.0)
     out = np.array(out, dtype=float)
     out[far] += (1.0 - W[far]) * rr
