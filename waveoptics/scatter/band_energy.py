@@ -1,6 +1,6 @@
 """The energy of the band-limited nano lobe: its scattered albedo over incidence (a polar quadrature about the mirror
-direction, continued beyond the tangent plane's validity with first-order perturbation theory), and the coherent
-fraction of the specular reflection it leaves (docs/physics.md §9).
+direction; towards grazing angles of the lobe handed over to first-order perturbation theory, :mod:`.tangent_blend`),
+and the coherent fraction of the specular reflection it leaves (docs/physics.md §9).
 
 :class:`BandAlbedos` holds these as methods of :class:`waveoptics.scatter.BandSeries` (its base class): they need
 the series itself (``self(wi, wo, cos_sum, q=...)``), its relevant roughness (``sigma2_rel``), ``k``, ``model``,
