@@ -298,3 +298,13 @@ def test_render_job_refuses_what_the_glass_does_not_take_naming_fields(tmp_path)
         with pytest.raises(FieldError) as exc:
             render_job(request, tmp_path / "o", overwrite=True)
         assert exc.value.fields[:len(fields)] == fields and "--" not in str(exc.value), str(exc.value)
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_mono", "scalar_spectral_polarized"])
+def test_mono_and_polarized_variants_are_refused_in_one_line(variant):
+    from waveoptics.errors import WaveopticsError
+    from waveoptics.renderers.mitsuba_glass import register_glass
+
+    with pytest.raises(WaveopticsError, match="no form for Mitsuba variant") as exc:
+        register_glass(variant)
+    assert "\n" not in str(exc.value)
