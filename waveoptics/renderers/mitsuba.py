@@ -16,7 +16,8 @@ Mitsuba's ``eval`` is f cos θ_o (its convention); its ``si.wi`` is our first di
 Plugin parameters, as in a scene file: ``material`` (string), ``alpha``, ``alpha_y`` (float), ``ndf``,
 ``nano`` (``MODEL:params`` or ``none``), ``surface`` (height-field file), ``diffraction``, ``kd``, ``diffuse``,
 ``wavelength_step`` (nm), ``resolution``, ``exact`` (bool), ``multiple_scattering`` (bool). The plugin evaluates with NumPy, so in JIT variants it
-runs in wavefront mode: :func:`register` turns Dr.Jit's symbolic loops and calls off.
+runs in wavefront mode: :func:`register` turns Dr.Jit's symbolic loops and calls off. This plugin reflects only;
+the nano-rough glass, with transmission, is :mod:`waveoptics.renderers.mitsuba_glass` (``waveoptics_glass``).
 
 References
 ----------

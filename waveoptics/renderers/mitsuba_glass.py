@@ -279,7 +279,10 @@ def register_glass(variant: str | None = None, model=None, name: str = GLASS_PLU
     """Register the glass BSDF with Mitsuba 3 under *name* for *variant* (default: the variant already set) and
     return the ``mitsuba`` module. *model* (a :class:`waveoptics.brdf.SpectralNodes` of a rough dielectric) is
     used instead of the plugin's parameters when given. JIT variants switch to wavefront mode."""
-    mi = load_mitsuba(variant) if variant is not None else __import__("mitsuba")
+    if variant is not None:
+        mi = load_mitsuba(variant)
+    else:
+        import mitsuba as mi
     import drjit as dr
 
     if not mi.variant().startswith("scalar"):
