@@ -51,7 +51,7 @@ from .spectral import (SpectralNodes)
 from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
 from .chi2 import (Chi2Result, chi2_test)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
-from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, refract, half_vector_refraction, DielectricTables,
+from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, pack_third_uniform, refract, half_vector_refraction, DielectricTables,
     dielectric_tables, RoughDielectricBSDF)
 from .nano_dielectric import (NANO_MU_NODES, NanoTables, coherent_split, nano_tables, NanoRoughDielectricBSDF)
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,

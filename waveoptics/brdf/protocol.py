@@ -144,6 +144,15 @@ class BRDF:
         return BRDFSample(wo=wo.reshape(shape + (3,)), weight=weight.reshape(shape),
                           pdf=np.where(ok, p, 0.0).reshape(shape))
 
+    def sample_wo(self, wi, wavelength_nm, u):
+        """The sampled ω_o alone (..., 3) for ω_i at λ from u (..., 2) uniform in [0, 1)², wherever the sampler
+        puts it (a BSDF's transmitted directions below the surface included; 0 for an invalid sample), for a
+        caller that weights the samples itself with :meth:`eval` and :meth:`pdf` (a renderer's transport mode)."""
+        u = check_uniform(u)
+        wi_b, _, lam, shape = broadcast_pair(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
+        u_flat = np.array(np.broadcast_to(u, shape + (2,)).reshape(-1, 2))
+        return self._sample_flat(wi_b, u_flat, lam).reshape(shape + (3,))
+
     def albedo(self, wi, wavelength_nm):
         """Directional albedo ∫ f cos θ_o dω_o (dimensionless) by quadrature of :meth:`eval` over half-vectors
         (:func:`waveoptics.brdf.directional_albedo`, nodes placed by each term's width)."""
