@@ -26,11 +26,11 @@ from waveoptics.surfaces import PSDModel
 
 LAM_NM = 500.0
 LAM = LAM_NM * 1e-9
-TOL_GRATING = 2e-5     # kernels vs the rigorous grating at k a = 2e-3 (O((k a)²) terms: measured ≤ 3e-6)
+TOL_GRATING = 1e-5     # kernels vs the rigorous grating at k a = 1e-3 (its O((k a)²) terms: measured ≤ 2.5e-6)
 TOL_RANDOM = 2e-2      # the brief's target; the reference's own quadrature (20 × 14 nodes, no cut at the Rayleigh
-#                        anomalies) is the larger error: measured ≤ 1.3e-2 here, ≤ 4e-3 at 56 × 40 nodes
-TOL_THEOREM = 1e-3     # ΔR + ΔT vs TIS_R + TIS_T (measured ≤ 2e-5 at the default nodes)
-TOL_RECIPROCITY = 1e-3  # T̄ from either side (measured ≤ 1e-6)
+#                        anomalies) is the larger error: measured ≤ 1.3e-2 here, ≤ 3.8e-3 at 56 × 40 nodes
+TOL_THEOREM = 1e-3     # ΔR + ΔT vs TIS_R + TIS_T (measured ≤ 1.5e-5 at the default nodes)
+TOL_RECIPROCITY = 1e-3  # T̄ from either side (measured ≤ 1e-9)
 REF_NODES = (20, 14)
 
 # (n_i, n_o, θ_i in the incidence medium, deg): the brief's angles, from air and from glass (60°: beyond θ_c)
@@ -78,7 +78,7 @@ def test_kernels_are_the_rigorous_grating_loss(case):
         dx = [4 * k0 ** 2 * (P[i][0] + minus[pol][1][i][0] + D[i] / 4) for i in range(4)]
         dR = -2 * np.real(np.conj(x0[j]) * dx[j])
         dT = -2 * cross * np.real(np.conj(x0[j + 2]) * dx[j + 2])
-        ref = specular_losses(n_i, n_o, _wi(th), K[0, 0] / LAM, K[0, 1] / LAM, LAM, pol)
+        ref = specular_losses(n_i, n_o, _wi(th), K[0, 0] / LAM, K[0, 1] / LAM, LAM, pol, ka=1e-3)
         scale = abs(ref[0]) + abs(ref[1])
         assert abs(dR - ref[0]) < TOL_GRATING * scale and abs(dT - ref[1]) < TOL_GRATING * scale, (pol, dR, dT, ref)
 
