@@ -146,3 +146,21 @@ def test_bad_inputs():
         coherent_losses(0.0, 1.0, 1.5, psd, LAM_NM)
     with pytest.raises(FieldError, match="n_o"):
         coherent_losses(0.5, 1.0, -1.5, psd, LAM_NM)
+
+
+@pytest.mark.parametrize("n_i, n_o, th", [(1.0, 1.5, 40.0), (1.5, 1.0, 25.0), (1.5, 1.0, 70.0)])
+def test_slow_psd_tail_converges(n_i, n_o, th):
+    """ABC with C = 2.2 (∫ S |f| d²f infinite): the p kernels grow as |K| cosψ, which the azimuth cancels; the
+    losses converge (default nodes against 4 times as many in each direction) and keep the optical theorem."""
+    psd = PSDModel("abc", 2e-9, B=2e-6, C=2.2)
+    mu = math.cos(math.radians(th))
+    a = coherent_losses(mu, n_i, n_o, psd, LAM_NM)
+    b = coherent_losses(mu, n_i, n_o, psd, LAM_NM, nodes=(48, 40))
+    above = n_i == 1.0
+    n1, n2 = (n_i, n_o) if above else (n_o, n_i)
+    for pol in "sp":
+        total = b["dR"][pol] + b["dT"][pol]
+        assert abs(a["dR"][pol] - b["dR"][pol]) < 1e-4 * total and abs(a["dT"][pol] - b["dT"][pol]) < 1e-4 * total
+        tis = (rr_tis_reflection(th, LAM_NM, psd, n1, n2, pol, from_above=above)
+               + rr_tis_transmission(th, LAM_NM, psd, n1, n2, pol, from_above=above))
+        assert total == pytest.approx(tis, rel=TOL_THEOREM), (pol, total, tis)

@@ -21,7 +21,8 @@ tests/test_nano_dielectric.py; reference at 56 × 40 nodes, 500 nm, σ = 1 nm): 
 for ℓ = 0.3 µm (the reference's own quadrature error is of that size); within 1 % of an ABC PSD (B = 1 µm, C = 3).
 The Debye-Waller split this replaces was 17 % off in the reflected share at 70° from air (ℓ = 1 µm) and up to
 210 % in one polarization's share (ℓ = 0.3 µm, 85°). The coherent transmittance is reciprocal: T̄ from air at θ₁
-equals T̄ from glass at θ₂ (the Snell pair) within 1e-9 (the tables then interpolate in μ). It holds to O((k σ)²) (A is linear in σ²).
+equals T̄ from glass at θ₂ (the Snell pair) within 1e-9 (the tables then interpolate in μ). It holds to
+O((k σ)²) (A is linear in σ²).
 
 Where it holds: α → 0 (the nano lobes are evaluated about the macro normal, not per facet: for a rough α use the
 two-scale model) and the smooth-surface limit of the nano-roughness, (4π n σ cosθ / λ)² ≪ 1 and small slopes.

@@ -47,9 +47,14 @@ Quadrature (:func:`coherent_losses`): f in polar coordinates (ρ = λ|f|, ψ fro
 Gauss-Legendre pieces in ρ cut at the Rayleigh anomalies (|Q₀ + K| = n₁ or n₂, a √ kink of P: on each ray the
 roots of ρ² + 2ρκ cosψ + κ² = n²) and at multiples of the PSD's width λ / (π ℓ), each piece mapped by
 3τ² − 2τ³ (whose Jacobian smooths a √ at both ends), and a last piece to ρ = ∞ (ρ = ρ_e / (1 − u)); in ψ on
-[0, π] (the integrand is even in ψ), cut where a ray touches a circle. P_x tends to a constant as |K| → ∞ (as
-|K|⁻²): the integrand carries P − P(|K| = 10⁴) and the limit is integrated against S separately, σ² / (2π)
-times its ψ integral, so PSDs with slow algebraic tails (ABC with C near 2) converge.
+[0, π] (the integrand is even in ψ), cut where a ray touches a circle and where a circle crosses a ring of the
+radial cuts (near grazing incidence a circle passes close to the origin, where the PSD is), each piece mapped the
+same way. At large |K| the loss kernels approach a(ψ) |K| + b(ψ) (the rest falls off as |K|⁻¹ or faster), with
+a ∝ cosψ for p light (its integral over the azimuth vanishes for an isotropic PSD) and a = 0 for s: the integrand
+carries the kernel less this asymptote, taken from two points at |K| = 10⁴ and 2 · 10⁴, and b is integrated
+against S separately (σ² / (2π) times its ψ integral), so PSDs with slow algebraic tails (ABC with C near 2, whose ∫ S |f| d²f is
+infinite) converge. Converged to ≤ 1.3e-3 at the default nodes from 0° to 89.7°, ℓ from 50 nm to 10 µm,
+n = 1.33 and 2.4 (≤ 1e-5 away from grazing incidence).
 
 References
 ----------
@@ -76,9 +81,9 @@ from ..errors import FieldError
 __all__ = ["match_flat", "spm2_kernel", "coherent_losses", "SPM2_NODES", "K_LIMIT"]
 
 #: Gauss-Legendre nodes per piece of the radial (ρ) and azimuthal (ψ) quadrature of :func:`coherent_losses`
-SPM2_NODES = (12, 16)
+SPM2_NODES = (12, 10)
 
-#: |K| (units of k₀) where the kernel stands for its limit at infinity (it approaches it as |K|⁻²)
+#: |K| (units of k₀) of the first of the two far points that give the kernels' asymptote a |K| + b
 K_LIMIT = 1e4
 
 #: breakpoints of the radial quadrature in units of the PSD width λ / (π ℓ) (a Gaussian PSD is e^{−36} at 6)
@@ -218,17 +223,16 @@ def _smooth_gl(n):
     return u * u * (3.0 - 2.0 * u), wu * 6.0 * u * (1.0 - u)
 
 
-def _psi_pieces(kappa, indices):
-    """Cuts of ψ ∈ [0, π]: where a ray from the origin touches a circle |Q₀ + K| = n (κ > n), and, for a circle
-    passing near the origin (κ < n, at the distance n − κ on the ray ψ = 0), at ψ = √((n − κ)/n) and 3 times
-    that, the angular scale on which the circle's distance along the rays grows from n − κ."""
-    cuts = []
+def _psi_pieces(kappa, indices, width):
+    """Cuts of ψ ∈ [0, π]: where a ray from the origin touches a circle |Q₀ + K| = n (κ > n), and where a circle
+    crosses a ring of the radial cuts at the PSD's scales (ρ = b · width): cosψ = (n² − κ² − ρ²) / (2 ρ κ)."""
+    cuts = [math.pi - math.asin(n / kappa) for n in indices if kappa > n]
     for n in indices:
-        if kappa > n:
-            cuts.append(math.pi - math.asin(n / kappa))
-        else:
-            cuts += [c * math.sqrt((n - kappa) / n) for c in (1.0, 3.0)]
-    return [0.0] + sorted(c for c in cuts if 0.0 < c < math.pi) + [math.pi]
+        for rho in (b * width for b in _PSD_BREAKS):
+            c = (n * n - kappa * kappa - rho * rho) / (2.0 * rho * kappa) if kappa > 0 else 2.0
+            if -1.0 < c < 1.0:
+                cuts.append(math.acos(c))
+    return [0.0] + sorted(set(c for c in cuts if 0.0 < c < math.pi)) + [math.pi]
 
 
 def _rho_breaks(kappa, psi, indices, width):
@@ -247,7 +251,7 @@ def _nodes(kappa, indices, width, nodes):
     """ψ nodes and weights (n_psi,) on [0, π] and ρ nodes and weights (n_psi, n) on [0, ∞) (module doc)."""
     n_rho, n_psi = nodes
     t_p, w_p = _smooth_gl(n_psi)
-    cuts = _psi_pieces(kappa, indices)
+    cuts = _psi_pieces(kappa, indices, width)
     psi = np.concatenate([lo + (hi - lo) * t_p for lo, hi in zip(cuts[:-1], cuts[1:])])
     w_psi = np.concatenate([(hi - lo) * w_p for lo, hi in zip(cuts[:-1], cuts[1:])])
     edges = np.concatenate([np.zeros((psi.size, 1)), _rho_breaks(kappa, psi, indices, width)], axis=-1)
@@ -306,11 +310,15 @@ def coherent_losses(mu, n_i, n_o, psd, wavelength_nm, nodes=SPM2_NODES) -> dict:
     weight = 2.0 * w_psi[:, None] * w_rho * rho * psd.S(rho / lam) / lam ** 2   # ψ ∈ [0, π], twice
     sigma2 = float(psd.sigma) ** 2
     out = {k: {} for k in ("R0", "T0", "dR", "dT")}
-    ker, lim = _loss_kernels(kappa, K, n_i, n_o), _loss_kernels(kappa, K_LIMIT * direction, n_i, n_o)
+    ker = _loss_kernels(kappa, K, n_i, n_o)
+    far = [_loss_kernels(kappa, k * direction, n_i, n_o) for k in (K_LIMIT, 2.0 * K_LIMIT)]
     for pol in ("s", "p"):
         for i, key in enumerate(("dR", "dT")):
-            loss, limit, diag = ker[pol][i], lim[pol][i], ker[pol][i + 2]
+            # the kernel's asymptote a(ψ) |K| + b(ψ) from two far points; a ∝ cosψ (p light) integrates to 0 over ψ
+            slope = (far[1][pol][i] - far[0][pol][i]) / K_LIMIT
+            limit = far[0][pol][i] - slope * K_LIMIT
+            loss = ker[pol][i] - slope[:, None] * rho - limit[:, None]
             tail = sigma2 / (2.0 * math.pi) * 2.0 * float(np.sum(w_psi * limit))
-            out[key][pol] = k0 ** 2 * (float(np.sum(weight * (loss - limit[:, None]))) + tail + sigma2 * diag)
+            out[key][pol] = k0 ** 2 * (float(np.sum(weight * loss)) + tail + sigma2 * ker[pol][i + 2])
         out["R0"][pol], out["T0"][pol] = ker[pol][4], ker[pol][5]
     return out
