@@ -146,6 +146,17 @@ def test_bad_inputs():
         coherent_losses(0.0, 1.0, 1.5, psd, LAM_NM)
     with pytest.raises(FieldError, match="n_o"):
         coherent_losses(0.5, 1.0, -1.5, psd, LAM_NM)
+    with pytest.raises(FieldError, match="wavelength_nm"):
+        coherent_losses(0.5, 1.0, 1.5, psd, 0.0)
+
+
+def test_normal_incidence_has_no_polarization():
+    """At μ = 1 s and p are the same light: equal losses, from either side (to the azimuthal quadrature: ≤ 4e-7)."""
+    psd = PSDModel("gaussian", 2e-9, T=0.5e-6)
+    for n_i, n_o in ((1.0, 1.5), (1.5, 1.0)):
+        c = coherent_losses(1.0, n_i, n_o, psd, LAM_NM)
+        assert c["dR"]["s"] == pytest.approx(c["dR"]["p"], rel=1e-5)
+        assert c["dT"]["s"] == pytest.approx(c["dT"]["p"], rel=1e-5)
 
 
 @pytest.mark.parametrize("n_i, n_o, th", [(1.0, 1.5, 40.0), (1.5, 1.0, 25.0), (1.5, 1.0, 70.0)])

@@ -301,6 +301,8 @@ def coherent_losses(mu, n_i, n_o, psd, wavelength_nm, nodes=SPM2_NODES) -> dict:
         if not (np.isfinite(n) and n > 0):
             raise FieldError(f"{{{name}}} {n!r} is not allowed; the media must be transparent (a real index > 0)",
                              name)
+    if not (np.isfinite(float(wavelength_nm)) and float(wavelength_nm) > 0):
+        raise FieldError(f"{{wavelength_nm}} {wavelength_nm!r} is not allowed; it must be > 0 nm", "wavelength_nm")
     lam = float(wavelength_nm) * 1e-9
     k0 = 2.0 * math.pi / lam
     kappa = n_i * math.sqrt(max(1.0 - mu * mu, 0.0))
