@@ -53,10 +53,10 @@ def facet_frame_backend(backend: str, micro, nano) -> str:
     """``opencl`` or ``numpy``: the backend *backend* (one of :data:`FACET_FRAME_BACKENDS`) takes for *micro* and
     *nano*; ``opencl`` asked for a configuration the kernel does not take (:func:`kernel_reason`) is refused."""
     if backend not in FACET_FRAME_BACKENDS:
-        raise unknown("backend", backend, FACET_FRAME_BACKENDS)
+        raise unknown("backend", backend, FACET_FRAME_BACKENDS, field="backend")
     why = kernel_reason(micro, nano)
     if backend == "opencl" and why is not None:
-        raise FieldError(f"backend 'opencl' of the facet-frame quadrature: {why}", "backend")
+        raise FieldError("{backend} 'opencl' of the facet-frame quadrature is not available: " + why, "backend")
     if backend == "auto":
         return "opencl" if why is None and opencl_available() else "numpy"
     return backend
