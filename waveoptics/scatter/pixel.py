@@ -13,8 +13,9 @@ For a footprint G (:class:`waveoptics.surfaces.Footprint`, its box of ``N_SIGMA`
 * geometric optics (Yan et al. 2016's patch NDF with intrinsic roughness σ_s): D(h) = P22(t)/cos⁴θ_h with
   P22(t) = Σ_j G_j N(∇h_j − t; σ_s²) / Σ_j G_j, t = (−h_x/h_z, −h_y/h_z) the half vector's slope, ∇h by central
   differences, or the field's own slopes where it gives them (``region_slopes``, e.g.
-  :class:`waveoptics.surfaces.tiled.FlakeField`: each flake's plane, where a difference across the step between
-  two flakes would count a facet that is not there) (Heitz 2014 for D from P22), f = F(θ_d) D / (4 cos θ_i
+  :class:`waveoptics.surfaces.tiled.FlakeField`, or a file stored with a label map and plane slopes,
+  :mod:`waveoptics.surfaces.regions`: each flake's plane, where a difference across the step between two flakes
+  would count a facet that is not there) (Heitz 2014 for D from P22), f = F(θ_d) D / (4 cos θ_i
   cos θ_o), no shadowing.
 
 The sums run in one OpenCL kernel (``kernels/footprint.cl``, ``footprint_sums``; twin :func:`footprint_sums_numpy`)
@@ -269,10 +270,11 @@ def pixel_brdf(field, footprints, wi, wo, wavelengths_nm, material=None, *, slop
 
 def _region(field, i0, j0, i1, j1):
     """(heights (m), slopes) of samples [j0:j1, i0:i1] of a HeightField or of any field with ``region``; slopes
-    are (∂h/∂x, ∂h/∂y) where the field gives them (``region_slopes``), else None (central differences)."""
+    are (∂h/∂x, ∂h/∂y) where the field gives them (``gives_slopes``, ``region_slopes``), else None (central
+    differences)."""
     if isinstance(field, HeightField):
         return field.heights[j0:j1, i0:i1], None
-    if hasattr(field, "region_slopes"):
+    if getattr(field, "gives_slopes", False):
         h, hx, hy = field.region_slopes(i0, j0, i1, j1)
         return h, (hx, hy)
     if hasattr(field, "region_heights"):
