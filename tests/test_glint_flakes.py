@@ -2,7 +2,7 @@
 footprint BRDF must hold only the flakes' own normals. The reference is written here from the generator's seeds —
 each cell's flake drawn from ``default_rng(SeedSequence([seed, 2, cx, cy]))`` (indices shifted by 2⁴⁰), each sample
 on the flake of its nearest centre (brute force) — and P22(t) = Σ G N(s_flake − t; σ_s²) / Σ G over the footprint's
-±4σ box (Yan et al. 2016's patch NDF with intrinsic roughness)."""
+3√2 σ ellipse (G ≥ e⁻⁹, the kernel's truncation; Yan et al. 2016's patch NDF with intrinsic roughness)."""
 from __future__ import annotations
 
 import math
@@ -36,14 +36,16 @@ def _flakes(x0, x1, y0, y1):
 
 
 def _reference(fp_x, fp_y, sigma):
-    """(G weights, slopes (n, 2) of each sample's flake, the heights) over the footprint's ±4σ box."""
-    i0, i1 = math.floor((fp_x - 4 * sigma) / DX), math.ceil((fp_x + 4 * sigma) / DX) + 1
-    j0, j1 = math.floor((fp_y - 4 * sigma) / DX), math.ceil((fp_y + 4 * sigma) / DX) + 1
+    """(G weights, slopes (n, 2) of each sample's flake, the heights) over a ±4.5σ box, G truncated to the circle
+    r²/σ² ≤ 18 (G ≥ e⁻⁹, as the kernel; the samples on the circle itself, to 1e-9, count)."""
+    i0, i1 = math.floor((fp_x - 4.5 * sigma) / DX), math.ceil((fp_x + 4.5 * sigma) / DX) + 1
+    j0, j1 = math.floor((fp_y - 4.5 * sigma) / DX), math.ceil((fp_y + 4.5 * sigma) / DX) + 1
     X, Y = np.meshgrid(np.arange(i0, i1) * DX, np.arange(j0, j1) * DX)
     F = _flakes(X.min(), X.max(), Y.min(), Y.max())
     d2 = (X.ravel()[:, None] - F[:, 0]) ** 2 + (Y.ravel()[:, None] - F[:, 1]) ** 2
     k = np.argmin(d2, axis=1)
-    G = np.exp(-0.5 * ((X.ravel() - fp_x) ** 2 + (Y.ravel() - fp_y) ** 2) / sigma ** 2)
+    r2 = ((X.ravel() - fp_x) ** 2 + (Y.ravel() - fp_y) ** 2) / sigma ** 2
+    G = np.exp(-0.5 * r2) * (r2 <= 18 * (1 + 1e-9))
     h = F[k, 2] * (X.ravel() - F[k, 0]) + F[k, 3] * (Y.ravel() - F[k, 1])
     return G, F[k, 2:], h.reshape(X.shape), (i0, j0, i1, j1)
 
@@ -158,14 +160,15 @@ def test_flake_plane_render_geometric_panel_has_no_step_facets():
         Rm = np.array([[c, -sn], [sn, c]])
         C = Rm @ np.diag([s1 * s1, s2 * s2]) @ Rm.T                 # σ_1 along the angle, counter-clockwise
         Ci = np.linalg.inv(C)
-        hx, hy = 4 * math.sqrt(C[0, 0]), 4 * math.sqrt(C[1, 1])
+        hx, hy = 4.5 * math.sqrt(C[0, 0]), 4.5 * math.sqrt(C[1, 1])
         i0, i1 = math.floor((x - hx) / DX), math.ceil((x + hx) / DX) + 1
         j0, j1 = math.floor((y - hy) / DX), math.ceil((y + hy) / DX) + 1
         X, Y = np.meshgrid(np.arange(i0, i1) * DX, np.arange(j0, j1) * DX)
         F = _flakes(X.min(), X.max(), Y.min(), Y.max())
         k = np.argmin((X.ravel()[:, None] - F[:, 0]) ** 2 + (Y.ravel()[:, None] - F[:, 1]) ** 2, axis=1)
         rx, ry = X.ravel() - x, Y.ravel() - y
-        G = np.exp(-0.5 * (Ci[0, 0] * rx * rx + 2 * Ci[0, 1] * rx * ry + Ci[1, 1] * ry * ry))
+        q = Ci[0, 0] * rx * rx + 2 * Ci[0, 1] * rx * ry + Ci[1, 1] * ry * ry
+        G = np.exp(-0.5 * q) * (q <= 18 * (1 + 1e-9))                          # truncated: G ≥ e⁻⁹
         P22 = (np.exp(-0.5 * np.sum((F[k, 2:] - t) ** 2, axis=1) / SIGMA_S ** 2) @ G) / (
             G.sum() * 2 * math.pi * SIGMA_S ** 2)
         want.append(P22 / hv[2] ** 4 / (4 * wi[2] * wo[2]))
