@@ -49,9 +49,8 @@ from ..surfaces.footprint import Footprint, footprint_box
 from ..surfaces.heightfield import HeightField
 from .footprint import coherence_centres
 
-__all__ = ["SUM_N_SIGMA", "Q_MAX", "PIXEL_BACKENDS", "MAX_REGION_SAMPLES", "PixelBRDF", "footprint_sums", "footprint_sums_numpy",
-           "ellipse_samples", "pixel_brdf",
-           "footprint_brdf"]
+__all__ = ["SUM_N_SIGMA", "Q_MAX", "PIXEL_BACKENDS", "MAX_REGION_SAMPLES", "PixelBRDF", "footprint_sums",
+           "footprint_sums_numpy", "ellipse_samples", "pixel_brdf", "footprint_brdf"]
 
 #: the footprint's truncation radius in widths (module doc): G ≥ e⁻⁹ on the ellipse
 SUM_N_SIGMA = 3 * math.sqrt(2)
