@@ -79,7 +79,8 @@ __kernel void footprint_sums(__global const real_t *h, __global const real_t *hx
             const realv_t q = ca * rx * rx + R(2.0) * cb * rx * ry + cc * ry * ry;
             realv_t G = exp(R(-0.5) * q);
             /* lanes past the chord, and samples outside the ellipse */
-            G = select((realv_t)(R(0.0)), G, isless(lane, (realv_t)((real_t)(ib - i))) & islessequal(q, (realv_t)(qmax)));
+            G = select((realv_t)(R(0.0)), G,
+                       isless(lane, (realv_t)((real_t)(ib - i))) & islessequal(q, (realv_t)(qmax)));
             const realv_t hj = WO_VLOAD(0, row + i);
 #ifdef WO_GIVEN_SLOPES
             const realv_t gx = WO_VLOAD(0, hx + (long)j * pitch + i) - tx;
