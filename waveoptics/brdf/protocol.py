@@ -124,6 +124,11 @@ class BRDF:
         wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
         return self._eval_flat(wi, wo, lam).reshape(shape)
 
+    def _eval_nodes(self, wi, wo, wavelengths_nm) -> np.ndarray:
+        """f (n, n_λ) in 1/sr at flat direction pairs (n, 3) and every wavelength of *wavelengths_nm*: one
+        ``_eval1`` per wavelength (a model that shares work between wavelengths overrides it)."""
+        return np.stack([self._eval1(wi, wo, lam) for lam in wavelengths_nm], axis=-1)
+
     def pdf(self, wi, wo, wavelength_nm):
         """Density (1/sr over ω_o) of :meth:`sample`."""
         wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
@@ -416,6 +421,22 @@ class TwoScaleParts(MicrofacetBRDF):
 
     def _eval1(self, wi, wo, lam):
         return sum(self._parts(wi, wo, lam))
+
+    def _f_diffraction_nodes(self, wi, wo, wavelengths_nm) -> np.ndarray:
+        """The diffracted part (n, n_λ) at every wavelength of *wavelengths_nm* (a tabulated model reads them all
+        at once)."""
+        return np.stack([self._f_diffraction(wi, wo, lam) for lam in wavelengths_nm], axis=-1)
+
+    def _eval_nodes(self, wi, wo, wavelengths_nm) -> np.ndarray:
+        """:meth:`_eval1` at every wavelength of *wavelengths_nm* (n, n_λ), the diffracted part of all of them in
+        one :meth:`_f_diffraction_nodes` (the same sums as :meth:`_parts`)."""
+        diffraction = self._f_diffraction_nodes(wi, wo, wavelengths_nm) if self._rough else None
+        out = []
+        for i, lam in enumerate(wavelengths_nm):
+            coherent, diffuse = self._smooth_parts(wi, wo, lam)
+            d = diffraction[:, i] if diffraction is not None else np.zeros(wi.shape[0])
+            out.append(sum((coherent, d, diffuse, self._f_ms(wi, wo, lam))))
+        return np.stack(out, axis=-1)
 
     def _probs(self, wi, lam):
         """Lobe probabilities (coherent, diffracted, cosine) for each ω_i: the cosine lobe serves the diffuse term
