@@ -85,26 +85,28 @@ class BandAlbedos:
         if tab is not None:
             return tab
         lam, model = self.wavelength_nm, self.model
+        # every incidence node in one quadrature (polar_albedo with an array of incidences)
         if dm.perturbative:   # Rayleigh-Rice: its TIS, relative to the specular reflectance or absolute
             fn = rayleigh_rice_tis if absolute else rayleigh_rice_albedo
-            raw = np.array([fn(t, lam, model, material, pol) for t in RR_THETAS_DEG])
+            raw = np.asarray(fn(RR_THETAS_DEG, lam, model, material, pol), dtype=float)
             tab = (RR_THETAS_DEG, raw, raw)
         else:
-            raw = np.array([self._albedo_at(math.radians(t), dm, material, pol, absolute) for t in ALBEDO_THETAS_DEG])
+            raw = self._albedo_at(np.array([math.radians(t) for t in ALBEDO_THETAS_DEG]), dm, material, pol,
+                                  absolute)
             cont = raw.copy()
             far = ALBEDO_THETAS_DEG > TANGENT_PLANE_MAX_DEG
             at = int(np.flatnonzero(ALBEDO_THETAS_DEG == TANGENT_PLANE_MAX_DEG)[0])
             if material is None or not getattr(material, "has_index", True):
                 # F = 1, only F0 known or a thin-film stack (no single interface permittivity for the vector Q):
                 # the scalar problem of a modulus-1 reflection (Dirichlet, Q = 1), times F(θ) when absolute
-                first = [rayleigh_rice_tis(t, lam, model, scalar=True) for t in ALBEDO_THETAS_DEG[at:]]
+                first = rayleigh_rice_tis(ALBEDO_THETAS_DEG[at:], lam, model, scalar=True)
                 if absolute and material is not None:
-                    first = [v * float(material.F(math.cos(math.radians(t)), lam))
-                             for v, t in zip(first, ALBEDO_THETAS_DEG[at:])]
+                    first = np.array([v * float(material.F(math.cos(math.radians(t)), lam))
+                                      for v, t in zip(first, ALBEDO_THETAS_DEG[at:])])
             else:
                 fn = rayleigh_rice_tis if absolute else rayleigh_rice_albedo
-                first = [fn(t, lam, model, material, pol) for t in ALBEDO_THETAS_DEG[at:]]
-            first = np.asarray(first)
+                first = fn(ALBEDO_THETAS_DEG[at:], lam, model, material, pol)
+            first = np.asarray(first, dtype=float)
             # guard: a surface that scatters nothing to first order at θ_T keeps the lobe's own albedo
             if first[0] > 0:
                 cont[far] = raw[at] * first[1:] / first[0]
@@ -233,10 +235,11 @@ class BandAlbedos:
             return 1.0 - self.coherent_fraction(c, diffraction, material, polarization)
         return self.scattered_albedo(np.degrees(np.arccos(c)), diffraction, material, polarization, absolute=True)
 
-    def _albedo_at(self, theta, dm, material=None, polarization="unpolarized", absolute=False) -> float:
+    def _albedo_at(self, theta, dm, material=None, polarization="unpolarized", absolute=False):
         """∫ f¹ du dv over the disc (:func:`polar_albedo`), each direction's Fresnel factor relative to F(θ)
         (for s or p light the facet's polarized reflectance relative to the specular one), or the factor itself
-        (*absolute*)."""
+        (*absolute*), at incidence *theta* (rad; a float, or an array of the albedos of a 1-D array of
+        incidences, computed in one quadrature)."""
         from ..materials import RelativeFacetFresnel, fresnel_function
 
         lam = self.wavelength_nm
