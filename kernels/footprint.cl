@@ -1,6 +1,7 @@
 /* Per-pixel footprint sums at one direction pair per footprint (twin: waveoptics/scatter/pixel.py,
  * footprint_sums_numpy). For footprint p with Gaussian weight G(x) = exp(-1/2 (x - c)^T Sigma^-1 (x - c)) over the
- * box [i0, i1) x [j0, j1) of a height-field region (row-major, row length `pitch`, spacing dx, dy), it sums
+ * box [i0, i1) x [j0, j1) of a height-field region (row-major, row length `pitch`, spacing dx, dy), truncated to
+ * the ellipse q = (x - c)^T Sigma^-1 (x - c) <= q_max (G = 0 beyond, where G < exp(-q_max / 2)), it sums
  *
  *     U_l  = sum_j G_j exp(2 pi i phi_jl),  phi_jl = (s_x (x_j - c_x) + s_y (y_j - c_y) + s_z h_j) / lambda_l
  *     A    = sum_j G_j^2                         (the window's area / (dx dy))
@@ -13,14 +14,17 @@
  * half vector (Yan et al. 2016's patch NDF with intrinsic roughness sigma_s). The host multiplies by dx dy and
  * the Kirchhoff / Fresnel factors.
  *
- * Each row is summed WO_VW samples per SIMD step (explicit vectors, as kernels/kirchhoff.cl).
+ * Each row visits only the ellipse's chord on it (a few samples of margin; the test q <= q_max decides which
+ * samples count, so the chord's rounding changes nothing), not the whole box: pi/4 of a round footprint's box,
+ * less of an oblique ellipse's. Each row is summed WO_VW samples per SIMD step (explicit vectors, as
+ * kernels/kirchhoff.cl).
  * Work-item (p, c) sums rows j0 + c*step .. of footprint p (n_chunks work-items per footprint, so one large
  * footprint still fills every core); the host adds the chunks. Row sums are added to the running total (two-level
  * summation keeps float32 round-off near sqrt(rows) ulps). Positions enter relative to the box origin (cx, cy are
  * given from it) so that float32 does not cancel large x against c.
  *
  * geo (12 per footprint): cx, cy (m, from sample (i0, j0)), Sigma^-1 entries a, b, c (1/m^2: q = a dx^2 + 2 b dx dy
- * + c dy^2), s_x, s_y, s_z, t_x, t_y, unused, unused. out (2 WO_NL + 3 per work-item): Re U_l, Im U_l, A, W, P.
+ * + c dy^2), s_x, s_y, s_z, t_x, t_y, q_max (the truncation, waveoptics.scatter.pixel.Q_MAX), unused. out (2 WO_NL + 3 per work-item): Re U_l, Im U_l, A, W, P.
  */
 #include "kirchhoff.h"      /* realv_t: WO_VW samples of a row per SIMD step; wo_sincos_2pi */
 
@@ -48,7 +52,7 @@ __kernel void footprint_sums(__global const real_t *h, __global const real_t *hx
     const int i0 = box[4 * p], j0 = box[4 * p + 1], i1 = box[4 * p + 2], j1 = box[4 * p + 3];
     __global const real_t *g = geo + 12 * p;
     const real_t cx = g[0], cy = g[1], ca = g[2], cb = g[3], cc = g[4];
-    const real_t sx = g[5], sy = g[6], sz = g[7], tx = g[8], ty = g[9];
+    const real_t sx = g[5], sy = g[6], sz = g[7], tx = g[8], ty = g[9], qmax = g[10];
     const int step = (j1 - j0 + n_chunks - 1) / n_chunks;
     const int ja = j0 + ch * step, jb = min(j1, ja + step);
     real_t lanes[WO_VW];
@@ -60,14 +64,23 @@ __kernel void footprint_sums(__global const real_t *h, __global const real_t *hx
     const real_t hx2 = R(0.5) / dx, hy2 = R(0.5) / dy;
     for (int j = ja; j < jb; ++j) {
         const real_t ry = (real_t)(j - j0) * dy - cy;
+        /* the ellipse's chord on this row: a rx^2 + 2 b rx ry + c ry^2 <= q_max for rx in [-b ry -+ sqrt(d)] / a */
+        const real_t d = (cb * cb - ca * cc) * ry * ry + ca * qmax;
+        if (!(d >= R(0.0))) continue;
+        const real_t sq = sqrt(d);
+        const int ia = max(i0, i0 + (int)floor(((-cb * ry - sq) / ca + cx) / dx) - 1);
+        const int ib = min(i1, i0 + (int)ceil(((-cb * ry + sq) / ca + cx) / dx) + 2);
         realv_t rre[WO_NL], rim[WO_NL];
         for (int l = 0; l < WO_NL; ++l) { rre[l] = (realv_t)(R(0.0)); rim[l] = (realv_t)(R(0.0)); }
         realv_t ra = (realv_t)(R(0.0)), rw = ra, rp = ra;
         __global const real_t *row = h + (long)j * pitch;
-        for (int i = i0; i < i1; i += WO_VW) {
+        for (int i = ia; i < ib; i += WO_VW) {
             const realv_t rx = ((real_t)(i - i0) + lane) * dx - cx;
-            realv_t G = exp(R(-0.5) * (ca * rx * rx + R(2.0) * cb * rx * ry + cc * ry * ry));
-            G = select((realv_t)(R(0.0)), G, isless(lane, (realv_t)((real_t)(i1 - i))));   /* lanes past i1 */
+            const realv_t q = ca * rx * rx + R(2.0) * cb * rx * ry + cc * ry * ry;
+            realv_t G = exp(R(-0.5) * q);
+            /* lanes past the chord, and samples outside the ellipse */
+            G = select((realv_t)(R(0.0)), G,
+                       isless(lane, (realv_t)((real_t)(ib - i))) & islessequal(q, (realv_t)(qmax)));
             const realv_t hj = WO_VLOAD(0, row + i);
 #ifdef WO_GIVEN_SLOPES
             const realv_t gx = WO_VLOAD(0, hx + (long)j * pitch + i) - tx;

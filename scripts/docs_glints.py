@@ -118,6 +118,53 @@ def glint_section():
     return rows
 
 
+def dask_speedup(size: int = 96, repeats: int = 2) -> dict:
+    """The same glint render (brushed sphere, ``size``² px on a field of size/128 mm, as the brushed scene) in this
+    process and on a Dask LocalCluster of 1 and of 2 single-threaded worker processes (the executor of
+    ``render --glints --workers N``), each worker warmed first (imports, the OpenCL kernel, the material): the wall
+    time of the render, best of *repeats* runs taken in turn, the CPU time the workers spent, and the load average
+    of the machine before and after (it is shared: other processes take cores meanwhile)."""
+    import importlib
+
+    from waveoptics.distributed import dask_client
+    from waveoptics.renderers import glints
+    from waveoptics.surfaces import tiled
+
+    field = tiled.procedural("brushed", size / 128 * 1e-3, 0.1e-6, seed=1)
+    s = glints.GlintSettings(size=size, shape="sphere", light_deg=40.0, light_azimuth_deg=150.0, view_deg=25.0,
+                             view_azimuth_deg=200.0)
+    tiny = glints.GlintSettings(size=8, shape="sphere", wavelengths_nm=s.wavelengths_nm)
+    glints.render_glints(field, "Al", tiny)                              # this process warmed too
+    load0 = os.getloadavg()[0]
+    runs = {"in_process": [], "1": [], "2": []}
+    cpu = {"1": [], "2": []}
+    ref = None
+    with dask_client(1) as c1, dask_client(2) as c2:
+        for c in (c1, c2):
+            c.run(importlib.import_module, "waveoptics.renderers.glints")
+            c.run(glints.render_glints, field, "Al", tiny)
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            r = glints.render_glints(field, "Al", s)
+            runs["in_process"].append(time.perf_counter() - t0)
+            ref = r.wave_spectral if ref is None else ref
+            for key, c in (("1", c1), ("2", c2)):
+                p0 = sum(c.run(time.process_time).values())
+                t0 = time.perf_counter()
+                r = glints.render_glints(field, "Al", s, executor=c.get_executor())
+                runs[key].append(time.perf_counter() - t0)
+                cpu[key].append(sum(c.run(time.process_time).values()) - p0)
+                if not np.array_equal(r.wave_spectral, ref):
+                    raise SystemExit(f"the render on {key} Dask worker(s) differs from the in-process one")
+    best = {k: min(v) for k, v in runs.items()}
+    return {"size": size, "surface": f"procedural:brushed:{size / 128:g}mm:0.1um:1", "repeats": repeats,
+            "wall_s": {k: round(v, 1) for k, v in best.items()}, "runs_s": runs,
+            "worker_cpu_s": {k: round(min(v), 1) for k, v in cpu.items()},
+            "speedup_2_over_1": round(best["1"] / best["2"], 2),
+            "speedup_2_over_in_process": round(best["in_process"] / best["2"], 2),
+            "load_before": round(load0, 2), "load_after": round(os.getloadavg()[0], 2)}
+
+
 #: image size of the brushed scene (GLINTS_DOC_SIZE); its field is 1 mm per 128 px, so that footprints stay
 #: ~2-3 µm (the sphere's pixel pitch is 2.1 R / size with R = 0.9 W / π) and the cost grows as the size squared
 DOC_SIZE = int(os.environ.get("GLINTS_DOC_SIZE", "128"))
@@ -136,7 +183,7 @@ def compute() -> dict:
     field = surfaces.generate("gaussian", sigma="20nm", corr_length="1um", size="40um", samples=1024, seed=3)
     scratched = surfaces.scratches(80, "1um", "60nm", "30um", 512, orientation_deg=0.0, spread_deg=1.0, seed=5)
     figure(field, scratched)
-    return {"cores": cores(), "throughput": timing_table(), "scenes": glint_section()}
+    return {"cores": cores(), "throughput": timing_table(), "scenes": glint_section(), "dask": dask_speedup()}
 
 
 def main() -> None:

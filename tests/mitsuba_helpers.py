@@ -2,11 +2,12 @@
 import numpy as np
 
 
-def eval_pdf(mi, plugin, wi, wo, lam):
-    """(f cos θ_o (n, channels), pdf (n,)) from the plugin, per point in scalar variants."""
+def eval_pdf(mi, plugin, wi, wo, lam, ctx=None):
+    """(f cos θ_o (n, channels), pdf (n,)) from the plugin, per point in scalar variants; *ctx* a
+    ``mi.BSDFContext`` (default: Radiance, every component)."""
     import drjit as dr
 
-    ctx = mi.BSDFContext()
+    ctx = mi.BSDFContext() if ctx is None else ctx
     n = wi.shape[0]
     if mi.variant().startswith("scalar"):
         got, pdf = [], []

@@ -4,7 +4,8 @@
 References held against the code: the white furnace R + T = 1 of a lossless interface, by Monte Carlo over the
 BSDF's own sampler (weights f |cosθ_o| / pdf: the integral of eval by a different algorithm than the tables'
 quadratures), from air and from inside the glass, also beyond the critical angle; and the split of the coherent
-loss between R and T against a rigorous Rayleigh-method grating solve integrated over the PSD (tests/rr_grating.py).
+loss between R and T (second-order perturbation, waveoptics.scatter.spm2, also tested in tests/test_spm2.py) against
+a rigorous Rayleigh-method grating solve integrated over the PSD (tests/rr_grating.py).
 """
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ from waveoptics.surfaces import PSDModel
 
 LAM_NM = 500.0
 TOL_FURNACE = 1e-2     # the brief's white furnace tolerance (MC error ≤ 2.2e-3 at 50000 samples)
-TOL_SPLIT = 1.5e-2     # the Debye-Waller split vs the rigorous one, long correlation length (measured ≤ 7.5e-3)
+TOL_SPLIT = 2e-2       # the SPM2 split vs the rigorous one (the reference's 20 × 14 nodes dominate: ≤ 1e-2)
 N_SAMPLES = 50000
 
 
@@ -51,18 +52,16 @@ def test_white_furnace(glass, theta, side):
                                rtol=1e-12)
 
 
-@pytest.mark.parametrize("n_i, n_o, th", [(1.0, 1.5, 30.0), (1.5, 1.0, 20.0)])
-def test_coherent_split_against_rigorous_grating(n_i, n_o, th):
+@pytest.mark.parametrize("n_i, n_o, th, ell", [(1.0, 1.5, 30.0, 1e-6), (1.5, 1.0, 20.0, 1e-6),
+                                               (1.0, 1.5, 70.0, 1e-6), (1.0, 1.5, 70.0, 0.3e-6)])
+def test_coherent_split_against_rigorous_grating(n_i, n_o, th, ell):
     """1 − A_R and 1 − A_T (unpolarized) against the rigorous specular losses ΔR₀/R and ΔT₀/T of a random surface
-    (Gaussian PSD, T = 1 µm), integrated from grating solves."""
-    psd = PSDModel("gaussian", 1e-9, T=1e-6)
+    (Gaussian PSD), integrated from grating solves; at 70° from air the Debye-Waller split this replaced was 17 %
+    (ℓ = 1 µm) and 46 % (ℓ = 0.3 µm) off in the reflected share."""
+    psd = PSDModel("gaussian", 1e-9, T=ell)
     t = math.radians(th)
     wi = np.array([math.sin(t), 0.0, math.cos(t)])
-    above = n_i == 1.0
-    n1, n2 = (n_i, n_o) if above else (n_o, n_i)
-    tis = {p: rr_tis_reflection(th, LAM_NM, psd, n1, n2, p, from_above=above)
-           + rr_tis_transmission(th, LAM_NM, psd, n1, n2, p, from_above=above) for p in "sp"}
-    A_R, A_T = coherent_split(math.cos(t), n_i, n_o, psd.sigma, LAM_NM, tis["s"], tis["p"])
+    A_R, A_T = coherent_split(math.cos(t), n_i, n_o, psd, LAM_NM)
     Rs, Rp = (float(x) for x in fresnel.F_sp(math.cos(t), n_o / n_i))
     d = {p: integrated_losses(n_i, n_o, wi, psd.S, psd.T, LAM_NM * 1e-9, p, n_rho=20, n_psi=14) for p in "sp"}
     assert 1 - A_R == pytest.approx((d["s"][0] + d["p"][0]) / (Rs + Rp), rel=TOL_SPLIT)
@@ -70,15 +69,21 @@ def test_coherent_split_against_rigorous_grating(n_i, n_o, th):
 
 
 def test_coherent_split_limits():
-    """Beyond the critical angle the whole loss comes from R (A_T = 1: no coherent T to scale); at Brewster's
-    angle p light has no coherent R and its loss comes from T."""
-    A_R, A_T = coherent_split(math.cos(math.radians(60.0)), 1.5, 1.0, 1e-9, LAM_NM, 1e-3, 1e-3)
-    assert A_T == 1.0 and A_R == pytest.approx(1 - 1e-3, rel=1e-12)
+    """Beyond the critical angle the whole loss comes from R (A_T = 1: no coherent T to scale) and equals the
+    first-order scatter (optical theorem); at Brewster's angle p light has no coherent R and A_R is the s light's."""
+    psd = PSDModel("gaussian", 1e-9, T=1e-6)
+    th = 60.0
+    A_R, A_T = coherent_split(math.cos(math.radians(th)), 1.5, 1.0, psd, LAM_NM)
+    tis = sum(rr_tis_reflection(th, LAM_NM, psd, 1.0, 1.5, p, from_above=False)
+              + rr_tis_transmission(th, LAM_NM, psd, 1.0, 1.5, p, from_above=False) for p in "sp")
+    assert A_T == 1.0 and (1 - A_R) * 2 == pytest.approx(tis, rel=1e-3)
     c = math.cos(math.atan(1.5))
-    Rs, _ = fresnel.F_sp(c, 1.5)
-    A_R, A_T = coherent_split(c, 1.0, 1.5, 1e-9, LAM_NM, 0.0, 1e-3)
-    assert A_R == pytest.approx(1.0, abs=1e-12)
-    assert (1 - A_T) * (2 - float(Rs)) == pytest.approx(1e-3, rel=1e-9)
+    Rs, Rp = (float(x) for x in fresnel.F_sp(c, 1.5))
+    assert Rp < 1e-30
+    A_R, _ = coherent_split(c, 1.0, 1.5, psd, LAM_NM)
+    ref = integrated_losses(1.0, 1.5, np.array([math.sqrt(1 - c * c), 0.0, c]), psd.S, psd.T, LAM_NM * 1e-9, "s",
+                            n_rho=20, n_psi=14)
+    assert 1 - A_R == pytest.approx(ref[0] / Rs, rel=TOL_SPLIT)
 
 
 def test_psd_is_required():

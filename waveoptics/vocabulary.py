@@ -8,7 +8,7 @@ from dataclasses import dataclass
 __all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
            "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO",
            "DEFAULT_MATERIAL", "DEFAULT_NDF", "COST_TARGET_ERROR", "COST_BUDGET_S", "COST_DELTA_E",
-           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "RENDER_BSDF_AUTO", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS",
+           "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "RENDER_BSDF_AUTO", "RENDER_MODELS", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS",
            "FIELD_SOLVERS", "FIELD_BACKENDS", "DETRENDS"]
 
 #: nano-lobe solvers a simulation request may name ('auto' lets the model choose: the PSD series for statistics,
@@ -68,6 +68,9 @@ COST_DELTA_E = (4.0, 1.0, 0.5)
 RENDER_WAVELENGTH_STEP_NM = 20.0
 RENDER_BSDFS = ("measured", "plugin", "native")
 RENDER_BSDF_AUTO = "auto"
+#: the surface models ``waveoptics render`` renders (waveoptics.renderers.jobs.RENDER_MODEL_KINDS): the two-scale
+#: BRDF, and the rough dielectric (nano-rough glass, reflection and transmission; waveoptics.renderers.glass_render)
+RENDER_MODELS = ("twoscale", "rough-dielectric")
 #: what a glint render's height field textures (:data:`waveoptics.renderers.glints.SHAPES`)
 GLINT_SHAPES = ("plane", "sphere")
 

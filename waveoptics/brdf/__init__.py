@@ -4,7 +4,7 @@ Files: roughness (α from perceptual roughness and Blinn-Phong exponents), direc
 smith (Smith masking; Λ by radial quadrature), anisotropy (stretched NDFs), ndf_closed (GGX, Beckmann, Blinn-Phong),
 ndf_shaped (ABC, EPD, SGD), ndf (the NDF registry: D, Λ, G1 by name), shadowing (G terms), fresnel_terms (exact, Schlick or unit F; mean F), diffuse (Lambert, Oren-Nayar, trade-off),
 microfacet (the Cook-Torrance specular term and the full BRDF), quadrature (directional albedo), opencl (kernel
-twins), twoscale (micro facets carrying nano-roughness: coherent lobe plus diffracted lobe on a direction grid),
+twins), facet_frame_cl (the facet-frame quadrature's per-cell sum as an OpenCL kernel), twoscale (micro facets carrying nano-roughness: coherent lobe plus diffracted lobe on a direction grid),
 facet_polarization (macro s/p light on tilted facets: each facet's own s/p mix),
 sampling (microfacet normal samplers), protocol (the BRDF as a function: eval / pdf / sample / albedo; the
 microfacet model), pointwise (the two-scale model as a function), tabulated (the same from diffracted lobes tabulated over
@@ -51,7 +51,7 @@ from .spectral import (SpectralNodes)
 from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
 from .chi2 import (Chi2Result, chi2_test)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
-from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, refract, half_vector_refraction, DielectricTables,
+from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, pack_third_uniform, refract, half_vector_refraction, DielectricTables,
     dielectric_tables, RoughDielectricBSDF)
 from .nano_dielectric import (NANO_MU_NODES, NanoTables, coherent_split, nano_tables, NanoRoughDielectricBSDF)
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,

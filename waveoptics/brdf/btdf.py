@@ -77,15 +77,26 @@ from .sampling import pdf_normal, sample_normal
 from .smith import gl01
 from .twoscale import Micro
 
-__all__ = ['DIELECTRIC_SHADOWINGS', 'DIELECTRIC_MS_NODES', 'refract', 'half_vector_refraction', 'DielectricTables',
-           'dielectric_tables', 'RoughDielectricBSDF']
+__all__ = ['DIELECTRIC_SHADOWINGS', 'DIELECTRIC_MS_NODES', 'UNIFORM_DIGITS', 'pack_third_uniform', 'refract',
+           'half_vector_refraction', 'DielectricTables', 'dielectric_tables', 'RoughDielectricBSDF']
 
 #: masking-shadowing terms of the BSDF (the Smith forms, which have a transmission case)
 DIELECTRIC_SHADOWINGS = ("smith", "smith-correlated")
 #: Gauss-Legendre nodes in μ of the albedo tables of the energy compensation
 DIELECTRIC_MS_NODES = 32
 #: low digits of u₁ that give the third uniform number (reflection or refraction): u₁ resolves 2⁻²⁴ in the normal
-_DIGITS = float(2 ** 24)
+UNIFORM_DIGITS = float(2 ** 24)
+
+
+def pack_third_uniform(u1, u3):
+    """u₁ rounded down to the grid 2⁻²⁴ (:data:`UNIFORM_DIGITS`) with the uniform number *u3* ∈ [0, 1) in its low
+    digits, so that the samplers of this module, which read their third uniform number from those digits, draw it
+    from *u3* (a renderer that has three independent numbers, e.g. Mitsuba's ``sample1``, passes it here). The
+    result stays in [0, 1) and within 2⁻²⁴ of u₁; float64 keeps 28 bits of *u3* below the grid."""
+    u1 = np.asarray(u1, dtype=float)
+    # guard: u3 within 2⁻²⁸ of 1 would round the sum up to the next grid point (and u₁ = 1 − 2⁻²⁴ up to 1)
+    u3 = np.clip(np.asarray(u3, dtype=float), 0.0, 1.0 - 2.0 ** -28)
+    return (np.floor(u1 * UNIFORM_DIGITS) + u3) / UNIFORM_DIGITS
 
 
 def refract(w, m, eta_rel):
@@ -201,7 +212,7 @@ def _sample_single(wi, u, eta, ndf, ax, ay, c):
     eta_i = np.where(zi > 0, 1.0, eta)
     eta_t = np.where(zi > 0, eta, 1.0)
     F = _fresnel.F(np.abs(ih), eta_t / eta_i)
-    uc = np.modf(u[:, 1] * _DIGITS)[0]
+    uc = np.modf(u[:, 1] * UNIFORM_DIGITS)[0]
     wr = reflect(wi, m)
     wt, ok_t = refract(wi, s[:, None] * m, eta_t / eta_i)
     choose_r = uc < F
@@ -431,7 +442,7 @@ class RoughDielectricBSDF(BRDF):
         if np.any(ms):
             tab = self._tables(lam)
             s = np.sign(wi[ms, 2])
-            cross = np.modf(u[ms, 1] * _DIGITS)[0] < np.where(s > 0, tab.t_up, tab.t_down)
+            cross = np.modf(u[ms, 1] * UNIFORM_DIGITS)[0] < np.where(s > 0, tab.t_up, tab.t_down)
             r = np.sqrt(u[ms, 0])
             phi = 2.0 * np.pi * u[ms, 1]
             z = np.sqrt(np.maximum(1.0 - u[ms, 0], 0.0)) * np.where(cross, -s, s)

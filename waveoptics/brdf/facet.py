@@ -27,7 +27,7 @@ from .directions import dot_last
 from .sampling import sample_normal_dcos
 
 __all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'meridian_basis', 'to_facet',
-           'from_facet', 'ndf_nodes', 'half_vector_nodes']
+           'from_facet', 'ndf_nodes', 'half_vector_nodes', 'half_vector_base']
 
 #: radial bins of the nano-lobe sampler (geometric in spatial frequency)
 RADIAL_BINS = 384
@@ -243,9 +243,24 @@ def half_vector_nodes(rad: NanoRadial, level, n: int, cos_d, antithetic: bool = 
        Philos. Soc. 52(3):449-475, 1956.
     .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
     """
+    n_base, radii, phi = half_vector_base(rad, n, antithetic)
+    radii = radii[level]
+    for k in range(n):
+        yield radii[..., k % n_base] / (2 * cos_d), np.cos(phi[k]), np.sin(phi[k])
+
+
+def half_vector_base(rad: NanoRadial, n: int, antithetic: bool = True):
+    """The data of :func:`half_vector_nodes` (shared with its OpenCL twin, ``kernels/facet_frame.cl``): n_base
+    (n/2 antithetic pairs, else n), the offset radii (COS_LEVELS, n_base) of the n_base Sobol points through the
+    nano lobe's radial law at every cos θ_d level (direction-cosine units), and the azimuths φ (n,) about h of the
+    n nodes (node k: point k mod n_base at 2π u₂ + π ⌊k / n_base⌋).
+
+    References
+    ----------
+    .. [1] J. M. Hammersley, K. W. Morton, Proc. Cambridge Philos. Soc. 52(3):449-475, 1956 (antithetic variates).
+    """
     n_base = n // 2 if antithetic and n % 2 == 0 else n
     base = unit_nodes(n_base)
-    radii = rad.radius(np.arange(COS_LEVELS)[:, None], np.broadcast_to(base[:, 0], (COS_LEVELS, n_base)))[level]
-    for k in range(n):
-        phi = 2 * np.pi * base[k % n_base, 1] + np.pi * (k // n_base)
-        yield radii[..., k % n_base] / (2 * cos_d), np.cos(phi), np.sin(phi)
+    radii = rad.radius(np.arange(COS_LEVELS)[:, None], np.broadcast_to(base[:, 0], (COS_LEVELS, n_base)))
+    k = np.arange(n)
+    return n_base, radii, 2 * np.pi * base[k % n_base, 1] + np.pi * (k // n_base)

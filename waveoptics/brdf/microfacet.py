@@ -108,7 +108,9 @@ def specular(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-c
     return specular_term(wi, wo, spec, ax, ay, ndf_shape, gfn, F_fn)
 
 
-def specular_term(wi, wo, spec, ax, ay, c, gfn, F_fn):
+def specular_geometry(wi, wo, spec, ax, ay, c, gfn) -> tuple:
+    """The factors of :func:`specular_term` that do not depend on the wavelength: (cos θ_d, G, D, the floored
+    denominator 4 cos θ_i cos θ_o, the mask of the pairs that reflect), to be shared by several wavelengths."""
     up = (wi[..., 2] > 0) & (wo[..., 2] > 0)
     h = half_vector(wi, wo)
     cos_d = np.clip(dot_last(wi, h), 0.0, 1.0)
@@ -118,9 +120,15 @@ def specular_term(wi, wo, spec, ax, ay, c, gfn, F_fn):
     # at COS_MIN bounds f (below float32 overflow for α >= ALPHA_MIN) and only changes θ > 89.999994°, where
     # f then goes continuously to 0 with G
     denom = 4.0 * np.where(up, np.maximum(wi[..., 2], COS_MIN) * np.maximum(wo[..., 2], COS_MIN), 1.0)
-    val = F_fn(cos_d) * g * d / denom
     # guard: 0 below the surface (and in the product of 0 and a huge D at exactly grazing directions)
-    return np.where(up & (g > 0), val, 0.0)
+    return cos_d, g, d, denom, up & (g > 0)
+
+
+def specular_term(wi, wo, spec, ax, ay, c, gfn, F_fn, geometry=None):
+    """F G D / (4 cos θ_i cos θ_o) (1/sr); *geometry* the pairs' :func:`specular_geometry` when already known."""
+    cos_d, g, d, denom, ok = specular_geometry(wi, wo, spec, ax, ay, c, gfn) if geometry is None else geometry
+    val = F_fn(cos_d) * g * d / denom
+    return np.where(ok, val, 0.0)
 
 
 # ----------------------------------------------------------------------------------------------------------

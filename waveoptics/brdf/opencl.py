@@ -17,14 +17,14 @@ from .directions import as_dirs
 from .ndf import NDFS, check_alpha, ndf_by_name
 
 
-def _shape(spec, ndf_shape) -> float:
+def ndf_shape_parameter(spec, ndf_shape) -> float:
     """The shape parameter passed to the kernel: the given one, the NDF's default, or 0 (unused)."""
     if ndf_shape is not None:
         return float(ndf_shape)
     return float(spec.shape_default) if spec.shape_default is not None else 0.0
 from .shadowing import shadowing_by_name
 
-__all__ = ['D_cl', 'Lambda_cl', 'brdf_cl']
+__all__ = ['D_cl', 'Lambda_cl', 'brdf_cl', 'ndf_shape_parameter']
 
 # ----------------------------------------------------------------------------------------------------------
 # OpenCL twins
@@ -88,7 +88,7 @@ def _ndf_kernel(kname, w, alpha, alpha_y, ndf, ndf_shape, runtime, precision):
     n = w.size // 3
     d_w = _vec_dev(rt.queue, w, dt)
     d_out = cla.empty(rt.queue, max(n, 1), dt)
-    _kernel(prg, kname)(rt.queue, (max(n, 1),), None, d_w.data, d_out.data, dt(ax), dt(ay), dt(_shape(spec, ndf_shape)),
+    _kernel(prg, kname)(rt.queue, (max(n, 1),), None, d_w.data, d_out.data, dt(ax), dt(ay), dt(ndf_shape_parameter(spec, ndf_shape)),
                         np.int32(n))
     return d_out.get()[:n].reshape(w.shape[:-1]).astype(np.float64)
 
@@ -154,6 +154,6 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-co
     args = [_vec_dev(q, wi, dt), _vec_dev(q, wo, dt)]
     args += [cla.to_device(q, np.ascontiguousarray(a, dtype=dt)) for a in (eta_a.real, eta_a.imag, F0_a, kd_a, Fbar)]
     d_out = cla.empty(q, max(n * m, 1), dt)
-    _kernel(prg, "brdf_eval")(q, (max(n, 1), m), None, *[a.data for a in args], d_out.data, dt(ax), dt(ay), dt(_shape(spec, ndf_shape)),
+    _kernel(prg, "brdf_eval")(q, (max(n, 1), m), None, *[a.data for a in args], d_out.data, dt(ax), dt(ay), dt(ndf_shape_parameter(spec, ndf_shape)),
                   dt(sigma), np.int32(n))
     return d_out.get()[: n * m].reshape(m, n).astype(np.float64)

@@ -37,7 +37,7 @@ from ..units import check_wavelengths
 from ..vocabulary import DEFAULT_MATERIAL
 from .diffuse import DIFFUSES, diffuse_parameter, diffuse_tradeoff
 from .fresnel_terms import FRESNELS
-from .microfacet import specular_term
+from .microfacet import specular_geometry, specular_term
 from .directions import as_dirs
 from .ndf import ALPHA_MAX, check_alpha, ndf_by_name
 from .quadrature import directional_albedo
@@ -124,6 +124,11 @@ class BRDF:
         wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
         return self._eval_flat(wi, wo, lam).reshape(shape)
 
+    def _eval_nodes(self, wi, wo, wavelengths_nm) -> np.ndarray:
+        """f (n, n_λ) in 1/sr at flat direction pairs (n, 3) and every wavelength of *wavelengths_nm*: one
+        ``_eval1`` per wavelength (a model that shares work between wavelengths overrides it)."""
+        return np.stack([self._eval1(wi, wo, lam) for lam in wavelengths_nm], axis=-1)
+
     def pdf(self, wi, wo, wavelength_nm):
         """Density (1/sr over ω_o) of :meth:`sample`."""
         wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
@@ -143,6 +148,15 @@ class BRDF:
         weight = np.where(ok, f * np.maximum(wo_ok[:, 2], 0.0) / np.where(ok, p, 1.0), 0.0)
         return BRDFSample(wo=wo.reshape(shape + (3,)), weight=weight.reshape(shape),
                           pdf=np.where(ok, p, 0.0).reshape(shape))
+
+    def sample_wo(self, wi, wavelength_nm, u):
+        """The sampled ω_o alone (..., 3) for ω_i at λ from u (..., 2) uniform in [0, 1)², wherever the sampler
+        puts it (a BSDF's transmitted directions below the surface included; 0 for an invalid sample), for a
+        caller that weights the samples itself with :meth:`eval` and :meth:`pdf` (a renderer's transport mode)."""
+        u = check_uniform(u)
+        wi_b, _, lam, shape = broadcast_pair(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
+        u_flat = np.array(np.broadcast_to(u, shape + (2,)).reshape(-1, 2))
+        return self._sample_flat(wi_b, u_flat, lam).reshape(shape + (3,))
 
     def albedo(self, wi, wavelength_nm):
         """Directional albedo ∫ f cos θ_o dω_o (dimensionless) by quadrature of :meth:`eval` over half-vectors
@@ -269,10 +283,16 @@ class MicrofacetBRDF(BRDF):
         kw = self.micro.kw()
         return kw["ndf"], kw["alpha"], (kw["alpha_y"] if kw["alpha_y"] is not None else kw["alpha"])
 
-    def _f_specular(self, wi, wo, F_fn):
+    def _specular_geometry(self, wi, wo) -> tuple:
+        """The wavelength-independent factors of :meth:`_f_specular` (:func:`specular_geometry`)."""
         ndf, ax, ay = self._micro_args()
         gfn, _ = shadowing_by_name(self.micro.shadowing)
-        return specular_term(wi, wo, ndf_by_name(ndf), ax, ay, self.ndf_shape, gfn, F_fn)
+        return specular_geometry(wi, wo, ndf_by_name(ndf), ax, ay, self.ndf_shape, gfn)
+
+    def _f_specular(self, wi, wo, F_fn, geometry=None):
+        ndf, ax, ay = self._micro_args()
+        gfn, _ = shadowing_by_name(self.micro.shadowing)
+        return specular_term(wi, wo, ndf_by_name(ndf), ax, ay, self.ndf_shape, gfn, F_fn, geometry)
 
     def _has_diffuse(self):
         return (not self.material.is_metal) and self.kd > 0 and self.diffuse != "none"
@@ -390,13 +410,14 @@ class TwoScaleParts(MicrofacetBRDF):
         return self.nano.scattered_share(cos_d, lam, self.diffraction,
                                          self.material if self.fresnel == "exact" else None)
 
-    def _smooth_parts(self, wi, wo, lam):
-        """(coherent, diffuse) in 1/sr for flat arrays at one wavelength."""
+    def _smooth_parts(self, wi, wo, lam, geometry=None):
+        """(coherent, diffuse) in 1/sr for flat arrays at one wavelength (*geometry*: the pairs'
+        :meth:`_specular_geometry` when already known)."""
         F_fn = self._F(lam)
         h = wi + wo
         h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
         cos_d = np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0)
-        return self._f_specular(wi, wo, F_fn) * self._A(cos_d, lam), self._f_diffuse(wi, wo, F_fn)
+        return self._f_specular(wi, wo, F_fn, geometry) * self._A(cos_d, lam), self._f_diffuse(wi, wo, F_fn)
 
     def _parts(self, wi, wo, lam):
         coherent, diffuse = self._smooth_parts(wi, wo, lam)
@@ -416,6 +437,23 @@ class TwoScaleParts(MicrofacetBRDF):
 
     def _eval1(self, wi, wo, lam):
         return sum(self._parts(wi, wo, lam))
+
+    def _f_diffraction_nodes(self, wi, wo, wavelengths_nm) -> np.ndarray:
+        """The diffracted part (n, n_λ) at every wavelength of *wavelengths_nm* (a tabulated model reads them all
+        at once)."""
+        return np.stack([self._f_diffraction(wi, wo, lam) for lam in wavelengths_nm], axis=-1)
+
+    def _eval_nodes(self, wi, wo, wavelengths_nm) -> np.ndarray:
+        """:meth:`_eval1` at every wavelength of *wavelengths_nm* (n, n_λ), the diffracted part of all of them in
+        one :meth:`_f_diffraction_nodes` and the microfacet geometry once (the same sums as :meth:`_parts`)."""
+        diffraction = self._f_diffraction_nodes(wi, wo, wavelengths_nm) if self._rough else None
+        geometry = self._specular_geometry(wi, wo)
+        out = []
+        for i, lam in enumerate(wavelengths_nm):
+            coherent, diffuse = self._smooth_parts(wi, wo, lam, geometry)
+            d = diffraction[:, i] if diffraction is not None else np.zeros(wi.shape[0])
+            out.append(sum((coherent, d, diffuse, self._f_ms(wi, wo, lam))))
+        return np.stack(out, axis=-1)
 
     def _probs(self, wi, lam):
         """Lobe probabilities (coherent, diffracted, cosine) for each ω_i: the cosine lobe serves the diffuse term

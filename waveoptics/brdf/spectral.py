@@ -167,8 +167,7 @@ class SpectralNodes(BRDF):
     def eval_spectrum(self, wi, wo):
         """f at every node: (..., n_nodes) in 1/sr."""
         wi, wo, _, shape = broadcast_pair(wi, wo, self.nodes[0])
-        out = np.stack([self.base._eval1(wi, wo, lam) for lam in self.wavelengths_nm], axis=-1)
-        return out.reshape(shape + (self.nodes.size,))
+        return self.base._eval_nodes(wi, wo, self.wavelengths_nm).reshape(shape + (self.nodes.size,))
 
     def eval_rgb(self, wi, wo):
         """Linear RGB BRDF (..., 3) in 1/sr (see the module doc)."""

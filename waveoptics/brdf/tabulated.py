@@ -226,7 +226,12 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         return -np.sin(th) * np.cos(ph), -np.sin(th) * np.sin(ph)
 
     def _f_diffraction(self, wi, wo, lam):
-        j = self._wavelength_index(lam)
+        return self._f_diffraction_nodes(wi, wo, [lam])[:, 0]
+
+    def _f_diffraction_nodes(self, wi, wo, wavelengths_nm):
+        """The diffracted part (n, n_λ) at the table's wavelengths *wavelengths_nm*: the geometry of the
+        look-up once for all of them."""
+        j = np.array([self._wavelength_index(lam) for lam in wavelengths_nm])
         thetas = self._table["thetas"]
         theta_i = np.arccos(np.clip(wi[:, 2], -1.0, 1.0))
         a, b, t = _bracket(thetas, theta_i)
@@ -235,7 +240,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         wo_r, wi_r = _rotate(wo, rot), _rotate(wi, rot)
         delta = wo_r[:, :2] + wi_r[:, :2]   # (u, v) − mirror point of ω_i
         rotate = self._table["phis"].size == 1 and self.isotropic
-        num = np.zeros(wi.shape[0])
+        num = np.zeros((wi.shape[0], j.size))
         den = np.zeros(wi.shape[0])
         for p_idx, w_p in phi_nodes:
             for k, w_k in ((a, 1 - t), (b, t)):
@@ -250,10 +255,11 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                     uu, vv = mu + delta[:, 0], mv + delta[:, 1]
                     inside = uu * uu + vv * vv < 1.0
                 # a node whose point lies beyond its horizon holds no data there: it drops out of the blend
-                num += w_p * w_k * np.where(inside, self._lookup(p_idx, k, j, uu, vv), 0.0)
+                num += (w_p * w_k)[:, None] * np.where(inside[:, None], self._lookup(p_idx, k, j, uu, vv), 0.0)
                 den += w_p * w_k * inside
+        den = den[:, None]
         out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
-        return np.where((wi[:, 2] > 0) & (wo[:, 2] > 0), out, 0.0)
+        return np.where(((wi[:, 2] > 0) & (wo[:, 2] > 0))[:, None], out, 0.0)
 
     def _lookup_table(self):
         """The tabulated lobes with each cell beyond the rim of the disc given the mean of its neighbours inside
@@ -262,25 +268,33 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         if "lookup" not in self._table:
             lob = self._table["diffraction"]
             inside = self._table["grid"].inside
+            n_v, n_u = inside.shape
             filled, known = lob.copy(), inside.copy()
+            # neighbours (row, column offsets) of a cell, wrapping round the grid's edges
+            steps = ((0, -1), (0, 1), (-1, 0), (1, 0))
             for _ in range(2):
-                total = np.zeros_like(filled)
                 count = np.zeros(known.shape)
-                for axis, shift in ((-1, 1), (-1, -1), (-2, 1), (-2, -1)):
-                    total += np.roll(np.where(known, filled, 0.0), shift, axis=axis)
-                    count += np.roll(known, shift, axis=axis)
+                for dv, du in steps:
+                    count += np.roll(known, (-dv, -du), axis=(0, 1))
                 new = ~known & (count > 0)
-                filled = np.where(new, total / np.maximum(count, 1), filled)
+                rows, cols = np.nonzero(new)   # only the ring of new cells is read and written (all lobes at once)
+                total = np.zeros(filled.shape[:-2] + rows.shape)
+                for dv, du in steps:
+                    r, c = (rows + dv) % n_v, (cols + du) % n_u
+                    total += np.where(known[r, c], filled[..., r, c], 0.0)
+                filled[..., rows, cols] = total / np.maximum(count[rows, cols], 1)
                 known = known | new
             self._table["lookup"] = filled
         return self._table["lookup"]
 
     def _lookup(self, p, k, j, u, v):
-        """Bilinear value at (u, v) (n,) of the lobes of φ nodes p and θ nodes k (per point), wavelength j."""
+        """Bilinear values (n, n_j) at (u, v) (n,) of the lobes of φ nodes p and θ nodes k (per point), at the
+        wavelength indices j (n_j,)."""
         lob = self._lookup_table()
-        k0, j0, av, au, ok = self._table["grid"].bilinear(u, v)
-        p = np.broadcast_to(p, u.shape)
-        k = np.broadcast_to(k, u.shape)
+        k0, j0, av, au, ok = (x[:, None] for x in self._table["grid"].bilinear(u, v))
+        p = np.broadcast_to(p, u.shape)[:, None]
+        k = np.broadcast_to(k, u.shape)[:, None]
+        j = np.asarray(j)[None, :]
         val = ((1 - av) * ((1 - au) * lob[p, k, j, k0, j0] + au * lob[p, k, j, k0, j0 + 1])
                + av * ((1 - au) * lob[p, k, j, k0 + 1, j0] + au * lob[p, k, j, k0 + 1, j0 + 1]))
         return np.where(ok, val, 0.0)

@@ -192,7 +192,8 @@ def diffracted_lobe(route, wi, w, mat, micro, nano, grid, F, dm, polarization, r
         return np.zeros((w.size, grid.n_v, grid.n_u)), "none", np.ones(w.size), z
     if route == "frame":   # Walter's integral: each facet's nano lobe in its own frame
         diffraction, scattered, reflected = facet_frame_diffraction(
-            wi, w, mat, micro, nano, grid, F, diffraction=dm, polarization=polarization, table_grid=reference_grid)
+            wi, w, mat, micro, nano, grid, F, diffraction=dm, polarization=polarization, table_grid=reference_grid,
+            device=device, precision=precision)
         diffraction = np.where(inside, diffraction, 0.0)
         # the light the facets scatter that is masked on its way out or leaves below the macro horizon
         beyond = np.maximum(scattered - integrate(diffraction, grid), 0.0)

@@ -19,6 +19,7 @@ from ..materials import cos2_eta_i, facet_sp_mix
 from ..scatter.grid import DirectionGrid
 from ..scatter.tangent_blend import blend_with_first_order, uses_vector_first_order
 from .facet import half_vector_nodes, ndf_nodes
+from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_polarization import facet_scattered_share
 from .field_lobe import FIELD_GRID_OVERSAMPLING, field_anisotropy, field_proposal_model, kirchhoff_scattered_lobe
 from .nano_grid import NARROW_CELLS
@@ -285,7 +286,8 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
 
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
                             diffraction="kirchhoff", polarization: str = "unpolarized",
-                            table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None):
+                            table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None,
+                            backend: str = "auto", device=None, precision: str = "float32"):
     """The diffracted part on *grid*: Walter's integral over facet normals m of the nano lobe in each facet's
     frame (docs/physics.md §7),
 
@@ -317,6 +319,11 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     towards grazing angles (:mod:`waveoptics.scatter.tangent_blend`) carries Q of the macro polarization, not the
     facet's mix (on glass the s and p factors differ by 2 % at 81°, 10 % at 88°; that part is off by that
     difference times sin²η_i).
+
+    The per-cell sum runs on *backend* (:data:`waveoptics.brdf.facet_frame_cl.FACET_FRAME_BACKENDS`): the OpenCL
+    kernel ``kernels/facet_frame.cl`` (:func:`waveoptics.brdf.facet_frame_cl.facet_frame_sum_cl`, on *device* in
+    *precision*) or its NumPy twin here; ``auto`` takes the kernel where an OpenCL device exists, for PSD
+    statistics and an NDF with a kernel twin (:func:`waveoptics.brdf.facet_frame_cl.kernel_reason`).
 
     Returns
     -------
@@ -369,9 +376,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
     stack_other = None if other is None else _facet_stack(nano, w, table_grid or grid, dm, material, other)
-    out = np.zeros((wo.shape[0], w.size))
-
     tgrid = table_grid or grid
+    out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
+                              FACET_THETAS_DEG, device=device, precision=precision)
+           if facet_frame_backend(backend, micro, nano) == "opencl" else None)
 
     def add(m, valid):
         """Add the nodes m (3,) (an anisotropic NDF's node, shared by all cells) or (n_cells, 3) (one node per
@@ -410,13 +418,15 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         out[ok] += weight[:, None] * g
 
     e1, e2 = meridian_basis(h) if symmetric else facet_basis(h)
-    for m in (ndf_nodes(na, e2, ndf=ndf, ax=ax, ay=ay, c=c) if symmetric else m_a):
-        add(m, np.ones(wo.shape[0], bool))
-    for s_k, cp, sp in half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):
-        ok = s_k < 1                                      # a tilt s from h sends ω_i to q = 2k cosθ_d s
-        s_k = np.where(ok, s_k, 0.0)
-        m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
-        add(m, ok)
+    if out is None:   # the NumPy twin of kernels/facet_frame.cl
+        out = np.zeros((wo.shape[0], w.size))
+        for m in (ndf_nodes(na, e2, ndf=ndf, ax=ax, ay=ay, c=c) if symmetric else m_a):
+            add(m, np.ones(wo.shape[0], bool))
+        for s_k, cp, sp in half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):
+            ok = s_k < 1                                      # a tilt s from h sends ω_i to q = 2k cosθ_d s
+            s_k = np.where(ok, s_k, 0.0)
+            m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
+            add(m, ok)
     diffraction = np.zeros((w.size, grid.n_v, grid.n_u))
     for i, lam in enumerate(w):
         if dm.perturbative:

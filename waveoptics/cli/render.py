@@ -18,7 +18,7 @@ MAX_SPP_DEFAULT = _d("max_spp")
 
 def register(sub):
     from ..vocabulary import GLINT_SHAPES
-    from ..vocabulary import RENDER_BSDF_AUTO
+    from ..vocabulary import RENDER_BSDF_AUTO, RENDER_MODELS
     from ..vocabulary import RENDER_BSDFS as WAVE_BSDFS
 
     p = sub.add_parser(
@@ -30,6 +30,12 @@ def register(sub):
                     "CIEDE2000 map, a labelled PNG and summary.json. Needs the 'render' extra.")
     add_model(p)
     g = p.add_argument_group("render")
+    g.add_argument("--model", choices=RENDER_MODELS, default=_d("model"),
+                   help="the surface rendered: twoscale (the two-scale BRDF of the options above) or "
+                        "rough-dielectric (the nano-rough glass: a rough dielectric with --material, --micro-alpha, "
+                        "--alpha-y, --ndf, --nano, --multiple-scattering and --wavelength-step, reflecting and "
+                        "transmitting, beside Mitsuba's roughdielectric; through the NumPy glass plugin) "
+                        f"(default {_d('model')})")
     option(g, "--environment", default=_d("environment"), note="sky and studio are built by the code")
     g.add_argument("--no-ground", dest="ground", action="store_false", help="no ground plane under the sphere")
     g.add_argument("--variant", default=_d("variant"), metavar="NAME",
@@ -81,7 +87,8 @@ def register(sub):
 
 
 #: sphere-render options that --glints does not take, with their defaults
-_SPHERE_ONLY = {"target_noise": _d("target_noise"), "max_spp": _d("max_spp"), "budget": f"{_d('budget_s'):g}"}
+_SPHERE_ONLY = {"target_noise": _d("target_noise"), "max_spp": _d("max_spp"), "budget": f"{_d('budget_s'):g}",
+                "model": _d("model")}
 #: --glints options and their defaults (their options default to None, so that a sphere render can tell them given)
 _GLINT_DEFAULTS = {k: _d(k, GlintRequest) for k in ("incident", "view", "wavelengths", "shape", "workers",
                                                      "scheduler", "coherence", "light_radius")}
@@ -169,9 +176,9 @@ def run_render(args):
     from ..renderers.jobs import render_job
 
     budget = parse_budget(args.budget)
-    request = RenderRequest(**model_fields(args), environment=args.environment, ground=args.ground,
-                            variant=args.variant, bsdf=args.bsdf, sphere_size=args.sphere_size, spp=args.spp,
-                            target_noise=args.target_noise, max_spp=args.max_spp, budget_s=budget)
+    request = RenderRequest(**model_fields(args), model=args.model, environment=args.environment,
+                            ground=args.ground, variant=args.variant, bsdf=args.bsdf, sphere_size=args.sphere_size,
+                            spp=args.spp, target_noise=args.target_noise, max_spp=args.max_spp, budget_s=budget)
     r = render_job(request, args.output, overwrite=args.overwrite, progress=partial(progress, args=args))
     if r.stop and not args.json:
         print(r.stop, file=sys.stderr)

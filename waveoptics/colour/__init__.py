@@ -1,4 +1,5 @@
-"""Spectra to colour, with colour-science underneath.
+"""Spectra to colour, with colour-science underneath (imported only by the functions that need it; the default
+observer and illuminant come from cie_tables without it).
 
 Files: observers (CIE colour-matching functions), illuminants (light sources as SPDs), colorimetry (CMFs, tristimulus weights, XYZ, RGB spaces, ΔE2000),
 sampling (the wavelength grid for a colour accuracy), metamers (laser metamers of an illuminant), f0 (F0 colours

@@ -2,7 +2,9 @@
 
 Everything colorimetric (colour-matching functions, CIE illuminants, Planck's law, RGB colour spaces, chromatic
 adaptation, CIELAB and ΔE2000, the sRGB transfer function, CSV spectra, ASTM E2022 weights) comes from
-colour-science; this module only arranges it for waveoptics' needs:
+colour-science (imported by the functions that need it: it takes about 2 s to import; the default observer and
+illuminant, CIE 1931 2° and D65, come from :mod:`waveoptics.colour.cie_tables`, the same numbers); this module
+only arranges it for waveoptics' needs:
 
 * spectra sampled on *any* wavelength grid with the wavelength axis **last** and any leading shape (images,
   direction sets), so a simulation hands over its per-wavelength output as is;
@@ -66,7 +68,6 @@ from __future__ import annotations
 
 import functools
 
-import colour
 import numpy as np
 from scipy.interpolate import CubicSpline
 
@@ -161,6 +162,7 @@ def _weights_astm_e2022(grid: np.ndarray, spd: SPD, observer) -> np.ndarray:
         adjust_tristimulus_weighting_factors_ASTME308,
         tristimulus_weighting_factors_ASTME2022,
     )
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
 
     if spd.lines:
         raise WaveopticsError("method 'ASTM E2022' needs a continuous illuminant; use method='linear' for lasers")
@@ -297,6 +299,7 @@ def XYZ_to_rgb(XYZ, space="sRGB", white=None, *, cat: str = CAT) -> np.ndarray:
     numpy.ndarray (..., 3)
         Linear RGB; values outside [0, 1] are kept (out-of-gamut colours such as gold's red F0).
     """
+    import colour   # colour-science (module doc)
 
     cs = colour.RGB_COLOURSPACES[space_name(space)]
     XYZ = np.asarray(XYZ, dtype=float)
@@ -328,6 +331,7 @@ def reflectance_to_rgb_matrix(wavelengths_nm, illuminant="D65", space="sRGB") ->
 def luminance(rgb, space="sRGB") -> np.ndarray:
     """Relative luminance Y of linear RGB (..., 3) in *space*: the Y row of the space's RGB → XYZ matrix
     (colour-science's; for sRGB the Rec. 709 weights 0.2126, 0.7152, 0.0722, IEC 61966-2-1)."""
+    import colour   # colour-science (module doc)
 
     weights = np.asarray(colour.RGB_COLOURSPACES[space_name(space)].matrix_RGB_to_XYZ)[1]
     return np.asarray(rgb, dtype=float) @ weights
@@ -335,6 +339,7 @@ def luminance(rgb, space="sRGB") -> np.ndarray:
 
 def rgb_to_srgb8(rgb) -> np.ndarray:
     """8-bit sRGB-encoded integers from linear sRGB: clipped to [0, 1], IEC 61966-2-1 curve, rounded."""
+    import colour   # colour-science (module doc)
 
     rgb = np.asarray(rgb, dtype=float)
     if not np.all(np.isfinite(rgb)):
@@ -344,6 +349,7 @@ def rgb_to_srgb8(rgb) -> np.ndarray:
 
 
 def delta_e2000_XYZ(XYZ1, XYZ2, white) -> np.ndarray:
+    import colour   # colour-science (module doc)
 
     xy = colour.XYZ_to_xy(np.asarray(white, dtype=float))
     return colour.delta_E(colour.XYZ_to_Lab(XYZ1, xy), colour.XYZ_to_Lab(XYZ2, xy), method="CIE 2000")
@@ -356,6 +362,7 @@ def delta_e2000(rgb1, rgb2, colourspace="sRGB") -> np.ndarray:
     ----------
     .. [1] Luo, Cui, Rigg, Color Res. Appl. 26(5), 2001; colour-science ``delta_E(method='CIE 2000')``.
     """
+    import colour   # colour-science (module doc)
 
     cs = colour.RGB_COLOURSPACES[space_name(colourspace)]
     to_XYZ = functools.partial(colour.RGB_to_XYZ, colourspace=cs, illuminant=cs.whitepoint,

@@ -13,11 +13,11 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-import colour
 import numpy as np
 
 from ..errors import WaveopticsError, unknown
 from ..units import WAVELENGTH_UNITS, check_wavelengths, parse_number_list
+from .cie_tables import d65
 
 __all__ = ['ILLUMINANT_NAMES', 'SPD', 'laser', 'blackbody', 'standard_illuminant', 'spd_from_csv', 'illuminant']
 
@@ -96,6 +96,7 @@ def blackbody(temperature_K: float) -> SPD:
     T = float(temperature_K)
     if not (math.isfinite(T) and 100.0 <= T <= 1e7):
         raise WaveopticsError(f"blackbody temperature {temperature_K!r} K is not allowed; use 100 to 1e7 K")
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
     sd = colour.sd_blackbody(T, colour.SpectralShape(360, 830, 1))
     return SPD(f"blackbody {T:g} K", sd.wavelengths, 100.0 * sd.values / sd[560])
 
@@ -104,6 +105,9 @@ def standard_illuminant(name: str) -> SPD:
     """A CIE (or other colour-science) illuminant by name: ``"D65"``, ``"A"``, ``"F2"`` (= ``"FL2"``), ``"E"``."""
 
     key = _STANDARD_ALIASES.get(name.upper(), name)
+    if key.lower() == "d65":   # the default illuminant, without importing colour-science (cie_tables)
+        return SPD("D65", *d65())
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
     table = {k.lower(): k for k in colour.SDS_ILLUMINANTS}
     if key.lower() not in table:
         raise unknown("illuminant", name, ILLUMINANT_NAMES)

@@ -5,10 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import colour
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from ..errors import WaveopticsError
 from ..io.files import atomic_path
@@ -76,6 +73,8 @@ def metamer_summary(target_spd, lines_nm, observer=DEFAULT_OBSERVER) -> dict:
     P = metamer_laser_weights(target, lines, observer)
     XYZ_t = spd_to_XYZ(target, observer)
     XYZ_m = spd_to_XYZ(laser(lines, P), observer)
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
+
     return {"target": target.name, "observer": observer_name(observer), "lines_nm": lines.tolist(),
             "powers": P.tolist(), "power_fractions": (P / P.sum()).tolist(),
             "XYZ_target": (XYZ_t / XYZ_t[1]).tolist(), "XYZ_mix": (XYZ_m / XYZ_t[1]).tolist(),
@@ -94,7 +93,9 @@ def plot_metamers(target_spd, lines_nm, powers, path, *, observer=DEFAULT_OBSERV
     path : str or Path
         PNG file (written atomically; refused if it exists unless *overwrite*).
     """
-
+    import colour   # colour-science and matplotlib, imported where used (about 2 s)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
     target = as_spd(target_spd)
     mix = laser(lines_nm, powers)

@@ -1,4 +1,5 @@
-"""Standard observers: the CIE colour-matching functions (colour-science's tables), by name.
+"""Standard observers: the CIE colour-matching functions (colour-science's tables; the CIE 1931 2° observer from
+:mod:`waveoptics.colour.cie_tables`, the same numbers without importing colour-science), by name.
 
 References
 ----------
@@ -8,10 +9,10 @@ from __future__ import annotations
 
 import functools
 
-import colour
 import numpy as np
 
 from ..errors import unknown
+from .cie_tables import CIE_1931_2_NAME, cie_1931_2
 
 __all__ = ['DEFAULT_OBSERVER', 'OBSERVERS', 'observer_name', 'cmfs', 'cmf_at']
 
@@ -40,6 +41,9 @@ def observer_name(observer) -> str:
 
 @functools.lru_cache(maxsize=8)
 def _cmfs(name: str):
+    if name == CIE_1931_2_NAME:   # the default observer, without importing colour-science
+        return cie_1931_2()
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
 
     c = colour.MSDS_CMFS[name]
     w, v = np.array(c.wavelengths, dtype=float), np.array(c.values, dtype=float)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import functools
 import math
 
-import colour
 import numpy as np
 
 from ..errors import WaveopticsError
@@ -58,6 +57,7 @@ def spectral_grid(illuminant, step_nm: float = 5.0, observer=DEFAULT_OBSERVER) -
 def reference_reflectances() -> tuple[np.ndarray, np.ndarray]:
     """Smooth test reflectances at 1 nm over 360–830 nm: the 24 ColorChecker patches (Ohta, Sprague-
     interpolated) and four metal-like absorption edges 0.05 + 0.9/(1 + exp(-(λ-λ0)/15 nm)), λ0 = 450..600 nm."""
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
 
     w = np.arange(360.0, 831.0)
     shape = colour.SpectralShape(380, 780, 1)

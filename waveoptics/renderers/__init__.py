@@ -4,6 +4,7 @@ and pbrt-v4's ``measured`` models read, and rendered scenes (``waveoptics render
 Modules: model (the BRDF a renderer receives), requests (the typed requests of the render jobs, which own their
 defaults), jobs (the sphere render and export jobs: model, Mitsuba renders, outputs written whole), glint_job (the footprint
 render job), mitsuba (loading Mitsuba 3 and the ``waveoptics`` plugin, NumPy in
+wavefront mode), mitsuba_glass (the ``waveoptics_glass`` plugin: the nano-rough glass with transmission, NumPy in
 wavefront mode), mitsuba_native (the ``waveoptics_native`` plugin, in Dr.Jit), drjit_twoscale and drjit_lobes (the
 model's tables and formulas in Dr.Jit), rgl (export to the RGL ``.bsdf`` tensor format), scene (Mitsuba scenes),
 glints (footprint renders of height fields), sphere (the NumPy sphere renderer: spheres under a directional light or

@@ -66,7 +66,7 @@ import numpy as np
 from .. import colour
 from ..errors import FieldError, unknown
 from ..materials import get_material
-from ..scatter.pixel import PIXEL_BACKENDS, pixel_brdf
+from ..scatter.pixel import PIXEL_BACKENDS, SUM_N_SIGMA, pixel_brdf
 from ..surfaces.footprint import Footprint
 from ..vocabulary import GLINT_SHAPES
 from .light_cone import cone_directions
@@ -469,7 +469,7 @@ def estimate_glints(field, material, settings: GlintSettings = GlintSettings(), 
     n_px = int(hit.sum())
     if n_px == 0:
         raise FieldError("no pixel of this view meets the surface", "surface")
-    box = (8 * s1 / field.dx + 2) * (8 * s2 / field.dy + 2)        # ±N_SIGMA box of each ellipse, roughly
+    box = math.pi * SUM_N_SIGMA ** 2 * s1 * s2 / (field.dx * field.dy)    # samples of each ellipse (those summed)
     total = float(np.sum(box[hit]))
     # one pixel outside the clock: builds the kernel and pays every first-call cost (imports, material tables)
     j, i = np.argwhere(hit)[int(n_px // 2)]

@@ -12,7 +12,10 @@ the summary out.
   reference.exr, delta_e.exr, render.png, summary.json (last: it says the set is complete) and, for the
   ``measured`` BSDF, material.bsdf;
 * :func:`choose_bsdf`: how the model enters Mitsuba when the request says ``auto`` (the Dr.Jit plugin where it
-  runs compiled and takes the model, else the RGL export in spectral variants, else the NumPy plugin).
+  runs compiled and takes the model, else the RGL export in spectral variants, else the NumPy plugin);
+* :data:`RENDER_MODEL_KINDS`: the surface models :func:`render_job` renders (the request's ``model``), each as the
+  functions that build it, choose how it enters Mitsuba, give its BSDF and Mitsuba's reference, and describe it:
+  ``twoscale`` (the functions above) and ``rough-dielectric`` (:mod:`waveoptics.renderers.glass_render`).
 
 Errors are :class:`waveoptics.errors.FieldError` naming the request's fields.
 
@@ -26,13 +29,16 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from ..errors import FieldError
 from ..vocabulary import DEFAULT_NANO, RENDER_BSDF_AUTO, RENDER_BSDFS
+from . import glass_render
 from .requests import RendererModel, RenderRequest
 
 __all__ = ["OUTPUTS", "EXPORT_FORMATS", "RenderResult", "load_height_field", "model_parameters", "build_model",
-           "describe_model", "plugin_parameters", "export_job", "choose_bsdf", "render_job"]
+           "describe_model", "plugin_parameters", "export_job", "choose_bsdf", "RenderModelKind",
+           "RENDER_MODEL_KINDS", "render_job"]
 
 #: files of one sphere render (summary.json last: it says the set is complete); the ``measured`` BSDF adds
 #: material.bsdf
@@ -196,6 +202,9 @@ class RenderResult:
 
 def _check(request: RenderRequest) -> None:
     """Validate the render fields before any work (the model's are checked where it is built)."""
+    if request.model not in RENDER_MODEL_KINDS:
+        raise FieldError(f"{{model}} {request.model!r} is not allowed; use one of {', '.join(RENDER_MODEL_KINDS)}",
+                         "model")
     if request.bsdf not in RENDER_BSDFS + (RENDER_BSDF_AUTO,):
         raise FieldError(f"{{bsdf}} {request.bsdf!r} is not allowed; use one of "
                          f"{', '.join(RENDER_BSDFS + (RENDER_BSDF_AUTO,))}", "bsdf")
@@ -236,6 +245,45 @@ def choose_bsdf(request: RenderRequest, model) -> tuple[str, str]:
     return "plugin", f"auto: {not_native}; the NumPy plugin (measured needs a spectral variant)"
 
 
+def _twoscale_wave(mi, how: str, model, params: dict, request: RenderRequest, stage) -> dict:
+    """The two-scale model's BSDF as *how* says (:func:`waveoptics.renderers.scene.wave_bsdf`)."""
+    from . import scene
+
+    return scene.wave_bsdf(mi, how, bsdf_file=stage / "material.bsdf",
+                           plugin_parameters=plugin_parameters(request, params) if how == "plugin" else None,
+                           model=model)
+
+
+def _twoscale_reference(mi, model, params: dict):
+    """Mitsuba's roughconductor or roughplastic (:func:`waveoptics.renderers.scene.reference_bsdf`)."""
+    from . import scene
+
+    return scene.reference_bsdf(mi, model, **{k: params[k] for k in ("material", "alpha", "alpha_y", "ndf", "kd")})
+
+
+@dataclass(frozen=True)
+class RenderModelKind:
+    """One surface model of :func:`render_job`: ``build(request)`` → (model, parameters); ``choose(request,
+    model)`` → (how it enters Mitsuba, why); ``wave(mi, how, model, parameters, request, stage)`` → its Mitsuba
+    dict; ``reference(mi, model, parameters)`` → (Mitsuba's own model, notes); ``describe(request, parameters)``
+    → the description summaries echo."""
+
+    build: Callable
+    choose: Callable
+    wave: Callable
+    reference: Callable
+    describe: Callable
+
+
+#: the surface models of :func:`render_job` by the request's ``model``
+#: (:data:`waveoptics.vocabulary.RENDER_MODELS`)
+RENDER_MODEL_KINDS = {
+    "twoscale": RenderModelKind(build_model, choose_bsdf, _twoscale_wave, _twoscale_reference, describe_model),
+    "rough-dielectric": RenderModelKind(glass_render.glass_build, glass_render.glass_choose, glass_render.glass_wave,
+                                        glass_render.glass_reference, glass_render.glass_describe),
+}
+
+
 def render_job(request: RenderRequest, output, *, overwrite: bool = False, progress=None) -> RenderResult:
     """Render *request* into the directory *output* (see the module doc); the set of files is written whole or not
     at all (:func:`waveoptics.io.files.staged_outputs`), an existing set only with *overwrite*.
@@ -266,15 +314,17 @@ def render_job(request: RenderRequest, output, *, overwrite: bool = False, progr
         raise FieldError(f"{{max_spp}} {request.max_spp} is below {{spp}} {request.spp}", "max_spp", "spp")
     timings = {}
     t0 = time.perf_counter()
-    model, params = build_model(request)
+    kind = RENDER_MODEL_KINDS[request.model]
+    model, params = kind.build(request)
     timings["model_s"] = time.perf_counter() - t0
-    bsdf = choose_bsdf(request, model)
+    bsdf = kind.choose(request, model)
     if bsdf[0] == "measured" and "material.bsdf" not in outputs:       # chosen by auto: check its file too
         outputs += ("material.bsdf",)
         files.prepare_outdir(outdir, overwrite=overwrite, expected=outputs)
-    desc = describe_model(request, params)
+    desc = kind.describe(request, params)
     with files.staged_outputs(outdir, outputs, last="summary.json") as stage:
-        summary, cmp = _render(request, bsdf, mi, model, params, desc, env, settings, stage, timings, progress)
+        summary, cmp = _render(request, kind, bsdf, mi, model, params, desc, env, settings, stage, timings,
+                               progress)
         summary["outputs"] = list(outputs)
         files.write_json(stage / "summary.json", summary)
     for note in summary["reference_notes"]:
@@ -282,9 +332,10 @@ def render_job(request: RenderRequest, output, *, overwrite: bool = False, progr
     return RenderResult(summary, outdir, cmp.stop, timings)
 
 
-def _render(request, bsdf, mi, model, params, desc, env, settings, stage, timings, progress):
-    """The renders of :func:`render_job` and every output but summary.json, written into *stage*, with the BSDF
-    *bsdf* of :func:`choose_bsdf`; (the summary, the :class:`waveoptics.renderers.scene.Comparison`)."""
+def _render(request, kind, bsdf, mi, model, params, desc, env, settings, stage, timings, progress):
+    """The renders of :func:`render_job` and every output but summary.json, written into *stage*, of the surface
+    model *kind* (:class:`RenderModelKind`) with the BSDF *bsdf* of its ``choose``; (the summary, the
+    :class:`waveoptics.renderers.scene.Comparison`)."""
     import json
 
     from ..io import files
@@ -305,11 +356,8 @@ def _render(request, bsdf, mi, model, params, desc, env, settings, stage, timing
     if how == "measured":
         rgl.export_rgl(model, stage / "material.bsdf", description="waveoptics render: " + json.dumps(desc))
     timings["export_s"] = time.perf_counter() - t0
-    wave = scene.wave_bsdf(mi, how, bsdf_file=stage / "material.bsdf",
-                           plugin_parameters=plugin_parameters(request, params) if how == "plugin" else None,
-                           model=model)
-    ref, notes = scene.reference_bsdf(mi, model, **{k: params[k] for k in ("material", "alpha", "alpha_y", "ndf",
-                                                                           "kd")})
+    wave = kind.wave(mi, how, model, params, request, stage)
+    ref, notes = kind.reference(mi, model, params)
     scenes = {k: scene.scene_dict(mi, b, env.radiance, settings) for k, b in (("wave", wave), ("reference", ref))}
     cmp = scene.render_comparison(mi, scenes, settings, on, target_noise=request.target_noise,
                                   max_spp=request.max_spp, budget_s=request.budget_s, progress=tick)

@@ -16,7 +16,8 @@ Mitsuba's ``eval`` is f cos θ_o (its convention); its ``si.wi`` is our first di
 Plugin parameters, as in a scene file: ``material`` (string), ``alpha``, ``alpha_y`` (float), ``ndf``,
 ``nano`` (``MODEL:params`` or ``none``), ``surface`` (height-field file), ``diffraction``, ``kd``, ``diffuse``,
 ``wavelength_step`` (nm), ``resolution``, ``exact`` (bool), ``multiple_scattering`` (bool). The plugin evaluates with NumPy, so in JIT variants it
-runs in wavefront mode: :func:`register` turns Dr.Jit's symbolic loops and calls off.
+runs in wavefront mode: :func:`register` turns Dr.Jit's symbolic loops and calls off. This plugin reflects only;
+the nano-rough glass, with transmission, is :mod:`waveoptics.renderers.mitsuba_glass` (``waveoptics_glass``).
 
 References
 ----------
@@ -36,7 +37,7 @@ from ..errors import WaveopticsError
 from .model import DEFAULT_WAVELENGTH_STEP_NM, cached_renderer_brdf
 
 __all__ = ['LLVM_MIN', 'PLUGIN_NAME', 'INSTALL_HINT', 'llvm_library', 'load_mitsuba', 'register',
-           'plugin_parameters']
+           'plugin_parameters', 'plugin_inputs']
 
 #: oldest LLVM whose code generation Mitsuba 3.9's LLVM variants survive
 LLVM_MIN = 17
@@ -129,7 +130,7 @@ def _rows(v, width=3) -> np.ndarray:
     return a.reshape(1, width) if a.ndim == 1 else a.reshape(width, -1).T
 
 
-def _plugin_inputs(si, other, width, spectral: bool, scalar: bool):
+def plugin_inputs(si, other, width, spectral: bool, scalar: bool):
     """(wi (n, 3), other (n, width), wavelengths (n, 4) or None) of a Mitsuba interaction, broadcast to a common n
     (a JIT variable of width 1 is a constant)."""
     wi, o = _rows(si.wi), _rows(other, width)
@@ -194,7 +195,7 @@ def _bsdf_class(mi):
         # -- helpers -------------------------------------------------------------------------------------
         @staticmethod
         def _inputs(si, other, width):
-            return _plugin_inputs(si, other, width, spectral, scalar)
+            return plugin_inputs(si, other, width, spectral, scalar)
 
         def _f(self, wi, wo, lam):
             """f (n, channels) in 1/sr."""

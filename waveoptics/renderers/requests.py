@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from ..vocabulary import DEFAULT_MATERIAL, DEFAULT_NDF, RENDER_BSDF_AUTO, RENDER_WAVELENGTH_STEP_NM
+from ..vocabulary import DEFAULT_MATERIAL, DEFAULT_NDF, RENDER_BSDF_AUTO, RENDER_MODELS, RENDER_WAVELENGTH_STEP_NM
 
 __all__ = ["RendererModel", "RenderRequest", "GlintRequest", "field_default"]
 
@@ -98,6 +98,11 @@ class RenderRequest(RendererModel):
 
     Parameters
     ----------
+    model : str
+        The surface model rendered (:data:`waveoptics.vocabulary.RENDER_MODELS`): ``twoscale`` (the two-scale BRDF
+        of the :class:`RendererModel` fields) or ``rough-dielectric`` (the nano-rough glass of *material*, *alpha*,
+        *alpha_y*, *ndf*, *nano*, *multiple_scattering* and *wavelength_step*, with transmission:
+        :mod:`waveoptics.renderers.glass_render`).
     environment : str
         Environment light: ``sky``, ``studio``, ``constant`` or an equirectangular .exr (+y up).
     ground : bool
@@ -128,6 +133,7 @@ class RenderRequest(RendererModel):
     (64, 0.1, 4096)
     """
 
+    model: str = RENDER_MODELS[0]
     environment: str = "sky"
     ground: bool = True
     variant: str = "llvm_ad_spectral"

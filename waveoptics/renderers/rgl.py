@@ -171,10 +171,14 @@ def _sigma(D_warp_eval, mi, wi_dirs, n_quad=192):
     D = _map(mi, D_warp_eval, pts)
     m = _sph(u2theta(pts[:, 0]), u2phi(pts[:, 1]))
     w = D * 2 * np.pi ** 2 * pts[:, 0] * np.sin(u2theta(pts[:, 0])) / n_quad ** 2
-    # in blocks of incidences: the whole (n_i, n_quad²) matrix of ⟨ω_i·m⟩ would take GBs (each row is the same sum)
+    # in blocks of incidences: the whole (n_i, n_quad²) matrix of ⟨ω_i·m⟩ would take GBs (each row is the same sum);
+    # the clamp in place (a second 75 MB block per step doubled the time)
     mt = np.ascontiguousarray(m.T)
-    return np.concatenate([np.maximum(wi_dirs[i:i + _SIGMA_BLOCK] @ mt, 0.0) @ w
-                           for i in range(0, wi_dirs.shape[0], _SIGMA_BLOCK)])
+    out = []
+    for i in range(0, wi_dirs.shape[0], _SIGMA_BLOCK):
+        cos = wi_dirs[i:i + _SIGMA_BLOCK] @ mt
+        out.append(np.maximum(cos, 0.0, out=cos) @ w)
+    return np.concatenate(out)
 
 
 def export_rgl(model, path, *, grid: RGLGrid = RGLGrid(), description: str = "waveoptics BRDF",

@@ -89,15 +89,16 @@ class BandAlbedos:
         if tab is not None:
             return tab
         lam, model = self.wavelength_nm, self.model
+        # every incidence node in one quadrature (polar_albedo with an array of incidences)
         if dm.perturbative:   # Rayleigh-Rice: its TIS, relative to the specular reflectance or absolute
             fn = rayleigh_rice_tis if absolute else rayleigh_rice_albedo
-            raw = np.array([fn(t, lam, model, material, pol) for t in RR_THETAS_DEG])
+            raw = np.asarray(fn(RR_THETAS_DEG, lam, model, material, pol), dtype=float)
             tab = (RR_THETAS_DEG, raw, raw)
         else:
             # raw: the tangent-plane lobe's own albedo; continued: that of the lobe the two-scale model carries,
-            # handed over to first order beyond the tangent plane's validity (waveoptics.scatter.tangent_blend)
-            raw, cont = np.array([self._albedo_at(math.radians(t), dm, material, pol, absolute)
-                                  for t in ALBEDO_THETAS_DEG]).T
+            # handed over to first order beyond the tangent plane's validity (waveoptics.scatter.tangent_blend);
+            # every incidence node in one quadrature
+            raw, cont = self._albedo_at(np.radians(ALBEDO_THETAS_DEG), dm, material, pol, absolute)
             tab = (ALBEDO_THETAS_DEG, raw, cont)
         self._albedos[key] = tab
         return tab
@@ -233,7 +234,8 @@ class BandAlbedos:
         the lobe handed over to first order towards grazing angles
         (:func:`waveoptics.scatter.tangent_blend.blend_with_first_order`), each direction's Fresnel factor relative
         to F(θ) (for s or p light the facet's polarized reflectance relative to the specular one), or the factor
-        itself (*absolute*). The series is evaluated once: the second quadrature takes the first one's values at
+        itself (*absolute*), at incidence *theta* (rad; a float, or a 1-D array of incidences in one quadrature).
+        The series is evaluated once: the second quadrature takes the first one's values at
         the same nodes."""
         from ..materials import RelativeFacetFresnel, fresnel_function
 

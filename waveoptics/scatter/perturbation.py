@@ -191,7 +191,8 @@ def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization
     *scalar*: the first order of the scalar problem with a reflection coefficient of modulus 1 (the Dirichlet
     problem, Q = 1; the Kirchhoff lobe with F = 1 is the tangent-plane approximation of that problem) in place of
     the vector Q of the *material*. A thin-film :class:`~waveoptics.materials.Stack` gives the TIS of the stack
-    with *psd* on every interface (:func:`waveoptics.scatter.rough_stack_tis`).
+    with *psd* on every interface (:func:`waveoptics.scatter.rough_stack_tis`). A 1-D array of incidences
+    *theta_deg* gives the TIS at each (one quadrature over all of them, :func:`~waveoptics.scatter.polar_albedo`).
 
     References
     ----------
@@ -202,15 +203,19 @@ def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization
     """
     import math
 
-
     lam = float(wavelength_nm)
-    t = math.radians(float(theta_deg))
+    many = np.ndim(theta_deg) > 0
+    t = [math.radians(float(x)) for x in np.ravel(theta_deg)] if many else math.radians(float(theta_deg))
     k = 2 * math.pi / (lam * 1e-9)
     if scalar:
         def lobe(wi_b, wo, q):
             return rayleigh_rice(wi_b, wo, lam, psd)
     elif is_stack(material):
-        return rough_stack_tis(theta_deg, lam, material, psd, stack_correlation(material), polarization)
+        corr = stack_correlation(material)
+        if many:
+            return np.array([rough_stack_tis(float(x), lam, material, psd, corr, polarization)
+                             for x in np.ravel(theta_deg)])
+        return rough_stack_tis(theta_deg, lam, material, psd, corr, polarization)
     else:
         eps = complex(np.ravel(permittivity(material, lam))[0])
 
@@ -224,7 +229,7 @@ def rayleigh_rice_albedo(theta_deg, wavelength_nm, psd, material=None, polarizat
     perfect conductor) that first-order roughness scatters, with TIS = ∫ f_RR cosθ_o dω_o over the hemisphere
     (:func:`rayleigh_rice_tis`). On a conductor the coherent fraction of the two-scale model is 1 − E_RR (energy
     conservation; to first order 1 − E_RR = exp(−g) for a paraxial lobe, Church, Jenkinson & Zavada 1979); on a
-    dielectric it is not (docs/physics.md §9).
+    dielectric it is not (docs/physics.md §9). A 1-D array of incidences *theta_deg* gives E_RR at each.
 
     References
     ----------
@@ -234,5 +239,9 @@ def rayleigh_rice_albedo(theta_deg, wavelength_nm, psd, material=None, polarizat
     import math
 
     tis = rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material, polarization)
+    if np.ndim(theta_deg) > 0:
+        R = np.array([_specular_reflectance(math.radians(float(x)), float(wavelength_nm), material, polarization)
+                      for x in np.ravel(theta_deg)])
+        return tis / np.maximum(R, 1e-300)
     R = _specular_reflectance(math.radians(float(theta_deg)), float(wavelength_nm), material, polarization)
     return tis / max(R, 1e-300)

@@ -1,8 +1,11 @@
 """Per-pixel footprint BRDFs: the wave (Kirchhoff) and geometric (patch NDF) BRDF of a Gaussian footprint at the
 one direction pair (ω_i, ω_o) a pixel of a point-light render needs, per wavelength, for many pixels at once.
 
-For a footprint G (:class:`waveoptics.surfaces.Footprint`, its box of ``N_SIGMA`` widths as
-:func:`waveoptics.surfaces.footprint_box`) and s = ω_i + ω_o in the surface's frame:
+For a footprint G (:class:`waveoptics.surfaces.Footprint`) truncated to its ellipse of :data:`SUM_N_SIGMA` = 3√2
+widths, (x − c)ᵀ Σ⁻¹ (x − c) ≤ 18 (:data:`Q_MAX`; G ≥ e⁻⁹: the window keeps all but e⁻⁹ = 1.23e-4 of its mass, as
+the ±4σ box of :func:`waveoptics.surfaces.footprint_box` keeps all but 1.27e-4 of a round one's, on ~12 % fewer
+samples, and far fewer for an oblique ellipse, whose box is much larger than it; the box of that radius is what is
+read), and s = ω_i + ω_o in the surface's frame:
 
 * wave optics (the windowed Kirchhoff integral, Beckmann & Spizzichino 1963 ch. 3; Yan et al. 2018 eq. 6):
   f = F(θ_d) K |U|² / (Σ_j G_j² ΔxΔy),  U = ΔxΔy Σ_j G_j e^{i k s·(x_j − c, h_j)},  K = |s|⁴ / (4 λ² cos θ_i cos θ_o
@@ -13,8 +16,9 @@ For a footprint G (:class:`waveoptics.surfaces.Footprint`, its box of ``N_SIGMA`
 * geometric optics (Yan et al. 2016's patch NDF with intrinsic roughness σ_s): D(h) = P22(t)/cos⁴θ_h with
   P22(t) = Σ_j G_j N(∇h_j − t; σ_s²) / Σ_j G_j, t = (−h_x/h_z, −h_y/h_z) the half vector's slope, ∇h by central
   differences, or the field's own slopes where it gives them (``region_slopes``, e.g.
-  :class:`waveoptics.surfaces.tiled.FlakeField`: each flake's plane, where a difference across the step between
-  two flakes would count a facet that is not there) (Heitz 2014 for D from P22), f = F(θ_d) D / (4 cos θ_i
+  :class:`waveoptics.surfaces.tiled.FlakeField`, or a file stored with a label map and plane slopes,
+  :mod:`waveoptics.surfaces.regions`: each flake's plane, where a difference across the step between two flakes
+  would count a facet that is not there) (Heitz 2014 for D from P22), f = F(θ_d) D / (4 cos θ_i
   cos θ_o), no shadowing.
 
 The sums run in one OpenCL kernel (``kernels/footprint.cl``, ``footprint_sums``; twin :func:`footprint_sums_numpy`)
@@ -45,9 +49,16 @@ from ..surfaces.footprint import Footprint, footprint_box
 from ..surfaces.heightfield import HeightField
 from .footprint import coherence_centres
 
-__all__ = ["PIXEL_BACKENDS", "MAX_REGION_SAMPLES", "PixelBRDF", "footprint_sums", "footprint_sums_numpy", "pixel_brdf",
-           "footprint_brdf"]
+__all__ = ["SUM_N_SIGMA", "Q_MAX", "PIXEL_BACKENDS", "MAX_REGION_SAMPLES", "PixelBRDF", "footprint_sums",
+           "footprint_sums_numpy", "ellipse_samples", "pixel_brdf", "footprint_brdf"]
 
+#: the footprint's truncation radius in widths (module doc): G ≥ e⁻⁹ on the ellipse
+SUM_N_SIGMA = 3 * math.sqrt(2)
+#: samples with (x − c)ᵀ Σ⁻¹ (x − c) ≤ Q_MAX count: SUM_N_SIGMA² = 18 and a margin of 1e-9 so that a sample on the
+#: ellipse itself (a lattice point there, e.g. (3, 3) widths from a centre on the grid) counts whatever the rounding
+#: of q (float64: 1e-15; the q of lattice samples about a round footprint differ by at least (Δx/σ)², 1e-5 at
+#: σ = 30 µm on a 0.1 µm grid)
+Q_MAX = 18 * (1 + 1e-9)
 #: evaluators of the footprint sums
 PIXEL_BACKENDS = ("opencl", "numpy")
 #: largest region (samples) read at once: 8 M samples, 64 MB in float64
@@ -73,10 +84,11 @@ class PixelBRDF:
 
 
 def _geometry(fp: Footprint, box, s, t, dx, dy) -> np.ndarray:
-    """The kernel's 12 per-footprint numbers (``kernels/footprint.cl``): centre from the box origin, Σ⁻¹, s, t."""
+    """The kernel's 12 per-footprint numbers (``kernels/footprint.cl``): centre from the box origin, Σ⁻¹, s, t and
+    the truncation :data:`Q_MAX`."""
     Ci = np.linalg.inv(fp.covariance)
     return np.array([fp.x - box[0] * dx, fp.y - box[1] * dy, Ci[0, 0], Ci[0, 1], Ci[1, 1],
-                     s[0], s[1], s[2], t[0], t[1], 0.0, 0.0])
+                     s[0], s[1], s[2], t[0], t[1], Q_MAX, 0.0])
 
 
 def footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, slopes=None) -> np.ndarray:
@@ -108,7 +120,8 @@ def footprint_sums_numpy(h, dx, dy, box, geo, wavelengths_nm, slope_sigma, slope
     for p, ((i0, j0, i1, j1), g) in enumerate(zip(np.asarray(box), np.asarray(geo))):
         rx = np.arange(i1 - i0) * dx - g[0]
         ry = (np.arange(j1 - j0) * dy - g[1])[:, None]
-        G = np.exp(-0.5 * (g[2] * rx * rx + 2 * g[3] * rx * ry + g[4] * ry * ry))
+        q = g[2] * rx * rx + 2 * g[3] * rx * ry + g[4] * ry * ry
+        G = np.where(q <= g[10], np.exp(-0.5 * q), 0.0)          # truncated to the ellipse q <= q_max
         hp = h[j0:j1, i0:i1]
         if slopes is None:
             gx = (h[j0:j1, i0 + 1:i1 + 1] - h[j0:j1, i0 - 1:i1 - 1]) / (2 * dx) - g[8]
@@ -239,7 +252,8 @@ def pixel_brdf(field, footprints, wi, wo, wavelengths_nm, material=None, *, slop
         raise FieldError("every ω_i and ω_o must lie above the surface (z > 0)", "directions")
     items = _items(footprints, coherence_m)
     ny, nx = field.shape
-    boxes = np.array([footprint_box(it[4], field.dx, field.dy) for it in items], dtype=np.int64).reshape(-1, 4)
+    boxes = np.array([footprint_box(it[4], field.dx, field.dy, SUM_N_SIGMA) for it in items],
+                     dtype=np.int64).reshape(-1, 4)
     inside = (boxes[:, 0] >= 1) & (boxes[:, 1] >= 1) & (boxes[:, 2] <= nx - 1) & (boxes[:, 3] <= ny - 1)
     ok = np.ones(n, bool)
     for (p, *_), good in zip(items, inside):
@@ -263,16 +277,37 @@ def pixel_brdf(field, footprints, wi, wo, wavelengths_nm, material=None, *, slop
         t_sums += time.perf_counter() - t1
     wave, geometric = _finish(sums, items, n, wi, wo, lam, material, slope_sigma, field.dx * field.dy)
     wave[~ok], geometric[~ok] = np.nan, np.nan
-    samples = int(np.sum(np.prod(boxes[use, 2:] - boxes[use, :2], axis=1)))
+    samples = int(np.sum(ellipse_samples([items[k][4] for k in use], field.dx, field.dy)))
     return PixelBRDF(wave, geometric, ok, samples, {"read": t_read, "sums": t_sums})
+
+
+def ellipse_samples(footprints, dx: float, dy: float) -> np.ndarray:
+    """The samples of each footprint's truncated ellipse (q ≤ :data:`Q_MAX`, what the sums add) on a grid of spacing
+    *dx*, *dy* (m) whose first sample is at the origin, counted row by row from the ellipse's chords."""
+    n = len(footprints)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
+    box = np.array([footprint_box(fp, dx, dy, SUM_N_SIGMA) for fp in footprints], dtype=np.int64)
+    Ci = np.linalg.inv(np.array([fp.covariance for fp in footprints]))
+    a, b, c = Ci[:, 0, 0, None], Ci[:, 0, 1, None], Ci[:, 1, 1, None]
+    x, y = (np.array([[fp.x, fp.y] for fp in footprints]).T)[:, :, None]
+    j = box[:, 1, None] + np.arange(int(np.max(box[:, 3] - box[:, 1])))[None, :]
+    ry = j * dy - y
+    d = (b * b - a * c) * ry * ry + a * Q_MAX
+    ok = (d >= 0) & (j < box[:, 3, None])
+    sq = np.sqrt(np.where(ok, d, 0.0))
+    lo = np.maximum(np.ceil(((-b * ry - sq) / a + x) / dx), box[:, 0, None])
+    hi = np.minimum(np.floor(((-b * ry + sq) / a + x) / dx), box[:, 2, None] - 1)
+    return np.sum(np.where(ok, np.maximum(hi - lo + 1, 0), 0), axis=1).astype(np.int64)
 
 
 def _region(field, i0, j0, i1, j1):
     """(heights (m), slopes) of samples [j0:j1, i0:i1] of a HeightField or of any field with ``region``; slopes
-    are (∂h/∂x, ∂h/∂y) where the field gives them (``region_slopes``), else None (central differences)."""
+    are (∂h/∂x, ∂h/∂y) where the field gives them (``gives_slopes``, ``region_slopes``), else None (central
+    differences)."""
     if isinstance(field, HeightField):
         return field.heights[j0:j1, i0:i1], None
-    if hasattr(field, "region_slopes"):
+    if getattr(field, "gives_slopes", False):
         h, hx, hy = field.region_slopes(i0, j0, i1, j1)
         return h, (hx, hy)
     if hasattr(field, "region_heights"):

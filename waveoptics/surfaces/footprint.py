@@ -12,7 +12,8 @@ patch it needs is the box holding the ellipse out to :data:`N_SIGMA` widths (G <
 footprint whose box leaves the surface is refused, not clipped (a clipped Gaussian is another window).
 
 :class:`LargeHeightField` keeps a .npy height field memory-mapped, so that a footprint reads its local patch only
-(an 8K × 8K float64 field is 512 MB; a 3 µm footprint on a 10 nm grid reads 240² samples).
+(an 8K × 8K float64 field is 512 MB; a 3 µm footprint on a 10 nm grid reads 240² samples); a label map and
+plane slopes stored next to it (:mod:`waveoptics.surfaces.regions`) give each sample its region's slopes.
 
 References
 ----------
@@ -34,6 +35,7 @@ import numpy as np
 from ..errors import FieldError, WaveopticsError
 from ..units import parse_length
 from .heightfield import HeightField
+from .regions import npy_regions
 
 __all__ = ["N_SIGMA", "Footprint", "LargeHeightField", "open_large", "footprint_box", "footprint_patch"]
 
@@ -128,6 +130,19 @@ class LargeHeightField:
             raise FieldError(f"{str(p)!r} does not state its grid spacing; pass {{spacing}}, e.g. 50nm", "spacing")
         self.array, self.dx, self.dy, self.path = a, float(sp[0]), float(sp[1]), p
         self._args = (str(p), spacing, units)
+        #: the label map and plane slopes stored next to the file (:mod:`waveoptics.surfaces.regions`), or None
+        self.planes = npy_regions(p, a.shape)
+
+    @property
+    def gives_slopes(self) -> bool:
+        """Whether :meth:`region_slopes` gives each sample's own slopes (regions stored with the file)."""
+        return self.planes is not None
+
+    def region_slopes(self, i0: int, j0: int, i1: int, j1: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(heights, ∂h/∂x, ∂h/∂y) of samples [j0:j1, i0:i1], the slopes from the stored regions."""
+        if self.planes is None:
+            raise FieldError(f"{str(self.path)!r} stores no regions (label map and plane slopes)", "regions")
+        return (self.region(i0, j0, i1, j1).heights, *self.planes.slopes(i0, j0, i1, j1))
 
     def __reduce__(self):
         # pickled (e.g. sent to a Dask worker) as its file, not its samples: the worker maps the file itself

@@ -32,8 +32,10 @@ round-off in ``tests/test_tiled.py``).
   the primitives of every cell whose primitives can reach it (a scratch reaches half its length plus three
   widths from its cell's box; a flake's Voronoi cell, the nearest centre, is found among the 5 × 5 cells around).
 
-A field may also give exact slopes, ``region_slopes(i0, j0, i1, j1)`` → (heights, ∂h/∂x, ∂h/∂y):
-:class:`FlakeField` does (each sample takes its flake's plane), so that the patch NDF of
+A field may also give exact slopes (``gives_slopes`` True), ``region_slopes(i0, j0, i1, j1)`` → (heights,
+∂h/∂x, ∂h/∂y): :class:`FlakeField` does (each sample takes its flake's plane), and so do :class:`NpyField` and
+:class:`HDF5Field` when a label map and a table of plane slopes are stored with them
+(:mod:`waveoptics.surfaces.regions`; :func:`write_tiles` stores a flake field's), so that the patch NDF of
 :func:`waveoptics.scatter.pixel_brdf` does not take the steps between flakes for facets.
 
 References
@@ -50,87 +52,24 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from ..errors import FieldError, WaveopticsError
 from .heightfield import HeightField
 from .psd import S_abc, S_exponential, S_gaussian
+from .regions import hdf5_regions, npy_regions, write_regions
+from .tiled_base import TiledBase, TiledField, shape_spacing
 
 __all__ = ["TiledField", "NpyField", "HDF5Field", "create_npy", "create_hdf5", "write_tiles", "PSDField",
            "ScratchField", "FlakeField", "PROCEDURAL", "procedural"]
-
-
-@runtime_checkable
-class TiledField(Protocol):
-    """A height field read by patches (see the module doc): ``shape`` (ny, nx), spacing ``dx``, ``dy`` (m)."""
-
-    shape: tuple
-    dx: float
-    dy: float
-
-    def patch(self, i0: int, j0: int, nx: int, ny: int) -> HeightField: ...
-
-    def region(self, i0: int, j0: int, i1: int, j1: int) -> HeightField: ...
-
-
-class _Tiled:
-    """Shared bounds checking: ``region`` → ``patch`` → ``_read`` (float64 heights in m)."""
-
-    shape: tuple
-    dx: float
-    dy: float
-
-    def patch(self, i0: int, j0: int, nx: int, ny: int) -> HeightField:
-        """Samples [j0:j0+ny, i0:i0+nx] as a HeightField in metres (refused when they leave the field)."""
-        i0, j0, nx, ny = self._check(i0, j0, nx, ny)
-        h = np.asarray(self._read(i0, j0, nx, ny), dtype=np.float64)
-        return HeightField(h, self.dx, self.dy, None, {"source": self.describe(), "cropped": {
-            "from_samples": [self.shape[1], self.shape[0]], "origin_samples": [i0, j0]}})
-
-    def region(self, i0: int, j0: int, i1: int, j1: int) -> HeightField:
-        return self.patch(i0, j0, i1 - i0, j1 - j0)
-
-    def region_heights(self, i0: int, j0: int, i1: int, j1: int) -> np.ndarray:
-        """Heights (m, float64) of samples [j0:j1, i0:i1], refused as :meth:`patch` when they leave the field; the
-        array alone, without a HeightField's checks of every sample (what a render's footprint sums read)."""
-        i0, j0, nx, ny = self._check(i0, j0, int(i1) - int(i0), int(j1) - int(j0))
-        return np.asarray(self._read(i0, j0, nx, ny), dtype=np.float64)
-
-    def _check(self, i0, j0, nx, ny):
-        """(i0, j0, nx, ny) as ints, refused when the patch leaves the field."""
-        i0, j0, nx, ny = int(i0), int(j0), int(nx), int(ny)
-        if nx < 1 or ny < 1 or i0 < 0 or j0 < 0 or i0 + nx > self.shape[1] or j0 + ny > self.shape[0]:
-            raise FieldError(f"patch [{j0}:{j0 + ny}, {i0}:{i0 + nx}] leaves the field of {self.shape[0]} x "
-                             f"{self.shape[1]} samples", "patch")
-        return i0, j0, nx, ny
-
-    def describe(self) -> str:
-        return type(self).__name__
-
-    @property
-    def extent(self) -> tuple[float, float]:
-        """(Lx, Ly) in m."""
-        return self.shape[1] * self.dx, self.shape[0] * self.dy
-
-
-def _shape_spacing(ny, nx, dx, dy):
-    ny, nx = int(ny), int(nx)
-    dx = float(dx)
-    dy = dx if dy is None else float(dy)
-    if ny < 2 or nx < 2:
-        raise FieldError(f"a field of {ny} x {nx} samples is not allowed; give at least 2 x 2", "shape")
-    if not (math.isfinite(dx) and dx > 0 and math.isfinite(dy) and dy > 0):
-        raise FieldError(f"spacing ({dx!r}, {dy!r}) m is not allowed; it must be > 0", "spacing")
-    return ny, nx, dx, dy
 
 
 # ----------------------------------------------------------------------------------------------------------------
 # On disk: memory-mapped .npy and chunked HDF5
 # ----------------------------------------------------------------------------------------------------------------
 
-class NpyField(_Tiled):
+class NpyField(TiledBase):
     """A .npy height field (heights in metres × ``scale``) memory-mapped: a patch reads only its own pages.
 
     Parameters
@@ -160,9 +99,15 @@ class NpyField(_Tiled):
         if self.array.ndim != 2:
             raise WaveopticsError(f"{str(self.path)!r} holds an array of shape {self.array.shape}; heights must be "
                                   "2-D")
-        ny, nx, self.dx, self.dy = _shape_spacing(*self.array.shape, dxs, dys)
+        ny, nx, self.dx, self.dy = shape_spacing(*self.array.shape, dxs, dys)
         self.shape = (ny, nx)
         self._args = (str(self.path), dx, dy)
+        self.reload_regions()
+
+    def reload_regions(self) -> None:
+        """Read the regions stored with the file again (after :func:`write_tiles` or
+        :func:`waveoptics.surfaces.regions.write_regions`)."""
+        self.planes = npy_regions(self.path, self.shape)
 
     def __reduce__(self):     # pickled as its path: a worker maps the file itself
         return (type(self), self._args)
@@ -177,7 +122,7 @@ class NpyField(_Tiled):
 def create_npy(path, ny: int, nx: int, dx: float, dy: float | None = None, dtype=np.float32) -> NpyField:
     """An empty (all-zero, sparse on disk) .npy height field of ny × nx samples in metres with its sidecar; fill
     it with :func:`write_tiles`."""
-    ny, nx, dx, dy = _shape_spacing(ny, nx, dx, dy)
+    ny, nx, dx, dy = shape_spacing(ny, nx, dx, dy)
     p = Path(path)
     a = np.lib.format.open_memmap(p, mode="w+", dtype=dtype, shape=(ny, nx))
     del a
@@ -185,7 +130,7 @@ def create_npy(path, ny: int, nx: int, dx: float, dy: float | None = None, dtype
     return NpyField(p)
 
 
-class HDF5Field(_Tiled):
+class HDF5Field(TiledBase):
     """A chunked HDF5 height field (dataset *dataset*, heights in m, attributes ``dx``, ``dy`` in m): a patch reads
     only the chunks it overlaps."""
 
@@ -205,24 +150,35 @@ class HDF5Field(_Tiled):
             shape, self.chunks = ds.shape, ds.chunks
         if "dx" not in a:
             raise FieldError(f"dataset {dataset!r} of {str(self.path)!r} has no dx attribute", "spacing")
-        ny, nx, self.dx, self.dy = _shape_spacing(*shape, a["dx"], a.get("dy", a["dx"]))
+        ny, nx, self.dx, self.dy = shape_spacing(*shape, a["dx"], a.get("dy", a["dx"]))
         self.shape = (ny, nx)
-        self._ds = None          # opened for reading on the first patch (write_tiles closes it)
+        self._file = None        # opened for reading on the first patch (write_tiles closes it)
+        self.reload_regions()
+
+    def reload_regions(self) -> None:
+        """Read the regions stored with the file again (after :func:`write_tiles` or
+        :func:`waveoptics.surfaces.regions.write_regions`)."""
+        self.close()
+        self.planes = hdf5_regions(self.path, self.shape, self._data)
 
     def close(self) -> None:
-        if self._ds is not None:
-            self._ds.file.close()
-            self._ds = None
+        if self._file is not None:
+            self._file.close()
+            self._file = None
 
     def __reduce__(self):
         return (type(self), (str(self.path), self.dataset))
 
-    def _read(self, i0, j0, nx, ny):
-        if self._ds is None:
+    def _data(self, name):
+        """Dataset *name* of the file, opened for reading once."""
+        if self._file is None:
             import h5py
 
-            self._ds = h5py.File(self.path, "r")[self.dataset]
-        return self._ds[j0:j0 + ny, i0:i0 + nx]
+            self._file = h5py.File(self.path, "r")
+        return self._file[name]
+
+    def _read(self, i0, j0, nx, ny):
+        return self._data(self.dataset)[j0:j0 + ny, i0:i0 + nx]
 
     def describe(self) -> str:
         return f"{self.path}:{self.dataset}"
@@ -233,7 +189,7 @@ def create_hdf5(path, ny: int, nx: int, dx: float, dy: float | None = None, chun
     """An empty chunked HDF5 height field (chunks of *chunk*² samples; unwritten chunks read 0 and take no disk)."""
     import h5py
 
-    ny, nx, dx, dy = _shape_spacing(ny, nx, dx, dy)
+    ny, nx, dx, dy = shape_spacing(ny, nx, dx, dy)
     with h5py.File(path, "w") as f:
         ds = f.create_dataset(dataset, shape=(ny, nx), dtype=dtype, chunks=(min(chunk, ny), min(chunk, nx)),
                               fillvalue=0.0)
@@ -243,12 +199,22 @@ def create_hdf5(path, ny: int, nx: int, dx: float, dy: float | None = None, chun
 
 def write_tiles(target, source: TiledField, tiles=None, tile: int = 1024) -> int:
     """Write the samples of *source* into *target* (an :class:`NpyField` or :class:`HDF5Field` path of the same
-    shape) tile by tile: all tiles, or only *tiles* (an iterable of (t_x, t_y)). Returns the tiles written."""
+    shape) tile by tile: all tiles, or only *tiles* (an iterable of (t_x, t_y)). Returns the tiles written. A source
+    made of planar regions (:class:`FlakeField`: ``region_labels`` and ``plane_table``) also stores its label map
+    and slopes table with the target (:mod:`waveoptics.surfaces.regions`), so the file gives each flake's plane."""
     import h5py
 
     ny, nx = source.shape
     if tiles is None:
         tiles = [(tx, ty) for ty in range(-(-ny // tile)) for tx in range(-(-nx // tile))]
+    if hasattr(source, "plane_table"):
+        if isinstance(target, HDF5Field):
+            target.close()
+        table = source.plane_table()
+        for k, (tx, ty) in enumerate(tiles):
+            i0, j0 = tx * tile, ty * tile
+            write_regions(target.path, (ny, nx), source.region_labels(i0, j0, min(nx, i0 + tile), min(ny, j0 + tile)),
+                          table if k == 0 else None, (i0, j0))
     n = 0
     if isinstance(target, HDF5Field):
         target.close()
@@ -269,6 +235,8 @@ def write_tiles(target, source: TiledField, tiles=None, tile: int = 1024) -> int
             f.close()
         else:
             out.flush()
+    if hasattr(source, "plane_table"):
+        target.reload_regions()
     return n
 
 
@@ -284,7 +252,7 @@ def _cell_rng(seed: int, *index) -> np.random.Generator:
 _PSD = {"gaussian": S_gaussian, "exponential": S_exponential}
 
 
-class PSDField(_Tiled):
+class PSDField(TiledBase):
     """A stationary Gaussian random field of an isotropic PSD, evaluated per patch (moving-average form; module
     doc).
 
@@ -307,7 +275,7 @@ class PSDField(_Tiled):
     """
 
     def __init__(self, model, sigma, T, shape, dx, dy=None, seed=0, tile=256, C=3.0, stretch=(1.0, 1.0)):
-        ny, nx, self.dx, self.dy = _shape_spacing(shape[0], shape[1], dx, dy)
+        ny, nx, self.dx, self.dy = shape_spacing(shape[0], shape[1], dx, dy)
         self.shape = (ny, nx)
         if model not in ("gaussian", "exponential", "abc"):
             raise FieldError(f"PSD model {model!r} is not allowed; gaussian, exponential or abc", "model")
@@ -373,7 +341,7 @@ class PSDField(_Tiled):
         return f"PSDField({self.model}, sigma={self.sigma:g} m, T={self.T:g} m, seed={self.seed})"
 
 
-class ScratchField(_Tiled):
+class ScratchField(TiledBase):
     """Straight scratches (grooves of Gaussian cross-section −d exp(−4 ln2 s²/w²), w the full width at half depth;
     where grooves overlap the deeper wins) as sparse primitives of a cell lattice (module doc).
 
@@ -395,7 +363,7 @@ class ScratchField(_Tiled):
 
     def __init__(self, shape, dx, dy=None, *, width, depth, length, density, orientation_deg=0.0, spread_deg=0.0,
                  variation=0.0, seed=0, cell=None):
-        ny, nx, self.dx, self.dy = _shape_spacing(shape[0], shape[1], dx, dy)
+        ny, nx, self.dx, self.dy = shape_spacing(shape[0], shape[1], dx, dy)
         self.shape = (ny, nx)
         if not (width > 0 and depth >= 0 and length > 0 and density >= 0 and 0 <= variation < 1):
             raise FieldError("width, length > 0, depth, density >= 0 and 0 <= variation < 1 are required", "width")
@@ -457,13 +425,13 @@ def _groove(h, x, y, px, py, th, w, d, length):
     np.minimum(h[ja:jb, ia:ib], g, out=h[ja:jb, ia:ib])
 
 
-class FlakeField(_Tiled):
+class FlakeField(TiledBase):
     """Metallic-paint flakes: a Voronoi mosaic of flat facets (as :func:`waveoptics.surfaces.flakes`), one flake
     centre uniform in each cell of width *size_flake* (so the mean flake area is size_flake²), slopes Gaussian of
     rms tan(*tilt_deg*) per axis; a sample lies on the plane of its nearest centre."""
 
     def __init__(self, shape, dx, dy=None, *, size_flake, tilt_deg, seed=0):
-        ny, nx, self.dx, self.dy = _shape_spacing(shape[0], shape[1], dx, dy)
+        ny, nx, self.dx, self.dy = shape_spacing(shape[0], shape[1], dx, dy)
         self.shape = (ny, nx)
         if not (size_flake > 0 and 0 <= tilt_deg < 60):
             raise FieldError("size_flake > 0 and 0 <= tilt_deg < 60 are required", "size_flake")
@@ -483,7 +451,8 @@ class FlakeField(_Tiled):
         return (cx + u[0]) * self.size_flake, (cy + u[1]) * self.size_flake, s[0], s[1]
 
     def _nearest(self, i0, j0, nx, ny):
-        """(flakes (m, 4) as :meth:`flake`, index (ny, nx) of each sample's flake, X, Y in m) of a patch."""
+        """(flakes (m, 4) as :meth:`flake`, index (ny, nx) of each sample's flake, X, Y in m, the flakes' cells
+        (m, 2)) of a patch."""
         from scipy.spatial import cKDTree
 
         c = self.size_flake
@@ -495,10 +464,10 @@ class FlakeField(_Tiled):
         F = np.array([self.flake(cx, cy) for cx, cy in cells])
         X, Y = np.meshgrid(x, y)
         _, idx = cKDTree(F[:, :2]).query(np.column_stack([X.ravel(), Y.ravel()]))
-        return F, idx.reshape(X.shape), X, Y
+        return F, idx.reshape(X.shape), X, Y, np.array(cells)
 
     def _read(self, i0, j0, nx, ny):
-        F, idx, X, Y = self._nearest(i0, j0, nx, ny)
+        F, idx, X, Y, _ = self._nearest(i0, j0, nx, ny)
         return F[idx, 2] * (X - F[idx, 0]) + F[idx, 3] * (Y - F[idx, 1])
 
     def region_slopes(self, i0: int, j0: int, i1: int, j1: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -512,9 +481,30 @@ class FlakeField(_Tiled):
            rendering of specular microstructure", ACM TOG 35(4), 56, 2016 (the patch NDF of a footprint's normals).
         """
         i0, j0, nx, ny = self._check(i0, j0, int(i1) - int(i0), int(j1) - int(j0))
-        F, idx, X, Y = self._nearest(i0, j0, nx, ny)
+        F, idx, X, Y, _ = self._nearest(i0, j0, nx, ny)
         h = F[idx, 2] * (X - F[idx, 0]) + F[idx, 3] * (Y - F[idx, 1])
         return h, F[idx, 2], F[idx, 3]
+
+    #: the flakes' own plane slopes (:meth:`region_slopes`)
+    gives_slopes = True
+
+    def _lattice(self) -> tuple[int, int]:
+        """(cells per row, rows) of every cell whose flake can own a sample: cells −2 … ⌊x_max / size⌋ + 2."""
+        c = self.size_flake
+        return int(((self.shape[1] - 1) * self.dx) // c) + 5, int(((self.shape[0] - 1) * self.dy) // c) + 5
+
+    def plane_table(self) -> np.ndarray:
+        """(n_regions, 2) slopes of every flake that can own a sample, row (c_y + 2) n_x + (c_x + 2) for cell
+        (c_x, c_y) (the rows :meth:`region_labels` gives)."""
+        ncx, ncy = self._lattice()
+        return np.array([self.flake(cx - 2, cy - 2)[2:] for cy in range(ncy) for cx in range(ncx)])
+
+    def region_labels(self, i0: int, j0: int, i1: int, j1: int) -> np.ndarray:
+        """The row of :meth:`plane_table` (int32) of each sample's flake, samples [j0:j1, i0:i1]."""
+        i0, j0, nx, ny = self._check(i0, j0, int(i1) - int(i0), int(j1) - int(j0))
+        _, idx, _, _, cells = self._nearest(i0, j0, nx, ny)
+        cells = cells[idx]
+        return ((cells[..., 1] + 2) * self._lattice()[0] + cells[..., 0] + 2).astype(np.int32)
 
     def describe(self) -> str:
         return f"FlakeField(size={self.size_flake:g} m, tilt={self.tilt_deg:g} deg, seed={self.seed})"
@@ -546,7 +536,7 @@ def _psd(shape, dx, dy=None, seed=0) -> PSDField:
 PROCEDURAL = {"brushed": brushed, "scratched": scratched, "flakes": _flakes, "psd": _psd}
 
 
-def procedural(name: str, size_m: float, dx: float, seed: int = 0) -> _Tiled:
+def procedural(name: str, size_m: float, dx: float, seed: int = 0) -> TiledBase:
     """The procedural field *name* (:data:`PROCEDURAL`) of *size_m* × *size_m* at spacing *dx* (m)."""
     if name not in PROCEDURAL:
         raise FieldError(f"procedural field {name!r} is not known; one of {', '.join(PROCEDURAL)}", "surface")
