@@ -171,9 +171,31 @@ def test_the_specular_loss_is_the_light_first_order_perturbation_theory_scatters
                 loss = float(nano.scattered_share(wi[2], 550.0, material=material)) / float(material.F(wi[2], 550.0))
             else:
                 loss = 1.0 - float(nano.coherent_fraction(wi[2], 550.0, material=material))
-            if mat == "1.5" and m.length_scale < 1e-6 and th > 30.0:
-                continue   # glass, correlation length near λ, oblique: Kirchhoff 1.43× Rayleigh-Rice (docs/validity)
+            if m.length_scale < 1e-6 and th > 30.0:
+                # correlation length near λ, oblique: the tangent plane's own limit (glass: Kirchhoff 1.43×
+                # Rayleigh-Rice, docs/validity; metal: test_tangent_plane_loss_at_a_correlation_length_near_lambda)
+                continue
             assert loss == pytest.approx(tis, rel=0.25 if mat == "1.5" else 0.06), (m, th)
+
+
+@pytest.mark.xfail(strict=True, reason="known: the tangent-plane lobe of a correlation length near λ holds 11 % less "
+                                       "light than first order in exits up to 75° (0.899 of TIS at 60°)")
+def test_tangent_plane_loss_at_a_correlation_length_near_lambda():
+    """Al, ABC σ = 5 nm, B = 0.5 µm, C = 3 (ℓ ≈ λ), 60°: the coherent loss within 6 % of first-order TIS, as for
+    the longer correlation lengths above. Measured 0.899: the tangent-plane (Kirchhoff) lobe holds 0.00245 of F in
+    exits ≤ 75° where Rayleigh-Rice holds 0.00275, a limit of the tangent plane where ℓ nears λ. Before the grazing
+    hand-over to first order (scatter.tangent_blend) it passed (0.945) only because the tangent-plane lobe's excess
+    at grazing exit (beyond its validity, and not reciprocal: up to 27 % in the two-scale BRDF) made up that deficit;
+    the hand-over gives grazing exits first order's light. The planner takes Rayleigh-Rice for such surfaces."""
+    grid = DirectionGrid.hemisphere(384)
+    wo = grid.directions()
+    material = materials.get_material("Al")
+    m = surfaces.PSDModel("abc", sigma=5e-9, B=0.5e-6, C=3)
+    wi = direction_from_angles(60.0, 0.0)
+    rr = np.where(grid.inside, perturbation.rayleigh_rice_brdf(wi, wo, 550.0, m, material.eta(550.0) ** 2), 0)
+    tis = integrate(rr[None], grid)[0] / float(material.F(wi[2], 550.0))
+    loss = 1.0 - float(twoscale.Nano(model=m).coherent_fraction(wi[2], 550.0, material=material))
+    assert loss == pytest.approx(tis, rel=0.06)
 
 
 ENERGY_CASES = [("gaussian", dict(sigma=55e-9, T=1e-6)), ("exponential", dict(sigma=55e-9, T=1e-6)),
@@ -200,13 +222,38 @@ def test_two_scale_albedo_is_fresnel_on_the_psd_route_without_capping(kind, kw):
             assert L.info["diffraction_energy_scale"] == [1.0]
 
 
-def test_micro_rough_two_scale_albedo_never_exceeds_the_microfacet_albedo():
-    """With micro α up to 0.3 the two-scale albedo is never above the microfacet albedo by more than 1e-3; it is below
-    it by the light the wider diffracted lobe loses to masking and the horizon: the facets shift it (paraxially)
-    and what crosses the horizon is lost. Measured here: 4.4 % for the Gaussian σ = 55 nm, T = 1 µm surface that
-    scatters 80 % of its light, carried by α = 0.3 facets; 3.8 % for the heavy-tailed ABC C = 2.2 (σ = 40 nm);
-    18 % for ABC C = 4 with B = 1 µm (σ = 55 nm), whose lobe spreads to the horizon (docs/two-scale.md)."""
+def _ggx_facet_reflectance(theta_deg, alpha, F):
+    """∫ F(ω_i·m) G1(ω_i, m) (ω_i·m)⁺ D(m) dm / cos θ_i: the light the micro facets reflect before masking on the
+    way out, GGX D and its Smith G1 written here (Walter et al. 2007, eqs. 33-34), by a product rule in
+    (tan θ_m, φ_m)."""
+    t = math.radians(theta_deg)
+    wi = np.array([math.sin(t), 0.0, math.cos(t)])
+    x, wx = np.polynomial.legendre.leggauss(400)
+    u = 0.5 * (x + 1)                                    # tan θ_m = α u / (1 − u) covers [0, ∞)
+    tan_m, dtan = alpha * u / (1 - u), 0.5 * wx * alpha / (1 - u) ** 2
+    phi = (np.arange(256) + 0.5) * (2 * math.pi / 256)
+    T, P = np.meshgrid(tan_m, phi, indexing="ij")
+    cm = 1 / np.sqrt(1 + T * T)
+    m = np.stack([T * cm * np.cos(P), T * cm * np.sin(P), cm], axis=-1)
+    D = alpha ** 2 / (math.pi * cm ** 4 * (alpha ** 2 + T * T) ** 2)
+    im = np.clip(m @ wi, 0, None)
+    tan_i = math.tan(t)
+    G1 = 2 / (1 + math.sqrt(1 + alpha ** 2 * tan_i ** 2))
+    dm = cm ** 3 * dtan[:, None] * (2 * math.pi / 256)        # dω_m = sin θ_m dθ_m dφ = cos³θ_m tan θ_m d(tan θ_m) dφ
+    return float(np.sum(F(im) * G1 * im * D * T * dm) / wi[2])
+
+
+def test_micro_rough_two_scale_albedo_is_bounded_by_the_light_the_facets_reflect():
+    """With micro α up to 0.3 the two-scale albedo (Au, kd = 0) is at most the light its facets reflect before
+    masking on the way out (each facet reflects F, coherent or diffracted), computed in the test
+    (:func:`_ggx_facet_reflectance`), and within 20 % of the microfacet albedo. Measured against the microfacet
+    albedo: 4.4 % below for the Gaussian σ = 55 nm, T = 1 µm surface that scatters 80 % of its light, carried by
+    α = 0.3 facets; 18 % below for ABC C = 4 with B = 1 µm (σ = 55 nm), whose lobe spreads to the horizon
+    (docs/two-scale.md); 0.24 % above for ABC C = 2.2 (σ = 40 nm) at 40° on α = 0.3, where the diffracted light,
+    handed over to first order towards grazing exit (scatter.tangent_blend), is masked less than the specular
+    light of its facets (the pointwise form, a different quadrature, gives the same +0.23 %)."""
     grid = DirectionGrid.hemisphere(128)
+    gold = materials.get_material("Au")
     for kind, kw in ENERGY_CASES[::2]:
         nano = twoscale.Nano(model=surfaces.PSDModel(kind, **kw))
         for alpha in (0.1, 0.3):
@@ -214,4 +261,6 @@ def test_micro_rough_two_scale_albedo_never_exceeds_the_microfacet_albedo():
                 L = twoscale.evaluate(direction_from_angles(th, 0.0), [550.0], "Au", twoscale.Micro(alpha=alpha, ndf="ggx"), nano,
                                       grid, kd=0)
                 ratio = L.albedo()[0] / L.albedo("microfacet")[0]
-                assert 0.8 < ratio < 1.0 + 1e-3, (kind, alpha, th, ratio)
+                bound = _ggx_facet_reflectance(th, alpha, lambda c: gold.F(c, 550.0))
+                assert 0.8 < ratio, (kind, alpha, th, ratio)
+                assert L.albedo()[0] <= bound, (kind, alpha, th, L.albedo()[0], bound)
