@@ -99,9 +99,9 @@ def energy_weighted_fresnel(wi, wo, cos_d, wavelength_nm, nano: Nano, F, diffrac
     have their own ratios r_s ≠ r_p, so r_u F_u would not be the average of the s and p lobes; the weight is then
     ½ (r_s F_s + r_p F_p) with r = 1, F_s and F_p the facet reflectances of each polarization in the macro plane
     (:meth:`waveoptics.materials.Material.F_facet`, whose average is F_u), which keeps the route linear in the
-    polarization and each polarization's own scattered energy. Where the three ratios agree (a lobe with no light
-    beyond 70° of exit at an incidence below 70°) and without a complex index (F = 1, F0 only, thin-film stacks)
-    it is (F_u, r_u) as before.
+    polarization and each polarization's own scattered energy (the s and p albedo tables are built instead of the
+    unpolarized one: twice the table cost of r_u alone, once per model and wavelength). Without a complex index
+    (F = 1, F0 only, thin-film stacks) it is (F_u, r_u).
 
     References
     ----------
@@ -110,11 +110,10 @@ def energy_weighted_fresnel(wi, wo, cos_d, wavelength_nm, nano: Nano, F, diffrac
     """
     pol = getattr(F, "polarization", "unpolarized")
     lam = float(wavelength_nm)
-    r = float(nano.lobe_energy_scale(wi[2], lam, diffraction, material, pol))
-    if pol == "unpolarized" and getattr(material, "has_index", False):
+    if pol == "unpolarized" and getattr(material, "has_index", False):   # r_u itself is not needed (nor built)
         r_s, r_p = (float(nano.lobe_energy_scale(wi[2], lam, diffraction, material, p)) for p in ("s", "p"))
-        if not r_s == r_p == r:
-            return 0.5 * (r_s * material.F_facet(wi, wo, lam, "s") + r_p * material.F_facet(wi, wo, lam, "p")), 1.0
+        return 0.5 * (r_s * material.F_facet(wi, wo, lam, "s") + r_p * material.F_facet(wi, wo, lam, "p")), 1.0
+    r = float(nano.lobe_energy_scale(wi[2], lam, diffraction, material, pol))
     return (F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam)), r
 
 
