@@ -18,7 +18,8 @@ from .field_lobe import kirchhoff_scattered_lobe
 from .roughness_scales import SERIES_MIN_CAPTURED, Nano
 from .twoscale_grid import fresnel_at_mirror, mirror_cell
 
-__all__ = ['NARROW_CELLS', 'nano_lobe', 'CORE_CELLS', 'CORE_SUBSAMPLE_STEP', 'CORE_MAX_SUBSAMPLES']
+__all__ = ['NARROW_CELLS', 'nano_lobe', 'energy_weighted_fresnel', 'CORE_CELLS', 'CORE_SUBSAMPLE_STEP',
+           'CORE_MAX_SUBSAMPLES']
 
 
 #: a PSD nano lobe narrower than this many grid cells (width λ/(π T)) is resampled preserving its energy
@@ -59,12 +60,12 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
             raise WaveopticsError("solver 'psd' needs nano statistics, not a height field; use fft or direct")
         out = np.empty((w.size, grid.n_v, grid.n_u))
         for i, lam in enumerate(w):
-            Fi = F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam)
+            # the Fresnel weight per direction and the ratio that gives the lobe the continued albedo beyond the
+            # tangent plane's validity (BandSeries.scattered_albedo)
+            Fi, ratio = energy_weighted_fresnel(wi, wo, cos_d, lam, nano, F, diffraction, material)
             out[i], cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True,
                                                  diffraction=diffraction)
-            # beyond the tangent plane's validity the lobe carries the continued albedo (BandSeries.scattered_albedo)
-            out[i] *= float(nano.lobe_energy_scale(wi[2], lam, diffraction, material,
-                                                   getattr(F, "polarization", "unpolarized")))
+            out[i] *= ratio
             # guard: the truncated series misses the light of its terms m > m_max once g = (kσ(cosθ_i + cosθ_o))²
             # ≳ 30 (σ ≳ λ/2): refuse rather than return a lobe that silently lacks that energy
             low = float(np.min(np.where(grid.inside, cap, 1.0)))
@@ -85,6 +86,35 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
                                         diffraction=diffraction,
                                         precision=precision)
     raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
+
+
+def energy_weighted_fresnel(wi, wo, cos_d, wavelength_nm, nano: Nano, F, diffraction="kirchhoff", material=None):
+    """(F, r): the Fresnel factor per direction *wo* (..., 3) the statistics series takes at incidence *wi*
+    (:func:`waveoptics.scatter.scattered_lobe` multiplies it in) and the factor r of the whole lobe, in the paraxial
+    grid route. F is that of *F* at each half-vector (*cos_d* its angle) and r the ratio
+    :meth:`waveoptics.brdf.Nano.lobe_energy_scale` of the light's polarization, which gives the tangent-plane lobe
+    the albedo of the lobe handed over to first order towards grazing angles.
+
+    Unpolarized light is the incoherent average of s and p light. On a *material* with a complex index the two
+    have their own ratios r_s ≠ r_p, so r_u F_u would not be the average of the s and p lobes; the weight is then
+    ½ (r_s F_s + r_p F_p) with r = 1, F_s and F_p the facet reflectances of each polarization in the macro plane
+    (:meth:`waveoptics.materials.Material.F_facet`, whose average is F_u), which keeps the route linear in the
+    polarization and each polarization's own scattered energy (the s and p albedo tables are built instead of the
+    unpolarized one: twice the table cost of r_u alone, once per model and wavelength). Without a complex index
+    (F = 1, F0 only, thin-film stacks) it is (F_u, r_u).
+
+    References
+    ----------
+    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5 and §10.9 (Fresnel equations; unpolarized light
+       as the incoherent sum of two orthogonal polarizations).
+    """
+    pol = getattr(F, "polarization", "unpolarized")
+    lam = float(wavelength_nm)
+    if pol == "unpolarized" and getattr(material, "has_index", False):   # r_u itself is not needed (nor built)
+        r_s, r_p = (float(nano.lobe_energy_scale(wi[2], lam, diffraction, material, p)) for p in ("s", "p"))
+        return 0.5 * (r_s * material.F_facet(wi, wo, lam, "s") + r_p * material.F_facet(wi, wo, lam, "p")), 1.0
+    r = float(nano.lobe_energy_scale(wi[2], lam, diffraction, material, pol))
+    return (F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam)), r
 
 
 #: cells whose centre lies within this many cells of the mirror direction form the core of a narrow nano lobe:
