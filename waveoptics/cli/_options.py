@@ -62,6 +62,7 @@ OPTIONS = {o.flag: o for o in (
     Option("--roughness-correlation", "correlation of the interface roughness of a thin-film stack under "
                                       "rayleigh-rice: correlated (a film replicating its substrate), uncorrelated "
                                       "or a coefficient in [0, 1] (Elson, Rahn & Bennett 1983)", "C"),
+    Option("--model", "BRDF model"),
     Option("--precision", "OpenCL floating-point precision of the height-field solvers"),
     Option("--solver", "solver of the diffracted (nano) lobe"),
     Option("--backend", "where the direct Kirchhoff sum runs: the OpenCL kernel or its float64 NumPy twin"),

@@ -31,7 +31,7 @@ def register(sub):
     add_model(p)
     g = p.add_argument_group("render")
     g.add_argument("--model", choices=RENDER_MODELS, default=_d("model"),
-                   help="the surface rendered: twoscale (the two-scale BRDF of the options above) or "
+                   help="BRDF model rendered: twoscale (the two-scale BRDF of the options above) or "
                         "rough-dielectric (the nano-rough glass: a rough dielectric with --material, --micro-alpha, "
                         "--alpha-y, --ndf, --nano, --multiple-scattering and --wavelength-step, reflecting and "
                         "transmitting, beside Mitsuba's roughdielectric; through the NumPy glass plugin) "

@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import WaveopticsError
 from .model import DEFAULT_WAVELENGTH_STEP_NM, cached_renderer_brdf
 
-__all__ = ['LLVM_MIN', 'PLUGIN_NAME', 'INSTALL_HINT', 'llvm_library', 'load_mitsuba', 'register',
+__all__ = ['LLVM_MIN', 'array_converters', 'PLUGIN_NAME', 'INSTALL_HINT', 'llvm_library', 'load_mitsuba', 'register',
            'plugin_parameters', 'plugin_inputs']
 
 #: oldest LLVM whose code generation Mitsuba 3.9's LLVM variants survive
@@ -159,14 +159,12 @@ def _rgb_sample(model, wi, u):
     return s, s.weight
 
 
-def _bsdf_class(mi):
-    """The plugin class for the variant set in *mi* (``mi.BSDF`` depends on the variant)."""
-    import drjit as dr
-
-    spectral = mi.is_spectral
+def array_converters(mi):
+    """(spectrum, floats, vectors): NumPy rows (n, channels), (n,) and (n, 3) to the Mitsuba types of the variant set
+    in *mi* as float32 (a scalar variant takes the first row)."""
     scalar = mi.variant().startswith("scalar")
 
-    def spectrum(values):          # values (n, channels)
+    def spectrum(values):
         v = np.asarray(values, dtype=np.float32)
         return mi.Spectrum(v[0]) if scalar else mi.Spectrum(np.ascontiguousarray(v.T))
 
@@ -177,6 +175,17 @@ def _bsdf_class(mi):
     def vectors(values):
         v = np.asarray(values, dtype=np.float32)
         return mi.Vector3f(*[float(x) for x in v[0]]) if scalar else mi.Vector3f(np.ascontiguousarray(v.T))
+
+    return spectrum, floats, vectors
+
+
+def _bsdf_class(mi):
+    """The plugin class for the variant set in *mi* (``mi.BSDF`` depends on the variant)."""
+    import drjit as dr
+
+    spectral = mi.is_spectral
+    scalar = mi.variant().startswith("scalar")
+    spectrum, floats, vectors = array_converters(mi)
 
     class WaveopticsBSDF(mi.BSDF):
         """waveoptics two-scale BRDF (see :mod:`waveoptics.renderers.mitsuba`)."""

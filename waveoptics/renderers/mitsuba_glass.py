@@ -54,7 +54,7 @@ from ..brdf.protocol import lobe_choice
 from ..errors import FieldError, WaveopticsError
 from ..request import parse_nano
 from ..vocabulary import DEFAULT_NANO
-from .mitsuba import load_mitsuba, plugin_inputs
+from .mitsuba import array_converters, load_mitsuba, plugin_inputs
 from .model import DEFAULT_WAVELENGTH_STEP_NM, wavelength_nodes
 
 __all__ = ['GLASS_PLUGIN_NAME', 'glass_model', 'cached_glass_model', 'glass_parameters', 'glass_eval',
@@ -206,17 +206,7 @@ def _glass_class(mi, fixed_model=None):
     spectral = mi.is_spectral
     scalar = mi.variant().startswith("scalar")
 
-    def spectrum(v):
-        v = np.asarray(v, dtype=np.float32)
-        return mi.Spectrum(v[0]) if scalar else mi.Spectrum(np.ascontiguousarray(v.T))
-
-    def floats(v):
-        v = np.asarray(v, dtype=np.float32)
-        return mi.Float(float(v[0])) if scalar else mi.Float(v)
-
-    def vectors(v):
-        v = np.asarray(v, dtype=np.float32)
-        return mi.Vector3f(*[float(x) for x in v[0]]) if scalar else mi.Vector3f(np.ascontiguousarray(v.T))
+    spectrum, floats, vectors = array_converters(mi)
 
     class WaveopticsGlass(mi.BSDF):
         """waveoptics nano-rough glass (see :mod:`waveoptics.renderers.mitsuba_glass`)."""
