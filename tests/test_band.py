@@ -186,7 +186,7 @@ def test_tangent_plane_loss_at_a_correlation_length_near_lambda():
     exits ≤ 75° where Rayleigh-Rice holds 0.00275, a limit of the tangent plane where ℓ nears λ. Before the grazing
     hand-over to first order (scatter.tangent_blend) it passed (0.945) only because the tangent-plane lobe's excess
     at grazing exit (beyond its validity, and not reciprocal: up to 27 % in the two-scale BRDF) made up that deficit;
-    the hand-over gives grazing exits first order's light. The planner takes Rayleigh-Rice for such surfaces."""
+    the hand-over gives grazing exits first order's light."""
     grid = DirectionGrid.hemisphere(384)
     wo = grid.directions()
     material = materials.get_material("Al")

@@ -94,8 +94,8 @@ def test_each_facet_scatters_the_light_its_coherent_part_gives_up(theta):
 
 PAIRS_RECIPROCAL = [(30, 60, 180), (20, 60, 120), (45, 55, 60), (10, 65, 90)]
 #: pairs with an end near or beyond the tangent plane's validity (75°; at 70° a facet of a rough micro surface often
-#: sees more): there each facet's lobe carries the albedo continued with first-order theory's incidence dependence
-#: (docs/physics.md §9), a factor of the facet's local incidence only
+#: sees more): there each facet's lobe hands over to first order, W f_K + (1 − W) f_RR with W = w(θ_i') w(θ_o')
+#: symmetric (docs/physics.md §9)
 PAIRS_GRAZING = [(30, 75, 180), (60, 80, 180), (20, 80, 120), (45, 70, 60)]
 
 

@@ -146,9 +146,9 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None):
     Al|Al2O3:300nm, GGX α = 0.05, θ_i 80–89°, 32² and 64² cells: ≤ 1.8 %, tests/test_stack_grazing_energy.py).
     On a dielectric the budget is all the light the facets receive and do not reflect coherently (the scattered
     light also draws on the transmitted beam), which the lobe does not approach (tests/test_dielectric_energy.py:
-    glass, s, p and unpolarized, 30–75° and Brewster's angle). Beyond 75° the tangent-plane lobe carries an albedo
-    continued with first-order perturbation theory (:meth:`waveoptics.scatter.BandSeries.scattered_albedo`), so its
-    obliquity does not make it grow without bound.
+    glass, s, p and unpolarized, 30–75° and Brewster's angle). Between 70° and 80° of local incidence or exit the
+    tangent-plane lobe hands over to first-order perturbation theory's lobe (:mod:`waveoptics.scatter.tangent_blend`),
+    so its obliquity does not make it grow without bound.
     Where it does act (a grid too coarse for a wide lobe, micro roughness at grazing
     incidence on a grid whose cells cannot resolve the facets' incidences) it warns in one line with the share it
     removed, and reports the factor (``diffraction_energy_scale``).

@@ -212,10 +212,10 @@ def decide_diffraction_model(e: Entry) -> None:
         e.decide("diffraction model", "rayleigh-rice",
                  f"light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}° on a surface smooth at these "
                  f"incidences (g = (kσ_rel(cosθ_i + 1))² ≤ {g_any:.2g} ≤ {RAYLEIGH_RICE_G_MAX:g}, first-order "
-                 "perturbation theory's domain): beyond 75° the tangent-plane lobe is outside its validity and "
-                 "only carries an albedo continued with Rayleigh-Rice's incidence dependence (docs/physics.md §9), "
-                 "while Rayleigh-Rice with its polarization factor Q gives the lobe's shape there too and agrees "
-                 "with Kirchhoff within 1 % up to 60°")
+                 "perturbation theory's domain): beyond 70-80° the tangent-plane lobe is outside its validity and "
+                 "hands over to the Rayleigh-Rice lobe (docs/physics.md §9), while Rayleigh-Rice with its "
+                 "polarization factor Q gives the lobe's shape at every angle and agrees with Kirchhoff within 1 % "
+                 "up to 60°")
         return
     why = ("tangent-plane Kirchhoff: the model held against the flat-patch, exp(−g), grating and Beckmann limits; "
            "RGHS differs from it by ~1 % on a rough surface, OHS/ROHS by 36 % at θ_i = 30°")
@@ -231,8 +231,8 @@ def decide_diffraction_model(e: Entry) -> None:
         why += "; " + choice.note()
     if theta_max > KIRCHHOFF_GRAZING_DEG:
         why += (f"; light up to θ_i = {theta_max:g}° > {KIRCHHOFF_GRAZING_DEG:g}°, beyond the tangent plane's "
-                "validity: there its lobe carries its 75° albedo continued with first-order perturbation theory's "
-                "incidence dependence (docs/physics.md §9)")
+                "validity: between 70° and 80° of incidence or exit its lobe hands over to first-order "
+                "perturbation theory's lobe (docs/physics.md §9)")
     e.decide("diffraction model", "kirchhoff", why)
 
 
