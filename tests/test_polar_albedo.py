@@ -39,16 +39,27 @@ def test_an_array_of_incidences_matches_the_closed_form_and_one_call_each():
     assert got.shape == THETAS_DEG.shape
     ref = np.array([closed_form(t) for t in THETAS_DEG])
     assert ref[-1] < 0.6            # at 88° the rim cuts the lobe
-    # measured: 1.4e-4, 1.1e-4, 6.9e-5, 1.4e-4 relative up to 80°; 4.2e-3 at 88°, where the rim crosses the lobe
-    # and the 24 azimuths resolve its cut coarsely
-    np.testing.assert_array_less(np.abs(got / ref - 1.0), [3e-4, 3e-4, 3e-4, 3e-4, 6e-3])
+    # measured: ≤ 1.3e-9 relative up to 60°, 2.9e-5 at 80°; 4.1e-3 at 88°, where the rim crosses the lobe and the
+    # 24 azimuths resolve its cut coarsely
+    np.testing.assert_array_less(np.abs(got / ref - 1.0), [1e-8, 1e-8, 1e-8, 1e-4, 6e-3])
     one = np.array([polar_albedo(math.radians(t), K, 1e-6, gaussian_lobe) for t in THETAS_DEG])
     np.testing.assert_allclose(got, one, rtol=1e-12, atol=0.0)
 
 
 def test_a_scalar_incidence_gives_a_float():
     assert isinstance(polar_albedo(0.3, K, 1e-6, gaussian_lobe), float)
-    assert polar_albedo(0.3, K, 1e-6, gaussian_lobe) == pytest.approx(closed_form(math.degrees(0.3)), rel=2e-4)
+    assert polar_albedo(0.3, K, 1e-6, gaussian_lobe) == pytest.approx(closed_form(math.degrees(0.3)), rel=1e-8)
+
+
+@pytest.mark.parametrize("theta_deg", [0.0, 30.0, 60.0, 80.0, 88.0, 89.9])
+def test_a_constant_and_a_one_over_cosine_lobe_fill_the_disc_and_the_hemisphere(theta_deg):
+    """f = 1: ∫ du dv over the unit disc = π, whatever the incidence (the nodes cover the disc once); f = 1/cosθ_o:
+    ∫ f cosθ_o dω_o = ∫ dω = 2π, which tests the substitution q = q_rim − τ² at the horizon, where the integrand
+    grows as 1/√(q_rim − q) (measured: ≤ 1.2e-11 up to 60°, 1.8e-6 at 80°, 4.1e-4 at 88°, 7.1e-4 at 89.9°)."""
+    t = math.radians(theta_deg)
+    assert polar_albedo(t, K, 1e-6, lambda wi, wo, q: 1.0 + 0.0 * q) == pytest.approx(math.pi, rel=1e-12)
+    tol = 1e-10 if theta_deg <= 60 else 1e-5 if theta_deg <= 80 else 1.5e-3
+    assert polar_albedo(t, K, 1e-6, lambda wi, wo, q: 1.0 / wo[..., 2]) == pytest.approx(2 * math.pi, rel=tol)
 
 
 def _fresnel_unpolarized(cos_i, n):

@@ -32,7 +32,9 @@ LAM = LAM_NM * 1e-9
 KA = 1e-3              # grating amplitude × the larger wave number, k₀ n_max a
 TOL_ORDER = 2e-6       # first order vs rigorous at KA (the error is O((k a)²): measured ≤ 1.1e-6)
 TOL_LOSS = 1e-5        # first-order scatter vs the rigorous specular loss at KA (measured ≤ 4e-7)
-TOL_QUAD = 5e-4       # the two TIS quadratures against each other (polar_albedo: within 3e-4)
+TOL_QUAD = 1e-8       # the two TIS quadratures against each other where the integrand is smooth (measured ≤ 8e-10)
+TOL_QUAD_KINK = 1e-3  # ... where a √ kink crosses the polar grid (measured 1.1e-4 to 7.0e-4: Gauss-Legendre panels
+                      # converge slowly across it; method='auto' integrates such wide lobes over the hemisphere)
 TOL_TIS = 1e-5         # TIS of a random surface vs the integrated grating loss (measured ≤ 9e-7)
 TOL_TIS_TIR = 1e-3     # the same beyond the critical angle (the reference's grid, measured 4.7e-4)
 
@@ -132,14 +134,17 @@ def test_random_surface_tis_is_the_integrated_specular_loss(n_i, n_o, th, pol, t
 def test_tis_quadratures_agree(th, corr):
     """The polar quadrature about the specular direction and the hemisphere quadrature (cut at the critical angle)
     give one TIS, transmitted and reflected, air → glass and glass → air; the hemisphere quadrature is converged
-    (doubling its nodes changes it by < 1e-9 relative)."""
+    (doubling its nodes changes it by < 1e-9 relative). Where the integrand has a √ kink inside the disc (the circle
+    where a first-order factor's normal wave number turns imaginary: transmission into glass, reflection inside
+    glass) and the lobe is wide enough to reach it, the polar quadrature's panels do not follow it."""
     psd = PSDModel("gaussian", 1e-9, T=corr)
     for n1, n2, above in ((1.0, 1.5, True), (1.0, 1.5, False)):
         tt = th if above else th * 0.6            # below the critical angle from inside
         for fn in (rr_tis_transmission, rr_tis_reflection):
             a = fn(tt, LAM_NM, psd, n1, n2, "p", from_above=above, method="polar")
             b = fn(tt, LAM_NM, psd, n1, n2, "p", from_above=above, method="hemisphere")
-            assert a == pytest.approx(b, rel=TOL_QUAD), (fn.__name__, above)
+            kink = (fn is rr_tis_transmission) == above and corr < 1e-6
+            assert a == pytest.approx(b, rel=TOL_QUAD_KINK if kink else TOL_QUAD), (fn.__name__, above)
     wi = np.array([math.sin(math.radians(th)), 0.0, math.cos(math.radians(th))])
 
     def lobe(wo):

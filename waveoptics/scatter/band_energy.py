@@ -113,9 +113,10 @@ class BandAlbedos:
         vanishes for p light at Brewster's angle).
 
         Computed once per model on a polar grid about the mirror direction in the plane of the grating vector q
-        (geometric in |q| from far below the PSD's knee to 2k, 48 azimuths; measured against a 384² direction-cosine
-        grid: within 3e-4 relative, tests/test_band.py). This is the light a facet's nano-roughness scatters at
-        that incidence: on a conductor the coherent fraction is its complement (:meth:`coherent_fraction`).
+        (Gauss-Legendre in ln|q| from far below the PSD's knee, 48 azimuths: :func:`waveoptics.scatter.polar_albedo`;
+        measured against a 512² direction-cosine grid: within 2e-3 relative, tests/test_band.py). This is the light
+        a facet's nano-roughness scatters at that incidence: on a conductor the coherent fraction is its complement
+        (:meth:`coherent_fraction`).
 
         *polarization* ``s`` or ``p`` (of the incident light, relative to the plane of incidence): each direction is
         weighted by its facet's polarized reflectance relative to the specular one,

@@ -273,8 +273,9 @@ def rr_tis_transmission(theta_deg, wavelength_nm, model, n1, n2, polarization: s
 
     *method*: ``polar``, the polar quadrature about the specular transmission direction of
     :func:`waveoptics.scatter.polar_albedo` in the direction cosines of the far side (for narrow lobes; needs that
-    direction, n_i sinθ_i < n_o; within about 3e-4); ``hemisphere``, :func:`hemisphere_albedo` over the far side,
-    cut at its critical angle (wide lobes, and light beyond the critical angle, whose lobe's centre lies outside
+    direction, n_i sinθ_i < n_o; within 1e-8 of the hemisphere where the integrand is smooth, 1e-3 where a wide
+    lobe reaches the critical circle); ``hemisphere``, :func:`hemisphere_albedo` over the far side, cut at its
+    critical angle (wide lobes, and light beyond the critical angle, whose lobe's centre lies outside
     the far side's directions); ``auto``, the hemisphere for lobes wider than :data:`WIDE_LOBE` or beyond the
     critical angle, else the polar quadrature.
 
