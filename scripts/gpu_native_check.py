@@ -11,7 +11,10 @@ Two steps, because the GPU machine has no network and only a small carried tree:
 
 ``device DIR OUT`` (on the GPU machine, with Mitsuba and Dr.Jit carried as a site folder):
     the same pairs in ``cuda_ad_rgb`` and ``cuda_ad_spectral``: eval and pdf against the NumPy model (float32
-    precision) and against the LLVM values; eval throughput; Mitsuba's own χ² test of sample/pdf at 30° and 80°;
+    precision) and against the LLVM values; eval throughput; Mitsuba's own χ² test of sample/pdf at 30° and 80°
+    (10⁶ samples; ires = 24: with Mitsuba's default-like ires = 8 the expected counts of the narrow grazing lobe,
+    GGX α 0.05 at 80°, are integrated too coarsely and both this BSDF and the NumPy model are rejected; measured
+    in LLVM here, the same test with ires = 24 accepts both at 70, 75 and 80°, p = 0.16, 0.70, 0.17);
     the same scene rendered (time, and the image against LLVM's with the same sampler seed). Writes OUT/cuda.json.
 
 Modules the GPU machine lacks and the model's evaluation does not call (pyopencl, colour-science, the optical
@@ -204,7 +207,7 @@ def device(d: Path, out: Path) -> None:
                 w = mi.Vector3f(float(np.sin(t) * np.cos(0.4)), float(np.sin(t) * np.sin(0.4)), float(np.cos(t)))
                 sf, pf = BSDFAdapter("wo_gpu_check", {"type": "wo_gpu_check"}, wi=w)
                 test = ChiSquareTest(domain=SphericalDomain(), sample_func=sf, pdf_func=pf, sample_dim=3,
-                                     sample_count=1_000_000, res=101, ires=8, seed=7)
+                                     sample_count=1_000_000, res=101, ires=24, seed=7)
                 chi[f"{th:g}"] = {"passed": bool(test.run()), "p_value": float(getattr(test, "p_value", np.nan))}
             r["chi2"] = chi
             img, times = _render(mi, "wo_gpu_check")
