@@ -11,6 +11,11 @@ with a complex index that :func:`~waveoptics.materials.get_material` accepts (a 
 ``shelf/book/page``, ``n+kj``; not ``f0:``); each thickness is a length with its unit (``5nm``, ``1.2um``,
 :func:`waveoptics.units.parse_length`), 0 allowed (the bare substrate).
 
+A film may end in ``:roughness=R``: the rms roughness of its top interface relative to the substrate's (R ≥ 0; the
+nano-roughness model describes the substrate's interface, and this interface's PSD is R² times it, the same shape:
+a film that smooths, R < 1, or roughens, R > 1, its substrate's profile). ``"Al|Al2O3:120nm:roughness=0.5"``;
+without it R = 1 (a film replicating its substrate). Only first-order scatter of the rough stack uses it.
+
 Films and the single-interface models
 -------------------------------------
 A stack has no single interface index: :meth:`Stack.eta` refuses (naming the ``material`` field) rather than
@@ -44,11 +49,12 @@ from ..vocabulary import ROUGHNESS_CORRELATIONS
 from . import fresnel, stack
 from .database import SPEC_PARSERS, Material, get_material
 
-__all__ = ['Stack', 'parse_stack', 'GRAMMAR', 'ROUGHNESS_CORRELATIONS', 'roughness_correlation',
+__all__ = ['Stack', 'parse_stack', 'GRAMMAR', 'ROUGHNESS_KEY', 'ROUGHNESS_CORRELATIONS', 'roughness_correlation',
            'with_roughness_correlation']
 
 #: the stack grammar, as errors write it
-GRAMMAR = "SUBSTRATE|FILM:THICKNESS|... (films from the substrate outwards, e.g. Al|Al2O3:120nm)"
+GRAMMAR = ("SUBSTRATE|FILM:THICKNESS[:roughness=R]|... (films from the substrate outwards, e.g. Al|Al2O3:120nm or "
+           "Al|Al2O3:120nm:roughness=0.5)")
 
 
 @dataclass(frozen=True)
@@ -66,16 +72,26 @@ class Stack(Material):
         :func:`waveoptics.scatter.rough_stack_brdf`): ``"correlated"`` (default: a thin evaporated film replicates
         its substrate's roughness, Elson 1979; Stover ch. 6), ``"uncorrelated"`` or a coefficient in [0, 1]
         (:func:`roughness_correlation`). The flat stack's reflectance does not depend on it.
+    interface_roughness : tuple of float
+        The rms roughness of each interface relative to the nano-roughness model's, substrate interface first (one
+        more than the films); () for 1 on every interface. Interface j's PSD is r_j² times the model's.
     """
 
     substrate: Material = None
     films: tuple = ()
     roughness_correlation: object = "correlated"
+    interface_roughness: tuple = ()
 
     @property
     def cache_name(self) -> str:
-        """The name with the roughness correlation: a key for caches of rough-stack quantities."""
+        """The name (with any interface roughness) and the roughness correlation: a key for caches of rough-stack
+        quantities."""
         return f"{self.name}~{self.roughness_correlation}"
+
+    @property
+    def roughness_scales(self) -> tuple:
+        """r_j of every interface, substrate interface first (:attr:`interface_roughness`, 1 where not given)."""
+        return tuple(self.interface_roughness) or (1.0,) * (len(self.films) + 1)
 
     @property
     def has_index(self) -> bool:
@@ -175,15 +191,38 @@ def _thickness_nm(spec: str, film: str, text: str) -> float:
                          f"with a unit ({', '.join(LENGTH_UNITS)}), e.g. 120nm or 1.2um", "material") from None
 
 
+#: the suffix of a film giving its top interface's relative roughness (module docstring)
+ROUGHNESS_KEY = "roughness="
+
+
+def _film_roughness(spec: str, tok: str):
+    """(the film token without ``:roughness=R``, R or None)."""
+    head, sep, value = tok.rpartition(":")
+    if not sep or not value.strip().lower().startswith(ROUGHNESS_KEY):
+        return tok, None
+    text = value.strip()[len(ROUGHNESS_KEY):]
+    try:
+        r = float(text)
+    except ValueError:
+        r = float("nan")
+    if not (np.isfinite(r) and r >= 0.0):
+        film = head.rpartition(":")[0].strip() or head.strip()
+        raise FieldError(f"{{material}} {spec!r}: film {film!r} has roughness {text!r}, which is not a "
+                         "number >= 0 (the rms roughness of its top interface relative to the substrate's, e.g. "
+                         "roughness=0.5)", "material")
+    return head.strip(), r
+
+
 def parse_stack(spec: str) -> Stack:
-    """A :class:`Stack` from ``"SUBSTRATE|FILM:THICKNESS|..."`` (module docstring), films from the substrate
-    outwards.
+    """A :class:`Stack` from ``"SUBSTRATE|FILM:THICKNESS[:roughness=R]|..."`` (module docstring), films from the
+    substrate outwards.
 
     Raises
     ------
     FieldError
         Naming the ``material`` field and the bad token: an empty layer, a film without ``:THICKNESS``, a thickness
-        that is not a length ≥ 0 with a unit, a layer the database does not know or that gives only F0.
+        that is not a length ≥ 0 with a unit, a roughness that is not a number ≥ 0, a layer the database does not
+        know or that gives only F0.
     """
     s = str(spec).strip()
     tokens = [t.strip() for t in s.split("|")]
@@ -191,8 +230,10 @@ def parse_stack(spec: str) -> Stack:
         raise FieldError(f"{{material}} {s!r}: the substrate {tokens[0]!r} takes no thickness (it is semi-infinite); "
                          f"write {GRAMMAR}", "material")
     substrate = _layer(s, tokens[0], "substrate")
-    films = []
+    films, scales = [], [1.0]
     for tok in tokens[1:]:
+        tok, r = _film_roughness(s, tok)
+        scales.append(1.0 if r is None else r)
         if ":" not in tok:
             _layer(s, tok, "film")   # an empty or unknown token is named as such first
             raise FieldError(f"{{material}} {s!r}: film {tok!r} needs a thickness; write FILM:THICKNESS, e.g. "
@@ -204,11 +245,14 @@ def parse_stack(spec: str) -> Stack:
         raise FieldError(f"{{material}} {s!r} has no film after '|'; write {GRAMMAR}", "material")
     los = [substrate.wavelength_range_nm[0]] + [m.wavelength_range_nm[0] for m, _ in films]
     his = [substrate.wavelength_range_nm[1]] + [m.wavelength_range_nm[1] for m, _ in films]
-    name = "|".join([substrate.name] + [f"{m.name}:{d:.10g}nm" for m, d in films])   # exact enough to key caches
+    rough = any(r != 1.0 for r in scales)
+    name = "|".join([substrate.name] + [f"{m.name}:{d:.10g}nm" + (f":{ROUGHNESS_KEY}{r:.10g}" if rough else "")
+                                        for (m, d), r in zip(films, scales[1:])])   # exact enough to key caches
     source = "thin-film stack (transfer matrix) of " + "; ".join(
         [f"substrate {substrate.name}: {substrate.source}"] + [f"{d:g} nm {m.name}: {m.source}" for m, d in films])
     return Stack(name=name, source=source, category=substrate.category,
-                 wavelength_range_nm=(max(los), min(his)), substrate=substrate, films=tuple(films))
+                 wavelength_range_nm=(max(los), min(his)), substrate=substrate, films=tuple(films),
+                 interface_roughness=tuple(scales) if rough else ())
 
 
 def roughness_correlation(value, field: str = "roughness_correlation"):

@@ -259,7 +259,8 @@ def rough_stack_components(wi, wo, wavelength_nm, stack_or_layers, interface_psd
     n = len(eps) - 1
     psds = _interface_psds(interface_psds, n)
     c = cross_psd_weights(correlation, n)
-    S = [_psd_values(m, wi, wo, wavelength_nm) for m in psds]
+    r = getattr(stack_or_layers, "roughness_scales", (1.0,) * n)     # a Stack's interface_roughness: S_j = r_j² S
+    S = [r_j * r_j * _psd_values(m, wi, wo, wavelength_nm) for m, r_j in zip(psds, r)]
     G = interface_amplitudes(wi, wo, wavelength_nm, eps, d)
     ci, _, co, _, _, _ = scattering_angles(wi, wo)
     ok = (ci > 0) & (co > 0)
@@ -287,7 +288,8 @@ def rough_stack_brdf(wi, wo, wavelength_nm, stack_or_layers, interface_psds, cor
     wavelength_nm : array_like, nm
         Vacuum wavelength (broadcast against the directions).
     stack_or_layers : Stack, Material or (n_substrate, n_films, d_films_nm)
-        The stack: films from the substrate outwards, thicknesses in nm (:func:`stack_layers`).
+        The stack: films from the substrate outwards, thicknesses in nm (:func:`stack_layers`). A
+        :class:`~waveoptics.materials.Stack` with ``interface_roughness`` r_j scales interface j's PSD by r_j².
     interface_psds : PSDModel, PeriodogramPSD, None or sequence of them
         Height PSD of each interface (m⁴ at f in 1/m), substrate interface first, the top (air) interface last;
         one model stands for every interface, None for a smooth one.
