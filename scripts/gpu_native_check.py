@@ -46,21 +46,22 @@ SCENE_RES, SCENE_SPP = 128, 64
 
 
 def _pairs(n, seed):
-    """n (ω_i, ω_o) pairs below 85°, half within ~5° of the mirror direction, and 4 wavelengths each; float32-exact."""
+    """n (ω_i, ω_o) pairs: θ_i uniform in cos θ up to 85°; ω_o uniform in cos θ up to 85° for half of them and within
+    ±5° (θ and φ) of the mirror direction for the other half; 4 wavelengths each; float32-exact."""
     rng = np.random.default_rng(seed)
+    cmin = np.cos(np.radians(85.0))
+    ti, pi = np.arccos(rng.uniform(cmin, 1.0, n)), rng.uniform(-np.pi, np.pi, n)
+    to, po = np.arccos(rng.uniform(cmin, 1.0, n)), rng.uniform(-np.pi, np.pi, n)
+    near = np.arange(n) < n // 2
+    jitter = np.radians(rng.uniform(-5.0, 5.0, (2, n)))
+    to = np.where(near, np.clip(ti + jitter[0], 0.0, np.radians(85.0)), to)
+    po = np.where(near, pi + np.pi + jitter[1], po)
 
-    def dirs(k):
-        th, ph = np.radians(rng.uniform(0.0, 85.0, k)), rng.uniform(0.0, 2 * np.pi, k)
-        return np.stack([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)], -1)
+    def unit(t, p):
+        return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], -1).astype(np.float32)
 
-    wi, wo = dirs(n), dirs(n)
-    h = n // 2
-    wo[:h] = wi[:h] * [-1.0, -1.0, 1.0] + 0.08 * rng.normal(size=(h, 3))
-    wo[:h, 2] = np.abs(wo[:h, 2])
-    wo[:h] /= np.linalg.norm(wo[:h], axis=1)[:, None]
-    lam = rng.uniform(400.0, 700.0, (n, 4))
-    f32 = (lambda a: a.astype(np.float32).astype(float))
-    return f32(wi), f32(wo), f32(lam)
+    lam = rng.uniform(400.0, 700.0, (n, 4)).astype(np.float32)
+    return unit(ti, pi).astype(float), unit(to, po).astype(float), lam.astype(float)
 
 
 def _eval_pdf(mi, plugin, wi, wo, lam):
