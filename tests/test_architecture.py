@@ -256,3 +256,16 @@ def test_the_command_line_writes_no_result_files_itself(path):
     writes one named output (``surfaces.save``, ``rgl.export_rgl``) is the job itself."""
     found = list(_writes(ast.parse(path.read_text())))
     assert not found, f"{_rel(path)} writes files itself: {found}"
+
+
+@pytest.mark.parametrize("init", sorted(p for p in MODULES if p.name == "__init__.py" and p.parent.name != "waveoptics"),
+                         ids=_rel)
+def test_every_name_a_sub_package_lists_is_there(init):
+    """A sub-package's ``__all__`` (its modules' lists joined) names only what the package imports: a name a
+    module adds to its own ``__all__`` must reach the package's import lines too (``from pkg import *`` and
+    ``pkg.name`` would fail on it)."""
+    import importlib
+
+    pkg = importlib.import_module(".".join(init.parent.relative_to(ROOT).parts))
+    missing = [n for n in getattr(pkg, "__all__", []) if not hasattr(pkg, n)]
+    assert not missing, f"{_rel(init)}: __all__ names that the package does not import: {missing}"

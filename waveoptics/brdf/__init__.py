@@ -21,11 +21,11 @@ from .ndf_shaped import (ABC_C_DEFAULT, abc_normalization, D_abc, Lambda_abc, EP
     D_epd, Lambda_epd, SGD_P_DEFAULT, gamma_upper, sgd_normalization, D_sgd, Lambda_sgd)
 from .ndf import (ALPHA_MIN, ALPHA_MAX, COS_MIN, SHAPE_RANGE, NDF, NDFS, D, Lambda, G1)
 from .shadowing import (G_smith, G_smith_correlated, G_cook_torrance, G_implicit, SHADOWINGS, G)
-from .fresnel_terms import (FRESNELS, F_mean)
-from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES)
+from .fresnel_terms import (FRESNELS, F_mean, MaterialFresnel)
+from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES, diffuse_parameter, sigma_renamed)
 from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
 from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albedo)
-from .opencl import (D_cl, Lambda_cl, brdf_cl)
+from .opencl import (D_cl, Lambda_cl, brdf_cl, ndf_shape_parameter)
 from .field_lobe import (BAND_MARGIN_BINS, band_limited_field, kirchhoff_scattered_lobe, FIELD_THETAS_DEG,
     FIELD_GRID_OVERSAMPLING, field_scattered_albedo, bracketing_nodes, ISOTROPIC_FIELD_MODELS, ANISOTROPIC_FIELD_MODELS,
     ISOTROPY_SECTORS, ISOTROPY_MAX_RATIO, field_anisotropy, field_proposal_model)
@@ -33,15 +33,15 @@ from .roughness_scales import (SERIES_MIN_CAPTURED, check_series, Micro, Nano, i
 from .scale_split import (SPLIT_PERIODS_OF_LAMBDA, split_scales)
 from .twoscale_grid import (mirror_direction, fresnel_at_mirror, mirror_cell, sharp_micro_lobe, azimuth_deg,
     FACET_TAIL_SHARE, significant_cells)
-from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP, CORE_MAX_SUBSAMPLES)
+from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP, CORE_MAX_SUBSAMPLES, energy_weighted_fresnel)
 from .facet_polarization import (facet_scattered_share, facet_coherent_fraction)
 from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, kernel_half_vectors, facet_scatter_weights, facet_incidences_deg,
     field_albedo_evaluations, paraxial_diffraction)
 from .twoscale_frame import (FACET_THETAS_DEG, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_NODE_SPLIT,
     FACET_REFERENCE_NM, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
-from .twoscale_coherent import (coherent_lobe)
+from .twoscale_coherent import (coherent_lobe, STACK_SUBCELL, SubCells)
 from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, multiple_scattering_lobe, evaluate)
-from .sampling import (NormalSampler, NORMAL_SAMPLERS, sample_normal, pdf_normal, pdf_reflected, sample_reflected)
+from .sampling import (NormalSampler, NORMAL_SAMPLERS, sample_normal, pdf_normal, pdf_reflected, sample_reflected, sample_normal_dcos)
 from .protocol import (BRDFSample, BRDF, MicrofacetBRDF, TwoScaleParts, sample_cosine, pdf_cosine, lobe_choice,
     check_uniform)
 from .pointwise import (QUADRATURE_NODES, RADIAL_BINS, COS_LEVELS, TwoScaleBRDF, unit_nodes, NanoRadial, facet_basis,

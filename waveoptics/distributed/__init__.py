@@ -5,7 +5,7 @@ results), table (HDF5 BRDF tables), sweep (parameter sweeps to CSV).
 """
 from .cases import (case_from_scene, surface_digest)
 from .cluster import (LOOPBACK, dask_client, local_cluster, WarmWorker, DEFAULT_RETRIES)
-from .store import (partial_path)
+from .store import (partial_path, check_resume_overwrite)
 from .table import (TABLE_FORMAT, TABLE_VERSION, DEFAULT_BATCH, TABLE_LAYOUT, TableSpec, TableTask, table_tasks,
     compute_block, table_size, check_table_size, run_table, table_plan, BRDFTable, table_info, read_table,
     open_table)

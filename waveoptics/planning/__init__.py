@@ -8,7 +8,7 @@ numerics (grid, directions, solver, precision), plan (the plan's data types), re
 before it runs).
 """
 from .scene import (KEYS, CAMERAS, DEFAULT_DELTA_E, DEFAULT_LIGHT_DIRECTIONS, NanoSpec, MaterialSpec, LightSpec,
-    ViewSpec, OutputSpec, Scene, parse, load)
+    ViewSpec, OutputSpec, Scene, parse, load, request_of)
 from .decisions import (DE_PER_RELATIVE_Y, LSTAR_SLOPE_BLACK, LAMBDA_REF_NM, EPS32, scattered_fraction, lobe_width,
     diffraction_lobe_width, grid_step, float32_floor, weakest_level, grating_orders, ORDER_EFFICIENCY_MIN,
     first_order_g)
@@ -23,7 +23,7 @@ from .report import (plan_table)
 from .plan import (EntryPlan, Plan)
 from .planner import (plan_scene)
 from .runner import (entry_prefix, output_files, EntryResult, run_entry, view_values, execute)
-from .estimate import (LONG_REQUEST_S, simulation_time, scatter_time)
+from .estimate import (LONG_REQUEST_S, simulation_time, scatter_time, MAX_REQUEST_S, time_budget)
 from . import scene, decisions, costmodel, thresholds, force, colour_estimate, effects, numerics, report, plan, planner, runner, estimate  # noqa: F401
 
 __all__ = scene.__all__ + decisions.__all__ + costmodel.__all__ + thresholds.__all__ + force.__all__ + colour_estimate.__all__ + effects.__all__ + numerics.__all__ + report.__all__ + plan.__all__ + planner.__all__ + runner.__all__ + estimate.__all__

@@ -24,12 +24,12 @@ from .direct import (VECTOR_WIDTH, TERMS_PER_LAUNCH, PhaseCoefficients, phase_co
 from .fft import (FFT_TOL, FFT_BAND_X, FFT_MAX_ORDER, fft_plan, field_fft)
 from .series import (M_MAX, SeriesTables, series_tables, SeriesSum, series_sum, poisson_weights, roughness_g,
     series_terms, debye_waller, obliquity, rayleigh_rice)
-from .polar import (polar_albedo)
+from .polar import (N_PSI, N_PANELS, N_PANEL_NODES, N_RIM, polar_nodes, polar_albedo)
 from .angles import (scattering_angles)
 from .band_energy import (TANGENT_PLANE_MAX_DEG, is_conductor, ALBEDO_THETAS_DEG, RR_THETAS_DEG, rr_interp,
     BandAlbedos)
 from .band import (band_arc, relevant_variance, relevant_variance_of_field, beyond_band_fraction, SIN_NODES,
-    relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series, scattered_lobe)
+    relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series, scattered_lobe, series_arrays)
 from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factors, Q,
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
     rayleigh_rice_tis, is_stack, stack_correlation)
@@ -45,7 +45,7 @@ from .solvers import (ENERGY_TOL, DiffractionWarning, Solver, SOLVERS, BACKENDS,
     sampling_warnings, brdf, ScatterResult, memory_estimate, check_request_memory, scatter)
 from .footprint import (footprint_scatter, coherence_centres, incoherent_sum)
 from .pixel import (PIXEL_BACKENDS, MAX_REGION_SAMPLES, PixelBRDF, footprint_sums, footprint_sums_numpy,
-    pixel_brdf, footprint_brdf)
+    pixel_brdf, footprint_brdf, SUM_N_SIGMA, Q_MAX, ellipse_samples)
 from .gabor import (KERNEL_SIGMA, GaborKernels, gabor_kernels, gabor_footprint_field, gabor_footprint_brdf)
 from .output import (plot_scatter, SCATTER_FILES, write_scatter, brdf_exr_header)
 from . import grid, patch, models, kirchhoff, direct, fft, series, polar, angles, band_energy, band, perturbation, transmission, rough_film, mom, models1d, solvers, footprint, pixel, gabor, output  # noqa: F401
