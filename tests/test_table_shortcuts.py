@@ -74,3 +74,33 @@ def test_facet_table_equals_the_lobe_blended_at_every_cell():
                 g = (blend_with_first_order(f, wi, wo, lam, MODEL, material, "unpolarized", Fl)
                      * wo[..., 2]).astype(np.float32)
                 np.testing.assert_allclose(table[..., i], g, rtol=2e-6, atol=1e-7 * float(np.abs(g).max()))
+
+
+def test_isotropic_sigma_row_matches_full_grid_and_closed_form():
+    """The RGL projected area σ(θ_i) of an isotropic Beckmann NDF table (α = 0.1): the one computed row repeated
+    over φ_i is within 2e-4 of the midpoint rule at every (φ_i, θ_i) vertex (measured 1.2e-4), and relative to
+    normal incidence within 2e-3 of the closed form cos θ_i (1 + Λ(θ_i)) up to 85° (Heitz 2014 eq. 2; Beckmann
+    Λ = (erf(a) − 1)/2 + e^{−a²}/(2a√π), a = 1/(α tan θ_i)): measured 5.4e-4, the full grid 5.5e-4."""
+    import pytest
+    pytest.importorskip("mitsuba")
+    from waveoptics.renderers import rgl
+
+    mi = rgl._mitsuba()
+    nn, a = 64, 0.1
+    th = rgl.u2theta(np.linspace(0.0, 1.0, nn))
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        D = np.where(th < np.pi / 2 - 1e-9, np.exp(-np.tan(th) ** 2 / a ** 2) / (np.pi * a * a * np.cos(th) ** 4),
+                     0.0)
+    warp = mi.MarginalContinuous2D0(np.repeat(D[None, :], nn, axis=0).astype(np.float32), normalize=False,
+                                    enable_sampling=False)
+    row = rgl.sigma_table(warp.eval, mi, nn, True)
+    full = rgl.sigma_table(warp.eval, mi, nn, False)
+    assert row.shape == full.shape == (nn, nn)
+    np.testing.assert_array_equal(row, np.repeat(row[:1], nn, axis=0))
+    np.testing.assert_allclose(row, full, rtol=2e-4)
+    ok = (th > 0) & (th <= np.radians(85.0))
+    x = 1.0 / (a * np.tan(th[ok]))
+    lam = (special.erf(x) - 1.0) / 2.0 + np.exp(-x * x) / (2.0 * x * math.sqrt(math.pi))
+    # relative to normal incidence, σ(0) = ∫ D cos θ_m dm: the interpolated table holds 1 + 3.7e-3 of it
+    np.testing.assert_allclose(row[0, 0], 1.0, rtol=5e-3)
+    np.testing.assert_allclose(row[0, ok] / row[0, 0], np.cos(th[ok]) * (1.0 + lam), rtol=2e-3)
