@@ -129,3 +129,29 @@ def test_series_tables_equal_the_per_term_hankel_sums():
         expect = dr * (y.sum(axis=1) - 0.5 * (y[:, 0] + y[:, -1])) + 2 * math.pi * dr ** 2 / 12
         expect = np.where(expect > 1e-12 * expect[0], expect, 0.0)
         np.testing.assert_allclose(tab.H[m - 1], expect, rtol=0, atol=1e-12 * expect.max())
+
+
+def test_scalar_eta_memo_returns_the_array_path_values():
+    """η at one wavelength is kept per material: repeated and interleaved asks give the values of the array path
+    (which is not kept), a caller's write into the returned array does not reach the memo, a replaced copy starts
+    empty, and the memo stays bounded."""
+    import dataclasses
+
+    from waveoptics.materials import get_material
+    from waveoptics.materials.database import ETA_MEMO_SIZE
+
+    m = get_material("Au")
+    w = np.array([380.0, 550.0, 701.5])
+    ref = m.eta(w)
+    for _ in range(2):
+        for lam, e in zip(w, ref):
+            got = m.eta(float(lam))
+            assert np.ndim(got) == 0 and got == e
+    got = m.eta(550.0)
+    got[...] = 0.0
+    assert m.eta(550.0) == ref[1]
+    assert dataclasses.replace(m, name="copy")._eta_memo == {}
+    for lam in np.linspace(400.0, 700.0, ETA_MEMO_SIZE + 10):
+        m.eta(float(lam))
+    assert len(m._eta_memo) <= ETA_MEMO_SIZE
+    assert m.eta(701.5) == ref[2]
