@@ -160,3 +160,19 @@ def test_scalar_eta_memo_returns_the_array_path_values():
         m.eta(float(lam))
     assert len(m._eta_memo) <= ETA_MEMO_SIZE
     assert m.eta(701.5) == ref[2]
+
+
+def test_info_reports_colours_version_without_importing_it():
+    """``waveoptics info`` reads colour-science's version from its metadata: the version the package itself
+    states, and the command leaves colour (its plotting, matplotlib, pandas: ~2 s) unimported."""
+    import json
+    import subprocess
+    import sys
+
+    code = ("import json, sys; from waveoptics.cli.info import gather; d = gather(); "
+            "print(json.dumps([d['colour'], 'colour' in sys.modules, 'matplotlib' in sys.modules]))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    version, imported_colour, imported_mpl = json.loads(out.stdout.strip().splitlines()[-1])
+    import colour
+    assert version == colour.__version__
+    assert not imported_colour and not imported_mpl
