@@ -146,7 +146,6 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                                  "table_lobes")
             self._table.update(grid=self.table_grid, thetas=np.radians(np.asarray(self.thetas_deg, dtype=float)),
                                phis=phis, diffraction=diff,
-                               cdf=diff.reshape(diff.shape[:3] + (-1,)).cumsum(axis=-1),
                                energy_scale=np.ones((1, diff.shape[2])))
             return
         grid = DirectionGrid.hemisphere(int(self.resolution))
@@ -176,9 +175,16 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                     self.progress(1)
         if diff is None:
             diff = np.zeros((n_phi, thetas.size, w.size, grid.n_v, grid.n_u))
-        cdf = diff.reshape(diff.shape[:3] + (-1,)).cumsum(axis=-1)
-        self._table.update(grid=grid, thetas=thetas, phis=phis, diffraction=diff, cdf=cdf,
+        self._table.update(grid=grid, thetas=thetas, phis=phis, diffraction=diff,
                            energy_scale=np.asarray(scale) if scale else np.ones((1, w.size)))
+
+    def _cdf(self) -> np.ndarray:
+        """The cumulative sums of each tabulated lobe over its cells (n_φ, n_θ, n_λ, n_v n_u), for sampling; made on
+        first use (a model only evaluated, such as an exported table, never needs them)."""
+        if "cdf" not in self._table:
+            diff = self._table["diffraction"]
+            self._table["cdf"] = diff.reshape(diff.shape[:3] + (-1,)).cumsum(axis=-1)
+        return self._table["cdf"]
 
     @property
     def grid(self) -> DirectionGrid:
@@ -321,7 +327,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         pk = np.stack([p, k], axis=-1)
         for pp, kk in np.unique(pk, axis=0):          # one CDF per node: binary search, not a scan per sample
             sel = (p == pp) & (k == kk)
-            cdf = self._table["cdf"][pp, kk, j]
+            cdf = self._cdf()[pp, kk, j]
             target = u[sel, 0] * cdf[-1]
             c = np.minimum(np.searchsorted(cdf, target, side="left"), cdf.size - 1)
             lo = np.where(c > 0, cdf[np.maximum(c - 1, 0)], 0.0)
@@ -352,7 +358,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         col = np.floor((uu - grid.u_range[0]) / grid.du).astype(int)
         row = np.floor((vv - grid.v_range[0]) / grid.dv).astype(int)
         ok = (col >= 0) & (col < grid.n_u) & (row >= 0) & (row < grid.n_v) & (wo[:, 2] > 0)
-        total = self._table["cdf"][p, k, j, -1]
+        total = self._cdf()[p, k, j, -1]
         val = self._table["diffraction"][p, k, j, np.clip(row, 0, grid.n_v - 1), np.clip(col, 0, grid.n_u - 1)]
         dens = np.where(ok & (total > 0), val / np.where(total > 0, total, 1.0), 0.0) / (grid.du * grid.dv)
         return dens * np.maximum(wo[:, 2], 0.0)

@@ -17,7 +17,7 @@ from .. import scatter
 from ..errors import FieldError, unknown
 from ..materials import cos2_eta_i, facet_sp_mix
 from ..scatter.grid import DirectionGrid
-from ..scatter.tangent_blend import blend_with_first_order, uses_vector_first_order
+from ..scatter.tangent_blend import blend_weight, blend_with_first_order, uses_vector_first_order
 from .facet import half_vector_nodes, ndf_nodes
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_polarization import facet_scattered_share
@@ -159,12 +159,17 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
         u, v = u * shrink, v * shrink
         wo = np.stack([u, v, np.sqrt(np.maximum(1.0 - u * u - v * v, 0.0))], axis=-1)
         out = np.empty((grid.n_v, grid.n_u, len(w)), dtype=np.float32)
+        # the tangent-plane lobe is needed only where the hand-over to first order keeps a share of it (W > 0): at
+        # local incidences beyond 80° nowhere (the lobe is pointwise, so the cells it is evaluated at are unchanged)
+        near = blend_weight(wi, wo) > 0.0
         for i, lam in enumerate(w):
             if dm.perturbative:
                 f = scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization)
             else:
                 check_series(nano.model, lam)
-                f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
+                f = np.zeros(wo.shape[:-1])
+                if near.any():
+                    f[near] = scatter.scattered_lobe(wi, wo[near], lam, nano.model, F=1.0, diffraction=dm)
                 # beyond the tangent plane's validity the lobe hands over to first order, reciprocal (W f_K +
                 # (1 − W) f_RR / F, F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9)
                 Fl = ((lambda a, b, lam=lam: material.F_facet(a, b, lam, polarization))

@@ -17,20 +17,25 @@ def register(sub):
 
 def gather(device=None) -> dict:
     """Everything ``info`` reports, as plain data."""
+    from importlib import metadata
+
     from .. import __version__
     from .. import runtime
-    import colour
     import numpy
     import pyopencl
 
-
-
+    # colour-science's version from its installed metadata: importing it (for colour.__version__) loads its
+    # plotting, matplotlib and pandas, 1.5-2 s of the command
+    try:
+        colour_version = metadata.version("colour-science")
+    except metadata.PackageNotFoundError:
+        colour_version = None
     data = {
         "waveoptics": __version__,
         "python": _platform.python_version(),
         "numpy": numpy.__version__,
         "pyopencl": pyopencl.VERSION_TEXT,
-        "colour": colour.__version__,
+        "colour": colour_version,
         "pocl": runtime.pocl_version(),
         "kernel_dir": str(runtime.kernel_dir()),
         **runtime.describe(),

@@ -37,7 +37,7 @@ from ..errors import FieldError, WaveopticsError, unknown
 from ..materials import fresnel
 from ..units import check_wavelengths
 
-__all__ = ['PolarizedFresnel', 'RelativeFacetFresnel', 'MAX_CLAMP_NM', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'ior_text', 'alias_key', 'category_from_f0', 'get_material', 'data_sets', 'VISIBLE_NM', 'search', 'fresnel_function']
+__all__ = ['PolarizedFresnel', 'RelativeFacetFresnel', 'MAX_CLAMP_NM', 'ETA_MEMO_SIZE', 'IOR_MODULUS', 'Preset', 'PRESETS', 'Material', 'parse_ior', 'ior_text', 'alias_key', 'category_from_f0', 'get_material', 'data_sets', 'VISIBLE_NM', 'search', 'fresnel_function']
 
 #: wavelengths further than this (nm) outside a data set's range are refused rather than clamped
 MAX_CLAMP_NM = 100.0
@@ -102,6 +102,10 @@ def _alias_table() -> dict[str, str]:
     return table
 
 
+#: scalar wavelengths whose η a :class:`Material` keeps (:meth:`Material.eta`)
+ETA_MEMO_SIZE = 1024
+
+
 @dataclass(frozen=True)
 class Material:
     """A material with a spectral complex refractive index relative to air (vacuum).
@@ -122,6 +126,10 @@ class Material:
     _nk: object = field(repr=False, compare=False, default=None)  # callable wl_nm -> complex array
     wavelength_range_nm: tuple = (0.0, np.inf)
     f0_rgb: tuple | None = None  # set for F0-only (Schlick) materials
+    # η at the scalar wavelengths asked so far: a model evaluates F at one wavelength at a time, thousands of times
+    # (the database's interpolation is most of a small array's Fresnel cost); not an init field, so that a
+    # dataclasses.replace copy starts empty
+    _eta_memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def schlick_only(self) -> bool:
@@ -154,6 +162,11 @@ class Material:
             For wavelengths ≤ 0 or more than :data:`MAX_CLAMP_NM` outside the data range, and for F0-only
             materials (which have no index).
         """
+        scalar = np.ndim(wavelength_nm) == 0
+        if scalar:
+            hit = self._eta_memo.get(float(wavelength_nm))
+            if hit is not None:
+                return hit.copy()
         w = check_wavelengths(wavelength_nm)
         if self._nk is None:
             raise WaveopticsError(f"material {self.name!r} is given by F0 only and has no refractive index")
@@ -166,7 +179,12 @@ class Material:
         wc = np.clip(w, lo, hi)
         e = np.asarray(self._nk(wc), dtype=np.complex128)
         e = np.where(e.real <= 0, 1e-6 + 1j * e.imag, e)  # some data sets round n to 0 for free-electron metals
-        return e.reshape(np.shape(wavelength_nm))
+        e = e.reshape(np.shape(wavelength_nm))
+        if scalar:
+            if len(self._eta_memo) >= ETA_MEMO_SIZE:   # bounded: a caller may ask at ever new wavelengths
+                self._eta_memo.clear()
+            self._eta_memo[float(wavelength_nm)] = e.copy()
+        return e
 
     def F0(self, wavelength_nm) -> np.ndarray:
         """Normal-incidence reflectance spectrum at *wavelength_nm* (nm)."""

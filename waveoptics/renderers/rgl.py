@@ -41,7 +41,7 @@ from .. import colour
 from ..brdf import roughness_scales
 from ..errors import FieldError
 
-__all__ = ['RGLGrid', 'export_rgl', 'read_back_eval', 'read_back_albedo', 'u2theta', 'u2phi', 'theta2u', 'phi2u', 'UNIFORM_NDF_SHARE']
+__all__ = ['RGLGrid', 'export_rgl', 'read_back_eval', 'read_back_albedo', 'sigma_table', 'u2theta', 'u2phi', 'theta2u', 'phi2u', 'UNIFORM_NDF_SHARE']
 
 #: share of the uniform NDF 1/π in the warp's NDF (positivity of the sampling density)
 UNIFORM_NDF_SHARE = 1e-3
@@ -181,6 +181,29 @@ def _sigma(D_warp_eval, mi, wi_dirs, n_quad=192):
     return np.concatenate(out)
 
 
+def sigma_table(D_warp_eval, mi, nn: int, isotropic: bool) -> np.ndarray:
+    """σ(ω_i) of :func:`_sigma` on the (φ_i, θ_i) vertex grid (nn, nn) of the format (rows φ_i, columns θ_i).
+
+    An isotropic NDF (every φ row of its table the same) has σ independent of φ_i: the row at φ_i = −π is
+    computed and repeated (nn times fewer directions; the other rows of the full grid differ from it only by the
+    midpoint rule's φ discretization, measured ≤ 1.2e-4 relative at θ_i = 90° for Beckmann α = 0.1, where both
+    are 4.0e-4 from the same rule with 8x the nodes per axis; tests/test_table_shortcuts.py).
+
+    References
+    ----------
+    .. [1] J. Dupuy, W. Jakob, "An adaptive parameterization for efficient material acquisition and rendering",
+       ACM TOG 37(6), 2018 (the projected area σ of the format).
+    .. [2] E. Heitz, "Understanding the masking-shadowing function in microfacet-based BRDFs", JCGT 3(2), 2014,
+       eq. (2) (σ(ω) = ∫ D(m) ⟨ω·m⟩ dm = cos θ (1 + Λ(ω))).
+    """
+    u = np.linspace(0.0, 1.0, nn)
+    th_s, ph_s = np.meshgrid(u2theta(u), u2phi(u))
+    if isotropic:
+        row = _sigma(D_warp_eval, mi, _sph(th_s[:1], ph_s[:1]).reshape(-1, 3))
+        return np.repeat(row[None, :], nn, axis=0)
+    return _sigma(D_warp_eval, mi, _sph(th_s, ph_s).reshape(-1, 3)).reshape(nn, nn)
+
+
 def export_rgl(model, path, *, grid: RGLGrid = RGLGrid(), description: str = "waveoptics BRDF",
                isotropic: bool | None = None, overwrite: bool = True) -> dict:
     """Write *model* to the RGL ``.bsdf`` file *path* (see the module doc) and return its fields.
@@ -216,8 +239,7 @@ def export_rgl(model, path, *, grid: RGLGrid = RGLGrid(), description: str = "wa
 
     # projected area on its own (φ_i, θ_i) vertex grid
     u = np.linspace(0.0, 1.0, nn)
-    th_s, ph_s = np.meshgrid(u2theta(u), u2phi(u))
-    sigma = _sigma(ndf_warp.eval, mi, _sph(th_s, ph_s).reshape(-1, 3)).reshape(nn, nn).astype(np.float32)
+    sigma = sigma_table(ndf_warp.eval, mi, nn, isotropic).astype(np.float32)
     sigma_warp = mi.MarginalContinuous2D0(sigma, normalize=False, enable_sampling=False)
 
     theta_i = np.radians(np.linspace(0.0, grid.theta_i_max_deg, grid.n_theta_i))

@@ -426,11 +426,15 @@ def series_arrays(model: PSDModel, wavelength_nm: float, nodes, sigma2, m_max: i
     q = np.linspace(0.0, 2.0 * k * 1.001, int(n_q))
     J = special.j0(np.outer(q, r)) * (2 * np.pi * r * wr)
     end_fix = 2 * np.pi * dr ** 2 / 12      # Euler-Maclaurin correction of the r = 0 end (as series_tables)
-    H = np.empty((max(m_use - 1, 0), q.size))
+    # c_b^m for m = 2..m_use as the columns of one matrix: every H_m in one pass over J (a product per term read
+    # the (n_q, n_r) matrix m_use − 1 times)
+    powers = np.empty((n_r, max(m_use - 1, 0)))
     cm = c.copy()
     for j in range(m_use - 1):
         cm = cm * c
-        H[j] = np.maximum(J @ cm + end_fix, 0.0)   # guard: H_m ≥ 0 (Bochner); negatives are quadrature noise
+        powers[:, j] = cm
+    # guard: H_m ≥ 0 (Bochner); negatives are quadrature noise
+    H = np.ascontiguousarray(np.maximum((J @ powers).T + end_fix, 0.0))
     # B_m: the share of H_m^b in the off-centre band of each θ_i (f = q / 2π)
     f = q / (2 * np.pi)
     arc = band_arc(f[None, :], nodes[:, None], lam)                       # (nodes, n_q)

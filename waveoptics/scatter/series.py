@@ -107,9 +107,13 @@ def series_tables(model: PSDModel, q_max: float, m_max: int = M_MAX, n_q: int = 
     # so the plain trapezoid rule carries a q-independent bias of −2π dr²/12. Left in, that floor is amplified
     # by the 1/cosθ_o obliquity near the horizon (docs/physics.md §1 warns about exactly this).
     end_fix = 2 * np.pi * (r[1] - r[0]) ** 2 / 12
+    # c^m for m = 1..m_max as the columns of one matrix: every H_m in one pass over J (a product per term read the
+    # (n_q, n_r) matrix m_max times)
+    powers = np.empty((n_r, m_max))
     for m in range(1, m_max + 1):
         cm = cm * c
-        H[m - 1] = J @ cm + end_fix
+        powers[:, m - 1] = cm
+    H[:] = (J @ powers).T + end_fix
     # guard: H_m is the Fourier transform of a positive-definite function (Bochner), so it is >= 0;
     # values below 1e-12 of the peak are quadrature noise and are set to 0.
     H = np.where(H > 1e-12 * H[:, :1], H, 0.0)
