@@ -10,7 +10,7 @@ from scipy import special
 from waveoptics import scatter, surfaces
 from waveoptics.brdf import twoscale_frame
 from waveoptics.brdf.roughness_scales import Nano
-from waveoptics.scatter.band import _sigma2_nodes, band_correlation, series_arrays
+from waveoptics.scatter.band import sigma2_nodes, band_correlation, series_arrays
 from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.scatter.tangent_blend import TANGENT_PLANE_BLEND_DEG, blend_with_first_order
 
@@ -36,7 +36,7 @@ def test_band_series_terms_equal_the_per_term_hankel_sums():
     the same radial grid (steps min(λ/16, ℓ/40)) to rounding (1e-12 of the peak)."""
     lam = 830.0
     nodes = np.linspace(0.0, 1.0, scatter.band.SIN_NODES)
-    tab = series_arrays(MODEL, lam, nodes, _sigma2_nodes(MODEL, lam), None, 256)
+    tab = series_arrays(MODEL, lam, nodes, sigma2_nodes(MODEL, lam), None, 256)
     L = MODEL.length_scale
     r_max = max(12.0 * L, 60.0 * lam * 1e-9)
     n_r = int(min(max(r_max / (lam * 1e-9 / 16.0), r_max / (L / 40.0), 400), 12000))

@@ -147,7 +147,7 @@ def relevant_variances(model: PSDModel, wavelength_nm: float, sin_theta) -> np.n
 
 
 @functools.lru_cache(maxsize=256)
-def _sigma2_nodes(model: PSDModel, wavelength_nm: float) -> np.ndarray:
+def sigma2_nodes(model: PSDModel, wavelength_nm: float) -> np.ndarray:
     return relevant_variances(model, wavelength_nm, np.linspace(0.0, 1.0, SIN_NODES))
 
 
@@ -156,7 +156,7 @@ def relevant_sigma2(model: PSDModel, wavelength_nm: float, sin_theta) -> np.ndar
     interpolated linearly (the band's share changes smoothly with θ_i)."""
     nodes = np.linspace(0.0, 1.0, SIN_NODES)
     return np.interp(np.clip(np.asarray(sin_theta, dtype=float), 0.0, 1.0), nodes,
-                     _sigma2_nodes(model, float(wavelength_nm)))
+                     sigma2_nodes(model, float(wavelength_nm)))
 
 
 def band_correlation(model: PSDModel, wavelength_nm: float, r) -> np.ndarray:
@@ -398,7 +398,7 @@ def band_series_cached(model: PSDModel, wavelength_nm: float, m_max: int | None,
     (:func:`series_arrays`) are computed on first use."""
     lam = float(wavelength_nm)
     return BandSeries(model=model, wavelength_nm=lam, sin_nodes=np.linspace(0.0, 1.0, SIN_NODES),
-                      sigma2=_sigma2_nodes(model, lam), m_max=m_max, n_q=int(n_q))
+                      sigma2=sigma2_nodes(model, lam), m_max=m_max, n_q=int(n_q))
 
 
 def series_arrays(model: PSDModel, wavelength_nm: float, nodes, sigma2, m_max: int | None, n_q: int) -> dict:
