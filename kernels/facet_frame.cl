@@ -13,6 +13,10 @@
  * Switches (build options): WO_NDF, WO_SHADOWING as in microfacet.h; WO_ISO 1 when the NDF nodes turn with
  * the cell's half-vector azimuth (isotropic NDF), 0 when they are fixed in the surface frame (anisotropic);
  * WO_MIX 1 for s or p light: cos^2 eta_i of the facet's own table and sin^2 eta_i of the other (Priest & Germer).
+ * WO_BLEND 1 when stack holds the first-order part f_RR / F cos theta_o and stack_other the tangent-plane part
+ * (f_K - f_RR / F) cos theta_o of the hand-over (waveoptics/scatter/tangent_blend.py): g = stack + W stack_other,
+ * W = w(theta_i') w(theta_o') at the facet's exact local angles, w the cubic smoothstep from 1 at WO_BLEND_0 to 0
+ * at WO_BLEND_1 (radians); the same for the local incidence and exit swapped (reciprocal).
  * References: Walter, Marschner, Li, Torrance, EGSR 2007, eq. 14; Veach, PhD thesis 1997, sec. 9.2; Duff et al.,
  * JCGT 6(1) 2017 (facet basis); Priest & Germer, Proc. MSS Passive Sensors 2000 (facet s/p frames).
  */
@@ -23,6 +27,20 @@
 #endif
 #ifndef WO_MIX
 #define WO_MIX 0
+#endif
+#ifndef WO_BLEND
+#define WO_BLEND 0
+#endif
+
+#if WO_BLEND
+/* w(theta): 1 up to WO_BLEND_0, 0 beyond WO_BLEND_1, the cubic smoothstep 1 - x^2 (3 - 2x) between (the twin of
+ * tangent_plane_weight in waveoptics/scatter/tangent_blend.py) */
+inline real_t tangent_weight(real_t theta)
+{
+    real_t x = wo_clamp((theta - (real_t)(WO_BLEND_0)) / ((real_t)(WO_BLEND_1) - (real_t)(WO_BLEND_0)),
+                        R(0.0), R(1.0));
+    return R(1.0) - x * x * (R(3.0) - R(2.0) * x);
+}
 #endif
 /* wavelengths accumulated per pass (the host loops over passes) */
 #define WO_NL 32
@@ -138,6 +156,8 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
     real_t c2 = cos2_eta_i(wi, s_mac, m);
     real_t other = own * (R(1.0) - c2);
     own *= c2;
+#elif WO_BLEND
+    real_t other = own * tangent_weight(theta) * tangent_weight(acos(wo_clamp(om, R(-1.0), R(1.0))));
 #endif
     int row = n_u * n_lam;
     for (int s = 0; s < 2; ++s) {
@@ -147,7 +167,7 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
         __global const float *p = stack + idx[s];
         for (int l = 0; l < nl; ++l)
             acc[l] += own * (w00 * p[l] + w01 * p[n_lam + l] + w10 * p[row + l] + w11 * p[row + n_lam + l]);
-#if WO_MIX
+#if WO_MIX || WO_BLEND
         __global const float *q = stack_other + idx[s];
         for (int l = 0; l < nl; ++l)
             acc[l] += other * (w00 * q[l] + w01 * q[n_lam + l] + w10 * q[row + l] + w11 * q[row + n_lam + l]);
