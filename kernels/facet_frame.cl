@@ -17,6 +17,9 @@
  * (f_K - f_RR / F) cos theta_o of the hand-over (waveoptics/scatter/tangent_blend.py): g = stack + W stack_other,
  * W = w(theta_i') w(theta_o') at the facet's exact local angles, w the cubic smoothstep from 1 at WO_BLEND_0 to 0
  * at WO_BLEND_1 (radians); the same for the local incidence and exit swapped (reciprocal).
+ * WO_EQUI 1 when the tables' grid is the azimuthal equidistant projection (x, y) = (2 theta / pi)(cos phi, sin phi)
+ * of the local exit (PSD statistics: a cell the same angle up to the horizon; Snyder 1987, sec. 25), 0 when it is
+ * in direction cosines (a height field's tables).
  * References: Walter, Marschner, Li, Torrance, EGSR 2007, eq. 14; Veach, PhD thesis 1997, sec. 9.2; Duff et al.,
  * JCGT 6(1) 2017 (facet basis); Priest & Germer, Proc. MSS Passive Sensors 2000 (facet s/p frames).
  */
@@ -30,6 +33,9 @@
 #endif
 #ifndef WO_BLEND
 #define WO_BLEND 0
+#endif
+#ifndef WO_EQUI
+#define WO_EQUI 0
 #endif
 
 #if WO_BLEND
@@ -141,7 +147,15 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
         real_t cb = ct * ck + st * sk, sb = st * ck - ct * sk;
         real_t u = lox * cb + om * sb;
         real_t z = -lox * sb + om * cb;
-        real_t fu = (u - u0) / du - R(0.5), fv = (loy - v0) / dv - R(0.5);
+#if WO_EQUI
+        /* the equidistant projection of (u, loy, z): radius 2 theta / pi */
+        real_t sr = sqrt(u * u + loy * loy);
+        real_t ke = ((sr > R(0.0)) ? atan2(sr, z) / sr : R(1.0) / fmax(z, R(1e-30))) * R(0.63661977236758134);
+        real_t xe = u * ke, ye = loy * ke;
+#else
+        real_t xe = u, ye = loy;
+#endif
+        real_t fu = (xe - u0) / du - R(0.5), fv = (ye - v0) / dv - R(0.5);
         bool ok = fu > R(-0.5) && fu < (real_t)n_u - R(0.5) && fv > R(-0.5) && fv < (real_t)n_v - R(0.5);
         int j0 = clamp((int)floor(fu), 0, n_u - 2), k0 = clamp((int)floor(fv), 0, n_v - 2);
         au[s] = wo_clamp(fu - (real_t)j0, R(0.0), R(1.0));

@@ -105,7 +105,7 @@ def _table_buffer(rt, stack):
 
 
 def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack, stack_other, table_grid,
-                       thetas_deg, *, device=None, precision: str = "float32", tangent=None):
+                       thetas_deg, *, device=None, precision: str = "float32", tangent=None, projected=False):
     """Σ over the NDF and half-vector nodes of the balance-heuristic weight |ω_i·m| D G / (cos θ_i cos θ_o
     (N_a p_a + N_b p_b)) times g = f_nano cos θ_o read from the facet tables, per cell: the kernel
     ``facet_frame_sum`` of ``kernels/facet_frame.cl``.
@@ -132,6 +132,9 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
         The tangent-plane tables (f_K − f_RR / F) cos θ_o of :func:`waveoptics.brdf.twoscale_frame._facet_table`
         (with *stack* their first-order part): each facet adds W tangent, W = w(θ_i') w(θ_o') of
         :mod:`waveoptics.scatter.tangent_blend` at its exact local angles (not with *stack_other*).
+    projected : bool
+        Whether *table_grid* is the azimuthal equidistant projection of PSD statistics' tables
+        (:func:`waveoptics.brdf.facet_table_grid`) rather than direction cosines.
     device : str, optional
         Device spec (:func:`waveoptics.runtime.get_runtime`).
     precision : {'float32', 'float64'}
@@ -160,7 +163,7 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
     dt = rt.real_dtype(precision)
     defines = (f"-DWO_NDF={spec.cl_id}", f"-DWO_SHADOWING={shadowing_by_name(kw['shadowing'])[1]}",
                f"-DWO_ISO={int(ay == ax)}", f"-DWO_MIX={int(stack_other is not None)}",
-               f"-DWO_BLEND={int(tangent is not None)}",
+               f"-DWO_BLEND={int(tangent is not None)}", f"-DWO_EQUI={int(bool(projected))}",
                *(f"-DWO_BLEND_{n}={float(np.radians(t))!r}" for n, t in zip("01", TANGENT_PLANE_BLEND_DEG)))
     if tangent is not None and stack_other is not None:
         raise FieldError("the facet tables take either another polarization's tables or tangent-plane tables, "

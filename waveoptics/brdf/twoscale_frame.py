@@ -27,7 +27,8 @@ from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
 
 __all__ = ['FACET_THETAS_DEG', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
-           'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction']
+           'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction',
+           'FACET_TABLE_MAX_CELLS', 'facet_table_grid', 'equidistant', 'from_equidistant']
 
 
 #: local incidences θ' (degrees) at which the facet-frame route tabulates the nano lobe on the direction grid: the
@@ -134,7 +135,8 @@ def facet_nodes(micro: Micro, nano: Nano, wavelengths_nm) -> tuple[int, int]:
 
 def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
     """g = f_nano cos θ_o of the nano lobe at local incidence :data:`FACET_THETAS_DEG` [k] (azimuth 0) at the cell
-    centres of *grid*, (n_v, n_u, n_λ) float32: F = 1 for the Kirchhoff family (its F(θ_d) is frame-independent
+    centres of *grid*, (n_v, n_u, n_λ) float32, for PSD statistics in the azimuthal equidistant projection
+    (:func:`equidistant`; a height field's in direction cosines): F = 1 for the Kirchhoff family (its F(θ_d) is frame-independent
     and applied afterwards), the Rayleigh-Rice lobe with its own factor Q of *material* and *polarization* (for s or
     p light Q of the facet's own s or p light: :func:`facet_frame_diffraction` mixes the s and p tables of each
     facet by cos²η_i, sin²η_i, its rotation of the macro basis).
@@ -158,14 +160,10 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     if key not in cache:
         th = np.radians(FACET_THETAS_DEG[k])
         wi = np.array([np.sin(th), 0.0, np.cos(th)])
-        u, v = _centres(grid)
+        x, y = _centres(grid)
         # the lobe of an isotropic PSD is even in v: rows from the middle up, mirrored onto the rows below
         half = slice(grid.n_v // 2 - 1, grid.n_v) if _v_symmetric(grid) else slice(0, grid.n_v)
-        u, v = u[half], v[half]
-        r = np.hypot(u, v)
-        shrink = np.where(r > RIM_RADIUS, RIM_RADIUS / np.where(r > 0, r, 1.0), 1.0)
-        u, v = u * shrink, v * shrink
-        wo = np.stack([u, v, np.sqrt(np.maximum(1.0 - u * u - v * v, 0.0))], axis=-1)
+        wo = from_equidistant(x[half], y[half])
         out = np.empty((grid.n_v, grid.n_u, len(w)), dtype=np.float32)
         tangent = None if dm.perturbative else np.empty_like(out)
         flat = wo.reshape(-1, 3)
@@ -249,8 +247,47 @@ def _centres(grid: DirectionGrid):
 
 
 
-#: radius of the direction-cosine disc at which :func:`_facet_table` evaluates the cells beyond its rim
+#: radius of the disc (of the equidistant projection, in direction cosines for a height field's tables) at which
+#: :func:`_facet_table` evaluates the cells beyond its rim
 RIM_RADIUS = 1.0 - 1e-6
+#: the finest facet table of PSD statistics (cells per axis; 0.18° a cell)
+FACET_TABLE_MAX_CELLS = 1024
+
+
+def facet_table_grid(grid: DirectionGrid) -> DirectionGrid:
+    """The grid of PSD statistics' facet tables for lobes on *grid* (a hemisphere): cells of the azimuthal
+    equidistant projection (:func:`equidistant`), as many per axis (even, at most :data:`FACET_TABLE_MAX_CELLS`) as
+    make a cell's angle π/n no larger than *grid*'s at the pole (du): the same resolution there and at every
+    angle, where direction cosines give a cell at θ an angle du / cos θ (5.7° at 78° on 96² cells, the last
+    cell at the rim 11°), too coarse for the lobe's bend over the hand-over window (70-80°,
+    :mod:`waveoptics.scatter.tangent_blend`) and its fall towards grazing exit: read there bilinearly, the facet-frame
+    sum was non-reciprocal by up to 3.5 % (Beckmann α 0.1, 96²; 384² cells in direction cosines: 0.8 %)."""
+    n = 2 * int(np.ceil(np.pi / (2.0 * max(grid.du, grid.dv))))
+    return DirectionGrid.hemisphere(min(max(n, 16), FACET_TABLE_MAX_CELLS))
+
+
+def equidistant(u, v, z):
+    """(x, y) of directions (u, v, z) in the azimuthal equidistant projection about the normal: radius 2θ/π, the
+    azimuth kept (the unit disc is the hemisphere; a cell is the same angle wherever it lies).
+
+    References
+    ----------
+    .. [1] J. P. Snyder, *Map Projections: A Working Manual*, USGS Prof. Paper 1395, 1987, §25 (azimuthal
+       equidistant projection).
+    """
+    s = np.hypot(u, v)
+    k = np.where(s > 0, np.arctan2(s, z) / np.where(s > 0, s, 1.0), 1.0 / np.maximum(z, 1e-300)) * (2.0 / np.pi)
+    return u * k, v * k
+
+
+def from_equidistant(x, y):
+    """Unit directions (..., 3) at the points (x, y) of :func:`equidistant`; points beyond its rim are taken at
+    radius :data:`RIM_RADIUS` (θ just below 90°) on their azimuth."""
+    r = np.hypot(x, y)
+    rho = np.minimum(r, RIM_RADIUS)
+    theta = rho * (np.pi / 2)
+    k = np.where(r > 0, np.sin(theta) / np.where(r > 0, r, 1.0), np.pi / 2)
+    return np.stack([x * k, y * k, np.cos(theta)], axis=-1)
 
 
 def _facet_stack(nano: Nano, w, grid: DirectionGrid, dm, material, polarization):
@@ -266,14 +303,15 @@ def _facet_stack(nano: Nano, w, grid: DirectionGrid, dm, material, polarization)
     return cache[key]
 
 
-def _facet_read(stack, grid: DirectionGrid, theta, lo, tangent=None):
+def _facet_read(stack, grid: DirectionGrid, theta, lo, tangent=None, projected=False):
     """The tabulated g = f_nano cos θ_o (n, n_λ) at local incidences *theta* (rad, (n,) or scalar) and local
     directions *lo* (n, 3) whose incidence lies in the local x–z plane: the two nodes θ_k around θ, each read at
     *lo* turned about the local y axis by θ − θ_k (which takes θ's mirror direction to θ_k's; the lobe of a tilted
     facet is a turned lobe), blended linearly in θ; a node whose turned direction falls below its horizon drops
     out of the blend. With *tangent* (:func:`_facet_table`'s second table, read with the same stencil) the result
     is g + W tangent, W = w(θ) w(θ_o) of :mod:`waveoptics.scatter.tangent_blend` at the exact local angles: the
-    same for the facet's incidence and exit swapped (reciprocal)."""
+    same for the facet's incidence and exit swapped (reciprocal). *projected*: the tables are PSD statistics' on
+    the equidistant projection (:func:`facet_table_grid`), not in direction cosines."""
     nodes = np.radians(FACET_THETAS_DEG)
     theta = np.asarray(theta, dtype=float)   # one incidence (an NDF node shared by all cells) stays a scalar
     if theta.ndim:
@@ -293,7 +331,7 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, tangent=None):
         cb, sb = np.cos(beta), np.sin(beta)
         u = lo[:, 0] * cb + lo[:, 2] * sb
         z = -lo[:, 0] * sb + lo[:, 2] * cb
-        k0, j0, av, au, ok = grid.bilinear(u, lo[:, 1])
+        k0, j0, av, au, ok = grid.bilinear(*(equidistant(u, lo[:, 1], z) if projected else (u, lo[:, 1])))
         wk = np.where(ok & (z > 0), wk, 0.0)
         i00 = (k * n_v + k0) * n_u + j0
         idx += [i00, i00 + 1, i00 + n_u, i00 + n_u + 1]
@@ -396,13 +434,14 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     # (FACET_NODES_FIELD was measured with them; the symmetric layout read its speckle 5-11 % off the reference)
     symmetric = nano.surface is None
     visible = sampler_for(ndf).visible
-    stack, tangent = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
+    tgrid = facet_table_grid(table_grid or grid) if symmetric else table_grid or grid
+    stack, tangent = _facet_stack(nano, w, tgrid, dm, material, polarization)
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
-    stack_other = None if other is None else _facet_stack(nano, w, table_grid or grid, dm, material, other)[0]
-    tgrid = table_grid or grid
+    stack_other = None if other is None else _facet_stack(nano, w, tgrid, dm, material, other)[0]
     out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
-                              FACET_THETAS_DEG, device=device, precision=precision, tangent=tangent)
+                              FACET_THETAS_DEG, device=device, precision=precision, tangent=tangent,
+                              projected=symmetric)
            if facet_frame_backend(backend, micro, nano) == "opencl" else None)
 
     def add(m, valid):
@@ -435,9 +474,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         ux, uy = np.sum(wok * t, axis=-1), np.sum(wok * b, axis=-1)   # turned so that ω_i^m lies in x–z
         lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, om[ok]], axis=-1)
         theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
-        g = _facet_read(stack, tgrid, theta, lo, tangent)
+        g = _facet_read(stack, tgrid, theta, lo, tangent, symmetric)
         if stack_other is not None:   # cos²η_i g_pol + sin²η_i g_other (the s-p term is odd about the facet plane)
-            g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo)}
+            g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo, projected=symmetric)}
             g = facet_sp_mix(g_sp["s"], g_sp["p"], cos2_eta_i(wi, mk)[:, None], polarization)
         out[ok] += weight[:, None] * g
 
