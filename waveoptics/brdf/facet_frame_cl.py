@@ -129,7 +129,7 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
         g at the local incidences *thetas_deg* (degrees) on *table_grid*; *stack_other*: the other polarization's
         (s or p light of a Rayleigh-Rice lobe, mixed by cos²η_i), or None.
     first : ndarray (n_θ, n_v, n_u, n_λ) float32, optional
-        The first-order tables f_RR / F cos θ_o of :func:`waveoptics.brdf.twoscale_frame._facet_table` (*stack*
+        The first-order facet tables f_RR / F cos θ_o of :func:`waveoptics.brdf.facet_frame_diffraction` (*stack*
         then holds the tangent-plane lobe f_K cos θ_o): each facet adds W stack + (1 − W) first, W = w(θ_i')
         w(θ_o') of :mod:`waveoptics.scatter.tangent_blend` at its exact local angles (not with *stack_other*).
     projected : bool
