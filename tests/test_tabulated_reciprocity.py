@@ -66,3 +66,33 @@ def test_tabulated_form_is_reciprocal_towards_grazing(ndf, alpha, theta_max, poi
     np.testing.assert_allclose(f_io, f_oi, rtol=0.02)
     p = TwoScaleBRDF("aluminium", micro, nano=NANO).eval(wi[:30], wo[:30], LAM)
     np.testing.assert_allclose(f_io[:30], p, rtol=pointwise_tol)
+
+
+def test_facet_frame_sum_is_reciprocal_towards_grazing():
+    """The grid route's facet-frame sum at one direction (evaluate's diffracted lobe on a one-cell grid, the light
+    turned to azimuth 0 as in the tables), the quantity the tables hold, within 1.5 % for ω_i and ω_o swapped at the
+    former worst pairs, with 96² lobes' facet tables. Measured (α 0.05 / 0.1 / 0.3): ≤ 0.83 / 1.02 / 0.70 %; with
+    the hand-over weight baked into direction-cosine facet tables over 5° incidence nodes: up to 3.6 / 3.7 / 3.4 %."""
+    from waveoptics.brdf.twoscale_frame import facet_frame_diffraction
+    from waveoptics.materials import get_material
+    from waveoptics.scatter.grid import DirectionGrid
+
+    mat = get_material("aluminium")
+    table = DirectionGrid.hemisphere(96)
+
+    def one(a, c, micro):
+        p = np.arctan2(a[1], a[0])
+        rot = np.array([[np.cos(p), np.sin(p), 0.0], [-np.sin(p), np.cos(p), 0.0], [0.0, 0.0, 1.0]])
+        a, c = rot @ a, rot @ c
+        cell = DirectionGrid(1, 1, (c[0] - 1e-7, c[0] + 1e-7), (c[1] - 1e-7, c[1] + 1e-7))
+        d, _, _ = facet_frame_diffraction(a, [LAM], mat, micro, NANO, cell, lambda x, lam: mat.F(x, lam),
+                                          table_grid=table)
+        return d[0, 0, 0]
+
+    pairs = [(78.1, 71.0, 173.1), (64.5, 78.9, 170.2), (78.5, 42.7, 2.0), (60, 80, 180), (20, 80, 120)]
+    wi = R.direction([p[0] for p in pairs])
+    wo = R.direction([p[1] for p in pairs], [p[2] for p in pairs])
+    for alpha in (0.05, 0.3):
+        micro = Micro(alpha=alpha, ndf="beckmann")
+        for a, c in zip(wi, wo):
+            assert one(a, c, micro) == pytest.approx(one(c, a, micro), rel=0.015)

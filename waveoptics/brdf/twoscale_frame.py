@@ -321,13 +321,14 @@ def facet_thetas(nano: Nano) -> np.ndarray:
     return FACET_THETAS_DEG if nano.surface is not None else FACET_THETAS_PSD_DEG
 
 
-def _facet_read(stack, grid: DirectionGrid, theta, lo, first=None, projected=False, thetas_deg=FACET_THETAS_DEG):
+def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=False, thetas_deg=FACET_THETAS_DEG):
     """The tabulated g = f_nano cos θ_o (n, n_λ) at local incidences *theta* (rad, (n,) or scalar) and local
     directions *lo* (n, 3) whose incidence lies in the local x–z plane: the two nodes θ_k around θ, each read at
     *lo* turned about the local y axis by θ − θ_k (which takes θ's mirror direction to θ_k's; the lobe of a tilted
     facet is a turned lobe), blended linearly in θ; a node whose turned direction falls below its horizon drops
-    out of the blend. With *first* (:func:`_facet_table`'s first-order table, read with the same stencil) the
-    result is W g + (1 − W) first, W = w(θ) w(θ_o) of :mod:`waveoptics.scatter.tangent_blend` at the exact local angles: the
+    out of the blend. With *blend* the last axis of *stack* holds :func:`_facet_table`'s g and first (2 n_λ, read
+    with the same stencil) and the result is W g + (1 − W) first, W = w(θ) w(θ_o) of
+    :mod:`waveoptics.scatter.tangent_blend` at the exact local angles: the
     same for the facet's incidence and exit swapped (reciprocal). *projected*: the tables are PSD statistics' on
     the equal-area projection (:func:`facet_table_grid`), not in direction cosines; *thetas_deg* the tables'
     incidences (:func:`facet_thetas`)."""
@@ -340,9 +341,8 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, first=None, projected=Fal
     b = np.minimum(a + 1, nodes.size - 1)
     wb = f - a
     n_v, n_u = stack.shape[1:3]
-    n_lam = stack.shape[-1]
-    flat = stack.reshape(-1, n_lam) if first is None else np.concatenate([stack, first], axis=-1).reshape(
-        -1, 2 * n_lam)
+    flat = stack.reshape(-1, stack.shape[-1])
+    n_lam = stack.shape[-1] // 2 if blend else stack.shape[-1]
     idx, wts = [], []
     den = np.zeros(lo.shape[0])
     for k, wk in ((a, 1.0 - wb), (b, wb)):
@@ -359,7 +359,7 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, first=None, projected=Fal
     # np.take gathers whole rows (n_λ values) ~3x faster than fancy indexing, the same values
     rows = np.take(flat, np.stack(idx, axis=1), axis=0)
     val = np.einsum("cj,cjl->cl", np.stack(wts, axis=1).astype(np.float32), rows)
-    if first is not None:
+    if blend:
         W = np.reshape(tangent_plane_weight(np.cos(theta)) * tangent_plane_weight(lo[:, 2]), (-1, 1))
         val = W * val[:, :n_lam] + (1.0 - W) * val[:, n_lam:]
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
@@ -493,7 +493,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         ux, uy = np.sum(wok * t, axis=-1), np.sum(wok * b, axis=-1)   # turned so that ω_i^m lies in x–z
         lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, om[ok]], axis=-1)
         theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
-        g = _facet_read(stack, tgrid, theta, lo, first, symmetric, facet_thetas(nano))
+        g = _facet_read(pair, tgrid, theta, lo, first is not None, symmetric, facet_thetas(nano))
         if stack_other is not None:   # cos²η_i g_pol + sin²η_i g_other (the s-p term is odd about the facet plane)
             g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo, projected=symmetric,
                                                         thetas_deg=facet_thetas(nano))}
@@ -503,6 +503,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     e1, e2 = meridian_basis(h) if symmetric else facet_basis(h)
     if out is None:   # the NumPy twin of kernels/facet_frame.cl
         out = np.zeros((wo.shape[0], w.size))
+        pair = stack if first is None else np.concatenate([stack, first], axis=-1)   # one gather for both
         for m in (ndf_nodes(na, e2, ndf=ndf, ax=ax, ay=ay, c=c) if symmetric else m_a):
             add(m, np.ones(wo.shape[0], bool))
         for s_k, cp, sp in half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):
