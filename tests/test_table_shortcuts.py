@@ -1,18 +1,14 @@
 """Shortcuts taken by the tables of the default model (issue 31: export and demo time) give the numbers of the plain
 computation they replace, to float rounding: the band series' H_m in one matrix product (against the per-term
-trapezoid Hankel sum written here), and the facet tables' tangent-plane lobe evaluated only where the grazing hand-over
-keeps a share of it (against the lobe evaluated at every cell and blended)."""
+trapezoid Hankel sum written here), the RGL table's projected area of an isotropic NDF on one row, the memo of η at
+single wavelengths, and `info` without colour-science's import."""
 import math
 
 import numpy as np
 from scipy import special
 
 from waveoptics import scatter, surfaces
-from waveoptics.brdf import twoscale_frame
-from waveoptics.brdf.roughness_scales import Nano
 from waveoptics.scatter.band import sigma2_nodes, band_correlation, series_arrays
-from waveoptics.scatter.grid import DirectionGrid
-from waveoptics.scatter.tangent_blend import TANGENT_PLANE_BLEND_DEG, blend_with_first_order
 
 MODEL = surfaces.PSDModel("abc", sigma=10e-9, B=2e-6, C=2.6)
 
@@ -45,40 +41,6 @@ def test_band_series_terms_equal_the_per_term_hankel_sums():
         same = _band_hankel(lam, j + 2, tab["q"], n_r)
         np.testing.assert_allclose(tab["H"][j], same, rtol=0, atol=1e-12 * same.max())
     assert tab["H"].flags.c_contiguous
-
-
-def test_facet_table_equals_the_lobe_blended_at_every_cell():
-    """The facet table at local incidences before, inside and beyond the hand-over window (50°, 78°, 84°: W > 0
-    at every cell, at some, at none) equals the Kirchhoff lobe evaluated at every cell, blended with first order
-    and times cos θ_o (the table's definition), for F = 1 and for Al (vector Q)."""
-    from waveoptics.materials import get_material
-
-    grid = DirectionGrid.hemisphere(24)
-    w = (450.0, 700.0)
-    dm = scatter.get_model("kirchhoff", perturbative=True)
-    theta_nodes = list(twoscale_frame.FACET_THETAS_DEG)
-    assert TANGENT_PLANE_BLEND_DEG == (70.0, 80.0)
-    for material in (None, get_material("Al")):
-        nano = Nano(model=MODEL)
-        for th in (50.0, 78.0, 84.0):
-            k = theta_nodes.index(th)
-            table = twoscale_frame._facet_table(nano, k, w, grid, dm, material, "unpolarized")
-            t = math.radians(th)
-            wi = np.array([math.sin(t), 0.0, math.cos(t)])
-            u = grid.u_range[0] + (np.arange(grid.n_u) + 0.5) * grid.du
-            v = grid.v_range[0] + (np.arange(grid.n_v) + 0.5) * grid.dv
-            u, v = np.meshgrid(u, v)
-            rad = np.hypot(u, v)
-            shrink = np.where(rad > twoscale_frame.RIM_RADIUS, twoscale_frame.RIM_RADIUS / np.maximum(rad, 1e-300),
-                              1.0)
-            u, v = u * shrink, v * shrink
-            wo = np.stack([u, v, np.sqrt(np.maximum(1.0 - u * u - v * v, 0.0))], axis=-1)
-            for i, lam in enumerate(w):
-                f = scatter.scattered_lobe(wi, wo, lam, MODEL, F=1.0, diffraction=dm)
-                Fl = None if material is None else (lambda a, b, lam=lam: material.F_facet(a, b, lam, "unpolarized"))
-                g = (blend_with_first_order(f, wi, wo, lam, MODEL, material, "unpolarized", Fl)
-                     * wo[..., 2]).astype(np.float32)
-                np.testing.assert_allclose(table[..., i], g, rtol=2e-6, atol=1e-7 * float(np.abs(g).max()))
 
 
 def test_isotropic_sigma_row_matches_full_grid_and_closed_form():

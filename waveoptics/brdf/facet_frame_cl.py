@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import FieldError, unknown
 from ..runtime import build_options, build_program, get_runtime, opencl_available
+from ..scatter.tangent_blend import TANGENT_PLANE_BLEND_DEG
 from .facet import COS_LEVELS, half_vector_base, unit_nodes
 from .ndf import ndf_by_name
 from .opencl import ndf_shape_parameter
@@ -104,7 +105,7 @@ def _table_buffer(rt, stack):
 
 
 def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack, stack_other, table_grid,
-                       thetas_deg, *, device=None, precision: str = "float32"):
+                       thetas_deg, *, device=None, precision: str = "float32", first=None, projected=False):
     """Σ over the NDF and half-vector nodes of the balance-heuristic weight |ω_i·m| D G / (cos θ_i cos θ_o
     (N_a p_a + N_b p_b)) times g = f_nano cos θ_o read from the facet tables, per cell: the kernel
     ``facet_frame_sum`` of ``kernels/facet_frame.cl``.
@@ -127,6 +128,13 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
     stack, stack_other : ndarray (n_θ, n_v, n_u, n_λ) float32
         g at the local incidences *thetas_deg* (degrees) on *table_grid*; *stack_other*: the other polarization's
         (s or p light of a Rayleigh-Rice lobe, mixed by cos²η_i), or None.
+    first : ndarray (n_θ, n_v, n_u, n_λ) float32, optional
+        The first-order facet tables f_RR / F cos θ_o of :func:`waveoptics.brdf.facet_frame_diffraction` (*stack*
+        then holds the tangent-plane lobe f_K cos θ_o): each facet adds W stack + (1 − W) first, W = w(θ_i')
+        w(θ_o') of :mod:`waveoptics.scatter.tangent_blend` at its exact local angles (not with *stack_other*).
+    projected : bool
+        Whether *table_grid* is Lambert's azimuthal equal-area projection of PSD statistics' tables
+        (:func:`waveoptics.brdf.facet_table_grid`) rather than direction cosines.
     device : str, optional
         Device spec (:func:`waveoptics.runtime.get_runtime`).
     precision : {'float32', 'float64'}
@@ -154,7 +162,12 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
     rt = get_runtime(device)
     dt = rt.real_dtype(precision)
     defines = (f"-DWO_NDF={spec.cl_id}", f"-DWO_SHADOWING={shadowing_by_name(kw['shadowing'])[1]}",
-               f"-DWO_ISO={int(ay == ax)}", f"-DWO_MIX={int(stack_other is not None)}")
+               f"-DWO_ISO={int(ay == ax)}", f"-DWO_MIX={int(stack_other is not None)}",
+               f"-DWO_BLEND={int(first is not None)}", f"-DWO_EQUI={int(bool(projected))}",
+               *(f"-DWO_BLEND_{n}={float(np.radians(t))!r}" for n, t in zip("01", TANGENT_PLANE_BLEND_DEG)))
+    if first is not None and stack_other is not None:
+        raise FieldError("the facet tables take either another polarization's tables or first-order tables, "
+                         "not both", "first")
     kern = _kernel(build_program(rt, "facet_frame.cl", build_options(dt, defines)))
     q = rt.queue
     m0 = sample_normal_dcos(unit_nodes(na), ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])
@@ -171,7 +184,8 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
             dev(rad.density * rad.k ** 2), dev(np.radians(thetas_deg)),
             dev(np.stack([np.cos(np.radians(thetas_deg)), np.sin(np.radians(thetas_deg))], axis=-1))]
     tab = _table_buffer(rt, stack)
-    tab_other = tab if stack_other is None else _table_buffer(rt, stack_other)
+    second = stack_other if first is None else first
+    tab_other = tab if second is None else _table_buffer(rt, second)
     out = cla.empty(q, max(n_cells * n_lam, 1), dt)
     g0, g1 = table_grid.u_range[0], table_grid.v_range[0]
     scalars = [dt(x) for x in (*wi, Li, ax, ay, c, g0, g1, table_grid.du, table_grid.dv)]

@@ -17,7 +17,7 @@ from .. import scatter
 from ..errors import FieldError, unknown
 from ..materials import cos2_eta_i, facet_sp_mix
 from ..scatter.grid import DirectionGrid
-from ..scatter.tangent_blend import blend_weight, blend_with_first_order, uses_vector_first_order
+from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weight, uses_vector_first_order
 from .facet import half_vector_nodes, ndf_nodes
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_polarization import facet_scattered_share
@@ -26,11 +26,12 @@ from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
 
-__all__ = ['FACET_THETAS_DEG', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
-           'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction']
+__all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
+           'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction',
+           'FACET_TABLE_MAX_CELLS', 'facet_table_grid', 'equal_area', 'from_equal_area']
 
 
-#: local incidences θ' (degrees) at which the facet-frame route tabulates the nano lobe on the direction grid: the
+#: local incidences θ' (degrees) at which the facet-frame route tabulates a height field's nano lobe on the direction grid: the
 #: nano lobe of a facet at any incidence is read between the two nodes around it, relative to the mirror direction.
 #: The nodes reach 89.9°: every rough surface's scatter falls to 0 at grazing incidence (first-order TIS of
 #: Al|Al2O3:300nm, ABC σ 15 nm, 560 nm: 0.0206 at 88°, 0.0152 at 89°, 0.0094 at 89.5°, 0.0022 at 89.9°), and
@@ -38,6 +39,13 @@ __all__ = ['FACET_THETAS_DEG', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_
 #: diffracted part came out 4 % above the light the facets scatter (Al: 1.3 %), 0.3 % with these nodes
 FACET_THETAS_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 78, 81, 84, 86, 88,
                              89, 89.5, 89.9])
+#: local incidences θ' (degrees) of the facet tables of PSD statistics: 2° apart from 40° to 88°, about as fine as
+#: the tables' exit angles (:func:`facet_table_grid`, 1.9° a cell on 96² lobes), so that a facet's lobe is read
+#: about as finely over its incidence as over its exit and the sum stays reciprocal where facets see 40-90°. With
+#: :data:`FACET_THETAS_DEG` (5° apart to 75°) the facet-frame sum's f(i,o)/f(o,i) − 1 was up to 3.7 % (Beckmann α
+#: 0.05-0.3, 96²; pairs near the grazing specular direction and 60 → 80° forward; 1° apart only from 60°: 2.6 %,
+#: facets tilted by α 0.3 see 40-60° there), with these nodes ≤ 0.84 % (1° apart from 40°: ≤ 0.5 %)
+FACET_THETAS_PSD_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, *range(40, 89, 2), 89, 89.5, 89.9], dtype=float)
 #: facet normals of the grid route's quadrature (:func:`facet_nodes`): (D(m) cos θ_m normals turned to each
 #: cell's half-vector azimuth; drawn about each cell's half-vector through the nano lobe's radial law), for a micro
 #: lobe narrower than :data:`FACET_NODE_SPLIT` nano lobe widths, and for a wider one. Measured per cell (with the
@@ -133,52 +141,60 @@ def facet_nodes(micro: Micro, nano: Nano, wavelengths_nm) -> tuple[int, int]:
 
 
 def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
-    """g = f_nano cos θ_o of the nano lobe at local incidence :data:`FACET_THETAS_DEG` [k] (azimuth 0) at the cell
-    centres of *grid*, (n_v, n_u, n_λ) float32: F = 1 for the Kirchhoff family (its F(θ_d) is frame-independent
+    """g = f_nano cos θ_o of the nano lobe at local incidence :func:`facet_thetas` [k] (azimuth 0) at the cell
+    centres of *grid*, (n_v, n_u, n_λ) float32, for PSD statistics in Lambert's azimuthal equal-area projection
+    (:func:`equal_area`; a height field's in direction cosines): F = 1 for the Kirchhoff family (its F(θ_d) is frame-independent
     and applied afterwards), the Rayleigh-Rice lobe with its own factor Q of *material* and *polarization* (for s or
     p light Q of the facet's own s or p light: :func:`facet_frame_diffraction` mixes the s and p tables of each
     facet by cos²η_i, sin²η_i, its rotation of the macro basis).
 
     g is finite up to the horizon (f grows like 1/cos θ_o there); cells beyond the rim of the disc hold g of the
     rim direction on their radius, so that bilinear reads within a cell of the rim are not pulled towards 0.
+
+    Returns (g, first): for the Kirchhoff family of PSD statistics g holds the tangent-plane lobe f_K cos θ_o and
+    first the first-order lobe f_RR / F cos θ_o, both smooth across the hand-over window of
+    :mod:`waveoptics.scatter.tangent_blend`, and the blended lobe is W g + (1 − W) first with W = w(θ_i') w(θ_o') taken
+    at the facet's exact local directions (:func:`_facet_read`); baked into one table, W (which falls from 1 to 0
+    over 70-80°, two 96² cells in u at the horizon) was read bilinearly at the exit and linearly between incidence
+    nodes, a different rule for ω_i and ω_o: the facet-frame sum came out non-reciprocal by up to 5 % (Beckmann
+    α 0.1, pairs with an end at 75-80°). Otherwise (Rayleigh-Rice, height fields) g is the lobe and first None.
     Cached on *nano*."""
     cache = nano.__dict__.setdefault("_cache", {})
     key = ("facet-table", k, tuple(float(x) for x in w), grid.n_u, grid.n_v, tuple(grid.u_range),
            tuple(grid.v_range), dm.name, getattr(material, "name", None), polarization)
     if key not in cache and nano.surface is not None:
-        cache[key] = _field_table(nano, k, w, grid, dm, material, polarization)
+        cache[key] = (_field_table(nano, k, w, grid, dm, material, polarization), None)
     if key not in cache:
-        th = np.radians(FACET_THETAS_DEG[k])
+        th = np.radians(FACET_THETAS_PSD_DEG[k])
         wi = np.array([np.sin(th), 0.0, np.cos(th)])
-        u, v = _centres(grid)
-        # the lobe of an isotropic PSD is even in v: rows from the middle up, mirrored onto the rows below
+        x, y = _centres(grid)
+        # the lobe of an isotropic PSD is even in v: rows from the middle up, mirrored onto the rows below; cells
+        # further than 3 cells beyond the rim are never read (a read lies inside the disc) and hold 0
         half = slice(grid.n_v // 2 - 1, grid.n_v) if _v_symmetric(grid) else slice(0, grid.n_v)
-        u, v = u[half], v[half]
-        r = np.hypot(u, v)
-        shrink = np.where(r > RIM_RADIUS, RIM_RADIUS / np.where(r > 0, r, 1.0), 1.0)
-        u, v = u * shrink, v * shrink
-        wo = np.stack([u, v, np.sqrt(np.maximum(1.0 - u * u - v * v, 0.0))], axis=-1)
-        out = np.empty((grid.n_v, grid.n_u, len(w)), dtype=np.float32)
-        # the tangent-plane lobe is needed only where the hand-over to first order keeps a share of it (W > 0): at
-        # local incidences beyond 80° nowhere (the lobe is pointwise, so the cells it is evaluated at are unchanged)
-        near = blend_weight(wi, wo) > 0.0
+        sel = np.zeros(x.shape, bool)
+        sel[half] = np.hypot(x[half], y[half]) < 1.0 + 3.0 * max(grid.du, grid.dv)
+        wo = from_equal_area(x[sel], y[sel])
+        out = np.zeros((grid.n_v, grid.n_u, len(w)), dtype=np.float32)
+        first = None if dm.perturbative else np.zeros_like(out)
         for i, lam in enumerate(w):
             if dm.perturbative:
                 f = scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization)
             else:
                 check_series(nano.model, lam)
-                f = np.zeros(wo.shape[:-1])
-                if near.any():
-                    f[near] = scatter.scattered_lobe(wi, wo[near], lam, nano.model, F=1.0, diffraction=dm)
+                f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
                 # beyond the tangent plane's validity the lobe hands over to first order, reciprocal (W f_K +
-                # (1 − W) f_RR / F, F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9)
+                # (1 − W) f_RR / F, F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9):
+                # f_K and f_RR / F held apart, W applied at each facet's exact local directions
                 Fl = ((lambda a, b, lam=lam: material.F_facet(a, b, lam, polarization))
                       if uses_vector_first_order(material) else None)
-                f = blend_with_first_order(f, wi, wo, lam, nano.model, material, polarization, Fl)
-            out[half, :, i] = f * wo[..., 2]
-        if half.start > 0:
-            out[:half.start] = out[grid.n_v - 1:grid.n_v - 1 - half.start:-1]
-        cache[key] = out
+                rr = first_order_over_fresnel(np.broadcast_to(wi, wo.shape), wo, lam, nano.model, material,
+                                              polarization, Fl)
+                first[sel, i] = rr * wo[:, 2]
+            out[sel, i] = f * wo[:, 2]
+        for a in (out, first):
+            if half.start > 0 and a is not None:
+                a[:half.start] = a[grid.n_v - 1:grid.n_v - 1 - half.start:-1]
+        cache[key] = (out, first)
     return cache[key]
 
 
@@ -239,28 +255,84 @@ def _centres(grid: DirectionGrid):
 
 
 
-#: radius of the direction-cosine disc at which :func:`_facet_table` evaluates the cells beyond its rim
+#: radius of the disc (of the equal-area projection, in direction cosines for a height field's tables) at which
+#: :func:`_facet_table` evaluates the cells beyond its rim
 RIM_RADIUS = 1.0 - 1e-6
+#: the finest facet table of PSD statistics (cells per axis; 0.2° a cell)
+FACET_TABLE_MAX_CELLS = 1024
+
+
+def facet_table_grid(grid: DirectionGrid) -> DirectionGrid:
+    """The grid of PSD statistics' facet tables for lobes on *grid* (a hemisphere): cells of Lambert's azimuthal
+    equal-area projection (:func:`equal_area`), as many per axis as *grid* has over the disc (2 / du, even, at most
+    :data:`FACET_TABLE_MAX_CELLS`): a cell spans 1.7-2.4° at any angle on 96², where direction cosines give a
+    cell at θ an angle du / cos θ (1.2° at the pole, 5.7° at 78°, 11° at the rim on 96²), too coarse for the
+    lobe's bend over the hand-over window (70-80°, :mod:`waveoptics.scatter.tangent_blend`) and its fall towards
+    grazing exit. Read there bilinearly, the facet-frame sum was non-reciprocal by up to 3.5 % (Beckmann α 0.1,
+    96²; 384² cells in direction cosines: 0.8 %); as many cells as the lobe grid, so the tables cost the same per
+    incidence node."""
+    n = 2 * int(np.ceil(1.0 / max(grid.du, grid.dv)))
+    return DirectionGrid.hemisphere(min(max(n, 16), FACET_TABLE_MAX_CELLS))
+
+
+def equal_area(u, v, z):
+    """(x, y) of directions (u, v, z) in Lambert's azimuthal equal-area projection about the normal, scaled so that
+    the horizon is the unit circle: (u, v) / √(1 + z), radius √(1 − cos θ) = √2 sin(θ/2). A cell spans an angle
+    between dx/0.71 at the pole and dx/0.5 at the horizon (1.7° and 2.4° on 96² cells), nearly uniform, where
+    direction cosines give du / cos θ; one square root a point.
+
+    References
+    ----------
+    .. [1] J. P. Snyder, *Map Projections: A Working Manual*, USGS Prof. Paper 1395, 1987, §24 (Lambert azimuthal
+       equal-area projection).
+    """
+    k = 1.0 / np.sqrt(1.0 + np.maximum(z, 0.0))
+    return u * k, v * k
+
+
+def from_equal_area(x, y):
+    """Unit directions (..., 3) at the points (x, y) of :func:`equal_area`; points beyond its rim are taken at
+    radius :data:`RIM_RADIUS` on their azimuth."""
+    r = np.hypot(x, y)
+    s = np.where(r > RIM_RADIUS, RIM_RADIUS / np.where(r > 0, r, 1.0), 1.0)
+    x, y = x * s, y * s
+    z = 1.0 - (x * x + y * y)
+    k = np.sqrt(1.0 + z)
+    return np.stack([x * k, y * k, z], axis=-1)
 
 
 def _facet_stack(nano: Nano, w, grid: DirectionGrid, dm, material, polarization):
-    """:func:`_facet_table` at every :data:`FACET_THETAS_DEG` node, stacked (n_θ, n_v, n_u, n_λ); cached."""
+    """:func:`_facet_table` at every :func:`facet_thetas` node, stacked: (g, first), each (n_θ, n_v, n_u,
+    n_λ), first None where the tables hold no hand-over; cached."""
     cache = nano.__dict__.setdefault("_cache", {})
     key = ("facet-stack", tuple(float(x) for x in w), grid.n_u, grid.n_v, tuple(grid.u_range), tuple(grid.v_range),
            dm.name, getattr(material, "name", None), polarization)
     if key not in cache:
-        cache[key] = np.stack([_facet_table(nano, k, w, grid, dm, material, polarization)
-                               for k in range(FACET_THETAS_DEG.size)])
+        parts = [_facet_table(nano, k, w, grid, dm, material, polarization)
+                 for k in range(facet_thetas(nano).size)]
+        cache[key] = (np.stack([p[0] for p in parts]),
+                      None if parts[0][1] is None else np.stack([p[1] for p in parts]))
     return cache[key]
 
 
-def _facet_read(stack, grid: DirectionGrid, theta, lo):
+def facet_thetas(nano: Nano) -> np.ndarray:
+    """The local incidences (degrees) of *nano*'s facet tables: :data:`FACET_THETAS_PSD_DEG` for PSD statistics,
+    :data:`FACET_THETAS_DEG` for a height field (each node one solve of the field)."""
+    return FACET_THETAS_DEG if nano.surface is not None else FACET_THETAS_PSD_DEG
+
+
+def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=False, thetas_deg=FACET_THETAS_DEG):
     """The tabulated g = f_nano cos θ_o (n, n_λ) at local incidences *theta* (rad, (n,) or scalar) and local
     directions *lo* (n, 3) whose incidence lies in the local x–z plane: the two nodes θ_k around θ, each read at
     *lo* turned about the local y axis by θ − θ_k (which takes θ's mirror direction to θ_k's; the lobe of a tilted
     facet is a turned lobe), blended linearly in θ; a node whose turned direction falls below its horizon drops
-    out of the blend."""
-    nodes = np.radians(FACET_THETAS_DEG)
+    out of the blend. With *blend* the last axis of *stack* holds :func:`_facet_table`'s g and first (2 n_λ, read
+    with the same stencil) and the result is W g + (1 − W) first, W = w(θ) w(θ_o) of
+    :mod:`waveoptics.scatter.tangent_blend` at the exact local angles: the
+    same for the facet's incidence and exit swapped (reciprocal). *projected*: the tables are PSD statistics' on
+    the equal-area projection (:func:`facet_table_grid`), not in direction cosines; *thetas_deg* the tables'
+    incidences (:func:`facet_thetas`)."""
+    nodes = np.radians(thetas_deg)
     theta = np.asarray(theta, dtype=float)   # one incidence (an NDF node shared by all cells) stays a scalar
     if theta.ndim:
         theta = np.broadcast_to(theta, lo.shape[:1])
@@ -270,6 +342,7 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
     wb = f - a
     n_v, n_u = stack.shape[1:3]
     flat = stack.reshape(-1, stack.shape[-1])
+    n_lam = stack.shape[-1] // 2 if blend else stack.shape[-1]
     idx, wts = [], []
     den = np.zeros(lo.shape[0])
     for k, wk in ((a, 1.0 - wb), (b, wb)):
@@ -277,7 +350,7 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
         cb, sb = np.cos(beta), np.sin(beta)
         u = lo[:, 0] * cb + lo[:, 2] * sb
         z = -lo[:, 0] * sb + lo[:, 2] * cb
-        k0, j0, av, au, ok = grid.bilinear(u, lo[:, 1])
+        k0, j0, av, au, ok = grid.bilinear(*(equal_area(u, lo[:, 1], z) if projected else (u, lo[:, 1])))
         wk = np.where(ok & (z > 0), wk, 0.0)
         i00 = (k * n_v + k0) * n_u + j0
         idx += [i00, i00 + 1, i00 + n_u, i00 + n_u + 1]
@@ -286,6 +359,9 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo):
     # np.take gathers whole rows (n_λ values) ~3x faster than fancy indexing, the same values
     rows = np.take(flat, np.stack(idx, axis=1), axis=0)
     val = np.einsum("cj,cjl->cl", np.stack(wts, axis=1).astype(np.float32), rows)
+    if blend:
+        W = np.reshape(tangent_plane_weight(np.cos(theta)) * tangent_plane_weight(lo[:, 2]), (-1, 1))
+        val = W * val[:, :n_lam] + (1.0 - W) * val[:, n_lam:]
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 
@@ -307,7 +383,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     turned (:class:`waveoptics.brdf.TabulatedTwoScaleBRDF`) keeps it: measured f(ω_i, ω_o)/f(ω_o, ω_i) − 1 ≤ 0.5 %
     at θ ≤ 65° (α 0.05-0.1; normals fixed in the surface's frame: up to 5.6 %), for 6-13 % more CPU time per
     incidence (96² cells). Each facet's nano lobe is read from tables
-    over local incidence (:data:`FACET_THETAS_DEG`, :func:`_facet_read`) on *table_grid* (default *grid*, a
+    over local incidence (:func:`facet_thetas`, :func:`_facet_read`) on *table_grid* (default *grid*, a
     hemisphere); F(θ_d), the same in every facet's frame, multiplies the sum. A nano height field's tables are its
     own lobe at azimuth 0 (:func:`_field_table`), read for facets of every azimuth: for a statistically isotropic
     field only (:func:`facet_route` keeps anisotropic ones paraxial); its half-vector normals are placed by the
@@ -377,13 +453,14 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     # (FACET_NODES_FIELD was measured with them; the symmetric layout read its speckle 5-11 % off the reference)
     symmetric = nano.surface is None
     visible = sampler_for(ndf).visible
-    stack = _facet_stack(nano, w, table_grid or grid, dm, material, polarization)
+    tgrid = facet_table_grid(table_grid or grid) if symmetric else table_grid or grid
+    stack, first = _facet_stack(nano, w, tgrid, dm, material, polarization)
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
-    stack_other = None if other is None else _facet_stack(nano, w, table_grid or grid, dm, material, other)
-    tgrid = table_grid or grid
+    stack_other = None if other is None else _facet_stack(nano, w, tgrid, dm, material, other)[0]
     out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
-                              FACET_THETAS_DEG, device=device, precision=precision)
+                              facet_thetas(nano), device=device, precision=precision, first=first,
+                              projected=symmetric)
            if facet_frame_backend(backend, micro, nano) == "opencl" else None)
 
     def add(m, valid):
@@ -416,15 +493,17 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         ux, uy = np.sum(wok * t, axis=-1), np.sum(wok * b, axis=-1)   # turned so that ω_i^m lies in x–z
         lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, om[ok]], axis=-1)
         theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
-        g = _facet_read(stack, tgrid, theta, lo)
+        g = _facet_read(pair, tgrid, theta, lo, first is not None, symmetric, facet_thetas(nano))
         if stack_other is not None:   # cos²η_i g_pol + sin²η_i g_other (the s-p term is odd about the facet plane)
-            g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo)}
+            g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo, projected=symmetric,
+                                                        thetas_deg=facet_thetas(nano))}
             g = facet_sp_mix(g_sp["s"], g_sp["p"], cos2_eta_i(wi, mk)[:, None], polarization)
         out[ok] += weight[:, None] * g
 
     e1, e2 = meridian_basis(h) if symmetric else facet_basis(h)
     if out is None:   # the NumPy twin of kernels/facet_frame.cl
         out = np.zeros((wo.shape[0], w.size))
+        pair = stack if first is None else np.concatenate([stack, first], axis=-1)   # one gather for both
         for m in (ndf_nodes(na, e2, ndf=ndf, ax=ax, ay=ay, c=c) if symmetric else m_a):
             add(m, np.ones(wo.shape[0], bool))
         for s_k, cp, sp in half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):

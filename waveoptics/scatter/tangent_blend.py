@@ -40,7 +40,7 @@ from .perturbation import is_stack, rayleigh_rice_lobe
 from .series import rayleigh_rice
 
 __all__ = ["TANGENT_PLANE_BLEND_DEG", "tangent_plane_weight", "blend_weight", "uses_vector_first_order",
-           "first_order_lobe", "blend_with_first_order"]
+           "first_order_lobe", "first_order_over_fresnel", "blend_with_first_order"]
 
 #: local angles (degrees) of incidence or exit between which the tangent-plane lobe hands over to first order: up to
 #: the first the Kirchhoff lobe is kept, beyond the second it is the Rayleigh-Rice lobe (module doc for the measure)
@@ -110,11 +110,23 @@ def blend_with_first_order(f_k, wi, wo, wavelength_nm, psd, material=None, polar
         return out
     wi_b = np.broadcast_to(wi, far.shape + (3,))[far]
     wo_b = np.broadcast_to(wo, far.shape + (3,))[far]
-    rr = np.asarray(first_order_lobe(wi_b, wo_b, wavelength_nm, psd, material, polarization), dtype=float)
-    if uses_vector_first_order(material):
-        F = (np.asarray(fresnel(wi_b, wo_b), dtype=float) if callable(fresnel)
-             else np.broadcast_to(np.asarray(fresnel, dtype=float), far.shape)[far])
-        rr = np.where(F > 0, rr / np.where(F > 0, F, 1.0), 0.0)
+    fr = (fresnel if callable(fresnel) or fresnel is None
+          else np.broadcast_to(np.asarray(fresnel, dtype=float), far.shape)[far])
     out = np.array(out, dtype=float)
-    out[far] += (1.0 - W[far]) * rr
+    out[far] += (1.0 - W[far]) * first_order_over_fresnel(wi_b, wo_b, wavelength_nm, psd, material, polarization, fr)
     return out
+
+
+def first_order_over_fresnel(wi, wo, wavelength_nm, psd, material=None, polarization: str = "unpolarized",
+                             fresnel=None):
+    """f_RR / F of :func:`blend_with_first_order` at paired directions (n, 3): the first-order lobe over the
+    Kirchhoff family's Fresnel factor F the caller applies (divided only where :func:`uses_vector_first_order`: the
+    lobe carries its own Q; 0 where F = 0). *fresnel*: F per pair (n,) or a function F(ω_i, ω_o). The blend is
+    W f_K + (1 − W) × this, so a table may hold this and f_K − this apart and apply W at the exact directions
+    (:func:`waveoptics.brdf.facet_frame_diffraction`)."""
+    wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
+    rr = np.asarray(first_order_lobe(wi, wo, wavelength_nm, psd, material, polarization), dtype=float)
+    if uses_vector_first_order(material):
+        F = np.asarray(fresnel(wi, wo) if callable(fresnel) else fresnel, dtype=float)
+        rr = np.where(F > 0, rr / np.where(F > 0, F, 1.0), 0.0)
+    return rr
