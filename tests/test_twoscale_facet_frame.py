@@ -132,20 +132,14 @@ def test_symmetric_facet_quadrature_is_reciprocal_at_any_azimuth():
     frame: -0.7 to +1.1 %). The tables are 128²: the far facets of the 10→65° pair see local angles beyond 80°,
     where the nano lobe is first order (f cosθ_o ∝ cos²θ_o, waveoptics.scatter.tangent_blend), which 64² cells
     (the last one spans 85-90°) read 0.69 % off (the Kirchhoff lobe alone: 0.30 %)."""
-    from waveoptics.brdf.twoscale_frame import facet_frame_diffraction
+    from facet_frame_helpers import facet_frame_at
 
     mat = get_material("aluminium")
     micro = Micro(alpha=0.2, ndf="beckmann")
     table = DirectionGrid.hemisphere(128)
 
     def one(a, c):
-        p = np.arctan2(a[1], a[0])   # turned so that a lies at azimuth 0
-        rot = np.array([[np.cos(p), np.sin(p), 0.0], [-np.sin(p), np.cos(p), 0.0], [0.0, 0.0, 1.0]])
-        a, c = rot @ a, rot @ c
-        cell = DirectionGrid(1, 1, (c[0] - 1e-7, c[0] + 1e-7), (c[1] - 1e-7, c[1] + 1e-7))
-        d, _, _ = facet_frame_diffraction(a, [LAM], mat, micro, NANO, cell, lambda x, lam: mat.F(x, lam),
-                                          table_grid=table)
-        return d[0, 0, 0]
+        return facet_frame_at(a, c, LAM, mat, micro, NANO, table)
 
     wi, wo = _pairs([(20, 60, 120), (10, 65, 90), (35, 50, 30)])
     for a, c in zip(wi, wo):
