@@ -2,7 +2,8 @@
 docs/img/renderers_render.png: the BRDF in renderers — the Mitsuba 3 plugin, the RGL export
 read back by Mitsuba 3's ``measured`` model, and ``waveoptics render`` — with every number measured in this run:
 the error of the wavelength interpolation against the exact model, the export's round-trip error, and the time
-of the default render with each BSDF on this machine."""
+of the default render with each BSDF on this machine; and the polarized render of a glass sphere
+(scripts/polarized_render.py, docs/img/renderers_polarized.png)."""
 from __future__ import annotations
 
 import contextlib
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+import polarized_render  # noqa: E402  (scripts/, on the path of make_docs)
 from waveoptics import brdf, surfaces
 from waveoptics.cli import main as cli
 from waveoptics.renderers import cached_renderer_brdf, rgl
@@ -139,7 +141,8 @@ def compute() -> dict:
         mi = wm.load_mitsuba("llvm_ad_spectral")
         trip = round_trip_table(mi, tmp)
         rend = render_section(tmp)
-    return {"interpolation": interp, "round_trip": trip, "render": rend}
+        polar = polarized_render.polarized_section(IMG)
+    return {"interpolation": interp, "round_trip": trip, "render": rend, "polarized": polar}
 
 
 def main() -> None:
