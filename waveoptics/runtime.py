@@ -32,7 +32,7 @@ import numpy as np
 
 from .errors import FieldError, NoOpenCLError, WaveopticsError
 
-__all__ = ['INSTALL_HINT', 'kernel_dir', 'kernel_source', 'platforms', 'opencl_available', 'device_spec_from_env', 'select_device', 'has_fp64', 'Runtime', 'get_runtime', 'build_options', 'build_program', 'program_cache_size', 'pocl_version', 'describe', 'cpu_workers', 'MEMORY_FRACTION', 'parse_size',
+__all__ = ['INSTALL_HINT', 'kernel_dir', 'kernel_source', 'platforms', 'opencl_available', 'device_spec_from_env', 'select_device', 'has_fp64', 'Runtime', 'get_runtime', 'build_options', 'build_program', 'program_kernel', 'program_cache_size', 'pocl_version', 'describe', 'cpu_workers', 'MEMORY_FRACTION', 'parse_size',
            'memory_limit', 'check_memory']
 
 INSTALL_HINT = ("no OpenCL platform found; install a CPU runtime with 'apt-get install pocl-opencl-icd' "
@@ -241,6 +241,33 @@ def build_program(runtime: Runtime, filename: str, options=()):
                                   f"with options {' '.join(opts)}:\n{exc}") from None
         _programs[key] = prg
         return prg
+
+
+_thread_kernels = threading.local()
+
+
+def program_kernel(program, name: str):
+    """The kernel *name* of *program* for the calling thread, retrieved once per thread.
+
+    A ``pyopencl.Kernel`` holds its arguments: a call sets them and then enqueues, so two threads calling one
+    kernel object can enqueue each other's arguments (wrong buffers, reads out of bounds). Every OpenCL call is
+    thread-safe except ``clSetKernelArg`` on one kernel object from several threads at once, whose result the
+    specification leaves undefined (OpenCL 1.2, appendix A.2), so each thread keeps its own kernel objects; a
+    kernel is retrieved once per thread (pyopencl warns on repeated retrieval through ``program.name``).
+
+    References
+    ----------
+    .. [1] Khronos OpenCL Working Group, *The OpenCL Specification*, version 1.2, 2012, appendix A.2
+       (multiple host threads).
+    """
+    cache = getattr(_thread_kernels, "cache", None)
+    if cache is None:
+        cache = _thread_kernels.cache = {}
+    key = (id(program), name)
+    hit = cache.get(key)
+    if hit is None or hit[0] is not program:
+        hit = cache[key] = (program, _cl().Kernel(program, name))
+    return hit[1]
 
 
 def program_cache_size() -> int:

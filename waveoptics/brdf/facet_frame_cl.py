@@ -16,10 +16,12 @@ References
 """
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from ..errors import FieldError, unknown
-from ..runtime import build_options, build_program, get_runtime, opencl_available
+from ..runtime import build_options, build_program, get_runtime, opencl_available, program_kernel
 from ..scatter.tangent_blend import TANGENT_PLANE_BLEND_DEG
 from .facet import COS_LEVELS, half_vector_base, unit_nodes
 from .ndf import ndf_by_name
@@ -74,18 +76,8 @@ def _half_vector_tables(rad, nb: int):
     return n_base, radii, pdf, np.stack([np.cos(phi), np.sin(phi)], axis=-1)
 
 
-_kernels: dict = {}
 _tables: dict = {}
-
-
-def _kernel(prg):
-    """The kernel ``facet_frame_sum`` of *prg*, retrieved once (pyopencl warns on repeated retrieval)."""
-    import pyopencl as cl
-
-    k = _kernels.get(id(prg))
-    if k is None:
-        k = _kernels[id(prg)] = (prg, cl.Kernel(prg, "facet_frame_sum"))
-    return k[1]
+_tables_lock = threading.Lock()
 
 
 def _table_buffer(rt, stack):
@@ -94,14 +86,15 @@ def _table_buffer(rt, stack):
     import pyopencl as cl
 
     key = (id(rt.context), id(stack))
-    hit = _tables.get(key)
-    if hit is None or hit[0] is not stack:
-        while len(_tables) >= 2:
-            _tables.pop(next(iter(_tables)))
-        data = np.ascontiguousarray(stack, dtype=np.float32)
-        hit = _tables[key] = (stack, cl.Buffer(rt.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
-                                               hostbuf=data))
-    return hit[1]
+    with _tables_lock:   # threads share the kept copies (a render's or a study's tasks)
+        hit = _tables.get(key)
+        if hit is None or hit[0] is not stack:
+            while len(_tables) >= 2:
+                _tables.pop(next(iter(_tables)))
+            data = np.ascontiguousarray(stack, dtype=np.float32)
+            hit = _tables[key] = (stack, cl.Buffer(rt.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
+                                                   hostbuf=data))
+        return hit[1]
 
 
 def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack, stack_other, table_grid,
@@ -168,7 +161,7 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
     if first is not None and stack_other is not None:
         raise FieldError("the facet tables take either another polarization's tables or first-order tables, "
                          "not both", "first")
-    kern = _kernel(build_program(rt, "facet_frame.cl", build_options(dt, defines)))
+    kern = program_kernel(build_program(rt, "facet_frame.cl", build_options(dt, defines)), "facet_frame_sum")
     q = rt.queue
     m0 = sample_normal_dcos(unit_nodes(na), ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])
     n_base, radii, hv_pdf, hv_phi = _half_vector_tables(rad, nb)

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-import pyopencl as cl
 import pyopencl.array as cla
 
 from ..errors import WaveopticsError, renamed_keywords, unknown
 from ..vocabulary import DEFAULT_NDF
 from ..materials import fresnel as _fresnel
-from ..runtime import build_options, build_program, get_runtime
+from ..runtime import build_options, build_program, get_runtime, program_kernel
 from .diffuse import DIFFUSES, diffuse_parameter, sigma_renamed
 from .fresnel_terms import F_mean
 from .microfacet import FRESNELS, fresnel_fn
@@ -36,19 +35,6 @@ def _cl_setup(runtime, precision, defines=()):
     dt = rt.real_dtype(precision)
     prg = build_program(rt, "microfacet.cl", build_options(dt, tuple(defines)))
     return rt, dt, prg
-
-
-_kernels: dict = {}
-
-
-def _kernel(prg, name):
-    """The kernel object *name* of *prg*, retrieved once (pyopencl warns on repeated retrieval)."""
-
-    key = (id(prg), name)
-    k = _kernels.get(key)
-    if k is None:
-        k = _kernels[key] = (prg, cl.Kernel(prg, name))
-    return k[1]
 
 
 def _defines(ndf=None, shadowing=None, fresnel=None, diffuse=None, tradeoff=None):
@@ -88,7 +74,7 @@ def _ndf_kernel(kname, w, alpha, alpha_y, ndf, ndf_shape, runtime, precision):
     n = w.size // 3
     d_w = _vec_dev(rt.queue, w, dt)
     d_out = cla.empty(rt.queue, max(n, 1), dt)
-    _kernel(prg, kname)(rt.queue, (max(n, 1),), None, d_w.data, d_out.data, dt(ax), dt(ay), dt(ndf_shape_parameter(spec, ndf_shape)),
+    program_kernel(prg, kname)(rt.queue, (max(n, 1),), None, d_w.data, d_out.data, dt(ax), dt(ay), dt(ndf_shape_parameter(spec, ndf_shape)),
                         np.int32(n))
     return d_out.get()[:n].reshape(w.shape[:-1]).astype(np.float64)
 
@@ -154,6 +140,6 @@ def brdf_cl(wi, wo, *, alpha, alpha_y=None, ndf=DEFAULT_NDF, shadowing="smith-co
     args = [_vec_dev(q, wi, dt), _vec_dev(q, wo, dt)]
     args += [cla.to_device(q, np.ascontiguousarray(a, dtype=dt)) for a in (eta_a.real, eta_a.imag, F0_a, kd_a, Fbar)]
     d_out = cla.empty(q, max(n * m, 1), dt)
-    _kernel(prg, "brdf_eval")(q, (max(n, 1), m), None, *[a.data for a in args], d_out.data, dt(ax), dt(ay), dt(ndf_shape_parameter(spec, ndf_shape)),
+    program_kernel(prg, "brdf_eval")(q, (max(n, 1), m), None, *[a.data for a in args], d_out.data, dt(ax), dt(ay), dt(ndf_shape_parameter(spec, ndf_shape)),
                   dt(sigma), np.int32(n))
     return d_out.get()[: n * m].reshape(m, n).astype(np.float64)
