@@ -78,7 +78,8 @@ from .smith import gl01
 from .twoscale import Micro
 
 __all__ = ['DIELECTRIC_SHADOWINGS', 'DIELECTRIC_MS_NODES', 'UNIFORM_DIGITS', 'pack_third_uniform', 'refract',
-           'half_vector_refraction', 'DielectricTables', 'dielectric_tables', 'RoughDielectricBSDF']
+           'half_vector_refraction', 'sided_lambda', 'sided_G2', 'albedo_single', 'DielectricTables',
+           'dielectric_tables', 'RoughDielectricBSDF']
 
 #: masking-shadowing terms of the BSDF (the Smith forms, which have a transmission case)
 DIELECTRIC_SHADOWINGS = ("smith", "smith-correlated")
@@ -137,14 +138,28 @@ def _sides(wi, wo, eta):
     return eta_i, eta_o, np.where(up_i, eta, 1.0)
 
 
-def _Lambda(spec, w, ax, ay, c):
-    """Smith Λ of a direction on either side: the microsurface seen from below is the one seen along −ω."""
+def sided_lambda(spec, w, ax, ay, c):
+    """Smith Λ (dimensionless) of directions *w* (n, 3) on either side of the macro surface: the microsurface seen
+    from below is the one seen along −ω (*spec* an NDF of :data:`waveoptics.brdf.NDFS`, *ax*, *ay*, *c* its
+    roughness and shape).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, §5.1 (G of a transmitted direction); E. Heitz, JCGT 3(2), 2014, §6.
+    """
     return spec.Lambda(np.where(w[:, 2:3] < 0, -w, w), ax, ay, c)
 
 
-def _G2(lam_i, lam_o, transmission, shadowing):
-    """Masking-shadowing of a valid configuration: separable (1 + Λ_i)⁻¹(1 + Λ_o)⁻¹, or height-correlated
-    1/(1 + Λ_i + Λ_o) (reflection) and B(1 + Λ_i, 1 + Λ_o) (transmission) (Heitz 2014, §6.1-6.2)."""
+def sided_G2(lam_i, lam_o, transmission, shadowing):
+    """Masking-shadowing (dimensionless) of a valid configuration from the Λ of both directions
+    (:func:`sided_lambda`): ``smith`` separable (1 + Λ_i)⁻¹(1 + Λ_o)⁻¹, or ``smith-correlated`` 1/(1 + Λ_i + Λ_o)
+    (reflection) and B(1 + Λ_i, 1 + Λ_o) (*transmission*, boolean array); 0 where a Λ is infinite.
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, §6.1-6.2.
+    .. [2] B. Walter et al., EGSR 2007, eq. (23).
+    """
     with np.errstate(invalid="ignore", over="ignore"):
         if shadowing == "smith":
             g = 1.0 / ((1.0 + lam_i) * (1.0 + lam_o))
@@ -181,7 +196,7 @@ def _single(wi, wo, eta, spec, ax, ay, c, shadowing):
     eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok = _pair_geometry(wi, wo, eta)
     F = _fresnel.F(np.abs(ih), eta_t / eta_i)
     D = spec.D(h, ax, ay, c)
-    G = _G2(_Lambda(spec, wi, ax, ay, c), _Lambda(spec, wo, ax, ay, c), trans, shadowing)
+    G = sided_G2(sided_lambda(spec, wi, ax, ay, c), sided_lambda(spec, wo, ax, ay, c), trans, shadowing)
     # guard: cosines floored at COS_MIN in the denominators (G already vanishes at the horizon)
     cc = np.maximum(np.abs(zi), COS_MIN) * np.maximum(np.abs(zo), COS_MIN)
     fr = np.where(ok & refl, F * G * D / (4.0 * cc), 0.0)
@@ -244,11 +259,18 @@ class DielectricTables:
         return np.where(up, np.interp(mu, self.mu, self.E_up), np.interp(mu, self.mu, self.E_down))
 
 
-def _albedo_single(wi, eta, spec, ndf, ax, ay, c, shadowing, symmetric=False):
-    """(R, T) = ∫ f_r |cos θ_o| dω_o, ∫ f_t |cos θ_o| dω_o for each wi (n, 3), by quadrature over microfacet normals
-    (:func:`waveoptics.brdf.normal_quadrature`, nodes placed by α): each normal m gives the mirror and the
-    refracted direction, dω_o = 4 |i·m| dω_m and (η_i (i·m) + η_o (o·m))² / (η_o² |o·m|) dω_m (Walter eqs. 14,
-    17). *symmetric*: an isotropic lobe with ω_i in the xz plane, integrated over the half m_y ≥ 0 (twice)."""
+def albedo_single(wi, eta, spec, ndf, ax, ay, c, shadowing, symmetric=False, facet_factors=None):
+    """(R, T) = ∫ f_r |cos θ_o| dω_o, ∫ f_t |cos θ_o| dω_o (dimensionless) for each wi (n, 3), by quadrature over
+    microfacet normals (:func:`waveoptics.brdf.normal_quadrature`, nodes placed by α): each normal m gives the
+    mirror and the refracted direction, dω_o = 4 |i·m| dω_m and (η_i (i·m) + η_o (o·m))² / (η_o² |o·m|) dω_m
+    (Walter eqs. 14, 17). *symmetric*: an isotropic lobe with ω_i in the xz plane, integrated over the half
+    m_y ≥ 0 (twice). *facet_factors*: a function (|i·m|, from_above) → (a_r, a_t) of arrays over the normals that
+    scales each facet's reflection and refraction (the coherent share of a nano-rough facet); None: 1.
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, eqs. (14), (17), (20), (21).
+    """
     m, w = normal_quadrature(ax, ay)
     if symmetric:
         keep = m[:, 1] >= 0
@@ -268,8 +290,9 @@ def _albedo_single(wi, eta, spec, ndf, ax, ay, c, shadowing, symmetric=False):
         oh = dot_last(wt, m)
         den = (eta_i * ih + eta_t * oh) ** 2
         jt = den / np.where(ok, eta_t ** 2 * np.abs(oh), 1.0)
-        R[j] = np.sum(np.where(vis, fr * np.abs(wr[:, 2]) * 4.0 * np.abs(ih), 0.0) * w)
-        T[j] = np.sum(np.where(vis & ok, ft * np.abs(wt[:, 2]) * jt, 0.0) * w)
+        a_r, a_t = (1.0, 1.0) if facet_factors is None else facet_factors(np.abs(ih), s > 0)
+        R[j] = np.sum(np.where(vis, a_r * fr * np.abs(wr[:, 2]) * 4.0 * np.abs(ih), 0.0) * w)
+        T[j] = np.sum(np.where(vis & ok, a_t * ft * np.abs(wt[:, 2]) * jt, 0.0) * w)
     return R, T
 
 
@@ -301,7 +324,7 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
     E = {}
     for side, sgn in (("up", 1.0), ("down", -1.0)):
         wi = np.stack([st, np.zeros_like(x), sgn * x], axis=-1)
-        R, T = _albedo_single(wi, eta, spec, ndf, alpha, alpha, ndf_shape, shadowing, symmetric=True)
+        R, T = albedo_single(wi, eta, spec, ndf, alpha, alpha, ndf_shape, shadowing, symmetric=True)
         # guard: a single-scattering albedo cannot exceed 1, but the quadrature's error can put it slightly above
         # (as in waveoptics.brdf.multiscatter); above 1 the compensation lobe 1 − E would turn negative
         E[side] = np.minimum(R + T, 1.0)
@@ -468,7 +491,7 @@ class RoughDielectricBSDF(BRDF):
 
     def albedo_parts(self, wi, wavelength_nm) -> dict:
         """∫ f |cos θ_o| dω_o of each part (dimensionless): ``reflection`` and ``transmission`` by quadrature over
-        microfacet normals (:func:`_albedo_single`), ``multiple_reflection`` and ``multiple_transmission`` by
+        microfacet normals (:func:`albedo_single`), ``multiple_reflection`` and ``multiple_transmission`` by
         Gauss-Legendre quadrature in cos θ_o of the compensation lobes (which depend on θ_o only)."""
         wi_f, lam_f, shape = broadcast_incidence(wi, wavelength_nm)
         keys = ("reflection", "transmission", "multiple_reflection", "multiple_transmission")
@@ -478,7 +501,7 @@ class RoughDielectricBSDF(BRDF):
         for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
             if w1[2] == 0:
                 continue
-            R, T = _albedo_single(w1[None], self._eta(float(l1)), spec, ndf, ax, ay, c, self.micro.shadowing)
+            R, T = albedo_single(w1[None], self._eta(float(l1)), spec, ndf, ax, ay, c, self.micro.shadowing)
             out["reflection"][j], out["transmission"][j] = R[0], T[0]
             if self.multiple_scattering:
                 for sgn in (1.0, -1.0):

@@ -24,10 +24,11 @@ from scipy.stats import qmc
 
 from .. import scatter
 from .directions import dot_last
-from .sampling import sample_normal_dcos
+from .sampling import sample_normal, sample_normal_dcos
 
 __all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'meridian_basis', 'to_facet',
-           'from_facet', 'ndf_nodes', 'half_vector_nodes', 'half_vector_base']
+           'from_facet', 'ndf_nodes', 'half_vector_nodes', 'half_vector_base', 'quadrature_normals',
+           'quadrature_density', 'sampler_normals']
 
 #: radial bins of the nano-lobe sampler (geometric in spatial frequency)
 RADIAL_BINS = 384
@@ -264,3 +265,59 @@ def half_vector_base(rad: NanoRadial, n: int, antithetic: bool = True):
     radii = rad.radius(np.arange(COS_LEVELS)[:, None], np.broadcast_to(base[:, 0], (COS_LEVELS, n_base)))
     k = np.arange(n)
     return n_base, radii, 2 * np.pi * base[k % n_base, 1] + np.pi * (k // n_base)
+
+
+def quadrature_normals(h, cos_d, rad: NanoRadial, level, n: int, *, ndf, ax, ay, c):
+    """The facet normals of the facet-frame quadrature for pairs with half-vectors *h* (n_pairs, 3), the grid
+    route's reciprocal layout: *n* normals with density D(m) cos θ_m turned to h's azimuth (:func:`ndf_nodes`) and
+    *n* antithetic normals about h through the nano lobe's radial law *rad* at the pairs' cos θ_d *level*
+    (:func:`half_vector_nodes`), both in :func:`meridian_basis` of h, so the same for ω_i and ω_o swapped and for
+    the pair turned about the normal. *cos_d* is half the length of the wave-vector sum whose tangential part the
+    tilt sets (cos θ_d = ω_i·h in reflection). Returns the normals (n_pairs, 2n, 3) and their validity
+    (n_pairs, 2n).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, §5.3; J. M. Hammersley, K. W. Morton 1956 (antithetic variates).
+    """
+    e1, e2 = meridian_basis(h)
+    ma = np.stack([np.broadcast_to(m, h.shape) for m in ndf_nodes(n, e2, ndf=ndf, ax=ax, ay=ay, c=c)], axis=1)
+    s, cp, sp = zip(*half_vector_nodes(rad, level, n, cos_d))
+    s, cp, sp = np.stack(s, axis=1), np.asarray(cp), np.asarray(sp)
+    ok = s < 1.0                    # a tilt s from h sends ω_i to the grating vector q = 2k cosθ_d s
+    s = np.where(ok, s, 0.0)
+    mb = ((s * cp)[..., None] * e1[:, None, :] + (s * sp)[..., None] * e2[:, None, :]
+          + np.sqrt(1.0 - s ** 2)[..., None] * h[:, None, :])
+    return np.concatenate([ma, mb], axis=1), np.concatenate([np.ones(ma.shape[:2], bool), ok], axis=1)
+
+
+def quadrature_density(m, D, h, cos_d, rad: NanoRadial, level, n: int):
+    """The balance heuristic's denominator n p_a(m) + n p_b(m) (1/sr) at the normals *m* (n_pairs, N, 3) of
+    :func:`quadrature_normals` with NDF values *D* (n_pairs, N): p_a = D(m) cos θ_m and p_b the radial law's
+    density of the tilt from *h* mapped to normals, p(t) (2 cos θ_d)² cos(m, h) with t = 2 cos θ_d sin(m, h).
+
+    References
+    ----------
+    .. [1] E. Veach, PhD thesis, Stanford, 1997, §9.2 (the balance heuristic).
+    """
+    pa = D * m[..., 2]
+    mh = np.clip(dot_last(m, h[:, None, :]), 0.0, 1.0)
+    t = 2.0 * cos_d[:, None] * np.sqrt(np.maximum(1.0 - mh ** 2, 0.0))
+    pb = np.where(mh > 0, rad.pdf_r(level[:, None], t) * 4.0 * cos_d[:, None] ** 2 * mh, 0.0)
+    return n * pa + n * pb
+
+
+def sampler_normals(wi, n: int, *, ndf, ax, ay, c):
+    """The sampler's facet normals for each ω_i (n_i, 3) above the surface: the micro NDF's sampler
+    (:func:`waveoptics.brdf.sample_normal`) at *n* fixed Sobol points (:func:`unit_nodes`), computed once per
+    distinct ω_i. Returns (n_i, n, 3).
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 7(4), 2018 (visible normals); B. Walter et al., EGSR 2007, §5.3.
+    """
+    uniq, inv = np.unique(wi, axis=0, return_inverse=True)
+    u = unit_nodes(n)
+    wi_b = np.broadcast_to(uniq[:, None, :], (uniq.shape[0], u.shape[0], 3))
+    m = sample_normal(wi_b, np.broadcast_to(u, wi_b.shape[:-1] + (2,)), ndf=ndf, ax=ax, ay=ay, c=c)
+    return m[inv.reshape(-1)]

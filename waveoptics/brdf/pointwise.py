@@ -60,11 +60,10 @@ from .. import scatter
 from ..scatter.tangent_blend import blend_with_first_order
 from ..errors import FieldError
 from .protocol import TwoScaleParts
-from .sampling import sample_normal
 from .ndf import ndf_by_name
 from .shadowing import shadowing_by_name
-from .facet import (COS_LEVELS, RADIAL_BINS, NanoRadial, local_pair, facet_basis, from_facet, half_vector_nodes,
-                    meridian_basis, ndf_nodes, to_facet, unit_nodes)
+from .facet import (COS_LEVELS, RADIAL_BINS, NanoRadial, local_pair, facet_basis, from_facet, quadrature_density,
+                    quadrature_normals, sampler_normals, to_facet, unit_nodes)
 from .directions import dot_last
 from .roughness_scales import check_series
 
@@ -188,36 +187,11 @@ class TwoScaleBRDF(TwoScaleParts):
 
     # -- facet normals -------------------------------------------------------------------------------------
     def _ndf_normals(self, wi):
-        """The sampler's facet normals for each ω_i (n, N/2, 3): the micro NDF's sampler at fixed Sobol points,
-        computed once per distinct ω_i (a renderer's batch often shares them). Only :meth:`_sample_diffraction` and
-        :meth:`_pdf_diffraction` use them (eval's quadrature lays its nodes about h: :meth:`_quadrature_normals`)."""
-        uniq, inv = np.unique(wi, axis=0, return_inverse=True)
-        u = unit_nodes(self.nodes // 2)
+        """The sampler's facet normals for each ω_i (n, N/2, 3) (:func:`waveoptics.brdf.facet.sampler_normals`).
+        Only :meth:`_sample_diffraction` and :meth:`_pdf_diffraction` use them (eval's quadrature lays its nodes
+        about h: :func:`waveoptics.brdf.facet.quadrature_normals`)."""
         ndf, ax, ay = self._micro_args()
-        wi_b = np.broadcast_to(uniq[:, None, :], (uniq.shape[0], u.shape[0], 3))
-        m = sample_normal(wi_b, np.broadcast_to(u, wi_b.shape[:-1] + (2,)), ndf=ndf, ax=ax, ay=ay,
-                          c=self.ndf_shape)
-        return m[inv.reshape(-1)]
-
-    def _quadrature_normals(self, h, cos_d, rad, level):
-        """The facet normals of the diffracted part's quadrature for pairs with half-vectors *h* (n, 3): the grid
-        route's reciprocal layout (:func:`waveoptics.brdf.facet.ndf_nodes`: N/2 normals with density D(m) cos θ_m
-        turned to h's azimuth; :func:`waveoptics.brdf.facet.half_vector_nodes`: N/2 antithetic normals about h
-        through the nano lobe's radial law *rad* at the pairs' cos θ_d *level*), both in
-        :func:`waveoptics.brdf.facet.meridian_basis` of h, so the same for ω_i and ω_o swapped and for the pair
-        turned about the normal. Returns the normals (n, N, 3) and their validity (n, N)."""
-        n = self.nodes // 2
-        ndf, ax, ay = self._micro_args()
-        e1, e2 = meridian_basis(h)
-        ma = np.stack([np.broadcast_to(m, h.shape) for m in ndf_nodes(n, e2, ndf=ndf, ax=ax, ay=ay,
-                                                                       c=self.ndf_shape)], axis=1)
-        s, cp, sp = zip(*half_vector_nodes(rad, level, n, cos_d))
-        s, cp, sp = np.stack(s, axis=1), np.asarray(cp), np.asarray(sp)
-        ok = s < 1.0                    # a tilt s from h sends ω_i to the grating vector q = 2k cosθ_d s
-        s = np.where(ok, s, 0.0)
-        mb = ((s * cp)[..., None] * e1[:, None, :] + (s * sp)[..., None] * e2[:, None, :]
-              + np.sqrt(1.0 - s ** 2)[..., None] * h[:, None, :])
-        return np.concatenate([ma, mb], axis=1), np.concatenate([np.ones(ma.shape[:2], bool), ok], axis=1)
+        return sampler_normals(wi, self.nodes // 2, ndf=ndf, ax=ax, ay=ay, c=self.ndf_shape)
 
     def _f_diffraction(self, wi, wo, lam):
         if not self._rough:
@@ -235,7 +209,7 @@ class TwoScaleBRDF(TwoScaleParts):
         up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
         wi = np.where(up[:, None], wi, [0.0, 0.0, 1.0])
         wo = np.where(up[:, None], wo, [0.0, 0.0, 1.0])
-        na = nb = self.nodes // 2
+        na = self.nodes // 2
         ndf, ax, ay = self._micro_args()
         spec = ndf_by_name(ndf)
         rad = self._radial(lam)
@@ -243,18 +217,15 @@ class TwoScaleBRDF(TwoScaleParts):
         # cos θ_d = ω_i·h = ω_o·h, taken as their mean so that ω_i and ω_o swapped give it to the last bit
         cos_d = np.maximum(0.5 * (dot_last(wi, h) + dot_last(wo, h)), 1e-6)
         level = rad.level(cos_d)
-        m, valid = self._quadrature_normals(h, cos_d, rad, level)
+        m, valid = quadrature_normals(h, cos_d, rad, level, self.nodes // 2, ndf=ndf, ax=ax, ay=ay,
+                                      c=self.ndf_shape)
         wi_b = np.broadcast_to(wi[:, None, :], m.shape)
         wo_b = np.broadcast_to(wo[:, None, :], m.shape)
         im = dot_last(wi_b, m)
         om = dot_last(wo_b, m)
         D = spec.D(m, ax, ay, self.ndf_shape)
         # densities of both node sets at every node, symmetric in ω_i and ω_o: D(m) cos θ_m and the radial law
-        pa = D * m[..., 2]
-        mh = np.clip(dot_last(m, h[:, None, :]), 0.0, 1.0)
-        t = 2.0 * cos_d[:, None] * np.sqrt(np.maximum(1.0 - mh ** 2, 0.0))
-        pb = np.where(mh > 0, rad.pdf_r(level[:, None], t) * 4.0 * cos_d[:, None] ** 2 * mh, 0.0)
-        den = na * pa + nb * pb
+        den = quadrature_density(m, D, h, cos_d, rad, level, na)
         # the integrand |i·m||o·m| / (|i·n||o·n|) f_nano(i_m, o_m) G(i, o, m) D(m)
         ok = valid & (im > 0) & (om > 0) & (den > 0)
         li, lo = local_pair(im, om, dot_last(wi, wo)[:, None])
