@@ -117,8 +117,9 @@ def test_alpha_to_zero_is_the_flat_nano_rough_glass():
     wi = np.broadcast_to(_dir(35.0), (4, 3))
     wo = np.array([_dir(30.0, 180.0), _dir(40.0, 170.0), _dir(18.0, 180.0, -1), _dir(26.0, 170.0, -1)])
     np.testing.assert_allclose(b.eval_parts(wi, wo, LAM)["nano"], flat.eval_parts(wi, wo, LAM)["nano"], rtol=3e-4)
+    coarse = _model(1e-4, nodes=16)                 # the coherent part does not depend on nodes
     for w in (_dir(35.0), _dir(25.0, side=-1)):
-        pb, pf = b.albedo_parts(w, LAM), flat.albedo_parts(w, LAM)
+        pb, pf = coarse.albedo_parts(w, LAM), flat.albedo_parts(w, LAM)
         for k in ("reflection", "transmission"):
             assert float(pb[k]) == pytest.approx(float(pf[k]), abs=3e-4), k
 
@@ -213,7 +214,7 @@ CHI2_CASES = [(0.2, 40.0, 1), (0.5, 60.0, 1), (0.3, 30.0, -1)]
 
 @pytest.mark.parametrize("alpha, theta, side", CHI2_CASES)
 def test_sampling_chi2_over_the_sphere(alpha, theta, side):
-    b = _model(alpha, nodes=64)
+    b = _model(alpha, nodes=32)
     wi = _dir(theta, side=side)
     res = chi2_test(lambda u: b.sample_wo(wi, LAM, u), lambda d: b.pdf(wi, d, LAM), sample_count=100_000, res=31,
                     ires=12, seed=7, test_count=len(CHI2_CASES))
