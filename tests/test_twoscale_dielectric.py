@@ -182,6 +182,18 @@ def test_white_furnace_of_lossless_glass(theta, side):
     assert coherent + diffracted == pytest.approx(1.0, abs=5e-4), (coherent, diffracted)
 
 
+def test_albedo_parts_are_the_sphere_integrals():
+    """albedo_parts (facet-normal quadrature of the coherent part, hemisphere grids of the diffracted part) against
+    the integrals of eval written here, at α = 0.2 from glass (total internal reflection on some facets)."""
+    b = _model(0.2, nodes=32)
+    wi = _dir(25.0, side=-1)
+    parts = b.albedo_parts(wi, LAM)
+    coherent = float(parts["reflection"] + parts["transmission"])
+    diffracted = float(parts["nano_reflection"] + parts["nano_transmission"])
+    assert coherent == pytest.approx(_coherent_albedo(b, wi), abs=2e-4)
+    assert diffracted == pytest.approx(_diffracted_albedo(b, wi), abs=2e-4)
+
+
 @pytest.mark.parametrize("shadowing", ["smith", "smith-correlated"])
 def test_reciprocity_with_the_eta_squared_factor(shadowing):
     """f(i, o)/η_o² = f(o, i)/η_i²: the diffracted part to rounding (the same nodes for the pair swapped), the
