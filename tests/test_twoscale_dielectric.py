@@ -28,7 +28,7 @@ LAM = 500.0
 ETA = 1.5
 PSD = PSDModel("gaussian", 20e-9, T=1e-6)     # σ = 20 nm, ℓ = 1 µm: 2.5-7 % of the light in the nano lobes
 N_MC = 200_000
-TOL_MC = 1.5e-2          # measured worst 0.5 % (MC standard error ≤ 0.4 %)
+TOL_MC = 1.5e-2          # measured worst 0.60 % (the MC standard error ≤ 0.57 %)
 
 
 def _dir(theta, phi=0.0, side=1):
