@@ -55,7 +55,8 @@ def _periodogram(hf):
 
 
 def _q_al(ti, u, v):
-    """Unpolarized Q = (|q_ss|² + |q_sp|² + |q_ps|² + |q_pp|²)/2 of Al at exit (u, v) (Germer 1997, eqs. 17–20)."""
+    """Unpolarized Q = (|q_ss|² + |q_sp|² + |q_ps|² + |q_pp|²)/2 of Al at exit (u, v) (Germer 1997,
+    eqs. 17–20)."""
     eps = complex(AL.eta(LAM)) ** 2
     si, ci = math.sin(ti), math.cos(ti)
     s2 = u * u + v * v
@@ -135,8 +136,8 @@ SHORTFALL = {"frame": 2e-3, "paraxial": 5e-3}
 
 @pytest.mark.parametrize("facet", ["frame", "paraxial"])
 def test_white_furnace_at_grazing_incidence(nano, facet):
-    """F = 1, GGX α = 0.1, 64² cells, θ_i 89 and 89.5°: the whole two-scale BRDF reflects ≤ 1.01 and no less than the
-    single-scattering microfacet albedo minus the diffracted light sent beyond the horizon (within
+    """F = 1, GGX α = 0.1, 64² cells, θ_i 89 and 89.5°: the whole two-scale BRDF reflects ≤ 1.01 and no less than
+    the single-scattering microfacet albedo minus the diffracted light sent beyond the horizon (within
     :data:`SHORTFALL`); neither the energy guard nor the coherent fraction's clip acts (each would warn). Before,
     the guard removed 7-9 % (frame) and 84-87 % (paraxial) of the diffracted light there."""
     one = materials.get_material("f0:1")

@@ -119,7 +119,8 @@ class Nano:
         complement, 1 − E_field(θ_d) (:func:`waveoptics.brdf.field_scattered_albedo`): E_field is the albedo of the field's own
         diffracted lobe |U − χ̂ U_flat|² (the lobe :func:`waveoptics.brdf.kirchhoff_scattered_lobe` gives, same samples, window and
         diffraction model; towards grazing angles handed over to the first-order lobe of the field's periodogram,
-        :func:`waveoptics.brdf.field_scattered_lobe`, as the PSD route's is) on a direction grid of λ/(3L) cells, finer than the patch's spectrum varies, so
+        :func:`waveoptics.brdf.field_scattered_lobe`, as the PSD route's is) on a direction grid of λ/(3L) cells,
+        finer than the patch's spectrum varies, so
         nothing between the two halves is lost: roughness in evanescent frequencies neither scatters nor reduces
         the specular light (A = |χ̂|² would take the whole variance, and the albedo of heavy-tailed patches would
         fall up to 12 % short of F; tests/test_twoscale.py). One or two incidences asked at once (the macro incidence)
@@ -302,8 +303,8 @@ def _complement_of_albedo(E, wavelength_nm):
         import warnings
 
         warnings.warn(f"height field's coherent fraction clipped at 0 at {float(wavelength_nm):g} nm: its lobe "
-                      f"scatters {float(E.max()):.4g} of the specular light (the clip removed {float(E.max()) - 1:.3g})",
-                      scatter.DiffractionWarning, stacklevel=3)
+                      f"scatters {float(E.max()):.4g} of the specular light (the clip removed "
+                      f"{float(E.max()) - 1:.3g})", scatter.DiffractionWarning, stacklevel=3)
     return np.clip(1.0 - E, 0.0, 1.0)
 
 

@@ -21,8 +21,8 @@ from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weig
 from .facet import half_vector_nodes, ndf_nodes
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_polarization import facet_scattered_share
-from .field_lobe import (FIELD_GRID_OVERSAMPLING, field_anisotropy, field_first_order_over_fresnel, field_proposal_model,
-                         kirchhoff_scattered_lobe)
+from .field_lobe import (FIELD_GRID_OVERSAMPLING, field_anisotropy, field_first_order_over_fresnel,
+                         field_proposal_model, kirchhoff_scattered_lobe)
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
