@@ -118,7 +118,9 @@ class Nano:
         paraxial this is the Davies (1954) factor exp(−(4πσ_rel cosθ_d/λ)²). For a height field it is the same
         complement, 1 − E_field(θ_d) (:func:`waveoptics.brdf.field_scattered_albedo`): E_field is the albedo of the field's own
         diffracted lobe |U − χ̂ U_flat|² (the lobe :func:`waveoptics.brdf.kirchhoff_scattered_lobe` gives, same samples, window and
-        diffraction model) on a direction grid of λ/(3L) cells, finer than the patch's spectrum varies, so
+        diffraction model; towards grazing angles handed over to the first-order lobe of the field's periodogram,
+        :func:`waveoptics.brdf.field_scattered_lobe`, as the PSD route's is) on a direction grid of λ/(3L) cells,
+        finer than the patch's spectrum varies, so
         nothing between the two halves is lost: roughness in evanescent frequencies neither scatters nor reduces
         the specular light (A = |χ̂|² would take the whole variance, and the albedo of heavy-tailed patches would
         fall up to 12 % short of F; tests/test_twoscale.py). One or two incidences asked at once (the macro incidence)
@@ -159,7 +161,8 @@ class Nano:
                           polarization: str = "unpolarized"):
         """The factor that gives a statistics lobe of tangent-plane shape at incidence θ_i the scattered albedo of
         the lobe handed over to first order towards grazing angles (:meth:`waveoptics.scatter.BandSeries.
-        lobe_energy_scale`; 1 for Rayleigh-Rice and for height fields)."""
+        lobe_energy_scale`; 1 for Rayleigh-Rice and for height fields, whose grid lobe
+        :func:`waveoptics.brdf.nano_lobe` scales itself: :func:`waveoptics.brdf.field_scattered_lobe`)."""
         c = np.clip(np.asarray(cos_theta_i, dtype=float), 0.0, 1.0)
         if self.model is None:
             return np.ones(np.broadcast_shapes(c.shape, np.shape(wavelength_nm)))
@@ -268,7 +271,8 @@ class Nano:
             asked = np.unique(theta[sel])
 
             def E_at(t, phi_deg, l_val=float(l_val)):
-                return field_scattered_albedo(self.surface, float(t), l_val, dm, material, polarization, phi_deg)
+                return field_scattered_albedo(self.surface, float(t), l_val, dm, material, polarization, phi_deg,
+                                              psd=self.periodogram())
 
             if asked.size <= 2:   # single incidences (the macro one): exactly, at their own azimuth
                 exact = cache.setdefault(("field-exact",) + key, {})
@@ -283,10 +287,25 @@ class Nano:
                         nodes[float(t)] = E_at(t, 0.0)
                 ts = np.array(sorted(nodes))
                 E = PchipInterpolator(ts, [nodes[t] for t in ts], extrapolate=True)(theta[sel])
-            # guard: near grazing incidence the tangent-plane lobe's albedo exceeds 1 (docs/two-scale.md): no
-            # specular light is left there, A = 0, never negative
-            out[sel] = np.clip(1.0 - E, 0.0, 1.0)
+            out[sel] = _complement_of_albedo(E, l_val)
         return out if out.ndim else float(out)
+
+
+def _complement_of_albedo(E, wavelength_nm):
+    """1 − E of a height field's scattered shares E (:meth:`Nano.coherent_fraction`).
+
+    guard: E > 1 would leave negative specular light; A is then 0 and a DiffractionWarning names how much light
+    the clip removed. The field's lobe hands over to first order towards grazing angles
+    (:func:`waveoptics.brdf.field_scattered_lobe`), so E stays far below 1 where the nano-roughness is nano (it never
+    acts for ABC σ 8 nm fields on Al, micro α 0.1 at θ_i 89-89.5°, tests/test_heightfield_grazing.py)."""
+    E = np.asarray(E, dtype=float)
+    if np.any(E > 1.0):
+        import warnings
+
+        warnings.warn(f"height field's coherent fraction clipped at 0 at {float(wavelength_nm):g} nm: its lobe "
+                      f"scatters {float(E.max()):.4g} of the specular light (the clip removed "
+                      f"{float(E.max()) - 1:.3g})", scatter.DiffractionWarning, stacklevel=3)
+    return np.clip(1.0 - E, 0.0, 1.0)
 
 
 def isotropic(micro: Micro, nano) -> bool:

@@ -21,7 +21,8 @@ from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weig
 from .facet import half_vector_nodes, ndf_nodes
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_polarization import facet_scattered_share
-from .field_lobe import FIELD_GRID_OVERSAMPLING, field_anisotropy, field_proposal_model, kirchhoff_scattered_lobe
+from .field_lobe import (FIELD_GRID_OVERSAMPLING, field_anisotropy, field_first_order_over_fresnel,
+                         field_proposal_model, kirchhoff_scattered_lobe)
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
@@ -157,13 +158,14 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     at the facet's exact local directions (:func:`_facet_read`); baked into one table, W (which falls from 1 to 0
     over 70-80°, two 96² cells in u at the horizon) was read bilinearly at the exit and linearly between incidence
     nodes, a different rule for ω_i and ω_o: the facet-frame sum came out non-reciprocal by up to 5 % (Beckmann
-    α 0.1, pairs with an end at 75-80°). Otherwise (Rayleigh-Rice, height fields) g is the lobe and first None.
+    α 0.1, pairs with an end at 75-80°). So for a height field's Kirchhoff lobe, whose first-order lobe is that of
+    its periodogram (:func:`_field_table`). Under Rayleigh-Rice g is the lobe and first None.
     Cached on *nano*."""
     cache = nano.__dict__.setdefault("_cache", {})
     key = ("facet-table", k, tuple(float(x) for x in w), grid.n_u, grid.n_v, tuple(grid.u_range),
            tuple(grid.v_range), dm.name, getattr(material, "name", None), polarization)
     if key not in cache and nano.surface is not None:
-        cache[key] = (_field_table(nano, k, w, grid, dm, material, polarization), None)
+        cache[key] = _field_table(nano, k, w, grid, dm, material, polarization)
     if key not in cache:
         th = np.radians(FACET_THETAS_PSD_DEG[k])
         wi = np.array([np.sin(th), 0.0, np.cos(th)])
@@ -199,10 +201,13 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
 
 
 def _field_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
-    """:func:`_facet_table` of a height field: g = f cos θ_o of its diffracted lobe at local incidence
+    """:func:`_facet_table` of a height field, (g, first): g = f cos θ_o of its diffracted lobe at local incidence
     :data:`FACET_THETAS_DEG` [k] at azimuth 0, by the field's own solver on *grid* (the FFT route of
     :func:`waveoptics.brdf.kirchhoff_scattered_lobe` with F = 1, the Kirchhoff family's F(θ_d) applied afterwards;
-    Rayleigh-Rice: the lobe of its periodogram with its own Q). Read for a facet at any azimuth: the lobe of a
+    Rayleigh-Rice: the lobe of its periodogram with its own Q, first None), and for the Kirchhoff family first =
+    f_RR / F cos θ_o, the first-order lobe of the field's periodogram it hands over to towards grazing angles
+    (:func:`waveoptics.brdf.field_first_order_over_fresnel`; W applied at the facets' exact local directions by
+    :func:`_facet_read`, as for PSD statistics). Read for a facet at any azimuth: the lobe of a
     statistically isotropic field (:func:`waveoptics.brdf.field_anisotropy`) turned with the facet, the azimuth of
     the one realization's speckle aside. Cells beyond the rim of the disc take the value of the nearest cell
     inside (the statistics table's rim values).
@@ -233,13 +238,22 @@ def _field_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     if dm.perturbative:
         f = np.stack([np.where(inside, scatter.rayleigh_rice_lobe(wi[None, None, :], wo, lam, nano.periodogram(),
                                                                   material, polarization), 0.0) for lam in w])
+        first = None
     else:
         with warnings.catch_warnings():   # the fine grid resolves the patch's diffraction width
             warnings.simplefilter("ignore", scatter.DiffractionWarning)
             f = kirchhoff_scattered_lobe(nano.surface, wi, fine, w, None, solver="fft", diffraction=dm)
-    g = (f * np.where(inside, wo[..., 2], 0.0)[None]).reshape(len(w), grid.n_v, r, grid.n_u, r).mean(axis=(2, 4))
+        wo_in = wo[inside]
+        first = np.zeros_like(f)
+        for i, lam in enumerate(w):
+            first[i][inside] = field_first_order_over_fresnel(nano.periodogram(), np.broadcast_to(wi, wo_in.shape),
+                                                              wo_in, lam, material, polarization)
     _, (iy, ix) = ndimage.distance_transform_edt(~grid.inside, return_indices=True)
-    return np.ascontiguousarray(np.moveaxis(g[:, iy, ix], 0, -1), dtype=np.float32)
+
+    def cells(a):   # cell averages of a cos θ_o, rim cells extended outwards, (n_v, n_u, n_λ)
+        g = (a * np.where(inside, wo[..., 2], 0.0)[None]).reshape(len(w), grid.n_v, r, grid.n_u, r).mean(axis=(2, 4))
+        return np.ascontiguousarray(np.moveaxis(g[:, iy, ix], 0, -1), dtype=np.float32)
+    return cells(f), (None if first is None else cells(first))
 
 
 def _v_symmetric(grid: DirectionGrid) -> bool:
