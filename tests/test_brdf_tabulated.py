@@ -41,11 +41,19 @@ def _direct(theta, phi=0.0, nano=NANO, micro=MICRO):
 
 def test_on_the_nodes_it_is_the_grid_model(table):
     """At a node the table returns the grid model's lobe (to the float32 rounding of the facet route's nano
-    tables, whose sums depend on how many wavelengths are evaluated together: 4e-8 measured)."""
+    tables, whose sums depend on how many wavelengths are evaluated together: 4e-8 measured) up to θ_o 65°.
+    Beyond, the read hands over to the rim tables (waveoptics.brdf.tabulated_rim: the same facet-frame sum at
+    nodes 1.5° × 2.5° apart in (θ_o, φ_o), read bilinearly), which at the grid's cell centres differ from the sum
+    there by their interpolation: measured max 0.12 % at 65-70°, 0.55 % at 70-80°, 0.94 % at 80-85°, 4.6 % at
+    85-90° (where a 128² cell spans 4-9° and the lobe rises steeply; the rim's last node is at 89.3°)."""
     wi, L = _direct(30.0)
     wo = GRID.directions()[GRID.inside]
     parts = table.eval_parts(wi, wo, 550.0)
-    np.testing.assert_allclose(parts["diffraction"], L.diffraction[0][GRID.inside], rtol=1e-6, atol=1e-15)
+    theta_o = np.degrees(np.arccos(wo[:, 2]))
+    ref = L.diffraction[0][GRID.inside]
+    for lo, hi, rtol in ((0, 65, 1e-6), (65, 80, 0.006), (80, 85, 0.01), (85, 90, 0.05)):
+        s = (theta_o >= lo) & (theta_o < hi)
+        np.testing.assert_allclose(parts["diffraction"][s], ref[s], rtol=rtol, atol=1e-15)
     c_ref = L.coherent[0][GRID.inside]
     assert np.max(np.abs(parts["coherent"] - c_ref)) < 1e-3 * c_ref.max()
 
