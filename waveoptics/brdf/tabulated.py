@@ -14,27 +14,31 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   mirror direction to θ_k's, as a tilted facet turns its lobe), and the two values are blended linearly in θ_i;
   the blend moves the lobe with the incidence instead of cross-fading two lobes at different places. Reads within
   a cell of the horizon take the cells beyond the rim as the mean of their neighbours inside it (the lobe rises
-  towards the horizon, where zeros would pull it down).
+  towards the horizon, where zeros would pull it down). Beyond θ_o 65-69° the read hands over to rim tables
+  (:mod:`waveoptics.brdf.tabulated_rim`: the same facet-frame sum on nodes 1.5° × 2.5° apart in (θ_o, φ_o) from
+  63° to the horizon), read at ω_o itself and blended linearly in θ_i, where a direction-cosine cell spans 5.7°
+  at 78° and the turn by θ_i − θ_k reads the concave lobe up and down the horizon's slope.
 * Surfaces whose nano lobe depends on the light's azimuth (height fields, gratings, anisotropic micro NDFs) are
   tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`) and read at each node's
   mirror point plus the offset Δ = (u_o, v_o) − (mirror point of ω_i) in direction cosines, blended in θ_i and
   φ_i (never rotated: a grating's orders stay where the grating puts them, and they shift in direction cosines,
   the Harvey-Shack picture, docs/physics.md §11).
 
-Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes; between 10° nodes the
+Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes up to θ_o 65° (beyond, to the
+rim tables' interpolation: within 0.6 % to 80°, 1 % to 85°); between 10° nodes the
 diffracted part's peak is within 1 % and its energy within 2 % of a direct evaluation at that incidence. Reciprocal
 for PSD statistics: f(ω_i, ω_o)/f(ω_o, ω_i) − 1 ≤ 0.5 % at θ ≤ 65° on and between the nodes (α 0.05-0.1, 96²
 cells; ``tests/test_twoscale_facet_frame.py``), because the facet route's quadrature is laid out about each cell's
 half-vector in a frame turning with it (:func:`waveoptics.brdf.facet_frame_diffraction`), so the tables at azimuth
 0 read turned hold the same sum for the pair and its swap. With an end at 70-80° (facets' nano lobes handed over to
 first order, :mod:`waveoptics.scatter.tangent_blend`), over 400 seeded pairs in and out of the plane, on and between
-the nodes, max |f(ω_i, ω_o)/f(ω_o, ω_i) − 1| with both angles ≤ 75 / 78 / 80° (``tests/test_tabulated_reciprocity.py``):
-Beckmann α 0.05: 1.8 / 3.6 / 5.1 %, α 0.1: 0.9 / 1.6 / 2.7 %, α 0.3: 0.6 / 1.1 / 1.1 %; GGX α 0.05: 0.8 / 1.4 /
-1.5 %, α 0.1-0.3 ≤ 0.35 % (before the facet tables held the hand-over's two lobes apart, on an equal-area grid, with
-incidence nodes 2° apart, :func:`waveoptics.brdf.facet_frame_diffraction`: 5.2 / 7.8 / 8.5 %, 3.8 / 4.9 / 10.2 %,
-2.9 / 3.3 / 9.1 %, 2.4 / 3.7 / 3.7 %). What is left beyond 75° is these tables' own read in direction cosines near
-the horizon (a 96² cell spans 5.7° at 78°: at an incidence node, read at θ_o 78-80°, 1.7-5.5 % below the
-facet-frame sum at that direction, where the lobe is concave) and the interpolation between the nodes 75° and 78°.
+the nodes, max |f(ω_i, ω_o)/f(ω_o, ω_i) − 1| with both angles ≤ 75 / 78 / 80° (``tests/test_tabulated_rim.py``,
+96², under load): Beckmann α 0.05: 1.6 / 1.6 / 1.6 %, α 0.1: 1.0 / 1.0 / 1.1 %, α 0.3: 0.5 / 0.9 / 1.1 %; GGX α
+0.05: 0.8 / 0.8 / 0.8 % (without the rim tables 1.4 / 4.0 / 5.5 %, 0.9 / 1.3 / 4.4 %, 1.1 at 80°, 0.6 / 1.3 /
+1.7 %: the direction-cosine cells' read near the horizon, 1.7-5.5 % below the facet-frame sum at θ_o 78-80°; before
+the facet tables held the hand-over's two lobes apart, on an equal-area grid, with incidence nodes 2° apart,
+:func:`waveoptics.brdf.facet_frame_diffraction`: 5.2 / 7.8 / 8.5 %, 3.8 / 4.9 / 10.2 %, 2.9 / 3.3 / 9.1 %, 2.4 /
+3.7 / 3.7 %). The rim tables cost 17-21 % more CPU time per table and 10 % more memory (96², 3 wavelengths).
 
 References
 ----------
