@@ -220,6 +220,28 @@ def test_open_table_evaluates_between_nodes_like_a_direct_evaluation(table_file,
     assert float(T.albedo(wi, 550.0)) == pytest.approx(L.albedo()[0], rel=0.02)
 
 
+def test_a_table_file_carries_the_rim_tables(table_file):
+    """Format version 3: the file holds the rim tables (waveoptics.brdf.tabulated_rim), and the opened model reads
+    them: beyond θ_o 69° at an incidence node its diffracted part is the facet-frame sum at that one direction
+    (tests/facet_frame_helpers.py, a one-cell grid; float32 storage: measured 3e-8)."""
+    import waveoptics
+    from facet_frame_helpers import facet_frame_at
+    from waveoptics import distributed as D
+    from waveoptics.brdf.tabulated_rim import rim_directions
+    from waveoptics.materials import get_material
+
+    path, case = table_file
+    assert D.read_table(path).attrs["format_version"] == 3
+    T = waveoptics.open_table(path)
+    assert T.rim_table is not None and T.rim_table.shape[:2] == (6, 3)
+    wi = _dir(30.0)
+    wo = rim_directions()[[2, 5, 8], [10, 80, 140]]   # θ_o 86°, 82°, 78°
+    got = T.eval_parts(np.repeat(wi[None], 3, axis=0), wo, 550.0)["diffraction"]
+    ref = [facet_frame_at(wi, c, 550.0, get_material(case.material), case.micro(), T.nano,
+                          DirectionGrid.hemisphere(64)) for c in wo]
+    np.testing.assert_allclose(got, ref, rtol=1e-6)
+
+
 def test_cli_brdf_model_table(table_file, capsys):
     import json
 
