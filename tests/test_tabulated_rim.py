@@ -53,8 +53,9 @@ def test_tabulated_form_is_reciprocal_up_to_80_degrees(ndf, alpha):
     assert t.rim_table is not None
     wi, wo = _pairs()
     assert _worst(t, wi, wo) <= 0.02
-    if (ndf, alpha) == ("beckmann", 0.05):
-        plain = TabulatedTwoScaleBRDF("aluminium", micro, nano=NANO, wavelengths_nm=(LAM,), resolution=96, rim=False)
+    if (ndf, alpha) == ("beckmann", 0.05):   # the same lobes without their rim tables
+        plain = TabulatedTwoScaleBRDF("aluminium", micro, nano=NANO, wavelengths_nm=(LAM,), table_lobes=t.table,
+                                      table_grid=t.grid)
         assert plain.rim_table is None
         assert _worst(plain, wi, wo) > 0.04
 
