@@ -45,7 +45,10 @@ def test_on_the_nodes_it_is_the_grid_model(table):
     Beyond, the read hands over to the rim tables (waveoptics.brdf.tabulated_rim: the same facet-frame sum at
     nodes 1.5° × 2.5° apart in (θ_o, φ_o), read bilinearly), which at the grid's cell centres differ from the sum
     there by their interpolation: measured max 0.12 % at 65-70°, 0.55 % at 70-80°, 0.94 % at 80-85°, 4.6 % at
-    85-90° (where a 128² cell spans 4-9° and the lobe rises steeply; the rim's last node is at 89.3°)."""
+    85-90° (where a 128² cell spans 4-9° and the lobe rises steeply; the rim's last node is at 89.3°). Between the
+    cell centres, at 40 random directions per band, the rim read is the closer one to the facet-frame sum: max /
+    mean error 0.46 / 0.19 % at 70-80°, 0.52 / 0.25 % at 80-85°, 8.4 / 1.1 % at 85-89°, where the direction-cosine
+    cells alone give 2.6 / 1.1 %, 36 / 5.2 %, 93 / 28 %."""
     wi, L = _direct(30.0)
     wo = GRID.directions()[GRID.inside]
     parts = table.eval_parts(wi, wo, 550.0)

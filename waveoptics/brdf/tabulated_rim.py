@@ -15,7 +15,9 @@ isotropic surface is even in φ_o, but the facet-frame quadrature's sum is not e
 62.4°, exit at 78.7°: 0.002736 at φ_o = +53.3° against 0.002816 at −53.3°; reciprocal for each sign), and a table
 over |φ_o| made the model non-reciprocal by 2.4 % there. The read blends it with the direction-cosine table by :func:`rim_weight`, 0 up to
 :data:`RIM_BLEND_DEG` [0] and 1 from [1] on, so the model is continuous and equals the main table where its cells
-are fine.
+are fine. Measured at an incidence node (Beckmann α 0.05, ABC σ 20 nm, gold, 128²), at random exits against the
+sum at each: max / mean error 0.46 / 0.19 % at θ_o 70-80°, 0.52 / 0.25 % at 80-85°, 8.4 / 1.1 % at 85-89°, where
+the direction-cosine cells alone give 2.6 / 1.1 %, 36 / 5.2 %, 93 / 28 %.
 
 References
 ----------
