@@ -1,8 +1,9 @@
 """The Dr.Jit two-scale BSDF (``waveoptics_native``, :mod:`waveoptics.renderers.mitsuba_native`).
 
 * eval and pdf equal the NumPy model's (its float64 twin) at 300 random direction pairs, half of them near the
-  specular direction, in scalar and LLVM variants, for a metal, an anisotropic micro roughness with multiple
-  scattering, and a dielectric with a diffuse substrate (Beckmann, separable Smith);
+  specular direction, in scalar and LLVM variants, for a metal (also with rim tables, read beyond θ_o 65°), an
+  anisotropic micro roughness with multiple scattering, and a dielectric with a diffuse substrate (Beckmann,
+  separable Smith);
 * the sampler maps the same uniform numbers to the same directions as the NumPy model's;
 * Mitsuba's own χ² test accepts sample and pdf (metal at 30° and 80°, anisotropic with multiple scattering at 45°
   and 80°, dielectric with diffuse at 0° and 80°);
@@ -47,6 +48,18 @@ def _lobes(n_phi, thetas, grid, seed):
     return out
 
 
+def _rim(thetas, seed):
+    """Rim tables (n_θ, n_λ, n_cos, n_φ) (waveoptics.brdf.tabulated_rim's layout): smooth in cos θ_o and φ_o,
+    different at each node, with 20 % node-to-node noise; the Dr.Jit BSDF must read them as the NumPy model does."""
+    from waveoptics.brdf.tabulated_rim import rim_cos_nodes, rim_phi_nodes
+
+    rng = np.random.default_rng(seed)
+    c, p = np.meshgrid(rim_cos_nodes(), rim_phi_nodes(), indexing="ij")
+    out = np.stack([np.stack([(0.3 + k + j + np.cos(p) ** 2 + c) * (1 + 0.2 * rng.uniform(size=c.shape))
+                              for j in range(len(NODES))]) for k in range(len(thetas))])
+    return 0.05 * out
+
+
 @functools.lru_cache(maxsize=None)
 def _model(case):
     from waveoptics import brdf
@@ -59,9 +72,10 @@ def _model(case):
     common = dict(wavelengths_nm=NODES, thetas_deg=thetas, table_grid=grid,
                   table_lobes=_lobes(n_phi, thetas, grid, seed=n_phi),
                   table_phis_deg=tuple(360.0 * p / n_phi for p in range(n_phi)))
-    if case == "metal":
+    if case in ("metal", "rim"):   # rim: with rim tables, read beyond θ_o 65°
         base = brdf.TabulatedTwoScaleBRDF(material="aluminium", micro=brdf.Micro(alpha=0.2, ndf="ggx"),
-                                          nano=make_nano("abc:sigma=15nm,B=2um,C=2.6", NODES), **common)
+                                          nano=make_nano("abc:sigma=15nm,B=2um,C=2.6", NODES),
+                                          table_rim=_rim(thetas, 7) if case == "rim" else None, **common)
     elif case == "anisotropic":
         base = brdf.TabulatedTwoScaleBRDF(material="gold", micro=brdf.Micro(alpha=0.1, alpha_y=0.3, ndf="ggx"),
                                           nano=make_nano("abc:sigma=15nm,B=2um,C=2.6", NODES),
@@ -112,7 +126,8 @@ def _assert_close(got, want, what):
                                           ("llvm_ad_rgb", "dielectric"), ("scalar_rgb", "metal"),
                                           ("scalar_rgb", "dielectric"), ("llvm_ad_spectral", "anisotropic"),
                                           ("scalar_spectral", "dielectric"), ("scalar_rgb", "burley"),
-                                          ("scalar_rgb", "oren-nayar")])
+                                          ("scalar_rgb", "oren-nayar"), ("llvm_ad_rgb", "rim"),
+                                          ("scalar_rgb", "rim")])
 def test_eval_and_pdf_equal_the_numpy_model(variant, case):
     mi, name = _plugin(variant, case)
     model = _model(case)

@@ -67,6 +67,9 @@ def test_a_second_build_reads_the_lobes_and_evaluates_the_same(cache_dir, monkey
             for got, want in zip(bs.albedo_tables()[key], tab):
                 np.testing.assert_array_equal(got, want)
     np.testing.assert_allclose(second.base.table, first.base.table, rtol=1e-6, atol=0)
+    # with the rim tables (waveoptics.brdf.tabulated_rim), which the read takes beyond θ_o 65°
+    assert first.base.rim_table is not None
+    np.testing.assert_allclose(second.base.rim_table, first.base.rim_table, rtol=1e-6, atol=0)
     with pytest.raises(AssertionError, match="computed again"):
         rmodel.renderer_brdf(**dict(SMALL, cache=False))
 

@@ -14,27 +14,31 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   mirror direction to θ_k's, as a tilted facet turns its lobe), and the two values are blended linearly in θ_i;
   the blend moves the lobe with the incidence instead of cross-fading two lobes at different places. Reads within
   a cell of the horizon take the cells beyond the rim as the mean of their neighbours inside it (the lobe rises
-  towards the horizon, where zeros would pull it down).
+  towards the horizon, where zeros would pull it down). Beyond θ_o 65-69° the read hands over to rim tables
+  (:mod:`waveoptics.brdf.tabulated_rim`: the same facet-frame sum on nodes 1.5° × 2.5° apart in (θ_o, φ_o) from
+  63° to the horizon), read at ω_o itself and blended linearly in θ_i, where a direction-cosine cell spans 5.7°
+  at 78° and the turn by θ_i − θ_k reads the concave lobe up and down the horizon's slope.
 * Surfaces whose nano lobe depends on the light's azimuth (height fields, gratings, anisotropic micro NDFs) are
   tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`) and read at each node's
   mirror point plus the offset Δ = (u_o, v_o) − (mirror point of ω_i) in direction cosines, blended in θ_i and
   φ_i (never rotated: a grating's orders stay where the grating puts them, and they shift in direction cosines,
   the Harvey-Shack picture, docs/physics.md §11).
 
-Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes; between 10° nodes the
+Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes up to θ_o 65° (beyond, to the
+rim tables' interpolation: within 0.6 % to 80°, 1 % to 85°); between 10° nodes the
 diffracted part's peak is within 1 % and its energy within 2 % of a direct evaluation at that incidence. Reciprocal
 for PSD statistics: f(ω_i, ω_o)/f(ω_o, ω_i) − 1 ≤ 0.5 % at θ ≤ 65° on and between the nodes (α 0.05-0.1, 96²
 cells; ``tests/test_twoscale_facet_frame.py``), because the facet route's quadrature is laid out about each cell's
 half-vector in a frame turning with it (:func:`waveoptics.brdf.facet_frame_diffraction`), so the tables at azimuth
 0 read turned hold the same sum for the pair and its swap. With an end at 70-80° (facets' nano lobes handed over to
 first order, :mod:`waveoptics.scatter.tangent_blend`), over 400 seeded pairs in and out of the plane, on and between
-the nodes, max |f(ω_i, ω_o)/f(ω_o, ω_i) − 1| with both angles ≤ 75 / 78 / 80° (``tests/test_tabulated_reciprocity.py``):
-Beckmann α 0.05: 1.8 / 3.6 / 5.1 %, α 0.1: 0.9 / 1.6 / 2.7 %, α 0.3: 0.6 / 1.1 / 1.1 %; GGX α 0.05: 0.8 / 1.4 /
-1.5 %, α 0.1-0.3 ≤ 0.35 % (before the facet tables held the hand-over's two lobes apart, on an equal-area grid, with
-incidence nodes 2° apart, :func:`waveoptics.brdf.facet_frame_diffraction`: 5.2 / 7.8 / 8.5 %, 3.8 / 4.9 / 10.2 %,
-2.9 / 3.3 / 9.1 %, 2.4 / 3.7 / 3.7 %). What is left beyond 75° is these tables' own read in direction cosines near
-the horizon (a 96² cell spans 5.7° at 78°: at an incidence node, read at θ_o 78-80°, 1.7-5.5 % below the
-facet-frame sum at that direction, where the lobe is concave) and the interpolation between the nodes 75° and 78°.
+the nodes, max |f(ω_i, ω_o)/f(ω_o, ω_i) − 1| with both angles ≤ 75 / 78 / 80° (``tests/test_tabulated_rim.py``,
+96², under load): Beckmann α 0.05: 1.6 / 1.6 / 1.6 %, α 0.1: 1.0 / 1.0 / 1.1 %, α 0.3: 0.5 / 0.9 / 1.1 %; GGX α
+0.05: 0.8 / 0.8 / 0.8 % (without the rim tables 1.4 / 4.0 / 5.5 %, 0.9 / 1.3 / 4.4 %, 1.1 at 80°, 0.6 / 1.3 /
+1.7 %: the direction-cosine cells' read near the horizon, 1.7-5.5 % below the facet-frame sum at θ_o 78-80°; before
+the facet tables held the hand-over's two lobes apart, on an equal-area grid, with incidence nodes 2° apart,
+:func:`waveoptics.brdf.facet_frame_diffraction`: 5.2 / 7.8 / 8.5 %, 3.8 / 4.9 / 10.2 %, 2.9 / 3.3 / 9.1 %, 2.4 /
+3.7 / 3.7 %). The rim tables cost 17-21 % more CPU time per table and 10 % more memory (96², 3 wavelengths).
 
 References
 ----------
@@ -52,6 +56,7 @@ from ..errors import FieldError
 from ..scatter.grid import DirectionGrid
 from .protocol import TwoScaleParts
 from .roughness_scales import isotropic
+from .tabulated_rim import rim_lobes, rim_read, rim_weight
 from .twoscale import evaluate
 
 __all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'TabulatedTwoScaleBRDF']
@@ -105,10 +110,16 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     lobes_at : callable, optional
         wi (3,) → :class:`waveoptics.brdf.Lobes` on a hemisphere grid at ``wavelengths_nm``: how to compute the
         tabulated lobes (default: :func:`waveoptics.brdf.evaluate` with the fields above).
+    rim : bool
+        Build rim tables (:mod:`waveoptics.brdf.tabulated_rim`: the facet-frame sum near the horizon on a grid in
+        (cos θ_o, φ_o), read beyond θ_o 65-69°) where the lobes come from the facet-frame route at one light
+        azimuth (an isotropic table of PSD statistics or an isotropic height field).
     table_lobes, table_grid, table_phis_deg : optional
         Lobes computed elsewhere (n_φ, n_θ, n_λ, n_v, n_u) in 1/sr on *table_grid*, at the light azimuths
         *table_phis_deg* (evenly spaced, or one azimuth for an isotropic table): nothing is computed
         (:func:`waveoptics.open_table`).
+    table_rim : optional
+        The rim tables (n_θ, n_λ, n_cos, n_φ) in 1/sr computed with *table_lobes* (:attr:`rim_table`), or None.
     progress : callable, optional
         Called with 1 after each tabulated incidence.
     """
@@ -122,9 +133,11 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     precision: str = "float32"
     progress: object = None
     lobes_at: object = None
+    rim: bool = True
     table_lobes: object = None
     table_grid: object = None
     table_phis_deg: tuple = (0.0,)
+    table_rim: object = None
     _table: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
@@ -150,8 +163,12 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                 raise FieldError(f"table_lobes of shape {diff.shape} do not match {phis.size} azimuths, "
                                  f"{len(self.thetas_deg)} angles and {len(self.wavelengths_nm)} wavelengths",
                                  "table_lobes")
+            rim = None if self.table_rim is None else np.asarray(self.table_rim, dtype=float)
+            if rim is not None and (rim.ndim != 4 or rim.shape[:2] != diff.shape[1:3] or phis.size != 1):
+                raise FieldError(f"table_rim of shape {rim.shape} does not match {len(self.thetas_deg)} angles and "
+                                 f"{len(self.wavelengths_nm)} wavelengths of one azimuth", "table_rim")
             self._table.update(grid=self.table_grid, thetas=np.radians(np.asarray(self.thetas_deg, dtype=float)),
-                               phis=phis, diffraction=diff,
+                               phis=phis, diffraction=diff, rim=rim,
                                energy_scale=np.ones((1, diff.shape[2])))
             return
         grid = DirectionGrid.hemisphere(int(self.resolution))
@@ -159,7 +176,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         n_phi = (1 if self.isotropic else PHI_NODES_ANISOTROPIC) if self.n_phi is None else int(self.n_phi)
         phis = 2 * np.pi * np.arange(n_phi) / n_phi
         w = np.asarray(self.wavelengths_nm)
-        diff = None
+        diff = rim = None
         rough = self.nano is not None and self.nano.sigma > 0
         scale = []
         for p, ph in enumerate(phis):
@@ -177,12 +194,28 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                         diff = np.zeros((n_phi, thetas.size, w.size, grid.n_v, grid.n_u))
                     diff[p, t] = L.diffraction
                     scale.append(L.info["diffraction_energy_scale"])
+                    rim = self._rim_node(rim, t, wi, L, n_phi)
                 if self.progress is not None:
                     self.progress(1)
         if diff is None:
             diff = np.zeros((n_phi, thetas.size, w.size, grid.n_v, grid.n_u))
-        self._table.update(grid=grid, thetas=thetas, phis=phis, diffraction=diff,
+        self._table.update(grid=grid, thetas=thetas, phis=phis, diffraction=diff, rim=rim,
                            energy_scale=np.asarray(scale) if scale else np.ones((1, w.size)))
+
+    def _rim_node(self, rim, t, wi, L, n_phi):
+        """*rim* (n_θ, n_λ, n_cos, n_φ) with incidence node t's rim table (:func:`waveoptics.brdf.tabulated_rim.
+        rim_lobes`, made with *L*'s facet tables and energy-guard factor) filled in; None where no rim is built: not
+        asked, lobes from ``lobes_at``, several azimuth nodes or a lobe by the paraxial route."""
+        if (not self.rim or self.lobes_at is not None or n_phi != 1 or not self.isotropic
+                or L.info["facet_integration"] != "frame"):
+            return None
+        r = rim_lobes(wi, self.wavelengths_nm, self.material, self.micro, self.nano, L.grid,
+                      diffraction=self.diffraction, energy_scale=L.info["diffraction_energy_scale"],
+                      device=self.device, precision=self.precision)
+        if rim is None:
+            rim = np.zeros((len(self.thetas_deg),) + r.shape)
+        rim[t] = r
+        return rim
 
     def _cdf(self) -> np.ndarray:
         """The cumulative sums of each tabulated lobe over its cells (n_φ, n_θ, n_λ, n_v n_u), for sampling; made on
@@ -200,6 +233,11 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     def table(self) -> np.ndarray:
         """The tabulated diffracted lobes (n_φ, n_θ, n_λ, n_v, n_u) in 1/sr (φ, θ the light's direction)."""
         return self._table["diffraction"]
+
+    @property
+    def rim_table(self) -> np.ndarray | None:
+        """The rim tables (n_θ, n_λ, n_cos, n_φ) in 1/sr (:mod:`waveoptics.brdf.tabulated_rim`), or None."""
+        return self._table.get("rim")
 
     def _wavelength_index(self, lam):
         w = np.asarray(self.wavelengths_nm)
@@ -271,7 +309,28 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                 den += w_p * w_k * inside
         den = den[:, None]
         out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
+        if rotate and self._table.get("rim") is not None:   # towards the horizon: the rim tables
+            out = self._with_rim(out, a, b, t, j, wo_r)
         return np.where(((wi[:, 2] > 0) & (wo[:, 2] > 0))[:, None], out, 0.0)
+
+    def _with_rim(self, val, a, b, t, j, wo):
+        """*val* (n, n_j), the main tables' read, blended by :func:`waveoptics.brdf.tabulated_rim.rim_weight` of θ_o
+        with the rim tables of the incidence nodes a, b read at *wo* (n, 3) itself (in the table's frame) and
+        blended linearly with the weight t of b. Not turned as the main tables are read: near the horizon the lobe
+        changes fastest with θ_o, and a turn by θ_i − θ_k reads it up to half a node spacing higher and lower,
+        whose mean lies below the lobe where it is concave (Beckmann α 0.05, exit 72-80°, incidence midway
+        between nodes: turned 0.975-1.031 of the facet-frame sum, read at ω_o 0.991-1.009)."""
+        W = rim_weight(wo[:, 2])
+        sel = W > 0
+        if not sel.any():
+            return val
+        rim = self._table["rim"]
+        x, y, z = wo[sel, 0], wo[sel, 1], wo[sel, 2]
+        ts = t[sel][:, None]
+        r = (1 - ts) * rim_read(rim, a[sel], j, x, y, z) + ts * rim_read(rim, b[sel], j, x, y, z)
+        out = val.copy()
+        out[sel] = (1 - W[sel])[:, None] * val[sel] + W[sel][:, None] * r
+        return out
 
     def _lookup_table(self):
         """The tabulated lobes with each cell beyond the rim of the disc given the mean of its neighbours inside

@@ -31,7 +31,7 @@ __all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'Ta
 
 #: version of the table file layout written by :func:`run_table`
 TABLE_FORMAT = "waveoptics-brdf-table"
-TABLE_VERSION = 2
+TABLE_VERSION = 3
 
 #: wavelengths per table task unless told otherwise
 DEFAULT_BATCH = 8
@@ -51,6 +51,10 @@ TABLE_LAYOUT = {
     "diffraction": "(theta_i, wavelength, v, u) float32, 1/sr — the diffracted part of brdf alone (mean over "
                    "realizations): what waveoptics.open_table interpolates between incidences relative to the "
                    "specular direction (the coherent and diffuse parts are closed forms of the parameters)",
+    "diffraction_rim": "(theta_i, wavelength, cos_theta_o, phi_o) float32, 1/sr — the diffracted part near the "
+                       "horizon in the light's frame (azimuth 0) on waveoptics.brdf.tabulated_rim's nodes (cos "
+                       "theta_o from cos 63 deg to 0, phi_o -180 to 180 deg), which open_table reads beyond theta_o "
+                       "65-69 deg; only for PSD statistics, unpolarized, isotropic micro roughness (version 3 on)",
     "albedo": "(theta_i, wavelength) float64 — directional albedo of brdf (sum f du dv over the disc)",
     "microfacet_albedo": "(theta_i, wavelength) float64",
     "rgb": "(theta_i, v, u, channel) float32, 1/sr — linear sRGB of brdf under the illuminant (D65 white)",
@@ -167,6 +171,7 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
                           solver=case.solver, kd=case.kd, device=device, precision=case.precision,
                           diffraction=case.diffraction, polarization=case.polarization)
     total, mf = L.total, L.microfacet
+    rim = _task_rim(spec, task, L, mat, nano, grid, device)
     for name, a in (("two-scale", total), ("microfacet", mf)):
         # the promise of the project: never NaN, Inf or negative
         if not np.all(np.isfinite(a)) or np.any(a < 0):
@@ -177,7 +182,23 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
             "diffraction": L.diffraction.astype(np.float32), "albedo": L.albedo("total"),
             "microfacet_albedo": L.albedo("microfacet"), "solver": L.info["solver"],
             "cost_s": time.perf_counter() - t0, "cpu_s": time.thread_time() - c0, "host": socket.gethostname(),
-            "pid": os.getpid()}
+            "pid": os.getpid(), **({} if rim is None else {"rim": rim.astype(np.float32)})}
+
+
+def _task_rim(spec: TableSpec, task: TableTask, L, mat, nano, grid, device):
+    """The rim tables (n_batch, n_cos, n_φ) of a task (:func:`waveoptics.brdf.tabulated_rim.rim_lobes`, light at
+    azimuth 0, times the lobes' energy-guard factor), where :class:`waveoptics.brdf.TabulatedTwoScaleBRDF` builds
+    them: the facet-frame route, unpolarized light, an isotropic surface; else None."""
+    from ..brdf.roughness_scales import isotropic
+    from ..brdf.tabulated_rim import rim_lobes
+
+    case = spec.case
+    if (L.info["facet_integration"] != "frame" or case.polarization != "unpolarized"
+            or not isotropic(case.micro(), nano)):
+        return None
+    return rim_lobes(direction_from_angles(spec.thetas_deg[task.t], 0.0), L.wavelengths_nm, mat, case.micro(), nano,
+                     grid, diffraction=case.diffraction, energy_scale=L.info["diffraction_energy_scale"],
+                     device=device, precision=case.precision)
 
 
 def _table_surface(case: SimulationRequest, realizations: int):
@@ -391,6 +412,7 @@ def _assemble_table(spec: TableSpec, token: str, store: Store, final: Path, *, o
         d_brdf = f.create_dataset("brdf", shape, np.float32, chunks=chunks, **comp)
         d_mf = f.create_dataset("microfacet", shape, np.float32, chunks=chunks, **comp)
         d_diff = f.create_dataset("diffraction", shape, np.float32, chunks=chunks, **comp)
+        d_rim = None
         d_real = (f.create_dataset("brdf_realizations", (n_r,) + shape, np.float32, chunks=(1,) + chunks, **comp)
                   if n_r > 1 else None)
         alb = np.zeros((n_t, n_l))
@@ -407,6 +429,11 @@ def _assemble_table(spec: TableSpec, token: str, store: Store, final: Path, *, o
                     tot = z["total"]
                     acc = tot.astype(np.float64) if acc is None else acc + tot
                     acc_d = z["diffraction"].astype(np.float64) if acc_d is None else acc_d + z["diffraction"]
+                    if "rim" in z.files:   # PSD statistics: one realization
+                        if d_rim is None:
+                            d_rim = f.create_dataset("diffraction_rim", (n_t, n_l) + z["rim"].shape[1:], np.float32)
+                            d_rim.attrs["description"] = TABLE_LAYOUT["diffraction_rim"]
+                        d_rim[it, task.lo:task.hi] = z["rim"]
                     if d_real is not None:
                         d_real[task.r, it, task.lo:task.hi] = tot
                     alb[it, task.lo:task.hi] += z["albedo"] / n_r
@@ -471,6 +498,7 @@ class BRDFTable:
     attrs: dict = field(default_factory=dict)
     brdf_realizations: np.ndarray | None = None
     diffraction: np.ndarray | None = None
+    diffraction_rim: np.ndarray | None = None
 
 
 def table_info(path) -> dict:
@@ -507,7 +535,7 @@ def read_table(path) -> BRDFTable:
                          microfacet_rgb=get("microfacet_rgb"), albedo_rgb=get("albedo_rgb"),
                          microfacet_albedo_rgb=get("microfacet_albedo_rgb"), task_cost_s=get("task_cost_s"),
                          params=info["parameters"], attrs=info, brdf_realizations=get("brdf_realizations"),
-                         diffraction=get("diffraction"))
+                         diffraction=get("diffraction"), diffraction_rim=get("diffraction_rim"))
 
 
 def open_table(path, *, surface=None):
@@ -522,7 +550,9 @@ def open_table(path, *, surface=None):
     Parameters
     ----------
     path : str or Path
-        A table written by ``waveoptics table`` (format version 2 or later).
+        A table written by ``waveoptics table`` (format version 2 or later; from version 3 with the rim tables
+        of PSD statistics, :mod:`waveoptics.brdf.tabulated_rim`, which a version 2 file lacks: its model reads
+        the direction-cosine lobes up to the horizon, reciprocal only within 1.7-5.5 % at 80°).
     surface : HeightField, optional
         The nano height field, when the table was made from one given in memory (not from a file or generator).
     """
@@ -539,8 +569,9 @@ def open_table(path, *, surface=None):
                      surface=surface if surface is not None else case.surface)
     order = np.argsort(t.thetas_deg)
     lobes = np.asarray(t.diffraction, dtype=float)[order][None]
+    rim = None if t.diffraction_rim is None else np.asarray(t.diffraction_rim, dtype=float)[order]
     mat = with_roughness_correlation(get_material(case.material), case.roughness_correlation)
     return TabulatedTwoScaleBRDF(material=mat, micro=case.micro(), nano=nano, kd=case.kd,
                                  wavelengths_nm=tuple(w), thetas_deg=tuple(np.asarray(t.thetas_deg)[order]),
                                  diffraction=case.diffraction, table_lobes=lobes, table_grid=t.grid,
-                                 table_phis_deg=(float(p.get("incident_phi_deg", 0.0)),))
+                                 table_phis_deg=(float(p.get("incident_phi_deg", 0.0)),), table_rim=rim)

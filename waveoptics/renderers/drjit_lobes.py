@@ -5,7 +5,8 @@ bilinear read relative to the specular direction, and the sampler of the nearest
 tables; it repeats, on Dr.Jit arrays, ``TabulatedTwoScaleBRDF._f_diffraction`` (an isotropic table turned about the
 axis normal to the plane of incidence by θ_i − θ_k; other tables shifted in direction cosines to ω_i's mirror
 point; nodes beyond their horizon drop out of the blend), ``_lookup`` (cell-centred bilinear stencil,
-``DirectionGrid.bilinear``, on the rim-filled table), ``_sample_diffraction`` (a cell by the node's CDF, uniform in
+``DirectionGrid.bilinear``, on the rim-filled table), ``_with_rim`` (the rim tables towards the horizon,
+:mod:`waveoptics.brdf.tabulated_rim`), ``_sample_diffraction`` (a cell by the node's CDF, uniform in
 it) and ``_pdf_diffraction``.
 
 References
@@ -20,6 +21,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_THETA_DEG
 
 __all__ = ['DiffractedLobes']
 
@@ -40,6 +43,9 @@ class DiffractedLobes:
         self.phis = [float(x) for x in tab["phis"]]
         self.rotate = self.P == 1 and base.isotropic
         self.lookup = self._upload(base._lookup_table())
+        rim = tab.get("rim") if self.rotate else None
+        self.rim = None if rim is None else self._upload(np.asarray(rim, dtype=float))
+        self.rim_shape = None if rim is None else tuple(int(n) for n in rim.shape[-2:])
         self.lobe = self._upload(diff)
         flat = diff.reshape(diff.shape[:3] + (-1,))
         cdf = np.cumsum(flat, axis=-1)
@@ -135,7 +141,31 @@ class DiffractedLobes:
                 num = num + w * dr.select(inside, self._lookup(self.lookup, p, k, j, uu, vv), 0.0)
                 den = den + w * dr.select(inside, 1.0, 0.0)
         out = dr.select(den > 0, num / dr.select(den > 0, den, 1.0), 0.0)
+        if self.rim is not None:   # towards the horizon the rim tables, read at ω_o itself (library ``_with_rim``)
+            c0, c1 = (math.cos(math.radians(x)) for x in RIM_BLEND_DEG)
+            W = dr.clip((c0 - g.wo_r.z) / (c0 - c1), 0.0, 1.0)
+            rim = (self._rim_lookup(ks[0][0], j, g.wo_r) * ks[0][1]
+                   + (self._rim_lookup(ks[1][0], j, g.wo_r) * ks[1][1] if len(ks) > 1 else 0.0))
+            out = (1.0 - W) * out + W * rim
         return dr.select(g.up, out, 0.0)
+
+    def _rim_lookup(self, k, j, w):
+        """Bilinear read of θ node k's rim table at wavelength node j at the direction *w* (library
+        
+        :func:`waveoptics.brdf.tabulated_rim.rim_read`: rows in cos θ_o, columns in φ_o over [−π, π], clamped)."""
+        dr = self.dr
+        n_cos, n_phi = self.rim_shape
+        top = math.cos(math.radians(RIM_THETA_DEG))
+        fc = w.z * (n_cos / top) - 0.5
+        fp = (dr.atan2(w.y, w.x) + math.pi) * ((n_phi - 1) / (2.0 * math.pi))
+        c0 = dr.clip(dr.floor(fc), 0.0, n_cos - 2.0)
+        p0 = dr.clip(dr.floor(fp), 0.0, n_phi - 2.0)
+        ac, ap = dr.clip(fc - c0, 0.0, 1.0), dr.clip(fp - p0, 0.0, 1.0)
+        node = self.idx(k) * self.J + j
+        base = node * (n_cos * n_phi) + self.idx(c0) * n_phi + self.idx(p0)
+        return ((1.0 - ac) * ((1.0 - ap) * self._gather(self.rim, base) + ap * self._gather(self.rim, base + 1))
+                + ac * ((1.0 - ap) * self._gather(self.rim, base + n_phi)
+                        + ap * self._gather(self.rim, base + n_phi + 1)))
 
     def _nearest_node(self, wi):
         """(p, k) of the node nearest ω_i (library ``_nearest``)."""

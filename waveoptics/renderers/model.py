@@ -17,7 +17,8 @@ nodes that cover a spectral renderer's range.
   and the code's version (:func:`waveoptics.cache.code_version`), so a second run with the same model reads them
   instead of computing them (measured on 2 busy cores, ``render --material gold --micro-alpha 0.2``: 82-87 s CPU
   for the command with the lobes computed, 46 s with them read). They are stored as float32, the precision of the
-  facet tables they are computed from (:func:`waveoptics.brdf.twoscale.facet_frame_diffraction`). The entry also
+  facet tables they are computed from (:func:`waveoptics.brdf.twoscale.facet_frame_diffraction`), with their rim
+  tables (:mod:`waveoptics.brdf.tabulated_rim`) where the model has them. The entry also
   holds the albedo tables of the coherent fraction A(θ_d) at each wavelength node (:func:`albedo_tables`, float64
   as computed), so a model read from it builds no band-limited series (their tables are built on first use):
   the default ``waveoptics export`` read from the cache took 24 s CPU with the series rebuilt, 7 s without
@@ -132,11 +133,13 @@ def _tabulated(nano_obj, nodes, resolution: int, common: dict, cache: bool):
         set_albedo_tables(nano_obj, hit)
         return brdf.TabulatedTwoScaleBRDF(table_lobes=hit["lobes"].astype(float),
                                           table_grid=DirectionGrid.hemisphere(resolution),
-                                          table_phis_deg=tuple(float(x) for x in hit["phis_deg"]), **kw)
+                                          table_phis_deg=tuple(float(x) for x in hit["phis_deg"]),
+                                          table_rim=hit["rim"].astype(float) if "rim" in hit else None, **kw)
     base = brdf.TabulatedTwoScaleBRDF(**kw)
     if digest and nano_obj.sigma > 0:
+        rim = {} if base.rim_table is None else {"rim": base.rim_table.astype(np.float32)}
         store.put_arrays(TABLE_CACHE_KIND, digest, {"lobes": base.table.astype(np.float32),
-                                                    "phis_deg": np.degrees(base._table["phis"]),
+                                                    "phis_deg": np.degrees(base._table["phis"]), **rim,
                                                     **albedo_tables(nano_obj, nodes)})
     return base
 
@@ -179,10 +182,12 @@ def table_key(nano_obj, nodes, resolution: int, common: dict) -> dict:
     """Every parameter the tabulated lobes of :func:`renderer_brdf` depend on, as plain data: the material's name
     and its complex index at the wavelength nodes (its data may change; F at three angles for an F0 material), the micro NDF, the nano statistics
     or a SHA-256 of the height field's heights, spacing and mask, the diffraction model, the nodes and the grid's
-    resolution (with :data:`waveoptics.brdf.tabulated.THETA_NODES_DEG`, the incidences tabulated)."""
+    resolution (with :data:`waveoptics.brdf.tabulated.THETA_NODES_DEG`, the incidences tabulated, and the rim
+    tables' layout, :mod:`waveoptics.brdf.tabulated_rim`)."""
     import hashlib
 
     from ..brdf.tabulated import THETA_NODES_DEG
+    from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_CELLS, RIM_THETA_DEG
     from ..materials import get_material
 
     mat = get_material(common["material"])
@@ -203,7 +208,8 @@ def table_key(nano_obj, nodes, resolution: int, common: dict) -> dict:
     micro = common["micro"]
     return {"material": str(common["material"]), "optics": optics, "micro": repr(micro), "nano": nano,
             "diffraction": str(common["diffraction"]), "wavelengths_nm": [float(x) for x in nodes],
-            "resolution": int(resolution), "thetas_deg": [float(t) for t in THETA_NODES_DEG]}
+            "resolution": int(resolution), "thetas_deg": [float(t) for t in THETA_NODES_DEG],
+            "rim": [RIM_THETA_DEG, list(RIM_BLEND_DEG), list(RIM_CELLS)]}
 
 
 @functools.lru_cache(maxsize=16)

@@ -1,0 +1,121 @@
+"""Rim tables of :class:`waveoptics.brdf.TabulatedTwoScaleBRDF`: the diffracted part near the horizon on a grid in
+(cos θ_o, φ_o) instead of direction cosines.
+
+A direction-cosine cell of width du spans an angle du / cos θ_o: 1.2° at the pole but 5.7° at 78° and 11° at
+the horizon on 96² cells. Towards the horizon the diffracted lobe is concave, and a bilinear read of such cells
+lies below the facet-frame sum it interpolates (at an incidence node, read at θ_o 78-80°: 1.7-5.5 % below the
+sum at that direction, Beckmann α 0.05-0.1, 96²); f(ω_i, ω_o) and f(ω_o, ω_i) read that error at different
+places, and the tabulated model was non-reciprocal by up to 5.5 % with both angles ≤ 80°.
+
+At each incidence node the rim table holds the same facet-frame sum (:func:`waveoptics.brdf.
+facet_frame_diffraction`, the lobes' own route, times the node's energy-guard factor) at the directions of a grid
+uniform in cos θ_o over [0, cos :data:`RIM_THETA_DEG`] (cell centres) and in φ_o over [−180°, 180°]:
+:data:`RIM_CELLS` = (18, 145) nodes, 1.4-1.6° apart in θ_o and 2.5° in φ_o. Both signs of φ_o: the lobe of an
+isotropic surface is even in φ_o, but the facet-frame quadrature's sum is not exactly (Beckmann α 0.3, light at
+62.4°, exit at 78.7°: 0.002736 at φ_o = +53.3° against 0.002816 at −53.3°; reciprocal for each sign), and a table
+over |φ_o| made the model non-reciprocal by 2.4 % there. The read blends it with the direction-cosine table by :func:`rim_weight`, 0 up to
+:data:`RIM_BLEND_DEG` [0] and 1 from [1] on, so the model is continuous and equals the main table where its cells
+are fine. Measured at an incidence node (Beckmann α 0.05, ABC σ 20 nm, gold, 128²), at random exits against the
+sum at each: max / mean error 0.46 / 0.19 % at θ_o 70-80°, 0.52 / 0.25 % at 80-85°, 8.4 / 1.1 % at 85-89°, where
+the direction-cosine cells alone give 2.6 / 1.1 %, 36 / 5.2 %, 93 / 28 %.
+
+References
+----------
+.. [1] B. Walter, S. Marschner, H. Li, K. Torrance, EGSR 2007, eq. (14) (the facet-frame integral the tables hold).
+.. [2] F. E. Nicodemus et al., NBS Monograph 160, 1977 (Helmholtz reciprocity, the property the tables restore).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..materials import get_material
+from .roughness_scales import Micro, Nano
+from .twoscale_frame import facet_frame_diffraction
+
+__all__ = ['RIM_THETA_DEG', 'RIM_BLEND_DEG', 'RIM_CELLS', 'DirectionPoints', 'rim_cos_nodes', 'rim_phi_nodes',
+           'rim_directions', 'rim_lobes', 'rim_weight', 'rim_read']
+
+#: polar angle (degrees) from which the rim table reaches to the horizon
+RIM_THETA_DEG = 63.0
+#: polar angles (degrees) of the exit over which the read hands over from the direction-cosine table to the rim
+#: table (linear in cos θ_o)
+RIM_BLEND_DEG = (65.0, 69.0)
+#: nodes of a rim table: (cos θ_o, φ_o)
+RIM_CELLS = (18, 145)
+
+
+class DirectionPoints:
+    """Directions (n, 3) in the shape of a one-row :class:`waveoptics.scatter.grid.DirectionGrid` (``n_v`` = 1,
+    ``n_u`` = n, all inside, :meth:`directions`), so :func:`waveoptics.brdf.facet_frame_diffraction` evaluates its
+    per-cell sum at exactly these directions."""
+
+    def __init__(self, directions):
+        self._w = np.asarray(directions, dtype=float).reshape(1, -1, 3)
+        self.n_v, self.n_u = self._w.shape[:2]
+        self.inside = np.ones((self.n_v, self.n_u), bool)
+
+    def directions(self) -> np.ndarray:
+        return self._w
+
+
+def rim_cos_nodes(n_cos: int = RIM_CELLS[0]) -> np.ndarray:
+    """cos θ_o of the rim table's rows (n_cos,), increasing: centres of n_cos equal cells over [0, cos θ_rim]."""
+    return np.cos(np.radians(RIM_THETA_DEG)) * (np.arange(n_cos) + 0.5) / n_cos
+
+
+def rim_phi_nodes(n_phi: int = RIM_CELLS[1]) -> np.ndarray:
+    """φ_o (rad) of the rim table's columns (n_phi,): −π to π inclusive."""
+    return np.linspace(-np.pi, np.pi, n_phi)
+
+
+def rim_directions(cells=RIM_CELLS) -> np.ndarray:
+    """Unit directions (n_cos, n_phi, 3) of the rim table's nodes."""
+    c = rim_cos_nodes(cells[0])[:, None]
+    p = rim_phi_nodes(cells[1])[None, :]
+    s = np.sqrt(1.0 - c * c)
+    return np.stack(np.broadcast_arrays(s * np.cos(p), s * np.sin(p), c), axis=-1)
+
+
+def rim_lobes(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid, *, diffraction="kirchhoff",
+              energy_scale=None, device=None, precision="float32", cells=RIM_CELLS) -> np.ndarray:
+    """The diffracted part (n_λ, n_cos, n_phi) in 1/sr at the rim nodes (:func:`rim_directions`) for light from
+    *wi* (azimuth 0): :func:`waveoptics.brdf.facet_frame_diffraction` with the facet tables of the lobes on *grid*
+    (the hemisphere grid of the main table, as :func:`waveoptics.brdf.evaluate` takes them) and the unpolarized F
+    of *material*, times *energy_scale* (n_λ,) (the energy guard's factor of that node's lobes, 1 where it did not
+    act)."""
+    mat = get_material(material)
+    dirs = rim_directions(cells)
+    pts = DirectionPoints(dirs.reshape(-1, 3))
+    d, _, _ = facet_frame_diffraction(np.asarray(wi, dtype=float), wavelengths_nm, mat, micro, nano, pts,
+                                      lambda c, lam: mat.F(c, lam), diffraction=diffraction, table_grid=grid,
+                                      device=device, precision=precision)
+    d = d.reshape((len(wavelengths_nm),) + dirs.shape[:2])
+    if energy_scale is not None:
+        d = d * np.asarray(energy_scale, dtype=float).reshape(-1, 1, 1)
+    return d
+
+
+def rim_weight(cos_theta):
+    """Weight of the rim table in the read (0 to 1): 0 for θ_o ≤ :data:`RIM_BLEND_DEG` [0], 1 from [1] on,
+    linear in cos θ_o between."""
+    c0, c1 = np.cos(np.radians(RIM_BLEND_DEG))
+    return np.clip((c0 - np.asarray(cos_theta, dtype=float)) / (c0 - c1), 0.0, 1.0)
+
+
+def rim_read(rim, k, j, x, y, z):
+    """Bilinear values (n, n_j) of the rim tables *rim* (n_θ, n_λ, n_cos, n_phi) of incidence nodes k (n,) at
+    wavelength indices j (n_j,), at directions (x, y, z) (n,) each; rows and columns clamped at the table's
+    ends."""
+    n_cos, n_phi = rim.shape[-2:]
+    top = np.cos(np.radians(RIM_THETA_DEG))
+    fc = np.asarray(z, dtype=float) * n_cos / top - 0.5
+    fp = (np.arctan2(y, x) + np.pi) * (n_phi - 1) / (2 * np.pi)
+    c0 = np.clip(np.floor(fc).astype(int), 0, n_cos - 2)
+    p0 = np.clip(np.floor(fp).astype(int), 0, n_phi - 2)
+    ac = np.clip(fc - c0, 0.0, 1.0)[:, None]
+    ap = np.clip(fp - p0, 0.0, 1.0)[:, None]
+    k = np.broadcast_to(k, c0.shape)[:, None]
+    j = np.asarray(j)[None, :]
+    c0, p0 = c0[:, None], p0[:, None]
+    return ((1 - ac) * ((1 - ap) * rim[k, j, c0, p0] + ap * rim[k, j, c0, p0 + 1])
+            + ac * ((1 - ap) * rim[k, j, c0 + 1, p0] + ap * rim[k, j, c0 + 1, p0 + 1]))
