@@ -171,15 +171,19 @@ def _diffracted_albedo(b, wi, n_mu=24, n_phi=48):
     return total
 
 
-@pytest.mark.parametrize("theta, side", [(0.0, 1), (40.0, 1), (70.0, 1), (20.0, -1)])
+@pytest.mark.parametrize("theta, side", [(0.0, 1), (40.0, 1), (70.0, 1), (20.0, -1), (30.0, -1), (35.0, -1),
+                                         (40.0, -1)])
 def test_white_furnace_of_lossless_glass(theta, side):
     """R + T over the sphere = 1 (the flat case, each facet conserving energy) at α = 0.05, where Smith's
-    shadowing loses < 1e-5 up to 70°; the nano lobes carry 2.5-5 % of the light, so a lost or doubled lobe shows."""
+    shadowing loses < 1e-5 up to 70° from air and 40° from glass (the facets then see 30-50° in glass, across the
+    critical angle 41.8°); the nano lobes carry 2.5-14 % of the light, so a lost or doubled lobe shows. Measured
+    ≤ 1.6e-4 (at 40° from glass; with the tables' linear interpolation across the critical angle it was 4.1e-4 at
+    35° and 7.8e-4 at 40°)."""
     wi = _dir(theta, side=side)
     coherent = _coherent_albedo(_model(0.05, nodes=16), wi)    # the coherent part does not depend on nodes
     diffracted = _diffracted_albedo(_model(0.05), wi)
     assert diffracted > 0.02
-    assert coherent + diffracted == pytest.approx(1.0, abs=5e-4), (coherent, diffracted)
+    assert coherent + diffracted == pytest.approx(1.0, abs=2e-4), (coherent, diffracted)
 
 
 def test_albedo_parts_are_the_sphere_integrals():

@@ -53,7 +53,8 @@ from .chi2 import (Chi2Result, chi2_test)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
 from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, pack_third_uniform, refract, half_vector_refraction, sided_lambda,
     sided_G2, albedo_single, DielectricTables, dielectric_tables, RoughDielectricBSDF)
-from .nano_dielectric import (NANO_MU_NODES, NanoTables, coherent_split, nano_tables, NanoRoughDielectricBSDF)
+from .nano_dielectric import (NANO_MU_NODES, critical_cosine, table_pieces, piece_variable, piece_cosine, NanoTables,
+                              coherent_split, nano_tables, NanoRoughDielectricBSDF)
 from .twoscale_dielectric import (TWOSCALE_DIELECTRIC_NODES, ALBEDO_MU_NODES, ALBEDO_PHI_NODES, pair_half_vector,
     coherent_transmission_share, TwoScaleDielectricBSDF)
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,
