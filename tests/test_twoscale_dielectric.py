@@ -36,9 +36,9 @@ def _dir(theta, phi=0.0, side=1):
     return np.array([math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), side * math.cos(t)])
 
 
-def _model(alpha, shadowing="smith", nodes=256):
+def _model(alpha, shadowing="smith", nodes=256, multiple_scattering=False):
     return TwoScaleDielectricBSDF(ETA, Micro(alpha=alpha, ndf="beckmann", shadowing=shadowing), psd=PSD,
-                                  nodes=nodes)
+                                  nodes=nodes, multiple_scattering=multiple_scattering)
 
 
 def _flat():
@@ -156,8 +156,9 @@ def _coherent_albedo(b, wi, n_theta=48, n_phi=64):
             + np.sum(np.where(ok_t, ft * np.abs(wt[:, 2]) * jt * dw, 0.0)))
 
 
-def _diffracted_albedo(b, wi, n_mu=24, n_phi=48):
-    """∫ f_d |cos θ_o| dω_o on each hemisphere: Gauss-Legendre in |cos θ_o|, midpoint rule in φ_o."""
+def _diffracted_albedo(b, wi, n_mu=24, n_phi=48, part="nano"):
+    """∫ f_d |cos θ_o| dω_o on each hemisphere (or of another *part* of eval_parts): Gauss-Legendre in |cos θ_o|,
+    midpoint rule in φ_o."""
     x, w = np.polynomial.legendre.leggauss(n_mu)
     mu, wmu = 0.5 * (x + 1.0), 0.5 * w
     phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
@@ -166,7 +167,7 @@ def _diffracted_albedo(b, wi, n_mu=24, n_phi=48):
         st = np.sqrt(1.0 - mu * mu)
         wo = np.stack([np.outer(st, np.cos(phi)), np.outer(st, np.sin(phi)), side * np.outer(mu, np.ones(n_phi))],
                       axis=-1).reshape(-1, 3)
-        f = b.eval_parts(np.broadcast_to(wi, wo.shape), wo, LAM)["nano"].reshape(n_mu, n_phi)
+        f = b.eval_parts(np.broadcast_to(wi, wo.shape), wo, LAM)[part].reshape(n_mu, n_phi)
         total += float(np.sum(wmu[:, None] * mu[:, None] * f) * 2 * np.pi / n_phi)
     return total
 
@@ -184,6 +185,27 @@ def test_white_furnace_of_lossless_glass(theta, side):
     diffracted = _diffracted_albedo(_model(0.05), wi)
     assert diffracted > 0.02
     assert coherent + diffracted == pytest.approx(1.0, abs=2e-4), (coherent, diffracted)
+
+
+@pytest.mark.parametrize("alpha, theta, side", [(0.5, 0.0, 1), (0.5, 70.0, 1), (1.0, 0.0, 1), (1.0, 40.0, 1),
+                                                (1.0, 70.0, 1), (1.0, 30.0, -1)])
+def test_white_furnace_with_multiple_scattering(alpha, theta, side):
+    """With the micro surface's multiple scattering (Kulla-Conty lobes of the facets without nano-roughness; the
+    nano lobes ride on single scattering) R + T over the sphere = 1 within the issue's 1e-2 up to α = 1, eval
+    integrated here (coherent part over facet normals, diffracted and multiple parts on hemisphere grids); the
+    compensation carries 0.3-14 % of the light (without it R + T is that much short). Measured ≤ 3.3e-4 (from air);
+    albedo_parts agree with the integrals within 1e-3."""
+    wi = _dir(theta, side=side)
+    b = _model(alpha, multiple_scattering=True)
+    coherent = _coherent_albedo(_model(alpha, nodes=16, multiple_scattering=True), wi)
+    diffracted = _diffracted_albedo(b, wi)
+    multiple = _diffracted_albedo(b, wi, part="multiple")
+    assert multiple > 2e-3
+    assert coherent + diffracted + multiple == pytest.approx(1.0, abs=1e-2), (coherent, diffracted, multiple)
+    print(f"R + T - 1 = {coherent + diffracted + multiple - 1:+.2e} (multiple {multiple:.4f})")
+    parts = b.albedo_parts(wi, LAM)
+    assert float(parts["multiple_reflection"] + parts["multiple_transmission"]) == pytest.approx(multiple, abs=1e-3)
+    assert float(sum(parts.values())) == pytest.approx(coherent + diffracted + multiple, abs=1e-3)
 
 
 def test_albedo_parts_are_the_sphere_integrals():
@@ -225,12 +247,12 @@ def test_reciprocity_with_the_eta_squared_factor(shadowing):
     np.testing.assert_allclose(t_f[big], t_b[big], rtol=1e-9)
 
 
-CHI2_CASES = [(0.2, 40.0, 1), (0.5, 60.0, 1), (0.3, 30.0, -1)]
+CHI2_CASES = [(0.2, 40.0, 1, False), (0.5, 60.0, 1, False), (0.3, 30.0, -1, False), (1.0, 50.0, 1, True)]
 
 
-@pytest.mark.parametrize("alpha, theta, side", CHI2_CASES)
-def test_sampling_chi2_over_the_sphere(alpha, theta, side):
-    b = _model(alpha, nodes=32)
+@pytest.mark.parametrize("alpha, theta, side, multiple", CHI2_CASES)
+def test_sampling_chi2_over_the_sphere(alpha, theta, side, multiple):
+    b = _model(alpha, nodes=32, multiple_scattering=multiple)
     wi = _dir(theta, side=side)
     res = chi2_test(lambda u: b.sample_wo(wi, LAM, u), lambda d: b.pdf(wi, d, LAM), sample_count=100_000, res=31,
                     ires=12, seed=7, test_count=len(CHI2_CASES))
@@ -252,9 +274,6 @@ def test_sample_weights_are_eval_over_pdf():
 
 
 def test_refusals_name_the_field():
-    with pytest.raises(ValueError, match="multiple_scattering"):
-        TwoScaleDielectricBSDF(ETA, Micro(alpha=0.2, ndf="beckmann", shadowing="smith"), psd=PSD,
-                               multiple_scattering=True)
     with pytest.raises(FieldError, match="nodes"):
         _model(0.2, nodes=24)
     with pytest.raises(FieldError, match="psd"):
