@@ -278,3 +278,44 @@ def test_refusals_name_the_field():
         _model(0.2, nodes=24)
     with pytest.raises(FieldError, match="psd"):
         TwoScaleDielectricBSDF(ETA, Micro(alpha=0.2, ndf="beckmann", shadowing="smith"))
+
+
+# -- wiring: the model registry, `waveoptics brdf` and the Mitsuba glass plugin ------------------------------------
+
+def test_brdf_command_takes_the_facet_frame():
+    """`brdf --model rough-dielectric --nano STATS --nano-frame facet` is the two-scale glass (the library object's
+    values at the same directions: reflected, transmitted, and off both specular lobes), macro the flat form; the
+    frame without --nano is refused naming the field."""
+    import json
+
+    from cli_helpers import run_cli
+    from waveoptics.units import direction_from_angles
+
+    base = ["brdf", "--model", "rough-dielectric", "--ior", "1.5", "--alpha", "0.2", "--ndf", "beckmann",
+            "--shadowing", "smith", "--incident", "30", "--wavelengths", "500", "--json",
+            "--nano", "gaussian:sigma=20nm,corr_length=1um"]
+    outs = ["--outgoing", "25,180", "--outgoing", "160,180", "--outgoing", "130,30"]
+    wo = direction_from_angles([25.0, 160.0, 130.0], [180.0, 180.0, 30.0])
+    wi = np.broadcast_to(_dir(30.0), wo.shape)
+    for frame, bsdf in (("facet", _model(0.2)), ("macro", NanoRoughDielectricBSDF(ETA, Micro(alpha=0.2,
+                        ndf="beckmann", shadowing="smith"), psd=PSD))):
+        rc, out, err, _ = run_cli(base + outs + ["--nano-frame", frame])
+        assert rc == 0, err
+        got = [row["brdf"] for row in json.loads(out)["values"]]
+        np.testing.assert_allclose(got, bsdf.eval(wi, wo, LAM), rtol=1e-12)
+    rc, _, err, _ = run_cli(base[:-2] + outs + ["--nano-frame", "facet"])
+    assert rc != 0 and "nano_frame" in err.replace("-", "_") and len(err.strip().splitlines()) == 1, err
+
+
+def test_glass_plugin_model_takes_the_facet_frame():
+    from waveoptics.renderers.mitsuba_glass import glass_model, glass_parameters
+
+    assert "nano_frame" in glass_parameters()
+    m = glass_model("1.5", alpha=0.2, nano="gaussian:sigma=20nm,corr_length=1um", nano_frame="facet",
+                    wavelength_step_nm=200.0)
+    assert isinstance(m.base, TwoScaleDielectricBSDF) and m.base.psd.sigma == pytest.approx(20e-9)
+    assert type(glass_model("1.5", alpha=0.2, wavelength_step_nm=200.0).base) is NanoRoughDielectricBSDF
+    with pytest.raises(FieldError, match="nano_frame"):
+        glass_model("1.5", alpha=0.2, nano="gaussian:sigma=20nm,corr_length=1um", nano_frame="tilted")
+    with pytest.raises(FieldError, match="nano_frame"):
+        glass_model("1.5", alpha=0.2, nano="none", nano_frame="facet")

@@ -69,7 +69,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import FieldError
+from ..errors import FieldError, unknown
 from ..scatter.transmission import rr_bsdf
 from .btdf import RoughDielectricBSDF, albedo_multiple, albedo_single, half_vector_refraction, sided_G2, sided_lambda
 from .directions import dot_last
@@ -79,7 +79,7 @@ from .protocol import broadcast_incidence, lobe_choice
 from .smith import gl01
 
 __all__ = ["TWOSCALE_DIELECTRIC_NODES", "ALBEDO_MU_NODES", "ALBEDO_PHI_NODES", "pair_half_vector",
-           "coherent_transmission_share", "TwoScaleDielectricBSDF"]
+           "coherent_transmission_share", "TwoScaleDielectricBSDF", "NANO_FRAME_BSDFS", "nano_rough_glass"]
 
 #: quadrature points over facet normals of the diffracted part (a power of two: an unscrambled Sobol set)
 TWOSCALE_DIELECTRIC_NODES = 256
@@ -298,3 +298,21 @@ class TwoScaleDielectricBSDF(NanoRoughDielectricBSDF):
                 out["multiple_reflection"][j], out["multiple_transmission"][j] = albedo_multiple(
                     w1, self._tables(lam))
         return {k: v.reshape(shape) for k, v in out.items()}
+
+
+#: the nano-rough glass by the frame of its nano lobes (:data:`waveoptics.vocabulary.NANO_FRAMES`)
+NANO_FRAME_BSDFS = {"macro": NanoRoughDielectricBSDF, "facet": TwoScaleDielectricBSDF}
+
+
+def nano_rough_glass(material, micro, psd, multiple_scattering: bool = False, nano_frame: str = "macro"):
+    """The nano-rough glass of *material* (a dielectric), *micro* (NDF, α, shadowing) and nano-roughness *psd*
+    (:class:`~waveoptics.surfaces.PSDModel`, m⁴) with its nano lobes in the frame *nano_frame*
+    (:data:`NANO_FRAME_BSDFS`: ``macro`` about the macro normal, ``facet`` in each micro facet's frame).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007; N. Holzschuch, R. Pacanowski 2017 (module references).
+    """
+    if nano_frame not in NANO_FRAME_BSDFS:
+        raise unknown("frame of the nano lobes", nano_frame, NANO_FRAME_BSDFS, field="nano_frame")
+    return NANO_FRAME_BSDFS[nano_frame](material, micro, multiple_scattering=multiple_scattering, psd=psd)
