@@ -198,7 +198,7 @@ def test_the_brdf_command_sets_models_up_through_the_registry(monkeypatch):
     assert rc == 0, err
     assert calls == [("rough-dielectric", dict(alpha=0.25, roughness=None, alpha_y=None, ndf="beckmann", ndf_shape=None,
                                                shadowing="smith-correlated", material=None, ior="1.5",
-                                               fresnel="exact", multiple_scattering=None))]
+                                               fresnel="exact", multiple_scattering=None, nano_frame="macro"))]
     f = json.loads(out)["values"][0]["brdf"]
     assert f == pytest.approx(0.04 / (4 * np.pi * 0.25 ** 2), rel=1e-9)
 

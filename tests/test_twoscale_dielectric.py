@@ -36,9 +36,9 @@ def _dir(theta, phi=0.0, side=1):
     return np.array([math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), side * math.cos(t)])
 
 
-def _model(alpha, shadowing="smith", nodes=256):
+def _model(alpha, shadowing="smith", nodes=256, multiple_scattering=False):
     return TwoScaleDielectricBSDF(ETA, Micro(alpha=alpha, ndf="beckmann", shadowing=shadowing), psd=PSD,
-                                  nodes=nodes)
+                                  nodes=nodes, multiple_scattering=multiple_scattering)
 
 
 def _flat():
@@ -156,8 +156,9 @@ def _coherent_albedo(b, wi, n_theta=48, n_phi=64):
             + np.sum(np.where(ok_t, ft * np.abs(wt[:, 2]) * jt * dw, 0.0)))
 
 
-def _diffracted_albedo(b, wi, n_mu=24, n_phi=48):
-    """∫ f_d |cos θ_o| dω_o on each hemisphere: Gauss-Legendre in |cos θ_o|, midpoint rule in φ_o."""
+def _diffracted_albedo(b, wi, n_mu=24, n_phi=48, part="nano"):
+    """∫ f_d |cos θ_o| dω_o on each hemisphere (or of another *part* of eval_parts): Gauss-Legendre in |cos θ_o|,
+    midpoint rule in φ_o."""
     x, w = np.polynomial.legendre.leggauss(n_mu)
     mu, wmu = 0.5 * (x + 1.0), 0.5 * w
     phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
@@ -166,20 +167,45 @@ def _diffracted_albedo(b, wi, n_mu=24, n_phi=48):
         st = np.sqrt(1.0 - mu * mu)
         wo = np.stack([np.outer(st, np.cos(phi)), np.outer(st, np.sin(phi)), side * np.outer(mu, np.ones(n_phi))],
                       axis=-1).reshape(-1, 3)
-        f = b.eval_parts(np.broadcast_to(wi, wo.shape), wo, LAM)["nano"].reshape(n_mu, n_phi)
+        f = b.eval_parts(np.broadcast_to(wi, wo.shape), wo, LAM)[part].reshape(n_mu, n_phi)
         total += float(np.sum(wmu[:, None] * mu[:, None] * f) * 2 * np.pi / n_phi)
     return total
 
 
-@pytest.mark.parametrize("theta, side", [(0.0, 1), (40.0, 1), (70.0, 1), (20.0, -1)])
+@pytest.mark.parametrize("theta, side", [(0.0, 1), (40.0, 1), (70.0, 1), (20.0, -1), (30.0, -1), (35.0, -1),
+                                         (40.0, -1)])
 def test_white_furnace_of_lossless_glass(theta, side):
     """R + T over the sphere = 1 (the flat case, each facet conserving energy) at α = 0.05, where Smith's
-    shadowing loses < 1e-5 up to 70°; the nano lobes carry 2.5-5 % of the light, so a lost or doubled lobe shows."""
+    shadowing loses < 1e-5 up to 70° from air and 40° from glass (the facets then see 30-50° in glass, across the
+    critical angle 41.8°); the nano lobes carry 2.5-14 % of the light, so a lost or doubled lobe shows. Measured
+    ≤ 1.6e-4 (at 40° from glass; with the tables' linear interpolation across the critical angle it was 4.1e-4 at
+    35° and 7.8e-4 at 40°)."""
     wi = _dir(theta, side=side)
     coherent = _coherent_albedo(_model(0.05, nodes=16), wi)    # the coherent part does not depend on nodes
     diffracted = _diffracted_albedo(_model(0.05), wi)
     assert diffracted > 0.02
-    assert coherent + diffracted == pytest.approx(1.0, abs=5e-4), (coherent, diffracted)
+    assert coherent + diffracted == pytest.approx(1.0, abs=2e-4), (coherent, diffracted)
+
+
+@pytest.mark.parametrize("alpha, theta, side", [(0.5, 0.0, 1), (0.5, 70.0, 1), (1.0, 0.0, 1), (1.0, 40.0, 1),
+                                                (1.0, 70.0, 1), (1.0, 30.0, -1)])
+def test_white_furnace_with_multiple_scattering(alpha, theta, side):
+    """With the micro surface's multiple scattering (Kulla-Conty lobes of the facets without nano-roughness; the
+    nano lobes ride on single scattering) R + T over the sphere = 1 within the issue's 1e-2 up to α = 1, eval
+    integrated here (coherent part over facet normals, diffracted and multiple parts on hemisphere grids); the
+    compensation carries 0.3-14 % of the light (without it R + T is that much short). Measured ≤ 3.3e-4 (from air);
+    albedo_parts agree with the integrals within 1e-3."""
+    wi = _dir(theta, side=side)
+    b = _model(alpha, multiple_scattering=True)
+    coherent = _coherent_albedo(_model(alpha, nodes=16, multiple_scattering=True), wi)
+    diffracted = _diffracted_albedo(b, wi)
+    multiple = _diffracted_albedo(b, wi, part="multiple")
+    assert multiple > 2e-3
+    assert coherent + diffracted + multiple == pytest.approx(1.0, abs=1e-2), (coherent, diffracted, multiple)
+    print(f"R + T - 1 = {coherent + diffracted + multiple - 1:+.2e} (multiple {multiple:.4f})")
+    parts = b.albedo_parts(wi, LAM)
+    assert float(parts["multiple_reflection"] + parts["multiple_transmission"]) == pytest.approx(multiple, abs=1e-3)
+    assert float(sum(parts.values())) == pytest.approx(coherent + diffracted + multiple, abs=1e-3)
 
 
 def test_albedo_parts_are_the_sphere_integrals():
@@ -221,12 +247,12 @@ def test_reciprocity_with_the_eta_squared_factor(shadowing):
     np.testing.assert_allclose(t_f[big], t_b[big], rtol=1e-9)
 
 
-CHI2_CASES = [(0.2, 40.0, 1), (0.5, 60.0, 1), (0.3, 30.0, -1)]
+CHI2_CASES = [(0.2, 40.0, 1, False), (0.5, 60.0, 1, False), (0.3, 30.0, -1, False), (1.0, 50.0, 1, True)]
 
 
-@pytest.mark.parametrize("alpha, theta, side", CHI2_CASES)
-def test_sampling_chi2_over_the_sphere(alpha, theta, side):
-    b = _model(alpha, nodes=32)
+@pytest.mark.parametrize("alpha, theta, side, multiple", CHI2_CASES)
+def test_sampling_chi2_over_the_sphere(alpha, theta, side, multiple):
+    b = _model(alpha, nodes=32, multiple_scattering=multiple)
     wi = _dir(theta, side=side)
     res = chi2_test(lambda u: b.sample_wo(wi, LAM, u), lambda d: b.pdf(wi, d, LAM), sample_count=100_000, res=31,
                     ires=12, seed=7, test_count=len(CHI2_CASES))
@@ -248,10 +274,48 @@ def test_sample_weights_are_eval_over_pdf():
 
 
 def test_refusals_name_the_field():
-    with pytest.raises(ValueError, match="multiple_scattering"):
-        TwoScaleDielectricBSDF(ETA, Micro(alpha=0.2, ndf="beckmann", shadowing="smith"), psd=PSD,
-                               multiple_scattering=True)
     with pytest.raises(FieldError, match="nodes"):
         _model(0.2, nodes=24)
     with pytest.raises(FieldError, match="psd"):
         TwoScaleDielectricBSDF(ETA, Micro(alpha=0.2, ndf="beckmann", shadowing="smith"))
+
+
+# -- wiring: the model registry, `waveoptics brdf` and the Mitsuba glass plugin ------------------------------------
+
+def test_brdf_command_takes_the_facet_frame():
+    """`brdf --model rough-dielectric --nano STATS --nano-frame facet` is the two-scale glass (the library object's
+    values at the same directions: reflected, transmitted, and off both specular lobes), macro the flat form; the
+    frame without --nano is refused naming the field."""
+    import json
+
+    from cli_helpers import run_cli
+    from waveoptics.units import direction_from_angles
+
+    base = ["brdf", "--model", "rough-dielectric", "--ior", "1.5", "--alpha", "0.2", "--ndf", "beckmann",
+            "--shadowing", "smith", "--incident", "30", "--wavelengths", "500", "--json",
+            "--nano", "gaussian:sigma=20nm,corr_length=1um"]
+    outs = ["--outgoing", "25,180", "--outgoing", "160,180", "--outgoing", "130,30"]
+    wo = direction_from_angles([25.0, 160.0, 130.0], [180.0, 180.0, 30.0])
+    wi = np.broadcast_to(_dir(30.0), wo.shape)
+    for frame, bsdf in (("facet", _model(0.2)), ("macro", NanoRoughDielectricBSDF(ETA, Micro(alpha=0.2,
+                        ndf="beckmann", shadowing="smith"), psd=PSD))):
+        rc, out, err, _ = run_cli(base + outs + ["--nano-frame", frame])
+        assert rc == 0, err
+        got = [row["brdf"] for row in json.loads(out)["values"]]
+        np.testing.assert_allclose(got, bsdf.eval(wi, wo, LAM), rtol=1e-12)
+    rc, _, err, _ = run_cli(base[:-2] + outs + ["--nano-frame", "facet"])
+    assert rc != 0 and "nano_frame" in err.replace("-", "_") and len(err.strip().splitlines()) == 1, err
+
+
+def test_glass_plugin_model_takes_the_facet_frame():
+    from waveoptics.renderers.mitsuba_glass import glass_model, glass_parameters
+
+    assert "nano_frame" in glass_parameters()
+    m = glass_model("1.5", alpha=0.2, nano="gaussian:sigma=20nm,corr_length=1um", nano_frame="facet",
+                    wavelength_step_nm=200.0)
+    assert isinstance(m.base, TwoScaleDielectricBSDF) and m.base.psd.sigma == pytest.approx(20e-9)
+    assert type(glass_model("1.5", alpha=0.2, wavelength_step_nm=200.0).base) is NanoRoughDielectricBSDF
+    with pytest.raises(FieldError, match="nano_frame"):
+        glass_model("1.5", alpha=0.2, nano="gaussian:sigma=20nm,corr_length=1um", nano_frame="tilted")
+    with pytest.raises(FieldError, match="nano_frame"):
+        glass_model("1.5", alpha=0.2, nano="none", nano_frame="facet")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
+__all__ = ["NANO_FRAMES", "NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
            "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO",
            "DEFAULT_MATERIAL", "DEFAULT_NDF", "COST_TARGET_ERROR", "COST_BUDGET_S", "COST_DELTA_E",
            "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "RENDER_BSDF_AUTO", "RENDER_MODELS", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS",
@@ -44,6 +44,10 @@ PARAMETRIC_NDF_NAMES = NDF_NAMES[:-1]
 SHADOWING_NAMES = ("smith", "smith-correlated", "cook-torrance", "implicit")
 FRESNEL_NAMES = ("exact", "schlick", "one")
 DIFFUSE_NAMES = ("none", "lambert", "oren-nayar", "burley")
+#: frames of the nano lobes of a nano-rough glass: ``macro`` about the macro normal (the α → 0 form,
+#: :class:`waveoptics.brdf.NanoRoughDielectricBSDF`), ``facet`` in each micro facet's own frame (the two-scale glass,
+#: :class:`waveoptics.brdf.TwoScaleDielectricBSDF`)
+NANO_FRAMES = ("macro", "facet")
 #: other names of diffuse terms (Burley's diffuse is known as the "Disney" diffuse)
 DIFFUSE_ALIASES = {"disney": "burley"}
 
@@ -168,7 +172,11 @@ BRDF_MODEL_PARAMETERS = {
     "rough-dielectric": (*_ALPHA, _SHADOWING, *_INDEX, _MS,
                          ModelParameter("psd", "m^4", None, "nano-roughness height statistics (a PSDModel): their "
                                                             "first-order scatter into both half-spaces "
-                                                            "(NanoRoughDielectricBSDF); None: none")),
+                                                            "(NanoRoughDielectricBSDF); None: none"),
+                         ModelParameter("nano_frame", "", "macro", "frame of the nano lobes of psd (NANO_FRAMES): "
+                                                                   "macro (about the macro normal, right as α → 0) "
+                                                                   "or facet (each micro facet's: "
+                                                                   "TwoScaleDielectricBSDF, ~200x slower)")),
     "table": (ModelParameter("table", "", REQUIRED, "a BRDF table as a function (waveoptics.distributed.table."
                                                     "open_table)"),),
 }

@@ -53,10 +53,11 @@ from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDI
 from .chi2 import (Chi2Result, chi2_test)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
 from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, pack_third_uniform, refract, half_vector_refraction, sided_lambda,
-    sided_G2, albedo_single, DielectricTables, dielectric_tables, RoughDielectricBSDF)
-from .nano_dielectric import (NANO_MU_NODES, NanoTables, coherent_split, nano_tables, NanoRoughDielectricBSDF)
+    sided_G2, albedo_single, DielectricTables, dielectric_tables, albedo_multiple, RoughDielectricBSDF)
+from .nano_dielectric import (NANO_MU_NODES, critical_cosine, table_pieces, piece_variable, piece_cosine, NanoTables,
+                              coherent_split, nano_tables, NanoRoughDielectricBSDF)
 from .twoscale_dielectric import (TWOSCALE_DIELECTRIC_NODES, ALBEDO_MU_NODES, ALBEDO_PHI_NODES, pair_half_vector,
-    coherent_transmission_share, TwoScaleDielectricBSDF)
+    coherent_transmission_share, TwoScaleDielectricBSDF, NANO_FRAME_BSDFS, nano_rough_glass)
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,
     twoscale_model, rough_dielectric_model, table_model, BRDF_MODELS, BRDF_MODEL_PARAMETERS, BRDF_MODEL_HELP,
     build_brdf_model)

@@ -79,7 +79,7 @@ from .twoscale import Micro
 
 __all__ = ['DIELECTRIC_SHADOWINGS', 'DIELECTRIC_MS_NODES', 'UNIFORM_DIGITS', 'pack_third_uniform', 'refract',
            'half_vector_refraction', 'sided_lambda', 'sided_G2', 'albedo_single', 'DielectricTables',
-           'dielectric_tables', 'RoughDielectricBSDF']
+           'dielectric_tables', 'albedo_multiple', 'RoughDielectricBSDF']
 
 #: masking-shadowing terms of the BSDF (the Smith forms, which have a transmission case)
 DIELECTRIC_SHADOWINGS = ("smith", "smith-correlated")
@@ -353,6 +353,25 @@ def _f_ms(wi, wo, tab: DielectricTables):
     return np.where(ok & same, (1.0 - t) * val, 0.0), np.where(ok & ~same, t * val, 0.0)
 
 
+def albedo_multiple(w1, tab: DielectricTables):
+    """(reflection, transmission) albedos ∫ f_ms |cos θ_o| dω_o (dimensionless) of the compensation lobes at one
+    direction *w1* (3,), by 64-node Gauss-Legendre quadrature in |cos θ_o| on each side (the lobes depend on θ_o
+    only).
+
+    References
+    ----------
+    .. [1] C. Kulla, A. Conty, SIGGRAPH 2017 course, the dielectric energy compensation.
+    """
+    x, wx = gl01(64)
+    refl = trans = 0.0
+    for sgn in (1.0, -1.0):
+        wo = np.stack([np.sqrt(1.0 - x * x), np.zeros_like(x), sgn * x], axis=-1)
+        mr, mt = _f_ms(np.broadcast_to(w1, wo.shape), wo, tab)
+        refl += 2.0 * np.pi * np.sum(wx * x * mr)
+        trans += 2.0 * np.pi * np.sum(wx * x * mt)
+    return refl, trans
+
+
 @dataclass(frozen=True)
 class RoughDielectricBSDF(BRDF):
     """The BSDF of a rough interface between air (z > 0) and a dielectric (z < 0): reflection and transmission
@@ -497,18 +516,14 @@ class RoughDielectricBSDF(BRDF):
         keys = ("reflection", "transmission", "multiple_reflection", "multiple_transmission")
         out = {k: np.zeros(lam_f.size) for k in keys}
         spec, ndf, ax, ay, c = self._args()
-        x, wx = gl01(64)
         for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
             if w1[2] == 0:
                 continue
             R, T = albedo_single(w1[None], self._eta(float(l1)), spec, ndf, ax, ay, c, self.micro.shadowing)
             out["reflection"][j], out["transmission"][j] = R[0], T[0]
             if self.multiple_scattering:
-                for sgn in (1.0, -1.0):
-                    wo = np.stack([np.sqrt(1.0 - x * x), np.zeros_like(x), sgn * x], axis=-1)
-                    mr, mt = _f_ms(np.broadcast_to(w1, wo.shape), wo, self._tables(float(l1)))
-                    out["multiple_reflection"][j] += 2.0 * np.pi * np.sum(wx * x * mr)
-                    out["multiple_transmission"][j] += 2.0 * np.pi * np.sum(wx * x * mt)
+                out["multiple_reflection"][j], out["multiple_transmission"][j] = albedo_multiple(
+                    w1, self._tables(float(l1)))
         return {k: v.reshape(shape) for k, v in out.items()}
 
     def albedo(self, wi, wavelength_nm):

@@ -456,7 +456,7 @@ def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, rough
 
 def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF, ndf_shape=None,
                            shadowing="smith-correlated", material=None, ior=None, fresnel="exact",
-                           multiple_scattering=False, psd=None) -> ModelEvaluation:
+                           multiple_scattering=False, psd=None, nano_frame="macro") -> ModelEvaluation:
     """The BSDF of a rough dielectric interface, reflection and transmission over the whole sphere (Walter et al.
     2007; :class:`waveoptics.brdf.RoughDielectricBSDF`), as a function: directions with z < 0 lie in the
     dielectric; the albedo is R + T; its parts are ``reflection``, ``transmission`` and ``multiple``.
@@ -479,10 +479,14 @@ def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_
         Nano-roughness height statistics (m⁴): the interface also scatters their first-order (Rayleigh-Rice) light
         into both half-spaces, which its coherent lobes give up (:class:`waveoptics.brdf.NanoRoughDielectricBSDF`,
         right as α → 0); its extra part is ``nano``.
+    nano_frame : str
+        Frame of the nano lobes of *psd* (:data:`waveoptics.vocabulary.NANO_FRAMES`): ``macro`` about the macro
+        normal (:class:`waveoptics.brdf.NanoRoughDielectricBSDF`), ``facet`` in each micro facet's frame
+        (:class:`waveoptics.brdf.TwoScaleDielectricBSDF`: right at any α, ~200x slower per evaluation).
     """
     from .btdf import RoughDielectricBSDF
-    from .nano_dielectric import NanoRoughDielectricBSDF
     from .twoscale import Micro
+    from .twoscale_dielectric import nano_rough_glass
 
     spec = _one_index(material, ior)
     if spec is None:
@@ -494,9 +498,12 @@ def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_
     micro = Micro(alpha=_alpha(alpha, roughness, "rough-dielectric"), alpha_y=alpha_y, ndf=ndf, shadowing=shadowing,
                   ndf_shape=ndf_shape)
     if psd is None:
+        if nano_frame != "macro":
+            raise FieldError(f"{{nano_frame}} {nano_frame!r} needs {{psd}} (nano-roughness statistics)", "nano_frame",
+                             "psd")
         bsdf = RoughDielectricBSDF(spec, micro, multiple_scattering=multiple_scattering)
     else:
-        bsdf = NanoRoughDielectricBSDF(spec, micro, multiple_scattering=multiple_scattering, psd=psd)
+        bsdf = nano_rough_glass(spec, micro, psd, multiple_scattering=multiple_scattering, nano_frame=nano_frame)
     return function_evaluation(lambda wi: bsdf, wavelengths_nm)
 
 

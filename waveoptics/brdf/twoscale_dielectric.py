@@ -33,8 +33,14 @@ integral of a BSDF carried by every facet (2007, eq. 14) then gives
 The α → 0 limit is :class:`waveoptics.brdf.NanoRoughDielectricBSDF` (its coherent factors at μ_i and its nano
 lobe about the macro normal). Energy: each facet conserves A_R F + A_T (1 − F) + TIS_R + TIS_T = 1 (lossless), so a
 white furnace over the sphere gives the flat case's R + T up to the energy single scattering loses on the micro
-surface (Smith's G; as :class:`RoughDielectricBSDF` without its compensation). Multiple scattering between facets
-(Kulla & Conty's compensation) is not available: ``multiple_scattering=True`` is refused.
+surface (Smith's G; as :class:`RoughDielectricBSDF` without its compensation). ``multiple_scattering=True`` adds
+the micro surface's multiple scattering: the compensation lobes of :class:`RoughDielectricBSDF` (Kulla & Conty
+2017; :func:`waveoptics.brdf.btdf.dielectric_tables` of the facets without nano-roughness), which return the
+energy 1 − E(μ_i) that single scattering between smooth facets loses; the nano lobes ride on single scattering.
+Since each facet conserves energy, the two-scale surface's single-scattering loss is that of the smooth facets up
+to the nano light's own (different) shadowing, a few % of the light times the difference in Smith's loss: R + T
+over the sphere = 1 within 3.3e-4 up to α = 1 (tests/test_twoscale_dielectric.py). The lobes are sampled with
+probability (1 − TIS_R − TIS_T)(1 − E(μ_i)) (a cosine-weighted direction on either side, as the base class).
 
 Sampling: the coherent lobes (Walter §5.3, :class:`RoughDielectricBSDF`'s sampler) with probability
 1 − TIS_R(μ_i) − TIS_T(μ_i), else the nano lobe on the reflection (TIS_R) or transmission (TIS_T) side: one of N/2
@@ -53,6 +59,8 @@ References
    ch. 4–5 (first-order scatter into both half-spaces).
 .. [4] E. Heitz, "Understanding the Masking-Shadowing Function in Microfacet-Based BRDFs", JCGT 3(2), 2014, §6.
 .. [5] E. Veach, PhD thesis, Stanford, 1997, §5.2 (the η² factor of radiance) and §9.2 (balance heuristic).
+.. [6] C. Kulla, A. Conty, "Revisiting Physically Based Shading at Imageworks", SIGGRAPH 2017 course, the
+   dielectric energy compensation.
 """
 from __future__ import annotations
 
@@ -61,9 +69,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import FieldError
+from ..errors import FieldError, unknown
 from ..scatter.transmission import rr_bsdf
-from .btdf import RoughDielectricBSDF, albedo_single, half_vector_refraction, sided_G2, sided_lambda
+from .btdf import RoughDielectricBSDF, albedo_multiple, albedo_single, half_vector_refraction, sided_G2, sided_lambda
 from .directions import dot_last
 from .facet import (NanoRadial, facet_basis, local_pair, quadrature_density, quadrature_normals, sampler_normals)
 from .nano_dielectric import NanoRoughDielectricBSDF
@@ -71,7 +79,7 @@ from .protocol import broadcast_incidence, lobe_choice
 from .smith import gl01
 
 __all__ = ["TWOSCALE_DIELECTRIC_NODES", "ALBEDO_MU_NODES", "ALBEDO_PHI_NODES", "pair_half_vector",
-           "coherent_transmission_share", "TwoScaleDielectricBSDF"]
+           "coherent_transmission_share", "TwoScaleDielectricBSDF", "NANO_FRAME_BSDFS", "nano_rough_glass"]
 
 #: quadrature points over facet normals of the diffracted part (a power of two: an unscrambled Sobol set)
 TWOSCALE_DIELECTRIC_NODES = 256
@@ -107,9 +115,8 @@ def coherent_transmission_share(tab, mu, up, eta):
     """A_T of a facet at incidence cosine *mu* on the side *up* (boolean; air above, index *eta* below): the
     table of light from air (:func:`waveoptics.brdf.nano_tables`) at the air side's cosine of the Snell pair,
     √(1 − η² (1 − μ²)) for light from the glass. The coherent transmittance is the same for both directions of
-    the pair (reciprocity; :mod:`waveoptics.brdf.nano_dielectric`), and the air side's table is smooth where the
-    glass side's has the critical angle between its nodes (their linear interpolations differ by up to 4 % at
-    37-41° in glass, 1.5e-4 below 28°). Dimensionless.
+    the pair (reciprocity; :mod:`waveoptics.brdf.nano_dielectric`), so the share is reciprocal to rounding (the
+    two sides' tables agree to their interpolation error, ≤ 1e-4). Dimensionless.
 
     References
     ----------
@@ -133,7 +140,8 @@ class TwoScaleDielectricBSDF(NanoRoughDielectricBSDF):
     m⁴) in its own frame; reflection and transmission over the whole sphere with ``eval`` / ``pdf`` / ``sample`` /
     ``albedo`` (as :class:`waveoptics.brdf.RoughDielectricBSDF`).
 
-    ``eval_parts`` gives ``reflection`` and ``transmission`` (the coherent part), ``multiple`` (0) and ``nano``
+    ``eval_parts`` gives ``reflection`` and ``transmission`` (the coherent part), ``multiple`` (the compensation
+    lobes, 0 unless ``multiple_scattering``) and ``nano``
     (the diffracted part), in 1/sr; ``albedo_parts`` their albedos (``nano_reflection``, ``nano_transmission``).
 
     Parameters
@@ -141,7 +149,7 @@ class TwoScaleDielectricBSDF(NanoRoughDielectricBSDF):
     material, micro, psd
         As :class:`waveoptics.brdf.NanoRoughDielectricBSDF`.
     multiple_scattering : bool
-        Not available (False only).
+        Add the micro surface's multiple scattering (Kulla-Conty lobes; module doc).
     nodes : int
         Quadrature points over facet normals per evaluation of the diffracted part (a power of two ≥ 16); the
         sampler draws from half as many normals.
@@ -155,10 +163,6 @@ class TwoScaleDielectricBSDF(NanoRoughDielectricBSDF):
 
     def __post_init__(self):
         super().__post_init__()
-        if self.multiple_scattering:
-            raise FieldError("{multiple_scattering} is not available for the two-scale rough dielectric (no "
-                             "energy compensation of facets carrying nano-roughness); use False",
-                             "multiple_scattering")
         n = int(self.nodes)
         if n < 16 or n & (n - 1):
             raise FieldError(f"{{nodes}}={self.nodes!r} is not allowed; use a power of two >= 16", "nodes")
@@ -273,7 +277,8 @@ class TwoScaleDielectricBSDF(NanoRoughDielectricBSDF):
         """∫ f |cos θ_o| dω_o of each part (dimensionless): ``reflection`` and ``transmission`` of the coherent part
         by quadrature over facet normals (:func:`waveoptics.brdf.btdf.albedo_single` with each facet's coherent
         shares), ``nano_reflection`` and ``nano_transmission`` by quadrature of the diffracted part over each
-        hemisphere; ``multiple_reflection``, ``multiple_transmission`` are 0."""
+        hemisphere; ``multiple_reflection``, ``multiple_transmission`` of the compensation lobes
+        (:func:`waveoptics.brdf.btdf.albedo_multiple`; 0 unless ``multiple_scattering``)."""
         wi_f, lam_f, shape = broadcast_incidence(wi, wavelength_nm)
         keys = ("reflection", "transmission", "multiple_reflection", "multiple_transmission", "nano_reflection",
                 "nano_transmission")
@@ -289,4 +294,25 @@ class TwoScaleDielectricBSDF(NanoRoughDielectricBSDF):
                                                                coherent_transmission_share(tab, mu, up, eta)))
             out["reflection"][j], out["transmission"][j] = R[0], T[0]
             out["nano_reflection"][j], out["nano_transmission"][j] = self._albedo_nano(w1, lam)
+            if self.multiple_scattering:
+                out["multiple_reflection"][j], out["multiple_transmission"][j] = albedo_multiple(
+                    w1, self._tables(lam))
         return {k: v.reshape(shape) for k, v in out.items()}
+
+
+#: the nano-rough glass by the frame of its nano lobes (:data:`waveoptics.vocabulary.NANO_FRAMES`)
+NANO_FRAME_BSDFS = {"macro": NanoRoughDielectricBSDF, "facet": TwoScaleDielectricBSDF}
+
+
+def nano_rough_glass(material, micro, psd, multiple_scattering: bool = False, nano_frame: str = "macro"):
+    """The nano-rough glass of *material* (a dielectric), *micro* (NDF, α, shadowing) and nano-roughness *psd*
+    (:class:`~waveoptics.surfaces.PSDModel`, m⁴) with its nano lobes in the frame *nano_frame*
+    (:data:`NANO_FRAME_BSDFS`: ``macro`` about the macro normal, ``facet`` in each micro facet's frame).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007; N. Holzschuch, R. Pacanowski 2017 (module references).
+    """
+    if nano_frame not in NANO_FRAME_BSDFS:
+        raise unknown("frame of the nano lobes", nano_frame, NANO_FRAME_BSDFS, field="nano_frame")
+    return NANO_FRAME_BSDFS[nano_frame](material, micro, multiple_scattering=multiple_scattering, psd=psd)

@@ -30,7 +30,8 @@ side (the samples of the other lobe keep the full density: an unbiased sub-stoch
 
 Plugin parameters: ``material`` (a dielectric, default ``glass``), ``alpha``, ``alpha_y``, ``ndf``,
 ``shadowing`` (``smith`` or ``smith-correlated``), ``nano`` (``MODEL:params`` of PSD statistics or ``none``),
-``multiple_scattering`` (bool), ``wavelength_step`` (nm).
+``multiple_scattering`` (bool), ``wavelength_step`` (nm), ``nano_frame`` (``macro``, the nano lobes about the
+macro normal, or ``facet``, in each micro facet's frame: :class:`waveoptics.brdf.TwoScaleDielectricBSDF`).
 
 References
 ----------
@@ -67,7 +68,7 @@ GLASS_PLUGIN_NAME = "waveoptics_glass"
 _PARAMETERS = {
     "material": ("material", str), "alpha": ("alpha", float), "alpha_y": ("alpha_y", float), "ndf": ("ndf", str),
     "shadowing": ("shadowing", str), "nano": ("nano", str), "multiple_scattering": ("multiple_scattering", bool),
-    "wavelength_step": ("wavelength_step_nm", float),
+    "wavelength_step": ("wavelength_step_nm", float), "nano_frame": ("nano_frame", str),
 }
 
 
@@ -78,7 +79,8 @@ def glass_parameters() -> tuple:
 
 def glass_model(material: str = "glass", alpha: float = 0.1, alpha_y: float | None = None, ndf: str = "ggx",
                 shadowing: str = "smith-correlated", nano: str | None = None, multiple_scattering: bool = False,
-                wavelength_step_nm: float = DEFAULT_WAVELENGTH_STEP_NM) -> brdf.SpectralNodes:
+                wavelength_step_nm: float = DEFAULT_WAVELENGTH_STEP_NM, nano_frame: str = "macro"
+                ) -> brdf.SpectralNodes:
     """The nano-rough glass of these parameters at the renderer's wavelength nodes (module doc).
 
     Parameters
@@ -96,6 +98,10 @@ def glass_model(material: str = "glass", alpha: float = 0.1, alpha_y: float | No
         Kulla-Conty energy compensation of the dielectric.
     wavelength_step_nm : float
         Largest spacing of the wavelength nodes over 360-830 nm.
+    nano_frame : str
+        Frame of the nano lobes (:data:`waveoptics.vocabulary.NANO_FRAMES`): ``macro`` about the macro normal
+        (:class:`waveoptics.brdf.NanoRoughDielectricBSDF`), ``facet`` in each micro facet's frame
+        (:class:`waveoptics.brdf.TwoScaleDielectricBSDF`, ~200x slower per evaluation).
     """
     from .. import surfaces
 
@@ -112,9 +118,13 @@ def glass_model(material: str = "glass", alpha: float = 0.1, alpha_y: float | No
         if p["sigma"] > 0:
             psd = surfaces.PSDModel(name, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"), C=p.get("C"))
     if psd is None:
+        if nano_frame != "macro":
+            raise FieldError(f"{{nano_frame}} {nano_frame!r} needs {{nano}} statistics (nano-roughness)",
+                             "nano_frame", "nano")
         base = brdf.RoughDielectricBSDF(material, micro, multiple_scattering=bool(multiple_scattering))
     else:
-        base = brdf.NanoRoughDielectricBSDF(material, micro, multiple_scattering=bool(multiple_scattering), psd=psd)
+        base = brdf.nano_rough_glass(material, micro, psd, multiple_scattering=bool(multiple_scattering),
+                                     nano_frame=nano_frame)
     return brdf.SpectralNodes(base, nodes)
 
 
