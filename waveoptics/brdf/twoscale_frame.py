@@ -56,9 +56,10 @@ FACET_THETAS_PSD_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, *range(40, 89, 
 #: every cell with θ_o ≤ 85° against 2048 + 2048 normals, max / rms error at θ_i = 30 / 60 / 77 / 80°: (64, 64)
 #: 9.7 / 7.7 / 15.4 / 14.4 %, rms 1.5-3.7 % (the lobe 3-5 % below a Monte-Carlo facet-frame integral at θ_i
 #: 74-80°); (128, 256) 1.4 / 2.2 / 2.9 / 2.8 %, rms 0.2-0.6 %; (256, 128) 1.0 / 2.2 / 3.2 / 3.5 %; (256, 64)
-#: 2.6 / 3.1 / 5.1 / 5.3 %; (128, 128) 2.0 / 3.8 / 6.2 / 6.1 %; (64, 256) - / 3.4 / 5.9 / 6.9 %; (256, 256)
-#: - / 1.8 / 1.8 / 1.5 % (the NDF normals, drawn with D(m) cos θ_m whatever the light, limit it at grazing
-#: incidence, where many face away from it)
+#: 2.6 / 3.1 / 5.1 / 5.3 %; (128, 128) 2.0 / 3.8 / 6.2 / 6.1 %; at 60 / 77 / 80° only: (64, 256) 3.4 / 5.9 / 6.9 %,
+#: (256, 256) 1.8 / 1.8 / 1.5 % (the NDF normals, drawn with D(m) cos θ_m whatever the light, limit it at grazing
+#: incidence, where many face away from it). Cost per incidence (96² and 128², 3 wavelengths, OpenCL on PoCL's
+#: CPU device, under load): (128, 256) 2.7-2.8x (64, 64)
 FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (128, 256)
 #: NDF normals of the energy budget of :func:`facet_frame_diffraction` (the light the facets scatter and reflect,
 #: one facet lobe albedo per normal and wavelength): as many as before the wide nodes grew, so its cost and its
