@@ -38,7 +38,7 @@ from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP
 from .facet_polarization import (facet_scattered_share, facet_coherent_fraction)
 from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, kernel_half_vectors, facet_scatter_weights, facet_incidences_deg,
     field_albedo_evaluations, paraxial_diffraction)
-from .twoscale_frame import (FACET_THETAS_DEG, FACET_THETAS_PSD_DEG, facet_thetas, FACET_TABLE_MAX_CELLS, facet_table_grid, equal_area, from_equal_area, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_NODE_SPLIT,
+from .twoscale_frame import (FACET_THETAS_DEG, FACET_THETAS_PSD_DEG, facet_thetas, FACET_TABLE_MAX_CELLS, facet_table_grid, equal_area, from_equal_area, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_BUDGET_NODES, FACET_NODE_SPLIT,
     FACET_REFERENCE_NM, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
 from .twoscale_coherent import (coherent_lobe, STACK_SUBCELL, SubCells)
 from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, multiple_scattering_lobe, evaluate)

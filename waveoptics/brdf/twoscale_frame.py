@@ -27,7 +27,7 @@ from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
 
-__all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
+__all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_BUDGET_NODES', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
            'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction',
            'FACET_TABLE_MAX_CELLS', 'facet_table_grid', 'equal_area', 'from_equal_area']
 
@@ -52,8 +52,19 @@ FACET_THETAS_PSD_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, *range(40, 89, 
 #: lobe narrower than :data:`FACET_NODE_SPLIT` nano lobe widths, and for a wider one. Measured per cell (with the
 #: earlier NDF normals fixed in the surface's frame; :func:`.facet.ndf_nodes` gives the present rule's error) against the
 #: pointwise form (ABC σ = 10 nm, B = 2 µm, C = 2.6, 550 nm, Beckmann, 96²-128² grids): α = 0.05 at 30° with
-#: (64, 16) ≤ 2.7 % (32 + 16: 4.8 %); α = 0.3 at 60° with (64, 64) ≤ 2.1 % (64 + 16: 6.8 %, 32 + 64: 4.5 %)
-FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (64, 64)
+#: (64, 16) ≤ 2.7 % (32 + 16: 4.8 %). Wide lobes towards grazing incidence need more: Beckmann α = 0.3 on 96²,
+#: every cell with θ_o ≤ 85° against 2048 + 2048 normals, max / rms error at θ_i = 30 / 60 / 77 / 80°: (64, 64)
+#: 9.7 / 7.7 / 15.4 / 14.4 %, rms 1.5-3.7 % (the lobe 3-5 % below a Monte-Carlo facet-frame integral at θ_i
+#: 74-80°); (128, 256) 1.4 / 2.2 / 2.9 / 2.8 %, rms 0.2-0.6 %; (256, 128) 1.0 / 2.2 / 3.2 / 3.5 %; (256, 64)
+#: 2.6 / 3.1 / 5.1 / 5.3 %; (128, 128) 2.0 / 3.8 / 6.2 / 6.1 %; at 60 / 77 / 80° only: (64, 256) 3.4 / 5.9 / 6.9 %,
+#: (256, 256) 1.8 / 1.8 / 1.5 % (the NDF normals, drawn with D(m) cos θ_m whatever the light, limit it at grazing
+#: incidence, where many face away from it). Cost per incidence (96² and 128², 3 wavelengths, OpenCL on PoCL's
+#: CPU device, under load): (128, 256) 2.7-2.8x (64, 64)
+FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (128, 256)
+#: NDF normals of the energy budget of :func:`facet_frame_diffraction` (the light the facets scatter and reflect,
+#: one facet lobe albedo per normal and wavelength): as many as before the wide nodes grew, so its cost and its
+#: values do not depend on the quadrature's nodes
+FACET_BUDGET_NODES = 64
 #: the grid route's (NDF normals, half-vector normals per cell) for a height field: its lobe is speckle (a
 #: windowed patch's |U|² varies on the scale λ/(2L)), which one shared stencil of 64 half-vector normals per cell
 #: reads with a bias: the diffracted albedo came out 1.7-7.6 % above the light the facets scatter (Gaussian patch
@@ -426,9 +437,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     scattered : ndarray (n_λ,)
         The light the facets' lobes scatter, F(θ_m) (1 − A(θ_m)) per facet on a conductor and the lobe's own
         absolute albedo on a dielectric (:meth:`waveoptics.brdf.Nano.scattered_share`), averaged over the facets the light
-        sees (the NDF nodes, weights D (ω_i·m) G1 / p, normalized by their sum, which is 1 in expectation): the
-        diffracted part's albedo falls short of it by the light masked on the way out or sent below the macro
-        horizon.
+        sees (:data:`FACET_BUDGET_NODES` normals of the NDF, weights D (ω_i·m) G1 / p, normalized by their sum,
+        which is 1 in expectation): the diffracted part's albedo falls short of it by the light masked on the way
+        out or sent below the macro horizon.
     reflected : ndarray (n_λ,)
         F(θ_m) averaged the same way: the light the facets reflect, coherent and diffracted together, before
         masking on the way out.
@@ -452,7 +463,8 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
     c, spec = kw["ndf_shape"], ndf_by_name(kw["ndf"])
     na, nb = nodes or facet_nodes(micro, nano, w)
-    m_a = sample_normal(np.broadcast_to(wi, (na, 3)), unit_nodes(na), ndf=ndf, ax=ax, ay=ay, c=c)
+    m_a = (sample_normal(np.broadcast_to(wi, (na, 3)), unit_nodes(na), ndf=ndf, ax=ax, ay=ay, c=c)
+           if nano.surface is not None else None)   # a height field's NDF nodes (PSD statistics: ndf_nodes)
     inside = grid.inside
     wo = grid.directions()[inside]
     h = wi + wo
@@ -532,8 +544,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         else:
             Fc = F.at(np.broadcast_to(wi, wo.shape), wo, lam) if hasattr(F, "at") else F(np.clip(h @ wi, 0, 1), lam)
         diffraction[i][inside] = out[:, i] * Fc
-    p_a = pdf_normal(np.broadcast_to(wi, (na, 3)), m_a, ndf=ndf, ax=ax, ay=ay, c=c)
-    scattered, reflected = _facet_budget(wi, w, m_a, spec.D(m_a, ax, ay, c) / np.where(p_a > 0, p_a, np.inf), nano, F,
+    nu = FACET_BUDGET_NODES   # the budget's own NDF normals (:data:`FACET_BUDGET_NODES`)
+    m_u = sample_normal(np.broadcast_to(wi, (nu, 3)), unit_nodes(nu), ndf=ndf, ax=ax, ay=ay, c=c)
+    p_u = pdf_normal(np.broadcast_to(wi, (nu, 3)), m_u, ndf=ndf, ax=ax, ay=ay, c=c)
+    scattered, reflected = _facet_budget(wi, w, m_u, spec.D(m_u, ax, ay, c) / np.where(p_u > 0, p_u, np.inf), nano, F,
                                          dm, material, polarization)
     return diffraction, scattered, reflected
 
