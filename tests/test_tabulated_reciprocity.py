@@ -10,7 +10,7 @@ Measured on 400 seeded pairs (θ_i, θ_o in 0-80°, 150 with θ_i in 60-80°, az
 C 2.6, Al, 550 nm), max |f(i,o)/f(o,i) − 1| with both angles ≤ 75 / 78 / 80°:
 
 =============  ===========================  ===========================
-α, NDF         before: ≤ 75° / 78° / 80°    now: ≤ 75° / 78° / 80°
+α, NDF         before: ≤ 75° / 78° / 80°    stop 40: ≤ 75° / 78° / 80°
 =============  ===========================  ===========================
 Beckmann 0.05  5.21 / 7.76 / 8.48 %         1.81 / 3.59 / 5.11 %
 Beckmann 0.1   3.78 / 4.92 / 10.16 %        0.93 / 1.56 / 2.72 %
@@ -20,7 +20,7 @@ GGX 0.1        0.59 / 0.94 / 1.93 %         0.23 / 0.27 / 0.35 %
 GGX 0.3        0.10 / 0.14 / 0.21 %         0.03 / 0.09 / 0.09 %
 =============  ===========================  ===========================
 
-(at θ ≤ 70° 0.02-1.29 % before, 0.02-0.99 % now).
+(at θ ≤ 70° 0.02-1.29 % before, 0.02-0.99 % at stop 40).
 
 Causes found and fixed (the facet-frame sum at one direction, ``facet_frame_diffraction`` on a one-cell grid, is
 now reciprocal within 1.0 % at the former worst pairs; it was 3.5-5.1 %): the hand-over weight W baked into the
