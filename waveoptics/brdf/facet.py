@@ -26,7 +26,7 @@ from .. import scatter
 from .directions import dot_last
 from .sampling import sample_normal, sample_normal_dcos
 
-__all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'meridian_basis', 'to_facet',
+__all__ = ['FACET_NODE_SPLIT', 'FACET_REFERENCE_NM', 'wide_micro_lobe', 'RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'meridian_basis', 'to_facet',
            'from_facet', 'ndf_nodes', 'half_vector_nodes', 'half_vector_base', 'quadrature_normals',
            'quadrature_density', 'sampler_normals']
 
@@ -34,6 +34,31 @@ __all__ = ['RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis
 RADIAL_BINS = 384
 #: levels of cos θ_i at which the nano-lobe sampler is tabulated (its Poisson weights depend on θ_i)
 COS_LEVELS = 65
+
+
+#: ratio 2α / w_n (the micro lobe's spread of mirror directions over the nano lobe's width λ/(π ℓ)) below which
+#: a facet quadrature takes its narrow node set (:func:`wide_micro_lobe`)
+FACET_NODE_SPLIT = 0.5
+#: wavelength (nm) of the nano lobe's radial law that places the grid route's half-vector normals and of w_n in
+#: :func:`wide_micro_lobe`: one for every wavelength, so that each wavelength's lobe does not depend on the others
+FACET_REFERENCE_NM = 550.0
+
+
+def wide_micro_lobe(alpha: float, length_scale_m: float) -> bool:
+    """Whether a micro lobe of roughness *alpha* (the larger of α_x, α_y) spreads its mirror directions over at least
+    :data:`FACET_NODE_SPLIT` widths of the nano lobe, w_n = λ / (π ℓ) at λ = :data:`FACET_REFERENCE_NM` with ℓ
+    = *length_scale_m* (m, the PSD's correlation or inner scale): then the facet-frame integral is carried by
+    normals about the half-vector as much as by the NDF's, and the quadratures take more of both
+    (:func:`waveoptics.brdf.facet_nodes`, :class:`waveoptics.brdf.TwoScaleBRDF`).
+
+    References
+    ----------
+    .. [1] J. C. Stover, *Optical Scattering: Measurement and Analysis*, 3rd ed., SPIE (2012), §2.4 (the grating
+       equation: a surface frequency f scatters to sin θ_o − sin θ_i = λ f, so a PSD of correlation length ℓ
+       scatters over direction cosines ~λ / (π ℓ)).
+    """
+    w_n = FACET_REFERENCE_NM * 1e-9 / (math.pi * float(length_scale_m))
+    return 2.0 * float(alpha) >= FACET_NODE_SPLIT * w_n
 
 
 @functools.lru_cache(maxsize=8)

@@ -18,7 +18,7 @@ from ..errors import FieldError, unknown
 from ..materials import cos2_eta_i, facet_sp_mix
 from ..scatter.grid import DirectionGrid
 from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weight, uses_vector_first_order
-from .facet import half_vector_nodes, ndf_nodes
+from .facet import FACET_NODE_SPLIT, FACET_REFERENCE_NM, half_vector_nodes, ndf_nodes, wide_micro_lobe
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_polarization import facet_scattered_share
 from .field_lobe import (FIELD_GRID_OVERSAMPLING, field_anisotropy, field_first_order_over_fresnel,
@@ -70,12 +70,6 @@ FACET_BUDGET_NODES = 64
 #: reads with a bias: the diffracted albedo came out 1.7-7.6 % above the light the facets scatter (Gaussian patch
 #: σ 15 nm, T 1 µm, 32 λ, Beckmann α 0.1-0.3, θ_i 30-75°, 96² cells), with 128 within -0.6 to +2.6 % (256: the same)
 FACET_NODES_FIELD = (64, 128)
-#: ratio 2α / w_n (the micro lobe's spread of mirror directions over the nano lobe's width λ/(π ℓ)) below which
-#: the grid route takes :data:`FACET_NODES_NARROW`
-FACET_NODE_SPLIT = 0.5
-#: wavelength (nm) of the nano lobe's radial law that places the grid route's half-vector normals and of w_n in
-#: :func:`facet_nodes`: one for every wavelength, so that each wavelength's lobe does not depend on the others asked
-FACET_REFERENCE_NM = 550.0
 #: evaluate's facet integration: ``frame`` (Walter's integral, each facet's nano lobe in its own frame),
 #: ``paraxial`` (the nano lobe at the macro incidence shifted to every facet's mirror direction: an FFT
 #: convolution), ``auto`` (frame where :func:`facet_route` allows it)
@@ -148,8 +142,7 @@ def facet_nodes(micro: Micro, nano: Nano, wavelengths_nm) -> tuple[int, int]:
         return FACET_NODES_FIELD
     kw = micro.kw()
     a = max(kw["alpha"], kw["alpha_y"] or 0.0)
-    wn = FACET_REFERENCE_NM * 1e-9 / (np.pi * nano_statistics(nano).length_scale)
-    return FACET_NODES_NARROW if 2 * a < FACET_NODE_SPLIT * wn else FACET_NODES_WIDE
+    return FACET_NODES_WIDE if wide_micro_lobe(a, nano_statistics(nano).length_scale) else FACET_NODES_NARROW
 
 
 def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
