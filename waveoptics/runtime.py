@@ -33,7 +33,7 @@ import numpy as np
 from .errors import FieldError, NoOpenCLError, WaveopticsError
 
 __all__ = ['INSTALL_HINT', 'kernel_dir', 'kernel_source', 'platforms', 'opencl_available', 'device_spec_from_env', 'select_device', 'has_fp64', 'Runtime', 'get_runtime', 'build_options', 'build_program', 'program_kernel', 'program_cache_size', 'pocl_version', 'describe', 'cpu_workers', 'MEMORY_FRACTION', 'parse_size',
-           'memory_limit', 'check_memory']
+           'memory_limit', 'check_memory', 'parallel_map', 'parallel_imap']
 
 INSTALL_HINT = ("no OpenCL platform found; install a CPU runtime with 'apt-get install pocl-opencl-icd' "
                 "(or 'pip install pocl-binary-distribution'), or run 'make demo' which does it")
@@ -203,6 +203,7 @@ def get_runtime(device: str | None = None) -> Runtime:
 
 
 _programs: dict = {}
+_building: dict = {}   # key -> the lock of its build in progress
 
 
 def build_options(precision_dtype=np.float32, extra=()) -> tuple[str, ...]:
@@ -234,12 +235,22 @@ def build_program(runtime: Runtime, filename: str, options=()):
         prg = _programs.get(key)
         if prg is not None:
             return prg
+        building = _building.setdefault(key, threading.Lock())
+    # one build per key, outside the process-wide lock: a program built in the background (a compiler run of
+    # 0.5-2 s on PoCL) holds up neither get_runtime nor the build of another program
+    with building:
+        with _lock:
+            prg = _programs.get(key)
+        if prg is not None:
+            return prg
         try:
             prg = cl.Program(runtime.context, src).build(options=list(opts))
         except cl.RuntimeError as exc:
             raise WaveopticsError(f"OpenCL build of kernels/{filename} failed on {runtime.name!r} "
                                   f"with options {' '.join(opts)}:\n{exc}") from None
-        _programs[key] = prg
+        with _lock:
+            _programs[key] = prg
+            _building.pop(key, None)
         return prg
 
 
@@ -323,6 +334,39 @@ def cpu_workers(workers: int | None = None) -> int:
     if int(workers) != workers or workers < 1:
         raise FieldError(f"workers={workers!r} is not allowed; give a whole number >= 1", "workers")
     return int(workers)
+
+
+def parallel_imap(fn, items, workers: int | None = None):
+    """``fn(item)`` for each of *items*, yielded in the order of *items*, computed by a pool of
+    :func:`cpu_workers` (*workers*) threads: for independent pieces of work that spend their time in NumPy, SciPy
+    or OpenCL calls, which release the GIL (per-wavelength or per-incidence tables). With one worker, or one item,
+    in the calling thread, one after the other. An exception of ``fn`` is raised when its item's turn comes; the
+    items not started by then are cancelled.
+
+    *fn* must not depend on the order in which items are computed, only on its item (each result is then the one a
+    serial loop gives, bit for bit); results shared between items (caches) must be safe to fill from several
+    threads.
+    """
+    items = list(items)
+    n = min(cpu_workers(workers), len(items))
+    if n <= 1:
+        for item in items:
+            yield fn(item)
+        return
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="waveoptics")
+    try:
+        futures = [pool.submit(fn, item) for item in items]
+        for fut in futures:
+            yield fut.result()
+    finally:   # on an exception, or a caller that stops early: the items not started are dropped
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def parallel_map(fn, items, workers: int | None = None) -> list:
+    """``[fn(item) for item in items]`` computed by :func:`parallel_imap` (threads; the same list, in order)."""
+    return list(parallel_imap(fn, items, workers))
 
 
 #: share of the machine's (or the container's) memory a request may plan to use unless told otherwise
