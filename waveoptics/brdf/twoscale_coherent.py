@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import scatter
+from ..runtime import parallel_map
 from ..materials import cos2_eta_i
 from ..scatter.grid import DirectionGrid
 from .facet_polarization import facet_coherent_fraction
@@ -97,7 +98,11 @@ def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: 
     if grid_rho > 0:
         f1 = f1 * (rho / grid_rho)
     used = inside if nano is None or nano.surface is None else inside & significant_cells(np.where(inside, f1, 0))
-    for i, lam in enumerate(w):
+
+    def one(i):
+        """mf and the coherent part at wavelength *i*: the wavelengths in parallel threads (the first incidence
+        builds every wavelength's band series and albedo tables here, ~0.5 s CPU each)."""
+        lam = w[i]
         mf[i] = f1 * (F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam))
         A = np.ones(cos_d.shape)
         if sigma_nano > 0:
@@ -117,6 +122,8 @@ def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: 
                                                            material, polarization, phi)
             mf[i][inside] = f1[inside] * sub.weighted(Fs)
             coherent[i][inside] = f1[inside] * sub.weighted(Fs * A_sub)
+
+    parallel_map(one, range(w.size))
     return (np.where(inside, mf, 0.0), np.broadcast_to(np.where(inside, f1, 0.0), shape),
             np.where(inside, coherent, 0.0))
 

@@ -29,7 +29,8 @@ from .angles import (scattering_angles)
 from .band_energy import (TANGENT_PLANE_MAX_DEG, is_conductor, ALBEDO_THETAS_DEG, RR_THETAS_DEG, rr_interp,
     BandAlbedos)
 from .band import (band_arc, relevant_variance, relevant_variance_of_field, beyond_band_fraction, SIN_NODES,
-    relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series, scattered_lobe, series_arrays)
+    relevant_variances, relevant_sigma2, band_correlation, BandSeries, band_series, band_series_built, scattered_lobe,
+    series_arrays)
 from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factors, Q,
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
     rayleigh_rice_tis, is_stack, stack_correlation)

@@ -33,6 +33,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,7 +47,8 @@ from .models import get_model
 from .series import M_MAX, poisson_weights, roughness_g, series_tables, series_terms
 
 __all__ = ["band_arc", "relevant_variance", "relevant_variance_of_field", "beyond_band_fraction", "SIN_NODES",
-           "relevant_variances", "relevant_sigma2", "band_correlation", "BandSeries", "band_series", "series_arrays",
+           "relevant_variances", "relevant_sigma2", "band_correlation", "BandSeries", "band_series", "band_series_built",
+           "series_arrays",
            "scattered_lobe"]
 
 
@@ -238,12 +240,23 @@ class BandSeries(BandAlbedos):
     m_max: int | None = None    # series terms (None: those the largest g = (2kσ)² needs)
     n_q: int = 512              # q nodes of the tables
     _albedos: dict = field(default_factory=dict, repr=False)   # diffraction model name -> E¹ at ALBEDO_THETAS_DEG
+    _lock: object = field(default_factory=threading.Lock, init=False, repr=False, compare=False)
 
     # The tables of the series, computed on first use (:func:`series_arrays`, ~0.2 s CPU a wavelength): the
     # albedo tables (``_albedos``) of a series may be known without them (read from a cache by the caller).
-    @functools.cached_property
+    @property
     def _arrays(self) -> dict:
-        return series_arrays(self.model, self.wavelength_nm, self.sin_nodes, self.sigma2, self.m_max, self.n_q)
+        # computed once, under this series' own lock: functools.cached_property (before Python 3.12) holds one lock
+        # shared by every instance, so threads building the series of different wavelengths waited for each other
+        got = self.__dict__.get("_series_arrays")
+        if got is None:
+            with self._lock:
+                got = self.__dict__.get("_series_arrays")
+                if got is None:
+                    got = series_arrays(self.model, self.wavelength_nm, self.sin_nodes, self.sigma2, self.m_max,
+                                        self.n_q)
+                    self.__dict__["_series_arrays"] = got   # a frozen dataclass: kept beside its fields
+        return got
 
     @property
     def q(self) -> np.ndarray:
@@ -382,6 +395,21 @@ def band_series(model: PSDModel, wavelength_nm: float, m_max: int | None = None,
     """:class:`BandSeries` of *model* at *wavelength_nm* (nm), built once per (model, λ, m_max, n_q) and cached
     (:func:`band_series_cached`)."""
     return band_series_cached(model, float(wavelength_nm), None if m_max is None else int(m_max), int(n_q))
+
+
+def band_series_built(model: PSDModel, wavelengths_nm, workers: int | None = None) -> list:
+    """:func:`band_series` of *model* at each of *wavelengths_nm* (nm), each with its tables (:func:`series_arrays`,
+    ~0.2 s CPU a wavelength) built: the wavelengths in parallel threads (:func:`waveoptics.runtime.parallel_map`,
+    *workers*), where their first use one after the other would build them in turn. The tables are those a serial
+    build gives, bit for bit (each depends on its own wavelength only)."""
+    from ..runtime import parallel_map
+
+    def built(lam):
+        bs = band_series(model, lam)
+        bs.q   # noqa: B018 - builds the tables
+        return bs
+
+    return parallel_map(built, [float(x) for x in np.atleast_1d(wavelengths_nm)], workers)
 
 
 #: band series kept in memory (~5 MB each, the look-up tables): more than the wavelength nodes one model is built
