@@ -86,3 +86,20 @@ def test_parallel_map_raises_the_first_failing_items_exception():
     with pytest.raises(ValueError, match="item 3"):
         runtime.parallel_map(fn, range(200), workers=2)
     assert 3 <= len(done) < 150   # the items not started when it failed are dropped (all 199: 1 s of sleeps)
+
+
+@pytest.mark.parametrize("diffraction", ["kirchhoff", "rayleigh-rice"])
+def test_the_kernel_built_in_the_background_is_the_one_the_model_launches(rt, diffraction, monkeypatch):
+    """warm_facet_frame_kernel's switches are those of the model's own launches: after it, building the model
+    builds no other program (the programs counted from none)."""
+    from waveoptics.brdf.facet_frame_cl import warm_facet_frame_kernel
+    from waveoptics.scatter import get_model
+
+    monkeypatch.setattr(runtime, "_programs", {})
+    micro, nano = Micro(alpha=0.1), make_nano(NANO, (550.0,))
+    warm_facet_frame_kernel(micro, nano, get_model(diffraction, perturbative=True)).join()
+    assert runtime.program_cache_size() == 1
+    tab = TabulatedTwoScaleBRDF("gold", micro, nano=nano, wavelengths_nm=(550.0,), resolution=24, thetas_deg=(30.0,),
+                                diffraction=diffraction)
+    assert np.max(tab.table) > 0
+    assert runtime.program_cache_size() == 1

@@ -29,7 +29,8 @@ from .opencl import ndf_shape_parameter
 from .sampling import sample_normal_dcos
 from .shadowing import shadowing_by_name
 
-__all__ = ['FACET_FRAME_BACKENDS', 'kernel_reason', 'facet_frame_backend', 'facet_frame_sum_cl']
+__all__ = ['FACET_FRAME_BACKENDS', 'kernel_reason', 'facet_frame_backend', 'facet_frame_kernel',
+           'warm_facet_frame_kernel', 'facet_frame_sum_cl']
 
 #: the per-cell sum of :func:`waveoptics.brdf.facet_frame_diffraction`: ``opencl`` (``kernels/facet_frame.cl``),
 #: ``numpy`` (its twin), ``auto`` (the kernel where an OpenCL device exists and :func:`kernel_reason` allows it)
@@ -74,6 +75,60 @@ def _half_vector_tables(rad, nb: int):
     n_base, radii, phi = half_vector_base(rad, nb)
     pdf = rad.pdf_r(np.arange(COS_LEVELS)[:, None], radii)
     return n_base, radii, pdf, np.stack([np.cos(phi), np.sin(phi)], axis=-1)
+
+
+def facet_frame_kernel(micro, *, mix: bool, blend: bool, projected: bool, device=None, precision: str = "float32"):
+    """(runtime, real dtype, kernel): the kernel ``facet_frame_sum`` of ``kernels/facet_frame.cl`` for *micro*'s
+    NDF, masking-shadowing form and isotropy, built (once per switch set, :func:`waveoptics.runtime.build_program`)
+    with its switches: *mix* another polarization's tables (``WO_MIX``), *blend* first-order tables
+    (``WO_BLEND``), *projected* tables on the equal-area projection (``WO_EQUI``); the kernel object is the calling
+    thread's own (:func:`waveoptics.runtime.program_kernel`)."""
+    kw = micro.kw()
+    spec = ndf_by_name(kw["ndf"])
+    ay = kw["alpha_y"] if kw["alpha_y"] is not None else kw["alpha"]
+    rt = get_runtime(device)
+    dt = rt.real_dtype(precision)
+    defines = (f"-DWO_NDF={spec.cl_id}", f"-DWO_SHADOWING={shadowing_by_name(kw['shadowing'])[1]}",
+               f"-DWO_ISO={int(ay == kw['alpha'])}", f"-DWO_MIX={int(bool(mix))}", f"-DWO_BLEND={int(bool(blend))}",
+               f"-DWO_EQUI={int(bool(projected))}",
+               *(f"-DWO_BLEND_{n}={float(np.radians(t))!r}" for n, t in zip("01", TANGENT_PLANE_BLEND_DEG)))
+    return rt, dt, program_kernel(build_program(rt, "facet_frame.cl", build_options(dt, defines)), "facet_frame_sum")
+
+
+def warm_facet_frame_kernel(micro, nano, diffraction, polarization: str = "unpolarized", *, device=None,
+                            precision: str = "float32"):
+    """Build, in a background thread, the kernel :func:`facet_frame_sum_cl` will take for *micro* and *nano*
+    (PSD statistics; the *diffraction* model, a :class:`waveoptics.scatter.DiffractionModel`, and *polarization*
+    set its switches), so that the OpenCL platform's start, the compiler run (0.5-2 s on PoCL, less with its
+    kernel cache) and PoCL's compile of the work-group function at a kernel's first launch (here a launch over no
+    cells) overlap the NumPy work that comes first (the coherent lobe, the facet tables). Returns the thread (join
+    it before the process ends), or None where :func:`facet_frame_backend` would not take the kernel. A failure
+    here is left to the real call, which raises it."""
+    if kernel_reason(micro, nano) is not None:
+        return None
+    mix = diffraction.perturbative and polarization in ("s", "p")
+    blend = not diffraction.perturbative
+
+    def warm():
+        from ..errors import WaveopticsError
+
+        try:
+            import pyopencl as cl
+        except ImportError:   # the real call names the missing dependency
+            return
+        try:
+            if not opencl_available():
+                return
+            rt, dt, kern = facet_frame_kernel(micro, mix=mix, blend=blend, projected=True, device=device,
+                                              precision=precision)
+            dummy = cl.Buffer(rt.context, cl.mem_flags.READ_WRITE, 64)
+            kern(rt.queue, (LOCAL_SIZE,), (LOCAL_SIZE,), *[dummy] * 13, *[dt(0)] * 11, *[np.int32(0)] * 11).wait()
+        except (WaveopticsError, cl.Error):   # the real call raises it where it belongs
+            return
+
+    thread = threading.Thread(target=warm, name="waveoptics-facet-frame-kernel", daemon=True)
+    thread.start()
+    return thread
 
 
 _tables: dict = {}
@@ -152,16 +207,11 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
     ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
     c = ndf_shape_parameter(spec, kw["ndf_shape"])
     na, nb = (int(x) for x in nodes)
-    rt = get_runtime(device)
-    dt = rt.real_dtype(precision)
-    defines = (f"-DWO_NDF={spec.cl_id}", f"-DWO_SHADOWING={shadowing_by_name(kw['shadowing'])[1]}",
-               f"-DWO_ISO={int(ay == ax)}", f"-DWO_MIX={int(stack_other is not None)}",
-               f"-DWO_BLEND={int(first is not None)}", f"-DWO_EQUI={int(bool(projected))}",
-               *(f"-DWO_BLEND_{n}={float(np.radians(t))!r}" for n, t in zip("01", TANGENT_PLANE_BLEND_DEG)))
     if first is not None and stack_other is not None:
         raise FieldError("the facet tables take either another polarization's tables or first-order tables, "
                          "not both", "first")
-    kern = program_kernel(build_program(rt, "facet_frame.cl", build_options(dt, defines)), "facet_frame_sum")
+    rt, dt, kern = facet_frame_kernel(micro, mix=stack_other is not None, blend=first is not None,
+                                      projected=projected, device=device, precision=precision)
     q = rt.queue
     m0 = sample_normal_dcos(unit_nodes(na), ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])
     n_base, radii, hv_pdf, hv_phi = _half_vector_tables(rad, nb)

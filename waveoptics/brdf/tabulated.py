@@ -178,6 +178,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         w = np.asarray(self.wavelengths_nm)
         diff = rim = None
         rough = self.nano is not None and self.nano.sigma > 0
+        warm = self._warm_kernel(grid, w) if rough and self.lobes_at is None else None
         scale = []
         for p, ph in enumerate(phis):
             for t, th in enumerate(thetas):
@@ -197,6 +198,8 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                     rim = self._rim_node(rim, t, wi, L, n_phi)
                 if self.progress is not None:
                     self.progress(1)
+        if warm is not None:
+            warm.join()
         if diff is None:
             diff = np.zeros((n_phi, thetas.size, w.size, grid.n_v, grid.n_u))
         self._table.update(grid=grid, thetas=thetas, phis=phis, diffraction=diff, rim=rim,
@@ -216,6 +219,18 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
             rim = np.zeros((len(self.thetas_deg),) + r.shape)
         rim[t] = r
         return rim
+
+    def _warm_kernel(self, grid, w):
+        """The thread of :func:`waveoptics.brdf.facet_frame_cl.warm_facet_frame_kernel` building the facet-frame
+        kernel while the first incidence's NumPy work runs, where the lobes take the frame route; else None."""
+        from .. import scatter
+        from .facet_frame_cl import warm_facet_frame_kernel
+        from .twoscale_frame import facet_route
+
+        if facet_route(self.micro, self.nano, grid, w, "auto") != "frame":
+            return None
+        return warm_facet_frame_kernel(self.micro, self.nano, scatter.get_model(self.diffraction, perturbative=True),
+                                       device=self.device, precision=self.precision)
 
     def _cdf(self) -> np.ndarray:
         """The cumulative sums of each tabulated lobe over its cells (n_φ, n_θ, n_λ, n_v n_u), for sampling; made on
