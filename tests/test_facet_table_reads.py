@@ -1,6 +1,7 @@
 """The threaded build of a tabulated two-scale model (issue 31, a fast first export): the per-wavelength and
 per-incidence work spread over threads (:func:`waveoptics.runtime.parallel_map`: band series, albedo tables, the
-facet tables) gives the serial build's tables bit for bit."""
+facet tables, the facet-frame kernel built in the background) gives the serial build's tables bit for bit, and the
+table reads of an export (only the nodes that weigh a point) equal a dense bilinear read written here."""
 import threading
 import time
 
@@ -103,3 +104,33 @@ def test_the_kernel_built_in_the_background_is_the_one_the_model_launches(rt, di
                                 diffraction=diffraction)
     assert np.max(tab.table) > 0
     assert runtime.program_cache_size() == 1
+
+
+def test_export_reads_equal_a_dense_bilinear_read(rt):
+    """f_diff at light directions on and between θ nodes, read by the model (only the nodes with weight > 0),
+    against the blend of both bracketing nodes' lobes read bilinearly at the turned directions (written here)."""
+    tab = TabulatedTwoScaleBRDF("gold", Micro(alpha=0.1), nano=make_nano(NANO, (550.0,)), wavelengths_nm=(550.0,),
+                                resolution=32, thetas_deg=(0.0, 30.0, 60.0))
+    grid = tab.grid
+    rng = np.random.default_rng(7)
+    r = 0.8 * np.sqrt(rng.uniform(0.0, 1.0, 300))   # exit directions away from the rim (no rim filling read)
+    ph = rng.uniform(-np.pi, np.pi, 300)
+    wo = np.stack([r * np.cos(ph), r * np.sin(ph), np.sqrt(1.0 - r * r)], axis=-1)
+    nodes = np.radians([0.0, 30.0, 60.0])
+    for theta in np.radians([30.0, 41.0, 60.0]):
+        wi = np.broadcast_to([np.sin(theta), 0.0, np.cos(theta)], wo.shape)
+        got = tab._f_diffraction(wi, wo, 550.0)
+        f = np.interp(theta, nodes, np.arange(3.0))
+        num = den = 0.0
+        for k in sorted({int(np.floor(f)), min(int(np.floor(f)) + 1, 2)}):
+            w = 1.0 - abs(f - k)
+            beta = theta - nodes[k]
+            u = wo[:, 0] * np.cos(beta) + wo[:, 2] * np.sin(beta)
+            z = -wo[:, 0] * np.sin(beta) + wo[:, 2] * np.cos(beta)
+            # the tabulated lobe with the cells beyond the disc's rim filled (the model's own look-up table)
+            lobe = np.where(z > 0, grid.interpolate(tab._lookup_table()[0, k, 0], u, wo[:, 1]), 0.0)
+            num = num + w * lobe
+            den = den + w * (z > 0)
+        ref = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
+        assert np.max(ref) > 0
+        np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-12 * np.max(ref))

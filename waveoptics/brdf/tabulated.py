@@ -319,9 +319,12 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                     mu, mv = self._node_mirror(p_idx, k)
                     uu, vv = mu + delta[:, 0], mv + delta[:, 1]
                     inside = uu * uu + vv * vv < 1.0
-                # a node whose point lies beyond its horizon holds no data there: it drops out of the blend
-                num += (w_p * w_k)[:, None] * np.where(inside[:, None], self._lookup(p_idx, k, j, uu, vv), 0.0)
-                den += w_p * w_k * inside
+                # a node whose point lies beyond its horizon holds no data there: it drops out of the blend; only
+                # the points a node weighs read its table (ω_i on a θ node gives the next node the weight 0)
+                wt = w_p * w_k
+                r = np.flatnonzero(inside & (wt > 0))
+                num[r] += wt[r, None] * self._lookup(np.broadcast_to(p_idx, wt.shape)[r], k[r], j, uu[r], vv[r])
+                den += wt * inside
         den = den[:, None]
         out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
         if rotate and self._table.get("rim") is not None:   # towards the horizon: the rim tables
