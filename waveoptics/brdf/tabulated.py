@@ -180,22 +180,21 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         rough = self.nano is not None and self.nano.sigma > 0
         warm = self._warm_kernel(grid, w) if rough and self.lobes_at is None else None
         scale = []
+        lobes = self._incidence_lobes(grid, w, [np.array([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)])
+                                                for ph in phis for th in thetas] if rough else [], n_phi)
         for p, ph in enumerate(phis):
             for t, th in enumerate(thetas):
                 if rough:
-                    wi = np.array([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)])
+                    L, r = next(lobes)
                     if self.lobes_at is not None:
-                        L = self.lobes_at(wi)
                         grid = L.grid
-                    else:
-                        L = evaluate(wi, w, self.material, self.micro, self.nano, grid, solver=self.solver,
-                                     kd=0.0, device=self.device, precision=self.precision,
-                                     diffraction=self.diffraction)
                     if diff is None:
                         diff = np.zeros((n_phi, thetas.size, w.size, grid.n_v, grid.n_u))
                     diff[p, t] = L.diffraction
                     scale.append(L.info["diffraction_energy_scale"])
-                    rim = self._rim_node(rim, t, wi, L, n_phi)
+                    if r is not None:
+                        rim = np.zeros((thetas.size,) + r.shape) if rim is None else rim
+                        rim[t] = r
                 if self.progress is not None:
                     self.progress(1)
         if warm is not None:
@@ -205,20 +204,41 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         self._table.update(grid=grid, thetas=thetas, phis=phis, diffraction=diff, rim=rim,
                            energy_scale=np.asarray(scale) if scale else np.ones((1, w.size)))
 
-    def _rim_node(self, rim, t, wi, L, n_phi):
-        """*rim* (n_θ, n_λ, n_cos, n_φ) with incidence node t's rim table (:func:`waveoptics.brdf.tabulated_rim.
-        rim_lobes`, made with *L*'s facet tables and energy-guard factor) filled in; None where no rim is built: not
+    def _rim_at(self, wi, L, n_phi):
+        """The rim table (n_λ, n_cos, n_φ) of the incidence node *wi* (:func:`waveoptics.brdf.tabulated_rim.
+        rim_lobes`, made with *L*'s facet tables and energy-guard factor), or None where no rim is built: not
         asked, lobes from ``lobes_at``, several azimuth nodes or a lobe by the paraxial route."""
         if (not self.rim or self.lobes_at is not None or n_phi != 1 or not self.isotropic
                 or L.info["facet_integration"] != "frame"):
             return None
-        r = rim_lobes(wi, self.wavelengths_nm, self.material, self.micro, self.nano, L.grid,
-                      diffraction=self.diffraction, energy_scale=L.info["diffraction_energy_scale"],
-                      device=self.device, precision=self.precision)
-        if rim is None:
-            rim = np.zeros((len(self.thetas_deg),) + r.shape)
-        rim[t] = r
-        return rim
+        return rim_lobes(wi, self.wavelengths_nm, self.material, self.micro, self.nano, L.grid,
+                         diffraction=self.diffraction, energy_scale=L.info["diffraction_energy_scale"],
+                         device=self.device, precision=self.precision)
+
+    def _incidence_lobes(self, grid, w, wis, n_phi):
+        """(:class:`waveoptics.brdf.Lobes`, rim table or None, :meth:`_rim_at`) at each light direction of *wis*
+        (the table's nodes), in their order: by ``lobes_at`` one after the other, or by
+        :func:`waveoptics.brdf.evaluate` on *grid* at the wavelengths *w*. For PSD statistics the first incidence
+        alone (it builds what all of them share: the band series, albedo and facet tables), the others in parallel
+        threads (:func:`waveoptics.runtime.parallel_imap`), each the same as built alone (the NumPy of one
+        incidence overlaps the facet-frame kernel of another). A height field's incidences stay in order: its
+        coherent fraction interpolates between incidence nodes computed as the incidences ask for them
+        (:meth:`waveoptics.brdf.Nano.coherent_fraction`), a cache whose content depends on the order."""
+        from ..runtime import parallel_imap
+
+        def one(wi):
+            L = self.lobes_at(wi) if self.lobes_at is not None else evaluate(
+                wi, w, self.material, self.micro, self.nano, grid, solver=self.solver, kd=0.0, device=self.device,
+                precision=self.precision, diffraction=self.diffraction)
+            return L, self._rim_at(wi, L, n_phi)
+
+        if not wis:
+            return
+        if self.lobes_at is not None or self.nano.model is None:
+            yield from map(one, wis)
+            return
+        yield one(wis[0])
+        yield from parallel_imap(one, wis[1:])
 
     def _warm_kernel(self, grid, w):
         """The thread of :func:`waveoptics.brdf.facet_frame_cl.warm_facet_frame_kernel` building the facet-frame

@@ -47,9 +47,8 @@ from .models import get_model
 from .series import M_MAX, poisson_weights, roughness_g, series_tables, series_terms
 
 __all__ = ["band_arc", "relevant_variance", "relevant_variance_of_field", "beyond_band_fraction", "SIN_NODES",
-           "relevant_variances", "relevant_sigma2", "band_correlation", "BandSeries", "band_series", "band_series_built",
-           "series_arrays",
-           "scattered_lobe"]
+           "relevant_variances", "relevant_sigma2", "band_correlation", "BandSeries", "band_series",
+           "band_series_built", "series_arrays", "scattered_lobe"]
 
 
 def band_arc(r, sin_theta_i, wavelength_nm):
