@@ -90,6 +90,16 @@ def test_parallel_map_with_one_worker_runs_in_the_calling_thread(monkeypatch):
     assert runtime.parallel_map(str, []) == []
 
 
+def test_a_parallel_map_inside_an_item_runs_in_that_items_thread():
+    def outer(x):
+        me = threading.get_ident()
+        inner = runtime.parallel_map(lambda y: (threading.get_ident(), x * 10 + y), range(4), workers=2)
+        assert all(t == me for t, _ in inner)
+        return [v for _, v in inner]
+
+    assert runtime.parallel_map(outer, range(3), workers=2) == [[x * 10 + y for y in range(4)] for x in range(3)]
+
+
 def test_parallel_map_raises_the_first_failing_items_exception():
     done = []
 

@@ -336,6 +336,9 @@ def cpu_workers(workers: int | None = None) -> int:
     return int(workers)
 
 
+_pool_thread = threading.local()
+
+
 def parallel_imap(fn, items, workers: int | None = None):
     """``fn(item)`` for each of *items*, yielded in the order of *items*, computed by a pool of
     :func:`cpu_workers` (*workers*) threads: for independent pieces of work that spend their time in NumPy, SciPy
@@ -345,19 +348,24 @@ def parallel_imap(fn, items, workers: int | None = None):
 
     *fn* must not depend on the order in which items are computed, only on its item (each result is then the one a
     serial loop gives, bit for bit); results shared between items (caches) must be safe to fill from several
-    threads.
+    threads. A call made by an item of another call runs serially in that item's thread: the outer call keeps the
+    workers busy, and pools inside pools would multiply the threads (workers² on a many-core machine).
     """
     items = list(items)
     n = min(cpu_workers(workers), len(items))
-    if n <= 1:
+    if n <= 1 or getattr(_pool_thread, "active", False):
         for item in items:
             yield fn(item)
         return
     from concurrent.futures import ThreadPoolExecutor
 
+    def run(item):
+        _pool_thread.active = True   # a thread of the pool: the calls its items make run serially
+        return fn(item)
+
     pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="waveoptics")
     try:
-        futures = [pool.submit(fn, item) for item in items]
+        futures = [pool.submit(run, item) for item in items]
         for fut in futures:
             yield fut.result()
     finally:   # on an exception, or a caller that stops early: the items not started are dropped
