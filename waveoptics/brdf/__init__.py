@@ -45,7 +45,7 @@ from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, mult
 from .sampling import (NormalSampler, NORMAL_SAMPLERS, sample_normal, pdf_normal, pdf_reflected, sample_reflected, sample_normal_dcos)
 from .protocol import (BRDFSample, BRDF, MicrofacetBRDF, TwoScaleParts, sample_cosine, pdf_cosine, lobe_choice,
     check_uniform)
-from .pointwise import (QUADRATURE_NODES, QUADRATURE_NODES_WIDE, wide_micro_lobe, RADIAL_BINS, COS_LEVELS, TwoScaleBRDF, unit_nodes, NanoRadial, facet_basis,
+from .pointwise import (QUADRATURE_NODES, QUADRATURE_NODES_WIDE, QUADRATURE_WIDE_ALPHA, wide_micro_lobe, RADIAL_BINS, COS_LEVELS, TwoScaleBRDF, unit_nodes, NanoRadial, facet_basis,
     to_facet, from_facet)
 from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, TabulatedTwoScaleBRDF)
 from .spectral import (SpectralNodes)

@@ -67,7 +67,7 @@ from .facet import (wide_micro_lobe, COS_LEVELS, RADIAL_BINS, NanoRadial, local_
 from .directions import dot_last
 from .roughness_scales import check_series
 
-__all__ = ['QUADRATURE_NODES', 'QUADRATURE_NODES_WIDE', 'wide_micro_lobe', 'RADIAL_BINS', 'COS_LEVELS', 'TwoScaleBRDF', 'unit_nodes', 'NanoRadial', 'facet_basis',
+__all__ = ['QUADRATURE_NODES', 'QUADRATURE_NODES_WIDE', 'QUADRATURE_WIDE_ALPHA', 'wide_micro_lobe', 'RADIAL_BINS', 'COS_LEVELS', 'TwoScaleBRDF', 'unit_nodes', 'NanoRadial', 'facet_basis',
            'to_facet', 'from_facet']
 
 #: quadrature points of the facet convolution (a power of two: an unscrambled Sobol set), for a micro lobe narrower
@@ -75,8 +75,12 @@ __all__ = ['QUADRATURE_NODES', 'QUADRATURE_NODES_WIDE', 'wide_micro_lobe', 'RADI
 #: (:func:`waveoptics.brdf.wide_micro_lobe`). Measured against a seeded Monte-Carlo facet-frame integral
 #: (scripts/facet_frame_sweep.py; Al, ABC σ 10 nm, B 2 µm, C 2.6, 550 nm, Beckmann, θ_o up to 85°): at θ_i = 80°,
 #: α 0.3 / 0.5, 256 nodes 3.2 / 6.1 % off at θ_o 85° (reference s.e. 0.7 / 0.9 %), 512 nodes 2.0 / 2.7 %,
-#: 2048 nodes 0.8 / 1.2 %; at 60° and below every node count is within 1 % (256: 0.7 %). 512 nodes cost ~2x 256.
+#: 2048 nodes 0.8 / 1.2 %; at 60° and below every node count is within 1 % (256: 0.7 %); at α 0.05 / 0.1 256 nodes
+#: are within 0.5 / 1.7 % at every θ_i of the sweep. 512 nodes cost ~2x 256, so they are taken for a wide lobe whose
+#: α is also at least :data:`QUADRATURE_WIDE_ALPHA` (its NDF normals, drawn with D(m) cos θ_m whatever the light,
+#: face away from grazing light: the deficit grows with α, not with the nano lobe's width)
 QUADRATURE_NODES, QUADRATURE_NODES_WIDE = 256, 512
+QUADRATURE_WIDE_ALPHA = 0.2
 _CHUNK = 2048
 
 
@@ -111,7 +115,8 @@ class TwoScaleBRDF(TwoScaleParts):
         Quadrature points over facet normals per evaluation (power of two ≥ 16): half with density D(m) cos θ_m,
         half about the half-vector through the nano lobe's radial law (module doc); the sampler draws from half as
         many normals of the micro NDF's sampler. None: :data:`QUADRATURE_NODES`, or :data:`QUADRATURE_NODES_WIDE`
-        for a micro lobe wide against the nano lobe (:func:`waveoptics.brdf.wide_micro_lobe`).
+        for a micro lobe wide against the nano lobe (:func:`waveoptics.brdf.wide_micro_lobe`) with α ≥
+        :data:`QUADRATURE_WIDE_ALPHA`.
     """
 
     nodes: int | None = None
@@ -124,8 +129,9 @@ class TwoScaleBRDF(TwoScaleParts):
                              "field is evaluated on a direction grid by simulate", "nano")
         if self.nodes is None:
             kw = self.micro.kw()
-            wide = self.nano is not None and wide_micro_lobe(max(kw["alpha"], kw["alpha_y"] or 0.0),
-                                                             self.nano.model.length_scale)
+            a = max(kw["alpha"], kw["alpha_y"] or 0.0)
+            wide = (self.nano is not None and a >= QUADRATURE_WIDE_ALPHA
+                    and wide_micro_lobe(a, self.nano.model.length_scale))
             object.__setattr__(self, "nodes", QUADRATURE_NODES_WIDE if wide else QUADRATURE_NODES)
         n = int(self.nodes)
         if n < 16 or n & (n - 1):
