@@ -96,7 +96,7 @@ def test_simulate_with_a_tabulated_micro_ndf_is_beckmann_for_a_gaussian_surface(
 
 def test_simulate_multiple_scattering_is_said_and_adds_the_lost_light():
     kw = dict(material="Al", micro_alpha=0.8, ndf="ggx", nano="gaussian:sigma=5nm,corr_length=1um", incident=(30.0, 0.0),
-              wavelengths=[550.0], resolution=48)
+              wavelengths=[550.0], resolution=32)
     on = simulate(multiple_scattering=True, **kw)
     off = simulate(**kw)
     assert on.params["multiple_scattering"] is True and off.params["multiple_scattering"] is False
