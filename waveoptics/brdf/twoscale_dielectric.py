@@ -193,6 +193,9 @@ class TwoScaleDielectricBSDF(NanoRoughDielectricBSDF):
         wi = np.where(ok_pair[:, None], wi, [0.0, 0.0, 1.0])
         wo = np.where(ok_pair[:, None], wo, [0.0, 0.0, 1.0])
         h, half, trans = pair_half_vector(wi, wo, eta)
+        # guard: half = 0 only for a degenerate pair (ω_o = −ω_i in reflection, η_i ω_i = −η_o ω_o in transmission),
+        # where the half-vector has no direction; the floor only keeps the node placement (cos θ_d level, offsets)
+        # finite there, the nodes' density enters their weights, so no value is scaled by it
         half = np.maximum(half, 1e-6)
         rad = _radial(self.psd, float(lam), self.nodes // 2)
         level = rad.level(half)
