@@ -138,7 +138,7 @@ def test_plugin_passes_mitsubas_chi2(variant, case, theta_deg):   # each case on
     else:
         sample_func, pdf_func = BSDFAdapter(wm.PLUGIN_NAME, extra, wi=wi)
     chi2 = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func, sample_dim=3,
-                         sample_count=200_000, res=101, ires=8, seed=7)
+                         sample_count=200_000, res=101, ires=4, seed=7)
     assert chi2.run(), chi2.messages
 
 

@@ -15,7 +15,7 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   the blend moves the lobe with the incidence instead of cross-fading two lobes at different places. Reads within
   a cell of the horizon take the cells beyond the rim as the mean of their neighbours inside it (the lobe rises
   towards the horizon, where zeros would pull it down). Beyond θ_o 65-69° the read hands over to rim tables
-  (:mod:`waveoptics.brdf.tabulated_rim`: the same facet-frame sum on nodes 1.5° × 2.5° apart in (θ_o, φ_o) from
+  (:mod:`waveoptics.brdf.tabulated_rim`: the same facet-frame sum on nodes 1.5° × 5° apart in (θ_o, φ_o) from
   63° to the horizon), read at ω_o itself and blended linearly in θ_i, where a direction-cosine cell spans 5.7°
   at 78° and the turn by θ_i − θ_k reads the concave lobe up and down the horizon's slope.
 * Surfaces whose nano lobe depends on the light's azimuth (height fields, gratings, anisotropic micro NDFs) are
