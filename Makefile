@@ -26,12 +26,14 @@ demo: $(STAMP)
 	$(VENV)/bin/waveoptics render --material gold --micro-alpha 0.05 --nano abc:sigma=50nm,B=1um,C=2.6 \
 		--environment studio --no-ground --sphere-size 128 --spp 256 -o out/render --overwrite
 
+# whole files to each worker, the longest first (tests/conftest.py): a file's fixtures and caches are built once;
+# a worker that crashes (a hung test, faulthandler_timeout) is restarted at most twice
 test: $(STAMP)
-	$(PY) -m pytest -q -ra -n $(JOBS)
+	$(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile --max-worker-restart 2
 
 # the edit loop: everything but the slow tests (marked by hand, or recorded above 0.5 s in tests/durations.json), <= 2 min
 test-fast: $(STAMP)
-	$(PY) -m pytest -q -ra -n $(JOBS) -m "not slow"
+	$(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile -m "not slow"
 
 # re-measure every test's wall time into tests/durations.json (which tests make test-fast leaves out)
 durations: $(STAMP)
