@@ -33,7 +33,7 @@ from .roughness_scales import Micro, Nano
 from .twoscale_frame import facet_frame_diffraction
 
 __all__ = ['RIM_THETA_DEG', 'RIM_BLEND_DEG', 'RIM_CELLS', 'DirectionPoints', 'rim_cos_nodes', 'rim_phi_nodes',
-           'rim_directions', 'rim_lobes', 'rim_weight', 'rim_read']
+           'rim_directions', 'rim_lobes', 'rim_weight', 'rim_read', 'pchip_slopes', 'rim_across_incidence']
 
 #: polar angle (degrees) from which the rim table reaches to the horizon
 RIM_THETA_DEG = 63.0
@@ -119,3 +119,59 @@ def rim_read(rim, k, j, x, y, z):
     c0, p0 = c0[:, None], p0[:, None]
     return ((1 - ac) * ((1 - ap) * rim[k, j, c0, p0] + ap * rim[k, j, c0, p0 + 1])
             + ac * ((1 - ap) * rim[k, j, c0 + 1, p0] + ap * rim[k, j, c0 + 1, p0 + 1]))
+
+
+def pchip_slopes(h0, h1, d0, d1, edge):
+    """Slopes of the monotone piecewise-cubic Hermite interpolant (Fritsch & Carlson 1980) at a node between
+    intervals of widths *h0*, *h1* whose secant slopes are *d0*, *d1* (arrays, broadcast): the weighted harmonic
+    mean (w1 + w2) / (w1/d0 + w2/d1), w1 = 2 h1 + h0, w2 = h1 + 2 h0 (Fritsch & Butland 1984), 0 where the secants
+    differ in sign or either is 0. Where *edge* (an end node: h0, d0 its own interval, h1, d1 the next one
+    inwards) the three-point end formula ((2 h0 + h1) d0 − h0 d1) / (h0 + h1), 0 where its sign differs from d0's,
+    3 d0 where the secants differ in sign and it exceeds 3 |d0|; with no next interval (h1 = 0) d0. The rules of
+    scipy's ``PchipInterpolator``.
+
+    References
+    ----------
+    .. [1] F. N. Fritsch, R. E. Carlson, SIAM J. Numer. Anal. 17(2), 238-246, 1980 (monotone cubic Hermite).
+    .. [2] F. N. Fritsch, J. Butland, SIAM J. Sci. Stat. Comput. 5(2), 300-304, 1984 (the harmonic-mean slopes).
+    """
+    h0, h1, d0, d1 = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (h0, h1, d0, d1)))
+    w1, w2 = 2 * h1 + h0, h1 + 2 * h0
+    same = (d0 * d1 > 0)
+    inner = np.where(same, (w1 + w2) / np.where(same, w1 / np.where(same, d0, 1) + w2 / np.where(same, d1, 1), 1),
+                     0.0)
+    hs = np.where(h0 + h1 > 0, h0 + h1, 1.0)
+    end = ((2 * h0 + h1) * d0 - h0 * d1) / hs
+    end = np.where(np.sign(end) != np.sign(d0), 0.0, end)
+    end = np.where((np.sign(d0) != np.sign(d1)) & (np.abs(end) > 3 * np.abs(d0)), 3 * d0, end)
+    end = np.where(h1 > 0, end, d0)
+    return np.where(edge, end, inner)
+
+
+def rim_across_incidence(rim, thetas, a, t, j, x, y, z):
+    """The rim tables *rim* (n_θ, n_λ, n_cos, n_φ) of incidence nodes *thetas* (rad) read at (x, y, z) (n,) each
+    (:func:`rim_read`, wavelength indices *j*) and interpolated over incidence between node a (n,) and a + 1 at
+    the fraction t (n,) of the interval, (n, n_j): the monotone cubic Hermite interpolant of the four nodes a − 1
+    to a + 2 (:func:`pchip_slopes`; the end formula at the first and last intervals; t = 0 at and beyond the last
+    node reads that node). At a fixed exit near the horizon the lobe rises steeply as θ_i nears the exit's mirror
+    angle: linear between nodes 3-5° apart it read the Monte-Carlo facet-frame integral 2.6-4.3 % high at
+    θ_o 85° forward (θ_i 74-80°, Beckmann α 0.3, Al, ABC σ 10 nm, B 2 µm, C 2.6, 550 nm; nodes 65-84°: this
+    interpolant of the same reference within 0.4 %, α 0.05 within 0.4 % too, linear 0.6-0.8 %); monotone, it stays
+    between the two nodes' values where they bracket no extremum, so never below 0.
+
+    References
+    ----------
+    .. [1] F. N. Fritsch, R. E. Carlson, SIAM J. Numer. Anal. 17(2), 238-246, 1980.
+    """
+    last = thetas.size - 1
+    k = [np.clip(a + s, 0, last) for s in (-1, 0, 1, 2)]
+    v = [rim_read(rim, kk, j, x, y, z) for kk in k]
+    th = [thetas[kk][:, None] for kk in k]
+    h = [th[s + 1] - th[s] for s in range(3)]                     # 0 where clamped at an end
+    d = [np.where(hh > 0, (v[s + 1] - v[s]) / np.where(hh > 0, hh, 1.0), 0.0) for s, hh in enumerate(h)]
+    m1 = np.where(h[0] > 0, pchip_slopes(h[0], h[1], d[0], d[1], False), pchip_slopes(h[1], h[2], d[1], d[2], True))
+    m2 = np.where(h[2] > 0, pchip_slopes(h[1], h[2], d[1], d[2], False), pchip_slopes(h[1], h[0], d[1], d[0], True))
+    s = np.asarray(t, dtype=float)[:, None]
+    s2, s3 = s * s, s * s * s
+    return ((2 * s3 - 3 * s2 + 1) * v[1] + (s3 - 2 * s2 + s) * h[1] * m1 + (3 * s2 - 2 * s3) * v[2]
+            + (s3 - s2) * h[1] * m2)
