@@ -25,6 +25,8 @@ References
 .. [2] E. Heitz, JCGT 3(2), 2014, eqs. (72), (99) (Beckmann Smith Λ; height-correlated G2).
 .. [3] E. Veach, PhD thesis, Stanford 1997, §9.2 (balance heuristic).
 """
+import functools
+
 import numpy as np
 import pytest
 from scipy.special import erfc
@@ -106,12 +108,14 @@ def facet_frame_mc(f_nano, wi, wo, n=16000, seed=28, scale=SCALE):
         d = _beckmann_d(m[..., 2])
         rad2 = np.maximum(1.0 - mh * mh, 0.0) / (scale * scale)
         pdf = na * d * m[..., 2] + na * np.where(mh > 0, (1 + rad2) ** -1.5 / (2 * np.pi * scale ** 2) * mh, 0.0)
-        ok = ok & (ci > 0) & (co > 0) & (m[..., 2] > 0)
-        li, lo = _local(ci, co, np.broadcast_to((wi * wo).sum(-1)[:, None], ci.shape))
-        fn = np.asarray(f_nano(li.reshape(-1, 3), lo.reshape(-1, 3), LAM)).reshape(ci.shape)
+        use = ok & (ci > 0) & (co > 0) & (m[..., 2] > 0) & (pdf > 0)
+        # the facet's lobe only where a sample counts (the others add 0): 0.7 of the run time is f_nano
+        li, lo = _local(ci[use], co[use], np.broadcast_to((wi * wo).sum(-1)[:, None], ci.shape)[use])
+        fn = np.zeros(ci.shape)
+        fn[use] = f_nano(li, lo, LAM)
         g2 = 1.0 / (1.0 + lam_i + lam_o)[:, None]
         val = ci * co / (wi[:, 2] * wo[:, 2])[:, None] * fn * g2 * d
-        terms.append(np.where(ok & (pdf > 0), val / np.where(pdf > 0, pdf, 1.0), 0.0))
+        terms.append(np.where(use, val / np.where(pdf > 0, pdf, 1.0), 0.0))
     mean = sum(t.sum(axis=1) for t in terms)
     se = np.sqrt(sum(na * t.var(axis=1, ddof=1) for t in terms))
     return mean, se
@@ -205,6 +209,14 @@ def test_tabulated_lobe_of_a_wide_micro_lobe_at_grazing_incidence():
     _assert_close(t.eval_parts(wi, wo, LAM)["diffraction"], ref, se, "tabulated")
 
 
+@functools.lru_cache(maxsize=1)
+def _pointwise_reference():
+    """The reference at :data:`PAIRS` and :data:`FORWARD` (the facet lobe does not depend on the pointwise form's
+    nodes: one Monte-Carlo run serves both cases of the test below)."""
+    wi, wo = _pairs(PAIRS + FORWARD)
+    return facet_frame_mc(TwoScaleBRDF("aluminium", MICRO, nano=NANO).facet_nano_brdf, wi, wo, n=32000)
+
+
 @pytest.mark.parametrize("nodes,passes", [(None, True), (128, False)])
 def test_pointwise_form_of_a_wide_micro_lobe_at_grazing_incidence(nodes, passes):
     """``TwoScaleBRDF`` (a per-pair quadrature over facet normals, not the grid's tables) at :data:`PAIRS` and
@@ -217,7 +229,7 @@ def test_pointwise_form_of_a_wide_micro_lobe_at_grazing_incidence(nodes, passes)
     b = TwoScaleBRDF("aluminium", MICRO, nano=NANO, nodes=nodes)
     assert b.nodes == (brdf.QUADRATURE_NODES_WIDE if nodes is None else nodes)
     wi, wo = _pairs(PAIRS + FORWARD)
-    ref, se = facet_frame_mc(b.facet_nano_brdf, wi, wo, n=32000)
+    ref, se = _pointwise_reference()
     got = b.eval_parts(wi, wo, LAM)["diffraction"]
     if passes:
         _assert_close(got, ref, se, "pointwise")
