@@ -19,9 +19,13 @@
  * at WO_BLEND_1 (radians); the same for the local incidence and exit swapped (reciprocal).
  * WO_EQUI 1 when the tables' grid is Lambert's azimuthal equal-area projection (x, y) = (u, v) / sqrt(1 + z) of
  * the local exit (PSD statistics: a cell 1.7-2.4 degrees on 96^2 up to the horizon; Snyder 1987, sec. 24), 0 when
- * it is in direction cosines (a height field's tables).
+ * it is in direction cosines (a height field's tables). With WO_EQUI the first-order tables (stack_other under
+ * WO_BLEND; stack and stack_other of a Rayleigh-Rice lobe) hold q = f_RR / cos theta_o = g / cos^2 theta_o, finite
+ * and smooth at the horizon where g falls like cos^2 theta_o (Church et al. 1979): each read is multiplied by the
+ * facet's exact cos^2 theta_o' (the twin _facet_read; a bilinear read of g itself ran 5-9 % high at 84-86 degrees).
  * References: Walter, Marschner, Li, Torrance, EGSR 2007, eq. 14; Veach, PhD thesis 1997, sec. 9.2; Duff et al.,
- * JCGT 6(1) 2017 (facet basis); Priest & Germer, Proc. MSS Passive Sensors 2000 (facet s/p frames).
+ * JCGT 6(1) 2017 (facet basis); Priest & Germer, Proc. MSS Passive Sensors 2000 (facet s/p frames); Church,
+ * Jenkinson, Zavada, Opt. Eng. 18(2) 1979 (the first-order lobe's cos theta_i cos theta_o).
  */
 #include "microfacet.h"
 
@@ -175,6 +179,17 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
     if (om < cos((real_t)(WO_BLEND_0))) wt *= tangent_weight(acos(wo_clamp(om, R(-1.0), R(1.0))));
     real_t other = own * (R(1.0) - wt);   /* the first-order table's share; each read is skipped at weight 0 */
     own *= wt;
+#endif
+#if WO_EQUI
+    /* first-order tables of PSD statistics hold q = g / cos^2 theta_o: times the exact cos^2 theta_o' */
+#if WO_BLEND
+    other *= om * om;
+#else
+    own *= om * om;
+#if WO_MIX
+    other *= om * om;
+#endif
+#endif
 #endif
     int row = n_u * n_lam;
     for (int s = 0; s < 2; ++s) {

@@ -182,7 +182,9 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
         w(θ_o') of :mod:`waveoptics.scatter.tangent_blend` at its exact local angles (not with *stack_other*).
     projected : bool
         Whether *table_grid* is Lambert's azimuthal equal-area projection of PSD statistics' tables
-        (:func:`waveoptics.brdf.facet_table_grid`) rather than direction cosines.
+        (:func:`waveoptics.brdf.facet_table_grid`) rather than direction cosines; their first-order tables
+        (*first*, or a Rayleigh-Rice *stack* and *stack_other*) then hold q = g / cos²θ_o, multiplied by each
+        facet's exact cos²θ_o' (:func:`waveoptics.brdf.facet_frame_diffraction`).
     device : str, optional
         Device spec (:func:`waveoptics.runtime.get_runtime`).
     precision : {'float32', 'float64'}

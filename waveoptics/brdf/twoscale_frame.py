@@ -41,13 +41,15 @@ __all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NO
 #: diffracted part came out 4 % above the light the facets scatter (Al: 1.3 %), 0.3 % with these nodes
 FACET_THETAS_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 78, 81, 84, 86, 88,
                              89, 89.5, 89.9])
-#: local incidences θ' (degrees) of the facet tables of PSD statistics: 2° apart from 40° to 88°, about as fine as
-#: the tables' exit angles (:func:`facet_table_grid`, 1.9° a cell on 96² lobes), so that a facet's lobe is read
-#: about as finely over its incidence as over its exit and the sum stays reciprocal where facets see 40-90°. With
-#: :data:`FACET_THETAS_DEG` (5° apart to 75°) the facet-frame sum's f(i,o)/f(o,i) − 1 was up to 3.7 % (Beckmann α
-#: 0.05-0.3, 96²; pairs near the grazing specular direction and 60 → 80° forward; 1° apart only from 60°: 2.6 %,
-#: facets tilted by α 0.3 see 40-60° there), with these nodes ≤ 0.84 % (1° apart from 40°: ≤ 0.5 %)
-FACET_THETAS_PSD_DEG = np.array([0.0, 5, 10, 15, 20, 25, 30, 35, *range(40, 89, 2), 89, 89.5, 89.9], dtype=float)
+#: local incidences θ' (degrees) of the facet tables of PSD statistics: 2° apart, about as fine as the tables' exit
+#: angles (:func:`facet_table_grid`, 1.9° a cell on 96² lobes). With :data:`FACET_THETAS_DEG` (5° apart to 75°) the
+#: facet-frame sum's f(i,o)/f(o,i) − 1 was up to 3.7 % (Beckmann α 0.05-0.3, 96²), 2° apart from 40° ≤ 0.84 %. Below
+#: 40° too since the first-order tables hold q = g / cos²θ_o (:func:`_facet_table`): the turned reads at the two
+#: nodes around a facet's θ' see its exit up to half a spacing higher and lower, where q bends (Q/F of a metal
+#: towards its pseudo-Brewster angle): 5° apart, θ' 7-12° → 77-82° in the plane read 3.5-5.4 % high (Al, 550 nm),
+#: 2° ≤ 1.7 %; tabulated max f(i,o)/f(o,i) − 1 (tests/test_tabulated_rim.py, Beckmann α 0.05 / 0.1) 3.5 / 2.6 %
+#: against 1.8 / 1.3 %. 48 tables, not 36: 27 % more CPU time to build (128², 25 wavelengths, under load)
+FACET_THETAS_PSD_DEG = np.array([*range(0, 89, 2), 89, 89.5, 89.9], dtype=float)
 #: facet normals of the grid route's quadrature (:func:`facet_nodes`): (D(m) cos θ_m normals turned to each
 #: cell's half-vector azimuth; drawn about each cell's half-vector through the nano lobe's radial law), for a micro
 #: lobe narrower than :data:`FACET_NODE_SPLIT` nano lobe widths, and for a wider one. Measured per cell (with the
@@ -157,15 +159,27 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     g is finite up to the horizon (f grows like 1/cos θ_o there); cells beyond the rim of the disc hold g of the
     rim direction on their radius, so that bilinear reads within a cell of the rim are not pulled towards 0.
 
+    A first-order lobe f_RR ∝ cos θ_i cos θ_o Q S (Church et al. 1979) gives g ∝ cos²θ_o ≈ 4 (1 − r)² towards the
+    rim r = 1 of the projection: read bilinearly it came out 3-14x the exact g at θ_o' 88-90°, 5-9 % high at 84-86°,
+    and the facet-frame sum 4-7 % above a Monte-Carlo reference at θ_i 74-80° → 80-85° forward (Beckmann α 0.3,
+    96²). So PSD statistics' tables hold first-order lobes as q = f_RR / cos θ_o = g / cos²θ_o (finite at the
+    horizon) and :func:`_facet_read` multiplies q by the facet's exact cos²θ_o' (a height field's tables hold g).
+
     Returns (g, first): for the Kirchhoff family of PSD statistics g holds the tangent-plane lobe f_K cos θ_o and
-    first the first-order lobe f_RR / F cos θ_o, both smooth across the hand-over window of
+    first the first-order lobe's q = f_RR / (F cos θ_o), both smooth across the hand-over window of
     :mod:`waveoptics.scatter.tangent_blend`, and the blended lobe is W g + (1 − W) first with W = w(θ_i') w(θ_o') taken
     at the facet's exact local directions (:func:`_facet_read`); baked into one table, W (which falls from 1 to 0
     over 70-80°, two 96² cells in u at the horizon) was read bilinearly at the exit and linearly between incidence
     nodes, a different rule for ω_i and ω_o: the facet-frame sum came out non-reciprocal by up to 5 % (Beckmann
     α 0.1, pairs with an end at 75-80°). So for a height field's Kirchhoff lobe, whose first-order lobe is that of
-    its periodogram (:func:`_field_table`). Under Rayleigh-Rice g is the lobe and first None.
-    Cached on *nano*."""
+    its periodogram (:func:`_field_table`). Under Rayleigh-Rice g is the lobe (for PSD statistics its q) and
+    first None. Cached on *nano*.
+
+    References
+    ----------
+    .. [1] E. L. Church, H. A. Jenkinson, J. M. Zavada, Opt. Eng. 18(2), 125-136, 1979 (f_RR = (16π²/λ⁴) cos θ_i
+       cos θ_o Q S).
+    """
     cache = nano.__dict__.setdefault("_cache", {})
     key = ("facet-table", k, tuple(float(x) for x in w), grid.n_u, grid.n_v, tuple(grid.u_range),
            tuple(grid.v_range), dm.name, getattr(material, "name", None), polarization)
@@ -185,18 +199,19 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
         first = None if dm.perturbative else np.zeros_like(out)
         for i, lam in enumerate(w):
             if dm.perturbative:
-                f = scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization)
-            else:
-                check_series(nano.model, lam)
-                f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
-                # beyond the tangent plane's validity the lobe hands over to first order, reciprocal (W f_K +
-                # (1 − W) f_RR / F, F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9):
-                # f_K and f_RR / F held apart, W applied at each facet's exact local directions
-                Fl = ((lambda a, b, lam=lam: material.F_facet(a, b, lam, polarization))
-                      if uses_vector_first_order(material) else None)
-                rr = first_order_over_fresnel(np.broadcast_to(wi, wo.shape), wo, lam, nano.model, material,
-                                              polarization, Fl)
-                first[sel, i] = rr * wo[:, 2]
+                # first order: q = f_RR / cos θ_o, read times the facet's cos²θ_o' (docstring)
+                out[sel, i] = scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization) / wo[:, 2]
+                continue
+            check_series(nano.model, lam)
+            f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
+            # beyond the tangent plane's validity the lobe hands over to first order, reciprocal (W f_K +
+            # (1 − W) f_RR / F, F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9):
+            # f_K and f_RR / F held apart, W applied at each facet's exact local directions
+            Fl = ((lambda a, b, lam=lam: material.F_facet(a, b, lam, polarization))
+                  if uses_vector_first_order(material) else None)
+            rr = first_order_over_fresnel(np.broadcast_to(wi, wo.shape), wo, lam, nano.model, material,
+                                          polarization, Fl)
+            first[sel, i] = rr / wo[:, 2]   # q = f_RR / (F cos θ_o), read times cos²θ_o' (docstring)
             out[sel, i] = f * wo[:, 2]
         for a in (out, first):
             if half.start > 0 and a is not None:
@@ -352,8 +367,9 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=Fa
     with the same stencil) and the result is W g + (1 − W) first, W = w(θ) w(θ_o) of
     :mod:`waveoptics.scatter.tangent_blend` at the exact local angles: the
     same for the facet's incidence and exit swapped (reciprocal). *projected*: the tables are PSD statistics' on
-    the equal-area projection (:func:`facet_table_grid`), not in direction cosines; *thetas_deg* the tables'
-    incidences (:func:`facet_thetas`)."""
+    the equal-area projection (:func:`facet_table_grid`), not in direction cosines, and their first-order lobes
+    (first; a Rayleigh-Rice stack) hold q = g / cos²θ_o, multiplied here by cos²θ_o' of *lo* (:func:`_facet_table`);
+    *thetas_deg* the tables' incidences (:func:`facet_thetas`)."""
     nodes = np.radians(thetas_deg)
     theta = np.asarray(theta, dtype=float)   # one incidence (an NDF node shared by all cells) stays a scalar
     if theta.ndim:
@@ -381,9 +397,12 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=Fa
     # np.take gathers whole rows (n_λ values) ~3x faster than fancy indexing, the same values
     rows = np.take(flat, np.stack(idx, axis=1), axis=0)
     val = np.einsum("cj,cjl->cl", np.stack(wts, axis=1).astype(np.float32), rows)
+    c2 = lo[:, 2:3] ** 2 if projected else 1.0   # PSD statistics' first-order tables hold q = g / cos²θ_o
     if blend:
         W = np.reshape(tangent_plane_weight(np.cos(theta)) * tangent_plane_weight(lo[:, 2]), (-1, 1))
-        val = W * val[:, :n_lam] + (1.0 - W) * val[:, n_lam:]
+        val = W * val[:, :n_lam] + (1.0 - W) * c2 * val[:, n_lam:]
+    else:   # projected: a Rayleigh-Rice table (the Kirchhoff family's come with their first-order part)
+        val = c2 * val
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 

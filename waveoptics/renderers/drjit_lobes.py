@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_THETA_DEG
+from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_THETA_DEG, pchip_between
 
 __all__ = ['DiffractedLobes']
 
@@ -144,8 +144,13 @@ class DiffractedLobes:
         if self.rim is not None:   # towards the horizon the rim tables, read at ω_o itself (library ``_with_rim``)
             c0, c1 = (math.cos(math.radians(x)) for x in RIM_BLEND_DEG)
             W = dr.clip((c0 - g.wo_r.z) / (c0 - c1), 0.0, 1.0)
-            rim = (self._rim_lookup(ks[0][0], j, g.wo_r) * ks[0][1]
-                   + (self._rim_lookup(ks[1][0], j, g.wo_r) * ks[1][1] if len(ks) > 1 else 0.0))
+            if self.K == 1:
+                rim = self._rim_lookup(ks[0][0], j, g.wo_r)
+            else:   # the monotone cubic over the incidence nodes a − 1 .. a + 2 (library ``rim_across_incidence``)
+                a, t = brk
+                k4 = [dr.clip(a + s, 0.0, self.K - 1.0) for s in (-1.0, 0.0, 1.0, 2.0)]
+                rim = pchip_between([self._rim_lookup(k, j, g.wo_r) for k in k4],
+                                    [self._gather_list(self.thetas, k) for k in k4], t, dr.select)
             out = (1.0 - W) * out + W * rim
         return dr.select(g.up, out, 0.0)
 
