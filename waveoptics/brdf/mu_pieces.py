@@ -1,0 +1,68 @@
+"""Pieces of μ = |cos θ| on which an albedo or coherent-factor table of a dielectric interface is smooth: [0, 1], or
+two pieces split at the critical cosine of light from the denser side (total internal reflection), with a variable
+t per piece that crowds nodes quadratically towards the kink (used by :func:`waveoptics.brdf.nano_tables` and
+:func:`waveoptics.brdf.dielectric_tables`).
+
+References
+----------
+.. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5.4 (total reflection: the √ kink of the Fresnel
+   factors at the critical angle).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["critical_cosine", "table_pieces", "piece_variable", "piece_cosine", "read_pieces"]
+
+
+def critical_cosine(n_i, n_o):
+    """μ_c = √(1 − (n_o/n_i)²), the cosine of the critical angle of light from index *n_i* onto *n_o* (real), or
+    0 when n_i ≤ n_o (no total internal reflection). Dimensionless.
+
+    References
+    ----------
+    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5.4 (total reflection).
+    """
+    r = float(n_o) / float(n_i)
+    return float(np.sqrt(1.0 - r * r)) if r < 1.0 else 0.0
+
+
+def table_pieces(mu_c):
+    """The pieces (lo, hi, kink at lo?, kink at hi?) of μ ∈ [0, 1] on which the tables are smooth: [0, 1], or
+    [0, μ_c] and [μ_c, 1] split at a critical cosine *mu_c* > 0, where the coherent transmission vanishes as
+    cos θ_t = √(1 − n² sin²θ) and the first-order TIS and the coherent factors have a √ kink (as the Fresnel
+    factors: Born & Wolf §1.5.4)."""
+    if mu_c <= 0.0:
+        return ((0.0, 1.0, False, False),)
+    return ((0.0, mu_c, False, True), (mu_c, 1.0, True, False))
+
+
+def piece_variable(mu, piece):
+    """The variable t ∈ [0, 1] of a *piece* (:func:`table_pieces`) at cosines *mu*: with s = (μ − lo)/(hi − lo),
+    t = s, or √s at a kink at lo and 1 − √(1 − s) at a kink at hi, so that a function a + b √|μ − μ_c| is smooth
+    (linear) in t near the kink (the nodes crowd quadratically towards it)."""
+    lo, hi, k_lo, k_hi = piece
+    s = np.clip((np.asarray(mu, dtype=float) - lo) / (hi - lo), 0.0, 1.0)
+    if k_lo:
+        return np.sqrt(s)
+    if k_hi:
+        return 1.0 - np.sqrt(1.0 - s)
+    return s
+
+
+def piece_cosine(t, piece):
+    """The inverse of :func:`piece_variable`: μ at *t* on *piece*."""
+    lo, hi, k_lo, k_hi = piece
+    t = np.asarray(t, dtype=float)
+    s = t * t if k_lo else (1.0 - (1.0 - t) ** 2 if k_hi else t)
+    return lo + (hi - lo) * s
+
+
+def read_pieces(mu, mu_c, t, values):
+    """A table read back at cosines *mu*: *values* (pieces, samples) of each piece of :func:`table_pieces`
+    (*mu_c*) sampled at the points *t* of its variable (:func:`piece_variable`), linear in t between samples; μ ≤
+    μ_c reads the first piece (the total-reflection side)."""
+    mu = np.clip(np.asarray(mu, dtype=float), 0.0, 1.0)
+    pieces = table_pieces(mu_c)
+    vals = [np.interp(piece_variable(mu, p), t, values[j]) for j, p in enumerate(pieces)]
+    return vals[0] if len(vals) == 1 else np.where(mu > mu_c, vals[1], vals[0])
