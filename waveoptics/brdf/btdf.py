@@ -44,14 +44,15 @@ above. The albedo is then E(μ_i) + (1 − E(μ_i)) = 1 from either side; the lo
 the true multiple scattering (Heitz et al. 2016), their energy exact up to the tables' error.
 
 The tables (:func:`dielectric_tables`): E↓ has the √ kink of total internal reflection at the critical cosine
-μ_c = √(1 − 1/η²) as α → 0 (a steep shoulder of width ~α above), so it is tabulated on [0, μ_c] and [μ_c, 1]
-(:func:`waveoptics.brdf.table_pieces`), each a cubic spline in a variable that crowds the nodes towards μ_c; its
-albedos from the glass integrate over facet normals about ω_i, split at the facets' critical angle
+μ_c = √(1 − 1/η²) as α → 0 (a steep shoulder of width ~α), and a weaker one at μ = 1/η, where the facets'
+critical circle touches their horizon (:func:`albedo_cuts`), so it is tabulated on the three pieces between them
+(:func:`waveoptics.brdf.split_pieces`), each a cubic spline in a variable that crowds the nodes towards the cuts;
+its albedos from the glass integrate over facet normals about ω_i, split at the facets' critical angle
 (:func:`waveoptics.brdf.incidence_normal_quadrature`, α ≥ 0.2), and Ē is the mean of the tables as read back, so
 that the lobes return exactly 1 − E(μ_i). Against a direct integral of Walter's closed forms
-(tests/test_btdf_tables.py) the tables are within 1.7e-4 at α = 0.3 and 1 (20-75° in the glass, 0-75° from air)
-and the white furnace from the glass at 30-50° within 1e-4 (linear on 32 Gauss-Legendre nodes over [0, 1]: up to
-2.3e-3 and 9.2e-4).
+(tests/test_btdf_tables.py) the tables are within 1.0e-4 at α = 0.3 and 1 (20-75° in the glass, 0-75° from air)
+and the white furnace from the glass at 30-50° within 2.8e-5 (linear on 32 Gauss-Legendre nodes over [0, 1]: up
+to 2.3e-3 and 9.2e-4). A table costs 0.7-0.9 s (ggx, beckmann; 0.2-0.5 s before), once per (NDF, α, η).
 
 References
 ----------
@@ -83,7 +84,7 @@ from .directions import dot_last, reflect
 from .fresnel_terms import F_mean
 from .ndf import COS_MIN, check_alpha, ndf_by_name
 from .protocol import BRDF, BRDFSample, broadcast_incidence, broadcast_pair, check_uniform, lobe_choice
-from .mu_pieces import critical_cosine, piece_cosine, read_pieces, table_pieces
+from .mu_pieces import critical_cosine, piece_cosine, read_pieces, split_pieces
 from .incidence_quadrature import INCIDENCE_ALPHA_MIN, incidence_normal_quadrature
 from .quadrature import normal_quadrature
 from .sampling import pdf_normal, sample_normal
@@ -92,13 +93,13 @@ from .twoscale import Micro
 
 __all__ = ['DIELECTRIC_SHADOWINGS', 'DIELECTRIC_MS_NODES', 'UNIFORM_DIGITS', 'pack_third_uniform', 'refract',
            'half_vector_refraction', 'sided_lambda', 'sided_G2', 'albedo_single', 'DielectricTables',
-           'dielectric_tables', 'albedo_multiple', 'RoughDielectricBSDF']
+           'albedo_cuts', 'dielectric_tables', 'albedo_multiple', 'RoughDielectricBSDF']
 
 #: masking-shadowing terms of the BSDF (the Smith forms, which have a transmission case)
 DIELECTRIC_SHADOWINGS = ("smith", "smith-correlated")
 #: Gauss-Legendre nodes in the variable t of each piece of μ of the albedo tables of the energy compensation
-#: (:func:`waveoptics.brdf.table_pieces`: one piece outside, two inside, split at the critical angle)
-DIELECTRIC_MS_NODES = 20
+#: (one piece outside, three inside: :func:`albedo_cuts`)
+DIELECTRIC_MS_NODES = 24
 #: samples in t per piece of the tables' cubic splines (read back by linear interpolation)
 DIELECTRIC_DENSE_SAMPLES = 257
 #: Gauss-Legendre nodes in μ per piece of the tables' means Ē
@@ -257,14 +258,15 @@ def _sample_single(wi, u, eta, ndf, ax, ay, c):
 @dataclass(frozen=True)
 class DielectricTables:
     """Single-scattering albedos (R + T, F exact) of a rough interface, ``E_up`` for light from outside and
-    ``E_down`` from inside: on each side, per piece of μ (:func:`waveoptics.brdf.table_pieces`: [0, 1] outside;
-    inside split at the critical cosine ``mu_c_down``, where total internal reflection sets in), a cubic spline in
-    the piece's variable t through :data:`DIELECTRIC_MS_NODES` Gauss-Legendre nodes, sampled at ``t`` (arrays
-    (pieces, samples)); their averages Ē = 2 ∫ E μ dμ of the tables as read back, the mean Fresnel reflectances F̄
+    ``E_down`` from inside: on each side, per piece of μ (``pieces_up``: [0, 1]; ``pieces_down``: split at
+    :func:`albedo_cuts`, where total internal reflection sets in on the facets), a cubic spline in the piece's
+    variable t (:func:`waveoptics.brdf.piece_variable`) through :data:`DIELECTRIC_MS_NODES` Gauss-Legendre nodes,
+    sampled at ``t`` (arrays (pieces, samples)); their averages Ē = 2 ∫ E μ dμ of the tables as read back, the mean Fresnel reflectances F̄
     of each side, and the shares of the compensated energy that cross the interface, ``t_up`` = (1 − F̄↑) x and
     ``t_down`` = (1 − F̄↓)(1 − x) (module doc)."""
 
-    mu_c_down: float
+    pieces_up: tuple
+    pieces_down: tuple
     t: np.ndarray
     E_up: np.ndarray
     E_down: np.ndarray
@@ -278,8 +280,8 @@ class DielectricTables:
     def E(self, mu, up):
         """E at cosines *mu* ≥ 0 on the side *up* (boolean array): the piece of each μ, linear in t between the
         spline's samples (:func:`waveoptics.brdf.read_pieces`)."""
-        return np.where(up, read_pieces(mu, 0.0, self.t, self.E_up),
-                        read_pieces(mu, self.mu_c_down, self.t, self.E_down))
+        return np.where(up, read_pieces(mu, self.pieces_up, self.t, self.E_up),
+                        read_pieces(mu, self.pieces_down, self.t, self.E_down))
 
 
 def _albedo_nodes(w1, eta_rel, ax, ay, symmetric):
@@ -329,15 +331,28 @@ def albedo_single(wi, eta, spec, ndf, ax, ay, c, shadowing, symmetric=False, fac
     return R, T
 
 
-def _cosine_mean(values, mu_c, t):
+def albedo_cuts(eta):
+    """The cosines μ (dimensionless) where the single-scattering albedo of light from inside a dielectric of index
+    *eta* (> 1) is not smooth: μ_c = √(1 − 1/η²), where the facets' circle of total internal reflection
+    (|ω_i·m| = μ_c) passes the macro normal (a √ kink as α → 0), and 1/η = sin θ_c, where it touches the facets'
+    horizon (m_z = 0); none for *eta* ≤ 1.
+
+    References
+    ----------
+    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5.4 (total reflection).
+    """
+    mu_c = critical_cosine(eta, 1.0)
+    return (mu_c, float(np.sqrt(1.0 - mu_c * mu_c))) if mu_c > 0.0 else ()
+
+
+def _cosine_mean(values, pieces, t):
     """2 ∫ E μ dμ of a table as :func:`waveoptics.brdf.read_pieces` reads it back: Gauss-Legendre in μ on each
     piece of μ (dimensionless)."""
     x, w = gl01(DIELECTRIC_MEAN_NODES)
     total = 0.0
-    for piece in table_pieces(mu_c):
-        lo, hi = piece[0], piece[1]
+    for lo, hi, _, _ in pieces:
         mu = lo + (hi - lo) * x
-        total += 2.0 * (hi - lo) * float(np.sum(w * mu * read_pieces(mu, mu_c, t, values)))
+        total += 2.0 * (hi - lo) * float(np.sum(w * mu * read_pieces(mu, pieces, t, values)))
     return total
 
 
@@ -366,11 +381,11 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
     spec = ndf_by_name(ndf)
     x, _ = gl01(DIELECTRIC_MS_NODES)
     t = np.linspace(0.0, 1.0, DIELECTRIC_DENSE_SAMPLES)
-    mu_c = {1.0: 0.0, -1.0: critical_cosine(eta, 1.0)}
+    pieces = {1.0: split_pieces(()), -1.0: split_pieces(albedo_cuts(eta))}
     E = {}
     for sgn in (1.0, -1.0):
         rows = []
-        for piece in table_pieces(mu_c[sgn]):
+        for piece in pieces[sgn]:
             mu = piece_cosine(x, piece)
             wi = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), sgn * mu], axis=-1)
             R, T = albedo_single(wi, eta, spec, ndf, alpha, alpha, ndf_shape, shadowing, symmetric=True)
@@ -378,15 +393,15 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
             # above (as in waveoptics.brdf.multiscatter); above 1 the compensation lobe 1 − E would turn negative
             rows.append(np.minimum(CubicSpline(x, np.minimum(R + T, 1.0))(t), 1.0))
         E[sgn] = np.array(rows)
-    Eavg_up = _cosine_mean(E[1.0], 0.0, t)
-    Eavg_down = _cosine_mean(E[-1.0], mu_c[-1.0], t)
+    Eavg_up = _cosine_mean(E[1.0], pieces[1.0], t)
+    Eavg_down = _cosine_mean(E[-1.0], pieces[-1.0], t)
     Favg_up = float(F_mean(lambda mu: _fresnel.F(mu, eta)))
     Favg_down = float(F_mean(lambda mu: _fresnel.F(mu, 1.0 / eta)))
     lost_up, lost_down = max(1.0 - Eavg_up, 1e-12), max(1.0 - Eavg_down, 1e-12)
     ratio = eta * eta * (1.0 - Favg_down) * lost_down / ((1.0 - Favg_up) * lost_up)
     share = ratio / (1.0 + ratio)
-    return DielectricTables(mu_c_down=mu_c[-1.0], t=t, E_up=E[1.0], E_down=E[-1.0], Eavg_up=Eavg_up,
-                            Eavg_down=Eavg_down,
+    return DielectricTables(pieces_up=pieces[1.0], pieces_down=pieces[-1.0], t=t, E_up=E[1.0], E_down=E[-1.0],
+                            Eavg_up=Eavg_up, Eavg_down=Eavg_down,
                             Favg_up=Favg_up, Favg_down=Favg_down, t_up=(1.0 - Favg_up) * share,
                             t_down=(1.0 - Favg_down) * (1.0 - share))
 
@@ -415,8 +430,8 @@ def albedo_multiple(w1, tab: DielectricTables):
     """
     g, wg = gl01(DIELECTRIC_MEAN_NODES)
     refl = trans = 0.0
-    for sgn, mu_c in ((1.0, 0.0), (-1.0, tab.mu_c_down)):
-        for lo, hi, _, _ in table_pieces(mu_c):
+    for sgn, pieces in ((1.0, tab.pieces_up), (-1.0, tab.pieces_down)):
+        for lo, hi, _, _ in pieces:
             x, wx = lo + (hi - lo) * g, (hi - lo) * wg
             wo = np.stack([np.sqrt(1.0 - x * x), np.zeros_like(x), sgn * x], axis=-1)
             mr, mt = _f_ms(np.broadcast_to(w1, wo.shape), wo, tab)

@@ -94,8 +94,8 @@ class NanoTables:
     def at(self, name: str, mu, up):
         """Table *name* (``A_R``, ``A_T``, ``tis_R``, ``tis_T``) at cosines *mu* on the side *up* (boolean): the
         piece of each μ (μ ≤ μ_c: the total-reflection side), linear in t between the spline's samples."""
-        return np.where(up, read_pieces(mu, self.mu_c_up, self.t, self.values[(name, True)]),
-                        read_pieces(mu, self.mu_c_down, self.t, self.values[(name, False)]))
+        return np.where(up, read_pieces(mu, table_pieces(self.mu_c_up), self.t, self.values[(name, True)]),
+                        read_pieces(mu, table_pieces(self.mu_c_down), self.t, self.values[(name, False)]))
 
 
 def coherent_split(mu, n_i, n_o, psd, wavelength_nm):
