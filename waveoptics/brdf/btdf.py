@@ -43,16 +43,18 @@ x/(1 − x) = η² (1 − F̄↓)(1 − Ē↓) / ((1 − F̄↑)(1 − Ē↑)) m
 above. The albedo is then E(μ_i) + (1 − E(μ_i)) = 1 from either side; the lobes' shape is an approximation of
 the true multiple scattering (Heitz et al. 2016), their energy exact up to the tables' error.
 
-The tables (:func:`dielectric_tables`): E↓ has the √ kink of total internal reflection at the critical cosine
-μ_c = √(1 − 1/η²) as α → 0 (a steep shoulder of width ~α), and a weaker one at μ = 1/η, where the facets'
-critical circle touches their horizon (:func:`albedo_cuts`), so it is tabulated on the three pieces between them
+The tables (:func:`dielectric_tables`): E↓ has the √ kink of total internal reflection at the critical cosine μ_c =
+√(1 − 1/η²) as α → 0 (a steep shoulder of width ~α), and a weaker one at μ = 1/η, where the facets' critical circle
+touches their horizon (:func:`waveoptics.brdf.albedo_cuts`), so it is tabulated on the three pieces between them
 (:func:`waveoptics.brdf.split_pieces`), each a cubic spline in a variable that crowds the nodes towards the cuts;
 its albedos from the glass integrate over facet normals about ω_i, split at the facets' critical angle
 (:func:`waveoptics.brdf.incidence_normal_quadrature`, α ≥ 0.2), and Ē is the mean of the tables as read back, so
 that the lobes return exactly 1 − E(μ_i). Against a direct integral of Walter's closed forms
-(tests/test_btdf_tables.py) the tables are within 1.0e-4 at α = 0.3 and 1 (20-75° in the glass, 0-75° from air)
-and the white furnace from the glass at 30-50° within 2.8e-5 (linear on 32 Gauss-Legendre nodes over [0, 1]: up
-to 2.3e-3 and 9.2e-4). A table costs 0.7-0.9 s (ggx, beckmann; 0.2-0.5 s before), once per (NDF, α, η).
+(tests/test_btdf_tables.py) the tables are within 1.0e-4 at α = 0.3 and 1 (20-75° in the glass, 0-75° from air) and
+the white furnace from the glass at 30-50° within 2.8e-5 (linear on 32 Gauss-Legendre nodes over [0, 1]: up to
+2.3e-3 and 9.2e-4). Below α = 0.2 the albedos are integrated over slopes about the macro normal: within 5e-4 of a
+direct integral near the critical angle (α 0.05-0.15, 41-48°; ≤ 1e-4 elsewhere). A table costs 0.5-0.7 s of CPU
+(ggx, beckmann; 0.2-0.4 s as linear tables), once per (NDF, α, η).
 
 References
 ----------
@@ -84,7 +86,7 @@ from .directions import dot_last, reflect
 from .fresnel_terms import F_mean
 from .ndf import COS_MIN, check_alpha, ndf_by_name
 from .protocol import BRDF, BRDFSample, broadcast_incidence, broadcast_pair, check_uniform, lobe_choice
-from .mu_pieces import critical_cosine, piece_cosine, read_pieces, split_pieces
+from .mu_pieces import albedo_cuts, piece_cosine, read_pieces, split_pieces
 from .incidence_quadrature import INCIDENCE_ALPHA_MIN, incidence_normal_quadrature
 from .quadrature import normal_quadrature
 from .sampling import pdf_normal, sample_normal
@@ -93,12 +95,12 @@ from .twoscale import Micro
 
 __all__ = ['DIELECTRIC_SHADOWINGS', 'DIELECTRIC_MS_NODES', 'UNIFORM_DIGITS', 'pack_third_uniform', 'refract',
            'half_vector_refraction', 'sided_lambda', 'sided_G2', 'albedo_single', 'DielectricTables',
-           'albedo_cuts', 'dielectric_tables', 'albedo_multiple', 'RoughDielectricBSDF']
+           'dielectric_tables', 'albedo_multiple', 'RoughDielectricBSDF']
 
 #: masking-shadowing terms of the BSDF (the Smith forms, which have a transmission case)
 DIELECTRIC_SHADOWINGS = ("smith", "smith-correlated")
 #: Gauss-Legendre nodes in the variable t of each piece of μ of the albedo tables of the energy compensation
-#: (one piece outside, three inside: :func:`albedo_cuts`)
+#: (one piece outside, three inside: :func:`waveoptics.brdf.albedo_cuts`)
 DIELECTRIC_MS_NODES = 24
 #: samples in t per piece of the tables' cubic splines (read back by linear interpolation)
 DIELECTRIC_DENSE_SAMPLES = 257
@@ -259,11 +261,11 @@ def _sample_single(wi, u, eta, ndf, ax, ay, c):
 class DielectricTables:
     """Single-scattering albedos (R + T, F exact) of a rough interface, ``E_up`` for light from outside and
     ``E_down`` from inside: on each side, per piece of μ (``pieces_up``: [0, 1]; ``pieces_down``: split at
-    :func:`albedo_cuts`, where total internal reflection sets in on the facets), a cubic spline in the piece's
-    variable t (:func:`waveoptics.brdf.piece_variable`) through :data:`DIELECTRIC_MS_NODES` Gauss-Legendre nodes,
-    sampled at ``t`` (arrays (pieces, samples)); their averages Ē = 2 ∫ E μ dμ of the tables as read back, the mean Fresnel reflectances F̄
-    of each side, and the shares of the compensated energy that cross the interface, ``t_up`` = (1 − F̄↑) x and
-    ``t_down`` = (1 − F̄↓)(1 − x) (module doc)."""
+    :func:`waveoptics.brdf.albedo_cuts`, where total internal reflection sets in on the facets), a cubic spline in
+    the piece's variable t (:func:`waveoptics.brdf.piece_variable`) through :data:`DIELECTRIC_MS_NODES`
+    Gauss-Legendre nodes, sampled at ``t`` (arrays (pieces, samples)); their averages Ē = 2 ∫ E μ dμ of the tables
+    as read back, the mean Fresnel reflectances F̄ of each side, and the shares of the compensated energy that cross
+    the interface, ``t_up`` = (1 − F̄↑) x and ``t_down`` = (1 − F̄↓)(1 − x) (module doc)."""
 
     pieces_up: tuple
     pieces_down: tuple
@@ -329,20 +331,6 @@ def albedo_single(wi, eta, spec, ndf, ax, ay, c, shadowing, symmetric=False, fac
         R[j] = np.sum(np.where(vis, a_r * fr * np.abs(wr[:, 2]) * 4.0 * np.abs(ih), 0.0) * w)
         T[j] = np.sum(np.where(vis & ok, a_t * ft * np.abs(wt[:, 2]) * jt, 0.0) * w)
     return R, T
-
-
-def albedo_cuts(eta):
-    """The cosines μ (dimensionless) where the single-scattering albedo of light from inside a dielectric of index
-    *eta* (> 1) is not smooth: μ_c = √(1 − 1/η²), where the facets' circle of total internal reflection
-    (|ω_i·m| = μ_c) passes the macro normal (a √ kink as α → 0), and 1/η = sin θ_c, where it touches the facets'
-    horizon (m_z = 0); none for *eta* ≤ 1.
-
-    References
-    ----------
-    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5.4 (total reflection).
-    """
-    mu_c = critical_cosine(eta, 1.0)
-    return (mu_c, float(np.sqrt(1.0 - mu_c * mu_c))) if mu_c > 0.0 else ()
 
 
 def _cosine_mean(values, pieces, t):

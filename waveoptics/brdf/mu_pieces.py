@@ -1,6 +1,7 @@
 """Pieces of μ = |cos θ| on which an albedo or coherent-factor table of a dielectric interface is smooth: [0, 1], or
-two pieces split at the critical cosine of light from the denser side (total internal reflection), with a variable
-t per piece that crowds nodes quadratically towards the kink (used by :func:`waveoptics.brdf.nano_tables` and
+pieces split at the critical cosine of light from the denser side (total internal reflection) and, for a rough
+interface's albedo, where the facets' critical circle touches their horizon (:func:`albedo_cuts`), with a variable
+t per piece that crowds nodes quadratically towards the kinks (used by :func:`waveoptics.brdf.nano_tables` and
 :func:`waveoptics.brdf.dielectric_tables`).
 
 References
@@ -12,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["critical_cosine", "table_pieces", "split_pieces", "piece_variable", "piece_cosine", "read_pieces"]
+__all__ = ["critical_cosine", "albedo_cuts", "table_pieces", "split_pieces", "piece_variable", "piece_cosine",
+           "read_pieces"]
 
 
 def critical_cosine(n_i, n_o):
@@ -25,6 +27,20 @@ def critical_cosine(n_i, n_o):
     """
     r = float(n_o) / float(n_i)
     return float(np.sqrt(1.0 - r * r)) if r < 1.0 else 0.0
+
+
+def albedo_cuts(eta):
+    """The cosines μ (dimensionless) where the single-scattering albedo of light from inside a dielectric of index
+    *eta* (> 1) is not smooth: μ_c = √(1 − 1/η²), where the facets' circle of total internal reflection
+    (|ω_i·m| = μ_c) passes the macro normal (a √ kink as α → 0), and 1/η = sin θ_c, where it touches the facets'
+    horizon (m_z = 0); none for *eta* ≤ 1.
+
+    References
+    ----------
+    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5.4 (total reflection).
+    """
+    mu_c = critical_cosine(eta, 1.0)
+    return (mu_c, float(np.sqrt(1.0 - mu_c * mu_c))) if mu_c > 0.0 else ()
 
 
 def table_pieces(mu_c):

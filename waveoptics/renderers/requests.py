@@ -16,7 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from ..vocabulary import DEFAULT_MATERIAL, DEFAULT_NANO_FRAME, DEFAULT_NDF, RENDER_BSDF_AUTO, RENDER_MODELS, RENDER_WAVELENGTH_STEP_NM
+from ..vocabulary import (DEFAULT_MATERIAL, DEFAULT_NANO_FRAME, DEFAULT_NDF, RENDER_BSDF_AUTO, RENDER_MODELS,
+                          RENDER_WAVELENGTH_STEP_NM)
 
 __all__ = ["RendererModel", "RenderRequest", "GlintRequest", "field_default"]
 
