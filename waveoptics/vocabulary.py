@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["NANO_FRAMES", "NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
+__all__ = ["NANO_FRAMES", "DEFAULT_NANO_FRAME", "NANO_SOLVERS", "PRECISIONS", "POLARIZATIONS", "DIFFRACTION", "NDF_NAMES", "SHADOWING_NAMES",
            "FRESNEL_NAMES", "PARAMETRIC_NDF_NAMES", "DIFFUSE_NAMES", "DIFFUSE_ALIASES", "DEFAULT_NANO",
            "DEFAULT_MATERIAL", "DEFAULT_NDF", "COST_TARGET_ERROR", "COST_BUDGET_S", "COST_DELTA_E",
            "RENDER_WAVELENGTH_STEP_NM", "RENDER_BSDFS", "RENDER_BSDF_AUTO", "RENDER_MODELS", "GLINT_SHAPES", "ROUGHNESS_CORRELATIONS",
@@ -48,6 +48,8 @@ DIFFUSE_NAMES = ("none", "lambert", "oren-nayar", "burley")
 #: :class:`waveoptics.brdf.NanoRoughDielectricBSDF`), ``facet`` in each micro facet's own frame (the two-scale glass,
 #: :class:`waveoptics.brdf.TwoScaleDielectricBSDF`)
 NANO_FRAMES = ("macro", "facet")
+#: the frame of the nano lobes of the nano-rough glass when none is given
+DEFAULT_NANO_FRAME = NANO_FRAMES[0]
 #: other names of diffuse terms (Burley's diffuse is known as the "Disney" diffuse)
 DIFFUSE_ALIASES = {"disney": "burley"}
 
@@ -173,7 +175,7 @@ BRDF_MODEL_PARAMETERS = {
                          ModelParameter("psd", "m^4", None, "nano-roughness height statistics (a PSDModel): their "
                                                             "first-order scatter into both half-spaces "
                                                             "(NanoRoughDielectricBSDF); None: none"),
-                         ModelParameter("nano_frame", "", "macro", "frame of the nano lobes of psd (NANO_FRAMES): "
+                         ModelParameter("nano_frame", "", DEFAULT_NANO_FRAME, "frame of the nano lobes of psd (NANO_FRAMES): "
                                                                    "macro (about the macro normal, right as α → 0) "
                                                                    "or facet (each micro facet's: "
                                                                    "TwoScaleDielectricBSDF, ~200x slower)")),

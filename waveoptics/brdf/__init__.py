@@ -52,9 +52,11 @@ from .spectral import (SpectralNodes)
 from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
 from .chi2 import (Chi2Result, chi2_test)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
+from .incidence_quadrature import (INCIDENCE_NODES, INCIDENCE_ALPHA_MIN, incidence_panels, incidence_normal_quadrature)
 from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, pack_third_uniform, refract, half_vector_refraction, sided_lambda,
     sided_G2, albedo_single, DielectricTables, dielectric_tables, albedo_multiple, RoughDielectricBSDF)
-from .nano_dielectric import (NANO_MU_NODES, critical_cosine, table_pieces, piece_variable, piece_cosine, NanoTables,
+from .mu_pieces import (critical_cosine, albedo_cuts, table_pieces, split_pieces, piece_variable, piece_cosine, read_pieces)
+from .nano_dielectric import (NANO_MU_NODES, NanoTables,
                               coherent_split, nano_tables, NanoRoughDielectricBSDF)
 from .twoscale_dielectric import (TWOSCALE_DIELECTRIC_NODES, ALBEDO_MU_NODES, ALBEDO_PHI_NODES, pair_half_vector,
     coherent_transmission_share, TwoScaleDielectricBSDF, NANO_FRAME_BSDFS, nano_rough_glass)

@@ -58,10 +58,10 @@ from ..scatter.spm2 import coherent_losses
 from ..scatter.transmission import rr_bsdf, rr_tis_reflection, rr_tis_transmission
 from ..surfaces.psd import PSDModel
 from .btdf import RoughDielectricBSDF
+from .mu_pieces import critical_cosine, piece_cosine, read_pieces, table_pieces
 from .protocol import broadcast_incidence, broadcast_pair, lobe_choice
 
-__all__ = ["NANO_MU_NODES", "critical_cosine", "table_pieces", "piece_variable", "piece_cosine", "NanoTables",
-           "coherent_split", "nano_tables", "NanoRoughDielectricBSDF"]
+__all__ = ["NANO_MU_NODES", "NanoTables", "coherent_split", "nano_tables", "NanoRoughDielectricBSDF"]
 
 #: intervals per piece of the coherent-factor and TIS tables (nodes uniform in the piece's variable t, both ends
 #: included; :func:`table_pieces`)
@@ -72,49 +72,6 @@ NANO_DENSE_SAMPLES = 257
 MU_GRAZING = 1e-6
 #: relative offset of a node at a critical cosine into its own piece (the two sides of the kink)
 _KINK_OFFSET = 1e-9
-
-
-def critical_cosine(n_i, n_o):
-    """μ_c = √(1 − (n_o/n_i)²), the cosine of the critical angle of light from index *n_i* onto *n_o* (real), or
-    0 when n_i ≤ n_o (no total internal reflection). Dimensionless.
-
-    References
-    ----------
-    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5.4 (total reflection).
-    """
-    r = float(n_o) / float(n_i)
-    return float(np.sqrt(1.0 - r * r)) if r < 1.0 else 0.0
-
-
-def table_pieces(mu_c):
-    """The pieces (lo, hi, kink at lo?, kink at hi?) of μ ∈ [0, 1] on which the tables are smooth: [0, 1], or
-    [0, μ_c] and [μ_c, 1] split at a critical cosine *mu_c* > 0, where the coherent transmission vanishes as
-    cos θ_t = √(1 − n² sin²θ) and the first-order TIS and the coherent factors have a √ kink (as the Fresnel
-    factors: Born & Wolf §1.5.4)."""
-    if mu_c <= 0.0:
-        return ((0.0, 1.0, False, False),)
-    return ((0.0, mu_c, False, True), (mu_c, 1.0, True, False))
-
-
-def piece_variable(mu, piece):
-    """The variable t ∈ [0, 1] of a *piece* (:func:`table_pieces`) at cosines *mu*: with s = (μ − lo)/(hi − lo),
-    t = s, or √s at a kink at lo and 1 − √(1 − s) at a kink at hi, so that a function a + b √|μ − μ_c| is smooth
-    (linear) in t near the kink (the nodes crowd quadratically towards it)."""
-    lo, hi, k_lo, k_hi = piece
-    s = np.clip((np.asarray(mu, dtype=float) - lo) / (hi - lo), 0.0, 1.0)
-    if k_lo:
-        return np.sqrt(s)
-    if k_hi:
-        return 1.0 - np.sqrt(1.0 - s)
-    return s
-
-
-def piece_cosine(t, piece):
-    """The inverse of :func:`piece_variable`: μ at *t* on *piece*."""
-    lo, hi, k_lo, k_hi = piece
-    t = np.asarray(t, dtype=float)
-    s = t * t if k_lo else (1.0 - (1.0 - t) ** 2 if k_hi else t)
-    return lo + (hi - lo) * s
 
 
 #: the tabulated quantities (module doc)
@@ -137,14 +94,8 @@ class NanoTables:
     def at(self, name: str, mu, up):
         """Table *name* (``A_R``, ``A_T``, ``tis_R``, ``tis_T``) at cosines *mu* on the side *up* (boolean): the
         piece of each μ (μ ≤ μ_c: the total-reflection side), linear in t between the spline's samples."""
-        mu = np.clip(np.asarray(mu, dtype=float), 0.0, 1.0)
-        out = []
-        for side, mu_c in ((True, self.mu_c_up), (False, self.mu_c_down)):
-            pieces = table_pieces(mu_c)
-            vals = [np.interp(piece_variable(mu, p), self.t, self.values[(name, side)][j])
-                    for j, p in enumerate(pieces)]
-            out.append(vals[0] if len(vals) == 1 else np.where(mu > mu_c, vals[1], vals[0]))
-        return np.where(up, out[0], out[1])
+        return np.where(up, read_pieces(mu, table_pieces(self.mu_c_up), self.t, self.values[(name, True)]),
+                        read_pieces(mu, table_pieces(self.mu_c_down), self.t, self.values[(name, False)]))
 
 
 def coherent_split(mu, n_i, n_o, psd, wavelength_nm):

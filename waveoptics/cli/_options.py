@@ -55,6 +55,9 @@ OPTIONS = {o.flag: o for o in (
     Option("--nano", "nano-roughness MODEL:key=value,... with units, e.g. abc:sigma=10nm,B=2um,C=2.6, "
                      "gaussian:sigma=5nm,corr_length=1um, sinusoid:amplitude=40nm,period=2um",
            "MODEL:PARAMS"),
+    Option("--nano-frame", "frame of the --nano lobes of the nano-rough glass: macro (about the macro normal, "
+                           "right as α → 0) or facet (each micro facet's: the two-scale glass, right at any α, "
+                           "~200x slower)"),
     Option("--diffraction", "diffraction model of the nano lobe: kirchhoff, ghs, rghs, ohs, rohs or rayleigh-rice "
                             "(first-order perturbation, two-scale lobes only) (docs/physics.md §10)"),
     Option("--polarization", "polarization of the incident light relative to the plane of incidence: unpolarized, "

@@ -375,9 +375,7 @@ def _twoscale_describe(args) -> dict:
 def _rough_dielectric_arguments(g) -> None:
     """The rough dielectric takes the microfacet options (--alpha, --ndf, --shadowing, --material or --ior,
     --multiple-scattering), --nano statistics (nano-rough glass) and the frame of their lobes."""
-    g.add_argument("--nano-frame", choices=NANO_FRAMES, default=_default("nano_frame", "rough-dielectric"),
-                   help="frame of the --nano lobes: macro (about the macro normal, right as α → 0) or facet (each "
-                        "micro facet's: the two-scale glass, right at any α, ~200x slower; default macro)")
+    option(g, "--nano-frame", choices=NANO_FRAMES, default=_default("nano_frame", "rough-dielectric"))
 
 
 def _rough_dielectric_inputs(args, wavelength_nm) -> dict:

@@ -17,7 +17,7 @@ MAX_SPP_DEFAULT = _d("max_spp")
 
 
 def register(sub):
-    from ..vocabulary import GLINT_SHAPES
+    from ..vocabulary import GLINT_SHAPES, NANO_FRAMES
     from ..vocabulary import RENDER_BSDF_AUTO, RENDER_MODELS
     from ..vocabulary import RENDER_BSDFS as WAVE_BSDFS
 
@@ -33,9 +33,11 @@ def register(sub):
     g.add_argument("--model", choices=RENDER_MODELS, default=_d("model"),
                    help="BRDF model rendered: twoscale (the two-scale BRDF of the options above) or "
                         "rough-dielectric (the nano-rough glass: a rough dielectric with --material, --micro-alpha, "
-                        "--alpha-y, --ndf, --nano, --multiple-scattering and --wavelength-step, reflecting and "
+                        "--alpha-y, --ndf, --nano, --nano-frame, --multiple-scattering and --wavelength-step, "
+                        "reflecting and "
                         "transmitting, beside Mitsuba's roughdielectric; through the NumPy glass plugin) "
                         f"(default {_d('model')})")
+    option(g, "--nano-frame", choices=NANO_FRAMES, default=_d("nano_frame"), note="--model rough-dielectric only")
     option(g, "--environment", default=_d("environment"), note="sky and studio are built by the code")
     g.add_argument("--no-ground", dest="ground", action="store_false", help="no ground plane under the sphere")
     g.add_argument("--variant", default=_d("variant"), metavar="NAME",
@@ -88,7 +90,7 @@ def register(sub):
 
 #: sphere-render options that --glints does not take, with their defaults
 _SPHERE_ONLY = {"target_noise": _d("target_noise"), "max_spp": _d("max_spp"), "budget": f"{_d('budget_s'):g}",
-                "model": _d("model")}
+                "model": _d("model"), "nano_frame": _d("nano_frame")}
 #: --glints options and their defaults (their options default to None, so that a sphere render can tell them given)
 _GLINT_DEFAULTS = {k: _d(k, GlintRequest) for k in ("incident", "view", "wavelengths", "shape", "workers",
                                                      "scheduler", "coherence", "light_radius")}
@@ -178,7 +180,8 @@ def run_render(args):
     budget = parse_budget(args.budget)
     request = RenderRequest(**model_fields(args), model=args.model, environment=args.environment,
                             ground=args.ground, variant=args.variant, bsdf=args.bsdf, sphere_size=args.sphere_size,
-                            spp=args.spp, target_noise=args.target_noise, max_spp=args.max_spp, budget_s=budget)
+                            spp=args.spp, target_noise=args.target_noise, max_spp=args.max_spp, budget_s=budget,
+                            nano_frame=args.nano_frame)
     r = render_job(request, args.output, overwrite=args.overwrite, progress=partial(progress, args=args))
     if r.stop and not args.json:
         print(r.stop, file=sys.stderr)

@@ -27,7 +27,8 @@ __all__ = ["GLASS_RENDER_NAME", "GLASS_FIELDS", "glass_parameters", "glass_build
 #: name under which :func:`glass_wave` registers the glass plugin holding a render's model
 GLASS_RENDER_NAME = "waveoptics_glass_render"
 #: the :class:`~waveoptics.renderers.requests.RendererModel` fields the glass takes
-GLASS_FIELDS = ("material", "alpha", "alpha_y", "ndf", "nano", "multiple_scattering", "wavelength_step")
+GLASS_FIELDS = ("material", "alpha", "alpha_y", "ndf", "nano", "nano_frame", "multiple_scattering",
+                "wavelength_step")
 #: NDFs of Mitsuba's roughdielectric
 _REFERENCE_NDFS = ("ggx", "beckmann")
 
@@ -46,7 +47,8 @@ def glass_parameters(request: RenderRequest) -> dict:
                          f"{{{given[0]}}}", "model", given[0])
     step = parse_length(request.wavelength_step, name="wavelength_step") * 1e9
     return dict(material=request.material, alpha=request.alpha, alpha_y=request.alpha_y, ndf=request.ndf,
-                nano=request.nano, multiple_scattering=request.multiple_scattering, wavelength_step_nm=step)
+                nano=request.nano, multiple_scattering=request.multiple_scattering, wavelength_step_nm=step,
+                nano_frame=request.nano_frame)
 
 
 def glass_build(request: RenderRequest):

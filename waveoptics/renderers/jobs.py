@@ -34,7 +34,7 @@ from typing import Callable
 from ..errors import FieldError
 from ..vocabulary import DEFAULT_NANO, RENDER_BSDF_AUTO, RENDER_BSDFS
 from . import glass_render
-from .requests import RendererModel, RenderRequest
+from .requests import RendererModel, RenderRequest, field_default
 
 __all__ = ["OUTPUTS", "EXPORT_FORMATS", "RenderResult", "load_height_field", "model_parameters", "build_model",
            "describe_model", "plugin_parameters", "export_job", "choose_bsdf", "RenderModelKind",
@@ -208,6 +208,9 @@ def _check(request: RenderRequest) -> None:
     if request.bsdf not in RENDER_BSDFS + (RENDER_BSDF_AUTO,):
         raise FieldError(f"{{bsdf}} {request.bsdf!r} is not allowed; use one of "
                          f"{', '.join(RENDER_BSDFS + (RENDER_BSDF_AUTO,))}", "bsdf")
+    if request.model != "rough-dielectric" and request.nano_frame != field_default(RenderRequest, "nano_frame"):
+        raise FieldError(f"{{nano_frame}} {request.nano_frame!r} belongs to the rough-dielectric {{model}} (the "
+                         f"nano-rough glass), not {request.model!r}", "nano_frame", "model")
     if request.bsdf == "measured" and "spectral" not in request.variant:
         raise FieldError(f"{{bsdf}} measured needs a spectral {{variant}} (Mitsuba's measured model), not "
                          f"{request.variant!r}; use {{bsdf}} plugin for RGB variants", "bsdf", "variant")

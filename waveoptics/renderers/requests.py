@@ -16,7 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from ..vocabulary import DEFAULT_MATERIAL, DEFAULT_NDF, RENDER_BSDF_AUTO, RENDER_MODELS, RENDER_WAVELENGTH_STEP_NM
+from ..vocabulary import (DEFAULT_MATERIAL, DEFAULT_NANO_FRAME, DEFAULT_NDF, RENDER_BSDF_AUTO, RENDER_MODELS,
+                          RENDER_WAVELENGTH_STEP_NM)
 
 __all__ = ["RendererModel", "RenderRequest", "GlintRequest", "field_default"]
 
@@ -125,6 +126,10 @@ class RenderRequest(RendererModel):
         Most samples per pixel *target_noise* doubles to.
     budget_s : float, s, optional
         Time budget of the *target_noise* renders (None: none); a doubling predicted to pass it is not started.
+    nano_frame : str
+        Frame of the nano lobes of the ``rough-dielectric`` glass (:data:`waveoptics.vocabulary.NANO_FRAMES`):
+        ``macro`` (about the macro normal) or ``facet`` (each micro facet's: the two-scale glass); the
+        ``twoscale`` model takes only the default.
 
     Examples
     --------
@@ -143,6 +148,7 @@ class RenderRequest(RendererModel):
     target_noise: float | None = None
     max_spp: int = 4096
     budget_s: float | None = 600.0
+    nano_frame: str = DEFAULT_NANO_FRAME
 
 
 @dataclass(frozen=True)
