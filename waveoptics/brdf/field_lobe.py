@@ -27,9 +27,9 @@ from ..scatter.tangent_blend import (blend_weight, first_order_over_fresnel, tan
 from ..surfaces.heightfield import HeightField
 from ..units import check_wavelengths
 
-__all__ = ['BAND_MARGIN_BINS', 'band_limited_field', 'kirchhoff_scattered_lobe', 'fresnel_at_pairs',
+__all__ = ['BAND_MARGIN_BINS', 'band_limited_field', 'kirchhoff_scattered_lobe', 'nyquist_band', 'fresnel_at_pairs',
            'field_first_order_over_fresnel', 'field_scattered_lobe', 'FIELD_THETAS_DEG',
-           'FIELD_GRID_OVERSAMPLING', 'field_scattered_albedo', 'bracketing_nodes', 'ISOTROPIC_FIELD_MODELS',
+           'FIELD_GRID_OVERSAMPLING', 'field_cell_split', 'field_cells_resolve', 'field_cell_averages', 'field_scattered_albedo', 'bracketing_nodes', 'ISOTROPIC_FIELD_MODELS',
            'ANISOTROPIC_FIELD_MODELS', 'ISOTROPY_SECTORS', 'ISOTROPY_MAX_RATIO', 'field_anisotropy',
            'field_proposal_model']
 
@@ -92,7 +92,8 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     (:class:`waveoptics.scatter.BandSeries`) takes only the relevant roughness: the roughness beyond the band
     would otherwise damp the lobe by exp(−g_beyond) through its phase modulation, a Kirchhoff artefact (a 1-D
     method-of-moments check on a perfect conductor finds no such damping). ``band_limit=False`` is the plain
-    Kirchhoff integral of the whole field.
+    Kirchhoff integral of the whole field. Directions outside the sampled field's band (:func:`nyquist_band`) are 0:
+    a field sampled coarser than λ/4 would send them a replica of the band's light.
 
     References
     ----------
@@ -129,7 +130,29 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     U0, _ = sol.grid_field(flat, wi, grid, w, **opts)
     out[:, inside] = scatter.brdf_from_field((U - chi[:, None, None] * U0)[:, inside], wi, dirs[inside], w,
                                              smp.area, F, diffraction)
-    return np.where(inside, np.maximum(out, 0.0), 0.0)
+    return np.where(inside & nyquist_band(smp, wi, grid, w), np.maximum(out, 0.0), 0.0)
+
+
+def nyquist_band(smp, wi, grid: DirectionGrid, wavelengths_nm) -> np.ndarray:
+    """Mask (n_λ, n_v, n_u) of the directions whose surface frequency (u_i + u_o, v_i + v_o)/λ lies in the
+    sampled field's principal band |f_x| ≤ 1/(2 dx), |f_y| ≤ 1/(2 dy) (*smp*: :class:`waveoptics.scatter.Samples`).
+
+    The Kirchhoff sum over samples is periodic in (u_i + u_o) dx/λ with period 1: beyond the band a field sampled
+    coarser than λ/4 returns the light of the band once more (a replica), counted as if it were scattered there.
+    The samples define the surface whose spectrum is the band's (Whittaker-Shannon), so the replicas are no light:
+    measured on the brushed-aluminium scene's scratches (250 nm wide, 40 nm deep) sampled at 312 nm, the replicas
+    made the diffracted share at 40° 0.81 at 380 nm, 5.6x the periodic field's Kirchhoff order sum (0.145); masked,
+    0.141 (tests/test_field_cells.py). A field sampled at dx ≤ λ/4 has the whole disc in its band.
+
+    References
+    ----------
+    .. [1] C. E. Shannon, Proc. IRE 37(1), 10–21, 1949 (a sampled function's band); R. N. Bracewell, *The Fourier
+       Transform and its Applications*, 3rd ed., ch. 10 (the DFT's periodic replicas).
+    """
+    lam = np.asarray(wavelengths_nm, dtype=float)[:, None, None] * 1e-9
+    d = grid.directions()
+    return ((np.abs(wi[0] + d[None, ..., 0]) * smp.dx <= lam / 2)
+            & (np.abs(wi[1] + d[None, ..., 1]) * smp.dy <= lam / 2))
 
 
 def fresnel_at_pairs(F, wi, wo, wavelength_nm) -> np.ndarray:
@@ -231,6 +254,53 @@ FIELD_THETAS_DEG = np.array([0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 68.0, 75.0
 #: 1e-3 below at 2, within 2e-4 from 3 to 12; a heavy-tailed ABC C = 2.2 patch, whose speckle reaches the
 #: horizon and its 1/cosθ_o obliquity, keeps ±0.5 % of cell-quadrature scatter at any of them)
 FIELD_GRID_OVERSAMPLING = 3.0
+
+
+def field_cell_split(surface: HeightField, grid: DirectionGrid, wavelength_nm: float) -> int:
+    """Sub-cells r per axis that make *grid*'s cells at most 2 λ / (:data:`FIELD_GRID_OVERSAMPLING` L) wide (L the
+    patch's larger side, *wavelength_nm* in nm): the cells on which a height field's lobe is averaged
+    (:func:`field_cell_averages`); 1 where *grid* is that fine already."""
+    ext = max(scatter.samples(surface).extent)
+    return max(1, int(np.ceil(max(grid.du, grid.dv) * FIELD_GRID_OVERSAMPLING * ext / (2e-9 * float(wavelength_nm)))))
+
+
+def field_cells_resolve(surface: HeightField, grid: DirectionGrid, wavelength_nm: float) -> bool:
+    """Whether the centres of *grid*'s cells sum a height field's lobe at *wavelength_nm* (nm) exactly: cells at
+    most λ/L_x by λ/L_y (L the patch's sides; Poisson summation of |Û|², :func:`waveoptics.scatter.sampling_warnings`).
+    Coarser cells take :func:`field_cell_averages`."""
+    Lx, Ly = scatter.samples(surface).extent
+    lam = float(wavelength_nm) * 1e-9
+    return grid.du <= lam / Lx * (1 + 1e-9) and grid.dv <= lam / Ly * (1 + 1e-9)
+
+
+def field_cell_averages(lobe_on, grid: DirectionGrid, r: int) -> np.ndarray:
+    """Cell averages (n_λ, n_v, n_u) on *grid* of a lobe ``lobe_on(fine)`` (n_λ, r n_v, r n_u) in 1/sr evaluated on
+    the grid r times finer per axis (:func:`field_cell_split`), 0 at cells whose centre lies below the horizon. A
+    cell across the rim of the disc holds the light of its part above the horizon (its mean with 0 below), so the
+    grid sum is the fine grid's.
+
+    A windowed patch's |U|² varies on the scale λ/(2L) (grating orders, speckle, the narrow streak of long
+    scratches); the centres of cells up to λ/L wide sum it exactly (Poisson summation: its transform, the window's
+    autocorrelation, spans |x| < L; :func:`field_cells_resolve`), those of coarser cells arbitrarily. Averaged over each cell, the grid
+    sum is the fine grid's, the quadrature of :func:`field_scattered_albedo` (the budget the coherent part gives
+    up). Measured on the brushed-aluminium scene's scratches (Al, 40°, 380 nm) on 16² cells: point samples held
+    1.46 of the incident light against a budget of 0.75 (64 samples, with the replicas :func:`nyquist_band` removes;
+    the two-scale energy guard then removed 49 %) and 0.0050 against 0.103 (the scene's 256 samples: the streak
+    missed the cell centres, which no guard sees); averaged, 0.130 against 0.130 and 0.098 against 0.103 (the rest
+    lies in rim cells below the horizon; tests/test_field_cells.py). The facet-frame route's tables are averaged
+    on the same cells (:mod:`waveoptics.brdf.twoscale_frame`).
+
+    References
+    ----------
+    .. [1] M. Parseval; R. N. Bracewell, *The Fourier Transform and its Applications*, 3rd ed., ch. 6 (the power
+       of the field's samples).
+    """
+    if r <= 1:
+        return np.where(grid.inside, lobe_on(grid), 0.0)
+    fine = DirectionGrid(grid.n_u * r, grid.n_v * r, tuple(grid.u_range), tuple(grid.v_range))
+    f = np.where(fine.inside, lobe_on(fine), 0.0)
+    g = f.reshape(f.shape[0], grid.n_v, r, grid.n_u, r).mean(axis=(2, 4))
+    return np.where(grid.inside, g, 0.0)
 
 
 def field_scattered_albedo(surface: HeightField, theta_deg: float, wavelength_nm: float, diffraction="kirchhoff",

@@ -14,7 +14,7 @@ from .. import scatter
 from ..errors import FieldError, WaveopticsError, unknown
 from ..scatter.grid import DirectionGrid, integrate
 from ..units import check_wavelengths
-from .field_lobe import field_scattered_lobe
+from .field_lobe import field_cell_averages, field_cell_split, field_cells_resolve, field_scattered_lobe
 from .roughness_scales import SERIES_MIN_CAPTURED, Nano
 from .twoscale_grid import fresnel_at_mirror, mirror_cell
 
@@ -83,10 +83,14 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
         if nano.surface is None:
             raise FieldError(f"solver {solver!r} needs a nano height field ({{surface}} or {{nano}} MODEL:...)", 'surface', 'nano')
         # the Kirchhoff lobe with the albedo of the lobe handed over to the first order of the field's periodogram
-        # towards grazing angles, its shape kept as the PSD route keeps it (energy_weighted_fresnel)
-        return field_scattered_lobe(nano.surface, wi, grid, w, F, psd=nano.periodogram(), material=material,
-                                    solver=solver, device=device, diffraction=diffraction, precision=precision,
-                                    keep_shape=True)
+        # towards grazing angles, its shape kept as the PSD route keeps it (energy_weighted_fresnel); averaged over
+        # each cell where the cells are coarser than λ/L, which their centres no longer sum exactly
+        return np.concatenate([field_cell_averages(
+            lambda g, lam=lam: field_scattered_lobe(nano.surface, wi, g, [lam], F, psd=nano.periodogram(),
+                                                    material=material, solver=solver, device=device,
+                                                    diffraction=diffraction, precision=precision, keep_shape=True),
+            grid, 1 if field_cells_resolve(nano.surface, grid, lam) else field_cell_split(nano.surface, grid, lam))
+            for lam in w])
     raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
 
 

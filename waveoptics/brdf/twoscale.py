@@ -149,9 +149,13 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None):
     glass, s, p and unpolarized, 30–75° and Brewster's angle). Between 70° and 80° of local incidence or exit the
     tangent-plane lobe hands over to first-order perturbation theory's lobe (:mod:`waveoptics.scatter.tangent_blend`),
     so its obliquity does not make it grow without bound.
-    Where it does act (a grid too coarse for a wide lobe, micro roughness at grazing
-    incidence on a grid whose cells cannot resolve the facets' incidences) it warns in one line with the share it
-    removed, and reports the factor (``diffraction_energy_scale``).
+    A height field's lobe is averaged over cells coarser than its speckle and kept inside the field's sampled band
+    (:func:`waveoptics.brdf.field_cell_averages`, :func:`waveoptics.brdf.nyquist_band`): point-sampled, the
+    brushed-aluminium scene's scratches on 16² cells held 1.95x their budget at 380 nm and this step removed 49 %
+    (tests/test_field_cells.py). Where it does act (a grid too coarse for a wide lobe: Au, ABC σ 8 nm, B 2 µm,
+    Beckmann α 0.1 on 32² cells at θ_i = 60° removes 6.2 % at 450 nm and 3.2 % at 520 nm, none on 64² or 128²; micro
+    roughness at grazing incidence on a grid whose cells cannot resolve the facets' incidences) it warns in one
+    line with the share it removed, and reports the factor (``diffraction_energy_scale``).
 
     Parameters
     ----------

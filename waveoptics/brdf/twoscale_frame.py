@@ -22,7 +22,7 @@ from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weig
 from .facet import FACET_NODE_SPLIT, FACET_REFERENCE_NM, half_vector_nodes, ndf_nodes, wide_micro_lobe
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_polarization import facet_scattered_share
-from .field_lobe import (FIELD_GRID_OVERSAMPLING, field_anisotropy, field_first_order_over_fresnel,
+from .field_lobe import (field_anisotropy, field_cell_split, field_first_order_over_fresnel,
                          field_proposal_model, kirchhoff_scattered_lobe)
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
@@ -250,8 +250,7 @@ def _field_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
 
     th = np.radians(FACET_THETAS_DEG[k])
     wi = np.array([np.sin(th), 0.0, np.cos(th)])
-    ext = max(scatter.samples(nano.surface).extent)
-    r = max(1, int(np.ceil(max(grid.du, grid.dv) * FIELD_GRID_OVERSAMPLING * ext / (2e-9 * float(np.min(w))))))
+    r = field_cell_split(nano.surface, grid, float(np.min(w)))
     fine = DirectionGrid(grid.n_u * r, grid.n_v * r, tuple(grid.u_range), tuple(grid.v_range))
     wo = fine.directions()
     inside = fine.inside
