@@ -46,3 +46,19 @@ def quad_albedo(b, i, alpha, eta, lam):
     R = np.sum(np.where(vis, pr * np.abs(o_r[:, 2]) * 4 * np.abs(c), 0) * w)
     T = np.sum(np.where(ok, pt * np.abs(o_t[:, 2]) * jac_t, 0) * w)
     return float(R), float(T)
+
+
+def quad_multiple(b, i, lam, n=64, n_phi=8):
+    """∫ f_ms |cos θ_o| dω_o of the compensation lobes of *b* at *lam* (nm) over both hemispheres (Gauss-Legendre
+    in cos θ_o, midpoint rule in φ)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    mu, wmu = (x + 1) / 2, w / 2
+    phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
+    total = 0.0
+    for side in (1.0, -1.0):
+        M, P = np.meshgrid(mu, phi, indexing="ij")
+        S = np.sqrt(1 - M * M)
+        o = np.stack([S * np.cos(P), S * np.sin(P), side * M], axis=-1).reshape(-1, 3)
+        f = b.eval_parts(np.broadcast_to(i, o.shape), o, lam)["multiple"].reshape(M.shape)
+        total += float(np.sum(f * M * wmu[:, None]) * 2 * np.pi / n_phi)
+    return total

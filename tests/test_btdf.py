@@ -186,19 +186,9 @@ def quad_albedo(b, i, alpha, eta=ETA):
     return slope_quadrature.quad_albedo(b, i, alpha, eta, LAM)
 
 
-def quad_multiple(b, i, n=64, n_phi=8):
-    """∫ f_ms |cos θ_o| dω_o of the compensation lobes over both hemispheres (Gauss-Legendre in cos θ_o)."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    mu, wmu = (x + 1) / 2, w / 2
-    phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
-    total = 0.0
-    for side in (1.0, -1.0):
-        M, P = np.meshgrid(mu, phi, indexing="ij")
-        S = np.sqrt(1 - M * M)
-        o = np.stack([S * np.cos(P), S * np.sin(P), side * M], axis=-1).reshape(-1, 3)
-        f = b.eval_parts(np.broadcast_to(i, o.shape), o, LAM)["multiple"].reshape(M.shape)
-        total += float(np.sum(f * M * wmu[:, None]) * 2 * np.pi / n_phi)
-    return total
+def quad_multiple(b, i):
+    """∫ f_ms |cos θ_o| dω_o of the compensation lobes at λ = 550 nm (:func:`slope_quadrature.quad_multiple`)."""
+    return slope_quadrature.quad_multiple(b, i, LAM)
 
 
 def _flat_fresnel(theta_deg, side):

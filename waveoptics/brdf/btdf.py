@@ -18,7 +18,7 @@ smooth limit is R = F(θ_i) + T = 1 − F(θ_i).
 
 F is the exact unpolarized Fresnel reflectance of a dielectric (:func:`waveoptics.materials.fresnel.F`; total
 internal reflection from inside gives F = 1), and 1 − F its transmittance; a thin-film stack on the glass puts the
-stack's R and T in their place (:mod:`waveoptics.brdf.facet_interface`; single scattering only). D is any NDF of :data:`waveoptics.brdf.NDFS`; G is Smith's with the
+stack's R and T in their place (:mod:`waveoptics.brdf.facet_interface`; multiple scattering if it is lossless). D is any NDF of :data:`waveoptics.brdf.NDFS`; G is Smith's with the
 NDF's Λ (a direction below the surface sees the microsurface upside down: Λ(ω) is Λ(−ω)), either separable,
 G1(i) G1(o) (``smith``, Walter eq. 23), or height-correlated (``smith-correlated``, Heitz 2014 §6.2):
 1/(1 + Λ(i) + Λ(o)) in reflection and the Beta function B(1 + Λ(i), 1 + Λ(o)) in transmission (the light must
@@ -82,7 +82,6 @@ from scipy.interpolate import CubicSpline
 
 from ..errors import FieldError, unknown
 from ..materials import Material, get_material
-from ..materials import fresnel as _fresnel
 from .directions import dot_last, reflect
 from .facet_interface import as_interface, facet_interface_of
 from .fresnel_terms import F_mean
@@ -326,8 +325,7 @@ def _cosine_mean(values, pieces, t):
 
 
 @functools.lru_cache(maxsize=64)
-def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_shape: float | None
-                      ) -> DielectricTables:
+def dielectric_tables(ndf: str, alpha: float, eta, shadowing: str, ndf_shape: float | None) -> DielectricTables:
     """The albedo tables of the energy compensation (:class:`DielectricTables`) of an isotropic interface.
 
     Parameters
@@ -336,8 +334,9 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
         NDF name (:data:`waveoptics.brdf.NDFS`).
     alpha : float
         Isotropic slope scale α (dimensionless).
-    eta : float
-        Real index of the medium below (air above).
+    eta : float or facet interface
+        Real index of the medium below (air above), or a lossless facet interface (a thin-film stack on it,
+        :func:`waveoptics.brdf.facet_interface_of`: its R and T in place of F and 1 − F, R + T = 1 per facet).
     shadowing : str
         ``smith`` or ``smith-correlated``.
     ndf_shape : float or None
@@ -348,6 +347,8 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
     .. [1] C. Kulla, A. Conty, SIGGRAPH 2017 course, the dielectric energy compensation.
     """
     spec = ndf_by_name(ndf)
+    iface = as_interface(eta)
+    eta = iface.eta
     x, _ = gl01(DIELECTRIC_MS_NODES)
     t = np.linspace(0.0, 1.0, DIELECTRIC_DENSE_SAMPLES)
     pieces = {1.0: split_pieces(()), -1.0: split_pieces(albedo_cuts(eta))}
@@ -357,15 +358,15 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
         for piece in pieces[sgn]:
             mu = piece_cosine(x, piece)
             wi = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), sgn * mu], axis=-1)
-            R, T = albedo_single(wi, eta, spec, ndf, alpha, alpha, ndf_shape, shadowing, symmetric=True)
+            R, T = albedo_single(wi, iface, spec, ndf, alpha, alpha, ndf_shape, shadowing, symmetric=True)
             # guard: a single-scattering albedo cannot exceed 1, but the quadrature's error can put it slightly
             # above (as in waveoptics.brdf.multiscatter); above 1 the compensation lobe 1 − E would turn negative
             rows.append(np.minimum(CubicSpline(x, np.minimum(R + T, 1.0))(t), 1.0))
         E[sgn] = np.array(rows)
     Eavg_up = _cosine_mean(E[1.0], pieces[1.0], t)
     Eavg_down = _cosine_mean(E[-1.0], pieces[-1.0], t)
-    Favg_up = float(F_mean(lambda mu: _fresnel.F(mu, eta)))
-    Favg_down = float(F_mean(lambda mu: _fresnel.F(mu, 1.0 / eta)))
+    Favg_up = float(F_mean(lambda mu: iface.RT(mu, True)[0]))
+    Favg_down = float(F_mean(lambda mu: iface.RT(mu, False)[0]))
     lost_up, lost_down = max(1.0 - Eavg_up, 1e-12), max(1.0 - Eavg_down, 1e-12)
     ratio = eta * eta * (1.0 - Favg_down) * lost_down / ((1.0 - Favg_up) * lost_up)
     share = ratio / (1.0 + ratio)
@@ -447,11 +448,10 @@ class RoughDielectricBSDF(BRDF):
             raise FieldError(f"{{material}} {mat.name!r} is not a dielectric with a refractive index; the rough "
                              "dielectric needs one (e.g. glass or 1.5)", "material")
         object.__setattr__(self, "material", mat)
-        if not mat.has_index and (self.multiple_scattering or not self.takes_stack):
-            other = "multiple_scattering" if self.takes_stack else "psd"
+        if not mat.has_index and not self.takes_stack:
             raise FieldError(f"{{material}} {mat.name!r} is a thin-film stack, which the rough dielectric with "
-                             f"{{{other}}} does not take (its tables are of a bare interface); drop one of them",
-                             "material", other)
+                             "{psd} does not take (its nano tables are of a bare interface); drop one of them",
+                             "material", "psd")
         if self.micro.shadowing not in DIELECTRIC_SHADOWINGS:
             raise unknown("shadowing model of the rough dielectric", self.micro.shadowing, DIELECTRIC_SHADOWINGS,
                           field="shadowing")
@@ -479,7 +479,12 @@ class RoughDielectricBSDF(BRDF):
     def _tables(self, lam):
         _, ndf, ax, ay, c = self._args()
         shape = float(c) if isinstance(c, (int, float, np.number)) else c
-        return dielectric_tables(ndf, float(np.sqrt(ax * ay)), self._eta(lam), self.micro.shadowing, shape)
+        iface = self._iface(lam)
+        if not iface.lossless:
+            raise FieldError(f"{{material}} {self.material.name!r} has absorbing films at {lam:g} nm; "
+                             "{multiple_scattering} needs lossless ones (its lobes return all of 1 − E)",
+                             "material", "multiple_scattering")
+        return dielectric_tables(ndf, float(np.sqrt(ax * ay)), iface, self.micro.shadowing, shape)
 
     def _parts1(self, wi, wo, lam):
         """(reflection, transmission, multiple reflection, multiple transmission) in 1/sr at one wavelength."""

@@ -41,6 +41,8 @@ class BareInterface:
     """Air (index 1) over a dielectric of real index ``eta``: R = F, T = 1 − F per facet (module doc)."""
 
     eta: float
+    #: R + T = 1 per facet
+    lossless = True
 
     def RT(self, cos_i, from_above):
         """(R, T) (dimensionless) of facets seen at |cos| *cos_i* from air (*from_above* True) or from the glass.
@@ -62,6 +64,11 @@ class CoatedInterface:
     n_films: tuple
     d_films_nm: tuple
     wavelength_nm: float
+
+    @property
+    def lossless(self) -> bool:
+        """True when no film absorbs (k = 0): R + T = 1 per facet."""
+        return all(np.imag(n) == 0 for n in self.n_films)
 
     def RT(self, cos_i, from_above):
         """(R, T) (dimensionless; R + T < 1 with absorbing films) of facets seen at |cos| *cos_i* from air
