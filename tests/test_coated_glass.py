@@ -184,12 +184,12 @@ def test_quarter_wave_mgf2_on_bk7_is_an_antireflection_coating():
 
 # -- sampling and reciprocity ----------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("theta, side", [(40, 1), (30, -1)])
-def test_sampling_chi2_of_coated_glass(theta, side):
-    b = RoughDielectricBSDF(COATED, Micro(alpha=0.3))
+@pytest.mark.parametrize("theta, side, ms", [(40, 1, False), (30, -1, False), (50, -1, True)])
+def test_sampling_chi2_of_coated_glass(theta, side, ms):
+    b = RoughDielectricBSDF(COATED, Micro(alpha=0.3, ndf="ggx"), multiple_scattering=ms)
     wi = _dir(theta, side)
     res = chi2_test(lambda u: b.sample(wi, LAM, u).wo, lambda d: b.pdf(wi, d, LAM), sample_count=100_000, res=31,
-                    ires=12, seed=5, test_count=2)
+                    ires=12, seed=5, test_count=3)
     print(res.message)
     assert res.passed, res.message
 
