@@ -18,16 +18,18 @@ smooth limit is R = F(θ_i) + T = 1 − F(θ_i).
 
 F is the exact unpolarized Fresnel reflectance of a dielectric (:func:`waveoptics.materials.fresnel.F`; total
 internal reflection from inside gives F = 1), and 1 − F its transmittance; a thin-film stack on the glass puts the
-stack's R and T in their place (:mod:`waveoptics.brdf.facet_interface`; multiple scattering if it is lossless). D is any NDF of :data:`waveoptics.brdf.NDFS`; G is Smith's with the
-NDF's Λ (a direction below the surface sees the microsurface upside down: Λ(ω) is Λ(−ω)), either separable,
+stack's R and T in their place (:mod:`waveoptics.brdf.facet_interface`; multiple scattering if it is lossless).
+D is any NDF of :data:`waveoptics.brdf.NDFS`; G is Smith's with the NDF's Λ (a direction below the surface sees
+the microsurface upside down: Λ(ω) is Λ(−ω)), either separable,
 G1(i) G1(o) (``smith``, Walter eq. 23), or height-correlated (``smith-correlated``, Heitz 2014 §6.2):
 1/(1 + Λ(i) + Λ(o)) in reflection and the Beta function B(1 + Λ(i), 1 + Λ(o)) in transmission (the light must
 be unmasked above the facet's height and unshadowed below it).
 
 Sampling (Walter §5.3): a normal m is drawn from the NDF's sampler (:mod:`waveoptics.brdf.sampling`: visible
 normals for GGX, D cos θ_m otherwise) for the direction turned above the surface, then reflection with probability
-F(|i·m|) and refraction otherwise. The densities over ω_o are p(m) F / (4 |i·h|) and
-p(m) (1 − F) η_o² |o·h| / (η_i (i·h) + η_o (o·h))² (the Jacobians of eqs. 14 and 17). The choice between
+F(|i·m|) and refraction otherwise (R/(R + T) of a coated facet, whose absorbing films make R + T < 1). The
+densities over ω_o are p(m) F / (4 |i·h|) and p(m) (1 − F) η_o² |o·h| / (η_i (i·h) + η_o (o·h))² (the Jacobians
+of eqs. 14 and 17). The choice between
 reflection and refraction takes a third uniform number from the low digits of u₁ (the protocol passes two).
 Samples that leave on the wrong side of the macro surface are invalid (weight 0, ``wo`` = 0), so ∫ pdf dω_o is
 the fraction of valid samples (1 for a mirror, below 1 as α grows).
