@@ -145,9 +145,9 @@ def test_white_furnace_of_a_lossless_coating():
 @pytest.mark.parametrize("alpha", [0.1, 0.5])
 def test_white_furnace_with_multiple_scattering(alpha):
     """Lossless film, the Kulla-Conty compensation built with the stack's R and T (tables per wavelength): R + T +
-    R_ms + T_ms = 1 within 2e-3 (the issue asks 1e-2) at 0-70° from air and 0-60° from the glass (total internal reflection included), by
-    the quadratures written here; absorbing films are refused in one line naming both fields (the lobes would
-    return light the films absorb)."""
+    R_ms + T_ms = 1 within 2e-3 (the issue asks 1e-2) at 0-70° from air and 0-60° from the glass (total internal
+    reflection included), by the quadratures written here; absorbing films are refused in one line naming both
+    fields (the lobes would return light the films absorb)."""
     b = RoughDielectricBSDF(COATED, Micro(alpha=alpha, ndf="ggx"), multiple_scattering=True)
     for theta, side in ((0, 1), (30, 1), (50, 1), (70, 1), (0, -1), (30, -1), (45, -1), (60, -1)):
         i = _dir(theta, side)
