@@ -8,7 +8,7 @@ twins), facet_frame_cl (the facet-frame quadrature's per-cell sum as an OpenCL k
 facet_polarization (macro s/p light on tilted facets: each facet's own s/p mix),
 sampling (microfacet normal samplers), protocol (the BRDF as a function: eval / pdf / sample / albedo; the
 microfacet model), pointwise (the two-scale model as a function), tabulated (the same from diffracted lobes tabulated over
-incidence, any nano-roughness), measured_ndf (an NDF tabulated from a height field's slopes), chi2 (goodness-of-fit test of samplers), multiscatter (Kulla-Conty energy compensation), btdf (the rough dielectric: reflection and transmission over the sphere, with its energy compensation), nano_dielectric (nano-rough glass: the rough dielectric with first-order Rayleigh-Rice scatter into both half-spaces), twoscale_dielectric (two-scale rough glass: micro facets carrying the nano-rough glass, reflection and transmission), spectral (a BRDF known at wavelength nodes, evaluated at any λ and in RGB), ndf_fit (the α of any NDF that matches a surface's slopes), models (the BRDF models by name, from keyword arguments:
+incidence, any nano-roughness), measured_ndf (an NDF tabulated from a height field's slopes), chi2 (goodness-of-fit test of samplers), multiscatter (Kulla-Conty energy compensation), facet_interface (what one facet of rough glass reflects and transmits: bare, or coated by thin films), btdf (the rough dielectric: reflection and transmission over the sphere, with its energy compensation), nano_dielectric (nano-rough glass: the rough dielectric with first-order Rayleigh-Rice scatter into both half-spaces), twoscale_dielectric (two-scale rough glass: micro facets carrying the nano-rough glass, reflection and transmission), spectral (a BRDF known at wavelength nodes, evaluated at any λ and in RGB), ndf_fit (the α of any NDF that matches a surface's slopes), models (the BRDF models by name, from keyword arguments:
 BRDF_MODELS, their parameters BRDF_MODEL_PARAMETERS, build_brdf_model).
 """
 from .measured_ndf import (SlopeTable, slope_table, footprint_ndf, D_tabulated, Lambda_tabulated)
@@ -20,7 +20,8 @@ from .ndf_closed import (D_ggx, Lambda_ggx, D_beckmann, Lambda_beckmann, D_blinn
 from .ndf_shaped import (ABC_C_DEFAULT, abc_normalization, D_abc, Lambda_abc, EPD_P_DEFAULT, epd_normalization,
     D_epd, Lambda_epd, SGD_P_DEFAULT, gamma_upper, sgd_normalization, D_sgd, Lambda_sgd)
 from .ndf import (ALPHA_MIN, ALPHA_MAX, COS_MIN, SHAPE_RANGE, NDF, NDFS, D, Lambda, G1)
-from .shadowing import (G_smith, G_smith_correlated, G_cook_torrance, G_implicit, SHADOWINGS, G)
+from .shadowing import (G_smith, G_smith_correlated, G_cook_torrance, G_implicit, SHADOWINGS, G, sided_lambda,
+    sided_G2)
 from .fresnel_terms import (FRESNELS, F_mean, MaterialFresnel)
 from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES, diffuse_parameter, sigma_renamed)
 from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
@@ -53,8 +54,9 @@ from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDI
 from .chi2 import (Chi2Result, chi2_test)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
 from .incidence_quadrature import (INCIDENCE_NODES, INCIDENCE_ALPHA_MIN, incidence_panels, incidence_normal_quadrature)
-from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, pack_third_uniform, refract, half_vector_refraction, sided_lambda,
-    sided_G2, albedo_single, DielectricTables, dielectric_tables, albedo_multiple, RoughDielectricBSDF)
+from .facet_interface import (BareInterface, CoatedInterface, FACET_INTERFACES, facet_interface_of, as_interface)
+from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, pack_third_uniform, refract, half_vector_refraction,
+    albedo_single, DielectricTables, dielectric_tables, albedo_multiple, RoughDielectricBSDF)
 from .mu_pieces import (critical_cosine, albedo_cuts, table_pieces, split_pieces, piece_variable, piece_cosine, read_pieces)
 from .nano_dielectric import (NANO_MU_NODES, NanoTables,
                               coherent_split, nano_tables, NanoRoughDielectricBSDF)
@@ -63,6 +65,6 @@ from .twoscale_dielectric import (TWOSCALE_DIELECTRIC_NODES, ALBEDO_MU_NODES, AL
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,
     twoscale_model, rough_dielectric_model, table_model, BRDF_MODELS, BRDF_MODEL_PARAMETERS, BRDF_MODEL_HELP,
     build_brdf_model)
-from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, field_lobe, roughness_scales, scale_split, twoscale_grid, nano_grid, facet_polarization, twoscale_paraxial, twoscale_frame, twoscale_coherent, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, btdf, nano_dielectric, twoscale_dielectric, spectral, ndf_fit, models  # noqa: F401
+from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, field_lobe, roughness_scales, scale_split, twoscale_grid, nano_grid, facet_polarization, twoscale_paraxial, twoscale_frame, twoscale_coherent, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, facet_interface, btdf, nano_dielectric, twoscale_dielectric, spectral, ndf_fit, models  # noqa: F401
 
-__all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + field_lobe.__all__ + roughness_scales.__all__ + scale_split.__all__ + twoscale_grid.__all__ + nano_grid.__all__ + facet_polarization.__all__ + twoscale_paraxial.__all__ + twoscale_frame.__all__ + twoscale_coherent.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + btdf.__all__ + nano_dielectric.__all__ + twoscale_dielectric.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__
+__all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + field_lobe.__all__ + roughness_scales.__all__ + scale_split.__all__ + twoscale_grid.__all__ + nano_grid.__all__ + facet_polarization.__all__ + twoscale_paraxial.__all__ + twoscale_frame.__all__ + twoscale_coherent.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + facet_interface.__all__ + btdf.__all__ + nano_dielectric.__all__ + twoscale_dielectric.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__

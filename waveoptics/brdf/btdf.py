@@ -17,16 +17,19 @@ rule is f_t(i, o)/η_o² = f_t(o, i)/η_i² (Veach 1997, §5.2), and the energy 
 smooth limit is R = F(θ_i) + T = 1 − F(θ_i).
 
 F is the exact unpolarized Fresnel reflectance of a dielectric (:func:`waveoptics.materials.fresnel.F`; total
-internal reflection from inside gives F = 1). D is any NDF of :data:`waveoptics.brdf.NDFS`; G is Smith's with the
-NDF's Λ (a direction below the surface sees the microsurface upside down: Λ(ω) is Λ(−ω)), either separable,
+internal reflection from inside gives F = 1), and 1 − F its transmittance; a thin-film stack on the glass puts the
+stack's R and T in their place (:mod:`waveoptics.brdf.facet_interface`; multiple scattering if it is lossless).
+D is any NDF of :data:`waveoptics.brdf.NDFS`; G is Smith's with the NDF's Λ (a direction below the surface sees
+the microsurface upside down: Λ(ω) is Λ(−ω)), either separable,
 G1(i) G1(o) (``smith``, Walter eq. 23), or height-correlated (``smith-correlated``, Heitz 2014 §6.2):
 1/(1 + Λ(i) + Λ(o)) in reflection and the Beta function B(1 + Λ(i), 1 + Λ(o)) in transmission (the light must
 be unmasked above the facet's height and unshadowed below it).
 
 Sampling (Walter §5.3): a normal m is drawn from the NDF's sampler (:mod:`waveoptics.brdf.sampling`: visible
 normals for GGX, D cos θ_m otherwise) for the direction turned above the surface, then reflection with probability
-F(|i·m|) and refraction otherwise. The densities over ω_o are p(m) F / (4 |i·h|) and
-p(m) (1 − F) η_o² |o·h| / (η_i (i·h) + η_o (o·h))² (the Jacobians of eqs. 14 and 17). The choice between
+F(|i·m|) and refraction otherwise (R/(R + T) of a coated facet, whose absorbing films make R + T < 1). The
+densities over ω_o are p(m) F / (4 |i·h|) and p(m) (1 − F) η_o² |o·h| / (η_i (i·h) + η_o (o·h))² (the Jacobians
+of eqs. 14 and 17). The choice between
 reflection and refraction takes a third uniform number from the low digits of u₁ (the protocol passes two).
 Samples that leave on the wrong side of the macro surface are invalid (weight 0, ``wo`` = 0), so ∫ pdf dω_o is
 the fraction of valid samples (1 for a mirror, below 1 as α grows).
@@ -74,15 +77,15 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
-from scipy import special
 from scipy.interpolate import CubicSpline
 
 from ..errors import FieldError, unknown
 from ..materials import Material, get_material
-from ..materials import fresnel as _fresnel
 from .directions import dot_last, reflect
+from .facet_interface import as_interface, facet_interface_of
 from .fresnel_terms import F_mean
 from .ndf import COS_MIN, check_alpha, ndf_by_name
 from .protocol import BRDF, BRDFSample, broadcast_incidence, broadcast_pair, check_uniform, lobe_choice
@@ -90,11 +93,12 @@ from .mu_pieces import albedo_cuts, piece_cosine, read_pieces, split_pieces
 from .incidence_quadrature import INCIDENCE_ALPHA_MIN, incidence_normal_quadrature
 from .quadrature import normal_quadrature
 from .sampling import pdf_normal, sample_normal
+from .shadowing import sided_G2, sided_lambda
 from .smith import gl01
 from .twoscale import Micro
 
 __all__ = ['DIELECTRIC_SHADOWINGS', 'DIELECTRIC_MS_NODES', 'UNIFORM_DIGITS', 'pack_third_uniform', 'refract',
-           'half_vector_refraction', 'sided_lambda', 'sided_G2', 'albedo_single', 'DielectricTables',
+           'half_vector_refraction', 'albedo_single', 'DielectricTables',
            'dielectric_tables', 'albedo_multiple', 'RoughDielectricBSDF']
 
 #: masking-shadowing terms of the BSDF (the Smith forms, which have a transmission case)
@@ -159,40 +163,6 @@ def _sides(wi, wo, eta):
     return eta_i, eta_o, np.where(up_i, eta, 1.0)
 
 
-def sided_lambda(spec, w, ax, ay, c):
-    """Smith Λ (dimensionless) of directions *w* (n, 3) on either side of the macro surface: the microsurface seen
-    from below is the one seen along −ω (*spec* an NDF of :data:`waveoptics.brdf.NDFS`, *ax*, *ay*, *c* its
-    roughness and shape).
-
-    References
-    ----------
-    .. [1] B. Walter et al., EGSR 2007, §5.1 (G of a transmitted direction); E. Heitz, JCGT 3(2), 2014, §6.
-    """
-    return spec.Lambda(np.where(w[:, 2:3] < 0, -w, w), ax, ay, c)
-
-
-def sided_G2(lam_i, lam_o, transmission, shadowing):
-    """Masking-shadowing (dimensionless) of a valid configuration from the Λ of both directions
-    (:func:`sided_lambda`): ``smith`` separable (1 + Λ_i)⁻¹(1 + Λ_o)⁻¹, or ``smith-correlated`` 1/(1 + Λ_i + Λ_o)
-    (reflection) and B(1 + Λ_i, 1 + Λ_o) (*transmission*, boolean array); 0 where a Λ is infinite.
-
-    References
-    ----------
-    .. [1] E. Heitz, JCGT 3(2), 2014, §6.1-6.2.
-    .. [2] B. Walter et al., EGSR 2007, eq. (23).
-    """
-    with np.errstate(invalid="ignore", over="ignore"):
-        if shadowing == "smith":
-            g = 1.0 / ((1.0 + lam_i) * (1.0 + lam_o))
-        else:
-            # guard: Λ = inf (grazing) has G = 0; B of finite arguments only
-            fin = np.isfinite(lam_i) & np.isfinite(lam_o)
-            li, lo = np.where(fin, lam_i, 0.0), np.where(fin, lam_o, 0.0)
-            g = np.where(transmission, special.beta(1.0 + li, 1.0 + lo), 1.0 / (1.0 + li + lo))
-            g = np.where(fin, g, 0.0)
-    return np.where(np.isfinite(g), g, 0.0)
-
-
 def _pair_geometry(wi, wo, eta):
     """(η_i, η_o, η_t, reflection?, transmission?, h, ω_i·h, ω_o·h, valid?) of flat direction pairs (n, 3): the half
     vector of reflection, or the generalized half vector of refraction (Walter et al. 2007, eq. 16), turned to the
@@ -211,43 +181,52 @@ def _pair_geometry(wi, wo, eta):
     return eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok
 
 
-def _single(wi, wo, eta, spec, ax, ay, c, shadowing):
-    """Single-scattering (f_r, f_t) in 1/sr (module doc) of flat arrays (n, 3) at a real index η."""
+def _single(wi, wo, iface, spec, ax, ay, c, shadowing):
+    """Single-scattering (f_r, f_t) in 1/sr (module doc) of flat arrays (n, 3) through the facet interface *iface*
+    (:mod:`waveoptics.brdf.facet_interface`: its R in place of F, its T in place of 1 − F)."""
     zi, zo = wi[:, 2], wo[:, 2]
-    eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok = _pair_geometry(wi, wo, eta)
-    F = _fresnel.F(np.abs(ih), eta_t / eta_i)
+    eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok = _pair_geometry(wi, wo, iface.eta)
+    F, T = iface.RT(np.abs(ih), zi > 0)
     D = spec.D(h, ax, ay, c)
     G = sided_G2(sided_lambda(spec, wi, ax, ay, c), sided_lambda(spec, wo, ax, ay, c), trans, shadowing)
     # guard: cosines floored at COS_MIN in the denominators (G already vanishes at the horizon)
     cc = np.maximum(np.abs(zi), COS_MIN) * np.maximum(np.abs(zo), COS_MIN)
     fr = np.where(ok & refl, F * G * D / (4.0 * cc), 0.0)
     den = (eta_i * ih + eta_o * oh) ** 2
-    ft = np.abs(ih * oh) / cc * eta_o ** 2 * (1.0 - F) * G * D / np.where(den > 0, den, 1.0)
+    ft = np.abs(ih * oh) / cc * eta_o ** 2 * T * G * D / np.where(den > 0, den, 1.0)
     return fr, np.where(ok & trans & (den > 0), ft, 0.0)
 
 
-def _single_pdf(wi, wo, eta, ndf, ax, ay, c):
+def _single_pdf(wi, wo, iface, ndf, ax, ay, c):
     """Density (1/sr over ω_o) of :func:`_sample_single`."""
     zi = wi[:, 2]
-    eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok = _pair_geometry(wi, wo, eta)
+    eta_i, eta_o, eta_t, refl, trans, h, ih, oh, ok = _pair_geometry(wi, wo, iface.eta)
     up = np.where(zi[:, None] < 0, -wi, wi)
     pm = pdf_normal(up, h, ndf=ndf, ax=ax, ay=ay, c=c)
-    F = _fresnel.F(np.abs(ih), eta_t / eta_i)
+    F, T = _choice(*iface.RT(np.abs(ih), zi > 0))
     den = (eta_i * ih + eta_o * oh) ** 2
     jr = F / (4.0 * np.maximum(np.abs(ih), 1e-300))
-    jt = (1.0 - F) * eta_o ** 2 * np.abs(oh) / np.where(den > 0, den, 1.0)
+    jt = T * eta_o ** 2 * np.abs(oh) / np.where(den > 0, den, 1.0)
     return np.where(ok, pm * np.where(refl, jr, np.where(den > 0, jt, 0.0)), 0.0)
 
 
-def _sample_single(wi, u, eta, ndf, ax, ay, c):
+def _choice(R, T):
+    """Probabilities (R/(R + T), T/(R + T)) of reflection and refraction on a facet (Walter §5.3 samples by F; with
+    absorbing films R + T < 1); (1, 0) where R + T = 0."""
+    tot = R + T
+    pos = tot > 0
+    return np.where(pos, R / np.where(pos, tot, 1.0), 1.0), np.where(pos, T / np.where(pos, tot, 1.0), 0.0)
+
+
+def _sample_single(wi, u, iface, ndf, ax, ay, c):
     """ω_o of the single-scattering lobes (module doc); invalid samples are 0."""
     zi = wi[:, 2]
     s = np.sign(zi)
     m = sample_normal(np.where(zi[:, None] < 0, -wi, wi), u, ndf=ndf, ax=ax, ay=ay, c=c)
     ih = dot_last(wi, m)
-    eta_i = np.where(zi > 0, 1.0, eta)
-    eta_t = np.where(zi > 0, eta, 1.0)
-    F = _fresnel.F(np.abs(ih), eta_t / eta_i)
+    eta_i = np.where(zi > 0, 1.0, iface.eta)
+    eta_t = np.where(zi > 0, iface.eta, 1.0)
+    F, _ = _choice(*iface.RT(np.abs(ih), zi > 0))
     uc = np.modf(u[:, 1] * UNIFORM_DIGITS)[0]
     wr = reflect(wi, m)
     wt, ok_t = refract(wi, s[:, None] * m, eta_t / eta_i)
@@ -299,31 +278,34 @@ def _albedo_nodes(w1, eta_rel, ax, ay, symmetric):
     return m, w
 
 
-def albedo_single(wi, eta, spec, ndf, ax, ay, c, shadowing, symmetric=False, facet_factors=None):
+def albedo_single(wi, iface, spec, ndf, ax, ay, c, shadowing, symmetric=False, facet_factors=None):
     """(R, T) = ∫ f_r |cos θ_o| dω_o, ∫ f_t |cos θ_o| dω_o (dimensionless) for each wi (n, 3), by quadrature over
     microfacet normals (:func:`waveoptics.brdf.normal_quadrature`, nodes placed by α): each normal m gives the
     mirror and the refracted direction, dω_o = 4 |i·m| dω_m and (η_i (i·m) + η_o (o·m))² / (η_o² |o·m|) dω_m
-    (Walter eqs. 14, 17). *symmetric*: an isotropic lobe with ω_i in the xz plane, integrated over the half
-    m_y ≥ 0 (twice). *facet_factors*: a function (|i·m|, from_above) → (a_r, a_t) of arrays over the normals that
-    scales each facet's reflection and refraction (the coherent share of a nano-rough facet); None: 1.
+    (Walter eqs. 14, 17). *iface*: a real index η below air, or a facet interface
+    (:func:`waveoptics.brdf.facet_interface_of`, R and T per facet). *symmetric*: an isotropic lobe with ω_i in the
+    xz plane, integrated over the half m_y ≥ 0 (twice). *facet_factors*: a function (|i·m|, from_above) →
+    (a_r, a_t) of arrays over the normals that scales each facet's reflection and refraction (the coherent share of
+    a nano-rough facet); None: 1.
 
     References
     ----------
     .. [1] B. Walter et al., EGSR 2007, eqs. (14), (17), (20), (21).
     """
+    iface = as_interface(iface)
     R = np.zeros(len(wi))
     T = np.zeros(len(wi))
     for j, w1 in enumerate(wi):
         s = 1.0 if w1[2] > 0 else -1.0
-        eta_i, eta_t = (1.0, eta) if s > 0 else (eta, 1.0)
+        eta_i, eta_t = (1.0, iface.eta) if s > 0 else (iface.eta, 1.0)
         m, w = _albedo_nodes(w1, eta_t / eta_i, ax, ay, symmetric)
         ih = m @ w1
         vis = ih * s > 0
         wr = reflect(w1, m)
         wt, ok = refract(np.broadcast_to(w1, m.shape), s * m, np.full(len(m), eta_t / eta_i))
         a = np.broadcast_to(w1, m.shape)
-        fr, _ = _single(a, wr, eta, spec, ax, ay, c, shadowing)
-        _, ft = _single(a, np.where(ok[:, None], wt, np.array([0.0, 0.0, s])), eta, spec, ax, ay, c, shadowing)
+        fr, _ = _single(a, wr, iface, spec, ax, ay, c, shadowing)
+        _, ft = _single(a, np.where(ok[:, None], wt, np.array([0.0, 0.0, s])), iface, spec, ax, ay, c, shadowing)
         oh = dot_last(wt, m)
         den = (eta_i * ih + eta_t * oh) ** 2
         jt = den / np.where(ok, eta_t ** 2 * np.abs(oh), 1.0)
@@ -345,8 +327,7 @@ def _cosine_mean(values, pieces, t):
 
 
 @functools.lru_cache(maxsize=64)
-def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_shape: float | None
-                      ) -> DielectricTables:
+def dielectric_tables(ndf: str, alpha: float, eta, shadowing: str, ndf_shape: float | None) -> DielectricTables:
     """The albedo tables of the energy compensation (:class:`DielectricTables`) of an isotropic interface.
 
     Parameters
@@ -355,8 +336,9 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
         NDF name (:data:`waveoptics.brdf.NDFS`).
     alpha : float
         Isotropic slope scale α (dimensionless).
-    eta : float
-        Real index of the medium below (air above).
+    eta : float or facet interface
+        Real index of the medium below (air above), or a lossless facet interface (a thin-film stack on it,
+        :func:`waveoptics.brdf.facet_interface_of`: its R and T in place of F and 1 − F, R + T = 1 per facet).
     shadowing : str
         ``smith`` or ``smith-correlated``.
     ndf_shape : float or None
@@ -367,6 +349,8 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
     .. [1] C. Kulla, A. Conty, SIGGRAPH 2017 course, the dielectric energy compensation.
     """
     spec = ndf_by_name(ndf)
+    iface = as_interface(eta)
+    eta = iface.eta
     x, _ = gl01(DIELECTRIC_MS_NODES)
     t = np.linspace(0.0, 1.0, DIELECTRIC_DENSE_SAMPLES)
     pieces = {1.0: split_pieces(()), -1.0: split_pieces(albedo_cuts(eta))}
@@ -376,15 +360,15 @@ def dielectric_tables(ndf: str, alpha: float, eta: float, shadowing: str, ndf_sh
         for piece in pieces[sgn]:
             mu = piece_cosine(x, piece)
             wi = np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), sgn * mu], axis=-1)
-            R, T = albedo_single(wi, eta, spec, ndf, alpha, alpha, ndf_shape, shadowing, symmetric=True)
+            R, T = albedo_single(wi, iface, spec, ndf, alpha, alpha, ndf_shape, shadowing, symmetric=True)
             # guard: a single-scattering albedo cannot exceed 1, but the quadrature's error can put it slightly
             # above (as in waveoptics.brdf.multiscatter); above 1 the compensation lobe 1 − E would turn negative
             rows.append(np.minimum(CubicSpline(x, np.minimum(R + T, 1.0))(t), 1.0))
         E[sgn] = np.array(rows)
     Eavg_up = _cosine_mean(E[1.0], pieces[1.0], t)
     Eavg_down = _cosine_mean(E[-1.0], pieces[-1.0], t)
-    Favg_up = float(F_mean(lambda mu: _fresnel.F(mu, eta)))
-    Favg_down = float(F_mean(lambda mu: _fresnel.F(mu, 1.0 / eta)))
+    Favg_up = float(F_mean(lambda mu: iface.RT(mu, True)[0]))
+    Favg_down = float(F_mean(lambda mu: iface.RT(mu, False)[0]))
     lost_up, lost_down = max(1.0 - Eavg_up, 1e-12), max(1.0 - Eavg_down, 1e-12)
     ratio = eta * eta * (1.0 - Favg_down) * lost_down / ((1.0 - Favg_up) * lost_up)
     share = ratio / (1.0 + ratio)
@@ -457,6 +441,8 @@ class RoughDielectricBSDF(BRDF):
     material: Material | str = "1.5"
     micro: Micro = Micro()
     multiple_scattering: bool = False
+    #: whether the class takes a thin-film stack as its material (facets coated: R and T of the stack)
+    takes_stack: ClassVar[bool] = True
 
     def __post_init__(self):
         mat = get_material(self.material)
@@ -464,6 +450,10 @@ class RoughDielectricBSDF(BRDF):
             raise FieldError(f"{{material}} {mat.name!r} is not a dielectric with a refractive index; the rough "
                              "dielectric needs one (e.g. glass or 1.5)", "material")
         object.__setattr__(self, "material", mat)
+        if not mat.has_index and not self.takes_stack:
+            raise FieldError(f"{{material}} {mat.name!r} is a thin-film stack, which the rough dielectric with "
+                             "{psd} does not take (its nano tables are of a bare interface); drop one of them",
+                             "material", "psd")
         if self.micro.shadowing not in DIELECTRIC_SHADOWINGS:
             raise unknown("shadowing model of the rough dielectric", self.micro.shadowing, DIELECTRIC_SHADOWINGS,
                           field="shadowing")
@@ -472,12 +462,16 @@ class RoughDielectricBSDF(BRDF):
         check_alpha(kw["alpha"], kw["alpha_y"], spec, kw["ndf_shape"])
 
     # -- pieces -------------------------------------------------------------------------------------------------
+    def _iface(self, lam):
+        """The facet interface at *lam* (nm): bare, or coated by the material's films (Snell with the substrate)."""
+        iface = facet_interface_of(self.material, lam)
+        if abs(iface.eta - 1.0) < 1e-9:
+            raise FieldError(f"the index {iface.eta!r} of {{material}} at {lam:g} nm equals the outside's (1): there "
+                             "is no interface", "material")
+        return iface
+
     def _eta(self, lam):
-        eta = float(np.real(self.material.eta(np.array([lam]))[0]))
-        if abs(eta - 1.0) < 1e-9:
-            raise FieldError(f"the index {eta!r} of {{material}} at {lam:g} nm equals the outside's (1): there is no "
-                             "interface", "material")
-        return eta
+        return self._iface(lam).eta
 
     def _args(self):
         kw = self.micro.kw()
@@ -487,12 +481,17 @@ class RoughDielectricBSDF(BRDF):
     def _tables(self, lam):
         _, ndf, ax, ay, c = self._args()
         shape = float(c) if isinstance(c, (int, float, np.number)) else c
-        return dielectric_tables(ndf, float(np.sqrt(ax * ay)), self._eta(lam), self.micro.shadowing, shape)
+        iface = self._iface(lam)
+        if not iface.lossless:
+            raise FieldError(f"{{material}} {self.material.name!r} has absorbing films at {lam:g} nm; "
+                             "{multiple_scattering} needs lossless ones (its lobes return all of 1 − E)",
+                             "material", "multiple_scattering")
+        return dielectric_tables(ndf, float(np.sqrt(ax * ay)), iface, self.micro.shadowing, shape)
 
     def _parts1(self, wi, wo, lam):
         """(reflection, transmission, multiple reflection, multiple transmission) in 1/sr at one wavelength."""
         spec, _, ax, ay, c = self._args()
-        fr, ft = _single(wi, wo, self._eta(lam), spec, ax, ay, c, self.micro.shadowing)
+        fr, ft = _single(wi, wo, self._iface(lam), spec, ax, ay, c, self.micro.shadowing)
         if not self.multiple_scattering:
             zero = np.zeros(len(wi))
             return fr, ft, zero, zero
@@ -521,7 +520,7 @@ class RoughDielectricBSDF(BRDF):
 
     def _pdf1(self, wi, wo, lam):
         _, ndf, ax, ay, c = self._args()
-        p = _single_pdf(wi, wo, self._eta(lam), ndf, ax, ay, c)
+        p = _single_pdf(wi, wo, self._iface(lam), ndf, ax, ay, c)
         if not self.multiple_scattering:
             return p
         tab = self._tables(lam)
@@ -535,7 +534,7 @@ class RoughDielectricBSDF(BRDF):
         _, ndf, ax, ay, c = self._args()
         pm = self._p_ms(wi, lam)
         idx, u[:, 0] = lobe_choice(u[:, 0], [1.0 - pm, pm])
-        wo = _sample_single(wi, u, self._eta(lam), ndf, ax, ay, c)
+        wo = _sample_single(wi, u, self._iface(lam), ndf, ax, ay, c)
         ms = idx == 1
         if np.any(ms):
             tab = self._tables(lam)
@@ -575,7 +574,7 @@ class RoughDielectricBSDF(BRDF):
         for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
             if w1[2] == 0:
                 continue
-            R, T = albedo_single(w1[None], self._eta(float(l1)), spec, ndf, ax, ay, c, self.micro.shadowing)
+            R, T = albedo_single(w1[None], self._iface(float(l1)), spec, ndf, ax, ay, c, self.micro.shadowing)
             out["reflection"][j], out["transmission"][j] = R[0], T[0]
             if self.multiple_scattering:
                 out["multiple_reflection"][j], out["multiple_transmission"][j] = albedo_multiple(

@@ -51,6 +51,9 @@ class ModelEvaluation:
         Directional albedo ∫ f cos θ_o dω_o (dimensionless).
     components : callable(wi, wo) -> dict, optional
         Named parts of the BRDF, each (n_λ, n_in, n_out) in 1/sr.
+    albedo_components : callable(wi) -> dict, optional
+        Named parts of the albedo, each (n_λ, n_in) (dimensionless; a BSDF over the sphere: ``reflection``,
+        ``transmission``, ``multiple_reflection``, ...), summing to ``albedo``.
 
     *progress* is an optional wrapper ``progress(iterable, desc)`` of the loops over incident directions (a
     progress bar).
@@ -59,6 +62,7 @@ class ModelEvaluation:
     evaluate: Callable
     albedo: Callable
     components: Callable | None = None
+    albedo_components: Callable | None = None
 
 
 def _one_index(material, ior):
@@ -371,7 +375,10 @@ def function_evaluation(setup: Callable, wavelengths_nm) -> ModelEvaluation:
     def albedo(wi, progress=None):
         return setup(wi).albedo(wi[None, :, :], wavelengths_nm[:, None])
 
-    return ModelEvaluation(evaluate, albedo, components)
+    def albedo_components(wi):
+        return setup(wi).albedo_parts(wi[None, :, :], wavelengths_nm[:, None])
+
+    return ModelEvaluation(evaluate, albedo, components, albedo_components)
 
 
 def twoscale_model(*, wavelengths_nm, nano=None, surface=None, alpha=None, roughness=None, alpha_y=None, ndf=DEFAULT_NDF,
@@ -472,7 +479,8 @@ def rough_dielectric_model(*, wavelengths_nm, alpha=None, roughness=None, alpha_
     material, ior : str
         The dielectric below the surface: a material name or a real index (exactly one).
     fresnel : str
-        ``exact`` only (the transmission is 1 − F).
+        ``exact`` only (the transmission is 1 − F; with a thin-film stack as *material*, ``"BK7|MgF2:100nm"``, each
+        facet reflects the stack's R and transmits its T: :func:`waveoptics.brdf.facet_interface_of`).
     multiple_scattering : bool
         Kulla-Conty dielectric energy compensation.
     psd : PSDModel, optional

@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -180,6 +181,8 @@ class NanoRoughDielectricBSDF(RoughDielectricBSDF):
     """
 
     psd: PSDModel | None = None
+    #: the nano tables are of one bare interface: a thin-film stack is refused
+    takes_stack: ClassVar[bool] = False
 
     def __post_init__(self):
         super().__post_init__()

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Callable
 
 import numpy as np
+from scipy import special
 
 from ..errors import unknown
 from ..vocabulary import DEFAULT_NDF
@@ -17,7 +18,8 @@ from .directions import as_dirs, dot_last
 from .ndf import check_alpha, ndf_by_name
 from .smith import G1_from_lambda
 
-__all__ = ['G_smith', 'G_smith_correlated', 'G_cook_torrance', 'G_implicit', 'SHADOWINGS', 'G']
+__all__ = ['G_smith', 'G_smith_correlated', 'G_cook_torrance', 'G_implicit', 'SHADOWINGS', 'G', 'sided_lambda',
+           'sided_G2']
 
 # ----------------------------------------------------------------------------------------------------------
 # masking-shadowing G(l, v, h): each entry takes (wi, wo, m, lam) with lam a callable w -> Λ(w)
@@ -110,3 +112,41 @@ def G(wi, wo, m, alpha, alpha_y=None, *, ndf=DEFAULT_NDF, shadowing="smith-corre
     ax, ay = check_alpha(alpha, alpha_y, spec, ndf_shape)
     fn, _ = shadowing_by_name(shadowing)
     return fn(as_dirs(wi, "wi"), as_dirs(wo, "wo"), as_dirs(m, "m"), lambda w: spec.Lambda(w, ax, ay, ndf_shape))
+
+
+# ----------------------------------------------------------------------------------------------------------
+# the Smith terms of a BSDF over the sphere (rough dielectric: directions on either side of the macro surface)
+
+
+def sided_lambda(spec, w, ax, ay, c):
+    """Smith Λ (dimensionless) of directions *w* (n, 3) on either side of the macro surface: the microsurface seen
+    from below is the one seen along −ω (*spec* an NDF of :data:`waveoptics.brdf.NDFS`, *ax*, *ay*, *c* its
+    roughness and shape).
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, §5.1 (G of a transmitted direction); E. Heitz, JCGT 3(2), 2014, §6.
+    """
+    return spec.Lambda(np.where(w[:, 2:3] < 0, -w, w), ax, ay, c)
+
+
+def sided_G2(lam_i, lam_o, transmission, shadowing):
+    """Masking-shadowing (dimensionless) of a valid configuration from the Λ of both directions
+    (:func:`sided_lambda`): ``smith`` separable (1 + Λ_i)⁻¹(1 + Λ_o)⁻¹, or ``smith-correlated`` 1/(1 + Λ_i + Λ_o)
+    (reflection) and B(1 + Λ_i, 1 + Λ_o) (*transmission*, boolean array); 0 where a Λ is infinite.
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, §6.1-6.2.
+    .. [2] B. Walter et al., EGSR 2007, eq. (23).
+    """
+    with np.errstate(invalid="ignore", over="ignore"):
+        if shadowing == "smith":
+            g = 1.0 / ((1.0 + lam_i) * (1.0 + lam_o))
+        else:
+            # guard: Λ = inf (grazing) has G = 0; B of finite arguments only
+            fin = np.isfinite(lam_i) & np.isfinite(lam_o)
+            li, lo = np.where(fin, lam_i, 0.0), np.where(fin, lam_o, 0.0)
+            g = np.where(transmission, special.beta(1.0 + li, 1.0 + lo), 1.0 / (1.0 + li + lo))
+            g = np.where(fin, g, 0.0)
+    return np.where(np.isfinite(g), g, 0.0)

@@ -73,7 +73,8 @@ import numpy as np
 
 from ..errors import FieldError, unknown
 from ..scatter.transmission import rr_bsdf
-from .btdf import RoughDielectricBSDF, albedo_multiple, albedo_single, half_vector_refraction, sided_G2, sided_lambda
+from .btdf import RoughDielectricBSDF, albedo_multiple, albedo_single, half_vector_refraction
+from .shadowing import sided_G2, sided_lambda
 from .directions import dot_last
 from .facet import (NanoRadial, facet_basis, local_pair, quadrature_density, quadrature_normals, sampler_normals)
 from .nano_dielectric import NanoRoughDielectricBSDF

@@ -474,6 +474,31 @@ def register(sub) -> None:
                    _brdf_flags={a.dest: next(o for o in a.option_strings if o.startswith("--")) for a in shown})
 
 
+def _reflected_transmitted(parts: dict) -> dict:
+    """The albedo of a BSDF over the sphere split into ``reflection`` and ``transmission``: the sums of its parts
+    named ``*reflection`` and ``*transmission`` (:meth:`waveoptics.brdf.RoughDielectricBSDF.albedo_parts`)."""
+    return {side: sum(v for k, v in parts.items() if k.endswith(side)) for side in ("reflection", "transmission")}
+
+
+def _print_albedo(args, ev, wi, inc, wl, head) -> int:
+    """--albedo: ∫ f cos θo dωo per incident direction and λ; a BSDF over the sphere also prints its reflected
+    and transmitted parts (R, T)."""
+    import numpy as np
+
+    if args.model in SPHERE_MODELS:
+        split = {k: np.asarray(v) for k, v in _reflected_transmitted(ev.albedo_components(wi)).items()}
+        E = split["reflection"] + split["transmission"]
+    else:
+        split, E = {}, np.asarray(ev.albedo(wi, progress=_bar(args)))
+    rows = [{"incident": list(inc[i]), "wavelength_nm": float(wl[j]), "albedo": float(E[j, i]),
+             **{k: float(v[j, i]) for k, v in split.items()}} for i in range(len(inc)) for j in range(len(wl))]
+    text = "\n".join(f"incident θ={r['incident'][0]:g}° φ={r['incident'][1]:g}°  λ={r['wavelength_nm']:g} nm  "
+                     f"albedo={r['albedo']:.6g}" + (f"  R={r['reflection']:.6g}  T={r['transmission']:.6g}"
+                                                    if split else "") for r in rows)
+    emit(args, {**head, "albedo": rows}, text)
+    return 0
+
+
 def run(args) -> int:
 
     import numpy as np
@@ -492,13 +517,7 @@ def run(args) -> int:
     head = {"model": args.model, "parameters": model.describe(args),
             "units": {"brdf": "1/sr", "albedo": "1", "wavelength_nm": "nm", "incident": "deg", "outgoing": "deg"}}
     if args.albedo:
-        E = np.asarray(model.build(args, wl).albedo(wi, progress=_bar(args)))
-        rows = [{"incident": list(inc[i]), "wavelength_nm": float(wl[j]), "albedo": float(E[j, i])}
-                for i in range(len(inc)) for j in range(len(wl))]
-        text = "\n".join(f"incident θ={r['incident'][0]:g}° φ={r['incident'][1]:g}°  λ={r['wavelength_nm']:g} nm  "
-                         f"albedo={r['albedo']:.6g}" for r in rows)
-        emit(args, {**head, "albedo": rows}, text)
-        return 0
+        return _print_albedo(args, model.build(args, wl), wi, inc, wl, head)
     if not args.outgoing:
         raise WaveopticsError("give at least one --outgoing THETA,PHI (or --albedo)")
     # a BSDF over the whole sphere (the rough dielectric) is also evaluated below the surface: θ > 90°
