@@ -162,7 +162,8 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *,
     the wavelength, the grid and a finer one to try (twice the cells per side), and reports the factor
     (``diffraction_energy_scale``). Known not to be the grid: aluminium, Beckmann α 0.15 / α_y 0.4, Gaussian σ 15 nm
     ℓ 1.5 µm, θ_i = 88°: the lobe holds 1.078x its budget at 830 nm, φ_i = 90°, and 1.037x at 360 nm, φ_i = 0°, on
-    64², 128² and 192² cells alike (issue 28, open).
+    64², 128² and 192² cells alike; Au under a measured slope table (α ≈ 0.066, Gaussian σ 8 nm ℓ 1 µm, 550 nm)
+    1.033x at 0°, 1.045x at 30°, 1.15x at 60° on 32² to 128² (issue 28, open).
 
     Parameters
     ----------
