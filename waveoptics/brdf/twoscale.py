@@ -154,13 +154,13 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *,
     brushed-aluminium scene's scratches on 16² cells held 1.95x their budget at 380 nm and this step removed 49 %
     (tests/test_field_cells.py). Where it does act (a grid too coarse for a wide lobe: Au, ABC σ 8 nm, B 2 µm,
     Beckmann α 0.1 on 32² cells at θ_i = 60° removes 6.2 % at 450 nm and 3.2 % at 520 nm, none on 64² or 128²; micro
-    roughness at grazing incidence on a grid whose cells cannot resolve the facets' incidences; a film stack's
-    lobe at the shortest wavelengths: Al|Al2O3:120nm, ABC σ 15 nm B 2 µm C 2.6, GGX α 0.05, Rayleigh-Rice,
-    θ_i = 60°, 380 nm held 1.066x its budget on 32² cells, 1.034x on 40², 0.999x on 48², 1.005x on 64², 0.992x on
-    128², the budget 0.0600 on every grid and within 0.6 % of the microfacet lobe minus the coherent lobe, 400 to
-    780 nm within 1 % on 32²; the 32² and 64² cases in tests/test_example_scene_guard.py) it warns in one line
-    with the share it removed, the wavelength, the grid and a finer one to try (twice the cells per side), and
-    reports the factor (``diffraction_energy_scale``). Known not to be the grid: aluminium, Beckmann α 0.15 / α_y 0.4, Gaussian σ 15 nm
+    roughness at grazing incidence on a grid whose cells cannot resolve the facets' incidences; a film stack's lobe
+    at the shortest wavelengths: Al|Al2O3:120nm, ABC σ 15 nm B 2 µm C 2.6, GGX α 0.05, Rayleigh-Rice, θ_i = 60°, 380
+    nm held 1.066x its budget on 32² cells, 1.034x on 40², 0.999x on 48², 1.005x on 64², 0.992x on 128², the budget
+    0.0600 on every grid and within 0.6 % of the microfacet lobe minus the coherent lobe, 400 to 780 nm within 1 %
+    on 32²; the 32² and 64² cases in tests/test_example_scene_guard.py) it warns in one line with the share it
+    removed, the wavelength, the grid and a finer one to try (twice the cells per side), and reports the factor
+    (``diffraction_energy_scale``). Known not to be the grid: aluminium, Beckmann α 0.15 / α_y 0.4, Gaussian σ 15 nm
     ℓ 1.5 µm, θ_i = 88°: the lobe holds 1.078x its budget at 830 nm, φ_i = 90°, and 1.037x at 360 nm, φ_i = 0°, on
     64², 128² and 192² cells alike; Au under a measured slope table (α ≈ 0.066, Gaussian σ 8 nm ℓ 1 µm, 550 nm)
     1.033x at 0°, 1.045x at 30°, 1.15x at 60° on 32² to 128² (issue 28, open).
