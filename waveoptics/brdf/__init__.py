@@ -26,7 +26,7 @@ from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES, d
 from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
 from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albedo)
 from .opencl import (D_cl, Lambda_cl, brdf_cl, ndf_shape_parameter)
-from .field_lobe import (BAND_MARGIN_BINS, band_limited_field, kirchhoff_scattered_lobe, nyquist_band, fresnel_at_pairs,
+from .field_lobe import (BAND_MARGIN_BINS, band_limited_field, kirchhoff_scattered_lobe, lobe_sampling_warnings, nyquist_band, fresnel_at_pairs,
     field_first_order_over_fresnel, field_scattered_lobe, FIELD_THETAS_DEG,
     FIELD_GRID_OVERSAMPLING, field_cell_split, field_cells_resolve, field_cell_averages, field_scattered_albedo, bracketing_nodes, ISOTROPIC_FIELD_MODELS, ANISOTROPIC_FIELD_MODELS,
     ISOTROPY_SECTORS, ISOTROPY_MAX_RATIO, field_anisotropy, field_proposal_model)
