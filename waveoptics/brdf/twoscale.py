@@ -52,7 +52,6 @@ References
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -135,6 +134,18 @@ class Lobes:
 CAP_TOLERANCE = 3e-2
 
 
+#: how the energy guard's lines begin (:func:`cap_to_coherent_loss`; a table of lobes says it once for all of
+#: them, :class:`waveoptics.brdf.TabulatedTwoScaleBRDF`)
+ENERGY_GUARD_PREFIX = "two-scale energy guard"
+
+
+def energy_guard_cause(grid: DirectionGrid) -> str:
+    """The end of the energy guard's line: what it found on *grid* and the resolution to try."""
+    return (f"the nano lobe held more than its energy budget on {grid.n_u}x{grid.n_v} direction cells (where cells "
+            f"too coarse for the lobe or the facets' incidences cause it, try resolution "
+            f"{2 * max(grid.n_u, grid.n_v)})")
+
+
 def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *, wi=None, wavelengths_nm=None):
     """Scale the diffracted lobes down where they hold more light than the coherent lobe gave up.
 
@@ -185,11 +196,9 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *,
         where = f"wavelength index {i}" if wavelengths_nm is None else f"{float(wavelengths_nm[i]):.4g} nm"
         if wi is not None:
             where += f", theta_i = {np.degrees(np.arccos(np.clip(wi[2], -1.0, 1.0))):.3g} deg"
-        warnings.warn(f"two-scale energy guard removed {100 * (1 - scale[i]):.3g}% of the diffracted light "
-                      f"({got[i] - budget[i]:.3g} of the incident light) at {where}: the nano lobe held more than "
-                      f"its energy budget on {grid.n_u}x{grid.n_v} direction cells (where cells too coarse for the "
-                      f"lobe or the facets' incidences cause it, try resolution {2 * max(grid.n_u, grid.n_v)})",
-                      scatter.DiffractionWarning, stacklevel=3)
+        scatter.solvers.warn_or_collect(f"{ENERGY_GUARD_PREFIX} removed {100 * (1 - scale[i]):.3g}% of the "
+                                        f"diffracted light ({got[i] - budget[i]:.3g} of the incident light) at "
+                                        f"{where}: {energy_guard_cause(grid)}")
     return diffraction * scale[:, None, None], scale
 
 
