@@ -57,3 +57,18 @@ def test_field_at_quarter_wavelength_does_not_warn():
     for dx in (LAM / 4, LAM / 5):
         assert dx <= LAM / 4
         assert not [m for m in _lines(_field(dx, 64), (40.0,)) if m.startswith("aliasing")]
+
+
+def test_paraxial_route_says_it_once_too():
+    """An anisotropic field (a grating: the paraxial route) at 250 nm spacing, 450 and 650 nm (> λ/4 for both):
+    one aliasing line, the shortest wavelength's, not one per wavelength."""
+    hf = surfaces.sinusoid(20e-9, 2e-6, 64 * 250e-9, 64)
+    assert 250.0 > 650.0 / 4
+    filters = list(warnings.filters)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        L = brdf.evaluate(np.array([0.5, 0.0, np.sqrt(0.75)]), [450.0, 650.0], "aluminium", Micro(alpha=0.1),
+                          Nano(surface=hf), GRID)
+    assert L.info["facet_integration"] == "paraxial" and warnings.filters == filters
+    lines = {str(w.message) for w in caught if str(w.message).startswith("aliasing")}
+    assert len(lines) == 1 and "lambda/4 = 112.5 nm" in lines.pop()
