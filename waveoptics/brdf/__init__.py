@@ -27,7 +27,7 @@ from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES, d
 from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
 from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albedo)
 from .opencl import (D_cl, Lambda_cl, brdf_cl, ndf_shape_parameter)
-from .field_lobe import (BAND_MARGIN_BINS, band_limited_field, kirchhoff_scattered_lobe, nyquist_band, fresnel_at_pairs,
+from .field_lobe import (BAND_MARGIN_BINS, band_limited_field, kirchhoff_scattered_lobe, lobe_sampling_warnings, nyquist_band, fresnel_at_pairs,
     field_first_order_over_fresnel, field_scattered_lobe, FIELD_THETAS_DEG,
     FIELD_GRID_OVERSAMPLING, field_cell_split, field_cells_resolve, field_cell_averages, field_scattered_albedo, bracketing_nodes, ISOTROPIC_FIELD_MODELS, ANISOTROPIC_FIELD_MODELS,
     ISOTROPY_SECTORS, ISOTROPY_MAX_RATIO, field_anisotropy, field_proposal_model)
@@ -38,7 +38,7 @@ from .twoscale_grid import (mirror_direction, fresnel_at_mirror, mirror_cell, sh
 from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP, CORE_MAX_SUBSAMPLES, energy_weighted_fresnel)
 from .facet_polarization import (facet_scattered_share, facet_coherent_fraction)
 from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, kernel_half_vectors, facet_scatter_weights, facet_incidences_deg,
-    field_albedo_evaluations, paraxial_diffraction)
+    field_albedo_evaluations, PARAXIAL_SHARE_RATIO, carried_share_warning, paraxial_diffraction)
 from .twoscale_frame import (FACET_THETAS_DEG, FACET_THETAS_PSD_DEG, facet_thetas, FACET_TABLE_MAX_CELLS, facet_table_grid, equal_area, from_equal_area, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_BUDGET_NODES, FACET_NODE_SPLIT,
     FACET_REFERENCE_NM, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
 from .twoscale_coherent import (coherent_lobe, STACK_SUBCELL, SubCells)

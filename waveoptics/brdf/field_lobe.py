@@ -14,7 +14,6 @@ References
 from __future__ import annotations
 
 import dataclasses
-import warnings
 
 import numpy as np
 
@@ -27,7 +26,7 @@ from ..scatter.tangent_blend import (blend_weight, first_order_over_fresnel, tan
 from ..surfaces.heightfield import HeightField
 from ..units import check_wavelengths
 
-__all__ = ['BAND_MARGIN_BINS', 'band_limited_field', 'kirchhoff_scattered_lobe', 'nyquist_band', 'fresnel_at_pairs',
+__all__ = ['BAND_MARGIN_BINS', 'band_limited_field', 'kirchhoff_scattered_lobe', 'lobe_sampling_warnings', 'nyquist_band', 'fresnel_at_pairs',
            'field_first_order_over_fresnel', 'field_scattered_lobe', 'FIELD_THETAS_DEG',
            'FIELD_GRID_OVERSAMPLING', 'field_cell_split', 'field_cells_resolve', 'field_cell_averages', 'field_scattered_albedo', 'bracketing_nodes', 'ISOTROPIC_FIELD_MODELS',
            'ANISOTROPIC_FIELD_MODELS', 'ISOTROPY_SECTORS', 'ISOTROPY_MAX_RATIO', 'field_anisotropy',
@@ -101,24 +100,16 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     .. [2] A. Krywonos, J. E. Harvey, N. Choi, JOSA A 28(6), 1121–1138, 2011 (relevant roughness).
     """
     w = check_wavelengths(wavelengths_nm)
-    if band_limit:
-        return np.concatenate([kirchhoff_scattered_lobe(band_limited_field(surface, lam, wi), wi, grid, [lam], F,
-                                                        solver=solver, device=device, precision=precision,
-                                                        warnings=warnings, diffraction=diffraction,
-                                                        band_limit=False) for lam in w])
     smp = scatter.samples(surface)
-    flat = dataclasses.replace(smp, h=np.zeros_like(smp.h))
-    for msg in scatter.sampling_warnings(smp, wi, w, wo=grid.directions()[grid.inside]):  # aliasing
+    for msg in lobe_sampling_warnings(smp, wi, grid, w):   # once for all wavelengths: the shortest's conditions
         scatter.solvers.warn_or_collect(msg, warnings)
-    # the specular spike is removed here (δU), but a periodic surface's orders and a patch's speckle are just as
-    # narrow (≈ λ/L): a coarser grid samples them at arbitrary points and their energy comes out wrong
-    Lx, Ly = smp.extent
-    lmin = float(w.min()) * 1e-9
-    if grid.du > lmin / Lx * (1 + 1e-9) or grid.dv > lmin / Ly * (1 + 1e-9):
-        need = int(np.ceil(2 * max(Lx, Ly) / lmin))
-        scatter.solvers.warn_or_collect(f"direction grid cell {grid.du:.3g} is coarser than the patch's diffraction width lambda/L = "
-                  f"{lmin / max(Lx, Ly):.3g}: sharp features (grating orders, speckle) are under-sampled and their "
-                  f"energy is inexact; use resolution >= {need} or a smaller patch", warnings)
+    if band_limit:
+        with scatter.diffraction_warnings_held([]):   # each wavelength's own lines would repeat the ones above
+            return np.concatenate([kirchhoff_scattered_lobe(band_limited_field(surface, lam, wi), wi, grid, [lam],
+                                                            F, solver=solver, device=device, precision=precision,
+                                                            diffraction=diffraction, band_limit=False)
+                                   for lam in w])
+    flat = dataclasses.replace(smp, h=np.zeros_like(smp.h))
     dirs = grid.directions()
     inside = grid.inside
     out = np.zeros((w.size, grid.n_v, grid.n_u))
@@ -131,6 +122,30 @@ def kirchhoff_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wave
     out[:, inside] = scatter.brdf_from_field((U - chi[:, None, None] * U0)[:, inside], wi, dirs[inside], w,
                                              smp.area, F, diffraction)
     return np.where(inside & nyquist_band(smp, wi, grid, w), np.maximum(out, 0.0), 0.0)
+
+
+def lobe_sampling_warnings(smp, wi, grid: DirectionGrid, wavelengths_nm) -> list[str]:
+    """The lines :func:`kirchhoff_scattered_lobe` warns for a field's samples *smp*
+    (:class:`waveoptics.scatter.Samples`) on *grid* at *wavelengths_nm* (nm), each for the shortest wavelength:
+    aliasing (:func:`waveoptics.scatter.sampling_warnings` at the grid's directions; the replicas themselves are
+    masked, :func:`nyquist_band`) and a direction grid coarser than the patch's diffraction width λ/L. The specular
+    spike is removed (δU), but a periodic surface's orders and a patch's speckle are just as narrow (≈ λ/L): a
+    coarser grid samples them at arbitrary points and their energy comes out wrong.
+
+    References
+    ----------
+    .. [1] C. E. Shannon, Proc. IRE 37(1), 10–21, 1949 (a sampled function's band); docs/physics.md §1.
+    """
+    w = np.asarray(wavelengths_nm, dtype=float)
+    msgs = scatter.sampling_warnings(smp, wi, w, wo=grid.directions()[grid.inside])
+    Lx, Ly = smp.extent
+    lmin = float(w.min()) * 1e-9
+    if grid.du > lmin / Lx * (1 + 1e-9) or grid.dv > lmin / Ly * (1 + 1e-9):
+        need = int(np.ceil(2 * max(Lx, Ly) / lmin))
+        msgs.append(f"direction grid cell {grid.du:.3g} is coarser than the patch's diffraction width lambda/L = "
+                    f"{lmin / max(Lx, Ly):.3g}: sharp features (grating orders, speckle) are under-sampled and "
+                    f"their energy is inexact; use resolution >= {need} or a smaller patch")
+    return msgs
 
 
 def nyquist_band(smp, wi, grid: DirectionGrid, wavelengths_nm) -> np.ndarray:
@@ -337,8 +352,9 @@ def field_scattered_albedo(surface: HeightField, theta_deg: float, wavelength_nm
     n = int(np.ceil(FIELD_GRID_OVERSAMPLING * max(smp.extent) / (wavelength_nm * 1e-9)))
     grid = DirectionGrid.hemisphere(n)
     wi = direction_from_angles(theta_deg, azimuth_deg)
-    with warnings.catch_warnings():   # the lobe's own evaluation says what its sampling misses
-        warnings.simplefilter("ignore", scatter.DiffractionWarning)
+    # the lobe's own evaluation says what its sampling misses (held in this thread only: the budget's callers run
+    # in a pool of threads, which warnings.catch_warnings would not leave alone)
+    with scatter.diffraction_warnings_held([]):
         lobe = field_scattered_lobe(surface, wi, grid, [wavelength_nm], RelativeFacetFresnel(material, polarization),
                                     psd=psd, material=material, polarization=polarization, solver="fft",
                                     diffraction=diffraction)

@@ -85,12 +85,22 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
         # the Kirchhoff lobe with the albedo of the lobe handed over to the first order of the field's periodogram
         # towards grazing angles, its shape kept as the PSD route keeps it (energy_weighted_fresnel); averaged over
         # each cell where the cells are coarser than λ/L, which their centres no longer sum exactly
-        return np.concatenate([field_cell_averages(
-            lambda g, lam=lam: field_scattered_lobe(nano.surface, wi, g, [lam], F, psd=nano.periodogram(),
-                                                    material=material, solver=solver, device=device,
-                                                    diffraction=diffraction, precision=precision, keep_shape=True),
-            grid, 1 if field_cells_resolve(nano.surface, grid, lam) else field_cell_split(nano.surface, grid, lam))
-            for lam in w])
+        held = {float(lam): [] for lam in w}
+
+        def one(lam):
+            with scatter.diffraction_warnings_held(held[float(lam)]):
+                return field_cell_averages(
+                    lambda g: field_scattered_lobe(nano.surface, wi, g, [lam], F, psd=nano.periodogram(),
+                                                   material=material, solver=solver, device=device,
+                                                   diffraction=diffraction, precision=precision, keep_shape=True),
+                    grid, 1 if field_cells_resolve(nano.surface, grid, lam) else field_cell_split(nano.surface, grid,
+                                                                                                  lam))
+        out = np.concatenate([one(lam) for lam in w])
+        # said once per run, not per wavelength: the shortest's lines (aliasing, dx > λ/(2|u_i + u_o|), and a cell
+        # wider than λ/L are both strictest there) hold every other wavelength's
+        for msg in held[float(np.min(w))]:
+            scatter.solvers.warn_or_collect(msg)
+        return out
     raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
 
 

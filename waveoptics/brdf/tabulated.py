@@ -53,12 +53,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import scatter
 from ..errors import FieldError
 from ..scatter.grid import DirectionGrid
 from .protocol import TwoScaleParts
 from .roughness_scales import isotropic
 from .tabulated_rim import rim_across_incidence, rim_lobes, rim_weight
-from .twoscale import evaluate
+from .twoscale import ENERGY_GUARD_PREFIX, energy_guard_cause, evaluate
 
 __all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'TabulatedTwoScaleBRDF']
 
@@ -204,6 +205,14 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
             diff = np.zeros((n_phi, thetas.size, w.size, grid.n_v, grid.n_u))
         self._table.update(grid=grid, thetas=thetas, phis=phis, diffraction=diff, rim=rim,
                            energy_scale=np.asarray(scale) if scale else np.ones((1, w.size)))
+        if scale and np.min(scale) < 1.0:   # the energy guard's one line for the table (_incidence_lobes)
+            s = np.asarray(scale).reshape(n_phi, thetas.size, w.size)
+            p, t, j = np.unravel_index(int(np.argmin(s)), s.shape)
+            scatter.solvers.warn_or_collect(
+                f"{ENERGY_GUARD_PREFIX} removed up to {100 * (1 - s[p, t, j]):.3g}% of the diffracted light in "
+                f"{int(np.sum(s.min(axis=-1) < 1.0))} of {n_phi * thetas.size} incidences of the diffraction table "
+                f"(at {float(w[j]):.4g} nm, theta_i = {np.degrees(thetas[t]):.3g} deg, phi_i = "
+                f"{np.degrees(phis[p]):.3g} deg): {energy_guard_cause(grid)}")
 
     def _rim_at(self, wi, L, n_phi):
         """The rim table (n_λ, n_cos, n_φ) of the incidence node *wi* (:func:`waveoptics.brdf.tabulated_rim.
@@ -228,9 +237,14 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         from ..runtime import parallel_imap
 
         def one(wi):
-            L = self.lobes_at(wi) if self.lobes_at is not None else evaluate(
-                wi, w, self.material, self.micro, self.nano, grid, solver=self.solver, kd=0.0, device=self.device,
-                precision=self.precision, diffraction=self.diffraction)
+            held = []   # the energy guard's lines: one for the whole table (_build), the others passed on
+            with scatter.diffraction_warnings_held(held):
+                L = self.lobes_at(wi) if self.lobes_at is not None else evaluate(
+                    wi, w, self.material, self.micro, self.nano, grid, solver=self.solver, kd=0.0,
+                    device=self.device, precision=self.precision, diffraction=self.diffraction)
+            for msg in held:
+                if not msg.startswith(ENERGY_GUARD_PREFIX):
+                    scatter.solvers.warn_or_collect(msg)
             return L, self._rim_at(wi, L, n_phi)
 
         if not wis:

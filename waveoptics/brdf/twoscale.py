@@ -52,7 +52,6 @@ References
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -135,7 +134,19 @@ class Lobes:
 CAP_TOLERANCE = 3e-2
 
 
-def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *, wavelengths_nm=None):
+#: how the energy guard's lines begin (:func:`cap_to_coherent_loss`; a table of lobes says it once for all of
+#: them, :class:`waveoptics.brdf.TabulatedTwoScaleBRDF`)
+ENERGY_GUARD_PREFIX = "two-scale energy guard"
+
+
+def energy_guard_cause(grid: DirectionGrid) -> str:
+    """The end of the energy guard's line: what it found on *grid* and the resolution to try."""
+    return (f"the nano lobe held more than its energy budget on {grid.n_u}x{grid.n_v} direction cells (where cells "
+            f"too coarse for the lobe or the facets' incidences cause it, try resolution "
+            f"{2 * max(grid.n_u, grid.n_v)})")
+
+
+def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *, wi=None, wavelengths_nm=None):
     """Scale the diffracted lobes down where they hold more light than the coherent lobe gave up.
 
     guard: on a conductor the coherent fraction is the complement of the nano lobe's own albedo (energy
@@ -154,16 +165,20 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *,
     brushed-aluminium scene's scratches on 16² cells held 1.95x their budget at 380 nm and this step removed 49 %
     (tests/test_field_cells.py). Where it does act (a grid too coarse for a wide lobe: Au, ABC σ 8 nm, B 2 µm,
     Beckmann α 0.1 on 32² cells at θ_i = 60° removes 6.2 % at 450 nm and 3.2 % at 520 nm, none on 64² or 128²; micro
-    roughness at grazing incidence on a grid whose cells cannot resolve the facets' incidences; a film stack's lobe
-    at the shortest wavelengths: Al|Al2O3:120nm, ABC σ 15 nm B 2 µm C 2.6, GGX α 0.05, Rayleigh-Rice, θ_i = 60°, 380
-    nm held 1.066x its budget on 32² cells, 1.034x on 40², 0.999x on 48², 1.005x on 64², 0.992x on 128², the budget
-    0.0600 on every grid and within 0.6 % of the microfacet lobe minus the coherent lobe, 400 to 780 nm within 1 %
-    on 32²; the 32² and 64² cases in tests/test_example_scene_guard.py) it warns in one line with the share it
-    removed, the wavelength, the grid and a finer one to try (twice the cells per side), and reports the factor
-    (``diffraction_energy_scale``). Known not to be the grid: aluminium, Beckmann α 0.15 / α_y 0.4, Gaussian σ 15 nm
-    ℓ 1.5 µm, θ_i = 88°: the lobe holds 1.078x its budget at 830 nm, φ_i = 90°, and 1.037x at 360 nm, φ_i = 0°, on
-    64², 128² and 192² cells alike; Au under a measured slope table (α ≈ 0.066, Gaussian σ 8 nm ℓ 1 µm, 550 nm)
-    1.033x at 0°, 1.045x at 30°, 1.15x at 60° on 32² to 128² (issue 28, open).
+    roughness at grazing incidence on a grid whose cells cannot resolve the facets' incidences) it warns in one
+    line with the share it removed, the wavelength and incidence (given *wi* and *wavelengths_nm*) and the
+    resolution to try, and reports the factor (``diffraction_energy_scale``). The 500 nm sinusoid (20 nm, Al,
+    Beckmann α 0.05) at 550 nm is one: 3.3 % at 78° on 32² cells, none on 40², 48², 64², 96², 128²; its 17.6 % on
+    64² at 10° in the grooves' plane is the paraxial route carrying a lobe the macro incidence hardly has
+    (:func:`waveoptics.brdf.carried_share_warning` says so in its own line). A film stack's lobe at
+    the shortest wavelengths is another: Al|Al2O3:120nm, ABC σ 15 nm B 2 µm C 2.6, GGX α 0.05, Rayleigh-Rice,
+    θ_i = 60°, 380 nm held 1.066x its budget on 32² cells, 1.034x on 40², 0.999x on 48², 1.005x on 64², 0.992x on
+    128² (the budget 0.0600 on every grid, within 0.6 % of the microfacet lobe minus the coherent lobe; 400 to
+    780 nm within 1 % on 32²; the 32² and 64² cases in tests/test_example_scene_guard.py). Known not to be the
+    grid: aluminium, Beckmann α 0.15 / α_y 0.4, Gaussian σ 15 nm ℓ 1.5 µm, θ_i = 88°: the lobe holds 1.078x its
+    budget at 830 nm, φ_i = 90°, and 1.037x at 360 nm, φ_i = 0°, on 64², 128² and 192² cells alike; Au under a
+    measured slope table (α ≈ 0.066, Gaussian σ 8 nm ℓ 1 µm, 550 nm) 1.033x at 0°, 1.045x at 30°, 1.15x at 60° on
+    32² to 128² (issue 28, open).
 
     Parameters
     ----------
@@ -174,6 +189,8 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *,
         facets before masking on the way out (:func:`waveoptics.brdf.facet_frame_diffraction`). A facet whose mirror direction is
         masked or below the horizon still sends part of its diffracted lobe out, so in Walter's integral the
         diffracted part can exceed the coherent part's loss; it cannot exceed what the facets scatter.
+    wi : array_like (3,), optional
+        The incident direction, named in the warning.
     wavelengths_nm : array_like (n_λ,), nm, optional
         Named in the warning (else the wavelength's index).
 
@@ -188,12 +205,12 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *,
     scale = np.where(got > budget * (1.0 + CAP_TOLERANCE), budget / np.where(got > 0, got, 1.0), 1.0)
     if np.any(scale < 1.0):
         i = int(np.argmin(scale))
-        at = f"wavelength index {i}" if wavelengths_nm is None else f"{float(wavelengths_nm[i]):g} nm"
-        warnings.warn(f"two-scale energy guard removed {100 * (1 - scale[i]):.3g}% of the diffracted light "
-                      f"({got[i] - budget[i]:.3g} of the incident light) at {at}: the nano lobe held more than its "
-                      f"energy budget on {grid.n_u}x{grid.n_v} cells: a grid too coarse for the lobe; if resolution "
-                      f"{2 * max(grid.n_u, grid.n_v)} still warns, the lobe or its budget is wrong here (issue 28)",
-                      scatter.DiffractionWarning, stacklevel=3)
+        where = f"wavelength index {i}" if wavelengths_nm is None else f"{float(wavelengths_nm[i]):.4g} nm"
+        if wi is not None:
+            where += f", theta_i = {np.degrees(np.arccos(np.clip(wi[2], -1.0, 1.0))):.3g} deg"
+        scatter.solvers.warn_or_collect(f"{ENERGY_GUARD_PREFIX} removed {100 * (1 - scale[i]):.3g}% of the "
+                                        f"diffracted light ({got[i] - budget[i]:.3g} of the incident light) at "
+                                        f"{where}: {energy_guard_cause(grid)}")
     return diffraction * scale[:, None, None], scale
 
 
@@ -223,7 +240,7 @@ def diffracted_lobe(route, wi, w, mat, micro, nano, grid, F, dm, polarization, r
                                                    device=device, precision=precision)
         budget = None
     if reference_grid is None:
-        diffraction, energy_scale = cap_to_coherent_loss(diffraction, lost, grid, budget, wavelengths_nm=w)
+        diffraction, energy_scale = cap_to_coherent_loss(diffraction, lost, grid, budget, wi=wi, wavelengths_nm=w)
     else:
         energy_scale = np.ones(w.size)
     used = solver if solver != "auto" else ("psd" if nano.model is not None else "fft")

@@ -9,8 +9,6 @@ References
 """
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 
 from .. import scatter
@@ -259,9 +257,9 @@ def _field_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
                                                                   material, polarization), 0.0) for lam in w])
         first = None
     else:
-        with warnings.catch_warnings():   # the fine grid resolves the patch's diffraction width
-            warnings.simplefilter("ignore", scatter.DiffractionWarning)
-            f = kirchhoff_scattered_lobe(nano.surface, wi, fine, w, None, solver="fft", diffraction=dm)
+        # its warnings pass on (aliasing: a field sampled coarser than λ/4, as on the paraxial route); the fine
+        # grid resolves the patch's diffraction width
+        f = kirchhoff_scattered_lobe(nano.surface, wi, fine, w, None, solver="fft", diffraction=dm)
         wo_in = wo[inside]
         first = np.zeros_like(f)
         for i, lam in enumerate(w):

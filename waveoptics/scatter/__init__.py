@@ -42,7 +42,7 @@ from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,
     solve_profile, thorsos_beam, thorsos_incident_power)
 from .models1d import (fresnel_amplitude_1d, kirchhoff_1d, spm1_1d)
-from .solvers import (ENERGY_TOL, DiffractionWarning, Solver, SOLVERS, BACKENDS, get_solver, tile_layout, split_patch,
+from .solvers import (ENERGY_TOL, DiffractionWarning, diffraction_warnings_held, Solver, SOLVERS, BACKENDS, get_solver, tile_layout, split_patch,
     sampling_warnings, brdf, ScatterResult, memory_estimate, check_request_memory, scatter)
 from .footprint import (footprint_scatter, coherence_centres, incoherent_sum)
 from .pixel import (PIXEL_BACKENDS, MAX_REGION_SAMPLES, PixelBRDF, footprint_sums, footprint_sums_numpy,

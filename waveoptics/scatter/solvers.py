@@ -3,7 +3,9 @@
 """
 from __future__ import annotations
 
+import contextlib
 import math
+import threading
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -24,7 +26,7 @@ from .kirchhoff import brdf_from_field, coherent_amplitude, cos_theta_d
 from .models import get_model
 from .patch import DEFAULT_WINDOW, Samples, samples
 
-__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'Solver', 'SOLVERS', 'BACKENDS', 'get_solver', 'tile_layout', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'memory_estimate', 'check_request_memory', 'scatter']
+__all__ = ['ENERGY_TOL', 'DiffractionWarning', 'diffraction_warnings_held', 'Solver', 'SOLVERS', 'BACKENDS', 'get_solver', 'tile_layout', 'split_patch', 'sampling_warnings', 'brdf', 'ScatterResult', 'memory_estimate', 'check_request_memory', 'scatter']
 
 #: largest albedo of the F = 1 lobe that :func:`scatter` accepts without an "energy not conserved" warning
 ENERGY_TOL = 1.05
@@ -34,9 +36,33 @@ class DiffractionWarning(UserWarning):
     """A result is computed but an approximation or sampling condition is violated (aliasing, coarse grid...)."""
 
 
+_HELD = threading.local()   # this thread's sink of held messages (diffraction_warnings_held), or none
+
+
+@contextlib.contextmanager
+def diffraction_warnings_held(sink: list):
+    """Within the block, in the calling thread only, the messages :func:`warn_or_collect` would warn are appended
+    to *sink* instead (for a computation whose own caller says what its sampling misses). Unlike
+    ``warnings.catch_warnings``, which swaps the process-wide filters and is not thread-safe, it leaves other
+    threads' warnings alone: two pool threads that entered and left ``catch_warnings`` in turn restored each
+    other's "ignore" filter, and every later :class:`DiffractionWarning` of the run was lost (issue 28)."""
+    outer = getattr(_HELD, "sink", None)
+    _HELD.sink = sink
+    try:
+        yield sink
+    finally:
+        _HELD.sink = outer
+
+
 def warn_or_collect(msg: str, sink: list | None = None) -> None:
+    """Warn *msg* as a :class:`DiffractionWarning` (appended to *sink* too, if given); held instead inside
+    :func:`diffraction_warnings_held`."""
     if sink is not None:
         sink.append(msg)
+    held = getattr(_HELD, "sink", None)
+    if held is not None:
+        held.append(msg)
+        return
     warnings.warn(msg, DiffractionWarning, stacklevel=3)
 
 
