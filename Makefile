@@ -29,11 +29,11 @@ demo: $(STAMP)
 # whole files to each worker, the longest first (tests/conftest.py): a file's fixtures and caches are built once;
 # a worker that crashes (a hung test, faulthandler_timeout) is restarted at most twice
 test: $(STAMP)
-	$(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile --max-worker-restart 2
+	$(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile --no-loadscope-reorder --max-worker-restart 2
 
 # the edit loop: everything but the slow tests (marked by hand, or recorded above 0.5 s in tests/durations.json), <= 2 min
 test-fast: $(STAMP)
-	$(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile -m "not slow"
+	$(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile --no-loadscope-reorder -m "not slow"
 
 # re-measure every test's wall time into tests/durations.json (which tests make test-fast leaves out)
 durations: $(STAMP)

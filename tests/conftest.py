@@ -88,7 +88,8 @@ def pytest_collection_modifyitems(config, items):
     own order): ``make test`` hands whole files to the pytest-xdist workers (``--dist loadfile``), so a file's
     module fixtures and in-process caches (band series, models) are built once, not on every worker (measured on
     5 fixture-heavy files: 13 % less CPU), and longest-first keeps the workers' ends together (the longest-
-    processing-time rule; Graham 1969)."""
+    processing-time rule; Graham 1969: with pytest-xdist's own reordering by test count, ``--no-loadscope-reorder``
+    in the Makefile turns it off, a file of few long tests came last and one worker ran alone for 90 s)."""
     recorded = json.loads(DURATIONS.read_text()) if DURATIONS.exists() else {}
     per_file: dict = {}
     for item in items:

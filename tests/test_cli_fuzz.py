@@ -216,13 +216,13 @@ def _run(argv, capsys):
         shutil.rmtree(work, ignore_errors=True)
 
 
-#: hypothesis draws per command (30: the 60 of before spent 5 minutes of the suite on one legal, CPU-heavy compare draw)
-EXAMPLES = 30
+#: hypothesis draws per command (20; 60 once spent 5 minutes of the suite on one legal, CPU-heavy compare draw, and
+#: 30 cost the suite ~25 s more when it ran at the 10-minute limit)
+EXAMPLES = 20
 
 #: fewer draws for the commands whose base invocation alone runs a whole scene or sweep (~1 s a draw on 2 cores);
-#: run and plan have 7 and 6 drawable options (10 and 15 draws of up to four reach each several times), sweep 27
-#: (each about twice)
-HEAVY_EXAMPLES = {"run": 10, "sweep": 15, "plan": 15}
+#: run and plan have 7 and 6 drawable options (7 and 10 draws of up to four reach each at least once), sweep 27
+HEAVY_EXAMPLES = {"run": 7, "sweep": 10, "plan": 10}
 
 
 #: the memory budget every draw runs under: legal but huge requests (``--resolution 1_000``: 1.6 GB) are refused by

@@ -124,9 +124,12 @@ def _spectral_adapter(mi, extra, wi, lam):
 
 
 @needs_llvm
-@pytest.mark.parametrize("case,theta_deg,variant", [(GOLD, 30.0, "llvm_ad_rgb"), (ANISO, 60.0, "llvm_ad_spectral"),
-                                                    (PLASTIC, 0.0, "llvm_ad_rgb"), (GOLD, 75.0, "llvm_ad_spectral")])
-def test_plugin_passes_mitsubas_chi2(variant, case, theta_deg):   # each case once, both variants covered
+@pytest.mark.parametrize("case,theta_deg,variant", [(GOLD, 30.0, "llvm_ad_rgb"), (GOLD, 75.0, "llvm_ad_spectral")])
+def test_plugin_passes_mitsubas_chi2(variant, case, theta_deg):
+    """The NumPy plugin's sampling against its pdf by Mitsuba's χ² test, in both kinds of variant. Its sample/pdf
+    are the library's (whose χ² tests cover the anisotropic and diffuse lobes, tests/test_brdf_function.py,
+    tests/test_ndf_shapes.py), and the Dr.Jit plugin passes Mitsuba's χ² for metal, anisotropic, dielectric with
+    diffuse and grazing light (tests/test_mitsuba_native.py): here the plugin's own wiring, at 30° and 75°."""
     mi = wm.register(variant)
     from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 
