@@ -35,6 +35,12 @@ def test_brdf_values_and_albedo(surface_file):
     validate(_json(base + ["--albedo"]), "brdf")
     validate(_json(["brdf", "--model", "rayleigh-rice", "--nano", "abc:sigma=3nm,B=5um,C=3", "--ior", "1+6j",
                     "--incident", "30", "--outgoing", "60,180"]), "brdf")
+    glass = _json(["brdf", "--model", "rough-dielectric", "--material", "BK7|MgF2:100nm", "--micro-alpha", "0.2",
+                   "--incident", "30", "--albedo"])
+    validate(glass, "brdf")
+    row = glass["albedo"][0]
+    assert glass["units"]["reflection"] == glass["units"]["transmission"] == "1"
+    assert row["reflection"] + row["transmission"] == pytest.approx(row["albedo"], rel=1e-12)
 
 
 def test_surface_stats(surface_file):

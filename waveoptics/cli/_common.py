@@ -28,6 +28,7 @@ FIELD_DESTS = {
     "phi_deg": ("phi",),
     "angles_deg": ("incident_angles",),
     "vary": ("vary",),
+    "psd": ("nano",),
 }
 
 

@@ -495,7 +495,8 @@ def _print_albedo(args, ev, wi, inc, wl, head) -> int:
     text = "\n".join(f"incident θ={r['incident'][0]:g}° φ={r['incident'][1]:g}°  λ={r['wavelength_nm']:g} nm  "
                      f"albedo={r['albedo']:.6g}" + (f"  R={r['reflection']:.6g}  T={r['transmission']:.6g}"
                                                     if split else "") for r in rows)
-    emit(args, {**head, "albedo": rows}, text)
+    units = dict(head["units"], **{k: "1" for k in split})
+    emit(args, {**head, "units": units, "albedo": rows}, text)
     return 0
 
 
