@@ -125,7 +125,7 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
     real_t cp = (r > R(0.0)) ? lx / r : R(1.0), sp = (r > R(0.0)) ? ly / r : R(0.0);
     real_t ux = dot(wo, t), uy = dot(wo, b);
     real_t lox = cp * ux + sp * uy, loy = -sp * ux + cp * uy;   /* turned so that wi^m lies in x-z */
-    real_t theta = atan2(r, im);                               /* local incidence, accurate near 0 */
+    real_t theta = atan(r / im);   /* local incidence (im > 0 here), accurate near 0; atan2 was 20 % of the sum on PoCL */
     real_t rho = sqrt(r * r + im * im);
     real_t ct = im / rho, st = r / rho;                        /* cos, sin theta */
     /* the two table incidences around theta (np.interp on the node index; beyond the last node: the last) */
