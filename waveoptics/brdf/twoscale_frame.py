@@ -19,14 +19,14 @@ from ..scatter.grid import DirectionGrid
 from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weight, uses_vector_first_order
 from .facet import FACET_NODE_SPLIT, FACET_REFERENCE_NM, half_vector_nodes, ndf_nodes, wide_micro_lobe
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
-from .facet_polarization import facet_scattered_share
+from .facet_energy import facet_budget
 from .field_lobe import (field_anisotropy, field_cell_split, field_first_order_over_fresnel,
                          field_proposal_model, kirchhoff_scattered_lobe)
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
 
-__all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_BUDGET_NODES', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
+__all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
            'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction',
            'FACET_TABLE_MAX_CELLS', 'facet_table_grid', 'equal_area', 'from_equal_area']
 
@@ -62,10 +62,6 @@ FACET_THETAS_PSD_DEG = np.array([*range(0, 89, 2), 89, 89.5, 89.9], dtype=float)
 #: incidence, where many face away from it). Cost per incidence (96² and 128², 3 wavelengths, OpenCL on PoCL's
 #: CPU device, under load): (128, 256) 2.7-2.8x (64, 64)
 FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (128, 256)
-#: NDF normals of the energy budget of :func:`facet_frame_diffraction` (the light the facets scatter and reflect,
-#: one facet lobe albedo per normal and wavelength): as many as before the wide nodes grew, so its cost and its
-#: values do not depend on the quadrature's nodes
-FACET_BUDGET_NODES = 64
 #: the grid route's (NDF normals, half-vector normals per cell) for a height field: its lobe is speckle (a
 #: windowed patch's |U|² varies on the scale λ/(2L)), which one shared stencil of 64 half-vector normals per cell
 #: reads with a bias: the diffracted albedo came out 1.7-7.6 % above the light the facets scatter (Gaussian patch
@@ -450,7 +446,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     scattered : ndarray (n_λ,)
         The light the facets' lobes scatter, F(θ_m) (1 − A(θ_m)) per facet on a conductor and the lobe's own
         absolute albedo on a dielectric (:meth:`waveoptics.brdf.Nano.scattered_share`), averaged over the facets the light
-        sees (:data:`FACET_BUDGET_NODES` normals of the NDF, weights D (ω_i·m) G1 / p, normalized by their sum,
+        sees (:data:`waveoptics.brdf.FACET_BUDGET_NODES` normals of the NDF, weights D (ω_i·m) G1 / p, normalized by their sum,
         which is 1 in expectation): the diffracted part's albedo falls short of it by the light masked on the way
         out or sent below the macro horizon.
     reflected : ndarray (n_λ,)
@@ -466,7 +462,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     """
     from .facet import NanoRadial, facet_basis, meridian_basis, unit_nodes
     from .ndf import ndf_by_name
-    from .sampling import pdf_normal, sample_normal, sampler_for
+    from .sampling import sample_normal, sampler_for
     from .shadowing import shadowing_by_name
 
     w = np.asarray(wavelengths_nm, dtype=float)
@@ -557,41 +553,5 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         else:
             Fc = F.at(np.broadcast_to(wi, wo.shape), wo, lam) if hasattr(F, "at") else F(np.clip(h @ wi, 0, 1), lam)
         diffraction[i][inside] = out[:, i] * Fc
-    nu = FACET_BUDGET_NODES   # the budget's own NDF normals (:data:`FACET_BUDGET_NODES`)
-    m_u = sample_normal(np.broadcast_to(wi, (nu, 3)), unit_nodes(nu), ndf=ndf, ax=ax, ay=ay, c=c)
-    p_u = pdf_normal(np.broadcast_to(wi, (nu, 3)), m_u, ndf=ndf, ax=ax, ay=ay, c=c)
-    scattered, reflected = _facet_budget(wi, w, m_u, spec.D(m_u, ax, ay, c) / np.where(p_u > 0, p_u, np.inf), nano, F,
-                                         dm, material, polarization)
+    scattered, reflected = facet_budget(wi, w, micro, nano, F, dm, material, polarization)
     return diffraction, scattered, reflected
-
-
-def _facet_budget(wi, w, m_a, d_over_p, nano: Nano, F, dm, material, polarization):
-    """(scattered, reflected) of :func:`facet_frame_diffraction` (n_λ,) each: the facets' scattered light and
-    reflectance averaged over the NDF nodes *m_a* (n, 3), weighted by (ω_i·m) D / p (*d_over_p*: D/p, 0 where p
-    = 0) normalized by their sum. For s or p light each facet takes the mix of its own s and p light
-    (:func:`waveoptics.brdf.facet_scattered_share`), as its F at the mirror direction does."""
-    na = m_a.shape[0]
-    im_a = m_a @ wi
-    node_w = np.where(im_a > 0, im_a * d_over_p / (wi[2] * na), 0.0)
-    mirror = 2 * im_a[:, None] * m_a - wi
-    c2_a = cos2_eta_i(wi, m_a)   # each NDF facet's rotation of the macro s/p basis into its own
-    scattered, reflected = np.zeros(w.size), np.zeros(w.size)
-
-    def one(i):   # the wavelengths in parallel threads (a dielectric's first incidence builds its albedo tables here)
-        lam = w[i]
-        Fm = (F.at(np.broadcast_to(wi, (na, 3)), mirror, lam) if hasattr(F, "at")
-              else F(np.clip(im_a, 0.0, 1.0), lam)) * np.ones(na)
-        # per facet: F (1 − A) on a conductor, the lobe's own absolute albedo on a dielectric
-        share = np.asarray(facet_scattered_share(nano, np.clip(im_a, 0.0, 1.0), c2_a, lam, dm, material,
-                                                 polarization))
-        lost = Fm * share if scatter.is_conductor(material) else share * np.ones(na)
-        # Σ node_w G1 estimates ∫ G1 (ω_i·m) D dm / cos θ_i = 1 (Smith); normalized by it, so that near grazing
-        # incidence, where few NDF nodes face the light, the facets' share is not over-counted
-        total_w = float(np.sum(node_w))
-        scattered[i] = float(np.sum(node_w * lost) / total_w) if total_w > 0 else 0.0
-        reflected[i] = float(np.sum(node_w * Fm) / total_w) if total_w > 0 else 0.0
-
-    parallel_map(one, range(w.size))
-    return scattered, reflected
-
-
