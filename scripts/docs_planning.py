@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "examples" / "scenes"
 
 #: the planner's thresholds in the order of the page's table (their meaning is in the template)
-THRESHOLDS = ("ESTIMATE_RESOLUTION", "ESTIMATE_STEP_NM", "ESTIMATE_SPHERE_THETAS", "ESTIMATE_SHARE", "FLAT_SCATTER",
+THRESHOLDS = ("ESTIMATE_RESOLUTION", "ESTIMATE_RESOLUTION_MAX", "ESTIMATE_STEP_NM", "ESTIMATE_SPHERE_THETAS", "ESTIMATE_SHARE", "FLAT_SCATTER",
               "PSD_G_MAX", "DE_PER_RELATIVE_Y", "PLAN_RESOLUTION_RANGE", "PATCH_SIGMAS", "LAMBDA_REF_NM", "F_FLAT_TOL",
               "ORDER_EFFICIENCY_MIN", "LSTAR_SLOPE_BLACK", "FLOOR_MARGIN")
 
@@ -38,7 +38,7 @@ def decisions_doc() -> list:
     "Costs come from", which the template says itself), with Sphinx roles written as Markdown code."""
     doc = planning.planner.__doc__.split("For every (material, light) pair of a :class:`waveoptics.planning.scene."
                                          "Scene` the planner takes, in order:", 1)[1].split("References", 1)[0]
-    blocks = re.split(r"\n``(\w+)``\n", doc)      # split before the roles are rewritten: the names are ``name``
+    blocks = re.split(r"\n``(\w[\w ]*)``\n", doc)      # split before the roles are rewritten: the names are ``name``
     out = []
     for name, body in zip(blocks[1::2], blocks[2::2]):
         body = re.sub(r":(?:data|func|mod|class|meth):`~?([^`]+)`", r"`\1`", body)

@@ -82,3 +82,23 @@ def test_on_32_cells_the_guard_acts_and_names_a_finer_grid(scene):
     with pytest.warns(DiffractionWarning, match=pattern):
         L = evaluate(scene, 60.0, 32, [380.0])
     assert 0.92 < L.info["diffraction_energy_scale"][0] < 0.95
+
+
+def test_the_planners_colour_estimate_refines_the_grid_where_the_guard_acts(scene, tmp_path, monkeypatch):
+    """The planner's coarse colour estimate (32² cells) of this scene took a lobe the guard had scaled (5.6 % at
+    380 nm, 60°); it now takes the coarsest grid from 32² up on which the guard does not act (64² here; the
+    estimate's default Kirchhoff lobe, whose albedo there is 1.3 % above that on 128² cells), and plans without a guard
+    line."""
+    from waveoptics.planning import load, plan_scene, resolved_lobes
+
+    mat, micro, nano, model, *_ = scene
+    monkeypatch.setenv("WAVEOPTICS_CACHE_DIR", str(tmp_path))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DiffractionWarning)
+        L, grid = resolved_lobes(direction_from_angles(60.0, 0.0), [380.0], mat, micro, nano, 32)
+        plan = plan_scene(load(SCENE))
+    assert grid.n_u == 64 and L.info["diffraction_energy_scale"] == [1.0]
+    fine = twoscale.evaluate(direction_from_angles(60.0, 0.0), [380.0], mat, micro, nano, DirectionGrid.hemisphere(128),
+                             kd=0.0, diffuse="none")
+    assert L.albedo("diffraction")[0] == pytest.approx(fine.albedo("diffraction")[0], rel=2e-2)
+    assert plan.entries[0].metrics["estimate_resolution"] == 64

@@ -14,11 +14,11 @@ from .decisions import (DE_PER_RELATIVE_Y, LSTAR_SLOPE_BLACK, LAMBDA_REF_NM, EPS
     first_order_g)
 from .costmodel import (CostModel, fft_units, fft_solver_units, psd_terms, band_table_time, calibrate,
     calibrate_direct, machine_busy, calibration, direct_calibration)
-from .thresholds import (ESTIMATE_RESOLUTION, ESTIMATE_STEP_NM, ESTIMATE_SPHERE_THETAS, ESTIMATE_SHARE, PSD_G_MAX,
+from .thresholds import (ESTIMATE_RESOLUTION, ESTIMATE_RESOLUTION_MAX, ESTIMATE_STEP_NM, ESTIMATE_SPHERE_THETAS, ESTIMATE_SHARE, PSD_G_MAX,
     FLAT_SCATTER, PLAN_RESOLUTION_RANGE, PATCH_SIGMAS, F_FLAT_TOL, FLOOR_MARGIN, KIRCHHOFF_GRAZING_DEG,
     RAYLEIGH_RICE_G_MAX, FILM_NODES_PER_FRINGE)
 from .force import (FORCEABLE, parse_force)
-from .colour_estimate import (colour_shift)
+from .colour_estimate import (colour_shift, resolved_lobes)
 from .report import (plan_table)
 from .plan import (EntryPlan, Plan)
 from .planner import (plan_scene)

@@ -11,15 +11,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import colour, surfaces
+from .. import colour, scatter, surfaces
 from ..brdf import twoscale
 from ..planning.scene import MaterialSpec
 from ..request import parse_nano
 from ..scatter.grid import DirectionGrid
 from ..units import direction_from_angles, parse_length
-from .thresholds import ESTIMATE_RESOLUTION, ESTIMATE_STEP_NM
+from .thresholds import ESTIMATE_RESOLUTION, ESTIMATE_RESOLUTION_MAX, ESTIMATE_STEP_NM
 
-__all__ = ['colour_shift']
+__all__ = ['colour_shift', 'resolved_lobes']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Nano surfaces: the object the solver uses and a PSD proxy for the estimate
@@ -69,13 +69,12 @@ def colour_shift(material, micro, model: surfaces.PSDModel, spd, light_dirs_deg,
     """
 
     w = colour.spectral_grid(spd) if spd.lines else colour.spectral_grid(spd, step_nm)
-    grid = DirectionGrid.hemisphere(resolution)
     nano = twoscale.Nano(model=model)
-    best, where = 0.0, None
+    best, where, used = 0.0, None, int(resolution)
     for th, ph in light_dirs_deg:
         wi = direction_from_angles(th, ph)
-        L = twoscale.evaluate(wi, w, material, micro, nano, grid, solver="psd", kd=kd,
-                              diffuse="lambert" if kd > 0 else "none")
+        L, grid = resolved_lobes(wi, w, material, micro, nano, int(resolution), kd=kd)
+        used = max(used, grid.n_u)
         q = []
         for f in (L.total, L.microfacet):
             vals = []
@@ -90,5 +89,27 @@ def colour_shift(material, micro, model: surfaces.PSDModel, spd, light_dirs_deg,
         i = int(np.argmax(dE))
         if dE[i] > best:
             best, where = float(dE[i]), {"light_deg": [th, ph], "index": i}
-    return best, {"wavelengths_nm": w, "at": where, "resolution": resolution}
+    return best, {"wavelengths_nm": w, "at": where, "resolution": used}
+
+
+def resolved_lobes(wi, w, material, micro, nano, resolution: int, *, kd=0.0):
+    """(:class:`waveoptics.brdf.Lobes`, grid) of :func:`waveoptics.brdf.evaluate` for light from *wi* at the
+    wavelengths *w* (nm), on the coarsest hemisphere grid from *resolution* cells per side up (doubling, at most
+    :data:`ESTIMATE_RESOLUTION_MAX`) on which the two-scale energy guard does not act: where it acts the cells are
+    too coarse for the lobe (coated aluminium at 380 nm, 60°: 1.066x its budget on 32², 1.005x on 64²), and the
+    estimate takes the finer grid rather than a lobe the guard scaled. The coarser grids' warnings are dropped; the
+    last grid's pass on (the guard's line where even :data:`ESTIMATE_RESOLUTION_MAX` does not resolve the lobe)."""
+    res = int(resolution)
+    while True:
+        grid = DirectionGrid.hemisphere(res)
+        held = []
+        with scatter.diffraction_warnings_held(held):
+            L = twoscale.evaluate(wi, w, material, micro, nano, grid, solver="psd", kd=kd,
+                                  diffuse="lambert" if kd > 0 else "none")
+        guarded = np.any(np.asarray(L.info.get("diffraction_energy_scale", 1.0)) < 1.0)
+        if not guarded or 2 * res > ESTIMATE_RESOLUTION_MAX:
+            for msg in held:
+                scatter.solvers.warn_or_collect(msg)
+            return L, grid
+        res *= 2
 

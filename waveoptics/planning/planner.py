@@ -9,7 +9,8 @@ For every (material, light) pair of a :class:`waveoptics.planning.scene.Scene` t
     The nano surface reflects the fraction exp(−g), g = (4π σ cos θ_i / λ)², coherently and scatters the rest,
     TIS = F (1 − exp(−g)) (Davies 1954; Bennett & Porteus 1961; docs/physics.md §2). Whether that scattered light
     changes what the scene shows is decided on the colour it produces: both models (two-scale and plain
-    microfacet) are evaluated on a coarse grid (:data:`ESTIMATE_RESOLUTION` cells, :data:`ESTIMATE_STEP_NM`
+    microfacet) are evaluated on a coarse grid (:data:`ESTIMATE_RESOLUTION` cells, refined by doubling up to
+    :data:`ESTIMATE_RESOLUTION_MAX` where the energy guard would act on it, :data:`ESTIMATE_STEP_NM`
     wavelength step) through the PSD route, at the scene's light directions and directions of interest, and the
     largest CIEDE2000 difference of the rendered radiance π f cos θ_i is compared with the target. Diffraction
     runs when that estimate exceeds :data:`ESTIMATE_SHARE` of the target (the rest of the budget covers the

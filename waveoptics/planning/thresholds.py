@@ -3,12 +3,15 @@ decisions they drive; :mod:`waveoptics.planning.planner` says why each has its v
 """
 from __future__ import annotations
 
-__all__ = ['ESTIMATE_RESOLUTION', 'ESTIMATE_STEP_NM', 'ESTIMATE_SPHERE_THETAS', 'ESTIMATE_SHARE', 'PSD_G_MAX',
+__all__ = ['ESTIMATE_RESOLUTION', 'ESTIMATE_RESOLUTION_MAX', 'ESTIMATE_STEP_NM', 'ESTIMATE_SPHERE_THETAS', 'ESTIMATE_SHARE', 'PSD_G_MAX',
            'FLAT_SCATTER', 'PLAN_RESOLUTION_RANGE', 'PATCH_SIGMAS', 'F_FLAT_TOL', 'FLOOR_MARGIN', 'KIRCHHOFF_GRAZING_DEG',
            'RAYLEIGH_RICE_G_MAX', 'FILM_NODES_PER_FRINGE']
 
 #: cells per side of the coarse grid on which the colour shift of diffraction is estimated
 ESTIMATE_RESOLUTION = 32
+#: the finest grid the colour estimate refines to where the energy guard acts on the coarse one
+#: (:func:`waveoptics.planning.colour_estimate.resolved_lobes`)
+ESTIMATE_RESOLUTION_MAX = 128
 #: wavelength step (nm) of the coarse estimate (line sources use their lines)
 ESTIMATE_STEP_NM = 40.0
 #: extra incidence angles (degrees) probed when a sphere camera sees every incidence
