@@ -144,9 +144,14 @@ def slope_law_table(mass, L: float, source: dict | None = None) -> SlopeTable:
     keep = W > 0
     xs, ys, ws = X[keep], Y[keep], W[keep]
     lam = np.empty((_PHI.size, _MU.size))
-    for k, phi in enumerate(_PHI):
+    for k, phi in enumerate(_PHI):   # E[(q − μ)⁺] = Σ_{q > μ} w q − μ Σ_{q > μ} w, by sorted q and tail sums
         q = xs * np.cos(phi) + ys * np.sin(phi)
-        lam[k] = np.sum(ws[None, :] * np.maximum(q[None, :] - _MU[:, None], 0.0), axis=1) / _MU
+        order = np.argsort(q)
+        qs, wq = q[order], ws[order]
+        tail_w = np.concatenate([np.cumsum(wq[::-1])[::-1], [0.0]])
+        tail_wq = np.concatenate([np.cumsum((wq * qs)[::-1])[::-1], [0.0]])
+        i = np.searchsorted(qs, _MU, side="right")
+        lam[k] = np.maximum(tail_wq[i] - _MU * tail_w[i], 0.0) / _MU
     return SlopeTable(L=float(L), P=P, lam=lam, source=dict(source or {"bins": n}))
 
 
