@@ -179,11 +179,12 @@ def test_tabulated_nodes_are_not_turned(table, micro):
 
 
 # -- the two-scale energy budget ---------------------------------------------------------------------------------
-@pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 70.0])
+@pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 70.0, 88.0])
 def test_facet_budget_against_the_bins(table, micro, fine, au, theta):
-    """The facet route's budget (64 NDF normals): the light the facets scatter within 0.5 % and reflect within
-    1e-4 of the visible-normal averages over the bins (measured ≤ 0.39 % and ≤ 5e-5; a bin drawn in raster order
-    from one uniform: 1.8 % and 6.6e-4 at 70°)."""
+    """The facet route's budget, summed over the table's bins (:func:`waveoptics.brdf.facet.budget_nodes`): the
+    light the facets scatter and reflect within 5e-4 and 3e-5 of the visible-normal averages over the bins written
+    here (measured ≤ 1.1e-4 and 8e-6, at 88°; 64 normals of the sampler drawing bins in raster order: 1.8 % and
+    6.6e-4 off at 70°; of the present sampler 0.39 % and 5e-5)."""
     mat, F = au
     nano = make_nano(NANO, [LAM])
     dm = scatter.get_model("kirchhoff", perturbative=True)
@@ -195,8 +196,8 @@ def test_facet_budget_against_the_bins(table, micro, fine, au, theta):
     c = np.clip(im, 0.0, 1.0)
     share = np.asarray(facet_scattered_share(nano, c, np.ones_like(c), LAM, dm, mat, "unpolarized"))
     Fm = F(c, LAM)
-    assert scattered[0] == pytest.approx(np.sum(vis * Fm * share) / vis.sum(), rel=5e-3)
-    assert reflected[0] == pytest.approx(np.sum(vis * Fm) / vis.sum(), rel=1e-4)
+    assert scattered[0] == pytest.approx(np.sum(vis * Fm * share) / vis.sum(), rel=5e-4)
+    assert reflected[0] == pytest.approx(np.sum(vis * Fm) / vis.sum(), rel=3e-5)
 
 
 @pytest.mark.parametrize("n", [32, 64])
@@ -219,11 +220,12 @@ def test_coherent_albedo_on_the_grid(table, micro, fine, au, n, theta):
 
 @pytest.mark.parametrize("n", [32, 64])
 def test_energy_guard_does_not_act_for_a_measured_table(micro, n):
-    """The measured table (Au, Gaussian nano σ 8 nm ℓ 1 µm, 550 nm): no energy guard at θ_i 0-70° on 32² and
-    64² cells (before issue 28's fixes it removed 3.2 / 4.4 / 13.4 / 25 % on 64², 37 % at 70° on 32²)."""
+    """The measured table (Au, Gaussian nano σ 8 nm ℓ 1 µm, 550 nm): no energy guard at θ_i 0-88° on 32² and
+    64² cells (measured: the lobe 1.002-1.007x its budget at 0-70°; before issue 28's fixes the guard removed
+    3.2 / 4.4 / 13.4 / 25.3 % at 0 / 30 / 60 / 70° on 64², 68 % at 70° on 32², 3.3 % at 80-88° on 32²)."""
     nano = make_nano(NANO, [LAM])
     grid = DirectionGrid.hemisphere(n)
-    for theta in (0.0, 30.0, 60.0, 70.0):
+    for theta in (0.0, 30.0, 60.0, 70.0, 80.0, 88.0):
         with warnings.catch_warnings(record=True) as rec:
             warnings.simplefilter("always")
             L = twoscale.evaluate(_dir(theta), [LAM], "Au", micro, nano, grid)

@@ -210,9 +210,11 @@ def sample_dcos_tabulated(wi, ax, ay, c, u):
 
     Each uniform is mapped monotonically onto one slope axis, so a stratified point set (the Sobol nodes of the
     facet quadratures, :func:`waveoptics.brdf.facet.unit_nodes`) stays stratified in slope space. Drawing the bin in
-    raster order from u₁ alone, as before, laid 64 nodes in bands of rows with x̃ set by u₁'s remainder: the
-    budget of :func:`waveoptics.brdf.facet_frame_diffraction` (64 normals) came out 1.4 % below its converged value
-    on a measured table at θ_i = 60° and the facet-frame lobe 0.5-1 % below (Beckmann: 0.1-0.5 %).
+    raster order from u₁ alone, as before, laid 64 nodes in bands of rows with x̃ set by u₁'s remainder: on a
+    measured table (Gaussian surface, 64² bins, α ≈ 0.066) their mean of (ω_i·m)⁺ D G1 / (p cos θ_i), 1 by
+    Smith's relation, was 0.9941 / 0.9805 / 0.9329 at θ_i = 60 / 80 / 88° (now 0.9994 / 0.9980 / 0.9884), and the
+    facet-frame lobe of :func:`waveoptics.brdf.facet_frame_diffraction` (64 + 16 normals, Au, 550 nm) 0.7-1.3 %
+    below its value with 1024 + 256 normals at θ_i 0-60° (now 0.3-0.5 % above).
 
     References
     ----------

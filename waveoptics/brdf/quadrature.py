@@ -20,7 +20,8 @@ from .directions import as_dirs, reflect
 from .ndf import ALPHA_MIN
 from .smith import gl01
 
-__all__ = ['NODE_BLOCK', 'TABLE_GL_ORDER', 'normal_quadrature', 'table_nodes', 'directional_albedo', 'albedo', 'slope_table_of']
+__all__ = ['NODE_BLOCK', 'TABLE_GL_ORDER', 'normal_quadrature', 'table_nodes', 'directional_albedo', 'albedo',
+           'slope_table_of']
 
 # ----------------------------------------------------------------------------------------------------------
 # quadrature over microfacet normals and directional albedo

@@ -21,8 +21,9 @@ for the whole cell. Read so, the coherent albedo of Au at θ_i = 70° (550 nm, G
 on 32² cells, 0.80521 on 64², 0.80506 on 96², 0.80489 on 128² and 0.80477 on 256², against 0.80473 by a direct
 sum over the table's slopes (Walter's integral, 8² points per bin): the diffracted budget (the light the facets
 reflect less the coherent albedo, :func:`waveoptics.brdf.twoscale.cap_to_coherent_loss`) lost up to half its
-0.0033, and the energy guard removed 7-54 % of the diffracted lobe on 32²-96² (issue 28). Cell averages: 0.80466
-to 0.80477 on 32² to 128² (tests/test_slope_table_energy.py).
+0.0033, and the energy guard removed 55 % of the diffracted lobe on 32² and 13 % on 64² (128²: the lobe 1.030x
+its budget; issue 28). Cell averages: 0.80466 to 0.80477 on 32² to 128², the lobe within 1.007x its budget
+(tests/test_slope_table_energy.py).
 
 References
 ----------

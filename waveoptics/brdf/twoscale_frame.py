@@ -17,7 +17,7 @@ from ..materials import cos2_eta_i, facet_sp_mix
 from ..runtime import parallel_map
 from ..scatter.grid import DirectionGrid
 from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weight, uses_vector_first_order
-from .facet import FACET_NODE_SPLIT, FACET_REFERENCE_NM, half_vector_nodes, ndf_nodes, wide_micro_lobe
+from .facet import FACET_NODE_SPLIT, FACET_REFERENCE_NM, budget_nodes, half_vector_nodes, ndf_nodes, wide_micro_lobe
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_polarization import facet_scattered_share
 from .field_lobe import (field_anisotropy, field_cell_split, field_first_order_over_fresnel,
@@ -450,9 +450,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     scattered : ndarray (n_λ,)
         The light the facets' lobes scatter, F(θ_m) (1 − A(θ_m)) per facet on a conductor and the lobe's own
         absolute albedo on a dielectric (:meth:`waveoptics.brdf.Nano.scattered_share`), averaged over the facets the light
-        sees (:data:`FACET_BUDGET_NODES` normals of the NDF, weights D (ω_i·m) G1 / p, normalized by their sum,
-        which is 1 in expectation): the diffracted part's albedo falls short of it by the light masked on the way
-        out or sent below the macro horizon.
+        sees (:func:`waveoptics.brdf.facet.budget_nodes`: :data:`FACET_BUDGET_NODES` normals of the NDF, weights
+        D (ω_i·m) G1 / p, normalized by their sum, which is 1 in expectation; a slope table's bins), the diffracted
+        part's albedo falls short of it by the light masked on the way out or sent below the macro horizon.
     reflected : ndarray (n_λ,)
         F(θ_m) averaged the same way: the light the facets reflect, coherent and diffracted together, before
         masking on the way out.
@@ -466,7 +466,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     """
     from .facet import NanoRadial, facet_basis, meridian_basis, unit_nodes
     from .ndf import ndf_by_name
-    from .sampling import pdf_normal, sample_normal, sampler_for
+    from .sampling import sample_normal, sampler_for
     from .shadowing import shadowing_by_name
 
     w = np.asarray(wavelengths_nm, dtype=float)
@@ -557,22 +557,21 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         else:
             Fc = F.at(np.broadcast_to(wi, wo.shape), wo, lam) if hasattr(F, "at") else F(np.clip(h @ wi, 0, 1), lam)
         diffraction[i][inside] = out[:, i] * Fc
-    nu = FACET_BUDGET_NODES   # the budget's own NDF normals (:data:`FACET_BUDGET_NODES`)
-    m_u = sample_normal(np.broadcast_to(wi, (nu, 3)), unit_nodes(nu), ndf=ndf, ax=ax, ay=ay, c=c)
-    p_u = pdf_normal(np.broadcast_to(wi, (nu, 3)), m_u, ndf=ndf, ax=ax, ay=ay, c=c)
-    scattered, reflected = _facet_budget(wi, w, m_u, spec.D(m_u, ax, ay, c) / np.where(p_u > 0, p_u, np.inf), nano, F,
-                                         dm, material, polarization)
+    # the budget's own normals (:data:`FACET_BUDGET_NODES` of the NDF's sampler; a slope table's bins)
+    m_u, w_u = budget_nodes(wi, FACET_BUDGET_NODES, ndf=ndf, ax=ax, ay=ay, c=c)
+    scattered, reflected = _facet_budget(wi, w, m_u, w_u, nano, F, dm, material, polarization)
     return diffraction, scattered, reflected
 
 
-def _facet_budget(wi, w, m_a, d_over_p, nano: Nano, F, dm, material, polarization):
+def _facet_budget(wi, w, m_a, w_a, nano: Nano, F, dm, material, polarization):
     """(scattered, reflected) of :func:`facet_frame_diffraction` (n_λ,) each: the facets' scattered light and
-    reflectance averaged over the NDF nodes *m_a* (n, 3), weighted by (ω_i·m) D / p (*d_over_p*: D/p, 0 where p
-    = 0) normalized by their sum. For s or p light each facet takes the mix of its own s and p light
-    (:func:`waveoptics.brdf.facet_scattered_share`), as its F at the mirror direction does."""
+    reflectance averaged over the NDF nodes *m_a* (n, 3), weighted by (ω_i·m)⁺ w_a (*w_a*: weights of ∫ · D dω_m,
+    :func:`waveoptics.brdf.facet.budget_nodes`) normalized by their sum. For s or p light each facet takes the mix
+    of its own s and p light (:func:`waveoptics.brdf.facet_scattered_share`), as its F at the mirror direction
+    does."""
     na = m_a.shape[0]
     im_a = m_a @ wi
-    node_w = np.where(im_a > 0, im_a * d_over_p / (wi[2] * na), 0.0)
+    node_w = np.where(im_a > 0, im_a * w_a / wi[2], 0.0)
     mirror = 2 * im_a[:, None] * m_a - wi
     c2_a = cos2_eta_i(wi, m_a)   # each NDF facet's rotation of the macro s/p basis into its own
     scattered, reflected = np.zeros(w.size), np.zeros(w.size)
