@@ -1,6 +1,6 @@
 """A measured slope table as micro NDF (issue 28): its D, Λ, sampler, albedo quadrature and the two-scale energy
 budget against direct sums over the table's own bins written here, an analytic Beckmann law tabulated against the
-closed-form Beckmann NDF, and the energy guard silent for a measured table at θ_i 0-70° on two grids.
+closed-form Beckmann NDF, and the energy guard silent for a measured table at θ_i 0-88° on two grids.
 
 The measured table is the slope histogram of a Gaussian height field (25.6 µm, 512², σ 20 nm, T 0.6 µm, seed 4;
 64² bins, α ≈ 0.066), as ``micro_surface=`` loads it (tests/test_micro_ndf_options.py). The reference sums put
@@ -96,7 +96,7 @@ def walter_sum(table, fine, wi, factor=None):
 # -- the table's own NDF: D, Λ, sampler, albedo quadrature --------------------------------------------------------
 def test_D_of_the_table_integrates_to_one_over_the_hemisphere(table):
     """∫ D(m) cos θ_m dω_m = 1 by a polar midpoint grid over the hemisphere (not aligned with the bins; measured
-    1 - 2e-5)."""
+    1 + 1.2e-5)."""
     th_max = np.arctan(np.sqrt(2.0) * table.L) * 1.01
     nt, nph = 1200, 1440
     t = (np.arange(nt) + 0.5) * th_max / nt
@@ -111,7 +111,7 @@ def test_D_of_the_table_integrates_to_one_over_the_hemisphere(table):
 @pytest.mark.parametrize("theta", [84.0, 86.0, 88.0, 89.5])
 def test_smith_lambda_of_the_table_is_its_projected_area(table, fine, theta):
     """Smith's relation (1 + Λ(ω)) cos θ = ∫ (ω·m)⁺ D(m) dω_m (Heitz 2014, eq. 26) with the table's Λ against the
-    sum over its bins (measured within 2e-4 relative)."""
+    sum over its bins (measured within 3.2e-4 relative)."""
     m, mass = fine
     for phi in (0.0, 35.0, 90.0, 200.0):
         w = _dir(theta, phi)
@@ -123,7 +123,8 @@ def test_smith_lambda_of_the_table_is_its_projected_area(table, fine, theta):
 
 def test_sampler_draws_the_tables_law(table):
     """200000 seeded draws of the table's sampler: their slope histogram on the table's bins against the bins'
-    masses (χ² per degree of freedom near 1), and the density pdf_normal gives them is P22 / cos³θ_m."""
+    masses (χ² per degree of freedom near 1: measured 0.93 on 1706 bins), and the density pdf_normal gives them
+    is P22 / cos³θ_m."""
     rng = np.random.default_rng(28)
     n = 200_000
     m = sample_normal(np.broadcast_to([0.0, 0.0, 1.0], (n, 3)), rng.random((n, 2)), ndf="tabulated", ax=0.1, ay=0.1,
@@ -142,9 +143,10 @@ def test_sampler_draws_the_tables_law(table):
 
 
 @pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 80.0])
-def test_budget_weights_estimate_smiths_one(table, theta):
-    """The budget's weights (ω_i·m)⁺ D / p / cos θ_i times G1 average to 1 (Smith: ∫ G1 (ω_i·m)⁺ D dm = cos θ_i):
-    at the 64 Sobol nodes within 1e-2 and at 16384 seeded random draws within 4 standard errors."""
+def test_sampler_weights_estimate_smiths_one(table, theta):
+    """The sampler's weights (ω_i·m)⁺ D / p / cos θ_i times G1 average to 1 (Smith: ∫ G1 (ω_i·m)⁺ D dm = cos θ_i):
+    at the 64 Sobol nodes of the facet quadratures within 1e-2 (measured 0.998 at 80°; bins drawn in raster order
+    from one uniform: 0.9805) and at 16384 seeded random draws within 4 standard errors."""
     from waveoptics.brdf.facet import unit_nodes
 
     wi = _dir(theta)
@@ -161,7 +163,7 @@ def test_budget_weights_estimate_smiths_one(table, theta):
 @pytest.mark.parametrize("theta", [0.0, 30.0, 60.0, 75.0])
 def test_albedo_quadrature_of_the_table(table, micro, fine, au, theta):
     """The F = 1 albedo of the tabulated lobe (the coherent lobe's scale) and a MicrofacetBRDF's albedo on Au
-    against Walter's sum over the bins: within 2e-5 (measured ≤ 4e-6; smooth-lobe nodes across the bin edges gave
+    against Walter's sum over the bins: within 2e-5 (measured ≤ 4.2e-6; smooth-lobe nodes across the bin edges gave
     1.00127 at 0°, where it is 1)."""
     wi = _dir(theta)
     got = float(albedo(wi, fresnel="one", **micro.kw()))
@@ -208,7 +210,7 @@ def test_facet_budget_against_the_bins(table, micro, fine, au, theta):
 @pytest.mark.parametrize("theta", [60.0, 70.0])
 def test_coherent_albedo_on_the_grid(table, micro, fine, au, n, theta):
     """The coherent lobe's grid albedo against Walter's sum over the bins with F(θ_d) A(θ_d) per facet: within
-    2e-4 (measured ≤ 7e-5; read at cell centres it was 0.80658 on 32² and 0.80521 on 64² at 70° against
+    2e-4 (measured ≤ 4e-5; read at cell centres it was 0.80658 on 32² and 0.80521 on 64² at 70° against
     0.80473, the diffracted budget being about 0.0033)."""
     mat, F = au
     nano = make_nano(NANO, [LAM])
@@ -248,9 +250,9 @@ def beckmann_table(alpha, n, L):
 
 def test_a_tabulated_beckmann_law_is_beckmann():
     """Beckmann α = 0.1 tabulated on 128² bins over ±4α against the closed form (Au, 450 and 650 nm, 64² cells,
-    θ_i 0-70°): albedos (total, microfacet, coherent) within 1.5e-3 (measured ≤ 6e-4, at 70°), the diffracted
-    albedo within 1.5 % (≤ 0.9 %), the energy in discs of radius 0.1-0.4 about the mirror direction within 2 %
-    (≤ 1.1 %: the table's lobe is cell averages, the closed form's cell centres). No energy guard in either."""
+    θ_i 0-70°): albedos (total, microfacet, coherent) within 1.5e-3 (measured ≤ 6.2e-4, at 70°), the diffracted
+    albedo within 1.5 % (≤ 0.65 %), the energy in discs of radius 0.1-0.4 about the mirror direction within 2 %
+    (≤ 1.0 %: the table's lobe is cell averages, the closed form's cell centres). No energy guard in either."""
     tab = beckmann_table(0.1, 128, 0.4)
     assert np.sqrt(2.0) * tab.rms_slope()[0] == pytest.approx(0.1, rel=1e-3)
     mt, mb = twoscale.Micro.from_slopes(tab), twoscale.Micro(alpha=0.1, ndf="beckmann")
