@@ -227,9 +227,8 @@ def sample_dcos_tabulated(wi, ax, ay, c, u):
     # the conditional CDFs of all rows in one increasing array: row j's entries run from j (excluded) to j + 1
     cond = np.cumsum(mass, axis=1) / np.where(row > 0, row, 1.0)[:, None]
     cond = np.where(row[:, None] > 0, cond, 1.0) + np.arange(c.n)[:, None]
-    top = np.nextafter(1.0, 0.0)
-    u0 = np.clip(u[..., 0], 0.0, top)
-    u1 = np.clip(u[..., 1], 0.0, top)
+    u0 = np.clip(u[..., 0], 0.0, np.nextafter(1.0, 0.0))
+    u1 = np.clip(u[..., 1], 0.0, 1.0 - 2.0 ** -40)   # j + u₁ < j + 1 in floating point for every row j < 2¹²
     j = np.minimum(np.searchsorted(row_cdf, u0, side="right"), c.n - 1)
     lo = np.where(j > 0, row_cdf[np.maximum(j - 1, 0)], 0.0)
     fy = np.clip((u0 - lo) / np.maximum(row_cdf[j] - lo, 1e-300), 0.0, 1.0)
