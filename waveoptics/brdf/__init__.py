@@ -11,7 +11,7 @@ microfacet model), pointwise (the two-scale model as a function), tabulated (the
 incidence, any nano-roughness), measured_ndf (an NDF tabulated from a height field's slopes), chi2 (goodness-of-fit test of samplers), multiscatter (Kulla-Conty energy compensation), facet_interface (what one facet of rough glass reflects and transmits: bare, or coated by thin films), btdf (the rough dielectric: reflection and transmission over the sphere, with its energy compensation), nano_dielectric (nano-rough glass: the rough dielectric with first-order Rayleigh-Rice scatter into both half-spaces), twoscale_dielectric (two-scale rough glass: micro facets carrying the nano-rough glass, reflection and transmission), spectral (a BRDF known at wavelength nodes, evaluated at any λ and in RGB), ndf_fit (the α of any NDF that matches a surface's slopes), models (the BRDF models by name, from keyword arguments:
 BRDF_MODELS, their parameters BRDF_MODEL_PARAMETERS, build_brdf_model).
 """
-from .measured_ndf import (SlopeTable, slope_table, footprint_ndf, D_tabulated, Lambda_tabulated)
+from .measured_ndf import (SlopeTable, slope_table, slope_law_table, footprint_ndf, D_tabulated, Lambda_tabulated)
 from .roughness import (alpha_from_roughness, roughness_from_alpha, blinn_phong_exponent, alpha_from_blinn_phong)
 from .directions import (half_vector, reflect)
 from .smith import (LAMBDA_GL_ORDER, Lambda_radial)
@@ -25,7 +25,8 @@ from .shadowing import (G_smith, G_smith_correlated, G_cook_torrance, G_implicit
 from .fresnel_terms import (FRESNELS, F_mean, MaterialFresnel)
 from .diffuse import (lambert, oren_nayar, burley, diffuse_tradeoff, DIFFUSES, diffuse_parameter, sigma_renamed)
 from .microfacet import (specular, brdf, fresnel_inputs, spectral_brdf)
-from .quadrature import (NODE_BLOCK, normal_quadrature, directional_albedo, albedo)
+from .quadrature import (NODE_BLOCK, TABLE_GL_ORDER, normal_quadrature, table_nodes, directional_albedo, albedo,
+                         slope_table_of)
 from .opencl import (D_cl, Lambda_cl, brdf_cl, ndf_shape_parameter)
 from .field_lobe import (BAND_MARGIN_BINS, band_limited_field, kirchhoff_scattered_lobe, lobe_sampling_warnings, nyquist_band, fresnel_at_pairs,
     field_first_order_over_fresnel, field_scattered_lobe, FIELD_THETAS_DEG,

@@ -28,7 +28,7 @@ from .sampling import sample_normal, sample_normal_dcos
 
 __all__ = ['FACET_NODE_SPLIT', 'FACET_REFERENCE_NM', 'wide_micro_lobe', 'RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'meridian_basis', 'to_facet',
            'from_facet', 'ndf_nodes', 'half_vector_nodes', 'half_vector_base', 'quadrature_normals',
-           'quadrature_density', 'sampler_normals']
+           'quadrature_density', 'sampler_normals', 'budget_nodes']
 
 #: radial bins of the nano-lobe sampler (geometric in spatial frequency)
 RADIAL_BINS = 384
@@ -206,7 +206,9 @@ def ndf_nodes(n: int, e2, *, ndf, ax, ay, c):
     swapped get the same nodes. For an isotropic NDF (*ax* = *ay*) they are turned about z to each direction pair's
     half-vector azimuth (*e2* (n_pairs, 3) = (−sin φ_h, cos φ_h, 0), :func:`meridian_basis` of h), so that a pair
     at any azimuth gets the same nodes relative to it (D(m) cos θ_m is unchanged by the turn). Yields, node by
-    node, (3,) normals (anisotropic NDF: fixed in the surface's frame) or (n_pairs, 3).
+    node, (3,) normals (anisotropic NDF: fixed in the surface's frame) or (n_pairs, 3). A slope table
+    (``tabulated``) is never turned, whatever its α and α_y: its D, constant on square bins of slope space, is not
+    unchanged by a turn, and turned nodes would not have the density D(m) cos θ_m the quadrature weights them by.
 
     Measured on the grid route against 4096 + 1024 normals (ABC σ = 10 nm, B = 2 µm, C = 2.6, Beckmann, 550 nm,
     20 pairs θ 3-65°): α = 0.1 with 64 + 16 normals rms 1.2 %, max 1.7 % (the earlier normals fixed in the
@@ -230,7 +232,7 @@ def ndf_nodes(n: int, e2, *, ndf, ax, ay, c):
     .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
     """
     m0 = sample_normal_dcos(unit_nodes(n), ndf=ndf, ax=ax, ay=ay, c=c)
-    if ay != ax:
+    if ay != ax or ndf == "tabulated":
         yield from m0
         return
     e2 = np.asarray(e2, dtype=float)
@@ -346,3 +348,33 @@ def sampler_normals(wi, n: int, *, ndf, ax, ay, c):
     wi_b = np.broadcast_to(uniq[:, None, :], (uniq.shape[0], u.shape[0], 3))
     m = sample_normal(wi_b, np.broadcast_to(u, wi_b.shape[:-1] + (2,)), ndf=ndf, ax=ax, ay=ay, c=c)
     return m[inv.reshape(-1)]
+
+
+def budget_nodes(wi, n: int, *, ndf, ax, ay, c):
+    """Facet normals m (K, 3) and weights w (K,) of ∫ g(m) D(m) dω_m ≈ Σ w g(m) for the energy budget of
+    :func:`waveoptics.brdf.facet_frame_diffraction`: the micro NDF's sampler for *wi* at *n* Sobol points
+    (:func:`unit_nodes`), w = D / (n p); for a slope table (``tabulated``) its bins instead,
+    :func:`waveoptics.brdf.table_nodes` (Gauss-Legendre points per bin, w = D dω): the table is a discrete law, whose
+    average over the facets the light sees is then a sum, not an estimate. With 64 nodes of its sampler the budget's
+    scattered share of a measured table (Au, Gaussian nano σ 8 nm ℓ 1 µm, 550 nm) was 0.25 % below the sum over its
+    bins at θ_i = 60°, 0.9 % at 80°, 2 % at 88°, where the closed-form Beckmann NDF's nodes are within 0.1 %.
+
+    References
+    ----------
+    .. [1] B. Walter et al., EGSR 2007, §5.3 (sampling normals); E. Heitz, JCGT 3(2), 2014, eq. (38) (the visible
+       normals' density, ∝ (ω_i·m)⁺ D(m)).
+    """
+    from .ndf import ndf_by_name
+    from .quadrature import table_nodes
+    from .sampling import pdf_normal
+
+    D = ndf_by_name(ndf).D
+    if ndf == "tabulated":
+        m, w = table_nodes(c)
+        d = D(m, ax, ay, c)
+        keep = (d > 0) & (m @ np.asarray(wi, float) > 0)
+        return m[keep], (d * w)[keep]
+    wb = np.broadcast_to(np.asarray(wi, float), (n, 3))
+    m = sample_normal(wb, unit_nodes(n), ndf=ndf, ax=ax, ay=ay, c=c)
+    p = pdf_normal(wb, m, ndf=ndf, ax=ax, ay=ay, c=c)
+    return m, D(m, ax, ay, c) / (n * np.where(p > 0, p, np.inf))

@@ -19,11 +19,9 @@ import numpy as np
 from .. import scatter
 from ..materials import cos2_eta_i
 from ..runtime import parallel_map
-from .facet import unit_nodes
+from .facet import budget_nodes
 from .facet_polarization import facet_scattered_share
-from .ndf import ndf_by_name
 from .roughness_scales import Micro, Nano
-from .sampling import pdf_normal, sample_normal
 
 __all__ = ['FACET_BUDGET_NODES', 'FACET_BUDGET_NODES_FIELD', 'facet_budget']
 
@@ -45,7 +43,7 @@ def facet_budget(wi, w, micro: Micro, nano: Nano, F, dm, material, polarization)
     at the wavelengths *w* (nm): the facets' scattered light (F (1 − A) per facet on a conductor, the lobe's own
     absolute albedo on a dielectric) and their reflectance F, averaged over the visible normals of *micro*'s NDF
     (:data:`FACET_BUDGET_NODES` Sobol points through its sampler for ω_i, :data:`FACET_BUDGET_NODES_FIELD` for a
-    height field). *F* (cos, λ) → reflectance, or an object with ``at(wi, wo, λ)``; *dm* the diffraction model.
+    height field; a measured slope table's own bins: :func:`waveoptics.brdf.facet.budget_nodes`). *F* (cos, λ) → reflectance, or an object with ``at(wi, wo, λ)``; *dm* the diffraction model.
 
     References
     ----------
@@ -55,20 +53,19 @@ def facet_budget(wi, w, micro: Micro, nano: Nano, F, dm, material, polarization)
     ndf, ax, c = kw["ndf"], kw["alpha"], kw["ndf_shape"]
     ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
     nu = FACET_BUDGET_NODES if nano.surface is None else FACET_BUDGET_NODES_FIELD
-    m_u = sample_normal(np.broadcast_to(wi, (nu, 3)), unit_nodes(nu), ndf=ndf, ax=ax, ay=ay, c=c)
-    p_u = pdf_normal(np.broadcast_to(wi, (nu, 3)), m_u, ndf=ndf, ax=ax, ay=ay, c=c)
-    d_over_p = ndf_by_name(ndf).D(m_u, ax, ay, c) / np.where(p_u > 0, p_u, np.inf)
-    return _budget_sums(wi, np.asarray(w, dtype=float), m_u, d_over_p, nano, F, dm, material, polarization)
+    m_u, w_u = budget_nodes(wi, nu, ndf=ndf, ax=ax, ay=ay, c=c)
+    return _budget_sums(wi, np.asarray(w, dtype=float), m_u, w_u, nano, F, dm, material, polarization)
 
 
-def _budget_sums(wi, w, m_a, d_over_p, nano: Nano, F, dm, material, polarization):
-    """(scattered, reflected) of :func:`facet_frame_diffraction` (n_λ,) each: the facets' scattered light and
-    reflectance averaged over the NDF nodes *m_a* (n, 3), weighted by (ω_i·m) D / p (*d_over_p*: D/p, 0 where p
-    = 0) normalized by their sum. For s or p light each facet takes the mix of its own s and p light
-    (:func:`waveoptics.brdf.facet_scattered_share`), as its F at the mirror direction does."""
+def _budget_sums(wi, w, m_a, w_a, nano: Nano, F, dm, material, polarization):
+    """(scattered, reflected) of :func:`waveoptics.brdf.facet_frame_diffraction` (n_λ,) each: the facets'
+    scattered light and reflectance averaged over the NDF nodes *m_a* (n, 3), weighted by (ω_i·m)⁺ w_a (*w_a*:
+    weights of ∫ · D dω_m, :func:`waveoptics.brdf.facet.budget_nodes`) normalized by their sum. For s or p light
+    each facet takes the mix of its own s and p light (:func:`waveoptics.brdf.facet_scattered_share`), as its F at
+    the mirror direction does."""
     na = m_a.shape[0]
     im_a = m_a @ wi
-    node_w = np.where(im_a > 0, im_a * d_over_p / (wi[2] * na), 0.0)
+    node_w = np.where(im_a > 0, im_a * w_a / wi[2], 0.0)
     mirror = 2 * im_a[:, None] * m_a - wi
     c2_a = cos2_eta_i(wi, m_a)   # each NDF facet's rotation of the macro s/p basis into its own
     scattered, reflected = np.zeros(w.size), np.zeros(w.size)

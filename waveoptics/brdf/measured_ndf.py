@@ -3,7 +3,8 @@
 The slopes (∂h/∂x, ∂h/∂y) of a height field are the slopes x̃ = −m_x/m_z, ỹ = −m_y/m_z of its facet normals, so
 their histogram P22 is the surface's NDF in slope space: D(m) = P22(x̃, ỹ) / cos⁴θ_m [1]_. The table keeps the
 empirical law piecewise constant on square bins (no smoothing, no fitted shape): D integrates to exactly 1,
-sampling draws a bin by its mass and a slope uniformly inside it (so the sampling density is D cos θ_m exactly),
+sampling draws a row by its marginal mass, a bin in it by its conditional mass and a slope uniformly
+inside it (so the sampling density is D cos θ_m exactly),
 and Smith's Λ is the same law's masking integral [1]_ (eq. 72 generalized to any azimuth):
 
     Λ(ω) = E[(q − μ)⁺] / μ,   q = x̃ cos φ + ỹ sin φ (the slope along ω's azimuth),  μ = cot θ,
@@ -23,7 +24,7 @@ import numpy as np
 
 from ..errors import WaveopticsError
 
-__all__ = ['SlopeTable', 'slope_table', 'footprint_ndf', 'D_tabulated', 'Lambda_tabulated']
+__all__ = ['SlopeTable', 'slope_table', 'slope_law_table', 'footprint_ndf', 'D_tabulated', 'Lambda_tabulated']
 
 _MU = np.logspace(-3, 3, 161)
 _PHI = np.linspace(0.0, 2.0 * np.pi, 73)
@@ -110,6 +111,27 @@ def slope_table(hf, bins: int | None = None, weights=None) -> SlopeTable:
     n = int(bins) if bins is not None else int(np.clip(round(n_eff ** (1.0 / 3.0)), 16, 128))
     L = 1.0001 * max(float(np.max(np.abs(sx))), float(np.max(np.abs(sy))), 1e-12)
     H, _, _ = np.histogram2d(sy, sx, bins=n, range=[[-L, L], [-L, L]], weights=ws)
+    return slope_law_table(H, L, {"samples": list(hf.shape[::-1]), "slopes": int(sx.size),
+                                  "effective_slopes": float(n_eff), "bins": n, "source": hf.meta.get("source"),
+                                  "weighted": weights is not None})
+
+
+def slope_law_table(mass, L: float, source: dict | None = None) -> SlopeTable:
+    """The :class:`SlopeTable` of a slope law given by its mass per bin: *mass* (n, n) ≥ 0 (rows ỹ, columns x̃;
+    any scale, normalized here) on the square bins of [−L, L]², and its Λ table (module docstring). The table of
+    a height field (:func:`slope_table`) is its slope histogram; an analytic law's is its integral over each bin
+    (a Gaussian's: products of differences of erf).
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, eq. (72) (Λ from the slope distribution).
+    """
+    H = np.asarray(mass, dtype=float)
+    if H.ndim != 2 or H.shape[0] != H.shape[1] or not (np.all(np.isfinite(H)) and np.all(H >= 0) and H.sum() > 0):
+        raise WaveopticsError("a slope law's bin masses must be a square array, finite, >= 0 and not all 0")
+    if not (np.isfinite(L) and L > 0):
+        raise WaveopticsError(f"the slope table's half-width L={L!r} must be finite and > 0")
+    n = H.shape[0]
     step = 2 * L / n
     P = H / (H.sum() * step * step)
     # Λ table: 3 × 3 points per bin carry the bin's mass
@@ -122,13 +144,15 @@ def slope_table(hf, bins: int | None = None, weights=None) -> SlopeTable:
     keep = W > 0
     xs, ys, ws = X[keep], Y[keep], W[keep]
     lam = np.empty((_PHI.size, _MU.size))
-    for k, phi in enumerate(_PHI):
+    for k, phi in enumerate(_PHI):   # E[(q − μ)⁺] = Σ_{q > μ} w q − μ Σ_{q > μ} w, by sorted q and tail sums
         q = xs * np.cos(phi) + ys * np.sin(phi)
-        lam[k] = np.sum(ws[None, :] * np.maximum(q[None, :] - _MU[:, None], 0.0), axis=1) / _MU
-    return SlopeTable(L=L, P=P, lam=lam, source={"samples": list(hf.shape[::-1]), "slopes": int(sx.size),
-                                                  "effective_slopes": float(n_eff), "bins": n,
-                                                  "source": hf.meta.get("source"),
-                                                  "weighted": weights is not None})
+        order = np.argsort(q)
+        qs, wq = q[order], ws[order]
+        tail_w = np.concatenate([np.cumsum(wq[::-1])[::-1], [0.0]])
+        tail_wq = np.concatenate([np.cumsum((wq * qs)[::-1])[::-1], [0.0]])
+        i = np.searchsorted(qs, _MU, side="right")
+        lam[k] = np.maximum(tail_wq[i] - _MU * tail_w[i], 0.0) / _MU
+    return SlopeTable(L=float(L), P=P, lam=lam, source=dict(source or {"bins": n}))
 
 
 def footprint_ndf(field, fp, bins: int | None = None) -> SlopeTable:
@@ -180,18 +204,39 @@ def Lambda_tabulated(w, ax, ay=None, c=None):
 
 
 def sample_dcos_tabulated(wi, ax, ay, c, u):
-    """A normal with density D(m) cos θ_m: a bin by its mass, then a slope uniformly in it (u₁ picks the bin and
-    is reused, rescaled, for x̃; u₂ for ỹ)."""
-    mass = (c.P * c.step ** 2).ravel()
-    cdf = np.cumsum(mass)
-    cdf /= cdf[-1]
+    """A normal with density D(m) cos θ_m of the table *c*: u₁ draws the row (ỹ) by the marginal mass and ỹ
+    uniformly in it, u₂ the bin in that row by its conditional mass and x̃ uniformly in it (the piecewise-constant
+    2-D distribution of Pharr et al., marginal then conditional).
+
+    Each uniform is mapped monotonically onto one slope axis, so a stratified point set (the Sobol nodes of the
+    facet quadratures, :func:`waveoptics.brdf.facet.unit_nodes`) stays stratified in slope space. Drawing the bin in
+    raster order from u₁ alone, as before, laid 64 nodes in bands of rows with x̃ set by u₁'s remainder: on a
+    measured table (Gaussian surface, 64² bins, α ≈ 0.066) their mean of (ω_i·m)⁺ D G1 / (p cos θ_i), 1 by
+    Smith's relation, was 0.9941 / 0.9805 / 0.9329 at θ_i = 60 / 80 / 88° (now 0.9994 / 0.9980 / 0.9884), and the
+    facet-frame lobe of :func:`waveoptics.brdf.facet_frame_diffraction` (64 + 16 normals, Au, 550 nm) 0.7-1.3 %
+    below its value with 1024 + 256 normals at θ_i 0-60° (now 0.3-0.5 % above).
+
+    References
+    ----------
+    .. [1] M. Pharr, W. Jakob, G. Humphreys, *Physically Based Rendering*, 3rd ed., §13.6.7 (sampling 2-D
+       piecewise-constant distributions: the marginal density of one variable, then the conditional of the other).
+    """
+    mass = c.P * c.step ** 2                                   # rows = ỹ bins, columns = x̃ bins
+    row = mass.sum(axis=1)
+    row_cdf = np.cumsum(row) / row.sum()
+    # the conditional CDFs of all rows in one increasing array: row j's entries run from j (excluded) to j + 1
+    cond = np.cumsum(mass, axis=1) / np.where(row > 0, row, 1.0)[:, None]
+    cond = np.where(row[:, None] > 0, cond, 1.0) + np.arange(c.n)[:, None]
     u0 = np.clip(u[..., 0], 0.0, np.nextafter(1.0, 0.0))
-    k = np.searchsorted(cdf, u0, side="right")
-    k = np.clip(k, 0, cdf.size - 1)
-    lo = np.where(k > 0, cdf[np.maximum(k - 1, 0)], 0.0)
-    frac = np.clip((u0 - lo) / np.maximum(cdf[k] - lo, 1e-300), 0.0, 1.0)
-    j, i = np.divmod(k, c.n)
-    sx = -c.L + (i + frac) * c.step
-    sy = -c.L + (j + u[..., 1]) * c.step
+    u1 = np.clip(u[..., 1], 0.0, 1.0 - 2.0 ** -40)   # j + u₁ < j + 1 in floating point for every row j < 2¹²
+    j = np.minimum(np.searchsorted(row_cdf, u0, side="right"), c.n - 1)
+    lo = np.where(j > 0, row_cdf[np.maximum(j - 1, 0)], 0.0)
+    fy = np.clip((u0 - lo) / np.maximum(row_cdf[j] - lo, 1e-300), 0.0, 1.0)
+    flat = cond.ravel()
+    k = np.minimum(np.searchsorted(flat, j + u1, side="right"), flat.size - 1)
+    lo = np.where(k % c.n > 0, flat[np.maximum(k - 1, 0)] - j, 0.0)
+    fx = np.clip((u1 - lo) / np.maximum(flat[k] - j - lo, 1e-300), 0.0, 1.0)
+    sx = -c.L + (k % c.n + fx) * c.step
+    sy = -c.L + (j + fy) * c.step
     m = np.stack([-sx, -sy, np.ones_like(sx)], axis=-1)
     return m / np.linalg.norm(m, axis=-1, keepdims=True)

@@ -32,7 +32,7 @@ import numpy as np
 
 from .microfacet import specular
 from .smith import gl01
-from .quadrature import directional_albedo
+from .quadrature import directional_albedo, slope_table_of
 
 __all__ = ['MS_NODES', 'AlbedoTable', 'albedo_table', 'f_ms', 'F_ms']
 
@@ -62,7 +62,7 @@ def albedo_table(ndf: str, alpha: float, shadowing: str, ndf_shape: float | None
         wi = np.array([np.sqrt(max(1.0 - mu * mu, 0.0)), 0.0, mu])
         E[i] = float(directional_albedo(
             lambda a, b: specular(a, b, alpha=alpha, ndf=ndf, shadowing=shadowing, fresnel="one", ndf_shape=ndf_shape),
-            wi, alpha=alpha))
+            wi, alpha=alpha, table=slope_table_of(ndf, ndf_shape)))
     # guard: a single-scattering albedo cannot exceed 1, but the quadrature's error can put it up to 2.3e-4 above
     # (measured over the four NDFs, α from 1e-4 to 2, all 64 nodes); above 1 the lobe 1 − E would turn negative
     E = np.minimum(E, 1.0)

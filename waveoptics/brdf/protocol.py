@@ -40,7 +40,7 @@ from .fresnel_terms import FRESNELS
 from .microfacet import specular_geometry, specular_term
 from .directions import as_dirs
 from .ndf import ALPHA_MAX, check_alpha, ndf_by_name
-from .quadrature import directional_albedo
+from .quadrature import directional_albedo, slope_table_of
 from .sampling import pdf_reflected, sample_reflected
 from .shadowing import shadowing_by_name
 from .roughness_scales import Micro
@@ -163,12 +163,15 @@ class BRDF:
         (:func:`waveoptics.brdf.directional_albedo`, nodes placed by each term's width)."""
         wi_f, lam_f, shape = broadcast_incidence(wi, wavelength_nm)
         out = np.zeros(lam_f.size)
+        micro = getattr(self, "micro", None)   # a slope table's nodes follow its bins
+        table = None if micro is None else slope_table_of(micro.ndf, micro.ndf_shape)
         for j, (w1, l1) in enumerate(zip(wi_f, lam_f)):
             if w1[2] <= 0:
                 continue
             for f, alpha, alpha_y in self._albedo_parts(float(l1)):
                 out[j] += float(directional_albedo(
-                    lambda a, b, f=f: f(np.broadcast_to(a, b.shape), b), w1, alpha=alpha, alpha_y=alpha_y))
+                    lambda a, b, f=f: f(np.broadcast_to(a, b.shape), b), w1, alpha=alpha, alpha_y=alpha_y,
+                    table=table))
         return out.reshape(shape)
 
     # -- flat arrays (n, 3), (n,): one call of the one-wavelength methods per distinct wavelength ----------------

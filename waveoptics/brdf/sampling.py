@@ -250,7 +250,7 @@ NORMAL_SAMPLERS: dict[str, NormalSampler] = {
     "epd": NormalSampler(sample_dcos_epd, pdf_dcos("epd"), False, "Holzschuch & Pacanowski 2017 (gamma slopes)"),
     "sgd": NormalSampler(sample_dcos_sgd, pdf_dcos("sgd"), False, "Bagher et al. 2012 (incomplete gamma inverted)"),
     "tabulated": NormalSampler(sample_dcos_tabulated, pdf_dcos("tabulated"), False,
-                               "a bin by its mass, a slope uniformly in it"),
+                               "marginal row, conditional bin, a slope uniformly in it (Pharr et al.)"),
 }
 
 

@@ -446,9 +446,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     scattered : ndarray (n_λ,)
         The light the facets' lobes scatter, F(θ_m) (1 − A(θ_m)) per facet on a conductor and the lobe's own
         absolute albedo on a dielectric (:meth:`waveoptics.brdf.Nano.scattered_share`), averaged over the facets the light
-        sees (:data:`waveoptics.brdf.FACET_BUDGET_NODES` normals of the NDF, weights D (ω_i·m) G1 / p, normalized by their sum,
-        which is 1 in expectation): the diffracted part's albedo falls short of it by the light masked on the way
-        out or sent below the macro horizon.
+        sees (:func:`waveoptics.brdf.facet_budget`: :data:`waveoptics.brdf.FACET_BUDGET_NODES` normals of the NDF,
+        weights D (ω_i·m) G1 / p, normalized by their sum, which is 1 in expectation; a slope table's bins), the
+        diffracted part's albedo falls short of it by the light masked on the way out or sent below the macro
+        horizon.
     reflected : ndarray (n_λ,)
         F(θ_m) averaged the same way: the light the facets reflect, coherent and diffracted together, before
         masking on the way out.
