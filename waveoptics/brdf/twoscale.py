@@ -235,10 +235,14 @@ def diffracted_lobe(route, wi, w, mat, micro, nano, grid, F, dm, polarization, r
         diffraction = np.where(inside, diffraction, 0.0)
         # the light the facets scatter that is masked on its way out or leaves below the macro horizon
         beyond = np.maximum(scattered - integrate(diffraction, grid), 0.0)
-        # guard: neither more than the facets scatter nor, with the coherent part, more than they reflect (on a
-        # dielectric: more than they receive, the scattered light also drawing on the transmitted beam)
-        budget = np.minimum(scattered, reflected - integrate(coherent, grid) if scatter.is_conductor(mat)
-                            else integrate(lost, grid))
+        # guard: not more than the facets scatter (on a dielectric neither more than they receive and do not
+        # reflect coherently, the scattered light also drawing on the transmitted beam). A conductor's facets
+        # reflect F and scatter F (1 − A) of it, so the reflected light less the coherent part's (masked on its way
+        # out) is never below what they scatter: that bound, taken with the coherent lobe's grid sum, only ever
+        # acted through the grid's error in the coherent lobe (Au, Beckmann α 0.066, Gaussian σ 8 nm ℓ 1 µm,
+        # 550 nm, 70° on 32² cells: its cell centres held 0.80615 against 0.80469 of the cells' averages, and 41 %
+        # of the diffracted light was removed for it); *reflected* stays for the record (tests/test_facet_budget.py)
+        budget = scattered if scatter.is_conductor(mat) else np.minimum(scattered, integrate(lost, grid))
     else:
         diffraction, beyond = paraxial_diffraction(wi, w, mat, micro, nano, grid, F, dm, polarization, solver=solver,
                                                    device=device, precision=precision)
