@@ -72,3 +72,24 @@ def test_paraxial_route_says_it_once_too():
     assert L.info["facet_integration"] == "paraxial" and warnings.filters == filters
     lines = {str(w.message) for w in caught if str(w.message).startswith("aliasing")}
     assert len(lines) == 1 and "lambda/4 = 112.5 nm" in lines.pop()
+
+
+@pytest.mark.parametrize("field, route", [("isotropic", "frame"), ("grating", "paraxial")])
+def test_rayleigh_rice_says_it_too(field, route):
+    """Under Rayleigh-Rice the lobe is the field's periodogram's, whose samples coarser than λ/4 fold the band as
+    the Kirchhoff sum aliases: the same one line on both routes (it said nothing), none at λ/4."""
+    coarse = {"isotropic": _field(500.0), "grating": surfaces.sinusoid(20e-9, 2e-6, 64 * 250e-9, 64)}[field]
+    assert 500.0 > LAM / 4 and 250.0 > LAM / 4
+
+    def lines(hf):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            L = brdf.evaluate(np.array([0.5, 0.0, np.sqrt(0.75)]), [LAM], "aluminium", Micro(alpha=0.1),
+                              Nano(surface=hf), GRID, diffraction="rayleigh-rice")
+        assert L.info["facet_integration"] == route
+        return {str(w.message) for w in caught if str(w.message).startswith("aliasing")}
+
+    got = lines(coarse)
+    assert len(got) == 1 and f"lambda/4 = {LAM / 4:.4g} nm" in got.pop()
+    if field == "isotropic":
+        assert not lines(_field(LAM / 4, 64))

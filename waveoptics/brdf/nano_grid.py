@@ -14,7 +14,8 @@ from .. import scatter
 from ..errors import FieldError, WaveopticsError, unknown
 from ..scatter.grid import DirectionGrid, integrate
 from ..units import check_wavelengths
-from .field_lobe import field_cell_averages, field_cell_split, field_cells_resolve, field_scattered_lobe
+from .field_lobe import (field_cell_averages, field_cell_split, field_cells_resolve, field_scattered_lobe,
+                         lobe_sampling_warnings)
 from .roughness_scales import SERIES_MIN_CAPTURED, Nano
 from .twoscale_grid import fresnel_at_mirror, mirror_cell
 
@@ -48,6 +49,9 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
     dm = scatter.get_model(diffraction, perturbative=True)
     if dm.perturbative:   # Rayleigh-Rice: the PSD's first-order lobe with its own polarization factor Q (no F)
         psd = nano.model if nano.model is not None else nano.periodogram()
+        if nano.surface is not None:   # the periodogram of samples coarser than λ/4 folds the band (as Kirchhoff's)
+            for msg in lobe_sampling_warnings(scatter.samples(nano.surface), wi, grid, w):
+                scatter.solvers.warn_or_collect(msg)
         pol = getattr(F, "polarization", "unpolarized")
         out = np.stack([np.where(grid.inside, scatter.rayleigh_rice_lobe(wi[None, None, :], wo, lam, psd, material,
                                                                          pol), 0.0) for lam in w])

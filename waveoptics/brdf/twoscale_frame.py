@@ -21,7 +21,7 @@ from .facet import FACET_NODE_SPLIT, FACET_REFERENCE_NM, half_vector_nodes, ndf_
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_energy import facet_budget
 from .field_lobe import (field_anisotropy, field_cell_split, field_first_order_over_fresnel,
-                         field_proposal_model, kirchhoff_scattered_lobe)
+                         field_proposal_model, kirchhoff_scattered_lobe, lobe_sampling_warnings)
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
@@ -249,6 +249,9 @@ def _field_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     wo = fine.directions()
     inside = fine.inside
     if dm.perturbative:
+        # the periodogram of samples coarser than λ/4 folds the band, as the Kirchhoff sum aliases: the same line
+        for msg in lobe_sampling_warnings(scatter.samples(nano.surface), wi, fine, w):
+            scatter.solvers.warn_or_collect(msg)
         f = np.stack([np.where(inside, scatter.rayleigh_rice_lobe(wi[None, None, :], wo, lam, nano.periodogram(),
                                                                   material, polarization), 0.0) for lam in w])
         first = None
