@@ -56,7 +56,8 @@ from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDI
 from .chi2 import (Chi2Result, chi2_test)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
 from .incidence_quadrature import (INCIDENCE_NODES, INCIDENCE_ALPHA_MIN, incidence_panels, incidence_normal_quadrature)
-from .facet_interface import (BareInterface, CoatedInterface, FACET_INTERFACES, facet_interface_of, as_interface)
+from .facet_interface import (BareInterface, CoatedInterface, FACET_INTERFACES, facet_interface_of, bulk_medium,
+                              as_interface)
 from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, pack_third_uniform, refract, half_vector_refraction,
     albedo_single, DielectricTables, dielectric_tables, albedo_multiple, RoughDielectricBSDF)
 from .mu_pieces import (critical_cosine, albedo_cuts, table_pieces, split_pieces, piece_variable, piece_cosine, read_pieces)

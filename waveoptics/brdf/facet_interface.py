@@ -33,7 +33,7 @@ import numpy as np
 from ..materials import fresnel as _fresnel
 from ..materials import stack as _stack
 
-__all__ = ['BareInterface', 'CoatedInterface', 'FACET_INTERFACES', 'facet_interface_of', 'as_interface']
+__all__ = ['bulk_medium', 'BareInterface', 'CoatedInterface', 'FACET_INTERFACES', 'facet_interface_of', 'as_interface']
 
 
 @dataclass(frozen=True)
@@ -111,6 +111,14 @@ def facet_interface_of(material, wavelength_nm: float):
     """The facet interface (:class:`BareInterface` or :class:`CoatedInterface`) of *material* at *wavelength_nm*
     (nm); its ``eta`` is Re n of the (substrate) dielectric."""
     return FACET_INTERFACES[bool(material.has_index)](material, float(wavelength_nm))
+
+
+def bulk_medium(material):
+    """The material whose index the light has inside the glass: *material* itself (one index), or a thin-film
+    stack's substrate (films thinner than the coherence length change what a facet reflects and transmits, not the
+    medium the transmitted light travels in: its direction obeys Snell's law between air and the substrate; Born &
+    Wolf, *Principles of Optics*, 7th ed., §1.6.1)."""
+    return material if material.has_index else material.substrate
 
 
 def as_interface(eta_or_interface):

@@ -91,8 +91,16 @@ def glass_reference(mi, model, params: dict) -> tuple[dict, list[str]]:
         notes.append(f"Mitsuba's roughdielectric has no {ndf} NDF; the reference uses ggx with the same alpha")
     rough = {"alpha": float(params["alpha"])} if params["alpha_y"] is None else {
         "alpha_u": float(params["alpha"]), "alpha_v": float(params["alpha_y"])}
-    n550 = float(np.real(model.base.material.eta(np.array([550.0]))[0]))
+    from ..brdf import bulk_medium
+
+    mat = model.base.material
+    glass = bulk_medium(mat)   # roughdielectric takes one interface: a stack's bare substrate
+    coated = glass is not mat
+    n550 = float(np.real(glass.eta(np.array([550.0]))[0]))
     notes.append(f"roughdielectric: index {n550:.4g} (550 nm) at every wavelength, separable Smith masking")
+    if coated:
+        notes.append(f"roughdielectric takes one interface: the reference is the bare substrate {glass.name}, "
+                     f"without the films of {mat.name} (the difference shown is the coating's and the model's)")
     if model.base.multiple_scattering:
         notes.append("the wave-optics glass has the multiple-scattering compensation; roughdielectric does not")
     if getattr(model.base, "psd", None) is not None:

@@ -176,7 +176,9 @@ def glass_pdf(model, wi, wo, lam0, reflection: bool = True, transmission: bool =
 
 def _index(model, lam):
     """Real index of the dielectric at wavelengths *lam* (n,) nm."""
-    return np.real(np.asarray(model.base.material.eta(np.asarray(lam, dtype=float)), dtype=complex))
+    from ..brdf import bulk_medium
+
+    return np.real(np.asarray(bulk_medium(model.base.material).eta(np.asarray(lam, dtype=float)), dtype=complex))
 
 
 def glass_sample(model, wi, u3, u, lam, radiance: bool, reflection: bool = True, transmission: bool = True):
