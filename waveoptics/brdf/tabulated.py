@@ -22,7 +22,11 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`) and read at each node's
   mirror point plus the offset Δ = (u_o, v_o) − (mirror point of ω_i) in direction cosines, blended in θ_i and
   φ_i (never rotated: a grating's orders stay where the grating puts them, and they shift in direction cosines,
-  the Harvey-Shack picture, docs/physics.md §11).
+  the Harvey-Shack picture, docs/physics.md §11). An anisotropic micro NDF with PSD statistics has rim tables at
+  each light azimuth node, held in the light's frame and read turned with the light (at the nodes within 1.4 % of
+  the facet-frame sum at 80-88°, where the shifted direction-cosine cells read 2.0-2.4x it; between nodes 90°
+  apart the forward lobe of α 0.15 × 0.4 at 85° changes 20x over 30° of light azimuth and the blend reads 7.2x:
+  tests/test_anisotropic_rim.py).
 
 Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes up to θ_o 65° (beyond, to the
 rim tables' interpolation: within 0.6 % to 80°, 1 % to 85°); between 10° nodes the
@@ -114,8 +118,9 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         tabulated lobes (default: :func:`waveoptics.brdf.evaluate` with the fields above).
     rim : bool
         Build rim tables (:mod:`waveoptics.brdf.tabulated_rim`: the facet-frame sum near the horizon on a grid in
-        (cos θ_o, φ_o), read beyond θ_o 65-69°) where the lobes come from the facet-frame route at one light
-        azimuth (an isotropic table of PSD statistics or an isotropic height field).
+        (cos θ_o, φ_o), read beyond θ_o 65-69°) where the lobes come from the facet-frame route: at one light
+        azimuth (an isotropic table of PSD statistics or an isotropic height field) or at each azimuth node of an
+        anisotropic micro NDF with PSD statistics.
     table_lobes, table_grid, table_phis_deg : optional
         Lobes computed elsewhere (n_φ, n_θ, n_λ, n_v, n_u) in 1/sr on *table_grid*, at the light azimuths
         *table_phis_deg* (evenly spaced, or one azimuth for an isotropic table): nothing is computed
@@ -166,9 +171,12 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                                  f"{len(self.thetas_deg)} angles and {len(self.wavelengths_nm)} wavelengths",
                                  "table_lobes")
             rim = None if self.table_rim is None else np.asarray(self.table_rim, dtype=float)
-            if rim is not None and (rim.ndim != 4 or rim.shape[:2] != diff.shape[1:3] or phis.size != 1):
-                raise FieldError(f"table_rim of shape {rim.shape} does not match {len(self.thetas_deg)} angles and "
-                                 f"{len(self.wavelengths_nm)} wavelengths of one azimuth", "table_rim")
+            if rim is not None and rim.ndim == 4:   # one light azimuth
+                rim = rim[None]
+            if rim is not None and (rim.ndim != 5 or rim.shape[:3] != diff.shape[:3]):
+                raise FieldError(f"table_rim of shape {rim.shape} does not match {phis.size} azimuths, "
+                                 f"{len(self.thetas_deg)} angles and {len(self.wavelengths_nm)} wavelengths",
+                                 "table_rim")
             self._table.update(grid=self.table_grid, thetas=np.radians(np.asarray(self.thetas_deg, dtype=float)),
                                phis=phis, diffraction=diff, rim=rim,
                                energy_scale=np.ones((1, diff.shape[2])))
@@ -195,8 +203,8 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                     diff[p, t] = L.diffraction
                     scale.append(L.info["diffraction_energy_scale"])
                     if r is not None:
-                        rim = np.zeros((thetas.size,) + r.shape) if rim is None else rim
-                        rim[t] = r
+                        rim = np.zeros((n_phi, thetas.size) + r.shape) if rim is None else rim
+                        rim[p, t] = r
                 if self.progress is not None:
                     self.progress(1)
         if warm is not None:
@@ -217,8 +225,11 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     def _rim_at(self, wi, L, n_phi):
         """The rim table (n_λ, n_cos, n_φ) of the incidence node *wi* (:func:`waveoptics.brdf.tabulated_rim.
         rim_lobes`, made with *L*'s facet tables and energy-guard factor), or None where no rim is built: not
-        asked, lobes from ``lobes_at``, several azimuth nodes or a lobe by the paraxial route."""
-        if (not self.rim or self.lobes_at is not None or n_phi != 1 or not self.isotropic
+        asked, lobes from ``lobes_at``, a height field at several azimuth nodes (its tables are shifted, not
+        turned) or a lobe by the paraxial route. An anisotropic micro NDF with PSD statistics has one per light
+        azimuth node: without them its grid read at exits 85-88° was 2.4-9x the pointwise form
+        (tests/test_tabulated_rim.py)."""
+        if (not self.rim or self.lobes_at is not None or (n_phi != 1 and self.nano.model is None)
                 or L.info["facet_integration"] != "frame"):
             return None
         return rim_lobes(wi, self.wavelengths_nm, self.material, self.micro, self.nano, L.grid,
@@ -286,8 +297,10 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
 
     @property
     def rim_table(self) -> np.ndarray | None:
-        """The rim tables (n_θ, n_λ, n_cos, n_φ) in 1/sr (:mod:`waveoptics.brdf.tabulated_rim`), or None."""
-        return self._table.get("rim")
+        """The rim tables (n_θ, n_λ, n_cos, n_φ) in 1/sr (:mod:`waveoptics.brdf.tabulated_rim`) of a table at one
+        light azimuth, (n_φ nodes, n_θ, n_λ, n_cos, n_φ) of one at several, or None."""
+        rim = self._table.get("rim")
+        return rim[0] if rim is not None and rim.shape[0] == 1 else rim
 
     def _wavelength_index(self, lam):
         w = np.asarray(self.wavelengths_nm)
@@ -362,25 +375,36 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                 den += wt * inside
         den = den[:, None]
         out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
-        if rotate and self._table.get("rim") is not None:   # towards the horizon: the rim tables
-            out = self._with_rim(out, a, b, t, j, wo_r)
+        if self._table.get("rim") is not None:   # towards the horizon: the rim tables, in the light's frame
+            wo_l = wo_r if rotate else _rotate(wo, np.arctan2(wi[:, 1], wi[:, 0]))
+            out = self._with_rim(out, a, t, j, wo_l, phi_nodes)
         return np.where(((wi[:, 2] > 0) & (wo[:, 2] > 0))[:, None], out, 0.0)
 
-    def _with_rim(self, val, a, b, t, j, wo):
+    def _with_rim(self, val, a, t, j, wo, phi_nodes):
         """*val* (n, n_j), the main tables' read, blended by :func:`waveoptics.brdf.tabulated_rim.rim_weight` of θ_o
         with the rim tables of the incidence nodes around θ_i (a, b and the next two outwards) read at *wo* (n, 3)
-        itself (in the table's frame) and interpolated at the fraction t of the interval a-b by the monotone cubic
+        itself (in the light's frame: azimuths from the light's) and interpolated at the fraction t of the
+        interval a-b by the monotone cubic
         of :func:`waveoptics.brdf.tabulated_rim.rim_across_incidence` (linear in θ_i it read the lobe up to 4 %
         high at θ_o 85° forward, where it rises steeply towards the exit's mirror angle). Not turned as the main tables are read: near the horizon the lobe
         changes fastest with θ_o, and a turn by θ_i − θ_k reads it up to half a node spacing higher and lower,
         whose mean lies below the lobe where it is concave (Beckmann α 0.05, exit 72-80°, incidence midway
-        between nodes: turned 0.975-1.031 of the facet-frame sum, read at ω_o 0.991-1.009)."""
+        between nodes: turned 0.975-1.031 of the facet-frame sum, read at ω_o 0.991-1.009). Several light azimuth
+        nodes (an anisotropic micro NDF, *phi_nodes* of :meth:`_frame`): each node's rim tables, held in its light's
+        frame, read there and blended with the nodes' weights (turned with the light, as the isotropic table is: the
+        forward peak stays forward; the NDF's axes turn by the light's offset from the node)."""
         W = rim_weight(wo[:, 2])
         sel = W > 0
         if not sel.any():
             return val
         x, y, z = wo[sel, 0], wo[sel, 1], wo[sel, 2]
-        r = rim_across_incidence(self._table["rim"], self._table["thetas"], a[sel], t[sel], j, x, y, z)
+        rim, thetas = self._table["rim"], self._table["thetas"]
+        r = np.zeros((x.size, np.size(j)))
+        for p_idx, w_p in phi_nodes:
+            pp, ww = np.broadcast_to(p_idx, W.shape)[sel], w_p[sel]
+            for p in np.unique(pp[ww > 0]):
+                m = (pp == p) & (ww > 0)
+                r[m] += ww[m, None] * rim_across_incidence(rim[p], thetas, a[sel][m], t[sel][m], j, x[m], y[m], z[m])
         out = val.copy()
         out[sel] = (1 - W[sel])[:, None] * val[sel] + W[sel][:, None] * r
         return out

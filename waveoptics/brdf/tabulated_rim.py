@@ -81,13 +81,17 @@ def rim_directions(cells=RIM_CELLS) -> np.ndarray:
 
 def rim_lobes(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid, *, diffraction="kirchhoff",
               energy_scale=None, device=None, precision="float32", cells=RIM_CELLS) -> np.ndarray:
-    """The diffracted part (n_λ, n_cos, n_phi) in 1/sr at the rim nodes (:func:`rim_directions`) for light from
-    *wi* (azimuth 0): :func:`waveoptics.brdf.facet_frame_diffraction` with the facet tables of the lobes on *grid*
-    (the hemisphere grid of the main table, as :func:`waveoptics.brdf.evaluate` takes them) and the unpolarized F
-    of *material*, times *energy_scale* (n_λ,) (the energy guard's factor of that node's lobes, 1 where it did not
-    act)."""
+    """The diffracted part (n_λ, n_cos, n_phi) in 1/sr at the rim nodes (:func:`rim_directions`, their azimuths
+    counted from the light's: turned by *wi*'s azimuth) for light from *wi*: :func:`waveoptics.brdf.
+    facet_frame_diffraction` with the facet tables of the lobes on *grid* (the hemisphere grid of the main table,
+    as :func:`waveoptics.brdf.evaluate` takes them) and the unpolarized F of *material*, times *energy_scale*
+    (n_λ,) (the energy guard's factor of that node's lobes, 1 where it did not act). An isotropic table has its
+    light at azimuth 0; an anisotropic micro NDF's table one rim table per light azimuth node."""
     mat = get_material(material)
     dirs = rim_directions(cells)
+    phi = float(np.arctan2(wi[1], wi[0]))
+    c, s = np.cos(phi), np.sin(phi)
+    dirs = np.stack([c * dirs[..., 0] - s * dirs[..., 1], s * dirs[..., 0] + c * dirs[..., 1], dirs[..., 2]], -1)
     pts = DirectionPoints(dirs.reshape(-1, 3))
     d, _, _ = facet_frame_diffraction(np.asarray(wi, dtype=float), wavelengths_nm, mat, micro, nano, pts,
                                       lambda c, lam: mat.F(c, lam), diffraction=diffraction, table_grid=grid,

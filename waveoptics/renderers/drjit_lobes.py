@@ -43,7 +43,7 @@ class DiffractedLobes:
         self.phis = [float(x) for x in tab["phis"]]
         self.rotate = self.P == 1 and base.isotropic
         self.lookup = self._upload(base._lookup_table())
-        rim = tab.get("rim") if self.rotate else None
+        rim = tab.get("rim")   # (P, K, J, n_cos, n_phi): one set per light azimuth node, in its light's frame
         self.rim = None if rim is None else self._upload(np.asarray(rim, dtype=float))
         self.rim_shape = None if rim is None else tuple(int(n) for n in rim.shape[-2:])
         self.lobe = self._upload(diff)
@@ -63,6 +63,8 @@ class DiffractedLobes:
         g.phi_i = dr.atan2(wi.y, wi.x)
         g.rot = (g.phi_i - self.phis[0]) if self.rotate else g.phi_i * 0.0
         g.wo_r, g.wi_r = _rotate(self.mi, dr, wo, g.rot), _rotate(self.mi, dr, wi, g.rot)
+        # the rim tables' frame: azimuths from the light's (library ``_f_diffraction_nodes``)
+        g.wo_l = g.wo_r if self.rotate or self.rim is None else _rotate(self.mi, dr, wo, g.phi_i)
 
     def _theta_bracket(self, theta):
         """(a, b, t) of np.interp(θ, θ_nodes, arange) as in the library's ``_bracket``: Python node indices are
@@ -143,19 +145,22 @@ class DiffractedLobes:
         out = dr.select(den > 0, num / dr.select(den > 0, den, 1.0), 0.0)
         if self.rim is not None:   # towards the horizon the rim tables, read at ω_o itself (library ``_with_rim``)
             c0, c1 = (math.cos(math.radians(x)) for x in RIM_BLEND_DEG)
-            W = dr.clip((c0 - g.wo_r.z) / (c0 - c1), 0.0, 1.0)
-            if self.K == 1:
-                rim = self._rim_lookup(ks[0][0], j, g.wo_r)
-            else:   # the monotone cubic over the incidence nodes a − 1 .. a + 2 (library ``rim_across_incidence``)
-                a, t = brk
-                k4 = [dr.clip(a + s, 0.0, self.K - 1.0) for s in (-1.0, 0.0, 1.0, 2.0)]
-                rim = pchip_between([self._rim_lookup(k, j, g.wo_r) for k in k4],
-                                    [self._gather_list(self.thetas, k) for k in k4], t, dr.select)
+            W = dr.clip((c0 - g.wo_l.z) / (c0 - c1), 0.0, 1.0)
+            rim = W * 0.0
+            for p, w_p in self._phi_nodes(g.phi_i):   # each light azimuth node's, in the light's frame
+                if self.K == 1:
+                    r = self._rim_lookup(p, ks[0][0], j, g.wo_l)
+                else:   # the monotone cubic over the incidence nodes a − 1 .. a + 2 (``rim_across_incidence``)
+                    a, t = brk
+                    k4 = [dr.clip(a + s, 0.0, self.K - 1.0) for s in (-1.0, 0.0, 1.0, 2.0)]
+                    r = pchip_between([self._rim_lookup(p, k, j, g.wo_l) for k in k4],
+                                      [self._gather_list(self.thetas, k) for k in k4], t, dr.select)
+                rim = rim + w_p * r
             out = (1.0 - W) * out + W * rim
         return dr.select(g.up, out, 0.0)
 
-    def _rim_lookup(self, k, j, w):
-        """Bilinear read of θ node k's rim table at wavelength node j at the direction *w* (library
+    def _rim_lookup(self, p, k, j, w):
+        """Bilinear read of φ node p's, θ node k's rim table at wavelength node j at the direction *w* (library
         
         :func:`waveoptics.brdf.tabulated_rim.rim_read`: rows in cos θ_o, columns in φ_o over [−π, π], clamped)."""
         dr = self.dr
@@ -166,7 +171,7 @@ class DiffractedLobes:
         c0 = dr.clip(dr.floor(fc), 0.0, n_cos - 2.0)
         p0 = dr.clip(dr.floor(fp), 0.0, n_phi - 2.0)
         ac, ap = dr.clip(fc - c0, 0.0, 1.0), dr.clip(fp - p0, 0.0, 1.0)
-        node = self.idx(k) * self.J + j
+        node = (self.idx(p) * self.K + self.idx(k)) * self.J + j
         base = node * (n_cos * n_phi) + self.idx(c0) * n_phi + self.idx(p0)
         return ((1.0 - ac) * ((1.0 - ap) * self._gather(self.rim, base) + ap * self._gather(self.rim, base + 1))
                 + ac * ((1.0 - ap) * self._gather(self.rim, base + n_phi)

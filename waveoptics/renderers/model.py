@@ -209,7 +209,7 @@ def table_key(nano_obj, nodes, resolution: int, common: dict) -> dict:
     return {"material": str(common["material"]), "optics": optics, "micro": repr(micro), "nano": nano,
             "diffraction": str(common["diffraction"]), "wavelengths_nm": [float(x) for x in nodes],
             "resolution": int(resolution), "thetas_deg": [float(t) for t in THETA_NODES_DEG],
-            "rim": [RIM_THETA_DEG, list(RIM_BLEND_DEG), list(RIM_CELLS)]}
+            "rim": [RIM_THETA_DEG, list(RIM_BLEND_DEG), list(RIM_CELLS), "every light azimuth node"]}
 
 
 @functools.lru_cache(maxsize=16)

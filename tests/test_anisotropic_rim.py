@@ -1,0 +1,190 @@
+"""Issue 28: an anisotropic micro NDF's tabulated two-scale BRDF towards the horizon (its rim tables, one set per
+light azimuth node) against a Monte-Carlo facet-frame integral written here.
+
+Reference (this file, not the package): Walter et al. 2007's integral over the micro facets, each carrying the nano
+BRDF in its own frame,
+
+    f(i, o) = ∫ |i·m| |o·m| / (|i·n| |o·n|) f_nano(i_m, o_m) G2(i, o, m) D(m) dm,
+
+with this file's anisotropic Beckmann D(m) (Walter et al. 2007 eq. 25 with the slopes' two widths), its sampler of
+D(m) cos θ_m (the slopes are independent Gaussians of variance α_x²/2, α_y²/2), its Smith Λ with the width along
+the direction's azimuth, α(φ)² = α_x² cos²φ + α_y² sin²φ (Heitz 2014, eq. 79), the height-correlated G2, and a
+heavy-tailed proposal about the half-vector for the nano lobe's peak, combined by the balance heuristic (Veach 1997),
+seeded. Only f_nano, the facet's own lobe (:meth:`TwoScaleBRDF.facet_nano_brdf`), comes from the package.
+
+Aluminium, Beckmann α 0.15 × 0.4, Gaussian σ 15 nm, T 1.5 µm, 550 nm, θ_i 30° at the tables' light azimuths 0° and
+90°, exits 80-88°. Before the rim tables (the 64² direction-cosine cells alone) the tabulated form read 2.0-2.4x
+the facet-frame sum at 85-88° forward; now the sum itself, whose quadrature for an anisotropic NDF is the open part
+(the strict xfail below).
+
+References
+----------
+.. [1] B. Walter, S. Marschner, H. Li, K. Torrance, EGSR 2007, eqs. (8), (25), (28).
+.. [2] E. Heitz, JCGT 3(2), 2014, eqs. (79), (99) (anisotropic Smith Λ; height-correlated G2).
+.. [3] E. Veach, PhD thesis, Stanford 1997, §9.2 (balance heuristic).
+"""
+import functools
+
+import numpy as np
+import pytest
+from scipy.special import erfc
+
+from waveoptics import surfaces
+from waveoptics.brdf import Micro, Nano, TabulatedTwoScaleBRDF, TwoScaleBRDF
+
+LAM = 550.0
+AX, AY = 0.15, 0.4
+NANO = Nano(model=surfaces.PSDModel("gaussian", 15e-9, T=1.5e-6))
+MICRO = Micro(alpha=AX, alpha_y=AY, ndf="beckmann")
+#: scale (direction cosines) of the half-vector proposal: about the nano lobe's width λ / (π T)
+SCALE = LAM * 1e-9 / (np.pi * 1.5e-6)
+TOL, K_SE = 0.03, 3.0
+
+
+def _dirs(theta_deg, phi_deg):
+    t, p = np.broadcast_arrays(np.radians(theta_deg), np.radians(phi_deg))
+    return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+
+
+def _d(m):
+    """Anisotropic Beckmann D(m), 1/sr (Walter et al. 2007 eq. 25 with slopes x = −m_x/m_z, y = −m_y/m_z)."""
+    mz = np.clip(m[..., 2], 1e-12, 1.0)
+    x, y = m[..., 0] / mz, m[..., 1] / mz
+    return np.where(m[..., 2] > 0, np.exp(-(x / AX) ** 2 - (y / AY) ** 2) / (np.pi * AX * AY * mz ** 4), 0.0)
+
+
+def _lambda(w):
+    """Smith Λ of directions *w* (..., 3) for the anisotropic Beckmann NDF (Heitz 2014 eq. 79)."""
+    s2 = np.maximum(w[..., 0] ** 2 + w[..., 1] ** 2, 1e-300)
+    alpha = np.sqrt((AX ** 2 * w[..., 0] ** 2 + AY ** 2 * w[..., 1] ** 2) / s2)
+    a = w[..., 2] / (alpha * np.sqrt(s2))
+    return 0.5 * (np.exp(-a * a) / (a * np.sqrt(np.pi)) - erfc(a))
+
+
+def _local(ci, co, cio):
+    si = np.sqrt(np.maximum(1.0 - ci * ci, 0.0))
+    so = np.sqrt(np.maximum(1.0 - co * co, 0.0))
+    x = np.clip(np.where(si > 1e-12, (cio - ci * co) / np.maximum(si, 1e-12), 0.0), -so, so)
+    y = np.sqrt(np.maximum(so * so - x * x, 0.0))
+    return np.stack([si, 0 * si, ci], axis=-1), np.stack([x, y, co], axis=-1)
+
+
+def _tangents(h):
+    a = np.where(np.abs(h[..., :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    t = a - np.sum(a * h, axis=-1, keepdims=True) * h
+    t /= np.linalg.norm(t, axis=-1, keepdims=True)
+    return t, np.cross(h, t)
+
+
+def facet_frame_mc(f_nano, wi, wo, n=64000, seed=33):
+    """(mean, standard error) of the facet-frame integral at the pairs *wi*, *wo* (P, 3), 1/sr: n/2 normals with
+    density D(m) cos θ_m and n/2 about the half-vector (2-D density (1 + r²/s²)^(-3/2) / (2π s²) of the tilt's
+    direction cosines, times m·h in solid angle), balance heuristic."""
+    rng = np.random.default_rng(seed)
+    P, na = wi.shape[0], n // 2
+    h = wi + wo
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    t1, t2 = _tangents(h)
+    sx, sy = rng.normal(size=(2, P, na)) * np.array([AX, AY])[:, None, None] / np.sqrt(2.0)
+    m_a = np.stack([-sx, -sy, np.ones_like(sx)], axis=-1)
+    m_a /= np.linalg.norm(m_a, axis=-1, keepdims=True)
+    r = SCALE * np.sqrt(np.maximum((1.0 - rng.random((P, na))) ** -2 - 1.0, 0.0))
+    pb = 2 * np.pi * rng.random((P, na))
+    x, y = r * np.cos(pb), r * np.sin(pb)
+    ok_b = x * x + y * y < 1.0
+    zb = np.sqrt(np.clip(1.0 - x * x - y * y, 0.0, 1.0))
+    m_b = x[..., None] * t1[:, None] + y[..., None] * t2[:, None] + zb[..., None] * h[:, None]
+    g2 = 1.0 / (1.0 + _lambda(wi) + _lambda(wo))[:, None]
+    terms = []
+    for m, ok in ((m_a, np.ones((P, na), bool)), (m_b, ok_b)):
+        ci, co = np.sum(m * wi[:, None], axis=-1), np.sum(m * wo[:, None], axis=-1)
+        mh = np.sum(m * h[:, None], axis=-1)
+        d = _d(m)
+        rad2 = np.maximum(1.0 - mh * mh, 0.0) / (SCALE * SCALE)
+        pdf = na * d * m[..., 2] + na * np.where(mh > 0, (1 + rad2) ** -1.5 / (2 * np.pi * SCALE ** 2) * mh, 0.0)
+        use = ok & (ci > 0) & (co > 0) & (m[..., 2] > 0) & (pdf > 0)
+        li, lo = _local(ci[use], co[use], np.broadcast_to((wi * wo).sum(-1)[:, None], ci.shape)[use])
+        fn = np.zeros(ci.shape)
+        fn[use] = f_nano(li, lo, LAM)
+        val = ci * co / (wi[:, 2] * wo[:, 2])[:, None] * fn * g2 * d
+        terms.append(np.where(use, val / np.where(pdf > 0, pdf, 1.0), 0.0))
+    return sum(t.sum(axis=1) for t in terms), np.sqrt(sum(na * t.var(axis=1, ddof=1) for t in terms))
+
+
+#: (θ_i, φ_i, θ_o, φ_o) degrees: light at the tables' azimuth nodes 0° and 90°, exits 80-88°, in and out of the plane
+PAIRS = [(30, 0, 85, 180), (30, 0, 88, 180), (30, 0, 85, 150), (30, 90, 88, 270), (30, 90, 80, 240)]
+
+
+@functools.lru_cache(maxsize=None)
+def _reference():
+    wi = _dirs([p[0] for p in PAIRS], [p[1] for p in PAIRS])
+    wo = _dirs([p[2] for p in PAIRS], [p[3] for p in PAIRS])
+    ref, se = facet_frame_mc(TwoScaleBRDF("aluminium", MICRO, nano=NANO).facet_nano_brdf, wi, wo)
+    return wi, wo, ref, se
+
+
+def test_reference_is_walters_brdf_for_a_mirror_like_nano_lobe():
+    """The reference integrator itself with a narrow unit Gaussian nano lobe (width 0.005): Walter's anisotropic
+    microfacet BRDF G2 D(h) / (4 cos θ_i cos θ_o) within 3 % + 3 s.e. at in-plane pairs near the mirror direction
+    (no package code in this check)."""
+    w = 0.005
+
+    def gauss(li, lo, lam):
+        dx, dy = lo[:, 0] + li[:, 0], lo[:, 1] + li[:, 1]
+        return np.exp(-(dx * dx + dy * dy) / (2 * w * w)) / (2 * np.pi * w * w)
+
+    wi, wo = _dirs([30, 30, 60], [0, 90, 45]), _dirs([35, 25, 62], [180, 275, 220])
+    h = wi + wo
+    h /= np.linalg.norm(h, axis=-1, keepdims=True)
+    walter = _d(h) / (4 * wi[:, 2] * wo[:, 2] * (1 + _lambda(wi) + _lambda(wo)))
+    global SCALE
+    keep, SCALE = SCALE, w
+    try:
+        ref, se = facet_frame_mc(gauss, wi, wo, n=16000)
+    finally:
+        SCALE = keep
+    assert np.all(np.abs(walter - ref) <= TOL * ref + K_SE * se), (walter / ref, se / ref)
+
+
+@functools.lru_cache(maxsize=None)
+def _table():
+    return TabulatedTwoScaleBRDF("aluminium", MICRO, nano=NANO, wavelengths_nm=(LAM,), resolution=64,
+                                 thetas_deg=(20.0, 30.0, 40.0))
+
+
+def _tabulated(wi, wo):
+    return np.array([_table().eval_parts(a[None], b[None], LAM)["diffraction"][0] for a, b in zip(wi, wo)])
+
+
+def test_rim_tables_read_the_facet_frame_sum_at_the_light_azimuth_nodes():
+    """64² tables at θ_i 20/30/40° and 4 light azimuths with their rim tables (one set per azimuth node, held in
+    its light's frame), at :data:`PAIRS`: within 3 % of the grid route's facet-frame sum taken at each exit itself
+    (``evaluate``'s per-cell sum on a one-direction list: not the tables' read). Measured 0.99-1.014; without the
+    rim tables 2.0-2.4x at 85-88° forward (the 64² direction-cosine cells alone)."""
+    from waveoptics.brdf import facet_frame_diffraction
+    from waveoptics.brdf.tabulated_rim import DirectionPoints
+    from waveoptics.materials import get_material
+    from waveoptics.scatter.grid import DirectionGrid
+
+    mat = get_material("aluminium")
+    wi, wo, _, _ = _reference()
+    got = _tabulated(wi, wo)
+    sums = np.array([facet_frame_diffraction(a, [LAM], mat, MICRO, NANO, DirectionPoints(b[None]),
+                                             lambda c, lam: mat.F(c, lam), table_grid=DirectionGrid.hemisphere(64))[0]
+                     .ravel()[0] for a, b in zip(wi, wo)])
+    np.testing.assert_allclose(got, sums, rtol=0.03)
+
+
+@pytest.mark.xfail(strict=True, reason="known (issue 28): the facet-frame quadrature of an anisotropic micro NDF "
+                   "(its (128, 256) normals fixed in the surface's frame) is 0.89-1.25 of this reference at exits "
+                   "80-88° (2048 + 2048 normals: 1.00-1.08)")
+def test_tabulated_form_towards_the_horizon_against_the_reference():
+    """At :data:`PAIRS` within 3 % + 3 s.e. of the Monte-Carlo facet-frame integral (64000 samples, s.e.
+    0.7-1.8 %). Measured tabulated / reference 0.894, 0.931, 1.109, 0.996, 1.252; the grid route's sum at each
+    exit 0.893-1.235 (the table reads it); with 512 + 512 normals 0.93-1.12, 2048 + 2048 1.00-1.08. Between the
+    light azimuth nodes (φ_i 45°) the turned nodes' blend adds its own error: the forward lobe at 85° changes 20x
+    over 30° of light azimuth (0.0133 / 0.0048 / 0.0007 at φ_i 30 / 45 / 60°), read 7.2x with 4 nodes, 2.0x with
+    12."""
+    wi, wo, ref, se = _reference()
+    got = _tabulated(wi, wo)
+    assert np.all(np.abs(got - ref) <= TOL * ref + K_SE * se), (got / ref, se / ref)
