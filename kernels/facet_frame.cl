@@ -11,7 +11,7 @@
  * incidence (stack: n_theta x n_v x n_u x n_lam, float32), bilinearly at the two table incidences around theta_m,
  * each at the local exit direction turned about the local y axis by theta_m - theta_k.
  * Switches (build options): WO_NDF, WO_SHADOWING as in microfacet.h; WO_ISO 1 when the NDF nodes turn with
- * the cell's half-vector azimuth (isotropic NDF), 0 when they are fixed in the surface frame (anisotropic);
+ * the cell's half-vector azimuth (isotropic NDF), 0 for an anisotropic NDF (its isotropic law's nodes turned to h there);
  * WO_MIX 1 for s or p light: cos^2 eta_i of the facet's own table and sin^2 eta_i of the other (Priest & Germer).
  * WO_BLEND 1 when stack holds the tangent-plane lobe f_K cos theta_o and stack_other the first-order lobe
  * f_RR / F cos theta_o of the hand-over (waveoptics/scatter/tangent_blend.py): g = W stack + (1 - W) stack_other,
@@ -212,7 +212,8 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
 }
 
 /* out[i * n_lam + l0 + l] = the sum over both node sets at cell i, wavelengths l0 .. l0 + nl - 1 (nl <= WO_NL).
- * m0 (na, 3): NDF nodes at half-vector azimuth 0 (WO_ISO) or in the surface frame; hv_r, hv_pdf (levels,
+ * m0 (na, 3): NDF nodes at half-vector azimuth 0 (WO_ISO; else those of the isotropic law the anisotropic NDF
+ * stretches, turned to h's unstretched azimuth and stretched per cell); hv_r, hv_pdf (levels,
  * n_base): the half-vector nodes' offset radii and their radial density; hv_phi (nb, 2): cos, sin of their
  * azimuths about h; edges (n_bins + 1), density (levels, n_bins): the radial law in direction-cosine units. */
 __kernel void facet_frame_sum(__global const real_t *cell, __global const int *level,
@@ -246,10 +247,20 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
     real_t acc[WO_NL];
     for (int l = 0; l < WO_NL; ++l) acc[l] = R(0.0);
     real_t fna = (real_t)na, fnb = (real_t)nb;
+#if !WO_ISO
+    /* an anisotropic NDF is the stretch of the isotropic law of roughness sqrt(ax ay) by (kx, ky) (Heitz 2014,
+     * sec. 5.3); m0 holds that law's nodes (twin facet.ndf_nodes) */
+    real_t kx = sqrt(ax / ay), ky = sqrt(ay / ax);
+    real_t rpsi = sqrt(cphi * cphi / (kx * kx) + sphi * sphi / (ky * ky));
+    real_t cpsi = cphi / kx / rpsi, spsi = sphi / ky / rpsi;
+#endif
     for (int k = 0; k < na; ++k) {
         real3_t m = (real3_t)(m0[3 * k], m0[3 * k + 1], m0[3 * k + 2]);
 #if WO_ISO
         m = (real3_t)(cphi * m.x - sphi * m.y, sphi * m.x + cphi * m.y, m.z);
+#else
+        /* the isotropic law's node turned in the unstretched slope plane to h's azimuth there, then stretched */
+        m = normalize((real3_t)(kx * (cpsi * m.x - spsi * m.y), ky * (spsi * m.x + cpsi * m.y), m.z));
 #endif
         real_t mh = wo_clamp(dot(h, m), R(0.0), R(1.0));
         /* sin(m, h) from the cross product: no cancellation for m near h */

@@ -23,11 +23,12 @@ import numpy as np
 from scipy.stats import qmc
 
 from .. import scatter
+from .anisotropy import STRETCH_EXPONENT, stretch_factors
 from .directions import dot_last
 from .sampling import sample_normal, sample_normal_dcos
 
 __all__ = ['FACET_NODE_SPLIT', 'FACET_REFERENCE_NM', 'wide_micro_lobe', 'RADIAL_BINS', 'COS_LEVELS', 'unit_nodes', 'NanoRadial', 'facet_basis', 'meridian_basis', 'to_facet',
-           'from_facet', 'ndf_nodes', 'half_vector_nodes', 'half_vector_base', 'quadrature_normals',
+           'from_facet', 'ndf_node_base', 'ndf_nodes', 'half_vector_nodes', 'half_vector_base', 'quadrature_normals',
            'quadrature_density', 'sampler_normals', 'budget_nodes']
 
 #: radial bins of the nano-lobe sampler (geometric in spatial frequency)
@@ -199,14 +200,36 @@ def local_pair(cos_i, cos_o, cos_io):
 
 
 
+def ndf_node_base(n: int, *, ndf, ax, ay, c):
+    """(m0 (n, 3), k_x, k_y): the *n* Sobol normals (:func:`unit_nodes`) with density D(m) cos θ_m of the isotropic
+    law that *ndf* at (α_x, α_y) stretches (roughness ᾱ = √(α_x α_y)), and its slope stretches
+    (:func:`waveoptics.brdf.anisotropy.stretch_factors`; 1, 1 and the NDF itself when α_x = α_y). Shared by
+    :func:`ndf_nodes` and the kernel's host code (``kernels/facet_frame.cl``).
+
+    References
+    ----------
+    .. [1] E. Heitz, JCGT 3(2), 2014, §5.3 (anisotropy by stretching the slopes).
+    """
+    if ay == ax:
+        return sample_normal_dcos(unit_nodes(n), ndf=ndf, ax=ax, ay=ay, c=c), 1.0, 1.0
+    base, kx, ky = stretch_factors(ax, ay, STRETCH_EXPONENT.get(ndf, 1.0))
+    return sample_normal_dcos(unit_nodes(n), ndf=ndf, ax=float(base), ay=float(base), c=c), float(kx), float(ky)
+
+
 def ndf_nodes(n: int, e2, *, ndf, ax, ay, c):
     """The NDF's normals of the facet-frame quadratures (:func:`waveoptics.brdf.facet_frame_diffraction`, the
     diffracted part of :class:`waveoptics.brdf.TwoScaleBRDF`): *n* Sobol points (:func:`unit_nodes`) drawn with
     density D(m) cos θ_m (:func:`waveoptics.brdf.sample_normal_dcos`), which does not depend on ω_i, so ω_i and ω_o
     swapped get the same nodes. For an isotropic NDF (*ax* = *ay*) they are turned about z to each direction pair's
     half-vector azimuth (*e2* (n_pairs, 3) = (−sin φ_h, cos φ_h, 0), :func:`meridian_basis` of h), so that a pair
-    at any azimuth gets the same nodes relative to it (D(m) cos θ_m is unchanged by the turn). Yields, node by
-    node, (3,) normals (anisotropic NDF: fixed in the surface's frame) or (n_pairs, 3). A slope table
+    at any azimuth gets the same nodes relative to it (D(m) cos θ_m is unchanged by the turn). An anisotropic NDF,
+    the stretch of an isotropic one (Heitz 2014 §5.3: slopes (k_x x̃, k_y ỹ) of the isotropic law of roughness
+    ᾱ = √(α_x α_y), :func:`waveoptics.brdf.anisotropy.stretch_factors`), gets the isotropic law's nodes turned in
+    its unstretched slope plane to the azimuth of h's unstretched slopes, atan2(sin φ_h / k_y, cos φ_h / k_x), and
+    stretched: their density is D(m) cos θ_m still, and they depend on h alone (reciprocal). Fixed in the
+    surface's frame they read the anisotropic facet-frame sum at exits 80-88° 0.89-1.25 of a Monte-Carlo facet
+    integral (Beckmann α 0.15 × 0.4, tests/test_anisotropic_rim.py). Yields, node by node, (n_pairs, 3) normals
+    (a slope table: (3,), fixed in the surface's frame). A slope table
     (``tabulated``) is never turned, whatever its α and α_y: its D, constant on square bins of slope space, is not
     unchanged by a turn, and turned nodes would not have the density D(m) cos θ_m the quadrature weights them by.
 
@@ -221,8 +244,8 @@ def ndf_nodes(n: int, e2, *, ndf, ax, ay, c):
     n : int
         Number of normals (a power of two).
     e2 : ndarray (n_pairs, 3)
-        The across-meridian tangent of each pair's half-vector (:func:`meridian_basis`); not used for an
-        anisotropic NDF.
+        The across-meridian tangent of each pair's half-vector (:func:`meridian_basis`); not used for a slope
+        table.
     ndf, ax, ay, c
         The micro NDF's name, roughness along x and y and shape parameter (:func:`waveoptics.brdf.D`).
 
@@ -231,14 +254,18 @@ def ndf_nodes(n: int, e2, *, ndf, ax, ay, c):
     .. [1] B. Walter et al., EGSR 2007, §5.3 (sampling D(m) cos θ_m).
     .. [2] I. M. Sobol', USSR Comput. Math. Math. Phys. 7(4):86-112, 1967.
     """
-    m0 = sample_normal_dcos(unit_nodes(n), ndf=ndf, ax=ax, ay=ay, c=c)
-    if ay != ax or ndf == "tabulated":
-        yield from m0
+    if ndf == "tabulated":
+        yield from sample_normal_dcos(unit_nodes(n), ndf=ndf, ax=ax, ay=ay, c=c)
         return
+    m0, kx, ky = ndf_node_base(n, ndf=ndf, ax=ax, ay=ay, c=c)
     e2 = np.asarray(e2, dtype=float)
     cs, sn = e2[..., 1], -e2[..., 0]
+    if ay != ax:   # turned in the unstretched slope plane, to h's azimuth there (module doc of .anisotropy)
+        r = np.hypot(cs / kx, sn / ky)
+        cs, sn = cs / kx / r, sn / ky / r
     for mx, my, mz in m0:
-        yield np.stack([cs * mx - sn * my, sn * mx + cs * my, np.full(cs.shape, mz)], axis=-1)
+        m = np.stack([kx * (cs * mx - sn * my), ky * (sn * mx + cs * my), np.full(cs.shape, mz)], axis=-1)
+        yield m / np.linalg.norm(m, axis=-1, keepdims=True) if ay != ax else m
 
 
 def half_vector_nodes(rad: NanoRadial, level, n: int, cos_d, antithetic: bool = True):

@@ -23,10 +23,9 @@ import numpy as np
 from ..errors import FieldError, unknown
 from ..runtime import build_options, build_program, get_runtime, opencl_available, program_kernel
 from ..scatter.tangent_blend import TANGENT_PLANE_BLEND_DEG
-from .facet import COS_LEVELS, half_vector_base, unit_nodes
+from .facet import COS_LEVELS, half_vector_base, ndf_node_base
 from .ndf import ndf_by_name
 from .opencl import ndf_shape_parameter
-from .sampling import sample_normal_dcos
 from .shadowing import shadowing_by_name
 
 __all__ = ['FACET_FRAME_BACKENDS', 'kernel_reason', 'facet_frame_backend', 'facet_frame_kernel',
@@ -215,7 +214,7 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
     rt, dt, kern = facet_frame_kernel(micro, mix=stack_other is not None, blend=first is not None,
                                       projected=projected, device=device, precision=precision)
     q = rt.queue
-    m0 = sample_normal_dcos(unit_nodes(na), ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])
+    m0, _, _ = ndf_node_base(na, ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])   # an anisotropic NDF's: unstretched
     n_base, radii, hv_pdf, hv_phi = _half_vector_tables(rad, nb)
     phi = np.arctan2(h[:, 1], h[:, 0])
     cell = np.column_stack([wo, h, np.cos(phi), np.sin(phi), cos_d, Lo])
