@@ -29,6 +29,7 @@ import numpy as np
 import pytest
 from scipy.special import erfc
 
+from facet_frame_helpers import local_pair as _local, tangents as _tangents
 from waveoptics import surfaces
 from waveoptics.brdf import Micro, Nano, TabulatedTwoScaleBRDF, TwoScaleBRDF
 
@@ -59,21 +60,6 @@ def _lambda(w):
     alpha = np.sqrt((AX ** 2 * w[..., 0] ** 2 + AY ** 2 * w[..., 1] ** 2) / s2)
     a = w[..., 2] / (alpha * np.sqrt(s2))
     return 0.5 * (np.exp(-a * a) / (a * np.sqrt(np.pi)) - erfc(a))
-
-
-def _local(ci, co, cio):
-    si = np.sqrt(np.maximum(1.0 - ci * ci, 0.0))
-    so = np.sqrt(np.maximum(1.0 - co * co, 0.0))
-    x = np.clip(np.where(si > 1e-12, (cio - ci * co) / np.maximum(si, 1e-12), 0.0), -so, so)
-    y = np.sqrt(np.maximum(so * so - x * x, 0.0))
-    return np.stack([si, 0 * si, ci], axis=-1), np.stack([x, y, co], axis=-1)
-
-
-def _tangents(h):
-    a = np.where(np.abs(h[..., :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
-    t = a - np.sum(a * h, axis=-1, keepdims=True) * h
-    t /= np.linalg.norm(t, axis=-1, keepdims=True)
-    return t, np.cross(h, t)
 
 
 def facet_frame_mc(f_nano, wi, wo, n=64000, seed=33):

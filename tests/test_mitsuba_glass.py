@@ -251,14 +251,21 @@ def test_mitsubas_chi2_accepts_sample_and_pdf_over_the_sphere(theta_deg):
     """llvm_ad_rgb (the two nodes' mixture): light from outside at 40°, from inside at 35° and at 60° (beyond the
     critical angle 41° of BK7: the transmitted lobe is the microfacets' and the nano-roughness' only)."""
     mi, _ = _plugin("llvm_ad_rgb")
+    _assert_chi2(mi, "wo_glass_test", theta_deg)
+
+
+def _assert_chi2(mi, name, theta_deg):
+    """Mitsuba's χ² test of the registered plugin *name* over the sphere (200 000 samples, 101 bins, seed 7) for
+    light at *theta_deg* (azimuth 0.4 rad); returns ω_i."""
     from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 
     t = np.radians(theta_deg)
     wi = mi.Vector3f(float(np.sin(t) * np.cos(0.4)), float(np.sin(t) * np.sin(0.4)), float(np.cos(t)))
-    sample_func, pdf_func = BSDFAdapter("wo_glass_test", {"type": "wo_glass_test"}, wi=wi)
+    sample_func, pdf_func = BSDFAdapter(name, {"type": name}, wi=wi)
     chi2 = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func, sample_dim=3,
                          sample_count=200_000, res=101, ires=8, seed=7)
     assert chi2.run(), chi2.messages
+    return wi
 
 
 def test_render_command_takes_the_rough_dielectric_with_nano(tmp_path):
@@ -369,17 +376,12 @@ def test_a_coated_glass_passes_mitsubas_chi2_and_refracts_into_its_substrate(the
     material database, not the stack's code): the films change what a facet reflects and transmits, not the medium
     the light refracts into."""
     import drjit as dr
-    from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
 
     from waveoptics.materials import get_material
 
     mi = _coated_plugin("llvm_ad_rgb")
     t = np.radians(theta_deg)
-    wi = mi.Vector3f(float(np.sin(t) * np.cos(0.4)), float(np.sin(t) * np.sin(0.4)), float(np.cos(t)))
-    sample_func, pdf_func = BSDFAdapter("wo_coated_test", {"type": "wo_coated_test"}, wi=wi)
-    chi2 = ChiSquareTest(domain=SphericalDomain(), sample_func=sample_func, pdf_func=pdf_func, sample_dim=3,
-                         sample_count=200_000, res=101, ires=8, seed=7)
-    assert chi2.run(), chi2.messages
+    wi = _assert_chi2(mi, "wo_coated_test", theta_deg)
     bsdf = mi.load_dict({"type": "wo_coated_test"})
     rng = np.random.default_rng(3)
     n = 4000

@@ -31,6 +31,7 @@ import numpy as np
 import pytest
 from scipy.special import erfc
 
+from facet_frame_helpers import local_pair as _local, tangents as _tangents
 from waveoptics import brdf, surfaces
 from waveoptics.brdf import Micro, Nano, TabulatedTwoScaleBRDF, TwoScaleBRDF
 from waveoptics.scatter.grid import DirectionGrid
@@ -60,24 +61,6 @@ def _smith_lambda(cz):
     """Beckmann Smith Λ of a direction with cosine *cz* to the macro normal (Heitz 2014, eq. 72)."""
     a = cz / (ALPHA * np.sqrt(np.maximum(1.0 - cz * cz, 1e-300)))
     return 0.5 * (np.exp(-a * a) / (a * np.sqrt(np.pi)) - erfc(a))
-
-
-def _local(ci, co, cio):
-    """Directions in a facet's frame (z = m) with the cosines *ci* = i·m, *co* = o·m and *cio* = i·o: i in the x-z
-    plane, o at the azimuth that keeps i·o."""
-    si = np.sqrt(np.maximum(1.0 - ci * ci, 0.0))
-    so = np.sqrt(np.maximum(1.0 - co * co, 0.0))
-    x = np.clip(np.where(si > 1e-12, (cio - ci * co) / np.maximum(si, 1e-12), 0.0), -so, so)
-    y = np.sqrt(np.maximum(so * so - x * x, 0.0))
-    return np.stack([si, 0 * si, ci], axis=-1), np.stack([x, y, co], axis=-1)
-
-
-def _tangents(h):
-    """Two unit tangents of the unit vectors *h* (..., 3), m_z > 0 (Gram-Schmidt against the x axis or y axis)."""
-    a = np.where(np.abs(h[..., :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
-    t = a - np.sum(a * h, axis=-1, keepdims=True) * h
-    t /= np.linalg.norm(t, axis=-1, keepdims=True)
-    return t, np.cross(h, t)
 
 
 def facet_frame_mc(f_nano, wi, wo, n=16000, seed=28, scale=SCALE):
