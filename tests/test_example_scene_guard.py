@@ -1,7 +1,7 @@
 """The coated-aluminium example scene runs where the two-scale energy guard does not act (issue 28).
 
 examples/scenes/coated-aluminium.toml (Al|Al2O3:120nm, ABC σ 15 nm B 2 µm C 2.6, GGX α 0.05, Rayleigh-Rice,
-correlated interfaces, lights at 20° and 60°). On 32² cells the guard removed 6.0-6.2 % at 380 nm, 60°: the lobe's
+correlated interfaces, lights at 20° and 60°). On 32² cells the guard removes 5.98 % at 380 nm, 60° (6.2 % with the former 64-normal budget): the lobe's
 cell-centre quadrature held 1.066x its budget (1.034x on 40², 0.999x on 48², 1.005x on 64², 0.992x on 128²; the
 budget the same on every grid), so the scene asks for 64² cells.
 

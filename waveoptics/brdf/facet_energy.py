@@ -43,7 +43,8 @@ def facet_budget(wi, w, micro: Micro, nano: Nano, F, dm, material, polarization)
     at the wavelengths *w* (nm): the facets' scattered light (F (1 − A) per facet on a conductor, the lobe's own
     absolute albedo on a dielectric) and their reflectance F, averaged over the visible normals of *micro*'s NDF
     (:data:`FACET_BUDGET_NODES` Sobol points through its sampler for ω_i, :data:`FACET_BUDGET_NODES_FIELD` for a
-    height field; a measured slope table's own bins: :func:`waveoptics.brdf.facet.budget_nodes`). *F* (cos, λ) → reflectance, or an object with ``at(wi, wo, λ)``; *dm* the diffraction model.
+    height field; a measured slope table's own bins: :func:`waveoptics.brdf.facet.budget_nodes`). *F* (cos, λ)
+    → reflectance, or an object with ``at(wi, wo, λ)``; *dm* the diffraction model.
 
     References
     ----------

@@ -163,9 +163,10 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *,
     A height field's lobe is averaged over cells coarser than its speckle and kept inside the field's sampled band
     (:func:`waveoptics.brdf.field_cell_averages`, :func:`waveoptics.brdf.nyquist_band`): point-sampled, the
     brushed-aluminium scene's scratches on 16² cells held 1.95x their budget at 380 nm and this step removed 49 %
-    (tests/test_field_cells.py). Where it does act (a grid too coarse for a wide lobe: Au, ABC σ 8 nm, B 2 µm,
-    Beckmann α 0.1 on 32² cells at θ_i = 60° removes 6.2 % at 450 nm and 3.2 % at 520 nm, none on 64² or 128²; micro
-    roughness at grazing incidence on a grid whose cells cannot resolve the facets' incidences) it warns in one
+    (tests/test_field_cells.py). Where it does act (a grid too coarse for the lobe or for the facets' incidences;
+    Au, ABC σ 8 nm, B 2 µm, Beckmann α 0.1 on 32² cells at θ_i = 60° was one, 6.2 % removed at 450 nm, until a
+    conductor's budget was what its facets scatter alone: the other bound, the light they reflect less the coherent
+    lobe's grid sum, acted through that sum's cell-centre error, :func:`diffracted_lobe`) it warns in one
     line with the share it removed, the wavelength and incidence (given *wi* and *wavelengths_nm*) and the
     resolution to try, and reports the factor (``diffraction_energy_scale``). The 500 nm sinusoid (20 nm, Al,
     Beckmann α 0.05) at 550 nm is one: 3.3 % at 78° on 32² cells, none on 40², 48², 64², 96², 128²; its 17.6 % on
@@ -174,9 +175,10 @@ def cap_to_coherent_loss(diffraction, lost, grid: DirectionGrid, budget=None, *,
     the shortest wavelengths is another: Al|Al2O3:120nm, ABC σ 15 nm B 2 µm C 2.6, GGX α 0.05, Rayleigh-Rice,
     θ_i = 60°, 380 nm held 1.066x its budget on 32² cells, 1.034x on 40², 0.999x on 48², 1.005x on 64², 0.992x on
     128² (the budget 0.0600 on every grid, within 0.6 % of the microfacet lobe minus the coherent lobe; 400 to
-    780 nm within 1 % on 32²; the 32² and 64² cases in tests/test_example_scene_guard.py). Known not to be the
-    grid: aluminium, Beckmann α 0.15 / α_y 0.4, Gaussian σ 15 nm ℓ 1.5 µm, θ_i = 88°: the lobe holds 1.078x its
-    budget at 830 nm, φ_i = 90°, and 1.037x at 360 nm, φ_i = 0°, on 64², 128² and 192² cells alike. Au under a
+    780 nm within 1 % on 32²; the 32² and 64² cases in tests/test_example_scene_guard.py). Not the grid: aluminium,
+    Beckmann α 0.15 / α_y 0.4, Gaussian σ 15 nm ℓ 1.5 µm, θ_i = 88° held 1.078x its budget at 830 nm, φ_i = 90°,
+    and 1.037x at 360 nm, φ_i = 0°, on 64² to 192² cells alike: the budget's 64 normals read it up to 7.7 % low
+    there (now 4096, :data:`waveoptics.brdf.FACET_BUDGET_NODES`; none acts, tests/test_facet_budget.py). Au under a
     measured slope table (α ≈ 0.066, Gaussian σ 8 nm ℓ 1 µm, 550 nm) held 1.033x at 0°, 1.045x at 30°, 1.15x at
     60° on 32² to 128², the guard removing up to 68 % at 70°: the table's numbers, not the grid (issue 28: its
     albedo quadrature across the bin edges, its 64-node budget, cell-centre reads of its histogram;
