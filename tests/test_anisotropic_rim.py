@@ -13,7 +13,7 @@ heavy-tailed proposal about the half-vector for the nano lobe's peak, combined b
 seeded. Only f_nano, the facet's own lobe (:meth:`TwoScaleBRDF.facet_nano_brdf`), comes from the package.
 
 Aluminium, Beckmann α 0.15 × 0.4, Gaussian σ 15 nm, T 1.5 µm, 550 nm, θ_i 30° at the tables' light azimuths 0° and
-90°, exits 80-88°. Before the rim tables (the 64² direction-cosine cells alone) the tabulated form read 2.0-2.4x
+90° and between the rim tables' 24 light azimuths, exits 80-88°. Before the rim tables (the 64² direction-cosine cells alone) the tabulated form read 2.0-2.4x
 the facet-frame sum at 85-88° forward; now the sum itself, within 1.4 %, and that sum within 6.3 % of the reference
 (its NDF normals fixed in the surface's frame were 0.89-1.25 of it).
 
@@ -143,22 +143,12 @@ def _tabulated(wi, wo):
 
 
 def test_rim_tables_read_the_facet_frame_sum_at_the_light_azimuth_nodes():
-    """64² tables at θ_i 20/30/40° and 4 light azimuths with their rim tables (one set per azimuth node, held in
-    its light's frame), at :data:`PAIRS`: within 3 % of the grid route's facet-frame sum taken at each exit itself
+    """64² tables at θ_i 20/30/40° and 4 light azimuths with rim tables at 24 (one set per light azimuth node, held
+    in its light's frame), at :data:`PAIRS`: within 3 % of the grid route's facet-frame sum taken at each exit itself
     (``evaluate``'s per-cell sum on a one-direction list: not the tables' read). Measured 0.99-1.014; without the
     rim tables 2.0-2.4x at 85-88° forward (the 64² direction-cosine cells alone)."""
-    from waveoptics.brdf import facet_frame_diffraction
-    from waveoptics.brdf.tabulated_rim import DirectionPoints
-    from waveoptics.materials import get_material
-    from waveoptics.scatter.grid import DirectionGrid
-
-    mat = get_material("aluminium")
     wi, wo, _, _ = _reference()
-    got = _tabulated(wi, wo)
-    sums = np.array([facet_frame_diffraction(a, [LAM], mat, MICRO, NANO, DirectionPoints(b[None]),
-                                             lambda c, lam: mat.F(c, lam), table_grid=DirectionGrid.hemisphere(64))[0]
-                     .ravel()[0] for a, b in zip(wi, wo)])
-    np.testing.assert_allclose(got, sums, rtol=0.03)
+    np.testing.assert_allclose(_tabulated(wi, wo), _facet_frame_sums(wi, wo), rtol=0.03)
 
 
 def test_tabulated_form_towards_the_horizon_against_the_reference():
@@ -166,10 +156,65 @@ def test_tabulated_form_towards_the_horizon_against_the_reference():
     0.3-0.9 %). Measured tabulated / reference 1.035, 1.043, 1.048, 0.997, 1.063: the grid route's sum at each exit
     (the table reads it within 1.4 %), whose NDF normals are the isotropic law's turned in the unstretched slope
     plane to h's azimuth and stretched (:func:`waveoptics.brdf.facet.ndf_nodes`); with 2048 + 2048 normals
-    1.00-1.06. With the normals fixed in the surface's frame (before) 0.89-1.25. Between the light azimuth nodes
-    (φ_i 45°) the blend of the nodes' turned rim tables adds its own error: the forward lobe at 85° changes 20x over
-    30° of light azimuth (0.0133 / 0.0048 / 0.0007 at φ_i 30 / 45 / 60°), read 7.2x with 4 nodes, 2.0x with 12
-    (not tested: known, issue 28)."""
+    1.00-1.06. With the normals fixed in the surface's frame (before) 0.89-1.25."""
     wi, wo, ref, se = _reference()
     got = _tabulated(wi, wo)
     assert np.all(np.abs(got - ref) <= 0.07 * ref + K_SE * se), (got / ref, se / ref)
+
+
+#: (θ_i, φ_i, θ_o, φ_o) degrees: light between the rim tables' azimuth nodes (15° apart) and, at 35°, between
+#: incidence nodes too; exits 80-88° in and out of the plane
+BETWEEN = [(30, 22.5, 85, 202.5), (30, 37.5, 88, 217.5), (30, 7, 85, 187), (35, 40, 86, 250), (30, 67.5, 80, 307.5)]
+#: a pair in the lobe's deep tail (1.4e-5 /sr, 5000x below the forward lobe of φ_i 90°): the grid route's
+#: facet-frame sum itself is 1.42x the Monte-Carlo integral there
+DEEP_TAIL = (30, 52.5, 85, 202.5)
+
+
+def _pairs(pairs):
+    return (_dirs([p[0] for p in pairs], [p[1] for p in pairs]), _dirs([p[2] for p in pairs], [p[3] for p in pairs]))
+
+
+def _facet_frame_sums(wi, wo):
+    """The grid route's facet-frame sum at each pair itself (``evaluate``'s per-cell sum on a one-direction list,
+    64² facet tables): what the tables hold at their nodes."""
+    from waveoptics.brdf import facet_frame_diffraction
+    from waveoptics.brdf.tabulated_rim import DirectionPoints
+    from waveoptics.materials import get_material
+    from waveoptics.scatter.grid import DirectionGrid
+
+    mat = get_material("aluminium")
+    return np.array([facet_frame_diffraction(a, [LAM], mat, MICRO, NANO, DirectionPoints(b[None]),
+                                             lambda c, lam: mat.F(c, lam), table_grid=DirectionGrid.hemisphere(64))[0]
+                     .ravel()[0] for a, b in zip(wi, wo)])
+
+
+def test_rim_tables_read_between_light_azimuth_nodes():
+    """Light between azimuth nodes (:data:`BETWEEN` and :data:`DEEP_TAIL`): the tables' read within 7 % of the
+    facet-frame sum taken at each light direction itself (measured 0.98-1.06). Near the horizon this lobe changes by
+    orders of magnitude with the light's azimuth (exit 85° forward: 4.4e-4 /sr at φ_i 0° to 0.069 at 90°); the 4
+    main nodes' rim tables blended linearly read these pairs 6.9-28000x the sum (0.0349 against 0.0051 /sr at φ_i
+    45°, 85° forward); the rim tables at 24 light azimuths read in log f
+    (:func:`waveoptics.brdf.tabulated_rim.rim_across_light_azimuth`) do not."""
+    wi, wo = _pairs(BETWEEN + [DEEP_TAIL])
+    np.testing.assert_allclose(_tabulated(wi, wo), _facet_frame_sums(wi, wo), rtol=0.07)
+
+
+def test_tabulated_form_between_light_azimuth_nodes_against_the_reference():
+    """At :data:`BETWEEN` within 8 % + 3 s.e. of the Monte-Carlo facet-frame integral (256 000 samples, s.e.
+    0.4-1.1 %): measured 0.97-1.06."""
+    wi, wo = _pairs(BETWEEN)
+    ref, se = facet_frame_mc(TwoScaleBRDF("aluminium", MICRO, nano=NANO).facet_nano_brdf, wi, wo, n=256000, seed=6)
+    got = _tabulated(wi, wo)
+    assert np.all(np.abs(got - ref) <= 0.08 * ref + K_SE * se), (got / ref, se / ref)
+
+
+@pytest.mark.xfail(strict=True, reason="issue 28: the grid route's facet-frame sum is 1.42x the Monte-Carlo "
+                                       "integral in this lobe's deep tail (1.4e-5 /sr)")
+def test_facet_frame_sum_in_the_deep_tail_against_the_reference():
+    """:data:`DEEP_TAIL`: the facet-frame sum within 8 % + 3 s.e. of the Monte-Carlo integral (256 000 samples, s.e.
+    1 %). Measured 2.05e-5 against 1.44e-5 /sr (1.42x; the tables read 2.18e-5): at the light azimuth nodes' pairs
+    (:data:`PAIRS`, 5e-4-0.07 /sr) the sum is within 6.3 %."""
+    wi, wo = _pairs([DEEP_TAIL])
+    ref, se = facet_frame_mc(TwoScaleBRDF("aluminium", MICRO, nano=NANO).facet_nano_brdf, wi, wo, n=256000, seed=6)
+    got = _facet_frame_sums(wi, wo)
+    assert np.all(np.abs(got - ref) <= 0.08 * ref + K_SE * se), (got / ref, se / ref)

@@ -23,10 +23,11 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   mirror point plus the offset Δ = (u_o, v_o) − (mirror point of ω_i) in direction cosines, blended in θ_i and
   φ_i (never rotated: a grating's orders stay where the grating puts them, and they shift in direction cosines,
   the Harvey-Shack picture, docs/physics.md §11). An anisotropic micro NDF with PSD statistics has rim tables at
-  each light azimuth node, held in the light's frame and read turned with the light (at the nodes within 1.4 % of
-  the facet-frame sum at 80-88°, where the shifted direction-cosine cells read 2.0-2.4x it; between nodes 90°
-  apart the forward lobe of α 0.15 × 0.4 at 85° changes 20x over 30° of light azimuth and the blend reads 7.2x:
-  tests/test_anisotropic_rim.py).
+  :data:`waveoptics.brdf.tabulated_rim.RIM_LIGHT_AZIMUTHS` (24) light azimuths, each held in its light's frame and
+  read turned with the light, interpolated across the light's azimuth in log f (at the nodes within 1.4 % of the
+  facet-frame sum at 80-88°, where the shifted direction-cosine cells read 2.0-2.4x it; near the horizon the lobe
+  changes by orders of magnitude with the light's azimuth, and the former linear blend of the 4 main nodes' rim
+  tables read it up to 7.2x at φ_i 45°: tests/test_anisotropic_rim.py).
 
 Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes up to θ_o 65° (beyond, to the
 rim tables' interpolation: within 0.6 % to 80°, 1 % to 85°); between 10° nodes the
@@ -62,7 +63,7 @@ from ..errors import FieldError
 from ..scatter.grid import DirectionGrid
 from .protocol import TwoScaleParts
 from .roughness_scales import isotropic
-from .tabulated_rim import rim_across_incidence, rim_lobes, rim_weight
+from .tabulated_rim import rim_across_light_azimuth, rim_light_azimuths, rim_lobes, rim_weight
 from .twoscale import ENERGY_GUARD_PREFIX, energy_guard_cause, evaluate
 
 __all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'TabulatedTwoScaleBRDF']
@@ -119,14 +120,16 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     rim : bool
         Build rim tables (:mod:`waveoptics.brdf.tabulated_rim`: the facet-frame sum near the horizon on a grid in
         (cos θ_o, φ_o), read beyond θ_o 65-69°) where the lobes come from the facet-frame route: at one light
-        azimuth (an isotropic table of PSD statistics or an isotropic height field) or at each azimuth node of an
-        anisotropic micro NDF with PSD statistics.
+        azimuth (an isotropic table of PSD statistics or an isotropic height field) or, for an anisotropic micro
+        NDF with PSD statistics, at :func:`waveoptics.brdf.tabulated_rim.rim_light_azimuths` light azimuths 2π/n_q
+        apart from 0 (24 for 4 azimuth nodes; the main nodes among them).
     table_lobes, table_grid, table_phis_deg : optional
         Lobes computed elsewhere (n_φ, n_θ, n_λ, n_v, n_u) in 1/sr on *table_grid*, at the light azimuths
         *table_phis_deg* (evenly spaced, or one azimuth for an isotropic table): nothing is computed
         (:func:`waveoptics.open_table`).
     table_rim : optional
-        The rim tables (n_θ, n_λ, n_cos, n_φ) in 1/sr computed with *table_lobes* (:attr:`rim_table`), or None.
+        The rim tables (n_θ, n_λ, n_cos, n_φ) in 1/sr computed with *table_lobes* (:attr:`rim_table`), or
+        (n_q, n_θ, n_λ, n_cos, n_φ) at n_q light azimuths 2π/n_q apart from 0, or None.
     progress : callable, optional
         Called with 1 after each tabulated incidence.
     """
@@ -173,10 +176,9 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
             rim = None if self.table_rim is None else np.asarray(self.table_rim, dtype=float)
             if rim is not None and rim.ndim == 4:   # one light azimuth
                 rim = rim[None]
-            if rim is not None and (rim.ndim != 5 or rim.shape[:3] != diff.shape[:3]):
-                raise FieldError(f"table_rim of shape {rim.shape} does not match {phis.size} azimuths, "
-                                 f"{len(self.thetas_deg)} angles and {len(self.wavelengths_nm)} wavelengths",
-                                 "table_rim")
+            if rim is not None and (rim.ndim != 5 or rim.shape[1:3] != diff.shape[1:3]):
+                raise FieldError(f"table_rim of shape {rim.shape} does not match {len(self.thetas_deg)} angles and "
+                                 f"{len(self.wavelengths_nm)} wavelengths", "table_rim")
             self._table.update(grid=self.table_grid, thetas=np.radians(np.asarray(self.thetas_deg, dtype=float)),
                                phis=phis, diffraction=diff, rim=rim,
                                energy_scale=np.ones((1, diff.shape[2])))
@@ -209,6 +211,9 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                     self.progress(1)
         if warm is not None:
             warm.join()
+        if rim is not None and not self.isotropic:
+            rim = self._rim_at_light_azimuths(rim, grid, thetas, phis, np.asarray(scale).reshape(n_phi, thetas.size,
+                                                                                                 w.size))
         if diff is None:
             diff = np.zeros((n_phi, thetas.size, w.size, grid.n_v, grid.n_u))
         self._table.update(grid=grid, thetas=thetas, phis=phis, diffraction=diff, rim=rim,
@@ -235,6 +240,35 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         return rim_lobes(wi, self.wavelengths_nm, self.material, self.micro, self.nano, L.grid,
                          diffraction=self.diffraction, energy_scale=L.info["diffraction_energy_scale"],
                          device=self.device, precision=self.precision)
+
+    def _rim_at_light_azimuths(self, rim, grid, thetas, phis, scale):
+        """The rim tables (n_q, n_θ, n_λ, n_cos, n_φ) of an anisotropic micro NDF at
+        :func:`waveoptics.brdf.tabulated_rim.rim_light_azimuths` light azimuths 2π/n_q apart from 0: those of the
+        main azimuth nodes *phis* as built with their lobes (*rim*), the others computed here (in parallel threads),
+        each with the energy-guard factor interpolated linearly in azimuth between the main nodes' (*scale*,
+        (n_φ, n_θ, n_λ); 1 where the guard did not act)."""
+        from ..runtime import parallel_imap
+
+        n_phi = phis.size
+        n_q = rim_light_azimuths(n_phi)
+        per = n_q // n_phi
+        out = np.zeros((n_q,) + rim.shape[1:])
+        out[::per] = rim
+        extra = [(q, k) for q in range(n_q) if q % per for k in range(thetas.size)]
+
+        def one(qk):
+            q, k = qk
+            p0, f = divmod(q, per)
+            s = (1 - f / per) * scale[p0, k] + f / per * scale[(p0 + 1) % n_phi, k]
+            ph, th = 2 * np.pi * q / n_q, thetas[k]
+            wi = np.array([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)])
+            return rim_lobes(wi, self.wavelengths_nm, self.material, self.micro, self.nano, grid,
+                             diffraction=self.diffraction, energy_scale=s, device=self.device,
+                             precision=self.precision)
+
+        for (q, k), r in zip(extra, parallel_imap(one, extra)):
+            out[q, k] = r
+        return out
 
     def _incidence_lobes(self, grid, w, wis, n_phi):
         """(:class:`waveoptics.brdf.Lobes`, rim table or None, :meth:`_rim_at`) at each light direction of *wis*
@@ -298,7 +332,8 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     @property
     def rim_table(self) -> np.ndarray | None:
         """The rim tables (n_θ, n_λ, n_cos, n_φ) in 1/sr (:mod:`waveoptics.brdf.tabulated_rim`) of a table at one
-        light azimuth, (n_φ nodes, n_θ, n_λ, n_cos, n_φ) of one at several, or None."""
+        light azimuth, (n_q, n_θ, n_λ, n_cos, n_φ) of one at n_q light azimuths 2π/n_q apart from 0 (an anisotropic
+        micro NDF), or None."""
         rim = self._table.get("rim")
         return rim[0] if rim is not None and rim.shape[0] == 1 else rim
 
@@ -348,7 +383,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         thetas = self._table["thetas"]
         theta_i = np.arccos(np.clip(wi[:, 2], -1.0, 1.0))
         a, b, t = _bracket(thetas, theta_i)
-        _, phi_nodes = self._frame(wi)
+        phi_i, phi_nodes = self._frame(wi)
         rot = self._table_rotation(wi)
         wo_r, wi_r = _rotate(wo, rot), _rotate(wi, rot)
         delta = wo_r[:, :2] + wi_r[:, :2]   # (u, v) − mirror point of ω_i
@@ -377,10 +412,10 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
         if self._table.get("rim") is not None:   # towards the horizon: the rim tables, in the light's frame
             wo_l = wo_r if rotate else _rotate(wo, np.arctan2(wi[:, 1], wi[:, 0]))
-            out = self._with_rim(out, a, t, j, wo_l, phi_nodes)
+            out = self._with_rim(out, a, t, j, wo_l, phi_i)
         return np.where(((wi[:, 2] > 0) & (wo[:, 2] > 0))[:, None], out, 0.0)
 
-    def _with_rim(self, val, a, t, j, wo, phi_nodes):
+    def _with_rim(self, val, a, t, j, wo, phi_i):
         """*val* (n, n_j), the main tables' read, blended by :func:`waveoptics.brdf.tabulated_rim.rim_weight` of θ_o
         with the rim tables of the incidence nodes around θ_i (a, b and the next two outwards) read at *wo* (n, 3)
         itself (in the light's frame: azimuths from the light's) and interpolated at the fraction t of the
@@ -389,22 +424,17 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         high at θ_o 85° forward, where it rises steeply towards the exit's mirror angle). Not turned as the main tables are read: near the horizon the lobe
         changes fastest with θ_o, and a turn by θ_i − θ_k reads it up to half a node spacing higher and lower,
         whose mean lies below the lobe where it is concave (Beckmann α 0.05, exit 72-80°, incidence midway
-        between nodes: turned 0.975-1.031 of the facet-frame sum, read at ω_o 0.991-1.009). Several light azimuth
-        nodes (an anisotropic micro NDF, *phi_nodes* of :meth:`_frame`): each node's rim tables, held in its light's
-        frame, read there and blended with the nodes' weights (turned with the light, as the isotropic table is: the
-        forward peak stays forward; the NDF's axes turn by the light's offset from the node)."""
+        between nodes: turned 0.975-1.031 of the facet-frame sum, read at ω_o 0.991-1.009). An anisotropic micro
+        NDF has rim tables at :func:`waveoptics.brdf.tabulated_rim.rim_light_azimuths` light azimuths, each held
+        in its light's frame and read turned with the light (the forward peak stays forward; the NDF's axes turn
+        by the light's offset from the node), interpolated across the light azimuth φ_i by the monotone cubic of
+        log f (:func:`waveoptics.brdf.tabulated_rim.rim_across_light_azimuth`)."""
         W = rim_weight(wo[:, 2])
         sel = W > 0
         if not sel.any():
             return val
-        x, y, z = wo[sel, 0], wo[sel, 1], wo[sel, 2]
-        rim, thetas = self._table["rim"], self._table["thetas"]
-        r = np.zeros((x.size, np.size(j)))
-        for p_idx, w_p in phi_nodes:
-            pp, ww = np.broadcast_to(p_idx, W.shape)[sel], w_p[sel]
-            for p in np.unique(pp[ww > 0]):
-                m = (pp == p) & (ww > 0)
-                r[m] += ww[m, None] * rim_across_incidence(rim[p], thetas, a[sel][m], t[sel][m], j, x[m], y[m], z[m])
+        r = rim_across_light_azimuth(self._table["rim"], self._table["thetas"], phi_i[sel], a[sel], t[sel], j,
+                                     wo[sel, 0], wo[sel, 1], wo[sel, 2])
         out = val.copy()
         out[sel] = (1 - W[sel])[:, None] * val[sel] + W[sel][:, None] * r
         return out

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_THETA_DEG, pchip_between
+from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_LOG_FLOOR, RIM_THETA_DEG, pchip_between
 
 __all__ = ['DiffractedLobes']
 
@@ -43,8 +43,9 @@ class DiffractedLobes:
         self.phis = [float(x) for x in tab["phis"]]
         self.rotate = self.P == 1 and base.isotropic
         self.lookup = self._upload(base._lookup_table())
-        rim = tab.get("rim")   # (P, K, J, n_cos, n_phi): one set per light azimuth node, in its light's frame
+        rim = tab.get("rim")   # (Q, K, J, n_cos, n_phi): one set per rim light azimuth node, in its light's frame
         self.rim = None if rim is None else self._upload(np.asarray(rim, dtype=float))
+        self.Q = None if rim is None else int(rim.shape[0])
         self.rim_shape = None if rim is None else tuple(int(n) for n in rim.shape[-2:])
         self.lobe = self._upload(diff)
         flat = diff.reshape(diff.shape[:3] + (-1,))
@@ -146,16 +147,26 @@ class DiffractedLobes:
         if self.rim is not None:   # towards the horizon the rim tables, read at ω_o itself (library ``_with_rim``)
             c0, c1 = (math.cos(math.radians(x)) for x in RIM_BLEND_DEG)
             W = dr.clip((c0 - g.wo_l.z) / (c0 - c1), 0.0, 1.0)
-            rim = W * 0.0
-            for p, w_p in self._phi_nodes(g.phi_i):   # each light azimuth node's, in the light's frame
+
+            def at(q):   # light azimuth node q's rim tables across incidence
                 if self.K == 1:
-                    r = self._rim_lookup(p, ks[0][0], j, g.wo_l)
-                else:   # the monotone cubic over the incidence nodes a − 1 .. a + 2 (``rim_across_incidence``)
-                    a, t = brk
-                    k4 = [dr.clip(a + s, 0.0, self.K - 1.0) for s in (-1.0, 0.0, 1.0, 2.0)]
-                    r = pchip_between([self._rim_lookup(p, k, j, g.wo_l) for k in k4],
-                                      [self._gather_list(self.thetas, k) for k in k4], t, dr.select)
-                rim = rim + w_p * r
+                    return self._rim_lookup(q, ks[0][0], j, g.wo_l)
+                a, t = brk   # the monotone cubic over the incidence nodes a − 1 .. a + 2 (``rim_across_incidence``)
+                k4 = [dr.clip(a + s, 0.0, self.K - 1.0) for s in (-1.0, 0.0, 1.0, 2.0)]
+                return pchip_between([self._rim_lookup(q, k, j, g.wo_l) for k in k4],
+                                     [self._gather_list(self.thetas, k) for k in k4], t, dr.select)
+
+            if self.Q == 1:
+                rim = at(0.0)
+            else:   # across the light azimuth: the monotone cubic of log f (``rim_across_light_azimuth``)
+                f = self._mod(g.phi_i, 2.0 * math.pi) * (self.Q / (2.0 * math.pi))
+                fl = dr.floor(f)
+                tq = f - fl
+                v = [at(self._mod(fl + s, float(self.Q))) for s in (-1.0, 0.0, 1.0, 2.0)]
+                lg = [dr.log(dr.maximum(x, RIM_LOG_FLOOR)) for x in v]
+                rim = dr.select(dr.maximum(v[1], v[2]) > RIM_LOG_FLOOR,
+                                dr.exp(pchip_between(lg, [tq * 0.0 + s for s in (-1.0, 0.0, 1.0, 2.0)], tq,
+                                                     dr.select)), 0.0)
             out = (1.0 - W) * out + W * rim
         return dr.select(g.up, out, 0.0)
 

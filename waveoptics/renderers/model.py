@@ -187,7 +187,7 @@ def table_key(nano_obj, nodes, resolution: int, common: dict) -> dict:
     import hashlib
 
     from ..brdf.tabulated import THETA_NODES_DEG
-    from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_CELLS, RIM_THETA_DEG
+    from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_CELLS, RIM_LIGHT_AZIMUTHS, RIM_THETA_DEG
     from ..materials import get_material
 
     mat = get_material(common["material"])
@@ -209,7 +209,8 @@ def table_key(nano_obj, nodes, resolution: int, common: dict) -> dict:
     return {"material": str(common["material"]), "optics": optics, "micro": repr(micro), "nano": nano,
             "diffraction": str(common["diffraction"]), "wavelengths_nm": [float(x) for x in nodes],
             "resolution": int(resolution), "thetas_deg": [float(t) for t in THETA_NODES_DEG],
-            "rim": [RIM_THETA_DEG, list(RIM_BLEND_DEG), list(RIM_CELLS), "every light azimuth node"]}
+            "rim": [RIM_THETA_DEG, list(RIM_BLEND_DEG), list(RIM_CELLS), RIM_LIGHT_AZIMUTHS,
+                    "log-monotone in phi_i"]}
 
 
 @functools.lru_cache(maxsize=16)
