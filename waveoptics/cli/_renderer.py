@@ -37,7 +37,8 @@ def add_model(parser) -> None:
     g.add_argument("--wavelength-step", default=_d("wavelength_step"), metavar="L",
                    help="largest spacing of the wavelength nodes over 360-830 nm, with unit "
                         f"(default {_d('wavelength_step')}); between nodes the BRDF is linear in λ")
-    option(g, "--resolution", default=_d("resolution"), note="of the tabulated diffracted lobes")
+    option(g, "--resolution", default=_d("resolution"),
+           note="of the tabulated diffracted lobes (default: from the nano lobe's width, 64-128)")
     g.add_argument("--scene", metavar="FILE.toml",
                    help="take the model from a scene file's material (waveoptics plan/run format: material, "
                         "roughness, ndf, diffuse_albedo, nano) instead of the options above")

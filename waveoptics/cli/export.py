@@ -40,6 +40,7 @@ def run(args):
     emit(args, data, f"wrote {out} ({data['bytes'] / 1e6:.2f} MB; {'isotropic' if data['isotropic'] else 'anisotropic'}"
                      f", {len(data['wavelengths_nm'])} wavelengths {data['wavelengths_nm'][0]:g}-"
                      f"{data['wavelengths_nm'][-1]:g} nm, {len(data['theta_i_deg'])} incidences; model "
-                     f"{data['time_model_s']:.1f} s, table {data['time_export_s']:.1f} s)\n"
+                     + (f"on {res}² cells " if (res := data["model"].get("resolution")) else "")
+                     + f"{data['time_model_s']:.1f} s, table {data['time_export_s']:.1f} s)\n"
                      f"Mitsuba 3: <bsdf type=\"measured\"><string name=\"filename\" value=\"{out}\"/></bsdf>")
     return 0

@@ -46,12 +46,9 @@ def lobe_width(alpha: float, cos_theta_i: float) -> float:
 
 
 def diffraction_lobe_width(model: surfaces.PSDModel, wavelength_nm: float) -> float:
-    """Standard deviation (direction cosines) of the nano lobe: λ / (√2 π ℓ) for correlation length ℓ.
-
-    For a Gaussian PSD π σ² T² exp(−π² T² f²) the spatial frequency has rms 1/(√2 π T) per axis, and a frequency
-    f turns the light by λ f in direction cosines (docs/physics.md §4).
-    """
-    return wavelength_nm * 1e-9 / (math.sqrt(2.0) * math.pi * model.length_scale)
+    """Standard deviation (direction cosines) of the nano lobe: λ / (√2 π ℓ) for correlation length ℓ
+    (:meth:`waveoptics.surfaces.PSDModel.lobe_width`, docs/physics.md §4)."""
+    return model.lobe_width(wavelength_nm)
 
 
 def grid_step(width: float, delta_e: float) -> float:

@@ -120,7 +120,10 @@ def build_model(model: RendererModel):
     if model.scene is None:
         built["surface"] = load_height_field(model.surface, model.spacing, model.units, model.channel,
                                              required=False)
-    return renderer_brdf(**built), kw
+    out = renderer_brdf(**built)
+    if kw.get("resolution") is None:   # chosen from the nano lobe (model.model_resolution): say which
+        kw["resolution"] = getattr(out.base, "resolution", None) if hasattr(out.base, "table") else None
+    return out, kw
 
 
 def plugin_parameters(model: RendererModel, kw: dict) -> dict:
@@ -146,6 +149,7 @@ def describe_model(model: RendererModel, kw: dict) -> dict:
         return d
     d = {k: getattr(model, k) for k in ("material", "alpha", "alpha_y", "ndf", "diffraction", "kd", "diffuse",
                                         "wavelength_step", "resolution", "exact", "multiple_scattering")}
+    d["resolution"] = kw.get("resolution", model.resolution)
     if model.surface:
         d["surface"] = model.surface
     else:

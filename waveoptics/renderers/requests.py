@@ -61,8 +61,9 @@ class RendererModel:
         Add the Kulla-Conty compensation lobe of the micro NDF.
     wavelength_step : str
         Largest spacing of the wavelength nodes over 360-830 nm, a length with unit (e.g. ``20nm``).
-    resolution : int
-        Direction-grid cells per axis of the tabulated diffracted lobes.
+    resolution : int or None
+        Direction-grid cells per axis of the tabulated diffracted lobes; None chooses them from the nano lobe's
+        width (:func:`waveoptics.renderers.model.model_resolution`: 64-128).
     exact : bool
         Evaluate the diffracted part pointwise (PSD statistics only; ~200x slower).
     scene : Scene, optional
@@ -86,7 +87,7 @@ class RendererModel:
     diffuse: str = "lambert"
     multiple_scattering: bool = False
     wavelength_step: str = f"{RENDER_WAVELENGTH_STEP_NM:g}nm"
-    resolution: int = 128
+    resolution: int | None = None
     exact: bool = False
     scene: object = None
     scene_material: str | None = None
