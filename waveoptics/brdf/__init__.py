@@ -43,8 +43,8 @@ from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, kernel_half_ve
 from .facet_energy import FACET_BUDGET_NODES, FACET_BUDGET_NODES_FIELD, facet_budget
 from .twoscale_frame import (FACET_THETAS_DEG, FACET_THETAS_PSD_DEG, facet_thetas, FACET_TABLE_MAX_CELLS, facet_table_grid, equal_area, from_equal_area, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_NODE_SPLIT,
     FACET_REFERENCE_NM, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
-from .twoscale_coherent import (coherent_lobe, STACK_SUBCELL, COHERENT_CELLS_PER_WIDTH, SUBCELLS_MAX, micro_lobe_width,
-                                coarse_micro_lobe, SubCells)
+from .twoscale_coherent import (coherent_lobe, STACK_SUBCELL, COHERENT_CELLS_PER_WIDTH, SUBCELLS_MAX, LOBE_CELLS_REACH,
+                                micro_lobe_width, lobe_cells, coarse_micro_lobe, SubCells)
 from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, multiple_scattering_lobe, evaluate)
 from .sampling import (NormalSampler, NORMAL_SAMPLERS, sample_normal, pdf_normal, pdf_reflected, sample_reflected, sample_normal_dcos)
 from .protocol import (BRDFSample, BRDF, MicrofacetBRDF, TwoScaleParts, sample_cosine, pdf_cosine, lobe_choice,

@@ -51,7 +51,8 @@ from .quadrature import albedo
 from .roughness_scales import Micro, Nano
 from .twoscale_grid import azimuth_deg, fresnel_at_mirror, mirror_cell, sharp_micro_lobe, significant_cells
 
-__all__ = ['STACK_SUBCELL', 'COHERENT_CELLS_PER_WIDTH', 'SUBCELLS_MAX', 'micro_lobe_width', 'coarse_micro_lobe',
+__all__ = ['STACK_SUBCELL', 'COHERENT_CELLS_PER_WIDTH', 'SUBCELLS_MAX', 'LOBE_CELLS_REACH', 'micro_lobe_width',
+           'lobe_cells', 'coarse_micro_lobe',
            'coherent_lobe', 'SubCells']
 
 
@@ -77,6 +78,22 @@ def micro_lobe_width(micro: Micro, wi) -> float:
     """
     a = micro.alpha if micro.alpha_y is None else min(micro.alpha, micro.alpha_y)
     return float(np.sqrt(2.0) * a * abs(wi[2]))
+
+
+#: reach (in the micro lobe's unsqueezed standard deviations √2 α, plus two cells) of the cells about the mirror
+#: point that a squeezed lobe averages (:func:`lobe_cells`): beyond 6 deviations a Beckmann lobe is below e^-18 of
+#: its peak
+LOBE_CELLS_REACH = 6.0
+
+
+def lobe_cells(grid: DirectionGrid, wi, micro: Micro) -> np.ndarray:
+    """Mask (n_v, n_u) of the cells whose centres lie within :data:`LOBE_CELLS_REACH` deviations √2 α (the NDF's
+    larger width) plus two cells of ω_i's mirror point (−u_i, −v_i) in direction cosines: where a squeezed micro
+    lobe's light is."""
+    a = micro.alpha if micro.alpha_y is None else max(micro.alpha, micro.alpha_y)
+    wo = grid.directions()
+    r = LOBE_CELLS_REACH * np.sqrt(2.0) * a + 2.0 * max(grid.du, grid.dv)
+    return (wo[..., 0] + wi[0]) ** 2 + (wo[..., 1] + wi[1]) ** 2 < r * r
 
 
 def coarse_micro_lobe(micro: Micro, grid: DirectionGrid, wi) -> bool:
@@ -130,17 +147,21 @@ def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: 
     f1 = np.where(inside, specular(wi, wo, fresnel="one", **micro.kw()), 0.0)
     # a stack's R(θ) varies within a cell, a slope table's D is a histogram finer than a cell: cell averages
     # (module doc)
-    stack = scatter.is_stack(material) or micro.ndf == "tabulated" or coarse_micro_lobe(micro, grid, wi)
+    whole = scatter.is_stack(material) or micro.ndf == "tabulated"
+    stack = whole or coarse_micro_lobe(micro, grid, wi)
     sub_width = min(STACK_SUBCELL, micro_lobe_width(micro, wi) / 2)
+    # a stack's or table's every cell; a squeezed lobe's cells about its mirror point (the others keep their centres)
+    cells = inside if whole else inside & lobe_cells(grid, wi, micro)
     if stack:
-        sub = SubCells(wi, grid, micro, inside, sub_width)
-        f1[inside] = sub.mean(1.0)
+        sub = SubCells(wi, grid, micro, cells, sub_width)
+        f1[cells] = sub.mean(1.0)
     grid_rho = float(f1.sum()) * grid.du * grid.dv
     if reference_grid is not None:  # a patch: the quadrature of the whole grid it belongs to
         ref = reference_grid
         f_ref = np.where(ref.inside, specular(wi, ref.directions(), fresnel="one", **micro.kw()), 0.0)
         if stack:
-            f_ref[ref.inside] = SubCells(wi, ref, micro, ref.inside, sub_width).mean(1.0)
+            ref_cells = ref.inside if whole else ref.inside & lobe_cells(ref, wi, micro)
+            f_ref[ref_cells] = SubCells(wi, ref, micro, ref_cells, sub_width).mean(1.0)
         grid_rho = float(np.sum(f_ref)) * ref.du * ref.dv
     rho = float(albedo(wi, fresnel="one", **micro.kw()))
     if grid_rho > 0:
@@ -164,12 +185,12 @@ def coherent_lobe(wi, wavelengths_nm, F, micro: Micro, nano: Nano | None, grid: 
             A_sub = np.ones(Fs.shape)
             if sigma_nano > 0:
                 A_sub[:] = nano.coherent_fraction(wi[2], lam, diffraction, material, polarization, phi)
-                u_sub = used[inside]
+                u_sub = used[cells]
                 if u_sub.any():
                     A_sub[u_sub] = facet_coherent_fraction(nano, sub.cos_d[u_sub], sub.c2[u_sub], lam, diffraction,
                                                            material, polarization, phi)
-            mf[i][inside] = f1[inside] * sub.weighted(Fs)
-            coherent[i][inside] = f1[inside] * sub.weighted(Fs * A_sub)
+            mf[i][cells] = f1[cells] * sub.weighted(Fs)
+            coherent[i][cells] = f1[cells] * sub.weighted(Fs * A_sub)
 
     parallel_map(one, range(w.size))
     return (np.where(inside, mf, 0.0), np.broadcast_to(np.where(inside, f1, 0.0), shape),
