@@ -46,7 +46,8 @@ RIM_THETA_DEG = 63.0
 RIM_BLEND_DEG = (65.0, 69.0)
 #: nodes of a rim table: (cos θ_o, φ_o)
 RIM_CELLS = (18, 73)
-#: light azimuths (evenly spaced over [0°, 360°)) of the rim tables of an anisotropic micro NDF, at least; a table
+#: light azimuths (evenly spaced over [0°, 360°)) of the rim tables of an anisotropic analytic micro NDF (a measured
+#: slope table keeps its main nodes': ``TabulatedTwoScaleBRDF._rim_at_light_azimuths``), at least; a table
 #: with more main azimuth nodes rounds it up to a multiple of them (:func:`rim_light_azimuths`). Near the horizon
 #: such a lobe changes by orders of magnitude with the light's azimuth (Al, Beckmann α 0.15 × 0.4, Gaussian σ 15 nm,
 #: T 1.5 µm, 550 nm, θ_i 30°, exit 85° forward: 4.4e-4 to 0.069 /sr between φ_i 0° and 90°; exit 70°: 1e7x).
