@@ -25,7 +25,8 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   the Harvey-Shack picture, docs/physics.md §11). The lobe of an anisotropic micro NDF changes its shape with the
   light's azimuth, which the shift does not follow: between nodes 90° apart (Al, Beckmann α 0.15 × 0.4, θ_i 30°,
   φ_i 22.5-67.5°, exits to 60° where the lobe is above 1 % of its peak) it reads the lobe 38-58 % off at the 90th
-  percentile, up to 2.9x (energy within 1.5 %; a strict xfail in tests/test_anisotropic_rim.py). An anisotropic micro NDF with PSD statistics has rim tables at
+  percentile, up to 2.9x (energy within 1.5 %; a strict xfail in tests/test_anisotropic_rim.py). An anisotropic
+  micro NDF with PSD statistics has rim tables at
   :data:`waveoptics.brdf.tabulated_rim.RIM_LIGHT_AZIMUTHS` (24) light azimuths, each held in its light's frame and
   read turned with the light, interpolated across the light's azimuth in log f (at the nodes within 1.4 % of the
   facet-frame sum at 80-88°, where the shifted direction-cosine cells read 2.0-2.4x it; near the horizon the lobe
@@ -241,8 +242,8 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         """Whether the table at light azimuth φ + π is the one at φ turned by π about the normal, (u, v) → (−u, −v):
         an anisotropic analytic micro NDF (a function of the stretched slope radius, D(−m) = D(m)) with PSD
         statistics (isotropic), lobes computed here, an even number of azimuth nodes. The facet-frame sums turn
-        with the half-vector's azimuth: measured equal to 4e-16 (:meth:`_rim_at_light_azimuths`). Half the lobes
-        are computed (Al, α 0.15 × 0.4: the table's build 2x faster)."""
+        with the half-vector's azimuth: the lobes so taken at 180° and 270° equal those computed there within
+        7e-16 (Al, Beckmann α 0.15 × 0.4, 64²). Half the main lobes are computed."""
         return (not self.isotropic and self.lobes_at is None and self.nano is not None
                 and self.nano.model is not None and self.micro.ndf != "tabulated" and n_phi % 2 == 0)
 

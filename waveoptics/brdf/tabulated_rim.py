@@ -198,7 +198,8 @@ def rim_across_incidence(rim, thetas, a, t, j, x, y, z, q=None):
     (:func:`rim_read`, wavelength indices *j*) and interpolated over incidence between node a (n,) and a + 1 at
     the fraction t (n,) of the interval, (n, n_j): the monotone cubic Hermite interpolant of the four nodes a − 1
     to a + 2 (:func:`pchip_slopes`; the end formula at the first and last intervals; t = 0 at and beyond the last
-    node reads that node); *q* as in :func:`rim_read`. At a fixed exit near the horizon the lobe rises steeply as θ_i nears the exit's mirror
+    node reads that node); *q* as in :func:`rim_read`. At a fixed exit near the horizon the lobe rises steeply as
+    θ_i nears the exit's mirror
     angle: linear between nodes 3-5° apart it read the Monte-Carlo facet-frame integral 2.6-4.3 % high at
     θ_o 85° forward (θ_i 74-80°, Beckmann α 0.3, Al, ABC σ 10 nm, B 2 µm, C 2.6, 550 nm; nodes 65-84°: this
     interpolant of the same reference within 0.4 %, α 0.05 within 0.4 % too, linear 0.6-0.8 %); monotone, it stays

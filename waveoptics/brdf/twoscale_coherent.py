@@ -82,7 +82,7 @@ def micro_lobe_width(micro: Micro, wi) -> float:
 
 #: reach (in the micro lobe's unsqueezed standard deviations √2 α, plus two cells) of the cells about the mirror
 #: point that a squeezed lobe averages (:func:`lobe_cells`): beyond 6 deviations a Beckmann lobe is below e^-18 of
-#: its peak
+#: its peak; a GGX lobe's heavier tail beyond keeps its cell-centre values (smooth on the scale of a cell there)
 LOBE_CELLS_REACH = 6.0
 
 

@@ -70,6 +70,8 @@ def model_resolution(nano) -> int:
     if nano is None or nano.model is None:
         return hi
     kappa = nano.model.lobe_curvature(min(SPECTRAL_RANGE_NM))
+    if not kappa > 0:   # a flat lobe (σ = 0): nothing to resolve
+        return lo
     need = 2.0 / np.sqrt(4.0 * MODEL_INTERPOLATION_ERROR / kappa)
     return int(np.clip(16 * np.ceil(need / 16.0), lo, hi))
 
