@@ -54,7 +54,7 @@ from .pointwise import (QUADRATURE_NODES, QUADRATURE_NODES_WIDE, QUADRATURE_WIDE
 from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, TabulatedTwoScaleBRDF)
 from .spectral import (SpectralNodes)
 from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
-from .chi2 import (Chi2Result, chi2_test)
+from .chi2 import (Chi2Result, chi2_test, reflected_samples)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
 from .incidence_quadrature import (INCIDENCE_NODES, INCIDENCE_ALPHA_MIN, incidence_panels, incidence_normal_quadrature)
 from .facet_interface import (BareInterface, CoatedInterface, FACET_INTERFACES, facet_interface_of, bulk_medium,
