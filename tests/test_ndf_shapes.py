@@ -1,6 +1,7 @@
 """The EPD (Holzschuch & Pacanowski 2017) and SGD (Bagher, Soler & Holzschuch 2012) NDFs (issue 16): their D
 against the papers' formulas written here, normalization, the Smith identity, the Beckmann limit of the EPD,
 the incomplete gamma function behind the SGD, sampling (χ²), reciprocity and the command line."""
+import functools
 import math
 
 import numpy as np
@@ -18,7 +19,9 @@ def _dir(theta_deg, phi_deg=0.0):
     return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t) * np.ones_like(p)], axis=-1)
 
 
+@functools.cache
 def _gamma_upper_quad(a, y):
+    """Γ(a, y) by quadrature of its integral (made once per (a, y): the slope laws below call it per point)."""
     return integrate.quad(lambda t: t ** (a - 1) * math.exp(-t), y, np.inf, limit=200)[0]
 
 
