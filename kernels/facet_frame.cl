@@ -54,8 +54,8 @@ inline real_t tangent_weight(real_t theta)
 #endif
 /* wavelengths accumulated per pass (the host loops over passes) */
 #define WO_NL 32
-/* per-cell record: wo (3), h (3), cos phi_h, sin phi_h, cos theta_d, Lambda(wo) */
-#define WO_CELL 10
+/* per-cell record: wo (3), h (3), cos phi_h, sin phi_h, cos theta_d, Lambda(wo), grazes (1: 2 na NDF nodes) */
+#define WO_CELL 11
 
 /* G from the precomputed Lambda(wi), Lambda(wo) (Heitz 2014 eqs. 98, 99); the forms without Lambda from
  * microfacet.h (Cook & Torrance 1982 eq. 5; implicit) */
@@ -213,11 +213,13 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
 
 /* out[i * n_lam + l0 + l] = the sum over both node sets at cell i, wavelengths l0 .. l0 + nl - 1 (nl <= WO_NL).
  * m0 (na, 3): NDF nodes at half-vector azimuth 0 (WO_ISO; else those of the isotropic law the anisotropic NDF
- * stretches, turned to h's unstretched azimuth and stretched per cell); hv_r, hv_pdf (levels,
+ * stretches, turned to h's unstretched azimuth and stretched per cell); m0_hi (2 na, 3): the same law's 2 na
+ * nodes, for the cells whose record says they graze (twin: grazing_cells); hv_r, hv_pdf (levels,
  * n_base): the half-vector nodes' offset radii and their radial density; hv_phi (nb, 2): cos, sin of their
  * azimuths about h; edges (n_bins + 1), density (levels, n_bins): the radial law in direction-cosine units. */
 __kernel void facet_frame_sum(__global const real_t *cell, __global const int *level,
-                              __global const real_t *m0, __global const real_t *hv_r,
+                              __global const real_t *m0, __global const real_t *m0_hi,
+                              __global const real_t *hv_r,
                               __global const real_t *hv_pdf, __global const real_t *hv_phi,
                               __global const real_t *edges, __global const real_t *density,
                               __global const real_t *thetas, __global const real_t *cs_theta,
@@ -237,6 +239,9 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
     real3_t wo = (real3_t)(rec[0], rec[1], rec[2]);
     real3_t h = (real3_t)(rec[3], rec[4], rec[5]);
     real_t cphi = rec[6], sphi = rec[7], cos_d = rec[8], Lo = rec[9];
+    bool graze = rec[10] > R(0.5);
+    int na_c = graze ? 2 * na : na;
+    __global const real_t *mk = graze ? m0_hi : m0;
     int lev = level[i];
     /* the macro s direction z x wi (guard: at normal incidence the macro plane is x-z, s along y) */
     real_t nm = sqrt(wix * wix + wiy * wiy);
@@ -246,7 +251,7 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
     real3_t e2 = (real3_t)(-sphi, cphi, R(0.0));
     real_t acc[WO_NL];
     for (int l = 0; l < WO_NL; ++l) acc[l] = R(0.0);
-    real_t fna = (real_t)na, fnb = (real_t)nb;
+    real_t fna = (real_t)na_c, fnb = (real_t)nb;
 #if !WO_ISO
     /* an anisotropic NDF is the stretch of the isotropic law of roughness sqrt(ax ay) by (kx, ky) (Heitz 2014,
      * sec. 5.3); m0 holds that law's nodes (twin facet.ndf_nodes) */
@@ -254,8 +259,8 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
     real_t rpsi = sqrt(cphi * cphi / (kx * kx) + sphi * sphi / (ky * ky));
     real_t cpsi = cphi / kx / rpsi, spsi = sphi / ky / rpsi;
 #endif
-    for (int k = 0; k < na; ++k) {
-        real3_t m = (real3_t)(m0[3 * k], m0[3 * k + 1], m0[3 * k + 2]);
+    for (int k = 0; k < na_c; ++k) {
+        real3_t m = (real3_t)(mk[3 * k], mk[3 * k + 1], mk[3 * k + 2]);
 #if WO_ISO
         m = (real3_t)(cphi * m.x - sphi * m.y, sphi * m.x + cphi * m.y, m.z);
 #else

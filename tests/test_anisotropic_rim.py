@@ -200,9 +200,12 @@ def test_rim_tables_read_between_light_azimuth_nodes():
 
 
 def test_tabulated_form_between_light_azimuth_nodes_against_the_reference():
-    """At :data:`BETWEEN` within 8 % + 3 s.e. of the Monte-Carlo facet-frame integral (256 000 samples, s.e.
-    0.4-1.1 %): measured 0.97-1.06."""
-    wi, wo = _pairs(BETWEEN)
+    """At the first four :data:`BETWEEN` pairs within 8 % + 3 s.e. of the Monte-Carlo facet-frame integral (256 000
+    samples, s.e. 0.4-1.1 %): measured 0.97-1.06. The last (1.4e-7 /sr, 5e5 below the lobe's peak) lies in the deep
+    tail where the facet-frame sum does not converge with its normals (at that pair 0.07 / 0.27 / 1.10 / 1.83 of the
+    integral with 64 / 128 / 1024 / 2048 NDF normals; the tables read 0.86), as the pointwise test below says of
+    its own quadrature (issue 28)."""
+    wi, wo = _pairs(BETWEEN[:4])
     ref, se = facet_frame_mc(TwoScaleBRDF("aluminium", MICRO, nano=NANO).facet_nano_brdf, wi, wo, n=256000, seed=6)
     got = _tabulated(wi, wo)
     assert np.all(np.abs(got - ref) <= 0.08 * ref + K_SE * se), (got / ref, se / ref)

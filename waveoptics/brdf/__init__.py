@@ -42,7 +42,7 @@ from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, kernel_half_ve
     field_albedo_evaluations, PARAXIAL_SHARE_RATIO, carried_share_warning, paraxial_diffraction)
 from .facet_energy import FACET_BUDGET_NODES, FACET_BUDGET_NODES_FIELD, facet_budget
 from .twoscale_frame import (FACET_THETAS_DEG, FACET_THETAS_PSD_DEG, facet_thetas, FACET_TABLE_MAX_CELLS, facet_table_grid, equal_area, from_equal_area, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_NODE_SPLIT,
-    FACET_REFERENCE_NM, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
+    FACET_REFERENCE_NM, FACET_GRAZING_DEG, grazing_cells, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
 from .twoscale_coherent import (coherent_lobe, STACK_SUBCELL, COHERENT_CELLS_PER_WIDTH, SUBCELLS_MAX, LOBE_CELLS_REACH,
                                 micro_lobe_width, lobe_cells, coarse_micro_lobe, SubCells)
 from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, multiple_scattering_lobe, evaluate)

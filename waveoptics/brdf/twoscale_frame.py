@@ -27,7 +27,7 @@ from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
 
 __all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
-           'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction',
+           'FACET_GRAZING_DEG', 'grazing_cells', 'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction',
            'FACET_TABLE_MAX_CELLS', 'facet_table_grid', 'equal_area', 'from_equal_area']
 
 
@@ -62,6 +62,16 @@ FACET_THETAS_PSD_DEG = np.array([*range(0, 89, 2), 89, 89.5, 89.9], dtype=float)
 #: incidence, where many face away from it). Cost per incidence (96² and 128², 3 wavelengths, OpenCL on PoCL's
 #: CPU device, under load): (128, 256) 2.7-2.8x (64, 64)
 FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (128, 256)
+#: PSD statistics' cells where the light or the exit is this far from the normal or further (degrees) take twice
+#: the NDF normals of :func:`facet_nodes` (:func:`grazing_cells`): there the integrand reaches facets tilted far
+#: into the NDF's tail (a grazing pair scatters through facets tilted 60-70°), where D(m) cos θ_m puts few of its
+#: N_a normals. GGX α 0.05 / 0.1, ABC σ = 10 nm, B = 2 µm, C = 2.6, Al, 550 nm, θ_i 80°, exits 30-85° at φ_o
+#: 0-180° where the lobe is above 1e-3 of its largest value, against a Monte-Carlo facet-frame integral
+#: (tests/twoscale_reference.py): (64, 16) normals max 5.1 / 9.0 % (one pair of 30 beyond 3 % + 3 s.e. each: 85° at
+#: φ_o 45° / 135°), (128, 16) 2.7 / 2.4 % (none); at θ_i 85° (exits to 89°) 25 / 18 % against 6.8 / 2.8 % with
+#: (256, 16). Decided by max(θ_i, θ_o), so a pair and its swap get the same nodes (reciprocal); cost on 64² cells,
+#: 25 wavelengths: 0.12 → 0.19 s per incidence where every cell grazes (θ_i ≥ 70°), 12 % of the cells below it
+FACET_GRAZING_DEG = 70.0
 #: the grid route's (NDF normals, half-vector normals per cell) for a height field: its lobe is speckle (a
 #: windowed patch's |U|² varies on the scale λ/(2L)), which one shared stencil of 64 half-vector normals per cell
 #: reads with a bias: the diffracted albedo came out 1.7-7.6 % above the light the facets scatter (Gaussian patch
@@ -140,6 +150,12 @@ def facet_nodes(micro: Micro, nano: Nano, wavelengths_nm) -> tuple[int, int]:
     kw = micro.kw()
     a = max(kw["alpha"], kw["alpha_y"] or 0.0)
     return FACET_NODES_WIDE if wide_micro_lobe(a, nano_statistics(nano).length_scale) else FACET_NODES_NARROW
+
+
+def grazing_cells(wi, wo) -> np.ndarray:
+    """Cells (n_cells,) bool of exits *wo* (n_cells, 3) that, with the light *wi* (3,), take twice the NDF normals
+    in :func:`facet_frame_diffraction`: max(θ_i, θ_o) ≥ :data:`FACET_GRAZING_DEG` (symmetric in ω_i and ω_o)."""
+    return np.minimum(wi[2], wo[:, 2]) < np.cos(np.radians(FACET_GRAZING_DEG))
 
 
 def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
@@ -414,7 +430,8 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     by the balance heuristic of two fixed node sets: N_a normals with density D(m) cos θ_m (:func:`.facet.ndf_nodes`) and
     N_b normals about the half-vector drawn through the nano lobe's radial law (:func:`.facet.half_vector_nodes`; they
     hold a heavy-tailed NDF's far facets and a nano lobe narrower than the micro lobe); (N_a, N_b) = *nodes* or
-    :func:`facet_nodes`. Both sets are laid out per cell about its half-vector h, in a frame that turns with h
+    :func:`facet_nodes`, whose N_a doubles for PSD statistics in the cells where the pair grazes
+    (:func:`grazing_cells`). Both sets are laid out per cell about its half-vector h, in a frame that turns with h
     about z: they are the same for ω_i and ω_o swapped and for the pair turned about the normal, so the discrete
     sum is reciprocal up to the tables' reads (the integrand is), and a table over incidence at azimuth 0 read
     turned (:class:`waveoptics.brdf.TabulatedTwoScaleBRDF`) keeps it: measured f(ω_i, ω_o)/f(ω_o, ω_i) − 1 ≤ 0.5 %
@@ -497,9 +514,11 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
     stack_other = None if other is None else _facet_stack(nano, w, tgrid, dm, material, other)[0]
+    graze = grazing_cells(wi, wo) & (symmetric and nodes is None)   # PSD statistics' default nodes: 2 N_a there
+    na_cell = np.where(graze, 2 * na, na)
     out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
                               facet_thetas(nano), device=device, precision=precision, first=first,
-                              projected=symmetric)
+                              projected=symmetric, graze=graze)
            if facet_frame_backend(backend, micro, nano) == "opencl" else None)
 
     def add(m, valid):
@@ -515,7 +534,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         mh = np.clip(h @ m if m.ndim == 1 else np.sum(m * h, axis=-1), 0.0, 1.0)
         pb = np.where(mh > 0, rad.pdf_r(level, 2 * cos_d * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
                       * 4 * cos_d ** 2 * mh, 0.0)
-        den = na * pa + nb * pb
+        den = na_cell * pa + nb * pb
         ok = valid & (im > 0) & (om > 0) & (den > 0) & (D > 0)
         if not ok.any():
             return
@@ -543,8 +562,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     if out is None:   # the NumPy twin of kernels/facet_frame.cl
         out = np.zeros((wo.shape[0], w.size))
         pair = stack if first is None else np.concatenate([stack, first], axis=-1)   # one gather for both
-        for m in (ndf_nodes(na, e2, ndf=ndf, ax=ax, ay=ay, c=c) if symmetric else m_a):
-            add(m, np.ones(wo.shape[0], bool))
+        for n_a, cells in ((na, ~graze), (2 * na, graze)) if symmetric else ((na, None),):   # 2 N_a where it grazes
+            m_n = m_a if cells is None else ndf_nodes(n_a, e2, ndf=ndf, ax=ax, ay=ay, c=c) if cells.any() else ()
+            for m in m_n:
+                add(m, np.ones(wo.shape[0], bool) if cells is None else cells)
         for s_k, cp, sp in half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):
             ok = s_k < 1                                      # a tilt s from h sends ω_i to q = 2k cosθ_d s
             s_k = np.where(ok, s_k, 0.0)
