@@ -121,7 +121,7 @@ def warm_facet_frame_kernel(micro, nano, diffraction, polarization: str = "unpol
             rt, dt, kern = facet_frame_kernel(micro, mix=mix, blend=blend, projected=True, device=device,
                                               precision=precision)
             dummy = cl.Buffer(rt.context, cl.mem_flags.READ_WRITE, 64)
-            kern(rt.queue, (LOCAL_SIZE,), (LOCAL_SIZE,), *[dummy] * 13, *[dt(0)] * 11, *[np.int32(0)] * 11).wait()
+            kern(rt.queue, (LOCAL_SIZE,), (LOCAL_SIZE,), *[dummy] * 14, *[dt(0)] * 11, *[np.int32(0)] * 11).wait()
         except (WaveopticsError, cl.Error):   # the real call raises it where it belongs
             return
 
