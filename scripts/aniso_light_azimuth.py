@@ -6,11 +6,19 @@ Al, Beckmann α 0.15 × 0.4, Gaussian σ 15 nm, T 1.5 µm, 550 nm, 64² cells. T
 tables at a light φ_i in [0°, 90°] (every 7.5°) is compared with the lobe computed at that light itself, at exits to
 60° where it is above 1 % of its peak: the 90th percentile and the max of |read / lobe − 1|.
 
-Candidates: ``shift`` (the tables in the surface's frame, read at each node's mirror point plus the offset in
-direction cosines, blended linearly in φ_i: today's), ``turn-lin`` (each node's table read turned with the light,
-blended linearly in φ_i), ``turn-log`` (turned, the monotone cubic of log f across φ_i over four nodes).
+Candidates (each node's table read at ω_o, then blended across φ_i; a node whose point lies beyond its horizon drops
+out): ``shift`` (the tables in the surface's frame, read at each node's mirror point plus the offset in direction
+cosines: the read before issue 28), ``turn`` (each node's table turned with the light: the NDF's axes turn under
+it, as the rim tables are read), ``half`` (each node read at the exit whose half-vector with the node's light is
+(ω_i, ω_o)'s, times cos θ_o' / cos θ_o: :func:`waveoptics.brdf.tabulated_reads.half_vector_exit`); blended ``-lin``
+(linearly), ``-log`` (the monotone cubic of log f over four nodes, as the rim tables), ``-pchip`` (the monotone
+cubic of f), ``-cr`` (Catmull-Rom of f) or ``-near`` (the nearest node); ``lib`` is the library's own read.
+``between`` reads θ_i 30° and 60° midway between incidence nodes 25/35° and 55/65° (the library's 12-azimuth
+half-vector read against the shifted read of 4 nodes).
 
-Run: PYTHONPATH=$PWD python scripts/aniso_light_azimuth.py [cache.npz]
+Run: PYTHONPATH=$PWD python scripts/aniso_light_azimuth.py [cache.npz] [N:kind,kind ...]   (default: all of N
+4, 8, 12, 16, 24), or ... [cache.npz] between [cache_between.npz]. Its numbers are quoted at
+``waveoptics.brdf.tabulated.PHI_NODES_ANISOTROPIC_NDF`` and in that module's doc.
 """
 from __future__ import annotations
 
