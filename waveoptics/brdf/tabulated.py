@@ -39,8 +39,9 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   the nodes within 1.4 % of the facet-frame sum at 80-88°, where the shifted direction-cosine cells read 2.0-2.4x
   it; near the horizon the lobe changes by orders of magnitude with the light's azimuth, and the former linear
   blend of the 4 main nodes' rim tables read it up to 7.2x at φ_i 45°: tests/test_anisotropic_rim.py). The 12
-  main azimuths cost 1.6x the CPU time of 4 to build (64², 3 wavelengths, rim tables: 30 → 49 s, under load):
-  the facet-frame kernel's time per incidence, 0.21 s per main lobe and 0.09 s per rim table, dominates.
+  main azimuths cost 1.6x the CPU time of 4 to build (64², rim tables, under load: 3 wavelengths 30 → 49 s, 25
+  wavelengths 48 → 77 s): the facet-frame kernel's time per incidence (3 wavelengths: 0.21 s per main lobe, 0.09 s
+  per rim table) dominates.
 
 Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes up to θ_o 65° (beyond, to the
 rim tables' interpolation: within 0.6 % to 80°, 1 % to 85°); between 10° nodes the
