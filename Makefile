@@ -26,18 +26,23 @@ demo: $(STAMP)
 	$(VENV)/bin/waveoptics render --material gold --micro-alpha 0.05 --nano abc:sigma=50nm,B=1um,C=2.6 \
 		--environment studio --no-ground --sphere-size 128 --spp 256 -o out/render --overwrite
 
+# one BLAS thread per pytest-xdist worker: the workers already use every core, and OpenBLAS's threads spin while
+# they wait for a core (tests/test_band_renormalization_mom.py, 2 workers: 82 s -> 34 s wall for its group, 95 -> 54 s
+# of CPU); the library's own threads and the OpenCL device are left as they are
+TEST_ENV := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
+
 # whole files to each worker, the longest first (tests/conftest.py): a file's fixtures and caches are built once;
 # a worker that crashes (a hung test, faulthandler_timeout) is restarted at most twice
 test: $(STAMP)
-	$(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile --no-loadscope-reorder --max-worker-restart 2
+	$(TEST_ENV) $(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile --no-loadscope-reorder --max-worker-restart 2
 
 # the edit loop: everything but the slow tests (marked by hand, or recorded above 0.5 s in tests/durations.json), <= 2 min
 test-fast: $(STAMP)
-	$(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile --no-loadscope-reorder -m "not slow"
+	$(TEST_ENV) $(PY) -m pytest -q -ra -n $(JOBS) --dist loadfile --no-loadscope-reorder -m "not slow"
 
 # re-measure every test's wall time into tests/durations.json (which tests make test-fast leaves out)
 durations: $(STAMP)
-	$(PY) -m pytest -q -ra -n $(JOBS) --store-durations
+	$(TEST_ENV) $(PY) -m pytest -q -ra -n $(JOBS) --store-durations
 
 # recompute every docs page's data (slow: benchmarks and studies) and render it
 docs: $(STAMP)
