@@ -62,6 +62,7 @@ from ..errors import FieldError
 from .protocol import TwoScaleParts
 from .ndf import ndf_by_name
 from .shadowing import shadowing_by_name
+from .facet import (BRIDGE_NODES, bridge_density, bridge_nodes, bridge_point)
 from .facet import (wide_micro_lobe, COS_LEVELS, RADIAL_BINS, NanoRadial, local_pair, facet_basis, from_facet, quadrature_density,
                     quadrature_normals, sampler_normals, to_facet, unit_nodes)
 from .directions import dot_last
@@ -222,7 +223,8 @@ class TwoScaleBRDF(TwoScaleParts):
         return np.where((wi[:, 2] > 0) & (wo[:, 2] > 0), out, 0.0)
 
     def _f_diffraction_chunk(self, wi, wo, lam):
-        """Walter's integral over facet normals m by the balance heuristic of two node sets (module doc)."""
+        """Walter's integral over facet normals m by the balance heuristic of two node sets (module doc) and, in a
+        lobe's deep tail, the bridge normals (:func:`waveoptics.brdf.facet.bridge_point`)."""
         up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
         wi = np.where(up[:, None], wi, [0.0, 0.0, 1.0])
         wo = np.where(up[:, None], wo, [0.0, 0.0, 1.0])
@@ -236,6 +238,14 @@ class TwoScaleBRDF(TwoScaleParts):
         level = rad.level(cos_d)
         m, valid = quadrature_normals(h, cos_d, rad, level, self.nodes // 2, ndf=ndf, ax=ax, ay=ay,
                                       c=self.ndf_shape)
+        # a third set about the bridge point where the integrand peaks between both sets' normals (a lobe's deep
+        # tail), its terms times the pair's β (:func:`waveoptics.brdf.facet.bridge_point`)
+        mc, bw, beta = bridge_point(h, cos_d, rad, level, (na, na), ndf=ndf, ax=ax, ay=ay, c=self.ndf_shape)
+        share = np.ones(m.shape[:2])
+        if beta.any():
+            mb, okb = bridge_nodes(mc, bw, h)
+            m, valid = np.concatenate([m, mb], axis=1), np.concatenate([valid, okb], axis=1)
+            share = np.concatenate([share, np.broadcast_to(beta[:, None], okb.shape)], axis=1)
         wi_b = np.broadcast_to(wi[:, None, :], m.shape)
         wo_b = np.broadcast_to(wo[:, None, :], m.shape)
         im = dot_last(wi_b, m)
@@ -243,6 +253,8 @@ class TwoScaleBRDF(TwoScaleParts):
         D = spec.D(m, ax, ay, self.ndf_shape)
         # densities of both node sets at every node, symmetric in ω_i and ω_o: D(m) cos θ_m and the radial law
         den = quadrature_density(m, D, h, cos_d, rad, level, na)
+        if beta.any():
+            den = den + BRIDGE_NODES * beta[:, None] * bridge_density(m, mc, bw, h)
         # the integrand |i·m||o·m| / (|i·n||o·n|) f_nano(i_m, o_m) G(i, o, m) D(m)
         ok = valid & (im > 0) & (om > 0) & (den > 0)
         li, lo = local_pair(im, om, dot_last(wi, wo)[:, None])
@@ -251,7 +263,7 @@ class TwoScaleBRDF(TwoScaleParts):
         shape = m.shape[:2]
         gfn, _ = shadowing_by_name(self.micro.shadowing)
         G = gfn(wi_b, wo_b, m, lambda w: np.broadcast_to((Li if w is wi_b else Lo)[:, None], shape))
-        val = im * om * fn * G * D / np.where(ok, den, 1.0)
+        val = share * im * om * fn * G * D / np.where(ok, den, 1.0)
         out = np.sum(np.where(ok, val, 0.0), axis=1)
         return np.where(up, out / (np.maximum(wi[:, 2], 1e-300) * np.maximum(wo[:, 2], 1e-300)), 0.0)
 

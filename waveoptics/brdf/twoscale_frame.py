@@ -17,7 +17,8 @@ from ..materials import cos2_eta_i, facet_sp_mix
 from ..runtime import parallel_map
 from ..scatter.grid import DirectionGrid
 from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weight, uses_vector_first_order
-from .facet import FACET_NODE_SPLIT, FACET_REFERENCE_NM, half_vector_nodes, ndf_nodes, wide_micro_lobe
+from .facet import (BRIDGE_NODES, FACET_NODE_SPLIT, FACET_REFERENCE_NM, bridge_density, bridge_nodes, bridge_point,
+                    half_vector_nodes, ndf_nodes, wide_micro_lobe)
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_energy import facet_budget
 from .field_lobe import (field_anisotropy, field_cell_split, field_first_order_over_fresnel,
@@ -402,6 +403,15 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=Fa
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 
+def _bridge(symmetric: bool, h, cos_d, rad, level, nodes, **ndf):
+    """PSD statistics' third set of normals in :func:`facet_frame_diffraction`: (bridge point, widths, β) of each
+    cell about the point where the integrand peaks between the NDF's normals and the half-vector's (a lobe's deep
+    tail; :func:`.facet.bridge_point`); a height field's (its nodes' layout is not symmetric): none."""
+    if symmetric:
+        return bridge_point(h, cos_d, rad, level, nodes, **ndf)
+    return h, np.zeros((h.shape[0], 2)), np.zeros(h.shape[0])
+
+
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
                             diffraction="kirchhoff", polarization: str = "unpolarized",
                             table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None,
@@ -414,7 +424,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     by the balance heuristic of two fixed node sets: N_a normals with density D(m) cos θ_m (:func:`.facet.ndf_nodes`) and
     N_b normals about the half-vector drawn through the nano lobe's radial law (:func:`.facet.half_vector_nodes`; they
     hold a heavy-tailed NDF's far facets and a nano lobe narrower than the micro lobe); (N_a, N_b) = *nodes* or
-    :func:`facet_nodes`. Both sets are laid out per cell about its half-vector h, in a frame that turns with h
+    :func:`facet_nodes`; for PSD statistics, in a lobe's deep tail where the integrand peaks between both sets'
+    normals, a third: :data:`.facet.BRIDGE_NODES` Gaussian normals about that point, counted β times
+    (:func:`.facet.bridge_point`, :func:`.facet.bridge_nodes`). Both sets are laid out per cell about its
+    half-vector h, in a frame that turns with h
     about z: they are the same for ω_i and ω_o swapped and for the pair turned about the normal, so the discrete
     sum is reciprocal up to the tables' reads (the integrand is), and a table over incidence at azimuth 0 read
     turned (:class:`waveoptics.brdf.TabulatedTwoScaleBRDF`) keeps it: measured f(ω_i, ω_o)/f(ω_o, ω_i) − 1 ≤ 0.5 %
@@ -497,14 +510,15 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
     stack_other = None if other is None else _facet_stack(nano, w, tgrid, dm, material, other)[0]
+    mc, bw, beta = _bridge(symmetric, h, cos_d, rad, level, (na, nb), ndf=ndf, ax=ax, ay=ay, c=c)
     out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
                               facet_thetas(nano), device=device, precision=precision, first=first,
-                              projected=symmetric)
+                              projected=symmetric, bridge=(mc, bw, beta))
            if facet_frame_backend(backend, micro, nano) == "opencl" else None)
 
-    def add(m, valid):
+    def add(m, valid, share=1.0):
         """Add the nodes m (3,) (an anisotropic NDF's node, shared by all cells) or (n_cells, 3) (one node per
-        cell), weighted by the balance heuristic."""
+        cell), weighted by the balance heuristic (a bridge node's term times its cell's β, *share*)."""
         om = wo @ m if m.ndim == 1 else np.sum(wo * m, axis=-1)
         im = m @ wi
         D = spec.D(m, ax, ay, c)
@@ -515,16 +529,17 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         mh = np.clip(h @ m if m.ndim == 1 else np.sum(m * h, axis=-1), 0.0, 1.0)
         pb = np.where(mh > 0, rad.pdf_r(level, 2 * cos_d * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
                       * 4 * cos_d ** 2 * mh, 0.0)
-        den = na * pa + nb * pb
+        den = na * pa + nb * pb + BRIDGE_NODES * beta * bridge_density(np.broadcast_to(m, wo.shape)[:, None], mc,
+                                                                         bw, h)[:, 0]
         ok = valid & (im > 0) & (om > 0) & (den > 0) & (D > 0)
         if not ok.any():
             return
-        wok = wo[ok]
-        Lok = Lo[ok]
+        wok, Lok = wo[ok], Lo[ok]
         Lik = np.full(Lok.shape, Li)
         mk = np.broadcast_to(m, wok.shape) if m.ndim == 1 else m[ok]
         G = gfn(np.broadcast_to(wi, wok.shape), wok, mk, lambda d: Lok if d is wok else Lik)
-        weight = (im * D if m.ndim == 1 else (im * D)[ok]) * G / (wi[2] * wok[:, 2] * den[ok])   # × |ω_o·m| f_nano
+        share = share[ok] if np.ndim(share) else share   # × |ω_o·m| f_nano below
+        weight = (im * D if m.ndim == 1 else (im * D)[ok]) * G * share / (wi[2] * wok[:, 2] * den[ok])
         t, b = facet_basis(mk if m.ndim > 1 else m)
         lx, ly = np.sum(t * wi, axis=-1), np.sum(b * wi, axis=-1)
         r = np.hypot(lx, ly)
@@ -550,6 +565,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
             s_k = np.where(ok, s_k, 0.0)
             m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
             add(m, ok)
+        m_c, ok_c = bridge_nodes(mc, bw, h)
+        for k in range(m_c.shape[1] if beta.any() else 0):
+            add(m_c[:, k], ok_c[:, k], beta)
     diffraction = np.zeros((w.size, grid.n_v, grid.n_u))
     for i, lam in enumerate(w):
         if dm.perturbative:
