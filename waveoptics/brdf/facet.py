@@ -439,8 +439,8 @@ def _bridge_search(h, cos_d, rad: NanoRadial, level, nodes, D, args):
     t = 2.0 * cos_d * np.sqrt(np.maximum(1.0 - mh * mh, 0.0))
     na, nb = nodes
     have = na * D(mc, *args) * mc[:, 2] + nb * rad.pdf_r(level, t) * 4.0 * cos_d ** 2 * mh
-    need = BRIDGE_NODES / (2.0 * np.pi * width[:, 0] * width[:, 1])
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):   # a width 0 where not ok
+        need = BRIDGE_NODES / (2.0 * np.pi * width[:, 0] * width[:, 1])
         weight = np.where(ok, _decade_ramp(BRIDGE_DENSITY * need / have), 0.0)
     return mc, np.minimum(width, 0.5), weight
 
@@ -482,11 +482,9 @@ def bridge_density(m, mc, width, h):
     """Density (1/sr) of :func:`bridge_nodes` at normals *m* (n_pairs, N, 3): the 2-D normal law of the offsets
     (x, y) of m in the tangent plane of the bridge point *mc* (widths *width* (n_pairs, 2)) times m·m_c (the
     projection's Jacobian); 0 where the width is 0 or m·m_c ≤ 0."""
-    e1, e2 = _bridge_frame(mc, h)
     on = width[:, 0] > 0
     sx, sy = (np.where(on, width[:, i], 1.0)[:, None] for i in (0, 1))
-    x, y = np.sum(m * e1[:, None], axis=-1), np.sum(m * e2[:, None], axis=-1)
-    mm = np.sum(m * mc[:, None], axis=-1)
+    x, y, mm = np.moveaxis(np.matmul(m, np.stack([*_bridge_frame(mc, h), mc], axis=-1)), -1, 0)   # m·e1, m·e2, m·mc
     g = np.exp(-0.5 * ((x / sx) ** 2 + (y / sy) ** 2)) / (2.0 * np.pi * sx * sy)
     return np.where(on[:, None] & (mm > 0), g * np.maximum(mm, 0.0), 0.0)
 

@@ -412,6 +412,17 @@ def _bridge(symmetric: bool, h, cos_d, rad, level, nodes, **ndf):
     return h, np.zeros((h.shape[0], 2)), np.zeros(h.shape[0])
 
 
+def _with_bridge(den, m, at, beta, mc, bw, h):
+    """*den* (the NDF and half-vector sets' density N_a p_a + N_b p_b at the nodes *m* of the cells *at*, 1/sr)
+    plus the bridge normals' N_c β p_c (:func:`.facet.bridge_density`) in those of the cells that have them."""
+    on = np.flatnonzero(beta[at] > 0)
+    if on.size:
+        c = at[on]
+        den[on] += BRIDGE_NODES * beta[c] * bridge_density(np.broadcast_to(m, (at.size, 3))[on, None], mc[c], bw[c],
+                                                           h[c])[:, 0]
+    return den
+
+
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
                             diffraction="kirchhoff", polarization: str = "unpolarized",
                             table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None,
@@ -511,34 +522,34 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
     stack_other = None if other is None else _facet_stack(nano, w, tgrid, dm, material, other)[0]
     mc, bw, beta = _bridge(symmetric, h, cos_d, rad, level, (na, nb), ndf=ndf, ax=ax, ay=ay, c=c)
+    on = np.flatnonzero(beta > 0)
     out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
                               facet_thetas(nano), device=device, precision=precision, first=first,
                               projected=symmetric, bridge=(mc, bw, beta))
            if facet_frame_backend(backend, micro, nano) == "opencl" else None)
 
-    def add(m, valid, share=1.0):
-        """Add the nodes m (3,) (an anisotropic NDF's node, shared by all cells) or (n_cells, 3) (one node per
-        cell), weighted by the balance heuristic (a bridge node's term times its cell's β, *share*)."""
-        om = wo @ m if m.ndim == 1 else np.sum(wo * m, axis=-1)
+    def add(m, valid, share=1.0, cells=slice(None)):
+        """Add the nodes m (3,) (an anisotropic NDF's node, shared by the cells) or (n, 3) (one per cell of *cells*,
+        indices or all), weighted by the balance heuristic (a bridge node's term times its cell's β, *share*)."""
+        wo_c, h_c, cd_c, lev_c, Lo_c = wo[cells], h[cells], cos_d[cells], level[cells], Lo[cells]
+        om = wo_c @ m if m.ndim == 1 else np.sum(wo_c * m, axis=-1)
         im = m @ wi
         D = spec.D(m, ax, ay, c)
         if symmetric:   # the NDF nodes' density D(m) cos θ_m, the same for ω_i and ω_o swapped
             pa = D * m[..., 2]
         else:           # a height field's: the micro NDF's sampler for ω_i
             pa = np.where(im > 0, D * im / (1.0 + Li), 0.0) / wi[2] if visible else D * m[..., 2]
-        mh = np.clip(h @ m if m.ndim == 1 else np.sum(m * h, axis=-1), 0.0, 1.0)
-        pb = np.where(mh > 0, rad.pdf_r(level, 2 * cos_d * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
-                      * 4 * cos_d ** 2 * mh, 0.0)
-        den = na * pa + nb * pb + BRIDGE_NODES * beta * bridge_density(np.broadcast_to(m, wo.shape)[:, None], mc,
-                                                                         bw, h)[:, 0]
+        mh = np.clip(h_c @ m if m.ndim == 1 else np.sum(m * h_c, axis=-1), 0.0, 1.0)
+        pb = np.where(mh > 0, rad.pdf_r(lev_c, 2 * cd_c * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
+                      * 4 * cd_c ** 2 * mh, 0.0)
+        den = _with_bridge(na * pa + nb * pb, m, np.arange(wo.shape[0])[cells], beta, mc, bw, h)
         ok = valid & (im > 0) & (om > 0) & (den > 0) & (D > 0)
         if not ok.any():
             return
-        wok, Lok = wo[ok], Lo[ok]
-        Lik = np.full(Lok.shape, Li)
+        wok, Lok, Lik = wo_c[ok], Lo_c[ok], np.full(int(ok.sum()), Li)
         mk = np.broadcast_to(m, wok.shape) if m.ndim == 1 else m[ok]
         G = gfn(np.broadcast_to(wi, wok.shape), wok, mk, lambda d: Lok if d is wok else Lik)
-        share = share[ok] if np.ndim(share) else share   # × |ω_o·m| f_nano below
+        share = share[cells][ok] if np.ndim(share) else share   # × |ω_o·m| f_nano below
         weight = (im * D if m.ndim == 1 else (im * D)[ok]) * G * share / (wi[2] * wok[:, 2] * den[ok])
         t, b = facet_basis(mk if m.ndim > 1 else m)
         lx, ly = np.sum(t * wi, axis=-1), np.sum(b * wi, axis=-1)
@@ -552,7 +563,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
             g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo, projected=symmetric,
                                                         thetas_deg=facet_thetas(nano))}
             g = facet_sp_mix(g_sp["s"], g_sp["p"], cos2_eta_i(wi, mk)[:, None], polarization)
-        out[ok] += weight[:, None] * g
+        out[np.arange(wo.shape[0])[cells][ok]] += weight[:, None] * g
 
     e1, e2 = meridian_basis(h) if symmetric else facet_basis(h)
     if out is None:   # the NumPy twin of kernels/facet_frame.cl
@@ -565,9 +576,9 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
             s_k = np.where(ok, s_k, 0.0)
             m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
             add(m, ok)
-        m_c, ok_c = bridge_nodes(mc, bw, h)
-        for k in range(m_c.shape[1] if beta.any() else 0):
-            add(m_c[:, k], ok_c[:, k], beta)
+        m_c, ok_c = bridge_nodes(mc[on], bw[on], h[on])
+        for k in range(m_c.shape[1] if on.size else 0):   # in the cells that have a bridge only
+            add(m_c[:, k], ok_c[:, k], beta, on)
     diffraction = np.zeros((w.size, grid.n_v, grid.n_u))
     for i, lam in enumerate(w):
         if dm.perturbative:
