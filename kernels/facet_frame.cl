@@ -56,9 +56,10 @@ inline real_t tangent_weight(real_t theta)
 #endif
 /* wavelengths accumulated per pass (the host loops over passes) */
 #define WO_NL 32
-/* per-cell record: wo (3), h (3), cos phi_h, sin phi_h, cos theta_d, Lambda(wo), the bridge point m_c (3), its
- * Gaussian's widths towards h and across (2; 0: no bridge nodes) and its weight beta (twin facet.bridge_point) */
-#define WO_CELL 16
+/* per-cell record: wo (3), h (3), cos phi_h, sin phi_h, cos theta_d, Lambda(wo), grazes (1: 2 na NDF nodes), the
+ * bridge point m_c (3), its Gaussian's widths towards h and across (2; 0: no bridge nodes) and its weight beta
+ * (twin facet.bridge_point) */
+#define WO_CELL 17
 
 /* G from the precomputed Lambda(wi), Lambda(wo) (Heitz 2014 eqs. 98, 99); the forms without Lambda from
  * microfacet.h (Cook & Torrance 1982 eq. 5; implicit) */
@@ -226,13 +227,15 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
 
 /* out[i * n_lam + l0 + l] = the sum over both node sets at cell i, wavelengths l0 .. l0 + nl - 1 (nl <= WO_NL).
  * m0 (na, 3): NDF nodes at half-vector azimuth 0 (WO_ISO; else those of the isotropic law the anisotropic NDF
- * stretches, turned to h's unstretched azimuth and stretched per cell); hv_r, hv_pdf (levels,
+ * stretches, turned to h's unstretched azimuth and stretched per cell); m0_hi (2 na, 3): the same law's 2 na
+ * nodes, for the cells whose record says they graze (twin: grazing_cells); hv_r, hv_pdf (levels,
  * n_base): the half-vector nodes' offset radii and their radial density; hv_phi (nb, 2): cos, sin of their
  * azimuths about h; edges (n_bins + 1), density (levels, n_bins): the radial law in direction-cosine units;
  * bc (nc, 2): the bridge nodes' offsets in units of the cell's widths (twin facet.bridge_offsets), about the cell's
  * bridge point where its record gives widths > 0 (Nc = nc nodes more; each set's density then adds Nc pc). */
 __kernel void facet_frame_sum(__global const real_t *cell, __global const int *level,
-                              __global const real_t *m0, __global const real_t *hv_r,
+                              __global const real_t *m0, __global const real_t *m0_hi,
+                              __global const real_t *hv_r,
                               __global const real_t *hv_pdf, __global const real_t *hv_phi,
                               __global const real_t *edges, __global const real_t *density,
                               __global const real_t *thetas, __global const real_t *cs_theta,
@@ -254,6 +257,9 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
     real3_t wo = (real3_t)(rec[0], rec[1], rec[2]);
     real3_t h = (real3_t)(rec[3], rec[4], rec[5]);
     real_t cphi = rec[6], sphi = rec[7], cos_d = rec[8], Lo = rec[9];
+    bool graze = rec[10] > R(0.5);
+    int na_c = graze ? 2 * na : na;
+    __global const real_t *mk = graze ? m0_hi : m0;
     int lev = level[i];
     /* the macro s direction z x wi (guard: at normal incidence the macro plane is x-z, s along y) */
     real_t nm = sqrt(wix * wix + wiy * wiy);
@@ -263,10 +269,10 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
     real3_t e2 = (real3_t)(-sphi, cphi, R(0.0));
     real_t acc[WO_NL];
     for (int l = 0; l < WO_NL; ++l) acc[l] = R(0.0);
-    real_t fna = (real_t)na, fnb = (real_t)nb;
+    real_t fna = (real_t)na_c, fnb = (real_t)nb;
     /* the bridge point and its frame (twin facet._bridge_frame); add_node's pb carries Nc pc / Nb */
-    real3_t mc = (real3_t)(rec[10], rec[11], rec[12]);
-    real_t bsx = rec[13], bsy = rec[14], beta = rec[15];
+    real3_t mc = (real3_t)(rec[11], rec[12], rec[13]);
+    real_t bsx = rec[14], bsy = rec[15], beta = rec[16];
     bool bridge = bsx > R(0.0) && beta > R(0.0) && nc > 0 && nb > 0;
     real3_t bp = h - dot(h, mc) * mc, bq;
     if (length(bp) > R(1e-12)) bp = normalize(bp); else facet_basis(mc, &bp, &bq);
@@ -281,8 +287,8 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
     real_t rpsi = sqrt(cphi * cphi / (kx * kx) + sphi * sphi / (ky * ky));
     real_t cpsi = cphi / kx / rpsi, spsi = sphi / ky / rpsi;
 #endif
-    for (int k = 0; k < na; ++k) {
-        real3_t m = (real3_t)(m0[3 * k], m0[3 * k + 1], m0[3 * k + 2]);
+    for (int k = 0; k < na_c; ++k) {
+        real3_t m = (real3_t)(mk[3 * k], mk[3 * k + 1], mk[3 * k + 2]);
 #if WO_ISO
         m = (real3_t)(cphi * m.x - sphi * m.y, sphi * m.x + cphi * m.y, m.z);
 #else

@@ -3,6 +3,7 @@ quadrature of the library against a brute-force 2-D sum written here, the closed
 incidence, the limits, and a generated height field against its own statistics."""
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -222,13 +223,19 @@ def test_two_scale_albedo_is_fresnel_on_the_psd_route_without_capping(kind, kw):
             assert L.info["diffraction_energy_scale"] == [1.0]
 
 
+@functools.cache
+def _gauss_legendre(n):
+    """Gauss-Legendre nodes and weights on [-1, 1] (NumPy's, an eigenvalue problem of 1 s at n = 400: made once)."""
+    return np.polynomial.legendre.leggauss(n)
+
+
 def _ggx_facet_reflectance(theta_deg, alpha, F):
     """∫ F(ω_i·m) G1(ω_i, m) (ω_i·m)⁺ D(m) dm / cos θ_i: the light the micro facets reflect before masking on the
     way out, GGX D and its Smith G1 written here (Walter et al. 2007, eqs. 33-34), by a product rule in
     (tan θ_m, φ_m)."""
     t = math.radians(theta_deg)
     wi = np.array([math.sin(t), 0.0, math.cos(t)])
-    x, wx = np.polynomial.legendre.leggauss(400)
+    x, wx = _gauss_legendre(400)
     u = 0.5 * (x + 1)                                    # tan θ_m = α u / (1 − u) covers [0, ∞)
     tan_m, dtan = alpha * u / (1 - u), 0.5 * wx * alpha / (1 - u) ** 2
     phi = (np.arange(256) + 0.5) * (2 * math.pi / 256)

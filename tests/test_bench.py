@@ -4,12 +4,11 @@ widths, fast-math, the naive baseline) against the float64 NumPy twin in float32
 the math built-ins, the NumPy alternatives the benchmark compares with, and the ``bench`` CLI's output shape.
 """
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
+from cli_helpers import run_cli
 from waveoptics import scatter
 from waveoptics import bench
 from waveoptics.surfaces.heightfield import HeightField
@@ -139,10 +138,9 @@ def test_math_errors_measures_the_builtins(rt):
 
 def test_bench_cli_quick_json(tmp_path):
     out = tmp_path / "b"
-    r = subprocess.run([sys.executable, "-m", "waveoptics", "bench", "--quick", "--json", "-o", str(out)],
-                       capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, r.stderr
-    res = json.loads(r.stdout)
+    rc, stdout, stderr, _ = run_cli(["bench", "--quick", "--json", "-o", str(out)])
+    assert rc == 0, stderr
+    res = json.loads(stdout)
     assert {"machine", "direct", "direct_scaling", "fft_backends", "fft_pipeline", "math_errors"} <= set(res)
     assert len(res["direct_scaling"]["by_samples"]) >= 4 and len(res["direct_scaling"]["by_directions"]) >= 4
     names = {row["name"] for row in res["direct"]["rows"]}
@@ -150,6 +148,5 @@ def test_bench_cli_quick_json(tmp_path):
     for row in res["direct"]["rows"]:
         assert row["terms_per_s"] > 0 and row["error"] < 1e-3
     assert (out / "bench.json").is_file() and "Direct Kirchhoff sum" in (out / "bench.md").read_text()
-    r2 = subprocess.run([sys.executable, "-m", "waveoptics", "bench", "--quick", "-o", str(out)],
-                        capture_output=True, text=True, timeout=300)
-    assert r2.returncode == 2 and "already exists" in r2.stderr
+    rc, _, stderr, _ = run_cli(["bench", "--quick", "-o", str(out)])
+    assert rc == 2 and "already exists" in stderr

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from waveoptics import brdf, scatter
-from waveoptics.brdf import Micro, MicrofacetBRDF, TwoScaleBRDF, chi2_test
+from waveoptics.brdf import Micro, MicrofacetBRDF, TwoScaleBRDF, chi2_test, reflected_samples
 from waveoptics.cli import main as cli_main
 from waveoptics.request import make_nano
 from waveoptics.scatter.grid import DirectionGrid
@@ -178,9 +178,7 @@ def _tiny_surface():
 def _chi2(b, theta, lam=550.0, **kw):
     wi = _dir(theta)
 
-    def sample(u):
-        s = b.sample(wi, lam, u)
-        return np.where((s.weight > 0)[:, None], s.wo, np.nan)
+    sample = reflected_samples(b, wi, lam)
     return chi2_test(sample, lambda d: b.pdf(wi, d, lam), **kw)
 
 

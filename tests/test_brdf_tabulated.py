@@ -12,7 +12,7 @@ from scipy import special
 
 from waveoptics import brdf, colour
 from waveoptics.renderers import sphere as render
-from waveoptics.brdf import Micro, MicrofacetBRDF, TabulatedTwoScaleBRDF, chi2_test
+from waveoptics.brdf import Micro, MicrofacetBRDF, TabulatedTwoScaleBRDF, chi2_test, reflected_samples
 from waveoptics.request import make_nano
 from waveoptics.scatter.grid import DirectionGrid
 
@@ -121,9 +121,7 @@ def test_a_wavelength_outside_the_table_is_refused(table):
 def test_sampling_passes_chi2(table, theta):
     wi = _dir(theta)
 
-    def sample(u):
-        s = table.sample(wi, 550.0, u)
-        return np.where((s.weight > 0)[:, None], s.wo, np.nan)
+    sample = reflected_samples(table, wi, 550.0)
     r = chi2_test(sample, lambda d: table.pdf(wi, d, 550.0), sample_count=100_000, res=41, ires=12, test_count=2)
     assert r.passed, r.message
     assert r.pdf_integral == pytest.approx(r.valid_fraction, abs=1e-2)

@@ -3,14 +3,13 @@
 float64 sum, docs/physics.md §1), the budget, the JSON layout and the CLI. Nothing here checks a timing.
 """
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from cli_helpers import run_cli
 from waveoptics.study import accuracy_cost as cost
 from waveoptics.scatter.grid import DirectionGrid
 from waveoptics.errors import WaveopticsError
@@ -162,21 +161,21 @@ def test_bad_inputs_raise_one_clear_error():
 
 def test_cli_cost(tmp_path):
     out = tmp_path / "c"
-    args = [sys.executable, "-m", "waveoptics", "cost", "--generator", "sinusoid:amplitude=30nm,period=0.8um",
+    args = ["cost", "--generator", "sinusoid:amplitude=30nm,period=0.8um",
             "--size", "3.2um", "--samples", "16", "--resolutions", "4,8", "--solvers", "fft,direct",
             "--precisions", "float32", "--illuminant", LASER, "--target-error", "0.5", "--json", "-o", str(out)]
-    r = subprocess.run(args, capture_output=True, text=True, timeout=300)
-    assert r.returncode == 0, r.stderr
-    res = json.loads(r.stdout)
+    rc, stdout, stderr, _ = run_cli(args)
+    assert rc == 0, stderr
+    res = json.loads(stdout)
     assert {"reference", "settings", "pareto"} <= set(res)
     assert {"solver", "resolution", "wavelengths", "precision", "error_rel_l2", "error_albedo", "delta_e2000",
             "time_s"} <= set(res["settings"][0])
     assert all((out / f).is_file() for f in cost.FILES)
     assert (out / "cost.png").read_bytes()[:4] == b"\x89PNG"
-    again = subprocess.run(args, capture_output=True, text=True, timeout=300)
-    assert again.returncode == 2 and "already exists" in again.stderr
-    bad = subprocess.run(args[:-3] + ["--resolutions", "5,8"], capture_output=True, text=True, timeout=300)
-    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "divide" in bad.stderr
+    rc, _, stderr, _ = run_cli(args)
+    assert rc == 2 and "already exists" in stderr
+    rc, _, stderr, _ = run_cli(args[:-3] + ["--resolutions", "5,8"])
+    assert rc == 2 and len(stderr.strip().splitlines()) == 1 and "divide" in stderr
 
 
 def test_default_fft_reference_agrees_with_the_direct_reference(small_study):

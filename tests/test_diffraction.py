@@ -9,9 +9,8 @@ fast on 2 cores.
 """
 import json
 import math
-import subprocess
-import sys
 import warnings
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -19,6 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.special import jv
 
+from cli_helpers import run_cli
 from waveoptics import brdf, scatter
 from waveoptics import io, surfaces
 from waveoptics.errors import WaveopticsError
@@ -415,7 +415,9 @@ def test_spectral_exr_layout(tmp_path):
 
 
 def _cli(*args):
-    return subprocess.run([sys.executable, "-m", "waveoptics", *args], capture_output=True, text=True)
+    """``waveoptics ARGS`` in-process (the console script itself is run by tests/test_bad_input.py)."""
+    rc, out, err, _ = run_cli(args)
+    return SimpleNamespace(returncode=rc, stdout=out, stderr=err)
 
 
 def test_cli_scatter_and_brdf(tmp_path):

@@ -148,3 +148,21 @@ def test_wavelengths_in_passes(monkeypatch):
 
     monkeypatch.setattr(facet_frame_cl, "KERNEL_WAVELENGTHS", 1)
     _assert_twins(*_both(30.0, Micro(alpha=0.3, ndf="ggx")), "one wavelength per pass")
+
+
+@pytest.mark.parametrize("diffraction,polarization", [("kirchhoff", "unpolarized"), ("rayleigh-rice", "s")])
+def test_the_warm_up_launch_matches_the_kernels_arguments(monkeypatch, diffraction, polarization):
+    """The warm-up thread launches the kernel over no cells with as many arguments as the kernel takes: a mismatch
+    raised in the thread, where no test saw it and the warm-up was lost (found when the kernel gained an argument)."""
+    import threading
+
+    from waveoptics import scatter
+    from waveoptics.brdf.facet_frame_cl import warm_facet_frame_kernel
+
+    raised = []
+    monkeypatch.setattr(threading, "excepthook", lambda args: raised.append(args.exc_value))
+    thread = warm_facet_frame_kernel(Micro(alpha=0.1), NANO, scatter.get_model(diffraction, perturbative=True),
+                                     polarization)
+    assert thread is not None
+    thread.join()
+    assert not raised, raised

@@ -8,7 +8,7 @@ import pytest
 
 from cli_helpers import run_cli
 from waveoptics import brdf, surfaces
-from waveoptics.brdf import chi2_test
+from waveoptics.brdf import chi2_test, reflected_samples
 
 SIGMA, T = 20e-9, 0.6e-6
 ALPHA = 2 * SIGMA / T
@@ -73,9 +73,7 @@ def test_sampling_passes_chi2(table):
     for theta in (30.0, 70.0):
         wi = _dir(theta)
 
-        def sample(u):
-            s = b.sample(wi, 550.0, u)
-            return np.where((s.weight > 0)[:, None], s.wo, np.nan)
+        sample = reflected_samples(b, wi, 550.0)
         # the piecewise-constant pdf needs a finer trapezoid rule per cell for the expected counts (ires 16;
         # with 6 its own integration error is rejected)
         r = chi2_test(sample, lambda d: b.pdf(wi, d, 550.0), sample_count=200_000, res=41, ires=16, test_count=3)

@@ -127,7 +127,7 @@ def _assert_close(got, want, what):
                                           ("scalar_rgb", "dielectric"), ("llvm_ad_spectral", "anisotropic"),
                                           ("scalar_spectral", "dielectric"), ("scalar_rgb", "burley"),
                                           ("scalar_rgb", "oren-nayar"), ("llvm_ad_rgb", "rim"),
-                                          ("scalar_rgb", "rim")])
+                                          ("scalar_rgb", "rim"), ("scalar_rgb", "anisotropic")])
 def test_eval_and_pdf_equal_the_numpy_model(variant, case):
     mi, name = _plugin(variant, case)
     model = _model(case)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from waveoptics.brdf import F_ms, Micro, MicrofacetBRDF, chi2_test
+from waveoptics.brdf import F_ms, Micro, MicrofacetBRDF, chi2_test, reflected_samples
 
 
 def _dir(theta_deg):
@@ -47,9 +47,7 @@ def test_reciprocity_and_sampling_with_compensation():
     np.testing.assert_allclose(b.eval(wi, wo, 550.0), b.eval(wo, wi, 550.0), rtol=1e-10)
     d = _dir(50)
 
-    def sample(u):
-        s = b.sample(d, 550.0, u)
-        return np.where((s.weight > 0)[:, None], s.wo, np.nan)
+    sample = reflected_samples(b, d, 550.0)
     r = chi2_test(sample, lambda x: b.pdf(d, x, 550.0), sample_count=100_000, res=41, ires=6)
     assert r.passed, r.message
 
@@ -72,9 +70,7 @@ def test_diffuse_and_compensation_sampling_of_a_dielectric_passes_chi2():
     b = MicrofacetBRDF("PMMA", Micro(alpha=1.0, ndf="beckmann"), kd=0.8, multiple_scattering=True)
     d = _dir(70)
 
-    def sample(u):
-        s = b.sample(d, 450.0, u)
-        return np.where((s.weight > 0)[:, None], s.wo, np.nan)
+    sample = reflected_samples(b, d, 450.0)
     r = chi2_test(sample, lambda x: b.pdf(d, x, 450.0), sample_count=100_000, res=41, ires=6)
     assert r.passed, r.message
 
@@ -149,11 +145,7 @@ def test_two_scale_multiple_scattering_sampling_passes_chi2():
     b = brdf.TwoScaleBRDF(material="gold", micro=brdf.Micro(alpha=0.7, ndf="ggx"), nano=nano, multiple_scattering=True,
                           nodes=64)
     wi = np.array([np.sin(0.6), 0.0, np.cos(0.6)])
-
-    def sample(u):
-        s = b.sample(wi, 550.0, u)
-        return np.where((s.weight > 0)[:, None], s.wo, np.nan)
-
+    sample = reflected_samples(b, wi, 550.0)
     res = brdf.chi2_test(sample, lambda d: b.pdf(wi, d, 550.0), sample_count=100_000, seed=3)
     assert res.passed, res.message
 

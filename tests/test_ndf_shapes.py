@@ -1,6 +1,7 @@
 """The EPD (Holzschuch & Pacanowski 2017) and SGD (Bagher, Soler & Holzschuch 2012) NDFs (issue 16): their D
 against the papers' formulas written here, normalization, the Smith identity, the Beckmann limit of the EPD,
 the incomplete gamma function behind the SGD, sampling (χ²), reciprocity and the command line."""
+import functools
 import math
 
 import numpy as np
@@ -9,7 +10,7 @@ from scipy import integrate
 
 from cli_helpers import run_cli
 from waveoptics import brdf
-from waveoptics.brdf import Micro, MicrofacetBRDF, chi2_test
+from waveoptics.brdf import Micro, MicrofacetBRDF, chi2_test, reflected_samples
 from waveoptics.brdf.ndf_shaped import gamma_upper
 
 
@@ -18,7 +19,9 @@ def _dir(theta_deg, phi_deg=0.0):
     return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t) * np.ones_like(p)], axis=-1)
 
 
+@functools.cache
 def _gamma_upper_quad(a, y):
+    """Γ(a, y) by quadrature of its integral (made once per (a, y): the slope laws below call it per point)."""
     return integrate.quad(lambda t: t ** (a - 1) * math.exp(-t), y, np.inf, limit=200)[0]
 
 
@@ -92,9 +95,7 @@ def test_sampling_passes_chi2(ndf, alpha, p):
     for theta in (30.0, 75.0):
         wi = _dir(theta)
 
-        def sample(u):
-            s = b.sample(wi, 550.0, u)
-            return np.where((s.weight > 0)[:, None], s.wo, np.nan)
+        sample = reflected_samples(b, wi, 550.0)
         r = chi2_test(sample, lambda d: b.pdf(wi, d, 550.0), sample_count=100_000, res=41, ires=6,
                       test_count=2 * len(CASES))
         assert r.passed, (theta, r.message)
@@ -245,9 +246,7 @@ def test_anisotropic_sampling_passes_chi2(ndf, ax, ay, p):
     for theta, phi in ((30.0, 0.0), (60.0, 70.0)):
         wi = _dir(theta, phi)
 
-        def sample(u):
-            s = b.sample(wi, 550.0, u)
-            return np.where((s.weight > 0)[:, None], s.wo, np.nan)
+        sample = reflected_samples(b, wi, 550.0)
         r = chi2_test(sample, lambda d: b.pdf(wi, d, 550.0), sample_count=100_000, res=41, ires=6,
                       test_count=2 * len(ANISO))
         assert r.passed, (theta, phi, r.message)

@@ -181,6 +181,36 @@ def test_scratches_geometry():
     assert many.heights.min() >= -1.3 * d - 1e-18 and many.heights.min() < -0.5 * d
 
 
+def _scratches_everywhere(count, w, d, L, n, th0, spread, ln, v, seed):
+    """:func:`surfaces.scratches` as its docstring states it, every groove evaluated on every cell (the rng drawn in
+    the generator's order: centre x, y, direction, width, depth)."""
+    rng = np.random.default_rng(seed)
+    x = (np.arange(n) - (n - 1) / 2) * (L / n)
+    X, Y = x[None, :], x[:, None]
+    h = np.zeros((n, n))
+    for _ in range(count):
+        px, py = rng.uniform(-L / 2, L / 2), rng.uniform(-L / 2, L / 2)
+        th = math.radians(th0 + rng.uniform(-spread, spread))
+        wi, di = w * rng.uniform(1 - v, 1 + v), d * rng.uniform(1 - v, 1 + v)
+        s = -(X - px) * math.sin(th) + (Y - py) * math.cos(th)
+        if ln is not None:
+            s = np.hypot(s, np.maximum(np.abs((X - px) * math.cos(th) + (Y - py) * math.sin(th)) - ln / 2, 0.0))
+        h = np.minimum(h, -di * np.exp(-4 * math.log(2) * s ** 2 / wi ** 2))
+    return h
+
+
+@pytest.mark.parametrize("th0,spread,length", [(0, 8, None), (30, 5, 10e-6), (60, 0, None), (90, 3, 6e-6),
+                                               (135, 90, None)])
+def test_scratches_visit_only_the_cells_their_grooves_reach(th0, spread, length):
+    """The generator's banded grooves (cells within GROOVE_REACH widths of each axis) equal every groove evaluated
+    on every cell to 1e-17 of the depth, in every direction (along x, along y, diagonal) and with rounded ends."""
+    w, d, L, n = 0.8e-6, 40e-9, 32e-6, 256
+    got = S.scratches(30, w, d, L, n, orientation_deg=th0, spread_deg=spread, length=length, variation=0.3, seed=4)
+    ref = _scratches_everywhere(30, w, d, L, n, th0, spread, length, 0.3, 4)
+    assert ref.min() < -0.5 * d
+    np.testing.assert_allclose(got.heights, ref, rtol=0, atol=1e-17 * d)
+
+
 def test_sum_of_bands_adds_variances():
     """Independent micro + nano bands: σ² adds; HeightField + and * work on one grid and refuse others."""
     comps = [{"model": "gaussian", "sigma": "4nm", "corr_length": "2um"},

@@ -286,6 +286,30 @@ def test_cli_f0_and_microfacet_brdf_take_a_stack(capsys):
     assert "film 'Al2O3' needs a thickness" in capsys.readouterr().err
 
 
+def test_cli_materials_describes_a_stack(capsys):
+    """``waveoptics materials STACK``: the layers with their data sources and thicknesses, F0 at 450/550/650 nm
+    against Airy's one-film formula written above (1e-12), and the fringe spacing λ²/(2 n d) at 550 nm."""
+    import json
+
+    spec = "BK7|MgF2:100nm"
+    assert cli_main(["materials", spec, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [layer["material"] for layer in data["layers"]] == ["BK7", "MgF2"]
+    assert data["layers"][1]["thickness_nm"] == 100.0 and "semi" not in json.dumps(data["layers"][1])
+    bk7, mgf2 = get_material("BK7"), get_material("MgF2")
+    for lam in (450.0, 550.0, 650.0):
+        ns, nf = bk7.eta(np.array(lam)), mgf2.eta(np.array(lam))
+        R = np.mean([abs(airy(pol, 1.0, lam, ns, nf, 100.0)[0]) ** 2 for pol in "sp"])
+        assert data["F0"][f"{lam:g}nm"] == pytest.approx(float(R), rel=1e-12)
+    n550 = float(np.real(mgf2.eta(np.array(550.0))))
+    assert data["fringe_spacing_nm_550nm"] == pytest.approx(550.0 ** 2 / (2 * n550 * 100.0), rel=1e-9)
+    assert cli_main(["materials", spec]) == 0
+    text = capsys.readouterr().out
+    assert "100 nm" in text and "semi-infinite" in text and "SCHOTT" in text
+    assert cli_main(["materials", "BK7|MgF2"]) == 2
+    assert "needs a thickness" in capsys.readouterr().err
+
+
 def test_microfacet_brdf_of_a_stack_uses_the_stack_reflectance_at_the_half_angle():
     from waveoptics.brdf import models
 

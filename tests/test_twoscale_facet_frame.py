@@ -183,6 +183,29 @@ def test_grid_lobes_are_the_facet_frame_integral(alpha, theta):
     _assert_close(vals[pick], ref, se, "grid")
 
 
+@pytest.mark.parametrize("alpha", [0.05, 0.1])
+def test_grid_route_of_a_ggx_lobe_towards_grazing_is_the_facet_frame_integral(alpha):
+    """GGX micro facets, light at 80°, exits 45-85° at azimuths 45-180° from the light's (where the lobe is above
+    1e-3 of its largest value): the grid route's sum (:func:`waveoptics.brdf.facet_frame_diffraction`, here at the
+    exits themselves on 128² facet tables) within 3 % + 3 s.e. of the reference. Such pairs reach facets tilted
+    60-70°, deep in GGX's tail, where the NDF's 64 normals were sparse: 5.1 % / 9.0 % off at 85° (φ_o 45° / 135°)
+    before the grazing cells took twice the normals (:func:`waveoptics.brdf.grazing_cells`); measured now ≤ 2.7 %."""
+    from waveoptics.brdf.tabulated_rim import DirectionPoints
+    from waveoptics.materials import get_material
+
+    mat = get_material("aluminium")
+    micro = Micro(alpha=alpha, ndf="ggx")
+    th, ph = np.meshgrid([45.0, 75.0, 85.0], [45.0, 135.0, 180.0], indexing="ij")
+    wo = R.direction(th.ravel(), ph.ravel())
+    wi = R.direction(80.0)
+    got = brdf.facet_frame_diffraction(wi, [LAM], mat, micro, NANO, DirectionPoints(wo), lambda c, lam: mat.F(c, lam),
+                                       table_grid=DirectionGrid.hemisphere(128))[0][0].ravel()
+    b = TwoScaleBRDF("aluminium", micro, nano=NANO)
+    ref, se = _reference(b, np.broadcast_to(wi, wo.shape), wo, alpha, ndf="ggx", n=24000)
+    assert np.all(ref > 1e-3 * ref.max())
+    _assert_close(got, ref, se, f"GGX α = {alpha}, 80°")
+
+
 def test_tabulated_form_between_nodes_is_the_facet_frame_integral():
     """TabulatedTwoScaleBRDF (lobes of the facet route tabulated over incidence) at θ_i = 32° and 57°, between its
     nodes, within 3 % of the reference (θ_o ≤ 70°, as the grid lobes it tabulates)."""

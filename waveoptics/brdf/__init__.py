@@ -42,7 +42,7 @@ from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, kernel_half_ve
     field_albedo_evaluations, PARAXIAL_SHARE_RATIO, carried_share_warning, paraxial_diffraction)
 from .facet_energy import FACET_BUDGET_NODES, FACET_BUDGET_NODES_FIELD, facet_budget
 from .twoscale_frame import (FACET_THETAS_DEG, FACET_THETAS_PSD_DEG, facet_thetas, FACET_TABLE_MAX_CELLS, facet_table_grid, equal_area, from_equal_area, FACET_NODES_NARROW, FACET_NODES_WIDE, FACET_NODES_FIELD, FACET_NODE_SPLIT,
-    FACET_REFERENCE_NM, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
+    FACET_REFERENCE_NM, FACET_GRAZING_DEG, grazing_cells, FACET_ROUTES, facet_route, paraxial_reason, nano_statistics, facet_nodes, RIM_RADIUS, facet_frame_diffraction)
 from .twoscale_coherent import (coherent_lobe, STACK_SUBCELL, COHERENT_CELLS_PER_WIDTH, SUBCELLS_MAX, LOBE_CELLS_REACH,
                                 micro_lobe_width, lobe_cells, coarse_micro_lobe, SubCells)
 from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, multiple_scattering_lobe, evaluate)
@@ -51,10 +51,10 @@ from .protocol import (BRDFSample, BRDF, MicrofacetBRDF, TwoScaleParts, sample_c
     check_uniform)
 from .pointwise import (QUADRATURE_NODES, QUADRATURE_NODES_WIDE, QUADRATURE_WIDE_ALPHA, wide_micro_lobe, RADIAL_BINS, COS_LEVELS, TwoScaleBRDF, unit_nodes, NanoRadial, facet_basis,
     to_facet, from_facet)
-from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, TabulatedTwoScaleBRDF)
+from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, PHI_NODES_ANISOTROPIC_NDF, TabulatedTwoScaleBRDF)
 from .spectral import (SpectralNodes)
 from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
-from .chi2 import (Chi2Result, chi2_test)
+from .chi2 import (Chi2Result, chi2_test, reflected_samples)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
 from .incidence_quadrature import (INCIDENCE_NODES, INCIDENCE_ALPHA_MIN, incidence_panels, incidence_normal_quadrature)
 from .facet_interface import (BareInterface, CoatedInterface, FACET_INTERFACES, facet_interface_of, bulk_medium,

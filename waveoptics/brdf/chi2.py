@@ -26,7 +26,7 @@ from typing import Callable
 import numpy as np
 from scipy import stats
 
-__all__ = ['Chi2Result', 'chi2_test']
+__all__ = ['Chi2Result', 'chi2_test', 'reflected_samples']
 
 #: cells with fewer expected samples are pooled
 MIN_EXPECTED = 5.0
@@ -133,3 +133,15 @@ def chi2_test(sample: Callable, pdf: Callable, *, sample_count: int = 200_000, r
     msg = (f"chi2 = {stat:.1f} with {dof} dof, p = {p_value:.3g} ({'accepted' if passed else 'rejected'} at "
            f"{level:.3g}); pdf integral {pdf_integral:.4f}, valid samples {valid.mean():.4f}")
     return Chi2Result(bool(passed), p_value, stat, dof, pdf_integral, float(valid.mean()), msg)
+
+
+def reflected_samples(brdf, wi, wavelength_nm) -> Callable:
+    """The sampler of a BRDF for :func:`chi2_test`: u (n, 2) → the directions ``brdf.sample_wo`` draws for ω_i =
+    *wi* at *wavelength_nm* (nm), NaN where one is not above the surface (an invalid sample). The directions alone:
+    the samples' weights f cos θ_o / p, which :meth:`sample` also computes, play no part in the test (a sample where
+    f = 0 but p > 0 is counted, as the density says it is drawn)."""
+    def sample(u):
+        wo = np.asarray(brdf.sample_wo(wi, wavelength_nm, u), dtype=float)
+        return np.where((wo[..., 2] > 0)[..., None], wo, np.nan)
+    return sample
+

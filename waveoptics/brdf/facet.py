@@ -31,7 +31,7 @@ __all__ = ['FACET_NODE_SPLIT', 'FACET_REFERENCE_NM', 'wide_micro_lobe', 'RADIAL_
            'from_facet', 'ndf_node_base', 'ndf_nodes', 'half_vector_nodes', 'half_vector_base', 'quadrature_normals',
            'quadrature_density', 'sampler_normals', 'budget_nodes', 'BRIDGE_NODES', 'BRIDGE_GATE',
            'BRIDGE_STEPS', 'BRIDGE_SPREAD', 'BRIDGE_DENSITY',
-           'bridge_point', 'bridge_offsets', 'bridge_nodes', 'bridge_density']
+           'bridge_point', 'bridge_offsets', 'bridge_nodes', 'bridge_density', 'with_bridge_density']
 
 #: radial bins of the nano-lobe sampler (geometric in spatial frequency)
 RADIAL_BINS = 384
@@ -487,6 +487,19 @@ def bridge_density(m, mc, width, h):
     x, y, mm = np.moveaxis(np.matmul(m, np.stack([*_bridge_frame(mc, h), mc], axis=-1)), -1, 0)   # m·e1, m·e2, m·mc
     g = np.exp(-0.5 * ((x / sx) ** 2 + (y / sy) ** 2)) / (2.0 * np.pi * sx * sy)
     return np.where(on[:, None] & (mm > 0), g * np.maximum(mm, 0.0), 0.0)
+
+
+def with_bridge_density(den, m, at, beta, mc, width, h):
+    """*den* (n,) (the other sets' density at the nodes *m* (3,) or (n, 3) of the pairs *at* (n,), 1/sr) plus the
+    bridge normals' :data:`BRIDGE_NODES` β p_c (:func:`bridge_density`) in those pairs whose *beta* is > 0; *beta*,
+    *mc*, *width*, *h* of all pairs (:func:`bridge_point`). The balance heuristic counts every set at every node
+    (E. Veach, PhD thesis, Stanford 1997, §9.2)."""
+    on = np.flatnonzero(beta[at] > 0)
+    if on.size:
+        c = at[on]
+        den[on] += BRIDGE_NODES * beta[c] * bridge_density(np.broadcast_to(m, (at.size, 3))[on, None], mc[c],
+                                                           width[c], h[c])[:, 0]
+    return den
 
 
 def quadrature_normals(h, cos_d, rad: NanoRadial, level, n: int, *, ndf, ax, ay, c):

@@ -121,7 +121,7 @@ def warm_facet_frame_kernel(micro, nano, diffraction, polarization: str = "unpol
             rt, dt, kern = facet_frame_kernel(micro, mix=mix, blend=blend, projected=True, device=device,
                                               precision=precision)
             dummy = cl.Buffer(rt.context, cl.mem_flags.READ_WRITE, 64)
-            kern(rt.queue, (LOCAL_SIZE,), (LOCAL_SIZE,), *[dummy] * 14, *[dt(0)] * 11, *[np.int32(0)] * 12).wait()
+            kern(rt.queue, (LOCAL_SIZE,), (LOCAL_SIZE,), *[dummy] * 15, *[dt(0)] * 11, *[np.int32(0)] * 12).wait()
         except (WaveopticsError, cl.Error):   # the real call raises it where it belongs
             return
 
@@ -153,7 +153,7 @@ def _table_buffer(rt, stack):
 
 def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack, stack_other, table_grid,
                        thetas_deg, *, device=None, precision: str = "float32", first=None, projected=False,
-                       bridge=None):
+                       graze=None, bridge=None):
     """Σ over the NDF and half-vector nodes of the balance-heuristic weight |ω_i·m| D G / (cos θ_i cos θ_o
     (N_a p_a + N_b p_b)) times g = f_nano cos θ_o read from the facet tables, per cell: the kernel
     ``facet_frame_sum`` of ``kernels/facet_frame.cl``.
@@ -185,6 +185,8 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
         (:func:`waveoptics.brdf.facet_table_grid`) rather than direction cosines; their first-order tables
         (*first*, or a Rayleigh-Rice *stack* and *stack_other*) then hold q = g / cos²θ_o, multiplied by each
         facet's exact cos²θ_o' (:func:`waveoptics.brdf.facet_frame_diffraction`).
+    graze : ndarray (n_cells,) bool, optional
+        Cells that take 2 N_a NDF normals (:func:`waveoptics.brdf.grazing_cells`); none by default.
     bridge : (ndarray (n_cells, 3), ndarray (n_cells, 2), ndarray (n_cells,)), optional
         Each cell's bridge point, its Gaussian's widths and its weight β (:func:`waveoptics.brdf.facet.bridge_point`;
         β 0: none): :data:`waveoptics.brdf.facet.BRIDGE_NODES` normals about it
@@ -220,18 +222,20 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
                                       projected=projected, device=device, precision=precision)
     q = rt.queue
     m0, _, _ = ndf_node_base(na, ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])   # an anisotropic NDF's: unstretched
+    graze = np.zeros(wo.shape[0], bool) if graze is None else np.asarray(graze, bool)
+    m0_hi = ndf_node_base(2 * na, ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])[0] if graze.any() else m0
     n_base, radii, hv_pdf, hv_phi = _half_vector_tables(rad, nb)
     phi = np.arctan2(h[:, 1], h[:, 0])
     mc, bw, beta = bridge if bridge is not None else (h, np.zeros((h.shape[0], 2)), np.zeros(h.shape[0]))
-    cell = np.column_stack([wo, h, np.cos(phi), np.sin(phi), cos_d, Lo, mc, np.where(beta[:, None] > 0, bw, 0.0),
-                            beta])
+    cell = np.column_stack([wo, h, np.cos(phi), np.sin(phi), cos_d, Lo, graze, mc,
+                            np.where(beta[:, None] > 0, bw, 0.0), beta])
     n_cells = cell.shape[0]
     n_th, n_v, n_u, n_lam = stack.shape
 
     def dev(a, dtype=dt):
         return cla.to_device(q, np.ascontiguousarray(a, dtype=dtype).ravel())
 
-    args = [dev(cell), dev(level, np.int32), dev(m0), dev(radii), dev(hv_pdf), dev(hv_phi), dev(rad.edges / rad.k),
+    args = [dev(cell), dev(level, np.int32), dev(m0), dev(m0_hi), dev(radii), dev(hv_pdf), dev(hv_phi), dev(rad.edges / rad.k),
             dev(rad.density * rad.k ** 2), dev(np.radians(thetas_deg)),
             dev(np.stack([np.cos(np.radians(thetas_deg)), np.sin(np.radians(thetas_deg))], axis=-1))]
     tab = _table_buffer(rt, stack)

@@ -22,16 +22,26 @@ statistics or a height field, any diffraction model) at any (ω_i, ω_o) and at 
   tabulated in the surface's frame over azimuth φ_k too (:data:`PHI_NODES_ANISOTROPIC`) and read at each node's
   mirror point plus the offset Δ = (u_o, v_o) − (mirror point of ω_i) in direction cosines, blended in θ_i and
   φ_i (never rotated: a grating's orders stay where the grating puts them, and they shift in direction cosines,
-  the Harvey-Shack picture, docs/physics.md §11). The lobe of an anisotropic micro NDF changes its shape with the
-  light's azimuth, which the shift does not follow: between nodes 90° apart (Al, Beckmann α 0.15 × 0.4, θ_i 30°,
-  φ_i 22.5-67.5°, exits to 60° where the lobe is above 1 % of its peak) it reads the lobe 38-58 % off at the 90th
-  percentile, up to 2.9x (energy within 1.5 %; a strict xfail in tests/test_anisotropic_rim.py). An anisotropic
-  micro NDF with PSD statistics has rim tables at
-  :data:`waveoptics.brdf.tabulated_rim.RIM_LIGHT_AZIMUTHS` (24) light azimuths, each held in its light's frame and
-  read turned with the light, interpolated across the light's azimuth in log f (at the nodes within 1.4 % of the
-  facet-frame sum at 80-88°, where the shifted direction-cosine cells read 2.0-2.4x it; near the horizon the lobe
-  changes by orders of magnitude with the light's azimuth, and the former linear blend of the 4 main nodes' rim
-  tables read it up to 7.2x at φ_i 45°: tests/test_anisotropic_rim.py).
+  the Harvey-Shack picture, docs/physics.md §11). The lobe of an anisotropic analytic micro NDF with PSD
+  statistics changes its shape with the light's azimuth as D(h) does, which the shift does not follow: between
+  nodes 90° apart (Al, Beckmann α 0.15 × 0.4, 64², exits to 60° where the lobe is above 1 % of its peak, φ_i
+  every 7.5°) it read the lobe up to 58 % off at the 90th percentile and 4.1x at most at θ_i 30°, 200 % and 13x
+  at 60°. Such tables are held at :data:`PHI_NODES_ANISOTROPIC_NDF` (12) light azimuths and each node is read at
+  the exit whose half-vector with the node's light is (ω_i, ω_o)'s, times cos θ cos θ' / (cos θ_i cos θ_o)
+  (:func:`waveoptics.brdf.tabulated_reads.half_vector_exit`: the microfacet lobe at the same D(h)), blended
+  linearly in θ_i and φ_i: 90th percentile / max 1.7 / 5.2 % at θ_i 30°, 3.4 / 8.6 % at 60° (midway between
+  incidence nodes 10° apart too: 2.3 / 5.8 %, 4.0 / 9.5 %). Turned with the light instead (the NDF's axes turned
+  under it), 24 nodes read in log f as the rim tables are still read it 7-13 / 33-38 % off
+  (scripts/aniso_light_azimuth.py; tests/test_anisotropic_rim.py). The sampler keeps the nearest node's lobe
+  shifted to ω_i's mirror point. An anisotropic micro NDF with PSD statistics has rim tables at
+  :data:`waveoptics.brdf.tabulated_rim.RIM_LIGHT_AZIMUTHS` (24) light azimuths (the main nodes among them), each
+  held in its light's frame and read turned with the light, interpolated across the light's azimuth in log f (at
+  the nodes within 1.4 % of the facet-frame sum at 80-88°, where the shifted direction-cosine cells read 2.0-2.4x
+  it; near the horizon the lobe changes by orders of magnitude with the light's azimuth, and the former linear
+  blend of the 4 main nodes' rim tables read it up to 7.2x at φ_i 45°: tests/test_anisotropic_rim.py). The 12
+  main azimuths cost 1.6x the CPU time of 4 to build (64², rim tables, under load: 3 wavelengths 30 → 49 s, 25
+  wavelengths 48 → 77 s): the facet-frame kernel's time per incidence (3 wavelengths: 0.21 s per main lobe, 0.09 s
+  per rim table) dominates.
 
 Measured (``tests/test_brdf_tabulated.py``): on the nodes it equals the grid lobes up to θ_o 65° (beyond, to the
 rim tables' interpolation: within 0.6 % to 80°, 1 % to 85°); between 10° nodes the
@@ -67,10 +77,11 @@ from ..errors import FieldError
 from ..scatter.grid import DirectionGrid
 from .protocol import TwoScaleParts
 from .roughness_scales import isotropic
+from .tabulated_reads import filled_beyond_rim, half_vector_exit
 from .tabulated_rim import rim_across_light_azimuth, rim_light_azimuths, rim_lobes, rim_weight
 from .twoscale import ENERGY_GUARD_PREFIX, energy_guard_cause, evaluate
 
-__all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'TabulatedTwoScaleBRDF']
+__all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'PHI_NODES_ANISOTROPIC_NDF', 'TabulatedTwoScaleBRDF']
 
 #: default incidence nodes (degrees): 5° steps, denser towards grazing where lobes change fastest
 THETA_NODES_DEG = tuple(float(t) for t in (*range(0, 75, 5), 75, 78, 81, 84, 86, 88))
@@ -78,6 +89,12 @@ THETA_NODES_DEG = tuple(float(t) for t in (*range(0, 75, 5), 75, 78, 81, 84, 86,
 #: on scratches at light azimuths between nodes (θ_i 25-30°): 1 node (shift only): energy within 2 %, L1 5-26 %;
 #: 4 nodes: energy within 0.6 %, L1 2-5 %; 12 nodes: energy within 0.7 %, L1 1-2.4 %
 PHI_NODES_ANISOTROPIC = 4
+#: azimuth nodes over [0°, 360°) of an anisotropic analytic micro NDF with PSD statistics, read by the half-vector
+#: (:func:`waveoptics.brdf.tabulated_reads.half_vector_exit`). Measured (Al, Beckmann α 0.15 × 0.4, 64², θ_i 30° /
+#: 60°, φ_i every 7.5°, exits to 60° above 1 % of the peak; 90th percentile / max error against the lobe computed at
+#: that light): 4 nodes 9.7 / 20 %, 20 / 82 %; 8 nodes 3.3 / 5.1 %, 7.1 / 17 %; 12 nodes 1.7 / 5.2 %, 3.4 / 8.6 %
+#: (midway between incidence nodes 10° apart too: 2.3 / 5.8 %, 4.0 / 9.5 %); scripts/aniso_light_azimuth.py
+PHI_NODES_ANISOTROPIC_NDF = 12
 
 
 def _rotate(w, phi):
@@ -115,7 +132,9 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     thetas_deg : tuple of float
         Incidence nodes (degrees, increasing, in [0, 90)).
     n_phi : int or None
-        Azimuth nodes; None chooses 1 for isotropic surfaces and :data:`PHI_NODES_ANISOTROPIC` otherwise.
+        Azimuth nodes; None chooses 1 for isotropic surfaces, :data:`PHI_NODES_ANISOTROPIC_NDF` for an anisotropic
+        analytic micro NDF with PSD statistics (:attr:`half_vector_read`) and :data:`PHI_NODES_ANISOTROPIC`
+        otherwise.
     solver, diffraction, device, precision
         As :func:`waveoptics.brdf.evaluate`.
     lobes_at : callable, optional
@@ -169,6 +188,14 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         """Whether the lobe depends on θ_i only: PSD statistics (isotropic) and an isotropic micro NDF."""
         return isotropic(self.micro, self.nano)
 
+    @property
+    def half_vector_read(self) -> bool:
+        """Whether the tables are read by the half-vector (:func:`waveoptics.brdf.tabulated_reads.
+        half_vector_exit`): an anisotropic analytic micro NDF with PSD statistics, whose lobe changes its shape with
+        the light's azimuth as D(h) does."""
+        return (self.micro.alpha_y is not None and self.micro.ndf != "tabulated" and self.nano is not None
+                and self.nano.model is not None)
+
     def _build(self):
         if self.table_lobes is not None:
             diff = np.asarray(self.table_lobes, dtype=float)
@@ -189,7 +216,8 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
             return
         grid = DirectionGrid.hemisphere(int(self.resolution))
         thetas = np.radians(np.asarray(self.thetas_deg, dtype=float))
-        n_phi = (1 if self.isotropic else PHI_NODES_ANISOTROPIC) if self.n_phi is None else int(self.n_phi)
+        n_phi = ((1 if self.isotropic else PHI_NODES_ANISOTROPIC_NDF if self.half_vector_read else
+                  PHI_NODES_ANISOTROPIC) if self.n_phi is None else int(self.n_phi))
         phis = 2 * np.pi * np.arange(n_phi) / n_phi
         w = np.asarray(self.wavelengths_nm)
         diff = rim = None
@@ -406,6 +434,11 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         th, ph = self._table["thetas"][k], self._table["phis"][p]
         return -np.sin(th) * np.cos(ph), -np.sin(th) * np.sin(ph)
 
+    def _node_light(self, p, k):
+        """Light direction (3 component arrays) of the table at φ node p, θ node k (per point)."""
+        th, ph = self._table["thetas"][k], self._table["phis"][p]
+        return np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)
+
     def _f_diffraction(self, wi, wo, lam):
         return self._f_diffraction_nodes(wi, wo, [lam])[:, 0]
 
@@ -421,16 +454,21 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         wo_r, wi_r = _rotate(wo, rot), _rotate(wi, rot)
         delta = wo_r[:, :2] + wi_r[:, :2]   # (u, v) − mirror point of ω_i
         rotate = self._table["phis"].size == 1 and self.isotropic
+        half = not rotate and self.half_vector_read
         num = np.zeros((wi.shape[0], j.size))
         den = np.zeros(wi.shape[0])
         for p_idx, w_p in phi_nodes:
             for k, w_k in ((a, 1 - t), (b, t)):
+                scale = 1.0
                 if rotate:   # ω_o turned about the table's y axis by θ_i − θ_k: ω_i's mirror onto θ_k's
                     beta = theta_i - thetas[k]
                     cb, sb = np.cos(beta), np.sin(beta)
                     uu = wo_r[:, 0] * cb + wo_r[:, 2] * sb
                     vv = wo_r[:, 1]
                     inside = -wo_r[:, 0] * sb + wo_r[:, 2] * cb > 0
+                elif half:   # the node's exit with (ω_i, ω_o)'s half-vector
+                    uu, vv, zz, scale = half_vector_exit(wi.T, wo.T, self._node_light(p_idx, k))
+                    inside = zz > 0
                 else:        # shifted with the specular direction in the direction-cosine plane
                     mu, mv = self._node_mirror(p_idx, k)
                     uu, vv = mu + delta[:, 0], mv + delta[:, 1]
@@ -439,7 +477,8 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
                 # the points a node weighs read its table (ω_i on a θ node gives the next node the weight 0)
                 wt = w_p * w_k
                 r = np.flatnonzero(inside & (wt > 0))
-                num[r] += wt[r, None] * self._lookup(np.broadcast_to(p_idx, wt.shape)[r], k[r], j, uu[r], vv[r])
+                num[r] += (wt * scale)[r, None] * self._lookup(np.broadcast_to(p_idx, wt.shape)[r], k[r], j, uu[r],
+                                                               vv[r])
                 den += wt * inside
         den = den[:, None]
         out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
@@ -477,25 +516,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         it (two passes), for bilinear reads within a cell of the horizon, which would otherwise blend in zeros;
         sampling and its density keep the lobes as computed."""
         if "lookup" not in self._table:
-            lob = self._table["diffraction"]
-            inside = self._table["grid"].inside
-            n_v, n_u = inside.shape
-            filled, known = lob.copy(), inside.copy()
-            # neighbours (row, column offsets) of a cell, wrapping round the grid's edges
-            steps = ((0, -1), (0, 1), (-1, 0), (1, 0))
-            for _ in range(2):
-                count = np.zeros(known.shape)
-                for dv, du in steps:
-                    count += np.roll(known, (-dv, -du), axis=(0, 1))
-                new = ~known & (count > 0)
-                rows, cols = np.nonzero(new)   # only the ring of new cells is read and written (all lobes at once)
-                total = np.zeros(filled.shape[:-2] + rows.shape)
-                for dv, du in steps:
-                    r, c = (rows + dv) % n_v, (cols + du) % n_u
-                    total += np.where(known[r, c], filled[..., r, c], 0.0)
-                filled[..., rows, cols] = total / np.maximum(count[rows, cols], 1)
-                known = known | new
-            self._table["lookup"] = filled
+            self._table["lookup"] = filled_beyond_rim(self._table["diffraction"], self._table["grid"].inside)
         return self._table["lookup"]
 
     def _lookup(self, p, k, j, u, v):

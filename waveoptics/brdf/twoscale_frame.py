@@ -17,8 +17,8 @@ from ..materials import cos2_eta_i, facet_sp_mix
 from ..runtime import parallel_map
 from ..scatter.grid import DirectionGrid
 from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weight, uses_vector_first_order
-from .facet import (BRIDGE_NODES, FACET_NODE_SPLIT, FACET_REFERENCE_NM, bridge_density, bridge_nodes, bridge_point,
-                    half_vector_nodes, ndf_nodes, wide_micro_lobe)
+from .facet import (FACET_NODE_SPLIT, FACET_REFERENCE_NM, bridge_nodes, bridge_point, half_vector_nodes, ndf_nodes,
+                    wide_micro_lobe, with_bridge_density)
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_energy import facet_budget
 from .field_lobe import (field_anisotropy, field_cell_split, field_first_order_over_fresnel,
@@ -28,7 +28,7 @@ from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
 
 __all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
-           'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction',
+           'FACET_GRAZING_DEG', 'grazing_cells', 'FACET_ROUTES', 'facet_route', 'paraxial_reason', 'nano_statistics', 'facet_nodes', 'RIM_RADIUS', 'facet_frame_diffraction',
            'FACET_TABLE_MAX_CELLS', 'facet_table_grid', 'equal_area', 'from_equal_area']
 
 
@@ -63,6 +63,16 @@ FACET_THETAS_PSD_DEG = np.array([*range(0, 89, 2), 89, 89.5, 89.9], dtype=float)
 #: incidence, where many face away from it). Cost per incidence (96² and 128², 3 wavelengths, OpenCL on PoCL's
 #: CPU device, under load): (128, 256) 2.7-2.8x (64, 64)
 FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (128, 256)
+#: PSD statistics' cells where the light or the exit is this far from the normal or further (degrees) take twice
+#: the NDF normals of :func:`facet_nodes` (:func:`grazing_cells`): there the integrand reaches facets tilted far
+#: into the NDF's tail (a grazing pair scatters through facets tilted 60-70°), where D(m) cos θ_m puts few of its
+#: N_a normals. GGX α 0.05 / 0.1, ABC σ = 10 nm, B = 2 µm, C = 2.6, Al, 550 nm, θ_i 80°, exits 30-85° at φ_o
+#: 0-180° where the lobe is above 1e-3 of its largest value, against a Monte-Carlo facet-frame integral
+#: (tests/twoscale_reference.py): (64, 16) normals max 5.1 / 9.0 % (one pair of 30 beyond 3 % + 3 s.e. each: 85° at
+#: φ_o 45° / 135°), (128, 16) 2.7 / 2.4 % (none); at θ_i 85° (exits to 89°) 25 / 18 % against 6.8 / 2.8 % with
+#: (256, 16). Decided by max(θ_i, θ_o), so a pair and its swap get the same nodes (reciprocal); cost on 64² cells,
+#: 25 wavelengths: 0.12 → 0.19 s per incidence where every cell grazes (θ_i ≥ 70°), 12 % of the cells below it
+FACET_GRAZING_DEG = 70.0
 #: the grid route's (NDF normals, half-vector normals per cell) for a height field: its lobe is speckle (a
 #: windowed patch's |U|² varies on the scale λ/(2L)), which one shared stencil of 64 half-vector normals per cell
 #: reads with a bias: the diffracted albedo came out 1.7-7.6 % above the light the facets scatter (Gaussian patch
@@ -141,6 +151,12 @@ def facet_nodes(micro: Micro, nano: Nano, wavelengths_nm) -> tuple[int, int]:
     kw = micro.kw()
     a = max(kw["alpha"], kw["alpha_y"] or 0.0)
     return FACET_NODES_WIDE if wide_micro_lobe(a, nano_statistics(nano).length_scale) else FACET_NODES_NARROW
+
+
+def grazing_cells(wi, wo) -> np.ndarray:
+    """Cells (n_cells,) bool of exits *wo* (n_cells, 3) that, with the light *wi* (3,), take twice the NDF normals
+    in :func:`facet_frame_diffraction`: max(θ_i, θ_o) ≥ :data:`FACET_GRAZING_DEG` (symmetric in ω_i and ω_o)."""
+    return np.minimum(wi[2], wo[:, 2]) < np.cos(np.radians(FACET_GRAZING_DEG))
 
 
 def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
@@ -403,24 +419,14 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=Fa
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 
-def _bridge(symmetric: bool, h, cos_d, rad, level, nodes, **ndf):
-    """PSD statistics' third set of normals in :func:`facet_frame_diffraction`: (bridge point, widths, β) of each
-    cell about the point where the integrand peaks between the NDF's normals and the half-vector's (a lobe's deep
-    tail; :func:`.facet.bridge_point`); a height field's (its nodes' layout is not symmetric): none."""
-    if symmetric:
-        return bridge_point(h, cos_d, rad, level, nodes, **ndf)
-    return h, np.zeros((h.shape[0], 2)), np.zeros(h.shape[0])
-
-
-def _with_bridge(den, m, at, beta, mc, bw, h):
-    """*den* (the NDF and half-vector sets' density N_a p_a + N_b p_b at the nodes *m* of the cells *at*, 1/sr)
-    plus the bridge normals' N_c β p_c (:func:`.facet.bridge_density`) in those of the cells that have them."""
-    on = np.flatnonzero(beta[at] > 0)
-    if on.size:
-        c = at[on]
-        den[on] += BRIDGE_NODES * beta[c] * bridge_density(np.broadcast_to(m, (at.size, 3))[on, None], mc[c], bw[c],
-                                                           h[c])[:, 0]
-    return den
+def _extra_nodes(symmetric: bool, nodes, wi, wo, h, cos_d, rad, level, na: int, nb: int, **ndf):
+    """PSD statistics' extra normals in :func:`facet_frame_diffraction`: the cells that graze (2 N_a NDF normals,
+    :func:`grazing_cells`, with the default *nodes* only), N_a per cell, and each cell's (bridge point, widths, β)
+    (:func:`.facet.bridge_point`: a lobe's deep tail); a height field's (its nodes' layout is not symmetric): none."""
+    graze = grazing_cells(wi, wo) & (symmetric and nodes is None)
+    bridge = (bridge_point(h, cos_d, rad, level, (na, nb), **ndf) if symmetric
+              else (h, np.zeros((h.shape[0], 2)), np.zeros(h.shape[0])))
+    return graze, np.where(graze, 2 * na, na), bridge
 
 
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
@@ -435,7 +441,8 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     by the balance heuristic of two fixed node sets: N_a normals with density D(m) cos θ_m (:func:`.facet.ndf_nodes`) and
     N_b normals about the half-vector drawn through the nano lobe's radial law (:func:`.facet.half_vector_nodes`; they
     hold a heavy-tailed NDF's far facets and a nano lobe narrower than the micro lobe); (N_a, N_b) = *nodes* or
-    :func:`facet_nodes`; for PSD statistics, in a lobe's deep tail where the integrand peaks between both sets'
+    :func:`facet_nodes`, whose N_a doubles for PSD statistics in the cells where the pair grazes
+    (:func:`grazing_cells`); for PSD statistics, in a lobe's deep tail where the integrand peaks between both sets'
     normals, a third: :data:`.facet.BRIDGE_NODES` Gaussian normals about that point, counted β times
     (:func:`.facet.bridge_point`, :func:`.facet.bridge_nodes`). Both sets are laid out per cell about its
     half-vector h, in a frame that turns with h
@@ -496,16 +503,14 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     w = np.asarray(wavelengths_nm, dtype=float)
     dm = scatter.get_model(diffraction, perturbative=True)
     kw = micro.kw()
-    ndf, ax = kw["ndf"], kw["alpha"]
-    ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
+    ndf, ax, ay = kw["ndf"], kw["alpha"], kw["alpha_y"] if kw["alpha_y"] is not None else kw["alpha"]
     c, spec = kw["ndf_shape"], ndf_by_name(kw["ndf"])
     na, nb = nodes or facet_nodes(micro, nano, w)
     m_a = (sample_normal(np.broadcast_to(wi, (na, 3)), unit_nodes(na), ndf=ndf, ax=ax, ay=ay, c=c)
            if nano.surface is not None else None)   # a height field's NDF nodes (PSD statistics: ndf_nodes)
     inside = grid.inside
     wo = grid.directions()[inside]
-    h = wi + wo
-    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    h = (wi + wo) / np.linalg.norm(wi + wo, axis=-1, keepdims=True)
     cos_d = np.maximum(h @ wi, 1e-6)
     rad = NanoRadial(nano_statistics(nano), FACET_REFERENCE_NM, dm, nb)
     level = rad.level(cos_d)
@@ -521,16 +526,15 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
     stack_other = None if other is None else _facet_stack(nano, w, tgrid, dm, material, other)[0]
-    mc, bw, beta = _bridge(symmetric, h, cos_d, rad, level, (na, nb), ndf=ndf, ax=ax, ay=ay, c=c)
-    on = np.flatnonzero(beta > 0)
+    graze, na_cell, (mc, bw, beta) = _extra_nodes(symmetric, nodes, wi, wo, h, cos_d, rad, level, na, nb, ndf=ndf,
+                                                  ax=ax, ay=ay, c=c)
     out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
                               facet_thetas(nano), device=device, precision=precision, first=first,
-                              projected=symmetric, bridge=(mc, bw, beta))
+                              projected=symmetric, graze=graze, bridge=(mc, bw, beta))
            if facet_frame_backend(backend, micro, nano) == "opencl" else None)
 
     def add(m, valid, share=1.0, cells=slice(None)):
-        """Add the nodes m (3,) (an anisotropic NDF's node, shared by the cells) or (n, 3) (one per cell of *cells*,
-        indices or all), weighted by the balance heuristic (a bridge node's term times its cell's β, *share*)."""
+        """Add the nodes m (3,) (shared) or (n, 3) (one per cell of *cells*) by the balance heuristic, times *share*."""
         wo_c, h_c, cd_c, lev_c, Lo_c = wo[cells], h[cells], cos_d[cells], level[cells], Lo[cells]
         om = wo_c @ m if m.ndim == 1 else np.sum(wo_c * m, axis=-1)
         im = m @ wi
@@ -542,7 +546,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         mh = np.clip(h_c @ m if m.ndim == 1 else np.sum(m * h_c, axis=-1), 0.0, 1.0)
         pb = np.where(mh > 0, rad.pdf_r(lev_c, 2 * cd_c * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
                       * 4 * cd_c ** 2 * mh, 0.0)
-        den = _with_bridge(na * pa + nb * pb, m, np.arange(wo.shape[0])[cells], beta, mc, bw, h)
+        den = with_bridge_density(na_cell[cells] * pa + nb * pb, m, np.arange(wo.shape[0])[cells], beta, mc, bw, h)
         ok = valid & (im > 0) & (om > 0) & (den > 0) & (D > 0)
         if not ok.any():
             return
@@ -569,13 +573,16 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     if out is None:   # the NumPy twin of kernels/facet_frame.cl
         out = np.zeros((wo.shape[0], w.size))
         pair = stack if first is None else np.concatenate([stack, first], axis=-1)   # one gather for both
-        for m in (ndf_nodes(na, e2, ndf=ndf, ax=ax, ay=ay, c=c) if symmetric else m_a):
-            add(m, np.ones(wo.shape[0], bool))
+        for n_a, cells in ((na, ~graze), (2 * na, graze)) if symmetric else ((na, None),):   # 2 N_a where it grazes
+            m_n = m_a if cells is None else ndf_nodes(n_a, e2, ndf=ndf, ax=ax, ay=ay, c=c) if cells.any() else ()
+            for m in m_n:
+                add(m, np.ones(wo.shape[0], bool) if cells is None else cells)
         for s_k, cp, sp in half_vector_nodes(rad, level, nb, cos_d, antithetic=symmetric):
             ok = s_k < 1                                      # a tilt s from h sends ω_i to q = 2k cosθ_d s
             s_k = np.where(ok, s_k, 0.0)
             m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
             add(m, ok)
+        on = np.flatnonzero(beta > 0)
         m_c, ok_c = bridge_nodes(mc[on], bw[on], h[on])
         for k in range(m_c.shape[1] if on.size else 0):   # in the cells that have a bridge only
             add(m_c[:, k], ok_c[:, k], beta, on)

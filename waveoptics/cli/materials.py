@@ -10,7 +10,8 @@ def register(sub):
                        description="Without QUERY: the named presets with their data sets, F0 at 550 nm and "
                                    "category. With QUERY: matching refractiveindex.info pages, usable as "
                                    "--material shelf/book/page.")
-    p.add_argument("query", nargs="?", help="search words, e.g. 'gold' or 'TiO2'")
+    p.add_argument("query", nargs="?", help="search words, e.g. 'gold' or 'TiO2'; or a thin-film stack "
+                                            "SUBSTRATE|FILM:THICKNESS|..., e.g. 'Al|Al2O3:120nm', to describe it")
     p.add_argument("--limit", type=int, default=30, help="maximum number of search results (default 30)")
     add_common(p)
     p.set_defaults(func=run)
@@ -23,6 +24,10 @@ def run(args):
 
     if args.limit < 1:
         raise ValueError(f"--limit {args.limit} is not allowed; give a number of results >= 1")
+    if args.query and "|" in args.query:   # a thin-film stack: its layers, F0 and how fast R(λ) oscillates
+        m = materials.get_material(args.query)
+        emit(args, *_stack_description(m))
+        return 0
     if args.query:
         hits, total = materials.search(args.query, limit=args.limit, with_total=True)
         if not hits:
@@ -44,3 +49,35 @@ def run(args):
              "'Al|Al2O3:120nm' (docs/thin-films.md)")
     emit(args, {"presets": rows}, text)
     return 0
+
+
+#: wavelengths (nm) at which a stack's normal-incidence reflectance is listed
+STACK_REPORT_NM = (450.0, 550.0, 650.0)
+
+
+def _stack_description(m) -> tuple[dict, str]:
+    """(JSON, text) describing the thin-film stack *m*: each layer's data source and thickness (nm), the normal-
+    incidence reflectance at :data:`STACK_REPORT_NM`, the films' optical thickness Σ n d and the spacing of R(λ)'s
+    fringes at 550 nm (what the planner samples wavelengths by: docs/thin-films.md)."""
+    import numpy as np
+
+    layers = [{"role": "substrate", "material": m.substrate.name, "source": m.substrate.source}]
+    layers += [{"role": f"film {i + 1}", "material": f.name, "thickness_nm": round(float(d), 9), "source": f.source}
+               for i, (f, d) in enumerate(m.films)]
+    lam = np.array(STACK_REPORT_NM)
+    r = [float(x) for x in m.F0(lam)]
+    opt, fringe = float(m.optical_thickness_nm(550.0)), float(m.fringe_spacing_nm(550.0))
+    data = {"material": m.name, "layers": layers, "films_from": "substrate outwards",
+            "F0": {f"{w:g}nm": v for w, v in zip(STACK_REPORT_NM, r)},
+            "optical_thickness_nm_550nm": opt, "fringe_spacing_nm_550nm": fringe,
+            "units": {"thickness_nm": "nm", "F0": "reflectance at normal incidence from air, unpolarized",
+                      "optical_thickness_nm_550nm": "nm", "fringe_spacing_nm_550nm": "nm"}}
+    lines = [f"thin-film stack {m.name} (films from the substrate outwards, light from air)"]
+    for layer in layers:
+        thick = f"{layer['thickness_nm']:g} nm" if "thickness_nm" in layer else "semi-infinite"
+        lines.append(f"  {layer['role']:<10} {layer['material']:<16} {thick:<14} {layer['source']}")
+    lines.append("  F0 " + ", ".join(f"{v:.4f} at {w:g} nm" for w, v in zip(STACK_REPORT_NM, r)))
+    spacing = "no fringes" if not np.isfinite(fringe) else f"fringes of R(λ) {fringe:.3g} nm apart"
+    lines.append(f"  optical thickness Σ n d {opt:.4g} nm at 550 nm: {spacing} there")
+    return data, "\n".join(lines)
+

@@ -3,10 +3,11 @@ bilinear read relative to the specular direction, and the sampler of the nearest
 
 :class:`DiffractedLobes` is the half of :class:`waveoptics.renderers.drjit_twoscale.DrJitTwoScale` that reads the
 tables; it repeats, on Dr.Jit arrays, ``TabulatedTwoScaleBRDF._f_diffraction`` (an isotropic table turned about the
-axis normal to the plane of incidence by θ_i − θ_k; other tables shifted in direction cosines to ω_i's mirror
-point; nodes beyond their horizon drop out of the blend), ``_lookup`` (cell-centred bilinear stencil,
-``DirectionGrid.bilinear``, on the rim-filled table), ``_with_rim`` (the rim tables towards the horizon,
-:mod:`waveoptics.brdf.tabulated_rim`), ``_sample_diffraction`` (a cell by the node's CDF, uniform in
+axis normal to the plane of incidence by θ_i − θ_k; an anisotropic analytic micro NDF's read at each node's exit
+with (ω_i, ω_o)'s half-vector, :func:`waveoptics.brdf.tabulated_reads.half_vector_exit`; other tables shifted
+in direction cosines to ω_i's mirror point; nodes beyond their horizon drop out of the blend), ``_lookup``
+(cell-centred bilinear stencil, ``DirectionGrid.bilinear``, on the rim-filled table), ``_with_rim`` (the rim
+tables towards the horizon, :mod:`waveoptics.brdf.tabulated_rim`), ``_sample_diffraction`` (a cell by the node's CDF, uniform in
 it) and ``_pdf_diffraction``.
 
 References
@@ -22,6 +23,7 @@ import math
 
 import numpy as np
 
+from ..brdf.tabulated_reads import half_vector_exit
 from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_LOG_FLOOR, RIM_THETA_DEG, pchip_between
 
 __all__ = ['DiffractedLobes']
@@ -42,6 +44,7 @@ class DiffractedLobes:
         self.thetas = [float(x) for x in tab["thetas"]]
         self.phis = [float(x) for x in tab["phis"]]
         self.rotate = self.P == 1 and base.isotropic
+        self.half = not self.rotate and base.half_vector_read   # read by the half-vector (``half_vector_exit``)
         self.lookup = self._upload(base._lookup_table())
         rim = tab.get("rim")   # (Q, K, J, n_cos, n_phi): one set per rim light azimuth node, in its light's frame
         self.rim = None if rim is None else self._upload(np.asarray(rim, dtype=float))
@@ -131,17 +134,24 @@ class DiffractedLobes:
         for p, w_p in self._phi_nodes(g.phi_i):
             for k, w_k in ks:
                 th_k = self._gather_list(self.thetas, k) if self.K > 1 else self.thetas[0]
+                scale = 1.0
                 if self.rotate:
                     beta = g.theta_i - th_k
                     cb, sb = dr.cos(beta), dr.sin(beta)
                     uu, vv = g.wo_r.x * cb + g.wo_r.z * sb, g.wo_r.y
                     inside = -g.wo_r.x * sb + g.wo_r.z * cb > 0
                 else:
-                    ph_p = self._gather_list(self.phis, p) if self.P > 1 else self.phis[0]
-                    uu, vv = -dr.sin(th_k) * dr.cos(ph_p) + dx, -dr.sin(th_k) * dr.sin(ph_p) + dy
-                    inside = uu * uu + vv * vv < 1.0
+                    ph_p = (self._gather_list(self.phis, p) if self.P > 1 else self.phis[0]) + th_k * 0.0
+                    if self.half:   # the node's exit with (ω_i, ω_o)'s half-vector
+                        wn = (dr.sin(th_k) * dr.cos(ph_p), dr.sin(th_k) * dr.sin(ph_p), dr.cos(th_k))
+                        uu, vv, zz, scale = half_vector_exit((g.wi.x, g.wi.y, g.wi.z), (g.wo.x, g.wo.y, g.wo.z), wn,
+                                                             dr.select)
+                        inside = zz > 0
+                    else:
+                        uu, vv = -dr.sin(th_k) * dr.cos(ph_p) + dx, -dr.sin(th_k) * dr.sin(ph_p) + dy
+                        inside = uu * uu + vv * vv < 1.0
                 w = w_p * w_k
-                num = num + w * dr.select(inside, self._lookup(self.lookup, p, k, j, uu, vv), 0.0)
+                num = num + w * dr.select(inside, scale * self._lookup(self.lookup, p, k, j, uu, vv), 0.0)
                 den = den + w * dr.select(inside, 1.0, 0.0)
         out = dr.select(den > 0, num / dr.select(den > 0, den, 1.0), 0.0)
         if self.rim is not None:   # towards the horizon the rim tables, read at ω_o itself (library ``_with_rim``)

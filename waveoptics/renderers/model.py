@@ -213,11 +213,11 @@ def table_key(nano_obj, nodes, resolution: int, common: dict) -> dict:
     """Every parameter the tabulated lobes of :func:`renderer_brdf` depend on, as plain data: the material's name
     and its complex index at the wavelength nodes (its data may change; F at three angles for an F0 material), the micro NDF, the nano statistics
     or a SHA-256 of the height field's heights, spacing and mask, the diffraction model, the nodes and the grid's
-    resolution (with :data:`waveoptics.brdf.tabulated.THETA_NODES_DEG`, the incidences tabulated, and the rim
-    tables' layout, :mod:`waveoptics.brdf.tabulated_rim`)."""
+    resolution (with :data:`waveoptics.brdf.tabulated.THETA_NODES_DEG`, the incidences tabulated, the rim
+    tables' layout, :mod:`waveoptics.brdf.tabulated_rim`, and an anisotropic table's light azimuths)."""
     import hashlib
 
-    from ..brdf.tabulated import THETA_NODES_DEG
+    from ..brdf.tabulated import PHI_NODES_ANISOTROPIC, PHI_NODES_ANISOTROPIC_NDF, THETA_NODES_DEG
     from ..brdf.tabulated_rim import RIM_BLEND_DEG, RIM_CELLS, RIM_LIGHT_AZIMUTHS, RIM_THETA_DEG
     from ..materials import get_material
 
@@ -237,11 +237,14 @@ def table_key(nano_obj, nodes, resolution: int, common: dict) -> dict:
             h.update(np.ascontiguousarray(hf.mask, dtype=bool).tobytes())
         nano = {"height_field": h.hexdigest()}
     micro = common["micro"]
-    return {"material": str(common["material"]), "optics": optics, "micro": repr(micro), "nano": nano,
-            "diffraction": str(common["diffraction"]), "wavelengths_nm": [float(x) for x in nodes],
-            "resolution": int(resolution), "thetas_deg": [float(t) for t in THETA_NODES_DEG],
-            "rim": [RIM_THETA_DEG, list(RIM_BLEND_DEG), list(RIM_CELLS), RIM_LIGHT_AZIMUTHS,
-                    "log-monotone in phi_i"]}
+    key = {"material": str(common["material"]), "optics": optics, "micro": repr(micro), "nano": nano,
+           "diffraction": str(common["diffraction"]), "wavelengths_nm": [float(x) for x in nodes],
+           "resolution": int(resolution), "thetas_deg": [float(t) for t in THETA_NODES_DEG],
+           "rim": [RIM_THETA_DEG, list(RIM_BLEND_DEG), list(RIM_CELLS), RIM_LIGHT_AZIMUTHS,
+                   "log-monotone in phi_i"]}
+    if micro.alpha_y is not None:   # the light azimuths an anisotropic table holds
+        key["phis"] = [PHI_NODES_ANISOTROPIC, PHI_NODES_ANISOTROPIC_NDF, "half-vector read"]
+    return key
 
 
 @functools.lru_cache(maxsize=16)

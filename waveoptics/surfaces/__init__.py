@@ -9,7 +9,7 @@ tiled (fields of real size read by patches: memory-mapped .npy, chunked HDF5, pr
 from .heightfield import (HeightField)
 from .psd import (S_gaussian, S1_gaussian, c_gaussian, S_exponential, S1_exponential, c_exponential, abc_A,
     abc_sigma, S_abc, S1_abc, c_abc, PSDModel, PSDFamily, PSD_MODELS)
-from .generators import (flat, gaussian, exponential, abc, sinusoid, MAX_SCRATCHES, scratches, flakes, GENERATORS,
+from .generators import (flat, gaussian, exponential, abc, sinusoid, MAX_SCRATCHES, GROOVE_REACH, scratches, flakes, GENERATORS,
     generate)
 from .statistics import (PeriodogramPSD, DETRENDS, detrended, rms_height, rms_slopes, rms_slope,
     autocorrelation_radial, correlation_length, psd_radial, fit_psd, stats)

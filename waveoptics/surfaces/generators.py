@@ -18,7 +18,7 @@ from ..units import parse_length
 from .heightfield import HeightField
 from .psd import PSD_MODELS, S1_abc, S_abc, abc_A, abc_sigma
 
-__all__ = ['flat', 'gaussian', 'exponential', 'abc', 'sinusoid', 'MAX_SCRATCHES', 'scratches', 'flakes', 'GENERATORS', 'generate']
+__all__ = ['flat', 'gaussian', 'exponential', 'abc', 'sinusoid', 'MAX_SCRATCHES', 'GROOVE_REACH', 'scratches', 'flakes', 'GENERATORS', 'generate']
 
 # ----------------------------------------------------------------------------------------------------------------
 # Generators
@@ -367,6 +367,38 @@ def sinusoid(amplitude, period, size, samples, orientation_deg=0.0, phase_deg=0.
 MAX_SCRATCHES = 10000
 
 
+#: distance from a groove's axis, in widths w, beyond which :func:`scratches` leaves the surface alone: there the
+#: groove exp(−4 ln2 s² / w²) is shallower than 1e-18 of its depth (below float64's resolution of any height it
+#: meets), so the band |s| < GROOVE_REACH w holds the whole groove
+GROOVE_REACH = math.sqrt(18 * math.log(10) / (4 * math.log(2)))
+
+
+def _cut_groove(h, x, y, p, th, w, d, ln):
+    """Cut one groove of :func:`scratches` into *h* (ny, nx) in place: axis through *p* = (px, py) at angle *th*
+    (rad), full width at half depth *w*, depth *d*, length *ln* (None: across the patch), where it is deeper than
+    *h*. Only the cells within :data:`GROOVE_REACH` w of the axis are visited: per column for an axis closer to x,
+    per row otherwise (a 1024² patch and 0.5 µm grooves on 50 nm cells: 87 of 1024 cells per column)."""
+    c, s = math.cos(th), math.sin(th)
+    along_x = abs(c) >= abs(s)
+    a, b = (x, y) if along_x else (y, x)                 # the axis's direction runs along a; the band is across, in b
+    pa, pb = (p[0], p[1]) if along_x else (p[1], p[0])
+    slope, lead = (s / c, abs(c)) if along_x else (c / s, abs(s))
+    db = b[1] - b[0] if b.size > 1 else 1.0
+    half = GROOVE_REACH * w / lead                      # |across| < reach ⇔ |b − b_axis(a)| < reach / |cos|
+    k = int(math.ceil(half / db))
+    centre = np.rint((pb + (a - pa) * slope - b[0]) / db).astype(int)
+    jb = centre[:, None] + np.arange(-k, k + 1)[None, :]   # (len(a), 2k + 1)
+    ja = np.broadcast_to(np.arange(a.size)[:, None], jb.shape)
+    inside = (jb >= 0) & (jb < b.size)
+    ja, jb = ja[inside], jb[inside]
+    iy, ix = (jb, ja) if along_x else (ja, jb)
+    X, Y = x[ix] - p[0], y[iy] - p[1]
+    across = -X * s + Y * c
+    if ln is not None:
+        across = np.hypot(across, np.maximum(np.abs(X * c + Y * s) - ln / 2, 0.0))
+    h[iy, ix] = np.minimum(h[iy, ix], -d * np.exp(-4 * math.log(2) * across ** 2 / w ** 2))
+
+
 def scratches(count, width, depth, size, samples, orientation_deg=0.0, spread_deg=0.0, length=None,
               variation=0.0, seed=None) -> HeightField:
     """Random straight scratches (grooves) on a flat surface at h = 0.
@@ -418,18 +450,13 @@ def scratches(count, width, depth, size, samples, orientation_deg=0.0, spread_de
     hf0 = HeightField(np.zeros((ny, nx)), dx, dy)
     x, y = hf0.coords()
     Lx, Ly = hf0.extent
-    X, Y = x[None, :], y[:, None]
     h = np.zeros((ny, nx))
     for _ in range(n):
         px, py = rng.uniform(-Lx / 2, Lx / 2), rng.uniform(-Ly / 2, Ly / 2)
         th = math.radians(th0 + rng.uniform(-spread, spread))
         wi = w * rng.uniform(1 - v, 1 + v)
         di = d * rng.uniform(1 - v, 1 + v)
-        s = -(X - px) * math.sin(th) + (Y - py) * math.cos(th)   # across the groove
-        if ln is not None:
-            t = (X - px) * math.cos(th) + (Y - py) * math.sin(th)  # along the groove
-            s = np.hypot(s, np.maximum(np.abs(t) - ln / 2, 0.0))
-        np.minimum(h, -di * np.exp(-4 * math.log(2) * s**2 / wi**2), out=h)
+        _cut_groove(h, x, y, (px, py), th, wi, di, ln)
     meta = {"model": "scratches", "count": n, "width": w, "depth": d, "orientation_deg": th0,
             "spread_deg": spread, "length": ln, "variation": v, "seed": seed, "periodic": False, "units": "m"}
     return HeightField(h, dx, dy, meta=meta)
