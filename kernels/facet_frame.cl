@@ -7,7 +7,9 @@
  * one work item per cell (wo, its half-vector h): Na NDF nodes with density pa = D(m) cos theta_m turned to the
  * cell's half-vector azimuth, and Nb antithetic half-vector nodes (tilt radius from the nano lobe's radial law
  * at the cell's cos theta_d level, density pb = p_r(2 cos theta_d sin(m, h)) 4 cos^2 theta_d (m.h)); the balance
- * heuristic weights both (Veach 1997, sec. 9.2). g = f_nano cos theta_o is read from the facet tables over local
+ * heuristic weights both (Veach 1997, sec. 9.2), and where the cell's record gives a bridge point (where D(m) and
+ * the nano lobe meet between both sets' normals: a lobe's deep tail) Nc Gaussian nodes about it, density pc,
+ * counted beta times. g = f_nano cos theta_o is read from the facet tables over local
  * incidence (stack: n_theta x n_v x n_u x n_lam, float32), bilinearly at the two table incidences around theta_m,
  * each at the local exit direction turned about the local y axis by theta_m - theta_k.
  * Switches (build options): WO_NDF, WO_SHADOWING as in microfacet.h; WO_ISO 1 when the NDF nodes turn with
@@ -54,8 +56,10 @@ inline real_t tangent_weight(real_t theta)
 #endif
 /* wavelengths accumulated per pass (the host loops over passes) */
 #define WO_NL 32
-/* per-cell record: wo (3), h (3), cos phi_h, sin phi_h, cos theta_d, Lambda(wo), grazes (1: 2 na NDF nodes) */
-#define WO_CELL 11
+/* per-cell record: wo (3), h (3), cos phi_h, sin phi_h, cos theta_d, Lambda(wo), grazes (1: 2 na NDF nodes), the
+ * bridge point m_c (3), its Gaussian's widths towards h and across (2; 0: no bridge nodes) and its weight beta
+ * (twin facet.bridge_point) */
+#define WO_CELL 17
 
 /* G from the precomputed Lambda(wi), Lambda(wo) (Heitz 2014 eqs. 98, 99); the forms without Lambda from
  * microfacet.h (Cook & Torrance 1982 eq. 5; implicit) */
@@ -101,6 +105,16 @@ inline real_t pdf_r(__global const real_t *edges, __global const real_t *density
         if (edges[mid] <= r) lo = mid; else hi = mid;
     }
     return density[level * n_bins + lo];
+}
+
+/* Density (1/sr) of the bridge nodes at m: the 2-D normal law of m's offsets along bp, bq (widths sx, sy) in the
+ * tangent plane of the bridge point mc, times m.mc (twin facet.bridge_density) */
+inline real_t bridge_pdf(real3_t m, real3_t mc, real3_t bp, real3_t bq, real_t sx, real_t sy)
+{
+    real_t mm = dot(m, mc);
+    if (!(mm > R(0.0))) return R(0.0);
+    real_t x = dot(m, bp) / sx, y = dot(m, bq) / sy;
+    return exp(R(-0.5) * (x * x + y * y)) / (R(2.0) * WO_PI * sx * sy) * mm;
 }
 
 /* One node m: acc[l] += weight x g(theta_m, wo^m) at wavelengths l0 .. l0 + nl - 1. pb: the node's half-vector
@@ -216,7 +230,9 @@ inline void add_node(real3_t m, real_t pb, real3_t wi, real3_t wo, real3_t s_mac
  * stretches, turned to h's unstretched azimuth and stretched per cell); m0_hi (2 na, 3): the same law's 2 na
  * nodes, for the cells whose record says they graze (twin: grazing_cells); hv_r, hv_pdf (levels,
  * n_base): the half-vector nodes' offset radii and their radial density; hv_phi (nb, 2): cos, sin of their
- * azimuths about h; edges (n_bins + 1), density (levels, n_bins): the radial law in direction-cosine units. */
+ * azimuths about h; edges (n_bins + 1), density (levels, n_bins): the radial law in direction-cosine units;
+ * bc (nc, 2): the bridge nodes' offsets in units of the cell's widths (twin facet.bridge_offsets), about the cell's
+ * bridge point where its record gives widths > 0 (Nc = nc nodes more; each set's density then adds Nc pc). */
 __kernel void facet_frame_sum(__global const real_t *cell, __global const int *level,
                               __global const real_t *m0, __global const real_t *m0_hi,
                               __global const real_t *hv_r,
@@ -224,11 +240,13 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
                               __global const real_t *edges, __global const real_t *density,
                               __global const real_t *thetas, __global const real_t *cs_theta,
                               __global const float *stack,
-                              __global const float *stack_other, __global real_t *out,
+                              __global const float *stack_other, __global const real_t *bc,
+                              __global real_t *out,
                               const real_t wix, const real_t wiy, const real_t wiz, const real_t Li,
                               const real_t ax, const real_t ay, const real_t c,
                               const real_t u0, const real_t v0, const real_t du, const real_t dv,
-                              const int n_cells, const int na, const int nb, const int n_base, const int n_bins,
+                              const int n_cells, const int na, const int nb, const int nc, const int n_base,
+                              const int n_bins,
                               const int n_theta, const int n_u, const int n_v, const int n_lam, const int l0,
                               const int nl)
 {
@@ -252,6 +270,16 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
     real_t acc[WO_NL];
     for (int l = 0; l < WO_NL; ++l) acc[l] = R(0.0);
     real_t fna = (real_t)na_c, fnb = (real_t)nb;
+    /* the bridge point and its frame (twin facet._bridge_frame); add_node's pb carries Nc pc / Nb */
+    real3_t mc = (real3_t)(rec[11], rec[12], rec[13]);
+    real_t bsx = rec[14], bsy = rec[15], beta = rec[16];
+    bool bridge = bsx > R(0.0) && beta > R(0.0) && nc > 0 && nb > 0;
+    real3_t bp = h - dot(h, mc) * mc, bq;
+    if (length(bp) > R(1e-12)) bp = normalize(bp); else facet_basis(mc, &bp, &bq);
+    bq = cross(mc, bp);
+    /* the bridge's normals count beta Nc times (pb carries beta Nc pc / Nb); each one's term is beta times its
+     * own: add_node given Na / beta, Nb / beta */
+    real_t fc = bridge ? beta * (real_t)nc / fnb : R(0.0);
 #if !WO_ISO
     /* an anisotropic NDF is the stretch of the isotropic law of roughness sqrt(ax ay) by (kx, ky) (Heitz 2014,
      * sec. 5.3); m0 holds that law's nodes (twin facet.ndf_nodes) */
@@ -272,6 +300,7 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
         real_t pb = (mh > R(0.0))
             ? pdf_r(edges, density, lev, n_bins, R(2.0) * cos_d * length(cross(m, h))) * R(4.0) * cos_d * cos_d * mh
             : R(0.0);
+        if (bridge) pb += fc * bridge_pdf(m, mc, bp, bq, bsx, bsy);
         add_node(m, pb, wi, wo, s_mac, Li, Lo, ax, ay, c, fna, fnb, thetas, cs_theta, n_theta, stack, stack_other,
                  u0, v0, du, dv, n_u, n_v, n_lam, l0, nl, acc);
     }
@@ -282,8 +311,22 @@ __kernel void facet_frame_sum(__global const real_t *cell, __global const int *l
         real_t ch = sqrt(R(1.0) - s * s);
         real3_t m = (s * hv_phi[2 * k]) * e1 + (s * hv_phi[2 * k + 1]) * e2 + ch * h;
         real_t pb = hv_pdf[lev * n_base + j] * R(4.0) * cos_d * cos_d * ch;
+        if (bridge) pb += fc * bridge_pdf(m, mc, bp, bq, bsx, bsy);
         add_node(m, pb, wi, wo, s_mac, Li, Lo, ax, ay, c, fna, fnb, thetas, cs_theta, n_theta, stack, stack_other,
                  u0, v0, du, dv, n_u, n_v, n_lam, l0, nl, acc);
+    }
+    for (int k = 0; bridge && k < nc; ++k) {
+        real_t x = bsx * bc[2 * k], y = bsy * bc[2 * k + 1];
+        real_t r2 = x * x + y * y;
+        if (!(r2 < R(1.0))) continue;
+        real3_t m = x * bp + y * bq + sqrt(R(1.0) - r2) * mc;
+        real_t mh = wo_clamp(dot(h, m), R(0.0), R(1.0));
+        real_t pb = (mh > R(0.0))
+            ? pdf_r(edges, density, lev, n_bins, R(2.0) * cos_d * length(cross(m, h))) * R(4.0) * cos_d * cos_d * mh
+            : R(0.0);
+        pb += fc * bridge_pdf(m, mc, bp, bq, bsx, bsy);
+        add_node(m, pb, wi, wo, s_mac, Li, Lo, ax, ay, c, fna / beta, fnb / beta, thetas, cs_theta, n_theta, stack,
+                 stack_other, u0, v0, du, dv, n_u, n_v, n_lam, l0, nl, acc);
     }
     __global real_t *o = out + (size_t)i * n_lam + l0;
     for (int l = 0; l < nl; ++l) o[l] = acc[l];

@@ -167,8 +167,10 @@ def test_tabulated_form_towards_the_horizon_against_the_reference():
 #: (θ_i, φ_i, θ_o, φ_o) degrees: light between the rim tables' azimuth nodes (15° apart) and, at 35°, between
 #: incidence nodes too; exits 80-88° in and out of the plane
 BETWEEN = [(30, 22.5, 85, 202.5), (30, 37.5, 88, 217.5), (30, 7, 85, 187), (35, 40, 86, 250), (30, 67.5, 80, 307.5)]
-#: a pair in the lobe's deep tail (1.4e-5 /sr, 5000x below the forward lobe of φ_i 90°): the grid route's
-#: facet-frame sum itself is 1.42x the Monte-Carlo integral there
+#: a pair in the lobe's deep tail (1.4e-5 /sr, 5000x below the forward lobe of φ_i 90°), where the integrand
+#: peaks between the NDF's normals and the half-vector's: the grid route's facet-frame sum was 1.42x the
+#: Monte-Carlo integral there before its third node set about the bridge point
+#: (:func:`waveoptics.brdf.facet.bridge_point`)
 DEEP_TAIL = (30, 52.5, 85, 202.5)
 
 
@@ -196,29 +198,38 @@ def test_rim_tables_read_between_light_azimuth_nodes():
     orders of magnitude with the light's azimuth (exit 85° forward: 4.4e-4 /sr at φ_i 0° to 0.069 at 90°); the 4
     main nodes' rim tables blended linearly read these pairs 6.9-28000x the sum (0.0349 against 0.0051 /sr at φ_i
     45°, 85° forward); the rim tables at 24 light azimuths read in log f
-    (:func:`waveoptics.brdf.tabulated_rim.rim_across_light_azimuth`) do not."""
+    (:func:`waveoptics.brdf.tabulated_rim.rim_across_light_azimuth`) do not.
+
+    :data:`DEEP_TAIL` within 10 %: measured 1.094 (1.68e-5 against 1.53e-5 /sr), the sum there smooth across the
+    light's azimuth (1.06-1.09x the Monte-Carlo integral at φ_i 37.5-67.5°, 64² facet tables); 1.063 of the sum
+    before its bridge normals (then 1.42x the integral)."""
     wi, wo = _pairs(BETWEEN + [DEEP_TAIL])
-    np.testing.assert_allclose(_tabulated(wi, wo), _facet_frame_sums(wi, wo), rtol=0.07)
+    got, want = _tabulated(wi, wo), _facet_frame_sums(wi, wo)
+    np.testing.assert_allclose(got[:-1], want[:-1], rtol=0.07)
+    np.testing.assert_allclose(got[-1], want[-1], rtol=0.10)
 
 
 def test_tabulated_form_between_light_azimuth_nodes_against_the_reference():
     """At the first four :data:`BETWEEN` pairs within 8 % + 3 s.e. of the Monte-Carlo facet-frame integral (256 000
-    samples, s.e. 0.4-1.1 %): measured 0.97-1.06. The last (1.4e-7 /sr, 5e5 below the lobe's peak) lies in the deep
-    tail where the facet-frame sum does not converge with its normals (at that pair 0.07 / 0.27 / 1.10 / 1.83 of the
-    integral with 64 / 128 / 1024 / 2048 NDF normals; the tables read 0.86), as the pointwise test below says of
-    its own quadrature (issue 28)."""
+    samples, s.e. 0.4-1.1 %): measured 0.97-1.06. The last (1.4e-7 /sr, 5e5 below the lobe's peak) is left out:
+    with the bridge normals (:func:`waveoptics.brdf.facet.bridge_point`) the grid route's sum there is 1.099x the
+    integral with 64² facet tables (their bilinear read of the nano lobe's steep tail) and the tables read 1.102x
+    (before: the sum did not converge with its normals, 0.07-1.83x with 64-2048 NDF normals; the tables read
+    0.86)."""
     wi, wo = _pairs(BETWEEN[:4])
     ref, se = facet_frame_mc(TwoScaleBRDF("aluminium", MICRO, nano=NANO).facet_nano_brdf, wi, wo, n=256000, seed=6)
     got = _tabulated(wi, wo)
     assert np.all(np.abs(got - ref) <= 0.08 * ref + K_SE * se), (got / ref, se / ref)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 28: the grid route's facet-frame sum is 1.42x the Monte-Carlo "
-                                       "integral in this lobe's deep tail (1.4e-5 /sr)")
 def test_facet_frame_sum_in_the_deep_tail_against_the_reference():
     """:data:`DEEP_TAIL`: the facet-frame sum within 8 % + 3 s.e. of the Monte-Carlo integral (256 000 samples, s.e.
-    1 %). Measured 2.05e-5 against 1.44e-5 /sr (1.42x; the tables read 2.18e-5): at the light azimuth nodes' pairs
-    (:data:`PAIRS`, 5e-4-0.07 /sr) the sum is within 6.3 %."""
+    1 %; a slope-space quadrature gives 1.4419e-5 /sr, tests/test_facet_frame_tail.py). Measured 1.076x with 64²
+    facet tables (their bilinear read of the nano lobe's tail +7 %; 1.047x before the grazing cells' 2 N_a NDF
+    normals), 0.997x with 128² (before those); before the bridge normals
+    (:func:`waveoptics.brdf.facet.bridge_point`) 1.42x (2.05e-5 /sr; 1.32x with 128² tables): the integrand peaks
+    at slopes 1.4-3.5 α_x towards h, 1-3.5 nano lobe widths from h, where the 128 NDF normals and 256
+    half-vector normals are sparse."""
     wi, wo = _pairs([DEEP_TAIL])
     ref, se = facet_frame_mc(TwoScaleBRDF("aluminium", MICRO, nano=NANO).facet_nano_brdf, wi, wo, n=256000, seed=6)
     got = _facet_frame_sums(wi, wo)
@@ -258,14 +269,14 @@ def test_main_tables_between_light_azimuth_nodes(theta_i, phi_i):
 
 def test_pointwise_form_against_the_reference():
     """The pointwise form (:class:`TwoScaleBRDF`, its own facet quadrature at each pair) at :data:`PAIRS` and the
-    first four :data:`BETWEEN` pairs within 7 % + 3 s.e. of the Monte-Carlo facet-frame integral: measured
-    0.935-1.043 and 0.965-0.995 (the last BETWEEN pair, 1.3e-7 /sr, 0.79, and :data:`DEEP_TAIL` 1.20: the deep tail
-    where its normals are sparse, issue 28)."""
+    :data:`BETWEEN` pairs and :data:`DEEP_TAIL` within 7 % + 3 s.e. of the Monte-Carlo facet-frame integral:
+    measured 0.935-1.043 and 0.965-0.995, the last BETWEEN pair (1.4e-7 /sr) 0.979 and :data:`DEEP_TAIL` 1.003
+    with the bridge normals (:func:`waveoptics.brdf.facet.bridge_point`; before them 0.79 and 1.20, issue 28)."""
     b = TwoScaleBRDF("aluminium", MICRO, nano=NANO)
     wi, wo, ref, se = _reference()
     got = b.eval_parts(wi, wo, LAM)["diffraction"]
     assert np.all(np.abs(got - ref) <= 0.07 * ref + K_SE * se), (got / ref, se / ref)
-    wi, wo = _pairs(BETWEEN[:4])
+    wi, wo = _pairs(BETWEEN + [DEEP_TAIL])
     ref, se = facet_frame_mc(b.facet_nano_brdf, wi, wo, n=256000, seed=6)
     got = b.eval_parts(wi, wo, LAM)["diffraction"]
     assert np.all(np.abs(got - ref) <= 0.07 * ref + K_SE * se), (got / ref, se / ref)

@@ -94,6 +94,27 @@ def test_ndfs_with_a_radial_lambda(ndf):
     _assert_twins(*_both(40.0, Micro(alpha=0.2, ndf=ndf)), ndf)
 
 
+
+def test_bridge_normals_in_a_lobes_tail():
+    """Beckmann α 0.15 × 0.4 with a Gaussian nano lobe (σ 15 nm, T 1.5 µm), light at 60°, azimuth 30°: cells of
+    the lobe's tail get the third node set about the bridge point (:func:`waveoptics.brdf.facet.bridge_point`; its
+    Gaussian normals and their density in the kernel, their share β), the same sum in both."""
+    from waveoptics.brdf import facet
+
+    nano = Nano(model=surfaces.PSDModel("gaussian", 15e-9, T=1.5e-6))
+    micro = Micro(alpha=0.15, alpha_y=0.4, ndf="beckmann")
+    wi = _wi(60.0, 30.0)
+    res = [facet_frame_diffraction(wi, LAMS, AL, micro, nano, GRID, lambda x, lam: AL.F(x, lam), backend=b)
+           for b in ("numpy", "opencl")]
+    wo = GRID.directions()[GRID.inside]
+    h = (wi + wo) / np.linalg.norm(wi + wo, axis=-1, keepdims=True)
+    rad = facet.NanoRadial(nano.model, facet.FACET_REFERENCE_NM, "kirchhoff", 256)
+    beta = facet.bridge_point(h, h @ wi, rad, rad.level(h @ wi), (128, 256), ndf="beckmann", ax=0.15, ay=0.4,
+                              c=None)[2]
+    lobe = res[0][0][0][GRID.inside]
+    assert np.sum((beta > 0) & (lobe > CUT * lobe.max())) >= 10   # the bridge is on in cells the twins compare
+    _assert_twins(*res, "bridge normals")
+
 def test_float64_device_arithmetic():
     if not get_runtime().fp64:
         pytest.skip("the device has no fp64")

@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import FieldError, unknown
 from ..runtime import build_options, build_program, get_runtime, opencl_available, program_kernel
 from ..scatter.tangent_blend import TANGENT_PLANE_BLEND_DEG
-from .facet import COS_LEVELS, half_vector_base, ndf_node_base
+from .facet import BRIDGE_NODES, COS_LEVELS, bridge_offsets, half_vector_base, ndf_node_base
 from .ndf import ndf_by_name
 from .opencl import ndf_shape_parameter
 from .shadowing import shadowing_by_name
@@ -121,7 +121,7 @@ def warm_facet_frame_kernel(micro, nano, diffraction, polarization: str = "unpol
             rt, dt, kern = facet_frame_kernel(micro, mix=mix, blend=blend, projected=True, device=device,
                                               precision=precision)
             dummy = cl.Buffer(rt.context, cl.mem_flags.READ_WRITE, 64)
-            kern(rt.queue, (LOCAL_SIZE,), (LOCAL_SIZE,), *[dummy] * 14, *[dt(0)] * 11, *[np.int32(0)] * 11).wait()
+            kern(rt.queue, (LOCAL_SIZE,), (LOCAL_SIZE,), *[dummy] * 15, *[dt(0)] * 11, *[np.int32(0)] * 12).wait()
         except (WaveopticsError, cl.Error):   # the real call raises it where it belongs
             return
 
@@ -153,7 +153,7 @@ def _table_buffer(rt, stack):
 
 def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack, stack_other, table_grid,
                        thetas_deg, *, device=None, precision: str = "float32", first=None, projected=False,
-                       graze=None):
+                       graze=None, bridge=None):
     """Σ over the NDF and half-vector nodes of the balance-heuristic weight |ω_i·m| D G / (cos θ_i cos θ_o
     (N_a p_a + N_b p_b)) times g = f_nano cos θ_o read from the facet tables, per cell: the kernel
     ``facet_frame_sum`` of ``kernels/facet_frame.cl``.
@@ -187,6 +187,10 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
         facet's exact cos²θ_o' (:func:`waveoptics.brdf.facet_frame_diffraction`).
     graze : ndarray (n_cells,) bool, optional
         Cells that take 2 N_a NDF normals (:func:`waveoptics.brdf.grazing_cells`); none by default.
+    bridge : (ndarray (n_cells, 3), ndarray (n_cells, 2), ndarray (n_cells,)), optional
+        Each cell's bridge point, its Gaussian's widths and its weight β (:func:`waveoptics.brdf.facet.bridge_point`;
+        β 0: none): :data:`waveoptics.brdf.facet.BRIDGE_NODES` normals about it
+        (:func:`waveoptics.brdf.facet.bridge_nodes`) join the balance heuristic, counted β times. None: none.
     device : str, optional
         Device spec (:func:`waveoptics.runtime.get_runtime`).
     precision : {'float32', 'float64'}
@@ -222,7 +226,9 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
     m0_hi = ndf_node_base(2 * na, ndf=kw["ndf"], ax=ax, ay=ay, c=kw["ndf_shape"])[0] if graze.any() else m0
     n_base, radii, hv_pdf, hv_phi = _half_vector_tables(rad, nb)
     phi = np.arctan2(h[:, 1], h[:, 0])
-    cell = np.column_stack([wo, h, np.cos(phi), np.sin(phi), cos_d, Lo, graze])
+    mc, bw, beta = bridge if bridge is not None else (h, np.zeros((h.shape[0], 2)), np.zeros(h.shape[0]))
+    cell = np.column_stack([wo, h, np.cos(phi), np.sin(phi), cos_d, Lo, graze, mc,
+                            np.where(beta[:, None] > 0, bw, 0.0), beta])
     n_cells = cell.shape[0]
     n_th, n_v, n_u, n_lam = stack.shape
 
@@ -235,13 +241,14 @@ def facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, nodes, rad, stack
     tab = _table_buffer(rt, stack)
     second = stack_other if first is None else first
     tab_other = tab if second is None else _table_buffer(rt, second)
+    bc = dev(bridge_offsets(BRIDGE_NODES))
     out = cla.empty(q, max(n_cells * n_lam, 1), dt)
     g0, g1 = table_grid.u_range[0], table_grid.v_range[0]
     scalars = [dt(x) for x in (*wi, Li, ax, ay, c, g0, g1, table_grid.du, table_grid.dv)]
-    ints = [np.int32(x) for x in (n_cells, na, nb, n_base, rad.edges.size - 1, n_th, n_u, n_v, n_lam)]
+    ints = [np.int32(x) for x in (n_cells, na, nb, BRIDGE_NODES, n_base, rad.edges.size - 1, n_th, n_u, n_v, n_lam)]
     for l0 in range(0, n_lam, KERNEL_WAVELENGTHS):
         nl = min(KERNEL_WAVELENGTHS, n_lam - l0)
         kern(q, (-(-max(n_cells, 1) // LOCAL_SIZE) * LOCAL_SIZE,), (LOCAL_SIZE,), *[a.data for a in args], tab,
-             tab_other, out.data, *scalars, *ints, np.int32(l0), np.int32(nl))
+             tab_other, bc.data, out.data, *scalars, *ints, np.int32(l0), np.int32(nl))
     cl.enqueue_barrier(q)
     return out.get()[:n_cells * n_lam].reshape(n_cells, n_lam).astype(np.float64)

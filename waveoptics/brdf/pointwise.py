@@ -62,6 +62,7 @@ from ..errors import FieldError
 from .protocol import TwoScaleParts
 from .ndf import ndf_by_name
 from .shadowing import shadowing_by_name
+from .facet import (BRIDGE_NODES, bridge_density, bridge_nodes, bridge_point)
 from .facet import (wide_micro_lobe, COS_LEVELS, RADIAL_BINS, NanoRadial, local_pair, facet_basis, from_facet, quadrature_density,
                     quadrature_normals, sampler_normals, to_facet, unit_nodes)
 from .directions import dot_last
@@ -147,18 +148,19 @@ class TwoScaleBRDF(TwoScaleParts):
         """Refuse nano-roughness the truncated series cannot hold (:func:`waveoptics.brdf.roughness_scales.check_series`)."""
         check_series(self.nano.model, lam)
 
-    def _f_nano(self, wi, wo, lam):
+    def _f_nano(self, wi, wo, lam, F=None):
         """The nano lobe f_n (1/sr) of directions given in the nano surface's own frame, with its own Fresnel
-        factor at the half-vector angle; 0 where either direction is at or below that surface."""
-        h = wi + wo
-        h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
-        cos_d = np.clip(dot_last(h, wi), 0.0, 1.0)
+        factor at the half-vector angle (*F*, broadcast with the pairs, where the caller has it: θ_d is the same in
+        every frame); 0 where either direction is at or below that surface."""
         up = (wi[..., 2] > 0) & (wo[..., 2] > 0)
         dm = scatter.get_model(self.diffraction, perturbative=True)
         if dm.perturbative:   # Rayleigh-Rice: its own polarization factor Q in place of F (F = 1: a perfect conductor)
             mat = self.material if self.fresnel == "exact" else None
             return np.where(up, scatter.rayleigh_rice_lobe(wi, wo, lam, self.nano.model, mat), 0.0)
-        F = self._F(lam)(cos_d)
+        if F is None:
+            h = wi + wo
+            h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-300)
+            F = self._F(lam)(np.clip(dot_last(h, wi), 0.0, 1.0))
         # the series of the roughness inside the propagating band, as the grid model's (docs/physics.md §9)
         total = scatter.band_series(self.nano.model, lam)(wi, wo, dm.cos_sum(wi, wo))
         # beyond the tangent plane's validity the lobe hands over to first order, W f_K + (1 − W) f_RR with
@@ -222,38 +224,58 @@ class TwoScaleBRDF(TwoScaleParts):
         return np.where((wi[:, 2] > 0) & (wo[:, 2] > 0), out, 0.0)
 
     def _f_diffraction_chunk(self, wi, wo, lam):
-        """Walter's integral over facet normals m by the balance heuristic of two node sets (module doc)."""
+        """Walter's integral over facet normals m by the balance heuristic of two node sets (module doc) and, in a
+        lobe's deep tail, the bridge normals (:func:`waveoptics.brdf.facet.bridge_point`): evaluated in the pairs
+        whose weight β is > 0 only, as is their density at the other sets' normals."""
         up = (wi[:, 2] > 0) & (wo[:, 2] > 0)
         wi = np.where(up[:, None], wi, [0.0, 0.0, 1.0])
         wo = np.where(up[:, None], wo, [0.0, 0.0, 1.0])
         na = self.nodes // 2
         ndf, ax, ay = self._micro_args()
-        spec = ndf_by_name(ndf)
         rad = self._radial(lam)
         h = _unit(wi + wo)
         # cos θ_d = ω_i·h = ω_o·h, taken as their mean so that ω_i and ω_o swapped give it to the last bit
         cos_d = np.maximum(0.5 * (dot_last(wi, h) + dot_last(wo, h)), 1e-6)
         level = rad.level(cos_d)
-        m, valid = quadrature_normals(h, cos_d, rad, level, self.nodes // 2, ndf=ndf, ax=ax, ay=ay,
-                                      c=self.ndf_shape)
+        m, valid = quadrature_normals(h, cos_d, rad, level, na, ndf=ndf, ax=ax, ay=ay, c=self.ndf_shape)
+        # a third set about the bridge point where the integrand peaks between both sets' normals (a lobe's deep
+        # tail): counted β N_c times in the balance heuristic, each of its terms times β
+        mc, bw, beta = bridge_point(h, cos_d, rad, level, (na, na), ndf=ndf, ax=ax, ay=ay, c=self.ndf_shape)
+        on = np.flatnonzero(beta > 0)
+        extra = np.zeros(m.shape[:2])
+        if on.size:
+            extra[on] = BRIDGE_NODES * beta[on, None] * bridge_density(m[on], mc[on], bw[on], h[on])
+        out = self._facet_sum(wi, wo, h, cos_d, level, m, valid, extra, lam)
+        if on.size:
+            mb, okb = bridge_nodes(mc[on], bw[on], h[on])
+            extra = BRIDGE_NODES * beta[on, None] * bridge_density(mb, mc[on], bw[on], h[on])
+            out[on] += beta[on] * self._facet_sum(wi[on], wo[on], h[on], cos_d[on], level[on], mb, okb, extra, lam)
+        return np.where(up, out / (np.maximum(wi[:, 2], 1e-300) * np.maximum(wo[:, 2], 1e-300)), 0.0)
+
+    def _facet_sum(self, wi, wo, h, cos_d, level, m, valid, extra, lam):
+        """Σ_k |ω_i·m_k| |ω_o·m_k| f_nano(ω_i^m, ω_o^m) G D(m_k) / den(m_k) over the normals *m* (n_pairs, N, 3)
+        where *valid*: den the balance heuristic's denominator, both sets' densities
+        (:func:`waveoptics.brdf.facet.quadrature_density`) plus *extra* (n_pairs, N) (the bridge set's, 1/sr)."""
+        ndf, ax, ay = self._micro_args()
+        spec = ndf_by_name(ndf)
         wi_b = np.broadcast_to(wi[:, None, :], m.shape)
         wo_b = np.broadcast_to(wo[:, None, :], m.shape)
         im = dot_last(wi_b, m)
         om = dot_last(wo_b, m)
         D = spec.D(m, ax, ay, self.ndf_shape)
-        # densities of both node sets at every node, symmetric in ω_i and ω_o: D(m) cos θ_m and the radial law
-        den = quadrature_density(m, D, h, cos_d, rad, level, na)
+        # densities of the node sets at every node, symmetric in ω_i and ω_o: D(m) cos θ_m and the radial law
+        den = quadrature_density(m, D, h, cos_d, self._radial(lam), level, self.nodes // 2) + extra
         # the integrand |i·m||o·m| / (|i·n||o·n|) f_nano(i_m, o_m) G(i, o, m) D(m)
         ok = valid & (im > 0) & (om > 0) & (den > 0)
         li, lo = local_pair(im, om, dot_last(wi, wo)[:, None])
-        fn = self._f_nano(li, lo, lam)
+        # F(θ_d) once per pair: a pair's θ_d is the same in every facet's frame
+        fn = self._f_nano(li, lo, lam, F=self._F(lam)(np.clip(cos_d, 0.0, 1.0))[:, None])
         Li, Lo = spec.Lambda(wi, ax, ay, self.ndf_shape), spec.Lambda(wo, ax, ay, self.ndf_shape)
         shape = m.shape[:2]
         gfn, _ = shadowing_by_name(self.micro.shadowing)
         G = gfn(wi_b, wo_b, m, lambda w: np.broadcast_to((Li if w is wi_b else Lo)[:, None], shape))
         val = im * om * fn * G * D / np.where(ok, den, 1.0)
-        out = np.sum(np.where(ok, val, 0.0), axis=1)
-        return np.where(up, out / (np.maximum(wi[:, 2], 1e-300) * np.maximum(wo[:, 2], 1e-300)), 0.0)
+        return np.sum(np.where(ok, val, 0.0), axis=1)
 
     # -- sampling: a facet normal from the NDF's nodes, then the nano lobe in that facet's frame ---------------
     def _pdf_diffraction(self, wi, wo, lam):

@@ -17,7 +17,8 @@ from ..materials import cos2_eta_i, facet_sp_mix
 from ..runtime import parallel_map
 from ..scatter.grid import DirectionGrid
 from ..scatter.tangent_blend import first_order_over_fresnel, tangent_plane_weight, uses_vector_first_order
-from .facet import FACET_NODE_SPLIT, FACET_REFERENCE_NM, half_vector_nodes, ndf_nodes, wide_micro_lobe
+from .facet import (FACET_NODE_SPLIT, FACET_REFERENCE_NM, bridge_nodes, bridge_point, half_vector_nodes, ndf_nodes,
+                    wide_micro_lobe, with_bridge_density)
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_energy import facet_budget
 from .field_lobe import (field_anisotropy, field_cell_split, field_first_order_over_fresnel,
@@ -418,6 +419,16 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=Fa
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 
+def _extra_nodes(symmetric: bool, nodes, wi, wo, h, cos_d, rad, level, na: int, nb: int, **ndf):
+    """PSD statistics' extra normals in :func:`facet_frame_diffraction`: the cells that graze (2 N_a NDF normals,
+    :func:`grazing_cells`, with the default *nodes* only), N_a per cell, and each cell's (bridge point, widths, β)
+    (:func:`.facet.bridge_point`: a lobe's deep tail); a height field's (its nodes' layout is not symmetric): none."""
+    graze = grazing_cells(wi, wo) & (symmetric and nodes is None)
+    bridge = (bridge_point(h, cos_d, rad, level, (na, nb), **ndf) if symmetric
+              else (h, np.zeros((h.shape[0], 2)), np.zeros(h.shape[0])))
+    return graze, np.where(graze, 2 * na, na), bridge
+
+
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
                             diffraction="kirchhoff", polarization: str = "unpolarized",
                             table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None,
@@ -431,7 +442,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     N_b normals about the half-vector drawn through the nano lobe's radial law (:func:`.facet.half_vector_nodes`; they
     hold a heavy-tailed NDF's far facets and a nano lobe narrower than the micro lobe); (N_a, N_b) = *nodes* or
     :func:`facet_nodes`, whose N_a doubles for PSD statistics in the cells where the pair grazes
-    (:func:`grazing_cells`). Both sets are laid out per cell about its half-vector h, in a frame that turns with h
+    (:func:`grazing_cells`); for PSD statistics, in a lobe's deep tail where the integrand peaks between both sets'
+    normals, a third: :data:`.facet.BRIDGE_NODES` Gaussian normals about that point, counted β times
+    (:func:`.facet.bridge_point`, :func:`.facet.bridge_nodes`). Both sets are laid out per cell about its
+    half-vector h, in a frame that turns with h
     about z: they are the same for ω_i and ω_o swapped and for the pair turned about the normal, so the discrete
     sum is reciprocal up to the tables' reads (the integrand is), and a table over incidence at azimuth 0 read
     turned (:class:`waveoptics.brdf.TabulatedTwoScaleBRDF`) keeps it: measured f(ω_i, ω_o)/f(ω_o, ω_i) − 1 ≤ 0.5 %
@@ -489,16 +503,14 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     w = np.asarray(wavelengths_nm, dtype=float)
     dm = scatter.get_model(diffraction, perturbative=True)
     kw = micro.kw()
-    ndf, ax = kw["ndf"], kw["alpha"]
-    ay = kw["alpha_y"] if kw["alpha_y"] is not None else ax
+    ndf, ax, ay = kw["ndf"], kw["alpha"], kw["alpha_y"] if kw["alpha_y"] is not None else kw["alpha"]
     c, spec = kw["ndf_shape"], ndf_by_name(kw["ndf"])
     na, nb = nodes or facet_nodes(micro, nano, w)
     m_a = (sample_normal(np.broadcast_to(wi, (na, 3)), unit_nodes(na), ndf=ndf, ax=ax, ay=ay, c=c)
            if nano.surface is not None else None)   # a height field's NDF nodes (PSD statistics: ndf_nodes)
     inside = grid.inside
     wo = grid.directions()[inside]
-    h = wi + wo
-    h = h / np.linalg.norm(h, axis=-1, keepdims=True)
+    h = (wi + wo) / np.linalg.norm(wi + wo, axis=-1, keepdims=True)
     cos_d = np.maximum(h @ wi, 1e-6)
     rad = NanoRadial(nano_statistics(nano), FACET_REFERENCE_NM, dm, nb)
     level = rad.level(cos_d)
@@ -514,36 +526,35 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
     stack_other = None if other is None else _facet_stack(nano, w, tgrid, dm, material, other)[0]
-    graze = grazing_cells(wi, wo) & (symmetric and nodes is None)   # PSD statistics' default nodes: 2 N_a there
-    na_cell = np.where(graze, 2 * na, na)
+    graze, na_cell, (mc, bw, beta) = _extra_nodes(symmetric, nodes, wi, wo, h, cos_d, rad, level, na, nb, ndf=ndf,
+                                                  ax=ax, ay=ay, c=c)
     out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
                               facet_thetas(nano), device=device, precision=precision, first=first,
-                              projected=symmetric, graze=graze)
+                              projected=symmetric, graze=graze, bridge=(mc, bw, beta))
            if facet_frame_backend(backend, micro, nano) == "opencl" else None)
 
-    def add(m, valid):
-        """Add the nodes m (3,) (an anisotropic NDF's node, shared by all cells) or (n_cells, 3) (one node per
-        cell), weighted by the balance heuristic."""
-        om = wo @ m if m.ndim == 1 else np.sum(wo * m, axis=-1)
+    def add(m, valid, share=1.0, cells=slice(None)):
+        """Add the nodes m (3,) (shared) or (n, 3) (one per cell of *cells*) by the balance heuristic, times *share*."""
+        wo_c, h_c, cd_c, lev_c, Lo_c = wo[cells], h[cells], cos_d[cells], level[cells], Lo[cells]
+        om = wo_c @ m if m.ndim == 1 else np.sum(wo_c * m, axis=-1)
         im = m @ wi
         D = spec.D(m, ax, ay, c)
         if symmetric:   # the NDF nodes' density D(m) cos θ_m, the same for ω_i and ω_o swapped
             pa = D * m[..., 2]
         else:           # a height field's: the micro NDF's sampler for ω_i
             pa = np.where(im > 0, D * im / (1.0 + Li), 0.0) / wi[2] if visible else D * m[..., 2]
-        mh = np.clip(h @ m if m.ndim == 1 else np.sum(m * h, axis=-1), 0.0, 1.0)
-        pb = np.where(mh > 0, rad.pdf_r(level, 2 * cos_d * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
-                      * 4 * cos_d ** 2 * mh, 0.0)
-        den = na_cell * pa + nb * pb
+        mh = np.clip(h_c @ m if m.ndim == 1 else np.sum(m * h_c, axis=-1), 0.0, 1.0)
+        pb = np.where(mh > 0, rad.pdf_r(lev_c, 2 * cd_c * np.sqrt(np.maximum(1 - mh * mh, 0.0)))
+                      * 4 * cd_c ** 2 * mh, 0.0)
+        den = with_bridge_density(na_cell[cells] * pa + nb * pb, m, np.arange(wo.shape[0])[cells], beta, mc, bw, h)
         ok = valid & (im > 0) & (om > 0) & (den > 0) & (D > 0)
         if not ok.any():
             return
-        wok = wo[ok]
-        Lok = Lo[ok]
-        Lik = np.full(Lok.shape, Li)
+        wok, Lok, Lik = wo_c[ok], Lo_c[ok], np.full(int(ok.sum()), Li)
         mk = np.broadcast_to(m, wok.shape) if m.ndim == 1 else m[ok]
         G = gfn(np.broadcast_to(wi, wok.shape), wok, mk, lambda d: Lok if d is wok else Lik)
-        weight = (im * D if m.ndim == 1 else (im * D)[ok]) * G / (wi[2] * wok[:, 2] * den[ok])   # × |ω_o·m| f_nano
+        share = share[cells][ok] if np.ndim(share) else share   # × |ω_o·m| f_nano below
+        weight = (im * D if m.ndim == 1 else (im * D)[ok]) * G * share / (wi[2] * wok[:, 2] * den[ok])
         t, b = facet_basis(mk if m.ndim > 1 else m)
         lx, ly = np.sum(t * wi, axis=-1), np.sum(b * wi, axis=-1)
         r = np.hypot(lx, ly)
@@ -556,7 +567,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
             g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo, projected=symmetric,
                                                         thetas_deg=facet_thetas(nano))}
             g = facet_sp_mix(g_sp["s"], g_sp["p"], cos2_eta_i(wi, mk)[:, None], polarization)
-        out[ok] += weight[:, None] * g
+        out[np.arange(wo.shape[0])[cells][ok]] += weight[:, None] * g
 
     e1, e2 = meridian_basis(h) if symmetric else facet_basis(h)
     if out is None:   # the NumPy twin of kernels/facet_frame.cl
@@ -571,6 +582,10 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
             s_k = np.where(ok, s_k, 0.0)
             m = (s_k * cp)[:, None] * e1 + (s_k * sp)[:, None] * e2 + np.sqrt(1 - s_k ** 2)[:, None] * h
             add(m, ok)
+        on = np.flatnonzero(beta > 0)
+        m_c, ok_c = bridge_nodes(mc[on], bw[on], h[on])
+        for k in range(m_c.shape[1] if on.size else 0):   # in the cells that have a bridge only
+            add(m_c[:, k], ok_c[:, k], beta, on)
     diffraction = np.zeros((w.size, grid.n_v, grid.n_u))
     for i, lam in enumerate(w):
         if dm.perturbative:
