@@ -369,9 +369,9 @@ def bridge_point(h, cos_d, rad: NanoRadial, level, nodes, *, ndf, ax, ay, c):
     1), rising smoothly (:func:`_decade_ramp`) from 0 where no bridge is needed to 1: where the NDF's density at h
     and the radial law's at the normal fall below :data:`BRIDGE_GATE` of their peaks, and where the two sets'
     density at m_c (*nodes* = (N_a, N_b)) falls below :data:`BRIDGE_DENSITY` times that of the bridge normals at
-    their centre. 0 also where the
-    maximum lies at either end of the segment or the log is not concave there. A function of h and cos θ_d alone:
-    the same for ω_i and ω_o swapped.
+    their centre. 0 also where the maximum lies at either end of the segment or the log is not concave there, and
+    for a slope table (``tabulated``: a histogram, bounded, measured with analytic NDFs only). A function of h and
+    cos θ_d alone: the same for ω_i and ω_o swapped.
 
     References
     ----------
@@ -387,6 +387,8 @@ def bridge_point(h, cos_d, rad: NanoRadial, level, nodes, *, ndf, ax, ay, c):
     cos_d = np.asarray(cos_d, dtype=float)
     level = np.broadcast_to(np.asarray(level), cos_d.shape)
     mc, width, beta = h.copy(), np.zeros((h.shape[0], 2)), np.zeros(h.shape[0])
+    if ndf == "tabulated":   # a slope table's histogram: no smooth peak to find, no tail beyond its largest slope
+        return mc, width, beta
     z = np.broadcast_to(np.array([0.0, 0.0, 1.0]), h.shape)
     t_n = 2.0 * cos_d * np.sqrt(np.maximum(1.0 - h[:, 2] ** 2, 0.0))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):

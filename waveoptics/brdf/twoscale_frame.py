@@ -63,15 +63,14 @@ FACET_THETAS_PSD_DEG = np.array([*range(0, 89, 2), 89, 89.5, 89.9], dtype=float)
 #: incidence, where many face away from it). Cost per incidence (96² and 128², 3 wavelengths, OpenCL on PoCL's
 #: CPU device, under load): (128, 256) 2.7-2.8x (64, 64)
 FACET_NODES_NARROW, FACET_NODES_WIDE = (64, 16), (128, 256)
-#: PSD statistics' cells where the light or the exit is this far from the normal or further (degrees) take twice
-#: the NDF normals of :func:`facet_nodes` (:func:`grazing_cells`): there the integrand reaches facets tilted far
-#: into the NDF's tail (a grazing pair scatters through facets tilted 60-70°), where D(m) cos θ_m puts few of its
-#: N_a normals. GGX α 0.05 / 0.1, ABC σ = 10 nm, B = 2 µm, C = 2.6, Al, 550 nm, θ_i 80°, exits 30-85° at φ_o
-#: 0-180° where the lobe is above 1e-3 of its largest value, against a Monte-Carlo facet-frame integral
-#: (tests/twoscale_reference.py): (64, 16) normals max 5.1 / 9.0 % (one pair of 30 beyond 3 % + 3 s.e. each: 85° at
-#: φ_o 45° / 135°), (128, 16) 2.7 / 2.4 % (none); at θ_i 85° (exits to 89°) 25 / 18 % against 6.8 / 2.8 % with
-#: (256, 16). Decided by max(θ_i, θ_o), so a pair and its swap get the same nodes (reciprocal); cost on 64² cells,
-#: 25 wavelengths: 0.12 → 0.19 s per incidence where every cell grazes (θ_i ≥ 70°), 12 % of the cells below it
+#: cells where the light or the exit is this far from the normal or further (degrees) take twice the narrow lobes'
+#: NDF normals (:data:`FACET_NODES_NARROW`, analytic NDFs, :func:`grazing_cells`): there the integrand reaches
+#: facets tilted 60-70°, deep in the NDF's tail. GGX α 0.05 / 0.1, ABC σ 10 nm, B 2 µm, C 2.6, Al, 550 nm, θ_i 80°,
+#: exits 30-85° at φ_o 0-180° above 1e-3 of the peak, against a Monte-Carlo facet-frame integral
+#: (tests/twoscale_reference.py): 64 normals max 5.1 / 9.0 % (one pair of 30 beyond 3 % + 3 s.e. each), 128: 2.7 /
+#: 2.4 % (none); at θ_i 85° (exits to 89°) 25 / 18 %, 256: 6.8 / 2.8 %. By max(θ_i, θ_o): reciprocal. Cost on 64²,
+#: 25 wavelengths: 0.12 → 0.19 s per incidence from 70°. Wide lobes' 128 normals hold GGX α 0.3 / 0.5 at 80° within
+#: 2.9 / 4.7 % (none flagged; 256: 2.3 / 4.0 %); a slope table's histogram has no tail beyond its largest slope
 FACET_GRAZING_DEG = 70.0
 #: the grid route's (NDF normals, half-vector normals per cell) for a height field: its lobe is speckle (a
 #: windowed patch's |U|² varies on the scale λ/(2L)), which one shared stencil of 64 half-vector normals per cell
@@ -421,9 +420,11 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=Fa
 
 def _extra_nodes(symmetric: bool, nodes, wi, wo, h, cos_d, rad, level, na: int, nb: int, **ndf):
     """PSD statistics' extra normals in :func:`facet_frame_diffraction`: the cells that graze (2 N_a NDF normals,
-    :func:`grazing_cells`, with the default *nodes* only), N_a per cell, and each cell's (bridge point, widths, β)
-    (:func:`.facet.bridge_point`: a lobe's deep tail); a height field's (its nodes' layout is not symmetric): none."""
-    graze = grazing_cells(wi, wo) & (symmetric and nodes is None)
+    :func:`grazing_cells`, with the default narrow-lobe nodes of an analytic NDF only: :data:`FACET_GRAZING_DEG`),
+    N_a per cell, and each cell's (bridge point, widths, β) (:func:`.facet.bridge_point`: a lobe's deep tail); a
+    height field's (its nodes' layout is not symmetric): none."""
+    doubles = symmetric and nodes is None and (na, nb) == FACET_NODES_NARROW and ndf.get("ndf") != "tabulated"
+    graze = grazing_cells(wi, wo) & doubles
     bridge = (bridge_point(h, cos_d, rad, level, (na, nb), **ndf) if symmetric
               else (h, np.zeros((h.shape[0], 2)), np.zeros(h.shape[0])))
     return graze, np.where(graze, 2 * na, na), bridge
