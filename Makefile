@@ -26,10 +26,12 @@ demo: $(STAMP)
 	$(VENV)/bin/waveoptics render --material gold --micro-alpha 0.05 --nano abc:sigma=50nm,B=1um,C=2.6 \
 		--environment studio --no-ground --sphere-size 128 --spp 256 -o out/render --overwrite
 
-# one BLAS thread per pytest-xdist worker: the workers already use every core, and OpenBLAS's threads spin while
-# they wait for a core (tests/test_band_renormalization_mom.py, 2 workers: 82 s -> 34 s wall for its group, 95 -> 54 s
-# of CPU); the library's own threads and the OpenCL device are left as they are
-TEST_ENV := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1
+# one thread per pytest-xdist worker: the workers already use every core. OpenBLAS's threads spin while they wait
+# for a core (tests/test_band_renormalization_mom.py's group, 2 workers: 82 -> 34 s wall, 95 -> 54 s of CPU), and
+# the library's own (WAVEOPTICS_WORKERS, runtime.cpu_workers) contend with the other worker's (the whole suite
+# 543 -> 492 s on 2 cores); tests/test_facet_table_reads.py and test_frame_sampling_warnings.py set their own
+# worker counts to test the threaded paths (bit for bit against serial runs, warnings from threads)
+TEST_ENV := OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 WAVEOPTICS_WORKERS=1
 
 # whole files to each worker, the longest first (tests/conftest.py): a file's fixtures and caches are built once;
 # a worker that crashes (a hung test, faulthandler_timeout) is restarted at most twice
