@@ -306,6 +306,9 @@ def test_cli_materials_describes_a_stack(capsys):
     assert cli_main(["materials", spec]) == 0
     text = capsys.readouterr().out
     assert "100 nm" in text and "semi-infinite" in text and "SCHOTT" in text
+    assert cli_main(["materials", "BK7|MgF2:0nm", "--json"]) == 0      # the bare substrate: no fringes
+    bare = json.loads(capsys.readouterr().out)
+    assert bare["fringe_spacing_nm_550nm"] is None and bare["optical_thickness_nm_550nm"] == 0.0
     assert cli_main(["materials", "BK7|MgF2"]) == 2
     assert "needs a thickness" in capsys.readouterr().err
 

@@ -69,9 +69,11 @@ def _stack_description(m) -> tuple[dict, str]:
     opt, fringe = float(m.optical_thickness_nm(550.0)), float(m.fringe_spacing_nm(550.0))
     data = {"material": m.name, "layers": layers, "films_from": "substrate outwards",
             "F0": {f"{w:g}nm": v for w, v in zip(STACK_REPORT_NM, r)},
-            "optical_thickness_nm_550nm": opt, "fringe_spacing_nm_550nm": fringe,
+            "optical_thickness_nm_550nm": opt,
+            "fringe_spacing_nm_550nm": fringe if np.isfinite(fringe) else None,   # None: no film, no fringes
             "units": {"thickness_nm": "nm", "F0": "reflectance at normal incidence from air, unpolarized",
-                      "optical_thickness_nm_550nm": "nm", "fringe_spacing_nm_550nm": "nm"}}
+                      "optical_thickness_nm_550nm": "nm",
+                      "fringe_spacing_nm_550nm": "nm; null where the films are 0 nm thick (no fringes)"}}
     lines = [f"thin-film stack {m.name} (films from the substrate outwards, light from air)"]
     for layer in layers:
         thick = f"{layer['thickness_nm']:g} nm" if "thickness_nm" in layer else "semi-infinite"
