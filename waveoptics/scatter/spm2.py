@@ -78,7 +78,7 @@ import numpy as np
 
 from ..errors import FieldError
 
-__all__ = ["match_flat", "spm2_kernel", "coherent_losses", "SPM2_NODES", "K_LIMIT"]
+__all__ = ["match_flat", "spm2_kernel", "loss_quadrature", "coherent_losses", "SPM2_NODES", "K_LIMIT"]
 
 #: Gauss-Legendre nodes per piece of the radial (ρ) and azimuthal (ψ) quadrature of :func:`coherent_losses`
 SPM2_NODES = (12, 10)
@@ -223,23 +223,23 @@ def _smooth_gl(n):
     return u * u * (3.0 - 2.0 * u), wu * 6.0 * u * (1.0 - u)
 
 
-def _psi_pieces(kappa, indices, width):
+def _psi_pieces(kappa, indices, widths):
     """Cuts of ψ ∈ [0, π]: where a ray from the origin touches a circle |Q₀ + K| = n (κ > n), and where a circle
-    crosses a ring of the radial cuts at the PSD's scales (ρ = b · width): cosψ = (n² − κ² − ρ²) / (2 ρ κ)."""
+    crosses a ring of the radial cuts at the PSDs' scales (ρ = b · width): cosψ = (n² − κ² − ρ²) / (2 ρ κ)."""
     cuts = [math.pi - math.asin(n / kappa) for n in indices if kappa > n]
     for n in indices:
-        for rho in (b * width for b in _PSD_BREAKS):
+        for rho in (b * width for width in widths for b in _PSD_BREAKS):
             c = (n * n - kappa * kappa - rho * rho) / (2.0 * rho * kappa) if kappa > 0 else 2.0
             if -1.0 < c < 1.0:
                 cuts.append(math.acos(c))
     return [0.0] + sorted(set(c for c in cuts if 0.0 < c < math.pi)) + [math.pi]
 
 
-def _rho_breaks(kappa, psi, indices, width):
-    """Radial cuts (n_psi, n_cut) on each ray ψ: the Rayleigh anomalies and the PSD's scales, sorted (0 where a
+def _rho_breaks(kappa, psi, indices, widths):
+    """Radial cuts (n_psi, n_cut) on each ray ψ: the Rayleigh anomalies and the PSDs' scales, sorted (0 where a
     circle misses the ray: zero-width pieces)."""
     cos, sin = np.cos(psi), np.sin(psi)
-    cols = [np.full(psi.shape, b * width) for b in _PSD_BREAKS]
+    cols = [np.full(psi.shape, b * width) for width in widths for b in _PSD_BREAKS]
     for n in indices:
         disc = np.sqrt(np.maximum(n * n - (kappa * sin) ** 2, 0.0))
         roots = (-kappa * cos - disc, -kappa * cos + disc) if kappa > n else (-kappa * cos + disc,)
@@ -247,14 +247,14 @@ def _rho_breaks(kappa, psi, indices, width):
     return np.sort(np.stack(cols, axis=-1), axis=-1)
 
 
-def _nodes(kappa, indices, width, nodes):
+def _nodes(kappa, indices, widths, nodes):
     """ψ nodes and weights (n_psi,) on [0, π] and ρ nodes and weights (n_psi, n) on [0, ∞) (module doc)."""
     n_rho, n_psi = nodes
     t_p, w_p = _smooth_gl(n_psi)
-    cuts = _psi_pieces(kappa, indices, width)
+    cuts = _psi_pieces(kappa, indices, widths)
     psi = np.concatenate([lo + (hi - lo) * t_p for lo, hi in zip(cuts[:-1], cuts[1:])])
     w_psi = np.concatenate([(hi - lo) * w_p for lo, hi in zip(cuts[:-1], cuts[1:])])
-    edges = np.concatenate([np.zeros((psi.size, 1)), _rho_breaks(kappa, psi, indices, width)], axis=-1)
+    edges = np.concatenate([np.zeros((psi.size, 1)), _rho_breaks(kappa, psi, indices, widths)], axis=-1)
     t_r, w_r = _smooth_gl(n_rho)
     span = (edges[:, 1:] - edges[:, :-1])[..., None]
     rho = (edges[:, :-1, None] + span * t_r).reshape(psi.size, -1)
@@ -265,6 +265,61 @@ def _nodes(kappa, indices, width, nodes):
     rho = np.concatenate([rho, end / (1.0 - u)], axis=-1)              # the last piece, to ρ = ∞
     w_rho = np.concatenate([w_rho, end * wu / (1.0 - u) ** 2], axis=-1)
     return psi, w_psi, rho, w_rho
+
+
+def loss_quadrature(kappa, indices, wavelength_nm, terms, loss_kernels, nodes=SPM2_NODES) -> dict:
+    """k₀² Σ_t ∫ W_t(f) L_t(λ f) d²f over the plane of spatial frequencies f for kernels L_t even in ψ (the
+    quadrature of the module doc, shared by :func:`coherent_losses` and
+    :func:`waveoptics.scatter.stack_coherent_losses`).
+
+    Parameters
+    ----------
+    kappa : float
+        Lateral wave number of the incident wave (units of k₀; along x).
+    indices : sequence of float
+        Real indices of the two half-spaces (the Rayleigh anomalies |Q₀ + K| = n are cut).
+    wavelength_nm : float, nm
+        Vacuum wavelength.
+    terms : sequence of (W, integral, lengths)
+        Per term t: the weight W_t(|f|) (m⁴ at |f| in 1/m: a PSD, or c_jk √(S_j S_k)), its integral ∫ W_t d²f (m²)
+        and one length or a tuple of lengths ℓ (m) whose widths λ / (π ℓ) place the radial cuts.
+    loss_kernels : callable
+        ``loss_kernels(K)`` for grating vectors K (..., 2) (units of k₀): a dict of polarizations, each an array
+        (n_terms, n_losses, ...) of kernels per a² (the integrand per unit W without k₀²).
+    nodes : (int, int)
+        Gauss-Legendre nodes per piece in ρ and in ψ.
+
+    Returns
+    -------
+    dict
+        Per polarization, an array (n_losses,) of the integrals (dimensionless).
+
+    References
+    ----------
+    .. [1] Davis & Rabinowitz 1984 (Gauss-Legendre pieces, smoothing changes of variable); module doc (the
+       asymptote a(ψ) |K| + b(ψ) subtracted and b integrated against ∫ W d²f).
+    """
+    lam = float(wavelength_nm) * 1e-9
+    k0 = 2.0 * math.pi / lam
+    widths = tuple(sorted({lam / (math.pi * float(ell)) for _, _, lengths in terms for ell in np.atleast_1d(lengths)}))
+    psi, w_psi, rho, w_rho = _nodes(kappa, indices, widths, nodes)
+    direction = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
+    K = rho[..., None] * direction[:, None, :]
+    # ψ ∈ [0, π], twice
+    weights = np.stack([2.0 * w_psi[:, None] * w_rho * rho * W(rho / lam) / lam ** 2 for W, _, _ in terms])
+    integrals = np.array([float(i) for _, i, _ in terms])
+    ker = loss_kernels(K)
+    far = [loss_kernels(k * direction) for k in (K_LIMIT, 2.0 * K_LIMIT)]
+    out = {}
+    for pol, values in ker.items():
+        # the kernel's asymptote a(ψ) |K| + b(ψ) from two far points; a ∝ cosψ (p light) integrates to 0 over ψ
+        slope = (far[1][pol] - far[0][pol]) / K_LIMIT
+        limit = far[0][pol] - slope * K_LIMIT
+        loss = values - slope[..., None] * rho - limit[..., None]
+        inner = np.einsum("tab,tlab->l", weights, loss)
+        tail = integrals @ (2.0 * np.einsum("a,tla->tl", w_psi, limit)) / (2.0 * math.pi)
+        out[pol] = k0 ** 2 * (inner + tail)
+    return out
 
 
 def coherent_losses(mu, n_i, n_o, psd, wavelength_nm, nodes=SPM2_NODES) -> dict:
@@ -306,21 +361,18 @@ def coherent_losses(mu, n_i, n_o, psd, wavelength_nm, nodes=SPM2_NODES) -> dict:
     lam = float(wavelength_nm) * 1e-9
     k0 = 2.0 * math.pi / lam
     kappa = n_i * math.sqrt(max(1.0 - mu * mu, 0.0))
-    psi, w_psi, rho, w_rho = _nodes(kappa, (n_i, n_o), lam / (math.pi * psd.length_scale), nodes)
-    direction = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
-    K = rho[..., None] * direction[:, None, :]
-    weight = 2.0 * w_psi[:, None] * w_rho * rho * psd.S(rho / lam) / lam ** 2   # ψ ∈ [0, π], twice
     sigma2 = float(psd.sigma) ** 2
+
+    def kernels(K):
+        ker = _loss_kernels(kappa, K, n_i, n_o)
+        return {pol: np.stack(ker[pol][:2])[None] for pol in ("s", "p")}
+
+    integrals = loss_quadrature(kappa, (n_i, n_o), wavelength_nm, [(psd.S, sigma2, psd.length_scale)], kernels,
+                                nodes)
+    flat = _loss_kernels(kappa, np.zeros(2), n_i, n_o)
     out = {k: {} for k in ("R0", "T0", "dR", "dT")}
-    ker = _loss_kernels(kappa, K, n_i, n_o)
-    far = [_loss_kernels(kappa, k * direction, n_i, n_o) for k in (K_LIMIT, 2.0 * K_LIMIT)]
     for pol in ("s", "p"):
         for i, key in enumerate(("dR", "dT")):
-            # the kernel's asymptote a(ψ) |K| + b(ψ) from two far points; a ∝ cosψ (p light) integrates to 0 over ψ
-            slope = (far[1][pol][i] - far[0][pol][i]) / K_LIMIT
-            limit = far[0][pol][i] - slope * K_LIMIT
-            loss = ker[pol][i] - slope[:, None] * rho - limit[:, None]
-            tail = sigma2 / (2.0 * math.pi) * 2.0 * float(np.sum(w_psi * limit))
-            out[key][pol] = k0 ** 2 * (float(np.sum(weight * loss)) + tail + sigma2 * ker[pol][i + 2])
-        out["R0"][pol], out["T0"][pol] = ker[pol][4], ker[pol][5]
+            out[key][pol] = float(integrals[pol][i]) + k0 ** 2 * sigma2 * flat[pol][i + 2]
+        out["R0"][pol], out["T0"][pol] = flat[pol][4], flat[pol][5]
     return out
