@@ -8,7 +8,8 @@ Beckmann-Spizzichino series from a PSD), band (the propagating band and the rele
 perturbation (Rayleigh-Rice
 with the polarization factor Q), transmission (Rayleigh-Rice into both half-spaces of an interface between two
 media: the BTDF with Q_t), spm2 (the second-order mean field of a rough interface: the coherent
-reflection and transmission losses), rough_film (first-order scatter of a film stack with rough interfaces, Elson), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
+reflection and transmission losses), spm2_stack (the same for a thin-film stack with rough interfaces, light
+from either side), rough_film (first-order scatter of a film stack with rough interfaces, Elson), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
 Rayleigh-Rice for 1-D Gaussian surfaces), solvers (the :data:`SOLVERS` registry, :func:`brdf`,
 :func:`scatter`), footprint (the BRDF of a pixel footprint on a large field), pixel (per-pixel
 footprint BRDFs at one direction pair, OpenCL), gabor (one footprint by Yan et al. 2018's Gabor kernels, an
@@ -36,7 +37,9 @@ from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factor
     rayleigh_rice_tis, is_stack, stack_correlation)
 from .transmission import (q_transmission, rr_psd, rr_btdf_components, rr_brdf_components, rr_bsdf_components,
     rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection)
-from .spm2 import (match_flat, spm2_kernel, coherent_losses, SPM2_NODES, K_LIMIT)
+from .spm2 import (match_flat, spm2_kernel, loss_quadrature, coherent_losses, SPM2_NODES, K_LIMIT)
+from .spm2_stack import (GUIDED_SAMPLES, stack_media, flat_stack, stack_response, stack_loss_kernels, guided_film,
+    stack_coherent_losses)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
     rough_stack_components, rough_stack_brdf, rough_stack_tis)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,

@@ -43,7 +43,8 @@ and ΔR + ΔT is the first-order scatter TIS_R + TIS_T (the optical theorem; mea
 :func:`waveoptics.scatter.rr_tis_reflection` and :func:`~waveoptics.scatter.rr_tis_transmission`, a different
 route through Elson's dipole sheet).
 
-Quadrature (:func:`coherent_losses`): f in polar coordinates (ρ = λ|f|, ψ from the plane of incidence);
+Quadrature (:func:`loss_quadrature`, shared with :mod:`waveoptics.scatter.spm2_stack`, where each pair of rough
+interfaces is one weighted term): f in polar coordinates (ρ = λ|f|, ψ from the plane of incidence);
 Gauss-Legendre pieces in ρ cut at the Rayleigh anomalies (|Q₀ + K| = n₁ or n₂, a √ kink of P: on each ray the
 roots of ρ² + 2ρκ cosψ + κ² = n²) and at multiples of the PSD's width λ / (π ℓ), each piece mapped by
 3τ² − 2τ³ (whose Jacobian smooths a √ at both ends), and a last piece to ρ = ∞ (ρ = ρ_e / (1 − u)); in ψ on

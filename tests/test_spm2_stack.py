@@ -1,0 +1,248 @@
+"""The second-order (SPM2) coherent losses of a thin-film stack with rough interfaces
+(waveoptics.scatter.spm2_stack).
+
+References held against the code:
+* a rigorous Rayleigh-method solve of a film whose two interfaces are sinusoidal gratings, written here (Maxwell's
+  boundary conditions at both corrugated interfaces with Bessel harmonics, up and down waves in the film, solved
+  at a finite amplitude, nothing of the library): its specular loss (R₀ − R(a)) / (a²/4) against the kernels
+  Σ_jk a_j a_k [L_jk(K) + L_jk(−K)] + 2 Σ_j a_j² D_j, from air and from glass, s and p, conical mounts,
+  propagating and evanescent orders, an absorbing film;
+* spm2.coherent_losses for a bare interface (validated there against the rigorous grating of tests/rr_grating.py),
+  and the limits: a film of zero thickness with correlated roughness, a film of the substrate's index;
+* the optical theorem of the bare interface against the first-order TIS of scatter.transmission;
+* reciprocity of the coherent transmittance of a stack (from air at θ₁ and from glass at θ₂, sinθ₁ = n sinθ₂);
+* the closed-form cut-off thickness of the TE₀ mode of an asymmetric slab (Marcuse), where the guided-mode
+  refusal must start.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import special
+
+from waveoptics.errors import FieldError
+from waveoptics.scatter import coherent_losses, rr_tis_reflection, rr_tis_transmission
+from waveoptics.scatter.spm2_stack import stack_coherent_losses, stack_loss_kernels
+from waveoptics.surfaces import PSDModel
+
+LAM_NM = 500.0
+TOL_SPM2 = 1e-8        # the brief's; measured <= 2e-9 (no films, zero thickness, substrate-index film)
+TOL_GRATING = 1e-4     # kernels vs the rigorous film grating at k a = 2e-4 (measured <= 3.1e-6, its O((k a)²) error)
+TOL_THEOREM = 1e-6     # ΔR + ΔT vs TIS_R + TIS_T of the bare interface (measured <= 2.7e-8)
+TOL_RECIPROCITY = 1e-9  # measured <= 7.6e-14: n sinθ and so the quadrature's nodes are the same on both sides
+GAUSS = PSDModel("gaussian", 1e-9, T=0.3e-6)
+ABC = PSDModel("abc", 2e-9, B=2e-6, C=2.5)
+
+
+def _close(a, b, rel):
+    for key in ("R0", "T0", "dR", "dT"):
+        for pol in "sp":
+            assert a[key][pol] == pytest.approx(b[key][pol], rel=rel, abs=1e-22), (key, pol)
+
+
+# -- the rigorous reference: a film with two corrugated interfaces (Rayleigh method) -----------------------------
+
+def _kz(eps, alpha, beta):
+    g = np.sqrt(eps - alpha ** 2 - beta ** 2 + 0j)
+    return np.where(g.imag < 0, -g, g)
+
+
+def _waves(alpha, beta, gz, eps):
+    """(E, H = k × E) of the s and p plane waves (each (N, 3)) of wave vectors (α_m, β, γ_m)."""
+    kap = np.hypot(alpha, beta)
+    s = np.stack([-beta / kap, alpha / kap, np.zeros_like(alpha)], axis=-1).astype(complex)
+    k = np.stack([alpha + 0j, np.full_like(alpha, beta) + 0j, gz], axis=-1)
+    p = np.cross(s, k) / np.sqrt(eps + 0j)
+    return [(E, np.cross(k, E)) for E in (s, p)]
+
+
+def _rows(E, H, gz, orders, m, a, K):
+    """(4N, n) contributions of waves (orders *orders*) to E·ŷ, E·t, H·ŷ, H·t (t = x̂ + h' ẑ) at the harmonics m on
+    z = a cos(Kx): e^{iγh} = Σ_l i^l J_l(γa) e^{ilKx}, h' e^{iγh} = Σ_l i^l (aK/2)(J_{l−1} + J_{l+1}) e^{ilKx}."""
+    lval = m[:, None] - orders[None, :]
+    arg = gz[None, :] * a
+    C = (1j ** lval) * special.jv(lval, arg)
+    D = (1j ** lval) * 0.5 * a * K * (special.jv(lval - 1, arg) + special.jv(lval + 1, arg))
+    return np.concatenate([E[None, :, 1] * C, E[None, :, 0] * C + E[None, :, 2] * D,
+                           H[None, :, 1] * C, H[None, :, 0] * C + H[None, :, 2] * D], axis=0)
+
+
+def film_grating(n_top, n_film, n_bot, d, a_top, a_bot, alpha0, beta0, K, pol, M=1):
+    """Specular (R, T) of a film of thickness *d* (units 1/k₀) between the incidence medium *n_top* and *n_bot*,
+    its interfaces z = d + a_top cos(Kx) and z = a_bot cos(Kx); a unit *pol* wave of lateral wave vector
+    (α₀, β₀) (units of k₀) from above. Unknowns per order: reflected s, p; film up (phase at z = 0) and down
+    (phase at z = d) s, p; transmitted s, p; four continuity conditions per harmonic at each interface."""
+    e_t, e_f, e_b = (complex(n) ** 2 for n in (n_top, n_film, n_bot))
+    m = np.arange(-M, M + 1)
+    N = len(m)
+    alpha = alpha0 + m * K
+    gt, gf, gb = _kz(e_t, alpha, beta0), _kz(e_f, alpha, beta0), _kz(e_b, alpha, beta0)
+    ef = np.exp(1j * gf * d)
+    A = np.zeros((8 * N, 8 * N), complex)
+    cols = []
+    for E, H in _waves(alpha, beta0, gt, e_t):                 # reflected (phase at z = d)
+        cols.append((_rows(E, H, gt, m, m, a_top, K), 0.0))
+    for E, H in _waves(alpha, beta0, gf, e_f):                 # film, upwards
+        cols.append((-_rows(E, H, gf, m, m, a_top, K) * ef, _rows(E, H, gf, m, m, a_bot, K)))
+    for E, H in _waves(alpha, beta0, -gf, e_f):                # film, downwards
+        cols.append((-_rows(E, H, -gf, m, m, a_top, K), _rows(E, H, -gf, m, m, a_bot, K) * ef))
+    for E, H in _waves(alpha, beta0, -gb, e_b):                # transmitted (phase at z = 0)
+        cols.append((0.0, -_rows(E, H, -gb, m, m, a_bot, K)))
+    for i, (top, bottom) in enumerate(cols):
+        A[:4 * N, i * N:(i + 1) * N] = top
+        A[4 * N:, i * N:(i + 1) * N] = bottom
+    g0 = _kz(e_t, np.array([alpha0]), beta0)
+    Ei, Hi = _waves(np.array([alpha0]), beta0, -g0, e_t)["sp".index(pol)]
+    b = np.zeros(8 * N, complex)
+    b[:4 * N] = -_rows(Ei, Hi, -g0, np.array([0]), m, a_top, K)[:, 0]
+    x = np.linalg.solve(A, b).reshape(8, N)[:, M]
+    cross = gb[M].real / gt[M].real if abs(gb[M].imag) < 1e-14 else 0.0
+    return abs(x[0]) ** 2 + abs(x[1]) ** 2, cross * (abs(x[6]) ** 2 + abs(x[7]) ** 2)
+
+
+# (n_top, n_film, n_bottom, d nm, θ_i, |K| / k₀, azimuth of K deg, (a_bottom, a_top)): from air and from glass
+GRATINGS = [
+    (1.0, 1.38, 1.5, 100.0, 30.0, 0.7, 17.0, (1.0, 1.0)),
+    (1.0, 1.38, 1.5, 100.0, 30.0, 1.9, 130.0, (1.0, -0.5)),
+    (1.0, 1.38, 1.5, 100.0, 70.0, 3.5, 60.0, (0.0, 1.0)),
+    (1.0, 1.8, 1.5, 80.0, 60.0, 1.3, 100.0, (1.0, 0.0)),        # a guiding film, off its pole
+    (1.0, 1.6 + 0.1j, 1.5, 120.0, 45.0, 0.9, 35.0, (1.0, 1.0)),  # an absorbing film
+    (1.5, 1.38, 1.0, 100.0, 25.0, 0.7, 150.0, (1.0, 1.0)),      # from glass
+    (1.5, 2.0, 1.0, 60.0, 35.0, 2.6, 10.0, (0.5, 1.0)),
+    (1.5, 1.38, 1.0, 150.0, 55.0, 1.2, 80.0, (1.0, 1.0)),       # from glass beyond the critical angle
+]
+
+
+@pytest.mark.parametrize("case", GRATINGS)
+def test_kernels_are_the_rigorous_film_grating_loss(case):
+    """One grating a_j cos(K·r) on each interface j: (R₀ − R(a)) / (a²/4) of the rigorous film grating against
+    Σ_jk a_j a_k [L_jk(K) + L_jk(−K)] + 2 Σ_j a_j² D_j, reflected and transmitted, s and p."""
+    n_t, n_f, n_b, d_nm, th, kmag, psi_deg, amps = case
+    kd = 2 * math.pi * d_nm / LAM_NM
+    eps = [complex(n_b) ** 2, complex(n_f) ** 2, complex(n_t) ** 2]
+    kap = n_t * math.sin(math.radians(th))
+    psi = math.radians(psi_deg)
+    K = np.array([kmag * math.cos(psi), kmag * math.sin(psi)])
+    rough = [j for j in (0, 1) if amps[j] != 0]
+    plus, minus = stack_loss_kernels(kap, K, eps, [kd], rough), stack_loss_kernels(kap, -K, eps, [kd], rough)
+    a = 2e-4
+    for pol in "sp":
+        ker = [sum(amps[j] * amps[k] * (plus[pol]["L"][(j, k)][i] + minus[pol]["L"][(j, k)][i])
+                   for j in rough for k in rough) + 2 * sum(amps[j] ** 2 * plus[pol]["D"][j][i] for j in rough)
+               for i in (0, 1)]
+        a0, b0 = kap * math.cos(psi), -kap * math.sin(psi)       # the grating frame: K along x
+        flat = film_grating(n_t, n_f, n_b, kd, 0.0, 0.0, a0, b0, kmag, pol)
+        rough_ = film_grating(n_t, n_f, n_b, kd, a * amps[1], a * amps[0], a0, b0, kmag, pol)
+        ref = [(f - r) / (a * a / 4) for f, r in zip(flat, rough_)]
+        assert plus[pol]["R0"] == pytest.approx(flat[0], rel=1e-10) and plus[pol]["T0"] == pytest.approx(
+            flat[1], rel=1e-10, abs=1e-14)
+        scale = abs(ref[0]) + abs(ref[1])
+        if scale < 1e-6:                                        # every ±1 order evanescent: no loss at all
+            assert abs(ker[0]) + abs(ker[1]) < 1e-12
+            continue
+        assert abs(ker[0] - ref[0]) < TOL_GRATING * scale and abs(ker[1] - ref[1]) < TOL_GRATING * scale, (
+            pol, ker, ref)
+
+
+# -- the limits: spm2's bare interface --------------------------------------------------------------------------
+
+SIDES = [(True, 20.0), (True, 70.0), (True, 85.0), (False, 25.0), (False, 60.0)]   # glass 60°: beyond θ_c
+
+
+@pytest.mark.parametrize("psd", [GAUSS, ABC], ids=["gauss", "abc"])
+@pytest.mark.parametrize("above, th", SIDES)
+def test_no_films_is_spm2(psd, above, th):
+    mu = math.cos(math.radians(th))
+    n_i, n_o = (1.0, 1.5) if above else (1.5, 1.0)
+    _close(stack_coherent_losses(mu, above, (1.5, [], []), psd, "correlated", LAM_NM),
+           coherent_losses(mu, n_i, n_o, psd, LAM_NM), TOL_SPM2)
+
+
+@pytest.mark.parametrize("above, th", [(True, 40.0), (False, 30.0), (False, 60.0)])
+def test_film_limits_are_the_bare_interface(above, th):
+    """A film of zero thickness with correlated roughness (its two interfaces one), of a dielectric and of an
+    absorber; a 120 nm film of the substrate's index: rough only at the bottom, no loss; only at the top, the
+    bare interface."""
+    mu = math.cos(math.radians(th))
+    n_i, n_o = (1.0, 1.5) if above else (1.5, 1.0)
+    bare = coherent_losses(mu, n_i, n_o, GAUSS, LAM_NM)
+    for n_f in (2.0, 1.8 + 0.3j):
+        _close(stack_coherent_losses(mu, above, (1.5, [n_f], [0.0]), GAUSS, "correlated", LAM_NM), bare, TOL_SPM2)
+    top = stack_coherent_losses(mu, above, (1.5, [1.5], [120.0]), [None, GAUSS], "correlated", LAM_NM)
+    _close(top, bare, TOL_SPM2)
+    bottom = stack_coherent_losses(mu, above, (1.5, [1.5], [120.0]), [GAUSS, None], "correlated", LAM_NM)
+    for pol in "sp":
+        assert bottom["dR"][pol] == 0.0 and bottom["dT"][pol] == 0.0
+
+
+@pytest.mark.parametrize("above, th", [(True, 35.0), (True, 80.0), (False, 25.0), (False, 55.0)])
+def test_optical_theorem_of_the_bare_interface(above, th):
+    """ΔR + ΔT = TIS_R + TIS_T (first-order scatter into both half-spaces, scatter.transmission); the stack
+    version waits for waveoptics.scatter.rough_stack_tis_sides."""
+    got = stack_coherent_losses(math.cos(math.radians(th)), above, (1.5, [], []), GAUSS, "uncorrelated", LAM_NM)
+    for pol in "sp":
+        tis = (rr_tis_reflection(th, LAM_NM, GAUSS, 1.0, 1.5, pol, from_above=above, method="hemisphere")
+               + rr_tis_transmission(th, LAM_NM, GAUSS, 1.0, 1.5, pol, from_above=above, method="hemisphere"))
+        assert got["dR"][pol] + got["dT"][pol] == pytest.approx(tis, rel=TOL_THEOREM), pol
+
+
+@pytest.mark.parametrize("stack, psds, corr", [((1.5, [1.38], [100.0]), GAUSS, "correlated"),
+                                               ((1.5, [1.38, 1.7], [90.0, 40.0]), GAUSS, 0.4),
+                                               ((1.5, [1.45 + 0.05j], [150.0]), [GAUSS, ABC], "uncorrelated")])
+def test_coherent_transmittance_is_reciprocal(stack, psds, corr):
+    """T̄ = T₀ − ΔT from air at θ₁ equals T̄ from glass at θ₂ with sinθ₁ = 1.5 sinθ₂ (Lorentz reciprocity of the
+    mean field), per polarization, for lossless and absorbing films."""
+    for th1 in (20.0, 65.0):
+        th2 = math.degrees(math.asin(math.sin(math.radians(th1)) / 1.5))
+        a = stack_coherent_losses(math.cos(math.radians(th1)), True, stack, psds, corr, LAM_NM)
+        b = stack_coherent_losses(math.cos(math.radians(th2)), False, stack, psds, corr, LAM_NM)
+        for pol in "sp":
+            assert a["T0"][pol] == pytest.approx(b["T0"][pol], rel=1e-12)
+            assert a["dT"][pol] == pytest.approx(b["dT"][pol], rel=TOL_RECIPROCITY), (th1, pol)
+
+
+def test_correlation_is_a_quadratic_form():
+    """ΔX(c) = (1 − c) ΔX(uncorrelated) + c ΔX(correlated) for a coefficient c between two interfaces."""
+    stack = (1.5, [1.38], [100.0])
+    u, c, h = (stack_coherent_losses(0.7, True, stack, GAUSS, corr, LAM_NM) for corr in ("uncorrelated",
+                                                                                          "correlated", 0.3))
+    for key in ("dR", "dT"):
+        for pol in "sp":
+            assert h[key][pol] == pytest.approx(0.7 * u[key][pol] + 0.3 * c[key][pol], rel=1e-10)
+
+
+def test_quadrature_converges():
+    """A one-film stack with a slow ABC tail at the default nodes against twice as many in each direction."""
+    args = (0.5, True, (1.5, [1.38], [100.0]), ABC, "correlated", LAM_NM)
+    a, b = stack_coherent_losses(*args), stack_coherent_losses(*args, nodes=(24, 20))
+    for pol in "sp":
+        total = abs(b["dR"][pol]) + abs(b["dT"][pol])
+        assert abs(a["dR"][pol] - b["dR"][pol]) < 1e-3 * total and abs(a["dT"][pol] - b["dT"][pol]) < 1e-3 * total
+
+
+def test_guided_modes_are_refused():
+    """A high-index film on glass guides a TE₀ mode from the asymmetric slab's cut-off thickness
+    d_c = λ / (2π √(n_f² − n_s²)) · atan √((n_s² − n_a²) / (n_f² − n_s²)) (Marcuse 1974, §1.3): computed below it,
+    refused (naming the film) above it; a second film refused by its own index."""
+    n_f, n_s = 2.4, 1.5
+    d_c = LAM_NM / (2 * math.pi * math.sqrt(n_f ** 2 - n_s ** 2)) * math.atan(
+        math.sqrt((n_s ** 2 - 1.0) / (n_f ** 2 - n_s ** 2)))
+    for above in (True, False):
+        stack_coherent_losses(0.6, above, (n_s, [n_f], [0.97 * d_c]), GAUSS, "correlated", LAM_NM)
+        with pytest.raises(FieldError, match="film 0 .*guides a mode"):
+            stack_coherent_losses(0.6, above, (n_s, [n_f], [1.03 * d_c]), GAUSS, "correlated", LAM_NM)
+    with pytest.raises(FieldError, match="film 1 .*not built"):
+        stack_coherent_losses(0.6, False, (n_s, [1.38, n_f], [80.0, 100.0]), GAUSS, "correlated", LAM_NM)
+
+
+def test_bad_inputs():
+    with pytest.raises(FieldError, match="mu"):
+        stack_coherent_losses(0.0, True, (1.5, [], []), GAUSS, "correlated", LAM_NM)
+    with pytest.raises(FieldError, match="transparent"):
+        stack_coherent_losses(0.5, True, (1.5 + 0.1j, [], []), GAUSS, "correlated", LAM_NM)
+    with pytest.raises(FieldError, match="interface_psds"):
+        stack_coherent_losses(0.5, True, (1.5, [1.38], [50.0]), [GAUSS], "correlated", LAM_NM)
+    with pytest.raises(FieldError, match="wavelength_nm"):
+        stack_coherent_losses(0.5, True, (1.5, [], []), GAUSS, "correlated", -1.0)
