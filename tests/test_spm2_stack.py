@@ -246,3 +246,12 @@ def test_bad_inputs():
         stack_coherent_losses(0.5, True, (1.5, [1.38], [50.0]), [GAUSS], "correlated", LAM_NM)
     with pytest.raises(FieldError, match="wavelength_nm"):
         stack_coherent_losses(0.5, True, (1.5, [], []), GAUSS, "correlated", -1.0)
+
+    class Anisotropic:
+        length_scale, sigma = 1e-6, 1e-9
+
+        def S_xy(self, fx, fy):
+            return np.zeros(np.shape(fx))
+
+    with pytest.raises(FieldError, match="isotropic"):
+        stack_coherent_losses(0.5, True, (1.5, [], []), Anisotropic(), "correlated", LAM_NM)

@@ -41,7 +41,7 @@ from .spm2 import (match_flat, spm2_kernel, loss_quadrature, coherent_losses, SP
 from .spm2_stack import (GUIDED_SAMPLES, stack_media, flat_stack, stack_response, stack_loss_kernels, guided_film,
     stack_coherent_losses)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
-    rough_stack_components, rough_stack_brdf, rough_stack_tis)
+    interface_psd_list, rough_stack_components, rough_stack_brdf, rough_stack_tis)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,
     solve_profile, thorsos_beam, thorsos_incident_power)
 from .models1d import (fresnel_amplitude_1d, kirchhoff_1d, spm1_1d)

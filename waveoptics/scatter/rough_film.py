@@ -90,7 +90,7 @@ from .angles import scattering_angles
 from .polar import polar_albedo
 
 __all__ = ["CORRELATIONS", "stack_layers", "interface_fields", "interface_amplitudes", "cross_psd_weights",
-           "rough_stack_components", "rough_stack_brdf", "rough_stack_tis"]
+           "interface_psd_list", "rough_stack_components", "rough_stack_brdf", "rough_stack_tis"]
 
 #: named interface-roughness correlations: identical replicated profiles, or independent ones
 CORRELATIONS = ROUGHNESS_CORRELATIONS
@@ -241,7 +241,9 @@ def cross_psd_weights(correlation, n: int) -> np.ndarray:
     return c
 
 
-def _interface_psds(interface_psds, n: int) -> list:
+def interface_psd_list(interface_psds, n: int) -> list:
+    """One height PSD (or None: a smooth interface) per interface of a stack of *n* interfaces, substrate first,
+    from one PSD for all of them or a sequence of n (FieldError otherwise)."""
     if interface_psds is None or hasattr(interface_psds, "S") or hasattr(interface_psds, "S_xy"):
         return [interface_psds] * n
     psds = list(interface_psds)
@@ -257,7 +259,7 @@ def rough_stack_components(wi, wo, wavelength_nm, stack_or_layers, interface_psd
     of the module docstring; 0 below the horizon."""
     eps, d = stack_layers(stack_or_layers, wavelength_nm)
     n = len(eps) - 1
-    psds = _interface_psds(interface_psds, n)
+    psds = interface_psd_list(interface_psds, n)
     c = cross_psd_weights(correlation, n)
     r = getattr(stack_or_layers, "roughness_scales", (1.0,) * n)     # a Stack's interface_roughness: S_j = r_j² S
     S = [r_j * r_j * _psd_values(m, wi, wo, wavelength_nm) for m, r_j in zip(psds, r)]
@@ -331,7 +333,7 @@ def rough_stack_tis(theta_deg, wavelength_nm, stack_or_layers, interface_psds, c
     t = np.radians(float(theta_deg))
     k = 2.0 * np.pi / (lam * 1e-9)
     eps, _ = stack_layers(stack_or_layers, lam)
-    psds = [m for m in _interface_psds(interface_psds, len(eps) - 1) if m is not None]
+    psds = [m for m in interface_psd_list(interface_psds, len(eps) - 1) if m is not None]
     if not psds:
         return 0.0
     scale = min(m.length_scale for m in psds)

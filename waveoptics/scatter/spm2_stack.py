@@ -67,11 +67,10 @@ interface, and no guided mode.
 
 References
 ----------
-.. [1] A. A. Maradudin, D. L. Mills, "Scattering and absorption of electromagnetic radiation by a semi-infinite
-   medium in the presence of surface roughness", Phys. Rev. B 11(4), 1392–1415, 1975 (the mean field to second
-   order).
-.. [2] J. T. Johnson, "Third-order small-perturbation method for scattering from dielectric rough surfaces",
-   J. Opt. Soc. Am. A 16(11), 2720–2736, 1999 (SPM to higher order; the second-order mean field).
+.. [1] A. A. Maradudin, D. L. Mills, Phys. Rev. B 11(4), 1392–1415, 1975 (the mean field of a rough
+   semi-infinite medium to second order in the height).
+.. [2] J. T. Johnson, J. Opt. Soc. Am. A 16(11), 2720–2736, 1999 (the small-perturbation method of a dielectric
+   rough surface to third order; its second-order mean field).
 .. [3] J. M. Elson, "Theory of light scattering from a rough surface with an inhomogeneous dielectric
    permittivity", Phys. Rev. B 30(10), 5460–5480, 1984 (first-order sources Δε E_t, Δ(1/ε) D_z of a displaced
    boundary in a stratified medium).
@@ -89,7 +88,7 @@ import numpy as np
 from scipy import integrate
 
 from ..errors import FieldError
-from .rough_film import cross_psd_weights, stack_layers
+from .rough_film import cross_psd_weights, interface_psd_list, stack_layers
 from .spm2 import SPM2_NODES, loss_quadrature
 
 __all__ = ["GUIDED_SAMPLES", "stack_media", "flat_stack", "stack_response", "stack_loss_kernels", "guided_film",
@@ -336,17 +335,6 @@ def guided_film(eps, kd):
     return None
 
 
-def _psd_list(interface_psds, n):
-    """One PSD (or None) per interface, substrate first."""
-    if interface_psds is None or hasattr(interface_psds, "S"):
-        return [interface_psds] * n
-    psds = list(interface_psds)
-    if len(psds) != n:
-        raise FieldError(f"{{interface_psds}}: {len(psds)} PSDs for a stack of {n} interfaces (one per interface, "
-                         "substrate first; None for a smooth one)", "interface_psds")
-    return psds
-
-
 def _pair_weight(psd_j, psd_k):
     """(W(f) = √(S_j S_k), ∫ W d²f in m², the lengths) of a pair of interfaces' PSDs."""
     if psd_j is psd_k:
@@ -410,7 +398,9 @@ def stack_coherent_losses(mu, from_above, stack_or_layers, interface_psds, corre
     mu, lam_nm = _check(mu, wavelength_nm)
     eps, kd, order = stack_media(stack_or_layers, lam_nm, bool(from_above))
     n_if = len(eps) - 1
-    psds = _psd_list(interface_psds, n_if)
+    psds = interface_psd_list(interface_psds, n_if)
+    if any(m is not None and not hasattr(m, "S") for m in psds):
+        raise FieldError("{interface_psds}: the coherent losses take isotropic PSDs (with S(|f|))", "interface_psds")
     psds = [psds[i] for i in order]                       # internal order: exit side first
     c = cross_psd_weights(correlation, n_if)[np.ix_(order, order)]
     rough = [j for j in range(n_if) if psds[j] is not None and float(psds[j].sigma) > 0]
