@@ -37,8 +37,9 @@ from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factor
     rayleigh_rice_tis, is_stack, stack_correlation)
 from .transmission import (q_transmission, rr_psd, rr_btdf_components, rr_brdf_components, rr_bsdf_components,
     rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection)
-from .spm2 import (match_flat, spm2_kernel, loss_quadrature, coherent_losses, SPM2_NODES, K_LIMIT)
-from .spm2_stack import (GUIDED_SAMPLES, stack_media, flat_stack, stack_response, stack_loss_kernels, guided_film,
+from .spm2 import (match_flat, spm2_kernel, PSD_TAIL_EXPONENTS, tail_exponent, radial_moment, first_moment,
+    loss_quadrature, coherent_losses, SPM2_NODES, K_LIMIT)
+from .spm2_stack import (GUIDED_SAMPLES, stack_media, flat_stack, stack_response, stack_amplitudes, stack_loss_kernels, guided_modes,
     stack_coherent_losses)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
     interface_psd_list, rough_stack_components, rough_stack_brdf, rough_stack_tis)

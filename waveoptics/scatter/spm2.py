@@ -53,8 +53,10 @@ radial cuts (near grazing incidence a circle passes close to the origin, where t
 same way. At large |K| the loss kernels approach a(ψ) |K| + b(ψ) (the rest falls off as |K|⁻¹ or faster), with
 a ∝ cosψ for p light (its integral over the azimuth vanishes for an isotropic PSD) and a = 0 for s: the integrand
 carries the kernel less this asymptote, taken from two points at |K| = 10⁴ and 2 · 10⁴, and b is integrated
-against S separately (σ² / (2π) times its ψ integral), so PSDs with slow algebraic tails (ABC with C near 2, whose ∫ S |f| d²f is
-infinite) converge. Converged to ≤ 1.3e-3 at the default nodes from 0° to 89.7°, ℓ from 50 nm to 10 µm,
+against S separately (σ² / (2π) times its ψ integral), so PSDs with slow algebraic tails (ABC with C near 2, whose
+∫ S |f| d²f is infinite) converge. Where the slope's ψ integral does not vanish (a film of a stack,
+:mod:`waveoptics.scatter.spm2_stack`) it is added against ∫ S |f| d²f (:func:`first_moment`), and refused where
+that diverges. Converged to ≤ 1.3e-3 at the default nodes from 0° to 89.7°, ℓ from 50 nm to 10 µm,
 n = 1.33 to 2.4, both sides (≤ 5e-4 below 85°; the worst at ℓ = 50 nm).
 
 References
@@ -76,16 +78,22 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy import integrate
 
 from ..errors import FieldError
 
-__all__ = ["match_flat", "spm2_kernel", "loss_quadrature", "coherent_losses", "SPM2_NODES", "K_LIMIT"]
+__all__ = ["match_flat", "spm2_kernel", "PSD_TAIL_EXPONENTS", "tail_exponent", "radial_moment", "first_moment",
+           "loss_quadrature",
+           "coherent_losses", "SPM2_NODES", "K_LIMIT"]
 
 #: Gauss-Legendre nodes per piece of the radial (ρ) and azimuthal (ψ) quadrature of :func:`coherent_losses`
 SPM2_NODES = (12, 10)
 
 #: |K| (units of k₀) of the first of the two far points that give the kernels' asymptote a |K| + b
 K_LIMIT = 1e4
+
+#: the exponent C of each PSD family's tail S ∝ |f|^−C (∞: faster than any power; ABC: its own C)
+PSD_TAIL_EXPONENTS = {"gaussian": math.inf, "exponential": 3.0}
 
 #: breakpoints of the radial quadrature in units of the PSD width λ / (π ℓ) (a Gaussian PSD is e^{−36} at 6)
 _PSD_BREAKS = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0)
@@ -236,26 +244,41 @@ def _psi_pieces(kappa, indices, widths):
     return [0.0] + sorted(set(c for c in cuts if 0.0 < c < math.pi)) + [math.pi]
 
 
-def _rho_breaks(kappa, psi, indices, widths):
+def _pole_radius(kappa, psi, pole):
+    """ρ where the ray ψ from K = 0 meets the circle |Q₀ + K| = *pole* (> κ: one crossing on every ray)."""
+    return -kappa * np.cos(psi) + np.sqrt(pole * pole - (kappa * np.sin(psi)) ** 2)
+
+
+def _rho_breaks(kappa, psi, indices, widths, poles=()):
     """Radial cuts (n_psi, n_cut) on each ray ψ: the Rayleigh anomalies and the PSDs' scales, sorted (0 where a
-    circle misses the ray: zero-width pieces)."""
+    circle misses the ray: zero-width pieces); and for each pole circle (a guided mode, |Q₀ + K| = κ_m > κ) a
+    window ρ_m ± h symmetric about its crossing (h half the distance to the nearest other cut), whose nodes and
+    weights are symmetric about ρ_m: the principal value of the pole's 1 / (ρ − ρ_m) term sums to 0 there."""
     cos, sin = np.cos(psi), np.sin(psi)
     cols = [np.full(psi.shape, b * width) for width in widths for b in _PSD_BREAKS]
     for n in indices:
         disc = np.sqrt(np.maximum(n * n - (kappa * sin) ** 2, 0.0))
         roots = (-kappa * cos - disc, -kappa * cos + disc) if kappa > n else (-kappa * cos + disc,)
         cols += [np.where((root > 0) & (n * n >= (kappa * sin) ** 2), root, 0.0) for root in roots]
+    base = np.stack([np.zeros(psi.shape)] + cols, axis=-1)
+    roots = [_pole_radius(kappa, psi, pole) for pole in poles]
+    for i, root in enumerate(roots):
+        others = np.concatenate([base] + [r[:, None] for k, r in enumerate(roots) if k != i], axis=-1)
+        below = np.max(np.where(others < root[:, None], others, 0.0), axis=-1)
+        above = np.min(np.where(others > root[:, None], others, np.inf), axis=-1)
+        h = 0.5 * np.minimum(root - below, above - root)
+        cols += [root - h, root + h]
     return np.sort(np.stack(cols, axis=-1), axis=-1)
 
 
-def _nodes(kappa, indices, widths, nodes):
+def _nodes(kappa, indices, widths, nodes, poles=()):
     """ψ nodes and weights (n_psi,) on [0, π] and ρ nodes and weights (n_psi, n) on [0, ∞) (module doc)."""
     n_rho, n_psi = nodes
     t_p, w_p = _smooth_gl(n_psi)
-    cuts = _psi_pieces(kappa, indices, widths)
+    cuts = _psi_pieces(kappa, tuple(indices) + tuple(poles), widths)
     psi = np.concatenate([lo + (hi - lo) * t_p for lo, hi in zip(cuts[:-1], cuts[1:])])
     w_psi = np.concatenate([(hi - lo) * w_p for lo, hi in zip(cuts[:-1], cuts[1:])])
-    edges = np.concatenate([np.zeros((psi.size, 1)), _rho_breaks(kappa, psi, indices, widths)], axis=-1)
+    edges = np.concatenate([np.zeros((psi.size, 1)), _rho_breaks(kappa, psi, indices, widths, poles)], axis=-1)
     t_r, w_r = _smooth_gl(n_rho)
     span = (edges[:, 1:] - edges[:, :-1])[..., None]
     rho = (edges[:, :-1, None] + span * t_r).reshape(psi.size, -1)
@@ -268,7 +291,73 @@ def _nodes(kappa, indices, widths, nodes):
     return psi, w_psi, rho, w_rho
 
 
-def loss_quadrature(kappa, indices, wavelength_nm, terms, loss_kernels, nodes=SPM2_NODES) -> dict:
+def tail_exponent(psd):
+    """The exponent C of a PSD's tail S ∝ |f|^−C (:data:`PSD_TAIL_EXPONENTS`; ABC: its C), None when unknown.
+
+    References
+    ----------
+    .. [1] E. L. Church, P. Z. Takacs, "The optimal estimation of finish parameters", Proc. SPIE 1530, 71–85, 1991
+       (the ABC, K-correlation, PSD and its f^−C tail).
+    """
+    if getattr(psd, "kind", None) == "abc":
+        return float(psd.C)
+    return PSD_TAIL_EXPONENTS.get(getattr(psd, "kind", None))
+
+
+def radial_moment(W, power, exponent, length):
+    """∫ W(|f|) |f|^*power* d²f (m^(2 − power)) of a weight W (m⁴ at |f| in 1/m) whose tail falls as
+    |f|^−*exponent*, with a correlation *length* (m) to scale the integral (x = |f| ℓ, split at 1, relative
+    accuracy 1e-10); None where it diverges (exponent ≤ 2 + power, or unknown).
+
+    References
+    ----------
+    .. [1] R. Piessens et al., *QUADPACK*, Springer 1983 (adaptive Gauss-Kronrod quadrature on [0, 1] and
+       [1, ∞)).
+    """
+    if exponent is None or exponent <= 2.0 + power:
+        return None
+    ell = float(length)
+
+    def integrand(x):
+        return 2.0 * math.pi * x ** (1 + power) * W(x / ell)
+
+    total = sum(integrate.quad(integrand, lo, hi, limit=200, epsabs=0.0, epsrel=1e-10)[0]
+                for lo, hi in ((0.0, 1.0), (1.0, np.inf)))
+    return total / ell ** (2 + power)
+
+
+def first_moment(W, exponent, length):
+    """∫ W |f| d²f (m) of :func:`radial_moment`; None where it diverges (tail exponent ≤ 3 or unknown).
+
+    References
+    ----------
+    .. [1] R. Piessens et al., *QUADPACK*, Springer 1983.
+    """
+    return radial_moment(W, 1, exponent, length)
+
+
+def _slope_term(terms, slope, scale, w_psi, lam):
+    """λ Σ_t M_t ∫ a_t(ψ) dψ / (2π): the kernels' far slope a(ψ) |K| against the first moments M_t (the
+    integrand carries the kernel less a |K|), where ∫ a dψ stands out of the far points' rounding (1e-6 of
+    ∫ |a| dψ or of the kernels' size *scale* (n_terms, n_losses) over K_LIMIT); FieldError where such a term
+    meets a divergent moment."""
+    mean = 2.0 * np.einsum("a,tla->tl", w_psi, slope)                    # ∫ a dψ over [0, 2π]
+    noise = 1e-6 * np.maximum(2.0 * np.einsum("a,tla->tl", w_psi, np.abs(slope)), 2.0 * math.pi * scale / K_LIMIT)
+    significant = np.abs(mean) > noise
+    out = np.zeros(slope.shape[1])
+    for t, (_, _, _, moment) in enumerate(terms):
+        if not np.any(significant[t]):
+            continue
+        if moment is None:
+            raise FieldError("{psd}: the losses grow as ∫ S |f| d²f at high frequencies (|K| a(ψ) with a "
+                             "non-zero azimuthal mean), which diverges for this PSD's tail (S ∝ |f|^−C, C <= 3): "
+                             "ΔR and ΔT separately are not finite to second order", "psd")
+        out += np.where(significant[t], moment * lam * mean[t] / (2.0 * math.pi), 0.0)
+    return out
+
+
+def loss_quadrature(kappa, indices, wavelength_nm, terms, loss_kernels, nodes=SPM2_NODES, poles=(),
+                    residues=None) -> dict:
     """k₀² Σ_t ∫ W_t(f) L_t(λ f) d²f over the plane of spatial frequencies f for kernels L_t even in ψ (the
     quadrature of the module doc, shared by :func:`coherent_losses` and
     :func:`waveoptics.scatter.stack_coherent_losses`).
@@ -281,14 +370,23 @@ def loss_quadrature(kappa, indices, wavelength_nm, terms, loss_kernels, nodes=SP
         Real indices of the two half-spaces (the Rayleigh anomalies |Q₀ + K| = n are cut).
     wavelength_nm : float, nm
         Vacuum wavelength.
-    terms : sequence of (W, integral, lengths)
-        Per term t: the weight W_t(|f|) (m⁴ at |f| in 1/m: a PSD, or c_jk √(S_j S_k)), its integral ∫ W_t d²f (m²)
-        and one length or a tuple of lengths ℓ (m) whose widths λ / (π ℓ) place the radial cuts.
+    terms : sequence of (W, integral, lengths, moment)
+        Per term t: the weight W_t(|f|) (m⁴ at |f| in 1/m: a PSD, or c_jk √(S_j S_k)), its integral ∫ W_t d²f (m²),
+        one length or a tuple of lengths ℓ (m) whose widths λ / (π ℓ) place the radial cuts, and its first
+        moment ∫ W_t |f| d²f (m; :func:`first_moment`), None where it diverges: then the kernels' slope a(ψ)
+        must integrate to 0 over ψ (a ∝ cosψ, one interface), else FieldError.
     loss_kernels : callable
         ``loss_kernels(K)`` for grating vectors K (..., 2) (units of k₀): a dict of polarizations, each an array
         (n_terms, n_losses, ...) of kernels per a² (the integrand per unit W without k₀²).
     nodes : (int, int)
         Gauss-Legendre nodes per piece in ρ and in ψ.
+    poles : sequence of float
+        Lateral wave numbers κ_m (units of k₀, each > κ) of circles |Q₀ + K| = κ_m where the kernels have a
+        simple pole 1 / (ρ − ρ_m − i0) on each ray (guided modes): integrated as a principal value (a window
+        symmetric about ρ_m) plus *residues*.
+    residues : callable
+        ``residues(pole, K_m)`` at the poles' crossings K_m (n_psi, 2): a dict of polarizations, each an array
+        (n_terms, n_losses, n_psi) of the δ(ρ − ρ_m) weights of the kernels (per unit W without k₀²).
 
     Returns
     -------
@@ -302,15 +400,20 @@ def loss_quadrature(kappa, indices, wavelength_nm, terms, loss_kernels, nodes=SP
     """
     lam = float(wavelength_nm) * 1e-9
     k0 = 2.0 * math.pi / lam
-    widths = tuple(sorted({lam / (math.pi * float(ell)) for _, _, lengths in terms for ell in np.atleast_1d(lengths)}))
-    psi, w_psi, rho, w_rho = _nodes(kappa, indices, widths, nodes)
+    widths = tuple(sorted({lam / (math.pi * float(ell)) for _, _, lengths, _ in terms
+                           for ell in np.atleast_1d(lengths)}))
+    psi, w_psi, rho, w_rho = _nodes(kappa, indices, widths, nodes, poles)
     direction = np.stack([np.cos(psi), np.sin(psi)], axis=-1)
     K = rho[..., None] * direction[:, None, :]
-    # ψ ∈ [0, π], twice
-    weights = np.stack([2.0 * w_psi[:, None] * w_rho * rho * W(rho / lam) / lam ** 2 for W, _, _ in terms])
-    integrals = np.array([float(i) for _, i, _ in terms])
+    weights = np.stack([2.0 * w_psi[:, None] * w_rho * rho * W(rho / lam) / lam ** 2 for W, _, _, _ in terms])
+    integrals = np.array([float(i) for _, i, _, _ in terms])
     ker = loss_kernels(K)
     far = [loss_kernels(k * direction) for k in (K_LIMIT, 2.0 * K_LIMIT)]
+    delta = []
+    for pole in poles:
+        rho_m = _pole_radius(kappa, psi, pole)
+        w_m = np.stack([2.0 * w_psi * rho_m * W(rho_m / lam) / lam ** 2 for W, _, _, _ in terms])
+        delta.append((w_m, residues(pole, rho_m[:, None] * direction)))
     out = {}
     for pol, values in ker.items():
         # the kernel's asymptote a(ψ) |K| + b(ψ) from two far points; a ∝ cosψ (p light) integrates to 0 over ψ
@@ -319,7 +422,10 @@ def loss_quadrature(kappa, indices, wavelength_nm, terms, loss_kernels, nodes=SP
         loss = values - slope[..., None] * rho - limit[..., None]
         inner = np.einsum("tab,tlab->l", weights, loss)
         tail = integrals @ (2.0 * np.einsum("a,tla->tl", w_psi, limit)) / (2.0 * math.pi)
-        out[pol] = k0 ** 2 * (inner + tail)
+        scale = np.max(np.abs(values), axis=(-2, -1)) + np.max(np.abs(limit), axis=-1)
+        tail = tail + _slope_term(terms, slope, scale, w_psi, lam)
+        pole_terms = sum(np.einsum("ta,tla->l", w_m, res[pol]) for w_m, res in delta)
+        out[pol] = k0 ** 2 * (inner + tail + pole_terms)
     return out
 
 
@@ -368,8 +474,9 @@ def coherent_losses(mu, n_i, n_o, psd, wavelength_nm, nodes=SPM2_NODES) -> dict:
         ker = _loss_kernels(kappa, K, n_i, n_o)
         return {pol: np.stack(ker[pol][:2])[None] for pol in ("s", "p")}
 
-    integrals = loss_quadrature(kappa, (n_i, n_o), wavelength_nm, [(psd.S, sigma2, psd.length_scale)], kernels,
-                                nodes)
+    moment = first_moment(psd.S, tail_exponent(psd), psd.length_scale)
+    integrals = loss_quadrature(kappa, (n_i, n_o), wavelength_nm, [(psd.S, sigma2, psd.length_scale, moment)],
+                                kernels, nodes)
     flat = _loss_kernels(kappa, np.zeros(2), n_i, n_o)
     out = {k: {} for k in ("R0", "T0", "dR", "dT")}
     for pol in ("s", "p"):
