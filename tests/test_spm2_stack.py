@@ -193,11 +193,12 @@ def test_optical_theorem_of_the_bare_interface(above, th):
 
 
 @pytest.mark.parametrize("stack, psds, corr", [((1.5, [1.38], [100.0]), GAUSS, "correlated"),
+                                               ((1.5, [2.0], [150.0]), GAUSS, "correlated"),   # guided modes
                                                ((1.5, [1.38, 1.7], [90.0, 40.0]), GAUSS, 0.4),
                                                ((1.5, [1.45 + 0.05j], [150.0]), [GAUSS, ABC35], "uncorrelated")])
 def test_coherent_transmittance_is_reciprocal(stack, psds, corr):
     """T̄ = T₀ − ΔT from air at θ₁ equals T̄ from glass at θ₂ with sinθ₁ = 1.5 sinθ₂ (Lorentz reciprocity of the
-    mean field), per polarization, for lossless and absorbing films."""
+    mean field), per polarization, for lossless and absorbing films and with guided modes (their residues)."""
     for th1 in (20.0, 65.0):
         th2 = math.degrees(math.asin(math.sin(math.radians(th1)) / 1.5))
         a = stack_coherent_losses(math.cos(math.radians(th1)), True, stack, psds, corr, LAM_NM)
@@ -344,6 +345,18 @@ def test_guided_mode_residue_is_the_absorbing_limit(n_f, d_nm):
         ref = 2 * b[pol] - a[pol]
         assert got["dR"][pol] == pytest.approx(ref[0], rel=TOL_RESIDUE)
         assert got["dT"][pol] == pytest.approx(ref[1], rel=TOL_RESIDUE)
+
+
+def test_thick_stacks_take_more_nodes_or_are_refused():
+    """A 1 µm MgF₂ film (5.5 half-waves: nodes × 3) from glass converges against twice the nodes (measured
+    3.3e-6; without the scaling 2.2e-4 here and 7.4e-3 at ℓ = 0.3 µm); beyond MAX_HALF_WAVES it is refused."""
+    args = (0.6, False, (1.5, [1.38], [1000.0]), PSDModel("gaussian", 1e-9, T=1e-6), "correlated", LAM_NM)
+    a, b = stack_coherent_losses(*args), stack_coherent_losses(*args, nodes=(24, 20))
+    for pol in "sp":
+        total = abs(b["dR"][pol]) + abs(b["dT"][pol])
+        assert abs(a["dR"][pol] - b["dR"][pol]) < 1e-4 * total and abs(a["dT"][pol] - b["dT"][pol]) < 1e-4 * total
+    with pytest.raises(FieldError, match="half-waves"):
+        stack_coherent_losses(0.6, True, (1.5, [1.38], [2500.0]), GAUSS, "correlated", LAM_NM)
 
 
 def test_bad_inputs():

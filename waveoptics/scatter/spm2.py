@@ -84,13 +84,16 @@ from ..errors import FieldError
 
 __all__ = ["match_flat", "spm2_kernel", "PSD_TAIL_EXPONENTS", "tail_exponent", "radial_moment", "first_moment",
            "loss_quadrature",
-           "coherent_losses", "SPM2_NODES", "K_LIMIT"]
+           "coherent_losses", "SPM2_NODES", "K_LIMIT", "CHUNK_NODES"]
 
 #: Gauss-Legendre nodes per piece of the radial (ρ) and azimuthal (ψ) quadrature of :func:`coherent_losses`
 SPM2_NODES = (12, 10)
 
 #: |K| (units of k₀) of the first of the two far points that give the kernels' asymptote a |K| + b
 K_LIMIT = 1e4
+
+#: nodes of the PSD plane per call of the kernels in :func:`loss_quadrature` (rays of ψ in chunks: bounded memory)
+CHUNK_NODES = 1 << 15
 
 #: the exponent C of each PSD family's tail S ∝ |f|^−C (∞: faster than any power; ABC: its own C)
 PSD_TAIL_EXPONENTS = {"gaussian": math.inf, "exponential": 3.0}
@@ -338,11 +341,11 @@ def first_moment(W, exponent, length):
 
 def _slope_term(terms, slope, scale, w_psi, lam):
     """λ Σ_t M_t ∫ a_t(ψ) dψ / (2π): the kernels' far slope a(ψ) |K| against the first moments M_t (the
-    integrand carries the kernel less a |K|), where ∫ a dψ stands out of the far points' rounding (1e-6 of
-    ∫ |a| dψ or of the kernels' size *scale* (n_terms, n_losses) over K_LIMIT); FieldError where such a term
-    meets a divergent moment."""
+    integrand carries the kernel less a |K|), where ∫ a dψ is more than 1e-6 of ∫ |a| dψ (not a cosψ that
+    averages out) and of the kernels' median size *scale* (n_terms, n_losses) per unit |K|; FieldError where such
+    a term meets a divergent moment."""
     mean = 2.0 * np.einsum("a,tla->tl", w_psi, slope)                    # ∫ a dψ over [0, 2π]
-    noise = 1e-6 * np.maximum(2.0 * np.einsum("a,tla->tl", w_psi, np.abs(slope)), 2.0 * math.pi * scale / K_LIMIT)
+    noise = 1e-6 * np.maximum(2.0 * np.einsum("a,tla->tl", w_psi, np.abs(slope)), 2.0 * math.pi * scale)
     significant = np.abs(mean) > noise
     out = np.zeros(slope.shape[1])
     for t, (_, _, _, moment) in enumerate(terms):
@@ -407,25 +410,30 @@ def loss_quadrature(kappa, indices, wavelength_nm, terms, loss_kernels, nodes=SP
     K = rho[..., None] * direction[:, None, :]
     weights = np.stack([2.0 * w_psi[:, None] * w_rho * rho * W(rho / lam) / lam ** 2 for W, _, _, _ in terms])
     integrals = np.array([float(i) for _, i, _, _ in terms])
-    ker = loss_kernels(K)
     far = [loss_kernels(k * direction) for k in (K_LIMIT, 2.0 * K_LIMIT)]
+    # the kernel's asymptote a(ψ) |K| + b(ψ) from two far points
+    slope = {pol: (far[1][pol] - far[0][pol]) / K_LIMIT for pol in far[0]}
+    limit = {pol: far[0][pol] - slope[pol] * K_LIMIT for pol in far[0]}
+    inner = {pol: 0.0 for pol in far[0]}
+    scale = {pol: 0.0 for pol in far[0]}
+    step = max(1, CHUNK_NODES // rho.shape[1])
+    for rows in (slice(i, i + step) for i in range(0, psi.size, step)):     # bounded memory
+        for pol, values in loss_kernels(K[rows]).items():
+            loss = values - slope[pol][..., rows, None] * rho[rows] - limit[pol][..., rows, None]
+            inner[pol] = inner[pol] + np.einsum("tab,tlab->l", weights[:, rows], loss)
+            # the kernels' size: the median, which a node next to a guided mode's pole does not move
+            scale[pol] = np.maximum(scale[pol], np.median(np.abs(values), axis=(-2, -1)))
     delta = []
     for pole in poles:
         rho_m = _pole_radius(kappa, psi, pole)
         w_m = np.stack([2.0 * w_psi * rho_m * W(rho_m / lam) / lam ** 2 for W, _, _, _ in terms])
         delta.append((w_m, residues(pole, rho_m[:, None] * direction)))
     out = {}
-    for pol, values in ker.items():
-        # the kernel's asymptote a(ψ) |K| + b(ψ) from two far points; a ∝ cosψ (p light) integrates to 0 over ψ
-        slope = (far[1][pol] - far[0][pol]) / K_LIMIT
-        limit = far[0][pol] - slope * K_LIMIT
-        loss = values - slope[..., None] * rho - limit[..., None]
-        inner = np.einsum("tab,tlab->l", weights, loss)
-        tail = integrals @ (2.0 * np.einsum("a,tla->tl", w_psi, limit)) / (2.0 * math.pi)
-        scale = np.max(np.abs(values), axis=(-2, -1)) + np.max(np.abs(limit), axis=-1)
-        tail = tail + _slope_term(terms, slope, scale, w_psi, lam)
+    for pol in far[0]:
+        tail = integrals @ (2.0 * np.einsum("a,tla->tl", w_psi, limit[pol])) / (2.0 * math.pi)
+        tail = tail + _slope_term(terms, slope[pol], scale[pol], w_psi, lam)
         pole_terms = sum(np.einsum("ta,tla->l", w_m, res[pol]) for w_m, res in delta)
-        out[pol] = k0 ** 2 * (inner + tail + pole_terms)
+        out[pol] = k0 ** 2 * (inner[pol] + tail + pole_terms)
     return out
 
 
