@@ -56,17 +56,19 @@ def _airy(n0, n1, d, n2, kx, pol):
     return (r01 + r12 * ph * ph) / den, t01 * t12 * ph / den, g
 
 
-@pytest.mark.parametrize("n1, n2", [(1.38, 1.5168), (2.0 + 0.3j, 1.5168), (1.65, 1.2 + 7j)])
+@pytest.mark.parametrize("n0, n1, n2", [(1.0, 1.38, 1.5168), (1.0, 2.0 + 0.3j, 1.5168), (1.0, 1.65, 1.2 + 7j),
+                                        (1.5168, 1.38, 1.0)])
 @pytest.mark.parametrize("pol", ["s", "p"])
-def test_flat_film_is_airy(n1, n2, pol):
+def test_flat_film_is_airy(n0, n1, n2, pol):
     """a = 0: the specular amplitudes (r at the top, t at the film's lower face) and R, T equal Airy's one-film
-    sums, oblique and conical (the s/p basis follows the plane of incidence), transparent, absorbing film, metal."""
+    sums, oblique and conical (the s/p basis follows the plane of incidence), transparent, absorbing film, metal,
+    and from the glass side (the reversed stack; at 62° beyond the critical angle, T = 0)."""
     d = 2 * np.pi * 130.0 / LAM_NM
     for th, az in ((0.0, 0.0), (35.0, 0.0), (62.0, 40.0)):
-        kx = math.sin(math.radians(th))
-        res = stack_grating_solve(1.0, [(n1, d)], n2, kx * math.cos(math.radians(az)),
+        kx = n0 * math.sin(math.radians(th))
+        res = stack_grating_solve(n0, [(n1, d)], n2, kx * math.cos(math.radians(az)),
                                   kx * math.sin(math.radians(az)), 0.8, 0.0, pol, M=2)
-        r, t, g = _airy(1.0, n1, d, n2, kx, pol)
+        r, t, g = _airy(n0, n1, d, n2, kx, pol)
         assert abs(res["r0"][pol] - r) < TOL_AIRY
         assert abs(res["r"][2, "ps".index(pol)]) < TOL_AIRY                 # no cross-polarized specular
         assert abs(res["R"]["total"][2] - abs(r) ** 2) < TOL_AIRY
@@ -107,6 +109,20 @@ def test_lossless_stack_conserves_energy_and_converges():
             e2, e3 = res[2][X]["total"][[1, 3]], res[3][X]["total"][[2, 4]]
             assert np.all(e3 > 1e-6), (pol, X, e3)
             assert np.max(np.abs(e2 / e3 - 1)) < 1e-6, (pol, X, e2, e3)
+
+
+def test_opaque_metal_film_is_a_metal_substrate():
+    """A 2 µm metal film (n = 1.2 + 7i, attenuation e^{−160} across it) over glass reflects every order as the
+    semi-infinite metal does, and transmits nothing: the layer-referenced exponentials stay bounded (a formulation
+    with e^{+|γ| d} would overflow or lose the reflected orders to rounding)."""
+    oxide = (1.65, 2 * np.pi * 50.0 / LAM_NM)
+    for pol in "sp":
+        film = stack_grating_solve(1.0, [oxide, (1.2 + 7j, 2 * np.pi * 2000.0 / LAM_NM)], 1.5168, 0.3, 0.2, 0.7,
+                                   [0.01, 0.01, 0.01], pol, M=3)
+        bulk = stack_grating_solve(1.0, [oxide], 1.2 + 7j, 0.3, 0.2, 0.7, [0.01, 0.01], pol, M=3)
+        np.testing.assert_allclose(film["r"], bulk["r"], rtol=0, atol=1e-14)       # measured 8e-16
+        assert film["T"]["total"].max() < 1e-100
+        assert film["R"]["total"][2] > 1e-6                                        # order −1 propagates
 
 
 def test_index_matched_film_does_not_scatter():
@@ -192,6 +208,40 @@ def test_partly_correlated_interfaces(stack, phi):
     for pol in "sp":
         _assert_orders(_order_rows(STACKS[stack], MOUNTS[0], (1.0, 1.0), pol, phi=phi, correlation=c),
                        (stack, phi, pol))
+
+
+class ScaledUnitPSD(UnitPSD):
+    """S = r² m⁴ everywhere: an interface whose profile is r times the common one."""
+
+    def __init__(self, r):
+        self.r = r
+
+    def S(self, f):
+        return self.r ** 2 * super().S(f)
+
+
+@pytest.mark.parametrize("rough", [(1.0, 1.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0),
+                                   (1.0, 0.5, 0.7)])
+def test_two_film_stack_orders_match_rigorous_grating(rough):
+    """TiO₂ 60 nm over MgF₂ 100 nm on BK7 (three interfaces, top first here, the library's substrate first), one
+    interface rough at a time, all three correlated, and correlated with amplitudes 1, 0.5, 0.7 (the library's
+    S_j = r_j² S): every propagating reflected ±1 order, s and p in and analyzed, four mounts (measured ≤ 1.4e-6)."""
+    films = [(2.4, 60.0), (1.38, 100.0)]
+    a = KA / 2.4
+    a_m = a * LAM / (2 * np.pi)
+    layers = (1.5168, [n for n, _ in films][::-1], [d for _, d in films][::-1])
+    psds = [ScaledUnitPSD(r) if r else None for r in rough[::-1]]
+    for mount in MOUNTS:
+        wi = _wi(*mount[:2])
+        for pol in "sp":
+            res = stack_grating_solve(1.0, [(n, 2 * np.pi * d / LAM_NM) for n, d in films], 1.5168, -wi[0],
+                                      -wi[1], mount[2], a * np.array(rough), pol, M=3)
+            rows = []
+            for j in np.flatnonzero((np.abs(res["orders"]) == 1) & (np.abs(res["kr"][:, 2].imag) < 1e-12)):
+                f = rough_stack_components(wi, res["kr"][j].real, LAM_NM, layers, psds, "correlated")
+                rows += [(res["orders"][j], b, res["R"][b][j], LAM ** 2 * a_m ** 2 / 4 * f[pol + b],
+                          res["R"]["total"][j]) for b in "sp"]
+            _assert_orders(rows, (rough, mount, pol))
 
 
 def test_specular_losses_of_a_stack():
