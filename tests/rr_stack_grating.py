@@ -168,6 +168,34 @@ def stack_grating_solve(n_top, films, n_bot, alpha0, beta0, K, a, pol, M=3, phi=
             "kr": np.stack([alpha, beta, gam[0]], axis=-1), "kt": np.stack([alpha, beta, -gam[L]], axis=-1)}
 
 
+def stack_order_bsdf(n_top, films_m, n_bot, wi, wo, lam_m, rough=1.0, phi=None, ka=1e-3, M=3):
+    """The rigorous BSDF per unit PSD (1/sr at S = 1 m⁴) of the stack from light along −ω_i in the top medium into
+    ω_o (z > 0: reflected into the top medium; z < 0: transmitted into a transparent bottom medium): the efficiency
+    η of order +1 of the grating a_l = rough_l · a cos(2π f·x + φ_l) whose frequency sends the incident wave into
+    ω_o, f = (n_o ω_o + n_top ω_i)_xy / λ, divided by (λ / n_o)² a²/4 (a profile a cos(2π f·x) has the two-sided
+    PSD (a²/4)[δ(f − f₀) + δ(f + f₀)] and d²f = (n_o/λ)² cosθ_o dΩ_o). Returns {'ss', 'sp', 'ps', 'pp'} (first
+    index incident, second analyzed), equal to the first-order BSDF up to O((k a)²), a = *ka* / (k₀ max |n|).
+    *films_m*: (n_j, d_j in m) from the top down; *wi*, *wo*: unit vectors (towards the light, the viewer)."""
+    wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
+    n_o = complex(n_bot).real if wo[2] < 0 else n_top
+    k_in, k_out = -n_top * wi[:2], n_o * wo[:2]
+    kap = float(np.hypot(*(k_out - k_in)))             # |K| / k₀
+    c, s = (k_out - k_in) / kap
+    a0, b0 = c * k_in[0] + s * k_in[1], -s * k_in[0] + c * k_in[1]   # the grating vector along x
+    k0 = 2 * np.pi / lam_m
+    films = [(n, k0 * d) for n, d in films_m]
+    a = ka / max(abs(complex(n)) for n in [n_top, n_bot, *(n for n, _ in films)])
+    norm = (lam_m / n_o) ** 2 * (a / k0) ** 2 / 4
+    out = {}
+    for pol in "sp":
+        res = stack_grating_solve(n_top, films, n_bot, a0, b0, kap, a * np.asarray(rough, dtype=float), pol, M=M,
+                                  phi=phi)
+        eff = res["T" if wo[2] < 0 else "R"]
+        for b in "sp":
+            out[pol + b] = eff[b][M + 1] / norm
+    return out
+
+
 def stack_specular_losses(n_top, films_m, n_bot, wi, fx, fy, lam_m, pol, rough=1.0, phi=None, ka=2e-3,
                           flat=None):
     """Rigorous losses (ΔR₀, ΔT₀) of the specular reflectance and transmittance (flat minus grating) of the stack

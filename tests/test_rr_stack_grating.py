@@ -23,8 +23,9 @@ import numpy as np
 import pytest
 
 from rr_grating import grating_solve
-from rr_stack_grating import stack_grating_solve, stack_integrated_losses, stack_specular_losses
+from rr_stack_grating import stack_grating_solve, stack_integrated_losses, stack_order_bsdf, stack_specular_losses
 from waveoptics.scatter.rough_film import rough_stack_components
+from waveoptics.scatter.transmission import rr_brdf_components, rr_btdf_components
 
 LAM_NM = 550.0
 LAM = LAM_NM * 1e-9
@@ -32,6 +33,8 @@ KA = 1e-3              # grating amplitude × the largest |n| k₀
 TOL_AIRY = 1e-12       # measured ≤ 8e-16 on the amplitudes
 TOL_TWO_MEDIA = 1e-10
 TOL_ORDER = 5e-6       # first order vs rigorous at KA, O((k a)²): measured ≤ 1.9e-6 (1.9e-8 at KA = 1e-4)
+KA_FINE = 1e-4         # seeded random directions: the O((k a)²) term reaches 1.5e-5 at KA (1.5e-7 here)
+TOL_FINE = 5e-7
 
 
 def _fresnel(e_i, e_j, g_i, g_j, pol):
@@ -242,6 +245,29 @@ def test_two_film_stack_orders_match_rigorous_grating(rough):
                 rows += [(res["orders"][j], b, res["R"][b][j], LAM ** 2 * a_m ** 2 / 4 * f[pol + b],
                           res["R"]["total"][j]) for b in "sp"]
             _assert_orders(rows, (rough, mount, pol))
+
+
+def test_order_bsdf_at_seeded_directions():
+    """stack_order_bsdf (the grating chosen from ω_i, ω_o) at seeded random directions: without films it is the
+    library's single-interface Rayleigh-Rice BRDF and BTDF (air → glass, into both half-spaces); with a TiO₂ film
+    on glass, rough top, bottom or both, the library's rough_stack_components (at k a = 1e-4: measured ≤ 1.5e-7; at
+    1e-3 the same geometries give ≤ 1.5e-5, the O((k a)²) of the rigorous solve)."""
+    rng = np.random.default_rng(1983)
+    for _ in range(6):
+        th, az = rng.uniform(0.0, 80.0, 2), rng.uniform(0.0, 360.0, 2)
+        wi, wo = _wi(th[0], az[0]), _wi(th[1], az[1])
+        for z in (1.0, -1.0):
+            w = wo * [1.0, 1.0, z]
+            got = stack_order_bsdf(1.0, [], 1.5, wi, w, LAM, ka=KA_FINE)
+            ref = (rr_brdf_components if z > 0 else rr_btdf_components)(wi, w, LAM_NM, UnitPSD(), 1.0, 1.5)
+            for ab in got:
+                assert abs(got[ab] / ref[ab] - 1) < TOL_FINE, (wi, w, ab, got[ab], ref[ab])
+        for rough in ROUGH.values():
+            got = stack_order_bsdf(1.0, [(2.4, 120e-9)], 1.5168, wi, wo, LAM, rough=rough, ka=KA_FINE)
+            psds = [UnitPSD() if rough[1] else None, UnitPSD() if rough[0] else None]
+            ref = rough_stack_components(wi, wo, LAM_NM, (1.5168, [2.4], [120.0]), psds)
+            for ab in got:
+                assert abs(got[ab] / ref[ab] - 1) < TOL_FINE, (wi, wo, rough, ab, got[ab], ref[ab])
 
 
 def test_specular_losses_of_a_stack():
