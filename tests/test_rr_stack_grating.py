@@ -5,12 +5,14 @@ against it.
 References held against the solver (written here): the Airy one-film reflection and transmission amplitudes with the
 Fresnel coefficients (Born & Wolf §1.6.4, §1.5.2), oblique and conical, transparent and absorbing film, metal
 substrate; the two-media Rayleigh solve of tests/rr_grating.py (no films); energy conservation of a lossless stack;
-convergence in the number of orders; an index-matched film (a grating on a non-interface scatters nothing).
+convergence in the number of orders; an index-matched film (a grating on a non-interface scatters nothing); an
+opaque metal film against the metal substrate (bounded exponentials).
 
 Against the library: every propagating reflected ±1 order, s and p incident, s and p analyzed, for a rough top
 interface, a rough bottom interface, both (correlated: same amplitude and phase) and both with a phase shift φ
 (the mean of ±φ is the partially correlated stack, c = cos φ), for MgF₂ on BK7, TiO₂ on glass and an oxide on a
-metal. The mapping of the first-order BRDF with a delta PSD to an order's efficiency is that of
+metal; TiO₂/MgF₂ on BK7 (three interfaces); stack_order_bsdf at seeded random directions (also the library's
+single-interface BTDF without films). The mapping of the first-order BRDF with a delta PSD to an order's efficiency is that of
 tests/test_rr_transmission.py: a profile a cos(2π f₀·x) has the two-sided PSD (a²/4)[δ(f − f₀) + δ(f + f₀)], and
 d²f = (n/λ)² cosθ_o dΩ_o, so ∫ f_r cosθ_o dΩ_o over order +1 is (λ/n)² (a²/4) f_r|_{S=1}; for an interface of a
 stack the profile and its PSD enter the same way.
