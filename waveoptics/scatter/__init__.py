@@ -35,10 +35,12 @@ from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factor
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
     rayleigh_rice_tis, is_stack, stack_correlation)
 from .transmission import (q_transmission, rr_psd, rr_btdf_components, rr_brdf_components, rr_bsdf_components,
-    rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection)
+    rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection,
+    incident_polarization)
 from .spm2 import (match_flat, spm2_kernel, coherent_losses, SPM2_NODES, K_LIMIT)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
-    rough_stack_components, rough_stack_brdf, rough_stack_tis)
+    rough_stack_components, rough_stack_brdf, rough_stack_tis, direction_fields, bragg_psd, interface_psd_list,
+    interface_spectra, correlated_sum)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,
     solve_profile, thorsos_beam, thorsos_incident_power)
 from .models1d import (fresnel_amplitude_1d, kirchhoff_1d, spm1_1d)
