@@ -23,8 +23,9 @@ import numpy as np
 import pytest
 
 from waveoptics.errors import FieldError
+from waveoptics.materials import get_material
 from waveoptics.scatter import (rough_stack_bsdf, rough_stack_bsdf_components, rough_stack_components,
-                                rough_stack_tis_sides, rr_bsdf_components)
+                                rough_stack_tis, rough_stack_tis_sides, rr_bsdf_components)
 from waveoptics.surfaces import PSDModel
 
 LAM = 550.0
@@ -243,7 +244,9 @@ def test_tis_quadratures_agree_and_beyond_the_critical_angle():
     for above, th in ((True, 30.0), (False, 25.0)):
         a = rough_stack_tis_sides(th, LAM, TWO, psd, "correlated", "p", above, method="polar")
         b = rough_stack_tis_sides(th, LAM, TWO, psd, "correlated", "p", above, method="hemisphere")
-        np.testing.assert_allclose(a, b, rtol=2e-3)
+        # measured 6e-11 and 6e-6 from the air; 3.7e-4 on the glass side from inside, where the √ kink at the
+        # critical angle crosses the polar grid (as for one interface, tests/test_rr_transmission.py)
+        np.testing.assert_allclose(a, b, rtol=1e-3)
     r, t = rough_stack_tis_sides(60.0, LAM, TWO, PSD, "correlated", "s", from_above=False)
     assert r > 0 and t > 0
     with pytest.raises(FieldError, match="theta_deg .* critical angle"):
@@ -258,6 +261,8 @@ def test_absorbing_substrate():
     wo = np.array([0.1, 0.2, -math.sqrt(0.95)])
     r, t = rough_stack_tis_sides(20.0, LAM, metal, PSD)
     assert r > 0 and t == 0.0
+    r_polar, _ = rough_stack_tis_sides(20.0, LAM, metal, PSD, method="polar")
+    assert r_polar == pytest.approx(rough_stack_tis(20.0, LAM, metal, PSD), rel=1e-12)
     with pytest.raises(FieldError, match="stack: light from inside the substrate") as e:
         rough_stack_bsdf_components(wo, wi, LAM, metal, PSD)
     assert e.value.field == "stack"
@@ -269,9 +274,25 @@ def test_absorbing_substrate():
         rough_stack_tis_sides(20.0, LAM, TWO, PSD, method="grid")
 
 
-def test_wavelengths_broadcast_against_directions():
-    wi, wo = _sides_pairs(5, 3)
+def test_a_catalogued_glass_is_transparent():
+    """BK7's catalogued k (~1e-8, absorbed over millimetres) does not make it opaque: the stack material scatters
+    on every side as its layers with the substrate's real index."""
+    m = get_material("BK7|MgF2:100nm")
+    lam = np.array([450.0, 550.0, 650.0])
+    ns, nf = m.indices(lam)
+    assert np.all(ns.imag > 0)
+    wi, wo = _sides_pairs(3, 4)
+    for k in range(3):
+        f = rough_stack_bsdf(wi, wo, lam[k], m, PSD)
+        g = rough_stack_bsdf(wi, wo, lam[k], (ns[k].real, [nf[0][k]], [100.0]), PSD)
+        np.testing.assert_allclose(f, g, rtol=1e-12)
+
+
+@pytest.mark.parametrize("layers", [TWO, "BK7|MgF2:100nm"])
+def test_wavelengths_broadcast_against_directions(layers):
+    layers = get_material(layers) if isinstance(layers, str) else layers
+    wi, wo = _sides_pairs(3, 3)
     lam = np.linspace(450.0, 650.0, len(wi))
-    f = rough_stack_bsdf(wi, wo, lam, TWO, PSD)
-    g = np.array([rough_stack_bsdf(a, b, x, TWO, PSD) for a, b, x in zip(wi, wo, lam)])
+    f = rough_stack_bsdf(wi, wo, lam, layers, PSD)
+    g = np.array([rough_stack_bsdf(a, b, x, layers, PSD) for a, b, x in zip(wi, wo, lam)])
     np.testing.assert_allclose(f, g, rtol=1e-13)

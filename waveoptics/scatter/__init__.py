@@ -42,7 +42,7 @@ from .spm2 import (match_flat, spm2_kernel, coherent_losses, SPM2_NODES, K_LIMIT
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
     rough_stack_components, rough_stack_brdf, rough_stack_tis, direction_fields, bragg_psd, interface_psd_list,
     interface_spectra, correlated_sum)
-from .rough_film_sides import (substrate_is_transparent, rough_stack_bsdf_components, rough_stack_bsdf,
+from .rough_film_sides import (TRANSPARENT_K, substrate_is_transparent, rough_stack_bsdf_components, rough_stack_bsdf,
     rough_stack_tis_sides)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,
     solve_profile, thorsos_beam, thorsos_incident_power)

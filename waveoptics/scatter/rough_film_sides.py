@@ -18,15 +18,16 @@ far point (Sipe 1987): the component along ê_b of that far field is (k₀²/4π
 where E'_b is the flat-stack field of a unit plane wave of polarization b coming in from ω_o in the medium n_o.
 (d) Radiance convention (Stover's power BSDF, as :mod:`~waveoptics.scatter.transmission`): the scattered power
 per solid angle is r² n_o |E|² / 2Z₀ and the incident power on an area A is n_i A |cosθ_i| / 2Z₀, so
-f = dP/dω_o / (P_i |cosθ_o|) carries n_o / n_i. (e) The sheets' lateral phases e^{i (k_∥^a + k'_∥^b)·x} pick
-the Fourier transform of h_j at f = −(n_i ω_i + n_o ω_o)_xy / λ (the grating equation); ⟨H_j H_k*⟩ = A S_jk(f)
-(two-sided PSD; S(−f) = S(f) for a real profile). Altogether
+f = dP/dω_o / (P_i |cosθ_o|) carries n_o / n_i. (e) The incident wave's lateral phase e^{−i k₀ n_i ω_i·x}
+times the reciprocal wave's e^{−i k₀ n_o ω_o·x} integrates each sheet to the Fourier transform H_j(f) of h_j at
+f = (n_i ω_i + n_o ω_o)_xy / λ (the grating equation), with ⟨H_j H_k*⟩ = A S_jk(f) over the illuminated area A
+(two-sided PSDs). Altogether
 
     f_ab(ω_i, ω_o) = (n_o / n_i) k₀⁴ / (16 π² |cosθ_i cosθ_o|) Σ_j Σ_k c_jk √(S_j S_k) Re(G_j^{ab} G_k^{ab*}),
     G_j^{ab} = (ε_below − ε_above) [ E_t^a · E'_t^b + D_z^a D'_z^b / (ε_above ε_below) ],
     f = (n_i ω_i + n_o ω_o)_xy / λ                                                                        (1)
 
-with G, S_jk = c_jk √(S_j S_k) and the fields as :mod:`~waveoptics.scatter.rough_film` eq. (1) (there n_i = n_o = 1).
+with S_jk = c_jk √(S_j S_k) and G as in :mod:`~waveoptics.scatter.rough_film` eq. (1), which is (1) at n_i = n_o = 1.
 G_j^{ab} is symmetric in the two waves, so f_ab(ω_i, ω_o) / n_o² = f_ba(ω_o, ω_i) / n_i²: the reciprocity of
 radiance across media (Veach 1997, §5.2). A wave coming from the substrate is the mirror image (z → −z) of the
 reversed stack lit from above (:func:`~waveoptics.scatter.rough_film.interface_fields`); its lateral index is
@@ -36,10 +37,13 @@ BRDF on either side and BTDF across of one interface (:mod:`~waveoptics.scatter.
 rigorous grating solve and SCATMECH), which tests/test_rough_film_sides.py checks to 1e-10.
 
 Where it holds: the smooth-surface limit at every interface, as :mod:`~waveoptics.scatter.rough_film`. A
-direction below needs a transparent substrate (a real index; films may absorb); light from above over an absorbing
+direction below needs a transparent substrate (films may absorb): a real index, or one whose k is below
+:data:`TRANSPARENT_K` n (a catalogued glass's k ~ 1e-8), whose real part is then used (the radiance just below the
+interface; absorption along the path in the substrate is the renderer's); light from above over an absorbing
 substrate is scattered into the air only (:func:`~waveoptics.scatter.rough_film.rough_stack_components`), 0 below.
-Guided modes of the films lie at lateral indices above n_s and 1, outside every propagating direction, and are not
-excited to first order by propagating light (Elson 1995 couples them through evanescent orders).
+Light scattered into guided modes of the films (lateral indices above n_s and 1: no far-field direction; Elson
+1995) is not part of the BSDF, which has no pole over the propagating directions: the power they carry is in
+neither TIS.
 
 References
 ----------
@@ -68,13 +72,30 @@ from .rough_film import (correlated_sum, cross_psd_weights, interface_amplitudes
                          interface_spectra, rough_stack_components, stack_layers)
 from .transmission import TIS_METHODS, WIDE_LOBE, hemisphere_albedo, incident_polarization
 
-__all__ = ["substrate_is_transparent", "rough_stack_bsdf_components", "rough_stack_bsdf", "rough_stack_tis_sides"]
+__all__ = ["TRANSPARENT_K", "substrate_is_transparent", "rough_stack_bsdf_components", "rough_stack_bsdf",
+           "rough_stack_tis_sides"]
+
+#: the largest extinction coefficient, relative to n, of a substrate taken as transparent (with its real index n):
+#: the BSDF changes by O(k/n) there. A catalogued glass has k ~ 1e-8 (BK7 at 550 nm: 7e-9, absorbed over
+#: millimetres, far from the interface); a metal's k/n is of order 1 and more.
+TRANSPARENT_K = 1e-6
 
 
 def substrate_is_transparent(eps_substrate) -> bool:
-    """Whether the substrate's permittivity (one value or one a wavelength) is real and > 0 (light crosses)."""
-    e = np.asarray(eps_substrate, dtype=np.complex128)
-    return bool(np.all(e.imag == 0) and np.all(e.real > 0))
+    """Whether the substrate (its permittivity: one value, or one a wavelength) lets light cross: n = √ε with
+    Re n > 0 and |Im n| ≤ :data:`TRANSPARENT_K` Re n."""
+    n = np.sqrt(np.asarray(eps_substrate, dtype=np.complex128))
+    return bool(np.all(n.real > 0) and np.all(np.abs(n.imag) <= TRANSPARENT_K * n.real))
+
+
+def _transparent_layers(stack_or_layers, wavelength_nm):
+    """(ε list, thicknesses, transparent): :func:`~waveoptics.scatter.rough_film.stack_layers`, the substrate's
+    index taken real when it counts as transparent (:data:`TRANSPARENT_K`)."""
+    eps, d = stack_layers(stack_or_layers, wavelength_nm)
+    clear = substrate_is_transparent(eps[0])
+    if clear and np.any(np.imag(eps[0]) != 0):
+        eps = [np.asarray(np.sqrt(eps[0]).real ** 2, dtype=np.complex128), *eps[1:]]
+    return eps, d, clear
 
 
 def _refuse_absorbing(what: str):
@@ -94,10 +115,9 @@ def rough_stack_bsdf_components(wi, wo, wavelength_nm, stack_or_layers, interfac
     .. [1] Elson 1984, 1995; Johnson et al. 2002; Sipe 1987; Veach 1997 (module references).
     """
     wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
-    eps, d = stack_layers(stack_or_layers, wavelength_nm)
+    eps, d, clear = _transparent_layers(stack_or_layers, wavelength_nm)
     n = len(eps) - 1
     below_i, below_o = wi[..., 2] < 0, wo[..., 2] < 0
-    clear = substrate_is_transparent(eps[0])
     if not clear:
         if np.any(below_i):
             _refuse_absorbing("light from inside the substrate (wi with z < 0)")
@@ -179,8 +199,7 @@ def rough_stack_tis_sides(theta_deg, wavelength_nm, stack_or_layers, interface_p
     if method not in TIS_METHODS:
         raise unknown("method", method, TIS_METHODS, field="method")
     lam = float(wavelength_nm)
-    eps, _ = stack_layers(stack_or_layers, lam)
-    clear = substrate_is_transparent(eps[0])
+    eps, _, clear = _transparent_layers(stack_or_layers, lam)
     if not from_above and not clear:
         _refuse_absorbing("light from inside the substrate (from_above=False)")
     psds = [m for m in interface_psd_list(interface_psds, len(eps) - 1) if m is not None]
