@@ -8,7 +8,8 @@ Beckmann-Spizzichino series from a PSD), band (the propagating band and the rele
 perturbation (Rayleigh-Rice
 with the polarization factor Q), transmission (Rayleigh-Rice into both half-spaces of an interface between two
 media: the BTDF with Q_t), spm2 (the second-order mean field of a rough interface: the coherent
-reflection and transmission losses), rough_film (first-order scatter of a film stack with rough interfaces, Elson), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
+reflection and transmission losses), rough_film (first-order scatter of a film stack with rough interfaces, Elson), rough_film_sides (the same
+stack's first-order BSDF over the whole sphere, light from either side), mom (the rigorous method-of-moments reference for 1-D rough surfaces), models1d (Kirchhoff and
 Rayleigh-Rice for 1-D Gaussian surfaces), solvers (the :data:`SOLVERS` registry, :func:`brdf`,
 :func:`scatter`), footprint (the BRDF of a pixel footprint on a large field), pixel (per-pixel
 footprint BRDFs at one direction pair, OpenCL), gabor (one footprint by Yan et al. 2018's Gabor kernels, an
@@ -35,10 +36,14 @@ from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factor
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
     rayleigh_rice_tis, is_stack, stack_correlation)
 from .transmission import (q_transmission, rr_psd, rr_btdf_components, rr_brdf_components, rr_bsdf_components,
-    rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection)
+    rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection,
+    incident_polarization)
 from .spm2 import (match_flat, spm2_kernel, coherent_losses, SPM2_NODES, K_LIMIT)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
-    rough_stack_components, rough_stack_brdf, rough_stack_tis)
+    rough_stack_components, rough_stack_brdf, rough_stack_tis, direction_fields, bragg_psd, interface_psd_list,
+    interface_spectra, correlated_sum)
+from .rough_film_sides import (TRANSPARENT_K, substrate_is_transparent, rough_stack_bsdf_components, rough_stack_bsdf,
+    rough_stack_tis_sides)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,
     solve_profile, thorsos_beam, thorsos_incident_power)
 from .models1d import (fresnel_amplitude_1d, kirchhoff_1d, spm1_1d)
@@ -49,6 +54,6 @@ from .pixel import (PIXEL_BACKENDS, MAX_REGION_SAMPLES, PixelBRDF, footprint_sum
     pixel_brdf, footprint_brdf, SUM_N_SIGMA, Q_MAX, ellipse_samples)
 from .gabor import (KERNEL_SIGMA, GaborKernels, gabor_kernels, gabor_footprint_field, gabor_footprint_brdf)
 from .output import (plot_scatter, SCATTER_FILES, write_scatter, brdf_exr_header)
-from . import grid, patch, models, kirchhoff, direct, fft, series, polar, angles, band_energy, band, perturbation, transmission, rough_film, mom, models1d, solvers, footprint, pixel, gabor, output  # noqa: F401
+from . import grid, patch, models, kirchhoff, direct, fft, series, polar, angles, band_energy, band, perturbation, transmission, rough_film, rough_film_sides, mom, models1d, solvers, footprint, pixel, gabor, output  # noqa: F401
 
-__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + angles.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + transmission.__all__ + rough_film.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + pixel.__all__ + gabor.__all__ + output.__all__
+__all__ = grid.__all__ + patch.__all__ + models.__all__ + kirchhoff.__all__ + direct.__all__ + fft.__all__ + series.__all__ + polar.__all__ + angles.__all__ + band_energy.__all__ + band.__all__ + perturbation.__all__ + transmission.__all__ + rough_film.__all__ + rough_film_sides.__all__ + mom.__all__ + models1d.__all__ + solvers.__all__ + footprint.__all__ + pixel.__all__ + gabor.__all__ + output.__all__
