@@ -46,15 +46,17 @@ D_z/ε₀ = −κ U. In a film of index n_j with q_j = √(ε_j − κ²) (Im q_
 
 Starting from the substrate's transmitted wave (U, V) = (1, −η_sub) at interface 0 and carrying it up to the
 ambient, the incident amplitude there is A = (U − V/η_0)/2; every interface field is divided by A (unit incident
-wave). Numerical range: the upward product grows as e^{Σ Im β_j}, harmless for films below a few µm of metal
-(e^{709} overflows).
+wave). A wave coming from the substrate is the mirror image z → −z of the reversed stack lit from above (E_t kept,
+D_z of opposite sign; for p, U = n E in a medium of index n), :mod:`waveoptics.scatter.rough_film_sides`.
+Numerical range: the upward product grows as e^{Σ Im β_j}, harmless for films below a few µm of metal (e^{709}
+overflows).
 
 Where it holds: the smooth-surface limit, (4π σ_j cosθ / λ)² ≪ 1 at every interface and slopes ≪ 1, as for one
-interface. Only the reflection hemisphere is evaluated (light scattered into the substrate or into guided modes
-of the films, Elson 1995, is not), the ambient is air, and each profile's PSD is taken at the same Bragg
-frequency (interfaces are laterally stationary). No equation numbers of Elson's papers are quoted: eq. (1) was
-derived here and is checked against Germer's single-interface q factors and the limits in
-tests/test_rough_film.py.
+interface. Only the reflection hemisphere is evaluated here (light scattered into a transparent substrate, and light
+from inside it: :mod:`waveoptics.scatter.rough_film_sides`; into guided modes of the films, Elson 1995: not), the
+ambient is air, and each profile's PSD is taken at the same Bragg frequency (interfaces are laterally stationary).
+No equation numbers of Elson's papers are quoted: eq. (1) was derived here and is checked against Germer's
+single-interface q factors and the limits in tests/test_rough_film.py.
 
 References
 ----------
@@ -89,8 +91,9 @@ from ..vocabulary import POLARIZATIONS, ROUGHNESS_CORRELATIONS
 from .angles import scattering_angles
 from .polar import polar_albedo
 
-__all__ = ["CORRELATIONS", "stack_layers", "interface_fields", "interface_amplitudes", "cross_psd_weights",
-           "interface_psd_list", "rough_stack_components", "rough_stack_brdf", "rough_stack_tis"]
+__all__ = ["CORRELATIONS", "stack_layers", "interface_fields", "direction_fields", "interface_amplitudes",
+           "bragg_psd", "cross_psd_weights", "interface_psd_list", "interface_spectra", "correlated_sum",
+           "rough_stack_components", "rough_stack_brdf", "rough_stack_tis"]
 
 #: named interface-roughness correlations: identical replicated profiles, or independent ones
 CORRELATIONS = ROUGHNESS_CORRELATIONS
@@ -130,19 +133,30 @@ def _qz(eps, kappa2):
     return np.where(q.imag < 0, -q, q)
 
 
-def interface_fields(kappa, wavelength_nm, eps, d_nm, polarization: str):
-    """Flat-stack fields at every interface for a unit plane wave from the ambient with lateral index *kappa*
-    (sinθ in air): a list, interface 0 (substrate) first, of (E_t, D_z) where E_t is the tangential field along ŝ
-    (s) or û (p) and D_z the normal displacement over ε₀ (0 for s). See the module docstring.
+def interface_fields(kappa, wavelength_nm, eps, d_nm, polarization: str, from_above: bool = True, cos_theta=None):
+    """Flat-stack fields at every interface for a plane wave of unit electric amplitude with lateral index
+    *kappa* (κ = n sinθ in its medium) coming from the ambient (*from_above*) or from the substrate (which must
+    then be transparent): a list, interface 0 (substrate) first, of (E_t, D_z) where E_t is the tangential field
+    along ŝ (s) or û (p) and D_z the normal displacement over ε₀ (0 for s). See the module docstring.
+
+    From the substrate the fields are the mirror image (z → −z) of the reversed stack lit from above: E_t is kept
+    and D_z changes sign; the wave's amplitude is normalized in its own medium (for p, U = Z₀H_y = n E).
+    *cos_theta*, when given, is the wave's |cosθ| in its medium: its normal wave number there is n |cosθ| rather
+    than √(n² − κ²), which loses digits near grazing incidence.
 
     References
     ----------
     .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.6.2 (characteristic matrix of a film).
     .. [2] H. A. Macleod, *Thin-Film Optical Filters*, 4th ed., CRC Press 2010, §2.2.
     """
+    if not from_above:
+        mirrored = interface_fields(kappa, wavelength_nm, eps[::-1], d_nm[::-1], polarization, True, cos_theta)
+        return [(Et, -Dz) for Et, Dz in mirrored[::-1]]
     k2 = np.asarray(kappa, dtype=float) ** 2
     k0 = 2.0 * np.pi / np.asarray(wavelength_nm, dtype=float)        # 1/nm
     q = [_qz(e, k2) for e in eps]
+    if cos_theta is not None:                           # the incidence medium is transparent (a real index)
+        q[-1] = np.sqrt(eps[-1]) * np.abs(np.asarray(cos_theta, dtype=float))
     eta = q if polarization == "s" else [qj / e for qj, e in zip(q, eps)]
     U = np.ones(np.broadcast(k2, *eps).shape, dtype=np.complex128)
     V = -eta[0] * U
@@ -154,13 +168,29 @@ def interface_fields(kappa, wavelength_nm, eps, d_nm, polarization: str):
         at.append((U, V))
     # guard: at grazing incidence (q_0 = 0) the incident and reflected waves cancel (r = −1, the limit that
     # :func:`waveoptics.materials.stack.amplitudes` takes): every interface field is 0 there, not 0/0
-    grazing = np.broadcast_to(k2 >= 1.0, U.shape)
+    grazing = np.broadcast_to(k2 >= np.real(eps[-1]), U.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
-        A = 0.5 * (U - V / eta[-1])                      # incident amplitude in the ambient
+        A = 0.5 * (U - V / eta[-1])                      # incident amplitude of U in the incidence medium
         inv = np.where(grazing, 0.0, 1.0 / np.where(grazing, 1.0, A))
     if polarization == "s":
         return [(u * inv, np.zeros_like(u)) for u, _ in at]
+    inv = inv * np.sqrt(eps[-1])                         # unit E: U = n E in the incidence medium (n = 1 in air)
     return [(v * inv, -np.asarray(kappa) * u * inv) for u, v in at]
+
+
+def direction_fields(w, wavelength_nm, eps, d_nm, polarization: str):
+    """:func:`interface_fields` of the unit wave that comes in from the direction *w* (..., 3; towards its source):
+    from the ambient where w_z ≥ 0, from the substrate (lateral index n_sub sinθ) where w_z < 0."""
+    w = np.asarray(w, dtype=float)
+    s = np.hypot(w[..., 0], w[..., 1])
+    up = w[..., 2] >= 0
+    sides = [(True, up, s), (False, ~up, np.sqrt(eps[0]).real * s)]
+    parts = [(m, interface_fields(kappa, wavelength_nm, eps, d_nm, polarization, side, w[..., 2]))
+             for side, m, kappa in sides if np.any(m)]
+    if len(parts) == 1:
+        return parts[0][1]
+    (m, a), (_, b) = parts
+    return [(np.where(m, ea, eb), np.where(m, da, db)) for (ea, da), (eb, db) in zip(a, b)]
 
 
 def _planes(wi, wo):
@@ -184,13 +214,13 @@ def _planes(wi, wo):
 
 def interface_amplitudes(wi, wo, wavelength_nm, eps, d_nm) -> dict:
     """G_j^{ab} of eq. (1) of the module docstring for ab in ss, sp, ps, pp: a dict of lists over interfaces
-    (substrate first), each an array of the directions' shape (unitless)."""
-    ci, si, co, so, _, _ = scattering_angles(wi, wo)
+    (substrate first), each an array of the directions' shape (unitless). Each wave comes in from its direction's
+    side (:func:`direction_fields`: from the substrate where w_z < 0) with unit electric amplitude."""
     ui, vi, uo, vo = _planes(wi, wo)
     basis_i = {"s": vi, "p": ui}
     basis_o = {"s": vo, "p": uo}
-    fi = {a: interface_fields(si, wavelength_nm, eps, d_nm, a) for a in ("s", "p")}
-    fo = {b: interface_fields(so, wavelength_nm, eps, d_nm, b) for b in ("s", "p")}
+    fi = {a: direction_fields(wi, wavelength_nm, eps, d_nm, a) for a in ("s", "p")}
+    fo = {b: direction_fields(wo, wavelength_nm, eps, d_nm, b) for b in ("s", "p")}
     out = {}
     for a in ("s", "p"):
         for b in ("s", "p"):
@@ -204,9 +234,11 @@ def interface_amplitudes(wi, wo, wavelength_nm, eps, d_nm) -> dict:
     return out
 
 
-def _psd_values(model, wi, wo, wavelength_nm):
-    """S(f) (m⁴) of one interface at the Bragg frequency f = (ω_i + ω_o)_xy / λ; 0 for a smooth one (None)."""
-    s = np.asarray(wi, dtype=float) + np.asarray(wo, dtype=float)
+def bragg_psd(model, wi, wo, wavelength_nm, n_i=1.0, n_o=1.0):
+    """S(f) (m⁴) of one interface at the Bragg frequency f = (n_i ω_i + n_o ω_o)_xy / λ (1/m; n_i, n_o the indices
+    of the media of ω_i and ω_o, the grating equation); 0 for a smooth one (None)."""
+    n_i, n_o = np.asarray(n_i, dtype=float)[..., None], np.asarray(n_o, dtype=float)[..., None]
+    s = n_i * np.asarray(wi, dtype=float) + n_o * np.asarray(wo, dtype=float)
     lam = np.asarray(wavelength_nm, dtype=float) * 1e-9
     if model is None:
         return np.zeros(np.broadcast(s[..., 0], lam).shape)
@@ -242,8 +274,8 @@ def cross_psd_weights(correlation, n: int) -> np.ndarray:
 
 
 def interface_psd_list(interface_psds, n: int) -> list:
-    """One height PSD (or None: a smooth interface) per interface of a stack of *n* interfaces, substrate first,
-    from one PSD for all of them or a sequence of n (FieldError otherwise)."""
+    """The PSD model (or None, smooth) of each of the *n* interfaces, substrate first: one model or None stands
+    for every interface."""
     if interface_psds is None or hasattr(interface_psds, "S") or hasattr(interface_psds, "S_xy"):
         return [interface_psds] * n
     psds = list(interface_psds)
@@ -253,30 +285,39 @@ def interface_psd_list(interface_psds, n: int) -> list:
     return psds
 
 
+def interface_spectra(wi, wo, wavelength_nm, stack_or_layers, interface_psds, n: int, n_i=1.0, n_o=1.0) -> list:
+    """S_j(f) (m⁴) of each of the *n* interfaces at the Bragg frequency of :func:`bragg_psd`, a
+    :class:`~waveoptics.materials.Stack`'s ``interface_roughness`` r_j scaling interface j's PSD by r_j²."""
+    r = getattr(stack_or_layers, "roughness_scales", (1.0,) * n)
+    return [r_j * r_j * bragg_psd(m, wi, wo, wavelength_nm, n_i, n_o)
+            for m, r_j in zip(interface_psd_list(interface_psds, n), r)]
+
+
+def correlated_sum(G: list, S: list, c) -> np.ndarray:
+    """Σ_j Σ_k c_jk √(S_j S_k) Re(G_j G_k*) of eq. (1) (m⁴): the interfaces' amplitudes *G* weighted by their
+    cross-PSDs (:func:`cross_psd_weights` *c*)."""
+    total = 0.0
+    for j in range(len(G)):
+        for m in range(len(G)):
+            if c[j, m] != 0.0:
+                total = total + c[j, m] * np.sqrt(S[j] * S[m]) * (G[j] * np.conj(G[m])).real
+    return total
+
+
 def rough_stack_components(wi, wo, wavelength_nm, stack_or_layers, interface_psds,
                            correlation="correlated") -> dict:
     """The four polarized BRDFs f_ss, f_sp, f_ps, f_pp (1/sr; first index incident, second scattered) of eq. (1)
     of the module docstring; 0 below the horizon."""
     eps, d = stack_layers(stack_or_layers, wavelength_nm)
     n = len(eps) - 1
-    psds = interface_psd_list(interface_psds, n)
+    S = interface_spectra(wi, wo, wavelength_nm, stack_or_layers, interface_psds, n)
     c = cross_psd_weights(correlation, n)
-    r = getattr(stack_or_layers, "roughness_scales", (1.0,) * n)     # a Stack's interface_roughness: S_j = r_j² S
-    S = [r_j * r_j * _psd_values(m, wi, wo, wavelength_nm) for m, r_j in zip(psds, r)]
     G = interface_amplitudes(wi, wo, wavelength_nm, eps, d)
     ci, _, co, _, _, _ = scattering_angles(wi, wo)
     ok = (ci > 0) & (co > 0)
     k = 2.0 * np.pi / (np.asarray(wavelength_nm, dtype=float) * 1e-9)
     pre = k ** 4 / (16.0 * np.pi ** 2 * np.where(ok, ci * co, 1.0))
-    out = {}
-    for ab, Gab in G.items():
-        total = 0.0
-        for j in range(n):
-            for m in range(n):
-                if c[j, m] != 0.0:
-                    total = total + c[j, m] * np.sqrt(S[j] * S[m]) * (Gab[j] * np.conj(Gab[m])).real
-        out[ab] = np.where(ok, pre * total, 0.0)
-    return out
+    return {ab: np.where(ok, pre * correlated_sum(Gab, S, c), 0.0) for ab, Gab in G.items()}
 
 
 def rough_stack_brdf(wi, wo, wavelength_nm, stack_or_layers, interface_psds, correlation="correlated",

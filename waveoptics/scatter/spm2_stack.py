@@ -109,6 +109,7 @@ from scipy import optimize
 
 from ..errors import FieldError
 from .rough_film import cross_psd_weights, interface_psd_list, stack_layers
+from .rough_film_sides import TRANSPARENT_K, substrate_is_transparent
 from .spm2 import SPM2_NODES, first_moment, loss_quadrature, radial_moment, tail_exponent
 
 __all__ = ["GUIDED_SAMPLES", "stack_media", "flat_stack", "stack_response", "stack_amplitudes", "stack_loss_kernels", "node_scale", "MAX_HALF_WAVES", "guided_modes",
@@ -130,19 +131,18 @@ def _q(eps, kappa):
 
 def stack_media(stack_or_layers, wavelength_nm, from_above=True):
     """(ε of the media from the exit half-space up to the incidence one, k₀ d of the films in that order, the
-    interfaces' order: index into the substrate-first interfaces of :func:`waveoptics.scatter.stack_layers`).
+    interfaces' order: index into the substrate-first interfaces of :func:`waveoptics.scatter.stack_layers`); a
+    substrate with k ≤ :data:`~waveoptics.scatter.TRANSPARENT_K` n taken with its real index (FieldError beyond).
 
     References
     ----------
     .. [1] Born & Wolf §1.6 (the stratified medium).
     """
     eps, d = stack_layers(stack_or_layers, float(wavelength_nm))
-    eps = [complex(e) for e in eps]
-    for name, e in (("substrate", eps[0]), ("ambient", eps[-1])):
-        if abs(e.imag) > 1e-12 * abs(e) or e.real <= 0:
-            raise FieldError(f"{{stack}}: the {name} must be transparent (a real index > 0); its ε is {e!r}",
-                             "stack")
-        eps[0 if name == "substrate" else -1] = complex(e.real)
+    if not substrate_is_transparent(eps[0]):
+        raise FieldError(f"{{stack}}: the substrate must be transparent (k <= {TRANSPARENT_K} n); its ε is "
+                         f"{complex(eps[0])!r}", "stack")
+    eps = [complex(np.sqrt(complex(eps[0])).real ** 2)] + [complex(e) for e in eps[1:]]
     kd = [2.0 * math.pi * x / float(wavelength_nm) for x in d]
     order = list(range(len(eps) - 1))
     if not from_above:

@@ -67,7 +67,8 @@ from .perturbation import q_factors
 from .polar import polar_albedo
 
 __all__ = ["q_transmission", "rr_psd", "rr_btdf_components", "rr_brdf_components", "rr_bsdf_components",
-           "rr_bsdf", "TIS_METHODS", "WIDE_LOBE", "hemisphere_albedo", "rr_tis_transmission", "rr_tis_reflection"]
+           "rr_bsdf", "TIS_METHODS", "WIDE_LOBE", "hemisphere_albedo", "rr_tis_transmission", "rr_tis_reflection",
+           "incident_polarization"]
 
 
 def _real_index(n, name: str) -> float:
@@ -213,7 +214,7 @@ def rr_bsdf(wi, wo, wavelength_nm, model, n1, n2, polarization: str = "unpolariz
     transparent = complex(np.ravel(np.asarray(n2, dtype=np.complex128))[0]).imag == 0
     # an absorbing medium 2 has no transmitted light: the BRDF above it only
     f = (rr_bsdf_components if transparent else rr_brdf_components)(wi, wo, wavelength_nm, model, n1, n2)
-    return _polarized(f, polarization)
+    return incident_polarization(f, polarization)
 
 
 def _incidence(theta_deg: float, from_above: bool):
@@ -300,7 +301,7 @@ def rr_tis_transmission(theta_deg, wavelength_nm, model, n1, n2, polarization: s
     def lobe(wo):
         wo_t = wo * np.array([1.0, 1.0, s])
         f = rr_btdf_components(np.broadcast_to(wi, wo.shape), wo_t, lam, model, n1, n2)
-        return _polarized(f, polarization)
+        return incident_polarization(f, polarization)
 
     if a >= 1.0 or _use_hemisphere(method, model, lam, no):
         # the reciprocal wave of a scattered direction beyond n_i / n_o on the far side is evanescent in medium i
@@ -330,7 +331,7 @@ def rr_tis_reflection(theta_deg, wavelength_nm, model, n1, n2, polarization: str
     def lobe(wo):
         wo_r = wo * np.array([1.0, 1.0, s])
         f = rr_brdf_components(np.broadcast_to(wi, wo.shape), wo_r, lam, model, n1, n2)
-        return _polarized(f, polarization)
+        return incident_polarization(f, polarization)
 
     if _use_hemisphere(method, model, lam, ni):
         no = complex(np.ravel(np.asarray(n2 if from_above else n1, dtype=np.complex128))[0])
@@ -340,7 +341,9 @@ def rr_tis_reflection(theta_deg, wavelength_nm, model, n1, n2, polarization: str
     return polar_albedo(t, k, model.length_scale, lambda wi_b, wo, q: lobe(wo))
 
 
-def _polarized(f: dict, polarization: str):
+def incident_polarization(f: dict, polarization: str):
+    """The BSDF (1/sr) of incident *polarization* from the four components *f* (first index incident), scattered
+    light not analyzed: f_ss + f_sp (s), f_pp + f_ps (p) or their mean (unpolarized)."""
     if polarization not in POLARIZATIONS:
         raise unknown("polarization", polarization, POLARIZATIONS, field="polarization")
     s, p = f["ss"] + f["sp"], f["pp"] + f["ps"]
