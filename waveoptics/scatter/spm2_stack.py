@@ -63,7 +63,8 @@ half-spaces' indices < κ_m), so every ray of K crosses it once outwards, dκ/d�
 A / (ρ − ρ_m − i0) = A [P 1/(ρ − ρ_m) + iπ δ(ρ − ρ_m)] (Sokhotski-Plemelj): the principal value on a window
 symmetric about ρ_m (its 1/(ρ − ρ_m) part sums to 0 on symmetric nodes) plus 8π Im(x₀* A) at ρ_m, with A from
 two points ρ_m (1 ± 10⁻⁷). This is the power the roughness couples into the guided modes, lost to the specular
-beams (ΔR + ΔT exceeds TIS_R + TIS_T by it). Measured against the absorbing limit (tests/test_spm2_stack.py: the
+beams: ΔR + ΔT exceeds the first-order TIS_R + TIS_T into the half-spaces by it (4 % to 200 % for a 150 nm film
+of index 2 on glass, ℓ = 0.3 µm). Measured against the absorbing limit (tests/test_spm2_stack.py: the
 film with ε + iη, brute-force quadrature through each mode's Lorentzian, η → 0) within 3.3e-6. An absorbing stack
 with such a mode (a pole just off the axis, a Lorentzian the quadrature does not resolve) is refused by name.
 
@@ -72,6 +73,10 @@ Far field of the kernels: at large |K| the s kernels of a film grow as a(ψ) |K|
 where a ∝ cosψ averages out. The quadrature therefore adds λ ∫ a dψ / (2π) times ∫ S |f| d²f
 (:func:`waveoptics.scatter.first_moment`); for PSD tails S ∝ |f|^−C with C ≤ 3 (exponential, ABC with C ≤ 3)
 that moment diverges and ΔR, ΔT are refused (their sum, the total loss, stays finite).
+
+Optical theorem: without guided modes, ΔR + ΔT equals the first-order TIS_R + TIS_T of
+:func:`waveoptics.scatter.rough_stack_tis_sides` (the stack's BSDF over both hemispheres, another route) within
+8.1e-6 (one and two films, correlated, uncorrelated and c = 0.5, both sides, beyond the critical angle).
 
 Quadrature: :func:`waveoptics.scatter.loss_quadrature` of spm2 (cuts at the half-spaces' light cones, where the
 kernels have their √ kinks: the films' q enter only through entire functions of q²; the PSDs' widths; the far
