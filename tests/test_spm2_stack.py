@@ -6,7 +6,8 @@ References held against the code:
   boundary conditions at both corrugated interfaces with Bessel harmonics, up and down waves in the film, solved
   at a finite amplitude, nothing of the library): its specular loss (R₀ − R(a)) / (a²/4) against the kernels
   Σ_jk a_j a_k [L_jk(K) + L_jk(−K)] + 2 Σ_j a_j² D_j, from air and from glass, s and p, conical mounts,
-  propagating and evanescent orders, an absorbing film;
+  propagating and evanescent orders, an absorbing film; and tests/rr_stack_grating.py's rigorous two-film stack
+  (three corrugated interfaces);
 * spm2.coherent_losses for a bare interface (validated there against the rigorous grating of tests/rr_grating.py),
   and the limits: a film of zero thickness with correlated roughness, a film of the substrate's index;
 * the optical theorem: ΔR + ΔT against the first-order TIS into both half-spaces, of the bare interface
@@ -24,6 +25,7 @@ import numpy as np
 import pytest
 from scipy import special
 
+from rr_stack_grating import stack_specular_losses
 from waveoptics.errors import FieldError
 from waveoptics.scatter import coherent_losses, rough_stack_tis_sides, rr_tis_reflection, rr_tis_transmission
 from waveoptics.scatter.spm2_stack import guided_modes, stack_coherent_losses, stack_loss_kernels
@@ -148,6 +150,41 @@ def test_kernels_are_the_rigorous_film_grating_loss(case):
         if scale < 1e-6:                                        # every ±1 order evanescent: no loss at all
             assert abs(ker[0]) + abs(ker[1]) < 1e-12
             continue
+        assert abs(ker[0] - ref[0]) < TOL_GRATING * scale and abs(ker[1] - ref[1]) < TOL_GRATING * scale, (
+            pol, ker, ref)
+
+
+# (n_top, films from the top down (n, d in m), n_bottom, θ_i, |K| / k₀, azimuth deg, amplitudes from the top down)
+STACK_GRATINGS = [
+    (1.0, [(2.35, 60e-9), (1.38, 110e-9)], 1.52, 40.0, 0.8, 25.0, (1.0, 1.0, 1.0)),
+    (1.0, [(2.35, 60e-9), (1.38, 110e-9)], 1.52, 70.0, 2.2, 130.0, (1.0, 0.0, 0.5)),
+    (1.52, [(1.38, 110e-9), (2.35, 60e-9)], 1.0, 30.0, 1.1, 60.0, (1.0, 1.0, 1.0)),      # from the glass
+]
+
+
+@pytest.mark.parametrize("case", STACK_GRATINGS)
+def test_kernels_are_the_rigorous_two_film_grating_loss(case):
+    """Two films, three corrugated interfaces: the kernels against tests/rr_stack_grating.py's
+    stack_specular_losses (another helper's rigorous Rayleigh-method stack solve, at k a = 2e-4; measured
+    <= 8.6e-7)."""
+    n_t, films, n_b, th, kmag, psi_deg, rough_td = case
+    lam = LAM_NM * 1e-9
+    k0 = 2 * math.pi / lam
+    eps = [complex(n_b) ** 2] + [complex(n) ** 2 for n, _ in films[::-1]] + [complex(n_t) ** 2]
+    kd = [k0 * d for _, d in films[::-1]]
+    amps = list(rough_td)[::-1]                         # the kernels' interfaces count from the bottom
+    rough = [j for j in range(len(amps)) if amps[j] != 0]
+    kap, psi = n_t * math.sin(math.radians(th)), math.radians(psi_deg)
+    K = np.array([kmag * math.cos(psi), kmag * math.sin(psi)])
+    plus, minus = stack_loss_kernels(kap, K, eps, kd, rough), stack_loss_kernels(kap, -K, eps, kd, rough)
+    wi = np.array([-math.sin(math.radians(th)), 0.0, math.cos(math.radians(th))])
+    for pol in "sp":
+        ker = [sum(amps[j] * amps[k] * (plus[pol]["L"][(j, k)][i] + minus[pol]["L"][(j, k)][i])
+                   for j in rough for k in rough) + 2 * sum(amps[j] ** 2 * plus[pol]["D"][j][i] for j in rough)
+               for i in (0, 1)]
+        ref = [x / k0 ** 2 for x in stack_specular_losses(n_t, films, n_b, wi, K[0] / lam, K[1] / lam, lam, pol,
+                                                          rough=rough_td, ka=2e-4)]
+        scale = abs(ref[0]) + abs(ref[1])
         assert abs(ker[0] - ref[0]) < TOL_GRATING * scale and abs(ker[1] - ref[1]) < TOL_GRATING * scale, (
             pol, ker, ref)
 
