@@ -35,6 +35,14 @@ two-scale model) and the smooth-surface limit of the nano-roughness, (4π n σ c
 Reciprocity: f^RR and the microfacet lobes are reciprocal with the η² factor of radiance, and so is the coherent
 transmission A_T T; A_R scales one side's reflection and needs none.
 
+A thin-film stack on the glass (an anti-reflection coating, ``material`` a :class:`waveoptics.materials.Stack` on a
+dielectric substrate) makes each interface of the films rough with the stack's correlation: f^RR is then Elson's
+first-order scatter of the rough stack into both half-spaces (:func:`waveoptics.scatter.rough_stack_bsdf`), the
+losses the stack's second-order mean field (:func:`waveoptics.scatter.stack_coherent_losses`), R₀ and T₀ the flat
+stack's, and the microfacet lobes carry the stack's R and T (:mod:`waveoptics.brdf.nano_interface`,
+:mod:`waveoptics.brdf.facet_interface`). The white furnace of a lossless coated glass is then again
+A_R R + A_T T + TIS = 1 for α → 0 (tests/test_coated_nano_glass.py).
+
 References
 ----------
 .. [1] B. Walter, S. R. Marschner, H. Li, K. E. Torrance, EGSR 2007 (the rough dielectric BSDF).
@@ -56,9 +64,9 @@ from scipy.interpolate import CubicSpline
 
 from ..errors import FieldError
 from ..scatter.spm2 import coherent_losses
-from ..scatter.transmission import rr_bsdf, rr_tis_reflection, rr_tis_transmission
 from ..surfaces.psd import PSDModel
 from .btdf import RoughDielectricBSDF
+from .nano_interface import BareNano, check_film_psd, coherent_shares, nano_interface_of
 from .mu_pieces import critical_cosine, piece_cosine, read_pieces, table_pieces
 from .protocol import broadcast_incidence, broadcast_pair, lobe_choice
 
@@ -109,22 +117,14 @@ def coherent_split(mu, n_i, n_o, psd, wavelength_nm):
     .. [1] A. A. Maradudin, D. L. Mills, Phys. Rev. B 11(4), 1392–1415, 1975; J. T. Johnson, J. Opt. Soc. Am. A
        16(11), 2720–2736, 1999 (the second-order small-perturbation mean field).
     """
-    c = coherent_losses(mu, n_i, n_o, psd, wavelength_nm)
-    R2, T2 = c["R0"]["s"] + c["R0"]["p"], c["T0"]["s"] + c["T0"]["p"]
-    dR, dT = c["dR"]["s"] + c["dR"]["p"], c["dT"]["s"] + c["dT"]["p"]
-    # guard: beyond the critical angle T₀ is 0 (and so ΔT), and so is the coherent light A_T would scale
-    return (1.0 - dR / R2 if R2 > 1e-12 else 1.0), (1.0 - dT / T2 if T2 > 1e-12 else 1.0)
+    return coherent_shares(coherent_losses(mu, n_i, n_o, psd, wavelength_nm))
 
 
-def _direct(mu, above, psd, eta, wavelength_nm):
-    """(A_R, A_T, tis_R, tis_T) of unpolarized light at one cosine *mu* from above (air) or from inside."""
-    th = float(np.degrees(np.arccos(mu)))
-    tis_r = tis_t = 0.0
-    for pol in ("s", "p"):
-        tis_r += 0.5 * rr_tis_reflection(th, wavelength_nm, psd, 1.0, eta, pol, from_above=above)
-        tis_t += 0.5 * rr_tis_transmission(th, wavelength_nm, psd, 1.0, eta, pol, from_above=above)
-    n_i, n_o = (1.0, eta) if above else (eta, 1.0)
-    a_r, a_t = coherent_split(mu, n_i, n_o, psd, wavelength_nm)
+def _direct(mu, above, psd, nano, wavelength_nm):
+    """(A_R, A_T, tis_R, tis_T) of unpolarized light at one cosine *mu* from above (air) or from inside, on the nano
+    interface *nano* (:mod:`waveoptics.brdf.nano_interface`)."""
+    tis_r, tis_t = nano.tis(float(np.degrees(np.arccos(mu))), wavelength_nm, psd, "unpolarized", above)
+    a_r, a_t = coherent_shares(nano.losses(mu, above, psd, wavelength_nm))
     return a_r, a_t, tis_r, tis_t
 
 
@@ -140,17 +140,24 @@ def _piece_nodes(piece):
     return np.maximum(mu, MU_GRAZING)
 
 
-@functools.lru_cache(maxsize=64)
-def nano_tables(psd: PSDModel, eta: float, wavelength_nm: float) -> NanoTables:
-    """The tables (:class:`NanoTables`) of air over a dielectric of real index *eta* with nano-roughness *psd* at
-    *wavelength_nm* (nm): on each side, :data:`NANO_MU_NODES` + 1 nodes per piece of μ (split at the side's
-    critical cosine), a not-a-knot cubic spline in the piece's variable t through them.
+def nano_tables(psd: PSDModel, eta, wavelength_nm: float) -> NanoTables:
+    """The tables (:class:`NanoTables`) of air over a dielectric of real index *eta* (or the nano interface *eta*
+    of :mod:`waveoptics.brdf.nano_interface`: bare or coated) with nano-roughness *psd* at *wavelength_nm* (nm): on
+    each side, :data:`NANO_MU_NODES` + 1 nodes per piece of μ (split at the side's critical cosine between air and
+    the dielectric; films do not move it), a not-a-knot cubic spline in the piece's variable t through them.
 
     References
     ----------
     .. [1] J. C. Stover 2012, §4.4 (TIS); Maradudin & Mills 1975, Johnson 1999 (the coherent split, SPM2).
     .. [2] C. de Boor, *A Practical Guide to Splines*, Springer 1978, ch. IV (the not-a-knot cubic spline).
     """
+    nano = eta if hasattr(eta, "losses") else BareNano(float(eta))
+    return _nano_tables(psd, nano, float(wavelength_nm))
+
+
+@functools.lru_cache(maxsize=64)
+def _nano_tables(psd: PSDModel, nano, wavelength_nm: float) -> NanoTables:
+    eta = nano.eta
     t_nodes = np.linspace(0.0, 1.0, NANO_MU_NODES + 1)
     t = np.linspace(0.0, 1.0, NANO_DENSE_SAMPLES)
     mu_c = {True: critical_cosine(1.0, eta), False: critical_cosine(eta, 1.0)}
@@ -158,7 +165,7 @@ def nano_tables(psd: PSDModel, eta: float, wavelength_nm: float) -> NanoTables:
     for above in (True, False):
         rows = {name: [] for name in TABLE_NAMES}
         for piece in table_pieces(mu_c[above]):
-            vals = np.array([_direct(m, above, psd, eta, wavelength_nm) for m in _piece_nodes(piece)])
+            vals = np.array([_direct(m, above, psd, nano, wavelength_nm) for m in _piece_nodes(piece)])
             for k, name in enumerate(TABLE_NAMES):
                 rows[name].append(CubicSpline(t_nodes, vals[:, k])(t))
         values.update({(name, above): np.array(r) for name, r in rows.items()})
@@ -181,16 +188,22 @@ class NanoRoughDielectricBSDF(RoughDielectricBSDF):
     """
 
     psd: PSDModel | None = None
-    #: the nano tables are of one bare interface: a thin-film stack is refused
-    takes_stack: ClassVar[bool] = False
+    #: a thin-film stack on the glass: its interfaces rough (:class:`waveoptics.brdf.nano_interface.CoatedNano`)
+    takes_stack: ClassVar[bool] = True
 
     def __post_init__(self):
         super().__post_init__()
         if self.psd is None or not hasattr(self.psd, "S") or not hasattr(self.psd, "sigma"):
             raise FieldError(f"{{psd}} must be a PSDModel (the nano-roughness), got {self.psd!r}", "psd")
+        if not self.material.has_index:
+            check_film_psd(self.psd)
+
+    def _nano_interface(self, lam):
+        """The nano interface at *lam* (nm): bare, or the material's films rough (:mod:`.nano_interface`)."""
+        return nano_interface_of(self.material, float(lam))
 
     def _nano(self, lam) -> NanoTables:
-        return nano_tables(self.psd, self._eta(lam), float(lam))
+        return nano_tables(self.psd, self._nano_interface(lam), float(lam))
 
     def _parts1(self, wi, wo, lam):
         fr, ft, mr, mt = super()._parts1(wi, wo, lam)
@@ -200,7 +213,7 @@ class NanoRoughDielectricBSDF(RoughDielectricBSDF):
         return fr * a_r, ft * a_t, mr * a_r, mt * a_t
 
     def _f_nano(self, wi, wo, lam):
-        return rr_bsdf(wi, wo, lam, self.psd, 1.0, self._eta(lam))
+        return self._nano_interface(lam).bsdf(wi, wo, lam, self.psd)
 
     def _eval1(self, wi, wo, lam):
         return sum(self._parts1(wi, wo, lam)) + self._f_nano(wi, wo, lam)

@@ -72,7 +72,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import FieldError, unknown
-from ..scatter.transmission import rr_bsdf
 from .btdf import RoughDielectricBSDF, albedo_multiple, albedo_single, half_vector_refraction
 from .shadowing import sided_G2, sided_lambda
 from .directions import dot_last
@@ -209,7 +208,7 @@ class TwoScaleDielectricBSDF(NanoRoughDielectricBSDF):
         om = dot_last(wo[:, None, :], m)
         ok = valid & (im * wi[:, 2:3] > 0) & (om * wo[:, 2:3] > 0) & (den > 0)
         li, lo = local_pair(im, om, dot_last(wi, wo)[:, None])
-        fn = rr_bsdf(li, lo, lam, self.psd, 1.0, eta)
+        fn = self._nano_interface(lam).bsdf(li, lo, lam, self.psd)
         G = sided_G2(sided_lambda(spec, wi, ax, ay, c)[:, None], sided_lambda(spec, wo, ax, ay, c)[:, None],
                      trans[:, None], self.micro.shadowing)
         val = np.abs(im * om) * fn * G * D / np.where(ok, den, 1.0)
