@@ -51,7 +51,8 @@ from .protocol import (BRDFSample, BRDF, MicrofacetBRDF, TwoScaleParts, sample_c
     check_uniform)
 from .pointwise import (QUADRATURE_NODES, QUADRATURE_NODES_WIDE, QUADRATURE_WIDE_ALPHA, wide_micro_lobe, RADIAL_BINS, COS_LEVELS, TwoScaleBRDF, unit_nodes, NanoRadial, facet_basis,
     to_facet, from_facet)
-from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, PHI_NODES_ANISOTROPIC_NDF, TabulatedTwoScaleBRDF)
+from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, PHI_NODES_ANISOTROPIC_NDF, light_azimuth_nodes,
+    reads_by_half_vector, TabulatedTwoScaleBRDF)
 from .spectral import (SpectralNodes)
 from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
 from .chi2 import (Chi2Result, chi2_test, reflected_samples)

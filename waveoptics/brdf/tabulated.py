@@ -77,24 +77,16 @@ from ..errors import FieldError
 from ..scatter.grid import DirectionGrid
 from .protocol import TwoScaleParts
 from .roughness_scales import isotropic
-from .tabulated_reads import filled_beyond_rim, half_vector_exit
+from .tabulated_reads import (PHI_NODES_ANISOTROPIC, PHI_NODES_ANISOTROPIC_NDF, filled_beyond_rim, half_vector_exit,
+                              light_azimuth_nodes, reads_by_half_vector)
 from .tabulated_rim import rim_across_light_azimuth, rim_light_azimuths, rim_lobes, rim_weight
 from .twoscale import ENERGY_GUARD_PREFIX, energy_guard_cause, evaluate
 
-__all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'PHI_NODES_ANISOTROPIC_NDF', 'TabulatedTwoScaleBRDF']
+__all__ = ['THETA_NODES_DEG', 'PHI_NODES_ANISOTROPIC', 'PHI_NODES_ANISOTROPIC_NDF', 'light_azimuth_nodes',
+           'reads_by_half_vector', 'TabulatedTwoScaleBRDF']
 
 #: default incidence nodes (degrees): 5° steps, denser towards grazing where lobes change fastest
 THETA_NODES_DEG = tuple(float(t) for t in (*range(0, 75, 5), 75, 78, 81, 84, 86, 88))
-#: azimuth nodes over [0°, 360°) for surfaces whose lobe depends on the light's azimuth. Measured on a grating and
-#: on scratches at light azimuths between nodes (θ_i 25-30°): 1 node (shift only): energy within 2 %, L1 5-26 %;
-#: 4 nodes: energy within 0.6 %, L1 2-5 %; 12 nodes: energy within 0.7 %, L1 1-2.4 %
-PHI_NODES_ANISOTROPIC = 4
-#: azimuth nodes over [0°, 360°) of an anisotropic analytic micro NDF with PSD statistics, read by the half-vector
-#: (:func:`waveoptics.brdf.tabulated_reads.half_vector_exit`). Measured (Al, Beckmann α 0.15 × 0.4, 64², θ_i 30° /
-#: 60°, φ_i every 7.5°, exits to 60° above 1 % of the peak; 90th percentile / max error against the lobe computed at
-#: that light): 4 nodes 9.7 / 20 %, 20 / 82 %; 8 nodes 3.3 / 5.1 %, 7.1 / 17 %; 12 nodes 1.7 / 5.2 %, 3.4 / 8.6 %
-#: (midway between incidence nodes 10° apart too: 2.3 / 5.8 %, 4.0 / 9.5 %); scripts/aniso_light_azimuth.py
-PHI_NODES_ANISOTROPIC_NDF = 12
 
 
 def _rotate(w, phi):
@@ -132,9 +124,10 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     thetas_deg : tuple of float
         Incidence nodes (degrees, increasing, in [0, 90)).
     n_phi : int or None
-        Azimuth nodes; None chooses 1 for isotropic surfaces, :data:`PHI_NODES_ANISOTROPIC_NDF` for an anisotropic
-        analytic micro NDF with PSD statistics (:attr:`half_vector_read`) and :data:`PHI_NODES_ANISOTROPIC`
-        otherwise.
+        Azimuth nodes; None chooses :func:`light_azimuth_nodes` (1 for isotropic surfaces,
+        :data:`PHI_NODES_ANISOTROPIC_NDF` for an anisotropic analytic micro NDF with PSD statistics
+        (:attr:`half_vector_read`) and :data:`PHI_NODES_ANISOTROPIC` otherwise), as the sphere renders of
+        :func:`waveoptics.simulate.run` do.
     solver, diffraction, device, precision
         As :func:`waveoptics.brdf.evaluate`.
     lobes_at : callable, optional
@@ -193,8 +186,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         """Whether the tables are read by the half-vector (:func:`waveoptics.brdf.tabulated_reads.
         half_vector_exit`): an anisotropic analytic micro NDF with PSD statistics, whose lobe changes its shape with
         the light's azimuth as D(h) does."""
-        return (self.micro.alpha_y is not None and self.micro.ndf != "tabulated" and self.nano is not None
-                and self.nano.model is not None)
+        return reads_by_half_vector(self.micro, self.nano)
 
     def _build(self):
         if self.table_lobes is not None:
@@ -216,8 +208,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
             return
         grid = DirectionGrid.hemisphere(int(self.resolution))
         thetas = np.radians(np.asarray(self.thetas_deg, dtype=float))
-        n_phi = ((1 if self.isotropic else PHI_NODES_ANISOTROPIC_NDF if self.half_vector_read else
-                  PHI_NODES_ANISOTROPIC) if self.n_phi is None else int(self.n_phi))
+        n_phi = light_azimuth_nodes(self.micro, self.nano) if self.n_phi is None else int(self.n_phi)
         phis = 2 * np.pi * np.arange(n_phi) / n_phi
         w = np.asarray(self.wavelengths_nm)
         diff = rim = None
