@@ -109,7 +109,7 @@ def run_entry(e: EntryPlan, *, device=None, progress=None) -> EntryResult:
             progress(1)
     brdfs = None
     if e.sphere:   # BRDF functions for per-pixel renders: diffracted lobes tabulated over incidence by ev
-        thetas, n_phi = sphere_nodes(e.micro.alpha_y is None and (nano is None or nano.model is not None))
+        thetas, n_phi = sphere_nodes(e.micro, nano)
         wave = TabulatedTwoScaleBRDF(material=e.material, micro=e.micro, nano=nano, kd=req.kd,
                                      diffuse=kw["diffuse"],
                                      wavelengths_nm=tuple(e.colour_wavelengths_nm), thetas_deg=thetas, n_phi=n_phi,
