@@ -48,8 +48,9 @@ def sphere_nodes(micro, nano) -> tuple[tuple, int]:
     nm, 64², lights at φ_i 22.5° and 37.5°, diffracted part against :func:`waveoptics.brdf.evaluate` at that light,
     exits to θ_o 60° above 1 % of the peak; 90th percentile / max of |f / f_ref − 1|): with 4 azimuths 7.9 / 16 %
     at θ_i 30°, 9.9 / 18 % at 35° (between incidence nodes), 18 / 83 % at 60°; with 12, 1.1 / 4.2 %, 1.5 / 3.4 %,
-    1.9 / 6.4 %. The table's build: 23 → 51 s (min of 3, under load, one worker; 6 lobes per θ computed in place of
-    2, the half-turn symmetry giving the rest)."""
+    1.9 / 6.4 %. The table's build with its rim tables: 23.4 → 38.0 s, 1.6x (min of 6 in two rounds of 3, under
+    load, one worker; 6 main lobes per θ computed in place of 2, the half-turn symmetry giving the rest, and the
+    24 rim light azimuths either way)."""
     n_phi = light_azimuth_nodes(micro, nano)
     return (THETA_NODES_DEG if n_phi == 1 else SPHERE_THETAS_DEG), n_phi
 
