@@ -211,18 +211,11 @@ def _direction_fields_sp(w, wavelength_nm, eps, d_nm):
         side = bool(np.all(up))
         return _fields_sp(s if side else n_s * s, wavelength_nm, eps, d_nm, side, w[..., 2])
     shape = np.broadcast_shapes(up.shape, np.shape(wavelength_nm), *(np.shape(e) for e in eps))
-    if shape != up.shape:                               # parameters vary beyond the directions: both sides whole
-        a = _fields_sp(s, wavelength_nm, eps, d_nm, True, w[..., 2])
-        b = _fields_sp(n_s * s, wavelength_nm, eps, d_nm, False, w[..., 2])
-        return tuple([np.where(up, x, y) for x, y in zip(xa, xb)] for xa, xb in zip(a, b))
-
-    def part(m):
-        return [x if np.ndim(x) == 0 else np.broadcast_to(x, shape)[m] for x in (s, n_s, w[..., 2], wavelength_nm)]
-
+    up = np.broadcast_to(up, shape)
     out = tuple([np.empty(shape, dtype=np.complex128) for _ in range(len(eps) - 1)] for _ in range(3))
     for side, m in ((True, up), (False, ~up)):
-        s_m, n_m, z_m, lam_m = part(m)
-        eps_m = [e if np.ndim(e) == 0 else np.broadcast_to(e, shape)[m] for e in eps]
+        s_m, n_m, z_m, lam_m, *eps_m = [x if np.ndim(x) == 0 else np.broadcast_to(x, shape)[m]
+                                        for x in (s, n_s, w[..., 2], wavelength_nm, *eps)]
         for dst, src in zip(out, _fields_sp(s_m if side else n_m * s_m, lam_m, eps_m, d_nm, side, z_m)):
             for x, y in zip(dst, src):
                 x[m] = y
@@ -277,15 +270,14 @@ def interface_amplitudes(wi, wo, wavelength_nm, eps, d_nm) -> dict:
     # ŝ = ẑ × û: ŝ_i·ŝ_o = û_i·û_o and ŝ_i·û_o = −û_i·ŝ_o = (û_i × û_o)_z
     cos_io = ui[..., 0] * uo[..., 0] + ui[..., 1] * uo[..., 1]
     sin_io = ui[..., 0] * uo[..., 1] - ui[..., 1] * uo[..., 0]
-    dot = {"ss": cos_io, "sp": sin_io, "ps": -sin_io, "pp": cos_io}
-    out = {ab: [] for ab in dot}
+    out = {ab: [] for ab in ("ss", "sp", "ps", "pp")}
     for j in range(len(eps) - 1):
         below, above = eps[j], eps[j + 1]
-        jump = below - above
-        out["ss"].append(jump * (es_i[j] * es_o[j] * dot["ss"]))
-        out["sp"].append(jump * (es_i[j] * ep_o[j] * dot["sp"]))
-        out["ps"].append(jump * (ep_i[j] * es_o[j] * dot["ps"]))
-        out["pp"].append(jump * (ep_i[j] * ep_o[j] * dot["pp"] + dp_i[j] * dp_o[j] / (above * below)))
+        jump = below - above                            # the fields' factors first: a wave's may be one a row
+        out["ss"].append(jump * es_i[j] * es_o[j] * cos_io)
+        out["sp"].append(jump * es_i[j] * ep_o[j] * sin_io)
+        out["ps"].append(-(jump * ep_i[j] * es_o[j]) * sin_io)
+        out["pp"].append(jump * ep_i[j] * ep_o[j] * cos_io + jump / (above * below) * dp_i[j] * dp_o[j])
     return out
 
 
