@@ -211,15 +211,15 @@ def _direction_fields_sp(w, wavelength_nm, eps, d_nm):
         side = bool(np.all(up))
         return _fields_sp(s if side else n_s * s, wavelength_nm, eps, d_nm, side, w[..., 2])
     shape = np.broadcast_shapes(up.shape, np.shape(wavelength_nm), *(np.shape(e) for e in eps))
-    up = np.broadcast_to(up, shape)
-    out = tuple([np.empty(shape, dtype=np.complex128) for _ in range(len(eps) - 1)] for _ in range(3))
-    for side, m in ((True, up), (False, ~up)):
-        s_m, n_m, z_m, lam_m, *eps_m = [x if np.ndim(x) == 0 else np.broadcast_to(x, shape)[m]
+    up = np.broadcast_to(up, shape).reshape(-1)
+    out = tuple([np.empty(up.size, dtype=np.complex128) for _ in range(len(eps) - 1)] for _ in range(3))
+    for side, idx in ((True, np.flatnonzero(up)), (False, np.flatnonzero(~up))):
+        s_m, n_m, z_m, lam_m, *eps_m = [x if np.ndim(x) == 0 else np.broadcast_to(x, shape).reshape(-1)[idx]
                                         for x in (s, n_s, w[..., 2], wavelength_nm, *eps)]
         for dst, src in zip(out, _fields_sp(s_m if side else n_m * s_m, lam_m, eps_m, d_nm, side, z_m)):
             for x, y in zip(dst, src):
-                x[m] = y
-    return out
+                x[idx] = y
+    return tuple([x.reshape(shape) for x in part] for part in out)
 
 
 def _wave_fields(w, wavelength_nm, eps, d_nm):
