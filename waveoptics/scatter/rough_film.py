@@ -224,14 +224,16 @@ def _direction_fields_sp(w, wavelength_nm, eps, d_nm):
 
 def _wave_fields(w, wavelength_nm, eps, d_nm):
     """:func:`_direction_fields_sp` of the directions *w* (..., n, 3), computed once a row where every direction
-    of each row along the last axis has the same w_z and, to rounding (4 ulp), the same |w_xy| (a grid of
+    of each row (along the axis n) has the same w_z and, to rounding (4 ulp), the same |w_xy| (a grid of
     azimuths at each polar angle, as :func:`~waveoptics.scatter.transmission.hemisphere_albedo`'s): the fields
     depend on a direction through these two only, so a row's first direction stands for it (arrays (..., 1))."""
     w = np.asarray(w, dtype=float)
     if w.ndim >= 3 and w.shape[-2] > 1 and np.ndim(wavelength_nm) == 0 and all(np.ndim(e) == 0 for e in eps):
-        z, s = w[..., 2], np.hypot(w[..., 0], w[..., 1])
-        if np.all(z == z[..., :1]) and np.all(np.abs(s - s[..., :1]) <= 8.9e-16 * s[..., :1]):
-            return _direction_fields_sp(w[..., :1, :], wavelength_nm, eps, d_nm)
+        z = w[..., 2]
+        if np.all(z == z[..., :1]):
+            s = np.hypot(w[..., 0], w[..., 1])
+            if np.all(np.abs(s - s[..., :1]) <= 8.9e-16 * s[..., :1]):
+                return _direction_fields_sp(w[..., :1, :], wavelength_nm, eps, d_nm)
     return _direction_fields_sp(w, wavelength_nm, eps, d_nm)
 
 
