@@ -349,7 +349,13 @@ def interface_spectra(wi, wo, wavelength_nm, stack_or_layers, interface_psds, n:
 
 def cross_psd_pairs(S: list, c) -> list:
     """(j, k, w_jk) of the nonzero terms of Σ_j Σ_k c_jk √(S_j S_k) Re(G_j G_k*) taken once a pair (j ≤ k; c is
-    symmetric): w_jj = S_j and w_jk = 2 c_jk √(S_j S_k) (m⁴), for :func:`correlated_sum`."""
+    symmetric): w_jj = c_jj S_j and w_jk = 2 c_jk √(S_j S_k) (m⁴), for :func:`correlated_sum`.
+
+    References
+    ----------
+    .. [1] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (partly correlated
+       interfaces: S_jk = c_jk √(S_j S_k)).
+    """
     pairs = []
     for j in range(len(S)):
         if c[j, j] != 0.0:
