@@ -45,7 +45,7 @@ from .spm2_stack import (GUIDED_SAMPLES, MAX_HALF_WAVES, stack_media, flat_stack
     stack_loss_kernels, node_scale, guided_modes, stack_coherent_losses)
 from .rough_film import (CORRELATIONS, stack_layers, interface_fields, interface_amplitudes, cross_psd_weights,
     rough_stack_components, rough_stack_brdf, rough_stack_tis, direction_fields, bragg_psd, interface_psd_list,
-    interface_spectra, correlated_sum)
+    interface_spectra, cross_psd_pairs, correlated_sum)
 from .rough_film_sides import (TRANSPARENT_K, substrate_is_transparent, rough_stack_bsdf_components, rough_stack_bsdf,
     rough_stack_tis_sides)
 from .mom import (MIN_TAPER_PARAMETER, MomRequest, MomResult, ProfileSolution, gaussian_profile, mom_scatter,

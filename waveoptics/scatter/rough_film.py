@@ -88,11 +88,11 @@ import numpy as np
 
 from ..errors import FieldError, unknown
 from ..vocabulary import POLARIZATIONS, ROUGHNESS_CORRELATIONS
-from .angles import scattering_angles
 from .polar import polar_albedo
 
 __all__ = ["CORRELATIONS", "stack_layers", "interface_fields", "direction_fields", "interface_amplitudes",
-           "bragg_psd", "cross_psd_weights", "interface_psd_list", "interface_spectra", "correlated_sum",
+           "bragg_psd", "cross_psd_weights", "interface_psd_list", "interface_spectra", "cross_psd_pairs",
+           "correlated_sum",
            "rough_stack_components", "rough_stack_brdf", "rough_stack_tis"]
 
 #: named interface-roughness correlations: identical replicated profiles, or independent ones
@@ -130,7 +130,52 @@ def _qz(eps, kappa2):
     """q = √(ε − κ²) on the branch Im q ≥ 0 (decaying downwards into an absorbing or evanescent medium)."""
     q = np.sqrt(eps - kappa2)
     # guard: a rounding −0.0 imaginary part would put an evanescent q on the growing branch
-    return np.where(q.imag < 0, -q, q)
+    if np.ndim(q) == 0:
+        return -q if q.imag < 0 else q
+    return np.negative(q, out=q, where=q.imag < 0)
+
+
+def _fields_sp(kappa, wavelength_nm, eps, d_nm, from_above: bool = True, cos_theta=None):
+    """The fields of :func:`interface_fields` for both polarizations in one pass (the normal wave numbers q_j and
+    each film's phase cos β_j, i sin β_j shared by s and p): lists over interfaces (substrate first) of E_t of s,
+    E_t of p and D_z/ε₀ of p (that of s is 0).
+
+    References
+    ----------
+    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.6.2 (characteristic matrix of a film).
+    """
+    if not from_above:
+        es, ep, dp = _fields_sp(kappa, wavelength_nm, eps[::-1], d_nm[::-1], True, cos_theta)
+        return es[::-1], ep[::-1], [-x for x in dp[::-1]]
+    kappa = np.asarray(kappa, dtype=float)
+    k2 = kappa ** 2
+    k0 = 2.0 * np.pi / np.asarray(wavelength_nm, dtype=float)        # 1/nm
+    top = len(eps) - 1
+    if cos_theta is None:
+        q = [_qz(e, k2) for e in eps]
+    else:                                               # the incidence medium is transparent (a real index)
+        q = [_qz(e, k2) for e in eps[:-1]] + [np.sqrt(eps[-1]) * np.abs(np.asarray(cos_theta, dtype=float))]
+    etas = (q, [qj / e for qj, e in zip(q, eps)])       # η_j of s and of p
+    ones = np.ones(np.broadcast(k2, *eps).shape, dtype=np.complex128)
+    waves = tuple([(ones, -eta[0] * ones)] for eta in etas)
+    for j, d in enumerate(d_nm, start=1):               # film j sits on interface j−1, under interface j
+        b = k0 * q[j] * d
+        c, i_s = np.cos(b), 1j * np.sin(b)
+        for eta, at in zip(etas, waves):
+            U, V = at[-1]
+            at.append((c * U + i_s / eta[j] * V, eta[j] * i_s * U + c * V))
+    # guard: at grazing incidence (q_0 = 0) the incident and reflected waves cancel (r = −1, the limit that
+    # :func:`waveoptics.materials.stack.amplitudes` takes): every interface field is 0 there, not 0/0
+    grazing = k2 >= np.real(eps[-1])
+    inv = []
+    for eta, at in zip(etas, waves):
+        U, V = at[-1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            A = 0.5 * (U - V / eta[top])                 # incident amplitude of U in the incidence medium
+            inv.append(np.where(grazing, 0.0, 1.0 / np.where(grazing, 1.0, A)))
+    inv_p = inv[1] * np.sqrt(eps[-1])                   # unit E: U = n E in the incidence medium (n = 1 in air)
+    return ([u * inv[0] for u, _ in waves[0]], [v * inv_p for _, v in waves[1]],
+            [-kappa * u * inv_p for u, _ in waves[1]])
 
 
 def interface_fields(kappa, wavelength_nm, eps, d_nm, polarization: str, from_above: bool = True, cos_theta=None):
@@ -149,54 +194,62 @@ def interface_fields(kappa, wavelength_nm, eps, d_nm, polarization: str, from_ab
     .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.6.2 (characteristic matrix of a film).
     .. [2] H. A. Macleod, *Thin-Film Optical Filters*, 4th ed., CRC Press 2010, §2.2.
     """
-    if not from_above:
-        mirrored = interface_fields(kappa, wavelength_nm, eps[::-1], d_nm[::-1], polarization, True, cos_theta)
-        return [(Et, -Dz) for Et, Dz in mirrored[::-1]]
-    k2 = np.asarray(kappa, dtype=float) ** 2
-    k0 = 2.0 * np.pi / np.asarray(wavelength_nm, dtype=float)        # 1/nm
-    q = [_qz(e, k2) for e in eps]
-    if cos_theta is not None:                           # the incidence medium is transparent (a real index)
-        q[-1] = np.sqrt(eps[-1]) * np.abs(np.asarray(cos_theta, dtype=float))
-    eta = q if polarization == "s" else [qj / e for qj, e in zip(q, eps)]
-    U = np.ones(np.broadcast(k2, *eps).shape, dtype=np.complex128)
-    V = -eta[0] * U
-    at = [(U, V)]
-    for j, d in enumerate(d_nm, start=1):               # film j sits on interface j−1, under interface j
-        b = k0 * q[j] * d
-        c, s = np.cos(b), np.sin(b)
-        U, V = c * U + 1j * s / eta[j] * V, 1j * eta[j] * s * U + c * V
-        at.append((U, V))
-    # guard: at grazing incidence (q_0 = 0) the incident and reflected waves cancel (r = −1, the limit that
-    # :func:`waveoptics.materials.stack.amplitudes` takes): every interface field is 0 there, not 0/0
-    grazing = np.broadcast_to(k2 >= np.real(eps[-1]), U.shape)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        A = 0.5 * (U - V / eta[-1])                      # incident amplitude of U in the incidence medium
-        inv = np.where(grazing, 0.0, 1.0 / np.where(grazing, 1.0, A))
+    es, ep, dp = _fields_sp(kappa, wavelength_nm, eps, d_nm, from_above, cos_theta)
     if polarization == "s":
-        return [(u * inv, np.zeros_like(u)) for u, _ in at]
-    inv = inv * np.sqrt(eps[-1])                         # unit E: U = n E in the incidence medium (n = 1 in air)
-    return [(v * inv, -np.asarray(kappa) * u * inv) for u, v in at]
+        return [(e, np.zeros_like(e)) for e in es]
+    return list(zip(ep, dp))
+
+
+def _direction_fields_sp(w, wavelength_nm, eps, d_nm):
+    """:func:`_fields_sp` of the unit wave that comes in from the direction *w* (..., 3; towards its source), each
+    side computed on its own directions only."""
+    w = np.asarray(w, dtype=float)
+    s = np.hypot(w[..., 0], w[..., 1])
+    up = w[..., 2] >= 0
+    n_s = np.sqrt(eps[0]).real
+    if np.all(up) or not np.any(up):
+        side = bool(np.all(up))
+        return _fields_sp(s if side else n_s * s, wavelength_nm, eps, d_nm, side, w[..., 2])
+    shape = np.broadcast_shapes(up.shape, np.shape(wavelength_nm), *(np.shape(e) for e in eps))
+    up = np.broadcast_to(up, shape).reshape(-1)
+    out = tuple([np.empty(up.size, dtype=np.complex128) for _ in range(len(eps) - 1)] for _ in range(3))
+    for side, idx in ((True, np.flatnonzero(up)), (False, np.flatnonzero(~up))):
+        s_m, n_m, z_m, lam_m, *eps_m = [x if np.ndim(x) == 0 else np.broadcast_to(x, shape).reshape(-1)[idx]
+                                        for x in (s, n_s, w[..., 2], wavelength_nm, *eps)]
+        for dst, src in zip(out, _fields_sp(s_m if side else n_m * s_m, lam_m, eps_m, d_nm, side, z_m)):
+            for x, y in zip(dst, src):
+                x[idx] = y
+    return tuple([x.reshape(shape) for x in part] for part in out)
+
+
+def _wave_fields(w, wavelength_nm, eps, d_nm):
+    """:func:`_direction_fields_sp` of the directions *w* (..., n, 3), computed once a row where every direction
+    of each row (along the axis n) has the same w_z and, to rounding (4 ulp), the same |w_xy| (a grid of
+    azimuths at each polar angle, as :func:`~waveoptics.scatter.transmission.hemisphere_albedo`'s): the fields
+    depend on a direction through these two only, so a row's first direction stands for it (arrays (..., 1))."""
+    w = np.asarray(w, dtype=float)
+    if w.ndim >= 3 and w.shape[-2] > 1 and np.ndim(wavelength_nm) == 0 and all(np.ndim(e) == 0 for e in eps):
+        z = w[..., 2]
+        if np.all(z == z[..., :1]):
+            s = np.hypot(w[..., 0], w[..., 1])
+            if np.all(np.abs(s - s[..., :1]) <= 8.9e-16 * s[..., :1]):
+                return _direction_fields_sp(w[..., :1, :], wavelength_nm, eps, d_nm)
+    return _direction_fields_sp(w, wavelength_nm, eps, d_nm)
 
 
 def direction_fields(w, wavelength_nm, eps, d_nm, polarization: str):
     """:func:`interface_fields` of the unit wave that comes in from the direction *w* (..., 3; towards its source):
     from the ambient where w_z ≥ 0, from the substrate (lateral index n_sub sinθ) where w_z < 0."""
-    w = np.asarray(w, dtype=float)
-    s = np.hypot(w[..., 0], w[..., 1])
-    up = w[..., 2] >= 0
-    sides = [(True, up, s), (False, ~up, np.sqrt(eps[0]).real * s)]
-    parts = [(m, interface_fields(kappa, wavelength_nm, eps, d_nm, polarization, side, w[..., 2]))
-             for side, m, kappa in sides if np.any(m)]
-    if len(parts) == 1:
-        return parts[0][1]
-    (m, a), (_, b) = parts
-    return [(np.where(m, ea, eb), np.where(m, da, db)) for (ea, da), (eb, db) in zip(a, b)]
+    es, ep, dp = _direction_fields_sp(w, wavelength_nm, eps, d_nm)
+    if polarization == "s":
+        return [(e, np.zeros_like(e)) for e in es]
+    return list(zip(ep, dp))
 
 
 def _planes(wi, wo):
-    """Lateral unit vectors (û_i, ŝ_i, û_o, ŝ_o), each (..., 2), of the incident wave (travelling along −ω_i) and
-    of the reciprocal wave (travelling along −ω_o), with the planes of :func:`scattering_angles` at normal
-    incidence (x–z) and normal exit (φ_s = 0)."""
+    """Lateral unit vectors (û_i, û_o), each (..., 2), of the incident wave (travelling along −ω_i) and of the
+    reciprocal wave (travelling along −ω_o), with the planes of :func:`scattering_angles` at normal incidence (x–z)
+    and normal exit (φ_s = 0); ŝ = ẑ × û."""
     wi, wo = np.asarray(wi, dtype=float), np.asarray(wo, dtype=float)
     si = np.hypot(wi[..., 0], wi[..., 1])
     so = np.hypot(wo[..., 0], wo[..., 1])
@@ -205,32 +258,28 @@ def _planes(wi, wo):
                   np.where(si > 0, wi[..., 1] / np.where(si > 0, si, 1.0), 0.0)], axis=-1)
     o = np.stack([np.where(so > 0, wo[..., 0] / np.where(so > 0, so, 1.0), -e[..., 0]),
                   np.where(so > 0, wo[..., 1] / np.where(so > 0, so, 1.0), -e[..., 1])], axis=-1)
-
-    def perp(u):                                         # ẑ × û in the plane
-        return np.stack([-u[..., 1], u[..., 0]], axis=-1)
-
-    return -e, perp(-e), -o, perp(-o)
+    return -e, -o
 
 
 def interface_amplitudes(wi, wo, wavelength_nm, eps, d_nm) -> dict:
     """G_j^{ab} of eq. (1) of the module docstring for ab in ss, sp, ps, pp: a dict of lists over interfaces
     (substrate first), each an array of the directions' shape (unitless). Each wave comes in from its direction's
-    side (:func:`direction_fields`: from the substrate where w_z < 0) with unit electric amplitude."""
-    ui, vi, uo, vo = _planes(wi, wo)
-    basis_i = {"s": vi, "p": ui}
-    basis_o = {"s": vo, "p": uo}
-    fi = {a: direction_fields(wi, wavelength_nm, eps, d_nm, a) for a in ("s", "p")}
-    fo = {b: direction_fields(wo, wavelength_nm, eps, d_nm, b) for b in ("s", "p")}
-    out = {}
-    for a in ("s", "p"):
-        for b in ("s", "p"):
-            dot = np.sum(basis_i[a] * basis_o[b], axis=-1)
-            G = []
-            for j in range(len(eps) - 1):
-                below, above = eps[j], eps[j + 1]
-                (Et, Dz), (Et2, Dz2) = fi[a][j], fo[b][j]
-                G.append((below - above) * (Et * Et2 * dot + Dz * Dz2 / (above * below)))
-            out[a + b] = G
+    side (:func:`direction_fields`: from the substrate where w_z < 0) with unit electric amplitude; the D_z term
+    enters pp only (D_z of s is 0)."""
+    ui, uo = _planes(wi, wo)
+    es_i, ep_i, dp_i = _wave_fields(wi, wavelength_nm, eps, d_nm)
+    es_o, ep_o, dp_o = _wave_fields(wo, wavelength_nm, eps, d_nm)
+    # ŝ = ẑ × û: ŝ_i·ŝ_o = û_i·û_o and ŝ_i·û_o = −û_i·ŝ_o = (û_i × û_o)_z
+    cos_io = ui[..., 0] * uo[..., 0] + ui[..., 1] * uo[..., 1]
+    sin_io = ui[..., 0] * uo[..., 1] - ui[..., 1] * uo[..., 0]
+    out = {ab: [] for ab in ("ss", "sp", "ps", "pp")}
+    for j in range(len(eps) - 1):
+        below, above = eps[j], eps[j + 1]
+        jump = below - above                            # the fields' factors first: a wave's may be one a row
+        out["ss"].append(jump * es_i[j] * es_o[j] * cos_io)
+        out["sp"].append(jump * es_i[j] * ep_o[j] * sin_io)
+        out["ps"].append(-(jump * ep_i[j] * es_o[j]) * sin_io)
+        out["pp"].append(jump * ep_i[j] * ep_o[j] * cos_io + jump / (above * below) * dp_i[j] * dp_o[j])
     return out
 
 
@@ -287,20 +336,43 @@ def interface_psd_list(interface_psds, n: int) -> list:
 
 def interface_spectra(wi, wo, wavelength_nm, stack_or_layers, interface_psds, n: int, n_i=1.0, n_o=1.0) -> list:
     """S_j(f) (m⁴) of each of the *n* interfaces at the Bragg frequency of :func:`bragg_psd`, a
-    :class:`~waveoptics.materials.Stack`'s ``interface_roughness`` r_j scaling interface j's PSD by r_j²."""
+    :class:`~waveoptics.materials.Stack`'s ``interface_roughness`` r_j scaling interface j's PSD by r_j² (a model
+    shared by several interfaces is evaluated once)."""
     r = getattr(stack_or_layers, "roughness_scales", (1.0,) * n)
-    return [r_j * r_j * bragg_psd(m, wi, wo, wavelength_nm, n_i, n_o)
-            for m, r_j in zip(interface_psd_list(interface_psds, n), r)]
+    models = interface_psd_list(interface_psds, n)
+    S = {}
+    for m in models:
+        if id(m) not in S:
+            S[id(m)] = bragg_psd(m, wi, wo, wavelength_nm, n_i, n_o)
+    return [r_j * r_j * S[id(m)] for m, r_j in zip(models, r)]
 
 
-def correlated_sum(G: list, S: list, c) -> np.ndarray:
+def cross_psd_pairs(S: list, c) -> list:
+    """(j, k, w_jk) of the nonzero terms of Σ_j Σ_k c_jk √(S_j S_k) Re(G_j G_k*) taken once a pair (j ≤ k; c is
+    symmetric): w_jj = c_jj S_j and w_jk = 2 c_jk √(S_j S_k) (m⁴), for :func:`correlated_sum`.
+
+    References
+    ----------
+    .. [1] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (partly correlated
+       interfaces: S_jk = c_jk √(S_j S_k)).
+    """
+    pairs = []
+    for j in range(len(S)):
+        if c[j, j] != 0.0:
+            pairs.append((j, j, c[j, j] * S[j]))
+        for k in range(j + 1, len(S)):
+            if c[j, k] != 0.0:
+                pairs.append((j, k, 2.0 * c[j, k] * np.sqrt(S[j] * S[k])))
+    return pairs
+
+
+def correlated_sum(G: list, S: list, c, pairs=None) -> np.ndarray:
     """Σ_j Σ_k c_jk √(S_j S_k) Re(G_j G_k*) of eq. (1) (m⁴): the interfaces' amplitudes *G* weighted by their
-    cross-PSDs (:func:`cross_psd_weights` *c*)."""
+    cross-PSDs (:func:`cross_psd_weights` *c*); *pairs*, when given, the weights of :func:`cross_psd_pairs`."""
     total = 0.0
-    for j in range(len(G)):
-        for m in range(len(G)):
-            if c[j, m] != 0.0:
-                total = total + c[j, m] * np.sqrt(S[j] * S[m]) * (G[j] * np.conj(G[m])).real
+    for j, k, w in cross_psd_pairs(S, c) if pairs is None else pairs:
+        g, h = G[j], G[k]
+        total = total + w * (g.real * h.real + g.imag * h.imag)
     return total
 
 
@@ -313,11 +385,12 @@ def rough_stack_components(wi, wo, wavelength_nm, stack_or_layers, interface_psd
     S = interface_spectra(wi, wo, wavelength_nm, stack_or_layers, interface_psds, n)
     c = cross_psd_weights(correlation, n)
     G = interface_amplitudes(wi, wo, wavelength_nm, eps, d)
-    ci, _, co, _, _, _ = scattering_angles(wi, wo)
+    ci, co = np.asarray(wi, dtype=float)[..., 2], np.asarray(wo, dtype=float)[..., 2]
     ok = (ci > 0) & (co > 0)
     k = 2.0 * np.pi / (np.asarray(wavelength_nm, dtype=float) * 1e-9)
     pre = k ** 4 / (16.0 * np.pi ** 2 * np.where(ok, ci * co, 1.0))
-    return {ab: np.where(ok, pre * correlated_sum(Gab, S, c), 0.0) for ab, Gab in G.items()}
+    pairs = cross_psd_pairs(S, c)
+    return {ab: np.where(ok, pre * correlated_sum(Gab, S, c, pairs), 0.0) for ab, Gab in G.items()}
 
 
 def rough_stack_brdf(wi, wo, wavelength_nm, stack_or_layers, interface_psds, correlation="correlated",

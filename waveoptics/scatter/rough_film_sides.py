@@ -66,9 +66,8 @@ import math
 import numpy as np
 
 from ..errors import FieldError, unknown
-from .angles import scattering_angles
 from .polar import polar_albedo
-from .rough_film import (correlated_sum, cross_psd_weights, interface_amplitudes, interface_psd_list,
+from .rough_film import (correlated_sum, cross_psd_pairs, cross_psd_weights, interface_amplitudes, interface_psd_list,
                          interface_spectra, rough_stack_components, stack_layers)
 from .transmission import TIS_METHODS, WIDE_LOBE, hemisphere_albedo, incident_polarization
 
@@ -129,11 +128,12 @@ def rough_stack_bsdf_components(wi, wo, wavelength_nm, stack_or_layers, interfac
     S = interface_spectra(wi, wo, wavelength_nm, stack_or_layers, interface_psds, n, n_i, n_o)
     c = cross_psd_weights(correlation, n)
     G = interface_amplitudes(wi, wo, wavelength_nm, eps, d)
-    ci, _, co, _, _, _ = scattering_angles(wi, wo)
+    ci, co = wi[..., 2], wo[..., 2]
     ok = (ci != 0) & (co != 0)
     k0 = 2.0 * np.pi / (np.asarray(wavelength_nm, dtype=float) * 1e-9)
     pre = n_o / n_i * k0 ** 4 / (16.0 * np.pi ** 2 * np.where(ok, np.abs(ci * co), 1.0))
-    return {ab: np.where(ok, pre * correlated_sum(Gab, S, c), 0.0) for ab, Gab in G.items()}
+    pairs = cross_psd_pairs(S, c)
+    return {ab: np.where(ok, pre * correlated_sum(Gab, S, c, pairs), 0.0) for ab, Gab in G.items()}
 
 
 def rough_stack_bsdf(wi, wo, wavelength_nm, stack_or_layers, interface_psds, correlation="correlated",
@@ -215,7 +215,7 @@ def rough_stack_tis_sides(theta_deg, wavelength_nm, stack_or_layers, interface_p
     def lobe(z_sign):
         def f(wo):
             w = wo * np.array([1.0, 1.0, z_sign])
-            return rough_stack_bsdf(np.broadcast_to(wi, w.shape), w, lam, stack_or_layers, interface_psds,
+            return rough_stack_bsdf(wi, w, lam, stack_or_layers, interface_psds,
                                     correlation, polarization)
         return f
 

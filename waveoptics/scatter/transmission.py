@@ -56,6 +56,7 @@ References
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -231,6 +232,14 @@ TIS_METHODS = ("auto", "polar", "hemisphere")
 WIDE_LOBE = 0.05
 
 
+@functools.lru_cache(maxsize=8)
+def _gauss_legendre(n: int):
+    """Gauss-Legendre nodes and weights on [−1, 1] (read-only; computed once per *n*)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.flags.writeable = w.flags.writeable = False
+    return x, w
+
+
 def hemisphere_albedo(lobe, breaks=(), n_theta: int = 64, n_psi: int = 257) -> float:
     """∫ f cosθ dω over a hemisphere of a lobe ``lobe(wo)`` (1/sr; wo (..., 3) with z ≥ 0) symmetric about the
     x–z plane.
@@ -247,7 +256,7 @@ def hemisphere_albedo(lobe, breaks=(), n_theta: int = 64, n_psi: int = 257) -> f
        smooth endpoint singularities).
     """
     edges = [0.0] + sorted(float(b) for b in breaks if 0.0 < b < 0.5 * np.pi) + [0.5 * np.pi]
-    x, w = np.polynomial.legendre.leggauss(n_theta)
+    x, w = _gauss_legendre(n_theta)
     tau, wt = 0.5 * (x + 1), 0.5 * w
     psi = np.linspace(0.0, np.pi, n_psi)
     wp = np.full(n_psi, np.pi / (n_psi - 1))
