@@ -148,3 +148,49 @@ def test_a_psd_tail_the_films_cannot_take_is_refused_when_the_bsdf_is_made(psd):
     rc, _, err, _ = run_cli(["brdf", "--model", "rough-dielectric", "--alpha", "0.1", "--material", COATED,
                              "--nano", spec, "--incident", "30", "--wavelengths", "550", "--albedo"])
     assert rc == 2 and "--nano" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_brdf_command_rayleigh_rice_scatters_into_a_transparent_substrate():
+    """`brdf --model rayleigh-rice` takes directions below a transparent material (bare BK7 and MgF₂-coated BK7):
+    the value at the specular transmission direction and off it equals the rigorous grating solve times the PSD at
+    the grating equation's frequency (computed here); `--albedo` prints R and T, T equal to a brute-force
+    quadrature of the command's own BTDF over the lower hemisphere; below a metal the command refuses in one line."""
+    import json
+
+    from cli_helpers import run_cli
+    from rr_stack_grating import stack_order_bsdf
+
+    psd = PSDModel("gaussian", 5e-9, T=0.4e-6)
+    nano = "gaussian:sigma=5nm,corr_length=0.4um"
+    t_i = math.radians(30.0)
+    wi = np.array([math.sin(t_i), 0.0, math.cos(t_i)])
+    n_sub, (n_mgf2,) = get_material(COATED).indices(np.array([LAM_NM]))     # the data sets' indices at 550 nm
+    n_sub, n_mgf2 = float(np.real(n_sub[0])), complex(n_mgf2[0])
+    for material, films in (("BK7", []), (COATED, [(n_mgf2, 100e-9)])):
+        outs = [(160.8, 180.0), (140.0, 150.0)]
+        args = ["brdf", "--model", "rayleigh-rice", "--material", material, "--nano", nano, "--incident", "30",
+                "--wavelengths", "550", "--json"]
+        rc, out, err, _ = run_cli(args + sum((["--outgoing", f"{t},{p}"] for t, p in outs), []))
+        assert rc == 0, err
+        for row, (t, p) in zip(json.loads(out)["values"], outs):
+            th, ph = math.radians(t), math.radians(p)
+            wo = np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)])
+            rig = stack_order_bsdf(1.0, films, n_sub, wi, wo, LAM_NM * 1e-9, ka=1e-4)
+            f = (wi[:2] + n_sub * wo[:2]) / (LAM_NM * 1e-9)
+            want = 0.5 * sum(rig.values()) * float(psd.S(np.hypot(*f)))
+            assert row["brdf"] == pytest.approx(want, rel=1e-5), (material, t, p)
+        rc, out, err, _ = run_cli(args[:-1] + ["--albedo", "--json"])
+        row = json.loads(out)["albedo"][0]
+        # T by brute force: Gauss-Legendre in cos θ_o and the midpoint rule in φ_o over the lower hemisphere
+        x, w = np.polynomial.legendre.leggauss(48)
+        mu, wmu = 0.5 * (x + 1), 0.5 * w
+        phi = (np.arange(96) + 0.5) * 2 * np.pi / 96
+        dirs = [f"{math.degrees(math.acos(-m)):.12g},{math.degrees(p):.12g}" for m in mu for p in phi]
+        rc, out, err, _ = run_cli(args + sum((["--outgoing", d] for d in dirs), []))
+        f = np.array([v["brdf"] for v in json.loads(out)["values"]]).reshape(mu.size, phi.size)
+        T = float(np.sum(wmu[:, None] * mu[:, None] * f) * 2 * np.pi / phi.size)
+        assert row["transmission"] == pytest.approx(T, rel=2e-3), (material, row, T)
+        assert row["albedo"] == pytest.approx(row["reflection"] + row["transmission"], rel=1e-12)
+    rc, _, err, _ = run_cli(["brdf", "--model", "rayleigh-rice", "--material", "Al", "--nano", nano,
+                             "--incident", "30", "--outgoing", "150,0", "--wavelengths", "550"])
+    assert rc == 2 and "--outgoing" in err and len(err.strip().splitlines()) == 1, err

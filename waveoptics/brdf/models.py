@@ -315,10 +315,19 @@ def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polariz
         ``"uncorrelated"`` or a coefficient in [0, 1] (:func:`waveoptics.materials.roughness_correlation`);
         unused for a bare material.
 
+    A transparent substrate (glass, or a stack on glass) also scatters into the material: ``evaluate`` takes
+    directions ω_o below the surface (the first-order BTDF into the substrate, radiance convention,
+    :func:`waveoptics.scatter.rough_stack_bsdf`, which without films is the single interface's Rayleigh-Rice in
+    transmission), and the albedo is ``reflection`` + ``transmission`` (the transmitted TIS,
+    :func:`waveoptics.scatter.rough_stack_tis_sides`). Below an absorbing substrate nothing propagates: such
+    directions are refused.
+
     References
     ----------
     .. [1] T. A. Germer, Appl. Opt. 36(33), 8798–8805, 1997 (one interface).
     .. [2] J. M. Elson, J. P. Rahn, J. M. Bennett, Appl. Opt. 22(20), 3207–3219, 1983 (rough stacks).
+    .. [3] J. M. Elson, Phys. Rev. B 30(10), 5460–5480, 1984; J. C. Stover, *Optical Scattering*, 3rd ed., SPIE
+       2012, ch. 5 (first-order scatter into the substrate).
     """
     from ..materials.database import get_material
     from ..materials.thinfilm import with_roughness_correlation
@@ -336,24 +345,44 @@ def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polariz
     eps = mat if scatter.is_stack(mat) else scatter.permittivity(mat, wavelengths_nm)
     w3 = wavelengths_nm[:, None, None]
 
+    clear = scatter.substrate_is_transparent(
+        (mat.substrate if scatter.is_stack(mat) else mat).eta(wavelengths_nm) ** 2)
+    corr = scatter.stack_correlation(mat)
+
+    def below(wo):
+        down = wo[:, 2] < 0
+        if np.any(down) and not clear:
+            raise FieldError(f"{{outgoing}} below the surface: {mat.name!r} absorbs, nothing propagates into it "
+                             "(a transparent substrate scatters into itself)", "outgoing")
+        return down[None, None, :]
+
     def evaluate(wi, wo, progress=None):
-        return scatter.rayleigh_rice_brdf(wi[None, :, None, :], wo[None, None, :, :], w3, psd, _per_lambda(eps),
-                                          polarization)
+        a, b = wi[None, :, None, :], wo[None, None, :, :]
+        return np.where(below(wo), scatter.rough_stack_bsdf(a, b, w3, mat, psd, corr, polarization),
+                        scatter.rayleigh_rice_brdf(a, b, w3, psd, _per_lambda(eps), polarization))
 
     def components(wi, wo):
-        return scatter.rayleigh_rice_components(wi[None, :, None, :], wo[None, None, :, :], w3, psd,
-                                                _per_lambda(eps))
+        a, b = wi[None, :, None, :], wo[None, None, :, :]
+        down = below(wo)
+        t = scatter.rough_stack_bsdf_components(a, b, w3, mat, psd, corr) if np.any(down) else None
+        r = scatter.rayleigh_rice_components(a, b, w3, psd, _per_lambda(eps))
+        return r if t is None else {k: np.where(down, t[k], v) for k, v in r.items()}
 
-    def albedo(wi, progress=None):
+    def parts(wi, progress=None):
         grid = scatter.DirectionGrid.hemisphere(resolution or 512)
         wo = grid.directions()
-        out = np.empty((len(wavelengths_nm), len(wi)))
+        out = {"reflection": np.empty((len(wavelengths_nm), len(wi)))}
         for i, w in enumerate(wi):
             f = scatter.rayleigh_rice_brdf(w, wo[None], w3, psd, _per_lambda(eps), polarization)
-            out[:, i] = scatter.integrate(np.where(grid.inside, f, 0.0), grid)
+            out["reflection"][:, i] = scatter.integrate(np.where(grid.inside, f, 0.0), grid)
+        if clear:
+            theta = np.degrees(np.arccos(np.clip(wi[:, 2], -1.0, 1.0)))
+            out["transmission"] = np.array([[scatter.rough_stack_tis_sides(t, lam, mat, psd, corr, polarization)[1]
+                                             for t in theta] for lam in wavelengths_nm])
         return out
 
-    return ModelEvaluation(evaluate, albedo, components)
+    return ModelEvaluation(evaluate, lambda wi, progress=None: sum(parts(wi).values()), components,
+                           parts if clear else None)
 
 
 def _per_lambda(eps):

@@ -423,8 +423,9 @@ MODELS: dict[str, Model] = {m.name: m for m in (
     Model("table", _table_arguments, _table_inputs, _table_describe),
 )}
 
-#: models whose --outgoing directions cover the whole sphere (θ > 90°: transmitted, inside the material)
-SPHERE_MODELS = ("rough-dielectric",)
+#: models whose --outgoing directions cover the whole sphere (θ > 90°: transmitted, inside the material; the
+#: first-order model only where the material is transparent)
+SPHERE_MODELS = ("rough-dielectric", "rayleigh-rice")
 
 #: options every model takes (the command's own)
 _COMMON = {"model", "wavelengths", "incident", "outgoing", "albedo", "device", "json", "debug", "quiet", "func",
@@ -485,7 +486,7 @@ def _print_albedo(args, ev, wi, inc, wl, head) -> int:
     and transmitted parts (R, T)."""
     import numpy as np
 
-    if args.model in SPHERE_MODELS:
+    if args.model in SPHERE_MODELS and ev.albedo_components is not None:
         split = {k: np.asarray(v) for k, v in _reflected_transmitted(ev.albedo_components(wi)).items()}
         E = split["reflection"] + split["transmission"]
     else:
