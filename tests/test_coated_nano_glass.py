@@ -151,7 +151,8 @@ def test_a_psd_tail_the_films_cannot_take_is_refused_when_the_bsdf_is_made(psd):
 
 
 def test_brdf_command_rayleigh_rice_scatters_into_a_transparent_substrate():
-    """`brdf --model rayleigh-rice` takes directions below a transparent material (bare BK7 and MgF₂-coated BK7):
+    """`brdf --model rayleigh-rice` takes directions below a transparent material (bare BK7 and MgF₂-coated BK7),
+    and light from inside it:
     the value at the specular transmission direction and off it equals the rigorous grating solve times the PSD at
     the grating equation's frequency (computed here); `--albedo` prints R and T, T equal to a brute-force
     quadrature of the command's own BTDF over the lower hemisphere; below a metal the command refuses in one line."""
@@ -191,6 +192,18 @@ def test_brdf_command_rayleigh_rice_scatters_into_a_transparent_substrate():
         T = float(np.sum(wmu[:, None] * mu[:, None] * f) * 2 * np.pi / phi.size)
         assert row["transmission"] == pytest.approx(T, rel=2e-3), (material, row, T)
         assert row["albedo"] == pytest.approx(row["reflection"] + row["transmission"], rel=1e-12)
+    # light from inside the coated glass (θ_i 160°: 20° in the BK7) out into the air, against the solver lit from
+    # the glass (the stack turned over)
+    rc, out, err, _ = run_cli(["brdf", "--model", "rayleigh-rice", "--material", COATED, "--nano", nano,
+                               "--incident", "160", "--outgoing", "40,170", "--wavelengths", "550", "--json"])
+    assert rc == 0, err
+    t_i, t_o, p_o = math.radians(20.0), math.radians(40.0), math.radians(170.0)
+    wi_s = np.array([math.sin(t_i), 0.0, math.cos(t_i)])                     # the solver's frame: glass on top
+    wo_s = np.array([math.sin(t_o) * math.cos(p_o), math.sin(t_o) * math.sin(p_o), -math.cos(t_o)])
+    rig = stack_order_bsdf(n_sub, [(n_mgf2, 100e-9)], 1.0, wi_s, wo_s, LAM_NM * 1e-9, ka=1e-4)
+    f = (n_sub * wi_s[:2] + wo_s[:2]) / (LAM_NM * 1e-9)
+    want = 0.5 * sum(rig.values()) * float(psd.S(np.hypot(*f)))
+    assert json.loads(out)["values"][0]["brdf"] == pytest.approx(want, rel=1e-5)
     rc, _, err, _ = run_cli(["brdf", "--model", "rayleigh-rice", "--material", "Al", "--nano", nano,
                              "--incident", "30", "--outgoing", "150,0", "--wavelengths", "550"])
     assert rc == 2 and "--outgoing" in err and len(err.strip().splitlines()) == 1, err

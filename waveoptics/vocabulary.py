@@ -134,14 +134,14 @@ BRDF_MODEL_HELP = {
     "kirchhoff": "wave-optics Kirchhoff BRDF of a height-field file (waveoptics.scatter)",
     "rayleigh-rice": "first-order Rayleigh-Rice BRDF of a smooth rough surface from its PSD, with the "
                      "polarization factor Q (s, p, unpolarized; JSON also gives ss, sp, ps, pp); over a "
-                     "transparent material (glass, a stack on glass) also into it (--outgoing θ > 90°) and "
-                     "--albedo gives R and T",
+                     "transparent material (glass, a stack on glass) also into it (--outgoing θ > 90°), light "
+                     "from inside it (--incident θ > 90°), and --albedo gives R and T",
     "twoscale": "two-scale BRDF: micro NDF carrying PSD nano-roughness (Holzschuch & Pacanowski 2017), evaluated "
                 "at the given directions; JSON also gives its coherent, diffraction and diffuse parts",
     "rough-dielectric": "BSDF of a rough dielectric interface (Walter et al. 2007): reflection and transmission "
-                        "(air above, the material below; --outgoing θ > 90° is transmitted, the light comes from "
-                        "air; --albedo gives R and T); JSON also gives its reflection, transmission and multiple "
-                        "parts",
+                        "(air above, the material below; --outgoing θ > 90° is transmitted, --incident θ > 90° "
+                        "lights it from inside; --albedo gives R and T); JSON also gives its reflection, "
+                        "transmission and multiple parts",
     "table": "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated between "
              "incidences relative to the specular direction, coherent and diffuse parts exact; at the table's "
              "wavelengths",

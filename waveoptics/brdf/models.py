@@ -349,37 +349,45 @@ def rayleigh_rice_model(*, wavelengths_nm, psd, material=None, ior=None, polariz
         (mat.substrate if scatter.is_stack(mat) else mat).eta(wavelengths_nm) ** 2)
     corr = scatter.stack_correlation(mat)
 
-    def below(wo):
-        down = wo[:, 2] < 0
-        if np.any(down) and not clear:
-            raise FieldError(f"{{outgoing}} below the surface: {mat.name!r} absorbs, nothing propagates into it "
-                             "(a transparent substrate scatters into itself)", "outgoing")
-        return down[None, None, :]
+    def inside(wi, wo):
+        """Pairs that touch the material's side (light from inside, or a direction into it), (1, n_in, n_out)."""
+        for name, w in (("incident", wi), ("outgoing", wo)):
+            if np.any(w[:, 2] < 0) and not clear:
+                raise FieldError(f"{{{name}}} below the surface: {mat.name!r} absorbs, nothing propagates in it "
+                                 "(a transparent substrate scatters into itself and lights from inside)", name)
+        return (wi[:, 2] < 0)[None, :, None] | (wo[:, 2] < 0)[None, None, :]
 
     def evaluate(wi, wo, progress=None):
         a, b = wi[None, :, None, :], wo[None, None, :, :]
-        return np.where(below(wo), scatter.rough_stack_bsdf(a, b, w3, mat, psd, corr, polarization),
+        return np.where(inside(wi, wo), scatter.rough_stack_bsdf(a, b, w3, mat, psd, corr, polarization),
                         scatter.rayleigh_rice_brdf(a, b, w3, psd, _per_lambda(eps), polarization))
 
     def components(wi, wo):
         a, b = wi[None, :, None, :], wo[None, None, :, :]
-        down = below(wo)
-        t = scatter.rough_stack_bsdf_components(a, b, w3, mat, psd, corr) if np.any(down) else None
+        sel = inside(wi, wo)
+        t = scatter.rough_stack_bsdf_components(a, b, w3, mat, psd, corr) if np.any(sel) else None
         r = scatter.rayleigh_rice_components(a, b, w3, psd, _per_lambda(eps))
-        return r if t is None else {k: np.where(down, t[k], v) for k, v in r.items()}
+        return r if t is None else {k: np.where(sel, t[k], v) for k, v in r.items()}
 
     def parts(wi, progress=None):
+        """``reflection`` (a hemisphere grid of the Rayleigh-Rice BRDF from air; the stack's TIS on the incidence
+        side from inside) and, over a transparent material, ``transmission`` (the TIS across)."""
+        inside(wi, wi)
         grid = scatter.DirectionGrid.hemisphere(resolution or 512)
         wo = grid.directions()
-        out = {"reflection": np.empty((len(wavelengths_nm), len(wi)))}
+        out = {k: np.zeros((len(wavelengths_nm), len(wi))) for k in ("reflection", "transmission")}
         for i, w in enumerate(wi):
-            f = scatter.rayleigh_rice_brdf(w, wo[None], w3, psd, _per_lambda(eps), polarization)
-            out["reflection"][:, i] = scatter.integrate(np.where(grid.inside, f, 0.0), grid)
-        if clear:
-            theta = np.degrees(np.arccos(np.clip(wi[:, 2], -1.0, 1.0)))
-            out["transmission"] = np.array([[scatter.rough_stack_tis_sides(t, lam, mat, psd, corr, polarization)[1]
-                                             for t in theta] for lam in wavelengths_nm])
-        return out
+            theta = float(np.degrees(np.arccos(min(abs(w[2]), 1.0))))
+            for j, lam in enumerate(wavelengths_nm):
+                if clear:
+                    r, out["transmission"][j, i] = scatter.rough_stack_tis_sides(theta, lam, mat, psd, corr,
+                                                                                 polarization, from_above=w[2] > 0)
+                    if w[2] < 0:
+                        out["reflection"][j, i] = r
+            if w[2] > 0:
+                f = scatter.rayleigh_rice_brdf(w, wo[None], w3, psd, _per_lambda(eps), polarization)
+                out["reflection"][:, i] = scatter.integrate(np.where(grid.inside, f, 0.0), grid)
+        return out if clear else {"reflection": out["reflection"]}
 
     return ModelEvaluation(evaluate, lambda wi, progress=None: sum(parts(wi).values()), components,
                            parts if clear else None)

@@ -514,7 +514,9 @@ def run(args) -> int:
         raise WaveopticsError("--multiple-scattering applies to --model microfacet, twoscale and rough-dielectric, "
                               f"not {args.model!r}")
     wl = parse_wavelengths(args.wavelengths, name="--wavelengths")
-    inc = [parse_direction(t, name="--incident") for t in args.incident]
+    # a BSDF over the whole sphere also takes light from inside the material: θ > 90°
+    inc = [parse_direction(t, name="--incident", max_theta_deg=180.0 if args.model in SPHERE_MODELS else 90.0)
+           for t in args.incident]
     wi = direction_from_angles([t for t, _ in inc], [p for _, p in inc])
     head = {"model": args.model, "parameters": model.describe(args),
             "units": {"brdf": "1/sr", "albedo": "1", "wavelength_nm": "nm", "incident": "deg", "outgoing": "deg"}}
