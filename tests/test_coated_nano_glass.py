@@ -204,6 +204,11 @@ def test_brdf_command_rayleigh_rice_scatters_into_a_transparent_substrate():
     f = (n_sub * wi_s[:2] + wo_s[:2]) / (LAM_NM * 1e-9)
     want = 0.5 * sum(rig.values()) * float(psd.S(np.hypot(*f)))
     assert json.loads(out)["values"][0]["brdf"] == pytest.approx(want, rel=1e-5)
+    # the rough dielectric lit from inside the coated glass: lossless, R + T = 1 with multiple scattering
+    rc, out, err, _ = run_cli(["brdf", "--model", "rough-dielectric", "--alpha", "0.1", "--material", COATED,
+                               "--nano", nano, "--incident", "160", "--albedo", "--multiple-scattering",
+                               "--wavelengths", "550", "--json"])
+    assert rc == 0 and json.loads(out)["albedo"][0]["albedo"] == pytest.approx(1.0, abs=1e-2), err
     rc, _, err, _ = run_cli(["brdf", "--model", "rayleigh-rice", "--material", "Al", "--nano", nano,
                              "--incident", "30", "--outgoing", "150,0", "--wavelengths", "550"])
     assert rc == 2 and "--outgoing" in err and len(err.strip().splitlines()) == 1, err
