@@ -58,14 +58,16 @@ def test_lobe_width_ratio_follows_alpha_y_over_alpha_x():
 
 def test_cli_simulate_summary_carries_alpha_y(tmp_path):
     rc, out, err, _ = run_cli(["simulate", "--alpha-y", str(AY), "--micro-alpha", str(AX), "--resolution", "32",
-                               "--wavelengths", "550", "--sphere-size", "16", "--nano", "gaussian:sigma=0nm,corr_length=1um",
+                               "--wavelengths", "550", "--sphere-size", "16",
+                               "--nano", "gaussian:sigma=0nm,corr_length=1um",
                                "-o", str(tmp_path / "o"), "--quiet"])
     assert rc == 0, err
     params = json.loads((tmp_path / "o" / "summary.json").read_text())["parameters"]
     assert params["alpha_y"] == AY and params["micro_alpha"] == AX
 
 
-@pytest.mark.parametrize("extra", [["--alpha-y", "-0.1"], ["--alpha-y", "nan"], ["--alpha-y", "0.2", "--ndf", "abc"],
+@pytest.mark.parametrize("extra", [["--alpha-y", "-0.1"], ["--alpha-y", "nan"], ["--alpha-y", "3"],
+                                   ["--alpha-y", "0.2", "--ndf", "abc"],
                                    ["--alpha-y", "0.2", "--micro-surface", "nofile.npy"]])
 def test_cli_bad_alpha_y_is_one_line_naming_the_option(tmp_path, extra):
     rc, out, err, _ = run_cli(["simulate", *extra, "--resolution", "16", "-o", str(tmp_path / "o")])

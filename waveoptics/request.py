@@ -235,13 +235,15 @@ def _finite_number(value, field: str) -> float:
 
 
 def _alpha_y(value, ndf: str) -> float:
-    """α_y checked like α (finite, ≥ 0) and refused for an NDF without an anisotropic form (its ``anisotropic``
-    flag in :data:`waveoptics.brdf.NDFS`: the stretched NDFs of Heitz 2014 §5)."""
-    from .brdf.ndf import NDFS
+    """α_y checked like α (finite, in [0, :data:`~waveoptics.brdf.ndf.ALPHA_MAX`]) and refused for an NDF without an
+    anisotropic form (its ``anisotropic`` flag in :data:`waveoptics.brdf.NDFS`: the stretched NDFs of Heitz 2014
+    §5)."""
+    from .brdf.ndf import ALPHA_MAX, NDFS
 
     a = _finite_number(value, "alpha_y")
-    if a < 0:
-        raise FieldError(f"{{alpha_y}} {value!r} is not allowed; α_y must be finite and >= 0", "alpha_y")
+    if not 0 <= a <= ALPHA_MAX:
+        raise FieldError(f"{{alpha_y}} {value!r} is not allowed; α_y must be finite and in [0, {ALPHA_MAX:g}]",
+                         "alpha_y")
     if ndf in NDFS and not NDFS[ndf].anisotropic:
         raise FieldError(f"{{alpha_y}} {value!r} is not allowed for {{ndf}} {ndf!r}, which is isotropic; "
                          "anisotropic NDFs: " + ", ".join(k for k, v in NDFS.items()
