@@ -16,11 +16,11 @@ from waveoptics.errors import FieldError
 from waveoptics.request import SimulationRequest, request_default
 
 #: the defaults the docs and the demo (``waveoptics simulate`` with no options) promise, written out here
-DOCUMENTED = {"material": "Al", "micro_alpha": 0.05, "ndf": "beckmann", "shadowing": "smith-correlated",
-              "incident_deg": (30.0, 0.0), "illuminant": "D65", "delta_e": 1.0, "resolution": 128, "solver": "auto",
-              "kd": 0.5, "precision": "float32", "seed": 0, "diffraction": "kirchhoff",
-              "polarization": "unpolarized", "nano": "abc:sigma=10nm,B=2um,C=2.6", "split": False,
-              "multiple_scattering": False, "ndf_shape": None, "micro_surface": None, "surface": None,
+DOCUMENTED = {"material": "Al", "micro_alpha": 0.05, "alpha_y": None, "ndf": "beckmann",
+              "shadowing": "smith-correlated", "incident_deg": (30.0, 0.0), "illuminant": "D65", "delta_e": 1.0,
+              "resolution": 128, "solver": "auto", "kd": 0.5, "precision": "float32", "seed": 0,
+              "diffraction": "kirchhoff", "polarization": "unpolarized", "nano": "abc:sigma=10nm,B=2um,C=2.6",
+              "split": False, "multiple_scattering": False, "ndf_shape": None, "micro_surface": None, "surface": None,
               "wavelengths_nm": None, "roughness_correlation": "correlated"}
 
 FIELDS = {f.name: f.default for f in dataclasses.fields(SimulationRequest)}

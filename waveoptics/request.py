@@ -234,6 +234,24 @@ def _finite_number(value, field: str) -> float:
     return x
 
 
+def _alpha_y(value, ndf: str) -> float:
+    """α_y checked like α (finite, in [0, :data:`~waveoptics.brdf.ndf.ALPHA_MAX`]) and refused for an NDF without an
+    anisotropic form (its ``anisotropic`` flag in :data:`waveoptics.brdf.NDFS`: the stretched NDFs of Heitz 2014
+    §5)."""
+    from .brdf.ndf import ALPHA_MAX, NDFS
+
+    a = _finite_number(value, "alpha_y")
+    if not 0 <= a <= ALPHA_MAX:
+        raise FieldError(f"{{alpha_y}} {value!r} is not allowed; α_y must be finite and in [0, {ALPHA_MAX:g}]",
+                         "alpha_y")
+    if ndf in NDFS and not NDFS[ndf].anisotropic:
+        raise FieldError(f"{{alpha_y}} {value!r} is not allowed for {{ndf}} {ndf!r}, which is isotropic; "
+                         "anisotropic NDFs: " + ", ".join(k for k, v in NDFS.items()
+                                                          if v.anisotropic and k in PARAMETRIC_NDF_NAMES),
+                         "alpha_y", "ndf")
+    return a
+
+
 @dataclass(frozen=True)
 class SimulationRequest:
     """One two-scale simulation: surface, material, light and sampling, validated on construction.
@@ -247,7 +265,11 @@ class SimulationRequest:
     surface : str or None
         Path (or description) of a nano height field; the object itself is passed separately to the solvers.
     micro_alpha : float
-        Micro NDF roughness α (≥ 0, unitless).
+        Micro NDF roughness α (≥ 0, unitless); α_x of an anisotropic NDF when *alpha_y* is given.
+    alpha_y : float or None
+        Micro NDF roughness α_y (≥ 0, unitless) of an anisotropic NDF (ggx, beckmann, epd, sgd: the NDF's
+        ``anisotropic`` flag in :data:`waveoptics.brdf.NDFS`); None: isotropic (α_y = α). Refused with
+        *micro_surface* and *split*, which measure both α from slopes.
     ndf, shadowing : str
         Micro NDF and masking-shadowing term (:data:`waveoptics.brdf.NDFS`, :data:`waveoptics.brdf.SHADOWINGS`).
     incident_deg : (float, float)
@@ -295,6 +317,7 @@ class SimulationRequest:
     nano: str | None = DEFAULT_NANO
     surface: str | None = None
     micro_alpha: float = 0.05
+    alpha_y: float | None = None
     ndf: str = DEFAULT_NDF
     shadowing: str = "smith-correlated"
     incident_deg: tuple = (30.0, 0.0)
@@ -338,6 +361,8 @@ class SimulationRequest:
             raise FieldError(f"{{micro_alpha}} {self.micro_alpha!r} is not allowed; α must be finite and >= 0",
                              "micro_alpha")
         set_("micro_alpha", alpha)
+        if self.alpha_y is not None:
+            set_("alpha_y", _alpha_y(self.alpha_y, self.ndf))
         if int(self.resolution) != self.resolution or not (RESOLUTION_RANGE[0] <= self.resolution
                                                             <= RESOLUTION_RANGE[1]):
             raise FieldError(f"{{resolution}} {self.resolution!r} is not allowed; use "
@@ -391,6 +416,10 @@ class SimulationRequest:
                 raise FieldError("{split} measures the micro roughness from {surface}; drop {micro_surface}",
                                  "split", "micro_surface")
             set_("micro_surface", str(self.micro_surface))
+        for field in ("micro_surface", "split"):   # both measure α_x and α_y from slopes
+            if getattr(self, field) not in (None, False) and self.alpha_y is not None:
+                raise FieldError(f"{{alpha_y}} is not used with {{{field}}}, which measures α_x and α_y from the "
+                                 "height field's slopes; drop {alpha_y}", "alpha_y", field)
         if self.surface is None and self.nano is None:
             raise FieldError("a request needs nano roughness: {nano} MODEL:params or a height-field {surface}",
                              "nano", "surface")
@@ -430,7 +459,8 @@ class SimulationRequest:
 
         if self.micro_surface is not None:
             return _micro_of_file(self.micro_surface, self.shadowing)
-        return twoscale.Micro(alpha=self.micro_alpha, ndf=self.ndf, shadowing=self.shadowing, ndf_shape=self.ndf_shape)
+        return twoscale.Micro(alpha=self.micro_alpha, alpha_y=self.alpha_y, ndf=self.ndf, shadowing=self.shadowing,
+                              ndf_shape=self.ndf_shape)
 
     def params(self) -> dict:
         """Fields as plain data (JSON-able), with the resolved wavelength list."""

@@ -135,10 +135,10 @@ def simulate(material=None, *, surface=None, incident=None, wavelengths=None, sp
     progress : callable, optional
         Called with 1 after each lobe set.
     **fields
-        Any other field of :class:`~waveoptics.request.SimulationRequest` (``nano``, ``micro_alpha``, ``ndf``,
-        ``shadowing``, ``illuminant``, ``delta_e``, ``resolution``, ``solver``, ``kd``, ``seed``, ``precision``,
-        ``split``, ``diffraction``, ``polarization``, ``ndf_shape``, ``micro_surface``, ``multiple_scattering``),
-        documented there.
+        Any other field of :class:`~waveoptics.request.SimulationRequest` (``nano``, ``micro_alpha``,
+        ``alpha_y``, ``ndf``, ``shadowing``, ``illuminant``, ``delta_e``, ``resolution``, ``solver``, ``kd``,
+        ``seed``, ``precision``, ``split``, ``diffraction``, ``polarization``, ``ndf_shape``, ``micro_surface``,
+        ``multiple_scattering``), documented there.
 
     Returns
     -------
@@ -261,7 +261,8 @@ def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, dev
     params = {"material": mat.name, "material_source": mat.source,
               "nano": None if req.surface is not None else req.nano,
               "surface": req.surface if surface is None else None,
-              "micro_alpha": None if req.micro_surface is not None else req.micro_alpha, "ndf": micro.ndf,
+              "micro_alpha": None if req.micro_surface is not None else req.micro_alpha, "alpha_y": req.alpha_y,
+              "ndf": micro.ndf,
               "micro_surface": req.micro_surface, "multiple_scattering": req.multiple_scattering,
               "shadowing": req.shadowing, "incident_deg": [theta, phi], "illuminant": spd.name,
               "resolution": req.resolution, "solver": lobes.info["solver"], "kd": 0.0 if mat.is_metal else req.kd,

@@ -22,6 +22,7 @@ def add_scene_options(p) -> None:
                                          "exponential:sigma=5nm,corr_length=1um, scratches:count=20,width=200nm,depth=30nm")
     # micro α, NDF and shape stay None when not given (--micro-surface refuses them), the request fills them in
     option(p, "--micro-alpha", note=f"default {d('micro_alpha'):g}")
+    option(p, "--alpha-y", note="ggx, beckmann, epd and sgd; default: isotropic")
     option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note=f"default {d('ndf')}")
     option(p, "--ndf-shape")
     option(p, "--micro-surface", note="its own file metadata gives the spacing")
@@ -58,12 +59,13 @@ def request_from_args(args):
     """The :class:`~waveoptics.request.SimulationRequest` the scene options describe (its fields validate them;
     options left unset take the fields' defaults)."""
     if args.micro_surface is not None:
-        given = [f for f, v in (("--micro-alpha", args.micro_alpha), ("--ndf", args.ndf),
+        given = [f for f, v in (("--micro-alpha", args.micro_alpha), ("--alpha-y", args.alpha_y), ("--ndf", args.ndf),
                                 ("--ndf-shape", args.ndf_shape)) if v is not None]
         if given:
             raise FieldError(f"--micro-surface sets the NDF from the file's slopes; drop {', '.join(given)}",
                              "micro_surface")
-    optional = {"nano": args.nano, "micro_alpha": args.micro_alpha, "ndf": args.ndf, "ndf_shape": args.ndf_shape}
+    optional = {"nano": args.nano, "micro_alpha": args.micro_alpha, "alpha_y": args.alpha_y, "ndf": args.ndf,
+                "ndf_shape": args.ndf_shape}
     return SimulationRequest(
         surface=args.surface, material=args.material, micro_surface=args.micro_surface,
         multiple_scattering=args.multiple_scattering, incident_deg=parse_direction(args.incident),

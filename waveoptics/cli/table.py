@@ -34,6 +34,7 @@ def add_case_options(p, *, command: str, resolution: int) -> None:
                    help="with a scene file: the name of one of its lights (default the first)")
     option(p, "--micro-alpha", note="default 0 with a SURFACE file, whose heights are the whole geometry; "
                                     f"{d('micro_alpha'):g} with --nano")
+    option(p, "--alpha-y", note="ggx, beckmann, epd and sgd; default: isotropic (with a scene file: the material's)")
     option(p, "--ndf", choices=PARAMETRIC_NDF_NAMES, note=f"default {d('ndf')}")
     option(p, "--ndf-shape")
     option(p, "--wavelengths", note="default: chosen from the illuminant and --delta-e")
@@ -70,7 +71,8 @@ def case_from_args(args, *, source=None):
     from ..request import SimulationRequest
 
     given = dict(wavelengths_nm=tuple(parse_wavelengths(args.wavelengths)) if args.wavelengths else None,
-                 micro_alpha=args.micro_alpha, ndf=args.ndf, ndf_shape=args.ndf_shape, illuminant=args.illuminant, delta_e=args.delta_e,
+                 micro_alpha=args.micro_alpha, alpha_y=args.alpha_y, ndf=args.ndf, ndf_shape=args.ndf_shape,
+                 illuminant=args.illuminant, delta_e=args.delta_e,
                  resolution=args.resolution, solver=args.solver, kd=args.kd, precision=args.precision,
                  diffraction=args.diffraction,
                  seed=args.seed, incident_deg=getattr(args, "incident_deg", None))

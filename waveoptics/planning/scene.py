@@ -18,7 +18,8 @@ Schema (``examples/scenes/*.toml`` are worked examples)::
     [[materials]]
     name = "gold"                        # unique
     material = "Au"                      # preset, shelf/book/page or f0:...   (or: ior = 1.5 / "0.2+3.1j")
-    roughness = 0.1                      # micro NDF alpha >= 0, default 0.05
+    roughness = 0.1                      # micro NDF alpha >= 0, default 0.05 (alpha_x if roughness_y is given)
+    # roughness_y = 0.3                  # alpha_y of an anisotropic NDF (ggx, beckmann, epd, sgd); default isotropic
     ndf = "ggx"                          # ggx | beckmann (default) | blinn-phong | abc | epd | sgd
     # ndf_shape = 1.5                    # abc's C, epd's or sgd's p (default: the NDF's own)
     # micro_surface = "micro.npy"        # or {path, spacing, units, channel}: the NDF is this height field's
@@ -83,12 +84,11 @@ __all__ = ['KEYS', 'CAMERAS', 'DEFAULT_DELTA_E', 'DEFAULT_LIGHT_DIRECTIONS', 'Na
 KEYS = {
     "": ("name", "description", "seed", "accuracy", "materials", "lights", "view", "output"),
     "accuracy": ("delta_e",),
-    "materials": ("name", "material", "ior", "roughness", "ndf", "ndf_shape", "shadowing", "diffuse_albedo",
-                  "nano", "diffraction", "micro_surface", "multiple_scattering", "roughness_correlation"),
-    "nano": ("statistics", "generator", "file"),
-    "file": ("path", "spacing", "units", "channel"),
-    "lights": ("name", "spd", "directions_deg"),
-    "view": ("directions_deg", "camera"),
+    "materials": ("name", "material", "ior", "roughness", "roughness_y", "ndf", "ndf_shape", "shadowing",
+                  "diffuse_albedo", "nano", "diffraction", "micro_surface", "multiple_scattering",
+                  "roughness_correlation"),
+    "nano": ("statistics", "generator", "file"), "file": ("path", "spacing", "units", "channel"),
+    "lights": ("name", "spd", "directions_deg"), "view": ("directions_deg", "camera"),
     "output": ("spectral_brdf", "rgb_images", "tables", "resolution", "sphere_size"),
 }
 CAMERAS = ("sphere",)
@@ -134,6 +134,7 @@ class MaterialSpec:
     name: str
     material: str
     roughness: float = request_default("micro_alpha")
+    roughness_y: float | None = request_default("alpha_y")   # α_y of an anisotropic NDF; None: isotropic
     ndf: str = request_default("ndf")
     shadowing: str = request_default("shadowing")
     diffuse_albedo: float = request_default("kd")
@@ -149,7 +150,7 @@ class MaterialSpec:
         the parametric NDF."""
         if self.micro_surface is not None:
             return brdf.Micro.from_slopes(brdf.slope_table(self.micro_surface.height_field()), self.shadowing)
-        return brdf.Micro(alpha=self.roughness, ndf=self.ndf, shadowing=self.shadowing, ndf_shape=self.ndf_shape)
+        return brdf.Micro(self.roughness, self.roughness_y, self.ndf, self.shadowing, self.ndf_shape)
 
 
 @dataclass(frozen=True)
@@ -395,7 +396,7 @@ def _material(ctx, t, key, base) -> MaterialSpec:
         raise ctx.err(key + (".material" if "material" in t else ".ior"), f"= {spec!r}: {exc}") from None
     micro_surface = None
     if "micro_surface" in t:   # the NDF is the field's slope law: no parametric NDF keys beside it
-        clash = [q for q in ("roughness", "ndf", "ndf_shape") if q in t]
+        clash = [q for q in ("roughness", "roughness_y", "ndf", "ndf_shape") if q in t]
         if clash:
             raise ctx.err(key + ".micro_surface", f"sets the NDF from the field's slopes; drop {', '.join(clash)}")
         path, opts = _file(ctx, t["micro_surface"], key + ".micro_surface", base)
@@ -405,7 +406,7 @@ def _material(ctx, t, key, base) -> MaterialSpec:
         multiple_scattering=_bool(ctx, t.get("multiple_scattering", request_default("multiple_scattering")), key + ".multiple_scattering"),
         roughness=_number(ctx, t.get("roughness", request_default("micro_alpha")), key + ".roughness", lo=0.0, hi=2.0),
         ndf=_choice(ctx, t.get("ndf", request_default("ndf")), key + ".ndf", PARAMETRIC_NDF_NAMES),
-        ndf_shape=_ndf_shape(ctx, t, key),
+        ndf_shape=_ndf_shape(ctx, t, key), roughness_y=_roughness_y(ctx, t, key),
         shadowing=_choice(ctx, t.get("shadowing", request_default("shadowing")), key + ".shadowing",
                           tuple(brdf.SHADOWINGS)),
         diffuse_albedo=_number(ctx, t.get("diffuse_albedo", request_default("kd")), key + ".diffuse_albedo", lo=0.0, hi=1.0),
@@ -438,6 +439,14 @@ def _correlation(ctx, t, key, material: str):
     return c
 
 
+def _roughness_y(ctx, t, key):
+    """materials.roughness_y: α_y in [0, 2], only for an NDF with an anisotropic form (Heitz 2014 §5)."""
+    ndf = t.get("ndf", request_default("ndf"))
+    if "roughness_y" in t and not getattr(brdf.NDFS.get(ndf), "anisotropic", False):
+        raise ctx.err(key + ".roughness_y", f"needs an anisotropic NDF (ggx, beckmann, epd, sgd), not {ndf!r}")
+    return _number(ctx, t["roughness_y"], key + ".roughness_y", lo=0.0, hi=2.0) if "roughness_y" in t else None
+
+
 def _ndf_shape(ctx, t, key):
     """materials.ndf_shape: a number in the NDF's range, only for an NDF that has a shape parameter."""
     if "ndf_shape" not in t:
@@ -452,7 +461,6 @@ def _ndf_shape(ctx, t, key):
 
 
 def _light(ctx, t, key) -> LightSpec:
-
     _check_keys(ctx, t, "lights", key)
     name = _string(ctx, t.get("name"), key + ".name")
     spd = _string(ctx, t.get("spd", "D65"), key + ".spd")
@@ -570,8 +578,8 @@ def request_of(sc: Scene, material: str | None = None, light: str | None = None,
             raise WaveopticsError(f"scene {sc.name!r} has no light {light!r}; it has "
                                   f"{', '.join(x.name for x in sc.lights)}")
         li = found[0]
-    kw = dict(material=mat.material, micro_alpha=mat.roughness, ndf=mat.ndf, ndf_shape=mat.ndf_shape,
-              shadowing=mat.shadowing, kd=mat.diffuse_albedo, illuminant=li.spd,
+    kw = dict(material=mat.material, micro_alpha=mat.roughness, alpha_y=mat.roughness_y, ndf=mat.ndf,
+              ndf_shape=mat.ndf_shape, shadowing=mat.shadowing, kd=mat.diffuse_albedo, illuminant=li.spd,
               incident_deg=tuple(li.directions_deg[0]), delta_e=sc.delta_e, seed=sc.seed, nano=NO_NANO,
               surface=None, multiple_scattering=mat.multiple_scattering,
               roughness_correlation=mat.roughness_correlation)

@@ -82,7 +82,7 @@ def _scene_parameters(model: RendererModel) -> dict:
         raise FieldError(f"{{scene_material}} {name!r} is not in {sc.path}; it has: {', '.join(mats)}",
                          "scene_material")
     m = mats[name]
-    kw = dict(material=m.material, alpha=m.roughness, alpha_y=None, ndf=m.ndf, nano="none", surface=None,
+    kw = dict(material=m.material, alpha=m.roughness, alpha_y=m.roughness_y, ndf=m.ndf, nano="none", surface=None,
               kd=m.diffuse_albedo, diffraction=model.diffraction if m.diffraction == "auto" else m.diffraction)
     if m.nano is not None:
         if m.nano.kind == "statistics":
