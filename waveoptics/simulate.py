@@ -423,9 +423,8 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
     summary's RGB albedos; PNG previews and sphere renders are always sRGB. *environment* (a name in
     :data:`waveoptics.renderers.lighting.PROCEDURAL`, an .exr map or a :class:`waveoptics.renderers.lighting.Environment`) adds both
     models' spheres lit by that map (*env_size* pixels, *spp* samples per technique and pixel, multiple importance
-    sampling; :func:`waveoptics.renderers.sphere.render_sphere_environment`). A simulation run without sphere
-    renders (*sphere* False) writes no :data:`SPHERE_FILES`; its summary's ``delta_e2000`` is null and ``skipped``
-    says why (*no_sphere_reason*).
+    sampling; :func:`waveoptics.renderers.sphere.render_sphere_environment`). Run without sphere renders (*sphere*
+    False), it writes no :data:`SPHERE_FILES`; ``delta_e2000`` is null and ``skipped`` says why (*no_sphere_reason*).
     """
     spheres = sim.brdf_wave is not None
     if environment is not None and not spheres:
