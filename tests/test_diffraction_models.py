@@ -100,7 +100,7 @@ def test_one_vocabulary_and_every_front_end(tmp_path, capsys):
     with pytest.raises(FieldError, match="unknown diffraction 'hs'"):
         SimulationRequest(diffraction="hs")
     out = tmp_path / "sim"
-    assert main(["simulate", "-o", str(out), "--wavelengths", "450,650", "--resolution", "24", "--sphere-size", "32",
+    assert main(["simulate", "-o", str(out), "--wavelengths", "450,650", "--resolution", "24", "--no-spheres",
                  "--diffraction", "ghs", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["parameters"]["diffraction"] == "ghs"

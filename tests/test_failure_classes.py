@@ -199,7 +199,7 @@ def test_warnings_are_one_line_each_and_quiet_silences_them(capsys, tmp_path):
     """A warning the library raises (a retired nano parameter name; the grating on 32² cells this test used
     warned through the energy guard, which no longer acts there) reaches the terminal as one line."""
     argv = ["simulate", "--nano", "gaussian:sigma=20nm,T=1um", "-o", str(tmp_path / "o"), "--overwrite",
-            "--resolution", "32", "--sphere-size", "32", "--wavelengths", "550"]
+            "--resolution", "32", "--no-spheres", "--wavelengths", "550"]
     assert cli_main(argv) == 0
     err = capsys.readouterr().err
     lines = [ln for ln in err.splitlines() if ln.strip()]
@@ -287,7 +287,7 @@ def test_small_defects_of_issue_19(capsys, tmp_path):
         fit = fit_psd(hf, "abc")
     assert fit["resolved"] is False and any("below the sample spacing" in str(w.message) for w in caught)
     out = tmp_path / "o"
-    assert cli_main(["simulate", "-o", f"{out}/", "--resolution", "16", "--sphere-size", "16", "--wavelengths",
+    assert cli_main(["simulate", "-o", f"{out}/", "--resolution", "16", "--no-spheres", "--wavelengths",
                      "550"]) == 0
     assert "//" not in capsys.readouterr().out
 
@@ -319,7 +319,7 @@ def test_simulate_and_scatter_take_units_and_spacing_for_a_bare_text_grid(capsys
                      "--material", "Al", "--incident", "30", "--wavelengths", "550", "--resolution", "16", "-o",
                      str(tmp_path / "s1"), "--quiet"]) == 0
     assert cli_main(["simulate", "--surface", str(tmp_path / "measured.txt"), "--units", "um", "--spacing",
-                     "100nm", "--resolution", "16", "--sphere-size", "16", "--wavelengths", "550", "-o",
+                     "100nm", "--resolution", "16", "--no-spheres", "--wavelengths", "550", "-o",
                      str(tmp_path / "s2"), "--quiet", "--json"]) == 0
     capsys.readouterr()
     summary = json.loads((tmp_path / "s2" / "summary.json").read_text())
@@ -360,7 +360,7 @@ def test_long_requests_warn_with_their_estimate(tmp_path, monkeypatch):
 
     monkeypatch.setattr(estimate, "LONG_REQUEST_S", 0.0)
     base = ["--resolution", "16", "--wavelengths", "550"]
-    rc, _, err, _ = run_cli(["simulate", *base, "--sphere-size", "16", "-o", str(tmp_path / "s")])
+    rc, _, err, _ = run_cli(["simulate", *base, "--no-spheres", "-o", str(tmp_path / "s")])
     lines = [x for x in err.splitlines() if "will take about" in x]
     assert rc == 0 and len(lines) == 1 and "lower --resolution or the number of --wavelengths" in lines[0]
     assert lines[0].startswith("waveoptics simulate: warning: this request will take about ")

@@ -122,7 +122,8 @@ def test_pointwise_function_and_command_line(tmp_path):
     a, b = float(np.ravel(rr.albedo(wi, LAM))[0]), float(np.ravel(mf.albedo(wi, LAM))[0])
     assert b - 5e-3 < a <= b + 1e-3
     rc, out, err, _ = run_cli(["simulate", "--diffraction", "rayleigh-rice", "--resolution", "32", "--wavelengths",
-                               "550", "--nano", "abc:sigma=5nm,B=3um,C=2.8", "-o", str(tmp_path / "s"), "--json"])
+                               "550", "--nano", "abc:sigma=5nm,B=3um,C=2.8", "--no-spheres", "-o", str(tmp_path / "s"),
+                               "--json"])
     assert rc == 0, err
     assert json.loads(out)["parameters"]["diffraction"] == "rayleigh-rice"
     rc, _, err, _ = run_cli(["brdf", "--model", "twoscale", "--diffraction", "rayleigh-rice", "--material", "Al",
@@ -168,8 +169,8 @@ def test_simulate_writes_the_four_polarized_lobes(tmp_path):
     from waveoptics.simulate import simulate, write_outputs
 
     sim = simulate("Al", nano="abc:sigma=5nm,B=3um,C=2.8", micro_alpha=0.1, incident=(40.0, 0.0),
-                   wavelengths=[450.0, 650.0], resolution=64, diffraction="rayleigh-rice")
-    summary = write_outputs(sim, tmp_path / "o", sphere_size=32)
+                   wavelengths=[450.0, 650.0], resolution=64, diffraction="rayleigh-rice", sphere=False)
+    summary = write_outputs(sim, tmp_path / "o")
     assert "nano_polarized.exr" in summary["files"] and (tmp_path / "o" / "nano_polarized.exr").is_file()
     chans, header = wio.read_exr(tmp_path / "o" / "nano_polarized.exr")
     assert {c.split(".")[0] for c in chans} == {"ss", "sp", "ps", "pp"} and len(chans) == 8

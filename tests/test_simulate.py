@@ -50,11 +50,12 @@ def test_simulate_writes_every_output_with_documented_keys(tmp_path, capsys):
 def test_acescg_on_request(tmp_path, capsys):
     from waveoptics import colour as wcolour
 
-    assert main(["simulate", "-o", str(tmp_path / "a"), *FAST, "--colourspace", "ACEScg", "--json"]) == 0
+    assert main(["simulate", "-o", str(tmp_path / "a"), *FAST, "--colourspace", "ACEScg", "--no-spheres",
+                 "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
     assert s["colourspace"] == "linear ACEScg"
     # same light, other primaries: converting back through XYZ gives the sRGB albedo of a default run
-    assert main(["simulate", "-o", str(tmp_path / "b"), *FAST, "--json"]) == 0
+    assert main(["simulate", "-o", str(tmp_path / "b"), *FAST, "--no-spheres", "--json"]) == 0
     s2 = json.loads(capsys.readouterr().out)
     import colour
 
@@ -86,9 +87,10 @@ def test_split_surface_run(tmp_path, capsys):
     nano = surfaces.gaussian(sigma=8e-9, corr_length=0.5e-6, size=32e-6, samples=256, seed=2)
     surfaces.save(micro + nano, tmp_path / "both.npz")
     out = tmp_path / "split"
-    # one wavelength on a 16² grid: the split's anisotropic micro NDF makes the sphere table 44 field lobes
+    # one wavelength on a 16² grid, no sphere renders (the split's anisotropic micro NDF would make their table
+    # 44 field lobes)
     assert main(["simulate", "--surface", str(tmp_path / "both.npz"), "--split", "-o", str(out), "--resolution",
-                 "16", "--sphere-size", "16", "--wavelengths", "550", "--json"]) == 0
+                 "16", "--no-spheres", "--wavelengths", "550", "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
     assert s["solver"] == "fft"
     assert s["parameters"]["split"]["cutoff_period_m"] == pytest.approx(10 * 550e-9)   # ten of the longest λ
@@ -137,7 +139,7 @@ def test_height_field_simulation_reflects_fresnel(tmp_path, capsys):
     path = tmp_path / "nano.npz"
     surfaces.save(hf, path)
     assert main(["simulate", "-o", str(tmp_path / "run"), "--surface", str(path), "--micro-alpha", "0",
-                 "--material", "1+6j", "--incident", "20", "--resolution", "96", "--sphere-size", "32",
+                 "--material", "1+6j", "--incident", "20", "--resolution", "96", "--no-spheres",
                  "--wavelengths", "450,550,650", "--quiet", "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     n = 1 + 6j

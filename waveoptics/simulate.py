@@ -27,9 +27,8 @@ from .request import MAX_NANO_SAMPLES, SimulationRequest, crop, make_nano, parse
 from .scatter.grid import DirectionGrid, integrate
 from .units import direction_from_angles
 
-__all__ = ['SPHERE_THETAS_DEG', 'memory_estimate', 'check_request_memory', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'ENVIRONMENT_FILES', 'SUMMARY_UNITS', 'output_files', 'nano_field',
-           'render_spheres',
-           'plane_of_incidence', 'write_outputs']
+__all__ = ['SPHERE_THETAS_DEG', 'memory_estimate', 'check_request_memory', 'sphere_nodes', 'sphere_evaluations', 'sphere_steps', 'Simulation', 'simulate', 'run', 'nano_band', 'OUTPUT_FILES', 'SPHERE_FILES', 'ENVIRONMENT_FILES', 'SUMMARY_UNITS', 'output_files', 'nano_field',
+           'render_spheres', 'plane_of_incidence', 'write_outputs']
 
 #: incidence nodes (degrees) of the diffracted-lobe table of a surface whose lobe depends on the light's azimuth
 #: (tabulated over :func:`waveoptics.brdf.tabulated.light_azimuth_nodes` azimuths as well, hence coarser in θ)
@@ -75,9 +74,9 @@ def _sphere_table_entries(req: SimulationRequest) -> int:
     return len(thetas) * n_phi
 
 
-def sphere_steps(req: SimulationRequest) -> int:
-    """Lobe evaluations :func:`run` makes for *req* with sphere renders (for progress bars)."""
-    return 1 + _sphere_table_entries(req)
+def sphere_steps(req: SimulationRequest, sphere: bool = True) -> int:
+    """Lobe evaluations :func:`run` makes for *req* with sphere renders, or without them (for progress bars)."""
+    return 1 + (_sphere_table_entries(req) if sphere else 0)
 
 @dataclass
 class Simulation:
@@ -353,16 +352,19 @@ SUMMARY_UNITS = {
                     "(the most negative component, kept unclipped; the spectra are non-negative)",
 }
 
+#: the files of the sphere renders: absent from a run without them (*sphere* False, ``--no-spheres``)
+SPHERE_FILES = tuple(f for f in OUTPUT_FILES if f.startswith("sphere_"))
 #: the extra files of an environment-lit render (:func:`write_outputs` with *environment*)
 ENVIRONMENT_FILES = ("sphere_env_wave.exr", "sphere_env_microfacet.exr", "sphere_env.png")
 #: the extra file of a Rayleigh-Rice nano lobe: its four polarized BRDFs (ss, sp, ps, pp) as spectral layers
 POLARIZED_FILES = ("nano_polarized.exr",)
 
 
-def output_files(environment: bool = False, polarized: bool = False) -> tuple:
-    """Every file :func:`write_outputs` writes (with or without an environment-lit render, and with *polarized* the
-    Rayleigh-Rice nano lobe's polarized BRDFs)."""
-    return OUTPUT_FILES + (ENVIRONMENT_FILES if environment else ()) + (POLARIZED_FILES if polarized else ())
+def output_files(environment: bool = False, polarized: bool = False, sphere: bool = True) -> tuple:
+    """Every file :func:`write_outputs` writes (with or without an environment-lit render, with *polarized* the
+    Rayleigh-Rice nano lobe's polarized BRDFs, and without :data:`SPHERE_FILES` when *sphere* is False)."""
+    base = OUTPUT_FILES if sphere else tuple(f for f in OUTPUT_FILES if f not in SPHERE_FILES)
+    return base + (ENVIRONMENT_FILES if environment else ()) + (POLARIZED_FILES if polarized else ())
 
 
 def nano_polarized(sim: Simulation) -> dict:
@@ -415,27 +417,31 @@ def plane_of_incidence(sim: Simulation, which, n=721):
 
 
 def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, space="sRGB", environment=None,
-                  spp=16, env_size=128, progress=None) -> dict:
+                  spp=16, env_size=128, progress=None, no_sphere_reason="not asked (sphere=False)") -> dict:
     """Write the files of ``waveoptics simulate`` (see :func:`output_files`) and return the summary.
 
     *space* (``"sRGB"``, ``"ACEScg"``, ``"Display P3"``) is the linear RGB space of ``brdf_rgb.exr`` and of the
     summary's RGB albedos; PNG previews and sphere renders are always sRGB. *environment* (a name in
     :data:`waveoptics.renderers.lighting.PROCEDURAL`, an .exr map or a :class:`waveoptics.renderers.lighting.Environment`) adds both
     models' spheres lit by that map (*env_size* pixels, *spp* samples per technique and pixel, multiple importance
-    sampling; :func:`waveoptics.renderers.sphere.render_sphere_environment`).
+    sampling; :func:`waveoptics.renderers.sphere.render_sphere_environment`). Run without sphere renders (*sphere*
+    False), it writes no :data:`SPHERE_FILES`; ``delta_e2000`` is null and ``skipped`` says why (*no_sphere_reason*).
     """
+    spheres = sim.brdf_wave is not None
+    if environment is not None and not spheres:
+        raise FieldError("an environment render needs the sphere renders' table; this simulation was run without "
+                         "them (sphere=False)", "environment")
     files = output_files(environment is not None, sim.params.get("diffraction") == "rayleigh-rice" and
-                         sim.nano is not None)
+                         sim.nano is not None, spheres)
     final = io.prepare_outdir(outdir, overwrite=overwrite, expected=files)
     env = None if environment is None else lighting.environment(environment)
     # the set is written into a hidden staging directory beside the outputs and moved into place only when every
     # file is whole (summary.json last): a run that fails or is interrupted leaves the earlier set untouched
     with io.staged_outputs(final, files, last="summary.json") as out:
-        return _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, progress)
+        return _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, progress, no_sphere_reason)
 
 
-def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, progress) -> dict:
-    plt = figures.pyplot()
+def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, progress, no_sphere_reason) -> dict:
     t0 = time.perf_counter()
     L = sim.lobes
     g = sim.grid
@@ -452,46 +458,9 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
         header={**hdr, "waveoptics_colourspace": f"linear {space}, white-balanced (CAT02) from "
                                                  f"{sim.params['illuminant']}"})
     _plot_hemispheres(rgb, rgb_mf, g, out / "brdf.png", sim)
-    wave, mf, dE, mask = render_spheres(sim, sphere_size)
-    exposure = render.key_exposure(wave, mask)
-    figures.save_png(out / "sphere_wave.png", render.tonemap(wave, exposure))
-    figures.save_png(out / "sphere_microfacet.png", render.tonemap(mf, exposure))
-    theta, phi = sim.params["incident_deg"]
-    sphere_hdr = {"waveoptics_quantity": "radiance, linear sRGB (D65 white), of a sphere under a directional light "
-                                         "of irradiance pi: a white Lambertian sphere facing the light is 1",
-                  "waveoptics_camera": "orthographic, looking down -z; x right, y up; row 0 = top",
-                  "waveoptics_light_deg": f"theta {theta:g} phi {phi:g} (from +z, azimuth from +x)",
-                  "waveoptics_illuminant": str(sim.params["illuminant"]), "waveoptics_material": sim.params["material"]}
-    for name, img, model in (("sphere_wave.exr", wave, "two-scale (wave optics)"),
-                             ("sphere_microfacet.exr", mf, "microfacet (geometric optics)")):
-        gamut[name] = io.write_rgb_exr(out / name, img, header={**sphere_hdr, "waveoptics_model": model})
-    fig, ax = plt.subplots(figsize=(4.2, 3.6))
-    im = ax.imshow(np.where(mask, dE, np.nan), cmap="magma", vmin=0)
-    ax.set_title("ΔE2000: two-scale vs microfacet", fontsize=9)
-    ax.axis("off")
-    fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label="ΔE2000")
-    figures.save_figure(fig, out / "sphere_diff.png")
     _plot_lobes(sim, out / "lobes.png")
-    if env is not None:
-        t_env = time.perf_counter()
-        imgs = []
-        for name, fn in (("sphere_env_wave.exr", sim.brdf_wave), ("sphere_env_microfacet.exr", sim.brdf_microfacet)):
-            img, on = render.render_sphere_environment(fn, sim.wavelengths_nm, env, size=env_size, spp=spp,
-                                                       illuminant=sim.illuminant, progress=progress)
-            gamut[name] = io.write_rgb_exr(
-                out / name, img, header={**sphere_hdr, "waveoptics_light_deg": f"environment {env.name}",
-                                 "waveoptics_quantity": "radiance, linear sRGB (D65 white), of a sphere lit by the "
-                                                        "environment map (white Lambertian in a constant map of 1: 1)",
-                                 "waveoptics_environment": f"{env.name}, equirectangular, +y up, column 0 = -z",
-                                 "waveoptics_samples": f"{spp} BRDF + {spp} environment samples per pixel (MIS)"})
-            imgs.append(img)
-        exp_env = render.key_exposure(imgs[0], on)
-        render.plot_spheres([render.tonemap(i, exp_env) for i in imgs],
-                            ["two-scale (diffraction)", "microfacet only"], out / "sphere_env.png",
-                            exposure=exp_env, light_deg=None)
-        env_time = time.perf_counter() - t_env
-    else:
-        env_time = None
+    delta_e, env_time = (_write_spheres(sim, out, gamut, sphere_size, env, spp, env_size, progress)
+                         if sim.brdf_wave is not None else (None, None))
     polarized = None
     if "nano_polarized.exr" in files:   # Rayleigh-Rice: the four polarized lobes as layers ss, sp, ps, pp
         lobes = nano_polarized(sim)
@@ -518,12 +487,12 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
         "microfacet_rgb_albedo": sim.rgb_albedo("microfacet", space),
         "colourspace": f"linear {space}",
         "out_of_gamut": {k: v for k, v in gamut.items() if v is not None},
-        "delta_e2000": {"mean": float(dE[mask].mean()) if mask.any() else 0.0,
-                        "max": float(dE[mask].max()) if mask.any() else 0.0},
+        "delta_e2000": delta_e,
         "solver": sim.params["solver"],
         "nano_band": sim.band,
         **({"nano_field": nano_field(sim.nano)} if sim.nano is not None and sim.nano.surface is not None else {}),
         **({"nano_polarized_albedo": polarized} if polarized is not None else {}),
+        **({"skipped": {"sphere renders": no_sphere_reason}} if delta_e is None else {}),
         "timings_s": timings,
         "parameters": sim.params,
         "files": list(files),
@@ -531,6 +500,52 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
     }
     io.write_json(out / "summary.json", summary)
     return summary
+
+
+def _write_spheres(sim, out, gamut, sphere_size, env, spp, env_size, progress):
+    """The sphere renders of both models (and, with *env*, lit by that environment) into *out*; their ΔE2000
+    mean and max, and the environment render's time (s, None without one). *gamut* takes their out-of-gamut notes."""
+    plt = figures.pyplot()
+    wave, mf, dE, mask = render_spheres(sim, sphere_size)
+    exposure = render.key_exposure(wave, mask)
+    figures.save_png(out / "sphere_wave.png", render.tonemap(wave, exposure))
+    figures.save_png(out / "sphere_microfacet.png", render.tonemap(mf, exposure))
+    theta, phi = sim.params["incident_deg"]
+    sphere_hdr = {"waveoptics_quantity": "radiance, linear sRGB (D65 white), of a sphere under a directional light "
+                                         "of irradiance pi: a white Lambertian sphere facing the light is 1",
+                  "waveoptics_camera": "orthographic, looking down -z; x right, y up; row 0 = top",
+                  "waveoptics_light_deg": f"theta {theta:g} phi {phi:g} (from +z, azimuth from +x)",
+                  "waveoptics_illuminant": str(sim.params["illuminant"]), "waveoptics_material": sim.params["material"]}
+    for name, img, model in (("sphere_wave.exr", wave, "two-scale (wave optics)"),
+                             ("sphere_microfacet.exr", mf, "microfacet (geometric optics)")):
+        gamut[name] = io.write_rgb_exr(out / name, img, header={**sphere_hdr, "waveoptics_model": model})
+    fig, ax = plt.subplots(figsize=(4.2, 3.6))
+    im = ax.imshow(np.where(mask, dE, np.nan), cmap="magma", vmin=0)
+    ax.set_title("ΔE2000: two-scale vs microfacet", fontsize=9)
+    ax.axis("off")
+    fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label="ΔE2000")
+    figures.save_figure(fig, out / "sphere_diff.png")
+    env_time = None
+    if env is not None:
+        t_env = time.perf_counter()
+        imgs = []
+        for name, fn in (("sphere_env_wave.exr", sim.brdf_wave), ("sphere_env_microfacet.exr", sim.brdf_microfacet)):
+            img, on = render.render_sphere_environment(fn, sim.wavelengths_nm, env, size=env_size, spp=spp,
+                                                       illuminant=sim.illuminant, progress=progress)
+            gamut[name] = io.write_rgb_exr(
+                out / name, img, header={**sphere_hdr, "waveoptics_light_deg": f"environment {env.name}",
+                                 "waveoptics_quantity": "radiance, linear sRGB (D65 white), of a sphere lit by the "
+                                                        "environment map (white Lambertian in a constant map of 1: 1)",
+                                 "waveoptics_environment": f"{env.name}, equirectangular, +y up, column 0 = -z",
+                                 "waveoptics_samples": f"{spp} BRDF + {spp} environment samples per pixel (MIS)"})
+            imgs.append(img)
+        exp_env = render.key_exposure(imgs[0], on)
+        render.plot_spheres([render.tonemap(i, exp_env) for i in imgs],
+                            ["two-scale (diffraction)", "microfacet only"], out / "sphere_env.png",
+                            exposure=exp_env, light_deg=None)
+        env_time = time.perf_counter() - t_env
+    d = dE[mask] if mask.any() else np.zeros(1)
+    return {"mean": float(d.mean()), "max": float(d.max())}, env_time
 
 
 def _plot_hemispheres(rgb, rgb_mf, grid, path, sim):

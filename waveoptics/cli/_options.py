@@ -76,6 +76,8 @@ OPTIONS = {o.flag: o for o in (
     Option("--size", "patch size of a generated surface with unit: L or LX,LY", "L", unit="m"),
     Option("--seed", "random seed of generated surfaces", "SEED", int),
     Option("--sphere-size", "size of the sphere renders in pixels", "PX", int, "px"),
+    Option("--no-spheres", "skip the sphere renders and the diffracted-lobe table over incidence behind them: no "
+                           "sphere_* files and no sphere ΔE2000; the summary says they were skipped"),
     Option("--environment", "environment light: sky, studio, constant or an equirectangular .exr (+y up)", "MAP"),
     Option("--spp", "samples per pixel", "N", int),
     Option("--budget", "time budget in seconds ('none': no limit)", "SECONDS", unit="s"),

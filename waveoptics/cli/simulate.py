@@ -111,6 +111,7 @@ def register(sub):
     add_scene_options(p)
     renamed(p, "simulate", "--accuracy", dest="delta_e")
     option(p, "--sphere-size", default=256)
+    option(p, "--no-spheres", action="store_true", default=False)
     option(p, "--environment", note="also render both spheres lit by it (multiple importance sampling at "
                                     "--sphere-size; sphere_env_*.exr and sphere_env.png)")
     option(p, "--max-memory")
@@ -129,30 +130,35 @@ def run(args):
         raise FieldError(f"{{sphere_size}} {args.sphere_size} is not allowed; use 16..4096 pixels", "sphere_size")
     if not (1 <= args.spp <= 4096):
         raise FieldError(f"{{spp}} {args.spp} is not allowed; use 1..4096 samples", "spp")
+    if args.no_spheres and args.environment is not None:
+        raise FieldError("--environment renders spheres; drop --environment or --no-spheres", "environment")
     env = None
     if args.environment is not None:
         from ..renderers import lighting
         env = lighting.environment(args.environment)   # a bad map fails here, before any computing
     req = request_from_args(args)
-    sim_mod.check_request_memory(req, max_memory=args.max_memory)   # before anything is created
+    spheres = not args.no_spheres
+    sim_mod.check_request_memory(req, sphere=spheres, max_memory=args.max_memory)   # before anything is created
     surface = _surface(args)
     _announce_if_long(req, surface)   # before the output directory (a refusal creates nothing) and the progress bar
     prepare_outdir(args.output, overwrite=args.overwrite,
-                   expected=sim_mod.output_files(env is not None, req.diffraction == "rayleigh-rice"))
-    bar = progress(total=sim_mod.sphere_steps(req), desc="simulate", args=args)
+                   expected=sim_mod.output_files(env is not None, req.diffraction == "rayleigh-rice", spheres))
+    bar = progress(total=sim_mod.sphere_steps(req, spheres), desc="simulate", args=args)
     try:
         sim = sim_mod.run(req, device=args.device, progress=bar.update, max_memory=args.max_memory,
-                          surface=surface)
+                          surface=surface, sphere=spheres)
     finally:
         bar.close()
     summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size,
                                     space=args.colourspace, environment=env, spp=args.spp,
-                                    env_size=args.sphere_size)
+                                    env_size=args.sphere_size, no_sphere_reason="not asked: --no-spheres")
     d = summary["delta_e2000"]
+    spheres_text = (f"sphere ΔE2000 mean {d['mean']:.2f} max {d['max']:.2f}" if d is not None
+                    else f"spheres skipped ({summary['skipped']['sphere renders']})")
     theta = sim.params["incident_deg"][0]
     text = (f"{sim.params['material']} θi={theta:g}°: albedo {summary['rgb_albedo'].round(3).tolist()} (two-scale) vs "
-            f"{summary['microfacet_rgb_albedo'].round(3).tolist()} (microfacet), sphere ΔE2000 mean {d['mean']:.2f} "
-            f"max {d['max']:.2f}, solver {summary['solver']}, {sum(summary['timings_s'].values()):.1f} s\n"
+            f"{summary['microfacet_rgb_albedo'].round(3).tolist()} (microfacet), {spheres_text}, "
+            f"solver {summary['solver']}, {sum(summary['timings_s'].values()):.1f} s\n"
             f"outputs in {os.path.join(os.path.normpath(args.output), '')}: " + ", ".join(summary["files"]))
     emit(args, summary, text)
     return 0
