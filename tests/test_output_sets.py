@@ -85,6 +85,33 @@ def test_a_kill_at_any_point_leaves_the_old_set_or_no_manifest_and_the_next_run_
     assert not list(out.glob(".staging.*"))
 
 
+SMALLER_BODY = """
+from waveoptics.io import files
+names = ["a.exr", "summary.json"]     # this run skips b.exr and c.png (e.g. simulate --no-spheres)
+with files.staged_outputs(out, names, last="summary.json", members=["a.exr", "b.exr", "c.png", "summary.json"]) as st:
+    for n in names:
+        (st / n).write_text("new " + n)
+"""
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_a_smaller_set_removes_the_earlier_sets_members_it_does_not_hold_also_after_a_kill(tmp_path, k):
+    """A set that leaves out optional members (a run without sphere renders over one with them) removes the earlier
+    set's files of those names when it lands, so no file of another run sits beside the new manifest; killed
+    mid-commit, the replay removes them too. A file that is no member of the set is kept."""
+    out = tmp_path / "o"
+    out.mkdir()
+    for n in NAMES + ["mine.txt"]:
+        (out / n).write_text("old " + n)
+    r = _child(out, k, SMALLER_BODY)
+    assert r.returncode == -9, r.stderr
+    files.recover_staged(out)
+    assert _contents(out) == {"a.exr": "new a.exr", "summary.json": "new summary.json", "mine.txt": "old mine.txt"}
+    r = _child(out, 99, SMALLER_BODY)           # uninterrupted, over the new set: nothing else goes
+    assert r.returncode == 0, r.stderr
+    assert _contents(out) == {"a.exr": "new a.exr", "summary.json": "new summary.json", "mine.txt": "old mine.txt"}
+
+
 def test_a_live_run_s_staging_directory_is_left_alone(tmp_path):
     """Two runs into one directory: recovery by the second never clears the first's staging directory."""
     with files.staged_outputs(tmp_path, ["x.txt"], last="x.txt") as st:

@@ -437,7 +437,7 @@ def write_outputs(sim: Simulation, outdir, *, overwrite=False, sphere_size=256, 
     env = None if environment is None else lighting.environment(environment)
     # the set is written into a hidden staging directory beside the outputs and moved into place only when every
     # file is whole (summary.json last): a run that fails or is interrupted leaves the earlier set untouched
-    with io.staged_outputs(final, files, last="summary.json") as out:
+    with io.staged_outputs(final, files, last="summary.json", members=output_files(True, True)) as out:
         return _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, progress, no_sphere_reason)
 
 

@@ -96,14 +96,17 @@ def _owner_alive(stage: Path) -> bool:
     return False
 
 
-def _commit(stage: Path, directory: Path, order: list[str]) -> None:
+def _commit(stage: Path, directory: Path, order: list[str], stale=()) -> None:
     """Move the staged set *order* (manifest last) into *directory*.
 
     The manifest (the last name, e.g. summary.json) of the earlier set is removed first: from that moment until the
     new manifest lands, the directory holds no manifest, i.e. no complete set, instead of a mix that looks whole.
-    Files already moved (a commit resumed after a kill) are skipped, so the commit can be replayed."""
-    with contextlib.suppress(FileNotFoundError):
-        os.unlink(directory / order[-1])
+    Then the earlier set's members that the new set does not hold (*stale*) are removed, so the directory never
+    shows files of another run beside the new manifest. Files already moved or removed (a commit resumed after a
+    kill) are skipped, so the commit can be replayed."""
+    for n in (order[-1], *stale):
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(directory / n)
     for n in order:
         if (stage / n).is_file():
             try:
@@ -127,11 +130,12 @@ def recover_staged(directory) -> list[str]:
             continue
         journal = stage / JOURNAL
         try:
-            order = json.loads(journal.read_text())["order"] if journal.is_file() else None
-        except (OSError, ValueError, KeyError, TypeError):
+            record = json.loads(journal.read_text()) if journal.is_file() else {}
+            order, stale = record.get("order"), record.get("stale", [])
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
             order = None   # a journal cut short by the kill: its set had not started moving
         if order:
-            _commit(stage, directory, [str(n) for n in order])
+            _commit(stage, directory, [str(n) for n in order], [str(n) for n in stale])
             done.append(f"completed the interrupted output set of {str(stage)!r}")
         else:
             done.append(f"removed the unfinished output set {str(stage)!r}")
@@ -140,11 +144,12 @@ def recover_staged(directory) -> list[str]:
 
 
 @contextlib.contextmanager
-def staged_outputs(directory, names, *, last=None):
+def staged_outputs(directory, names, *, last=None, members=()):
     """Write a set of output files as a whole: yield a hidden staging directory inside *directory*; when the block
     succeeds, every file in *names* is moved from it into *directory* (*last*, the set's manifest such as
     summary.json, after the others); when it fails or is interrupted, the staging directory is removed and
-    *directory* is as it was.
+    *directory* is as it was. *members*: every file a set of this kind may hold; those not in *names* (an earlier
+    run's optional outputs, e.g. sphere renders this run skipped) are removed when the new set lands.
 
     A kill (SIGKILL, power loss) cannot leave a mix that looks whole:
 
@@ -175,15 +180,16 @@ def staged_outputs(directory, names, *, last=None):
         missing = [n for n in order if not (stage / n).is_file()]
         if missing:
             raise WaveopticsError(f"output set in {str(directory)!r} is incomplete: {', '.join(missing)} missing")
+        stale = [str(n) for n in members if n not in order]
         try:
             with open(stage / (JOURNAL + ".tmp"), "w") as fh:
-                json.dump({"order": order}, fh)
+                json.dump({"order": order, "stale": stale}, fh)
                 fh.flush()
                 os.fsync(fh.fileno())
             os.replace(stage / (JOURNAL + ".tmp"), stage / JOURNAL)
         except OSError as exc:
             raise WaveopticsError(f"cannot write into {str(directory)!r}: {exc.strerror or exc}") from None
-        _commit(stage, directory, order)
+        _commit(stage, directory, order, stale)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
         os.close(lock_fd)
