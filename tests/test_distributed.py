@@ -5,6 +5,7 @@ mid-run, or finished with --resume after an interruption is *bit-identical* (np.
 table — tasks are deterministic and each block is stored exactly once. Grids are small (32², 4 wavelengths) to
 keep the file well under a minute.
 """
+import dataclasses
 import json
 import os
 import subprocess
@@ -328,6 +329,11 @@ def test_sweep_points_are_the_cartesian_product():
     assert pts[4][1].material == "Ag" and pts[4][1].nano.startswith("abc:sigma=5.0000000000000001e-09m")
     with pytest.raises(WaveopticsError, match="given twice"):
         D.sweep_points(CASE, [("kd", [0.1]), ("kd", [0.2])])
+    # α_y of an anisotropic micro NDF: each point carries it into its micro NDF; an isotropic-only NDF refuses it
+    pts = D.sweep_points(CASE, [("alpha_y", D.parse_vary("alpha_y=0.1,0.3")[1])])
+    assert [p[1].micro().alpha_y for p in pts] == [0.1, 0.3] and pts[1][0]["alpha_y"] == 0.3
+    with pytest.raises(WaveopticsError, match="alpha_y"):
+        D.sweep_points(dataclasses.replace(CASE, ndf="blinn-phong"), [("alpha_y", [0.2])])
 
 
 SWEEP_BASE = SimulationRequest(material="Au", nano=NANO, micro_alpha=0.1, wavelengths_nm=(450.0, 600.0), resolution=16)

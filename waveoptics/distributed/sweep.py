@@ -86,6 +86,9 @@ VARY = {
     "micro_alpha": ("micro NDF roughness α", lambda s: [float(x) for x in parse_number_list(s, name="vary "
                                                                                                   "micro_alpha")],
                     lambda c, v: dataclasses.replace(c, micro_alpha=v)),
+    "alpha_y": ("α_y of an anisotropic micro NDF (α_x is micro_alpha)",
+                lambda s: [float(x) for x in parse_number_list(s, name="vary alpha_y")],
+                lambda c, v: dataclasses.replace(c, alpha_y=v)),
     "theta": ("incident zenith angle, degrees", lambda s: [float(x) for x in parse_number_list(s, name="vary theta")],
               lambda c, v: dataclasses.replace(c, incident_deg=(v, c.incident_deg[1]))),
     "kd": ("diffuse albedo of a dielectric", lambda s: [float(x) for x in parse_number_list(s, name="vary kd")],
