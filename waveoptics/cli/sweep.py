@@ -9,7 +9,7 @@ from .table import add_case_options, add_cluster_options, case_from_args
 
 #: --vary names listed in the help (kept equal to waveoptics.distributed.VARY by tests/test_distributed.py; the
 #: module is not imported here because importing Dask would slow down every command's start)
-VARY_NAMES = ("material", "sigma_nano", "micro_alpha", "theta", "kd", "ndf", "illuminant", "diffraction")
+VARY_NAMES = ("material", "sigma_nano", "micro_alpha", "alpha_y", "theta", "kd", "ndf", "illuminant", "diffraction")
 
 
 def register(sub):
