@@ -383,8 +383,10 @@ def test_cli_table_and_sweep(tmp_path, capsys):
     assert "already exists" in capsys.readouterr().err
     s = tmp_path / "s.json"
     rc = main(["sweep", "--nano", NANO, "--vary", "material=Au,Cu", "--wavelengths", "500,600", "--resolution", "16",
-               "--sphere-size", "0", "-o", str(s)])
-    assert rc == 0 and len(json.loads(s.read_text())) == 2
+               "--no-spheres", "-o", str(s)])
+    rows = json.loads(s.read_text())
+    assert rc == 0 and len(rows) == 2              # --no-spheres: simulate's option, --sphere-size 0 here
+    assert all(r["dE_sphere_mean"] == 0.0 and r["dE_sphere_max"] == 0.0 for r in rows)
 
 
 @pytest.mark.parametrize("argv, message", [

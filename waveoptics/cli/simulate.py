@@ -127,7 +127,8 @@ def run(args):
     from .. import simulate as sim_mod
 
     if not (16 <= args.sphere_size <= 4096):
-        raise FieldError(f"{{sphere_size}} {args.sphere_size} is not allowed; use 16..4096 pixels", "sphere_size")
+        raise FieldError(f"{{sphere_size}} {args.sphere_size} is not allowed; use 16..4096 pixels (--no-spheres "
+                         "skips the sphere renders)", "sphere_size")
     if not (1 <= args.spp <= 4096):
         raise FieldError(f"{{spp}} {args.spp} is not allowed; use 1..4096 samples", "spp")
     if args.no_spheres and args.environment is not None:

@@ -27,6 +27,8 @@ def register(sub):
                         "STOP:STEP, a bare STEP in START's unit)  micro_alpha=0.05,0.2  theta=0:60:30")
     option(p, "--incident", note="default 30; with a scene file, its light's first direction")
     option(p, "--sphere-size", default=64, note="for the per-pixel ΔE2000; 0 skips the renders")
+    option(p, "--no-spheres", action="store_true", default=False,
+           note="as simulate's; the same as --sphere-size 0 (the dE_sphere columns are then 0)")
     add_case_options(p, command="sweep", resolution=64)
     option(p, "--output", short="-o", required=True, metavar="OUT.csv", note="a table (.csv or .json)")
     add_cluster_options(p)
@@ -47,6 +49,8 @@ def run(args):
         args.incident_deg = (theta, phi)
     if not (0 <= args.sphere_size <= 1024):
         raise WaveopticsError(f"--sphere-size {args.sphere_size} is not allowed; use 0..1024")
+    if args.no_spheres:        # one option for one meaning across commands (simulate --no-spheres)
+        args.sphere_size = 0
     base, surface = case_from_args(args, source=args.source)
     varies = [distributed.parse_vary(v, base) for v in args.vary]
     n_points = len(distributed.sweep_points(base, varies))
