@@ -1,6 +1,8 @@
 """``simulate --no-spheres`` (promise 3: simulate only what is asked, and say what was skipped and why): the lobe
 outputs and no sphere file, a summary that names the skipped renders and the reason, a text line without a sphere
-ΔE, a progress bar whose total is the lobe evaluations the run makes, and --environment refused beside it."""
+ΔE, a progress bar whose total is the lobe evaluations the run makes, and --environment refused beside it.
+
+The memory refusal offers ``--no-spheres`` where the command has it, in one line."""
 import json
 
 import pytest
@@ -53,3 +55,42 @@ def test_no_spheres_with_an_environment_is_refused_in_one_line(tmp_path):
     assert rc == 2 and stdout == ""
     assert len(stderr.strip().splitlines()) == 1 and "--environment" in stderr and "--no-spheres" in stderr
     assert not out.exists()   # refused before the output directory is made
+
+
+# ------------------------------------------------------------------------------------------------ memory refusal
+
+#: at 16² directions and one wavelength the lobes alone take 12 float64 arrays (24.6 kB), the sphere renders' table
+#: over incidence adds ~180 kB: a 100 kB budget refuses the run with spheres, not the one without them
+SMALL = ["--resolution", "16", "--wavelengths", "550", "--nano", "abc:sigma=8nm,B=2um,C=2.6"]
+
+
+def test_memory_refusal_offers_no_spheres_in_one_line(tmp_path):
+    out = tmp_path / "run"
+    rc, stdout, stderr, _ = run_cli(["simulate", "-o", str(out), *SMALL, "--max-memory", "100kB"])
+    assert rc == 2 and stdout == "" and not out.exists()
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and "--max-memory" in lines[0] and "drop the sphere renders (--no-spheres)" in lines[0]
+    assert "sphere=False" not in lines[0]
+    # without spheres the same budget suffices; a smaller one is refused without offering what is already off
+    rc, _, stderr, _ = run_cli(["simulate", "-o", str(out), *SMALL, "--no-spheres", "--max-memory", "10kB"])
+    assert rc == 2 and "--no-spheres" not in stderr and "--resolution" in stderr
+    # compare needs the sphere renders' BRDF functions: it does not offer to drop them
+    rc, _, stderr, _ = run_cli(["compare", *SMALL, "--max-memory", "100kB"])
+    assert rc == 2 and len(stderr.strip().splitlines()) == 1 and "sphere" not in stderr
+
+
+def test_sweep_memory_refusal_offers_no_spheres(tmp_path, monkeypatch):
+    monkeypatch.setenv("WAVEOPTICS_MAX_MEMORY", "100kB")   # sweep has no --max-memory: the budget of every task
+    rc, stdout, stderr, _ = run_cli(["sweep", "--vary", "material=Au", *SMALL, "-o", str(tmp_path / "s.csv")])
+    assert rc == 2 and len(stderr.strip().splitlines()) == 1 and "(--no-spheres)" in stderr, stderr
+
+
+def test_the_library_names_its_keyword_not_the_flag():
+    from waveoptics import simulate
+    from waveoptics.errors import FieldError
+    from waveoptics.request import SimulationRequest
+
+    req = SimulationRequest(resolution=16, wavelengths_nm=(550.0,), nano="abc:sigma=8nm,B=2um,C=2.6")
+    with pytest.raises(FieldError) as e:
+        simulate.check_request_memory(req, max_memory="100kB")
+    assert str(e.value).endswith("or drop the sphere renders (sphere=False)") and "--" not in str(e.value)

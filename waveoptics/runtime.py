@@ -422,11 +422,12 @@ def memory_limit(max_memory=None) -> int:
     return parse_size(max_memory) if isinstance(max_memory, str) else int(max_memory)
 
 
-def check_memory(estimate_bytes: float, what: str, advice: str, max_memory=None, fields=()) -> None:
+def check_memory(estimate_bytes: float, what: str, advice: str, max_memory=None, fields=(), python=None) -> None:
     """Refuse, before any work, a request whose estimated memory exceeds the budget (:func:`memory_limit`): one
-    line with the estimate, the budget and what to reduce (*advice* may name *fields* as ``{field}``)."""
+    line with the estimate, the budget and what to reduce (*advice* may name *fields* as ``{field}``; *python*: how
+    the library writes a field whose plain name would read badly, as in :class:`~waveoptics.errors.FieldError`)."""
     limit = memory_limit(max_memory)
     if estimate_bytes > limit:
         raise FieldError(f"{what} needs about {estimate_bytes / 1e9:.3g} GB, above the {{max_memory}} budget of "
-                         f"{limit / 1e9:.3g} GB; {advice}", "max_memory", *fields)
+                         f"{limit / 1e9:.3g} GB; {advice}", "max_memory", *fields, python=python)
 

@@ -197,15 +197,15 @@ def _nano_field_bytes(req: SimulationRequest) -> int:
     return 0 if _nano_statistics(req) else 10 * 16 * MAX_NANO_SAMPLES ** 2
 
 
-def check_request_memory(req: SimulationRequest, *, sphere=True, max_memory=None) -> None:
-    """Refuse *req* in one line when its :func:`memory_estimate` exceeds the budget
-    (:func:`waveoptics.runtime.check_memory`)."""
+def check_request_memory(req: SimulationRequest, *, sphere=True, max_memory=None, sphere_needed=False) -> None:
+    """Refuse *req* when its :func:`memory_estimate` is over budget (:func:`waveoptics.runtime.check_memory`), in
+    one line offering to drop the sphere renders (field ``sphere``) unless there are none or the caller needs them."""
     from .runtime import check_memory
 
-    check_memory(memory_estimate(req, sphere=sphere), "this simulation",
-                 "lower {resolution} or the number of {wavelengths_nm}" + (", or drop the sphere renders" if sphere
-                                                                           else ""), max_memory,
-                 fields=("resolution", "wavelengths_nm"))
+    drop = ", or drop the sphere renders ({sphere})" if sphere and not sphere_needed else ""
+    check_memory(memory_estimate(req, sphere=sphere), "this simulation", "lower {resolution} or the number of "
+                 "{wavelengths_nm}" + drop, max_memory, fields=("resolution", "wavelengths_nm", "sphere"),
+                 python={"sphere": "sphere=False"})
 
 
 def run(req: SimulationRequest, *, surface=None, material=None, sphere=True, device=None,

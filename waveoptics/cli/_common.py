@@ -29,6 +29,7 @@ FIELD_DESTS = {
     "angles_deg": ("incident_angles",),
     "vary": ("vary",),
     "psd": ("nano",),
+    "sphere": ("no_spheres",),     # the library's sphere=False: the commands that may skip the sphere renders
 }
 
 

@@ -45,7 +45,7 @@ def run(args):
     if not (0 < args.tail < 90):
         raise WaveopticsError(f"--tail {args.tail!r} is not allowed; use an angle in (0, 90) degrees")
     req = request_from_args(args)
-    sim_mod.check_request_memory(req, max_memory=args.max_memory)   # before anything is created
+    sim_mod.check_request_memory(req, max_memory=args.max_memory, sphere_needed=True)   # before anything is created
     if args.output:
         io.prepare_outdir(args.output, overwrite=args.overwrite, expected=cmp.OUTPUTS)
     sim = simulation_from_args(args, req=req)
