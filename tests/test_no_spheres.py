@@ -2,7 +2,10 @@
 outputs and no sphere file, a summary that names the skipped renders and the reason, a text line without a sphere
 ΔE, a progress bar whose total is the lobe evaluations the run makes, and --environment refused beside it.
 
+``sweep --no-spheres`` / ``--sphere-size 0``: its ΔE2000 columns over sphere renders are "not computed" (an empty
+CSV cell, JSON null), never 0 (which reads as "no colour difference"), and its outputs say what was skipped and why.
 The memory refusal offers ``--no-spheres`` where the command has it, in one line."""
+import csv
 import json
 
 import pytest
@@ -55,6 +58,55 @@ def test_no_spheres_with_an_environment_is_refused_in_one_line(tmp_path):
     assert rc == 2 and stdout == ""
     assert len(stderr.strip().splitlines()) == 1 and "--environment" in stderr and "--no-spheres" in stderr
     assert not out.exists()   # refused before the output directory is made
+
+
+# ------------------------------------------------------------------------------------------------ sweep
+
+#: the smallest sweep: the coarsest grid, one wavelength, the PSD solver (no height field), two points
+SWEEP = ["sweep", "--nano", "abc:sigma=8nm,B=2um,C=2.6", "--vary", "material=Au,Cu", "--wavelengths", "550",
+         "--resolution", "8"]
+SPHERE_COLUMNS = ("dE_sphere_mean", "dE_sphere_max")
+
+
+def _csv_rows(path):
+    """The table as the csv module reads it (not the library's reader): every cell as its text."""
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.mark.parametrize("flags, reason", [(["--no-spheres"], "not asked: --no-spheres"),
+                                           (["--sphere-size", "0"], "not asked: --sphere-size 0")])
+def test_sweep_without_spheres_writes_no_value_and_says_why(tmp_path, flags, reason):
+    from waveoptics.distributed import read_sweep
+
+    out_csv, out_json = tmp_path / "s.csv", tmp_path / "s.json"
+    rc, stdout, stderr, _ = run_cli([*SWEEP, *flags, "-o", str(out_csv)])
+    assert rc == 0, stderr
+    rows = _csv_rows(out_csv)
+    assert len(rows) == 2
+    for r in rows:   # an empty cell ("not computed"), not "0"
+        assert [r[c] for c in SPHERE_COLUMNS] == ["", ""], r
+        assert r["skipped"] == f"sphere renders: {reason}"
+        assert 0 < float(r["albedo_R"]) < 1   # the columns that were computed are there
+    assert f"spheres skipped ({reason})" in stdout and "sphere mean" not in stdout
+    back = read_sweep(out_csv)   # the library's reader gives None for the empty cell and the entry JSON holds
+    assert all(r["dE_sphere_mean"] is None and r["skipped"] == {"sphere renders": reason} for r in back)
+
+    rc, stdout, stderr, _ = run_cli([*SWEEP, *flags, "-o", str(out_json), "--json"])
+    assert rc == 0, stderr
+    for rows in (json.loads(out_json.read_text()), json.loads(stdout)["rows"]):
+        assert all(r[c] is None for r in rows for c in SPHERE_COLUMNS)
+        assert all(r["skipped"] == {"sphere renders": reason} for r in rows)
+
+
+def test_sweep_with_spheres_writes_their_delta_e_and_skips_nothing(tmp_path):
+    out = tmp_path / "s.csv"
+    rc, stdout, stderr, _ = run_cli([*SWEEP, "--sphere-size", "16", "-o", str(out)])
+    assert rc == 0, stderr
+    rows = _csv_rows(out)
+    assert "skipped" not in rows[0] and "skipped" not in stdout and "sphere mean" in stdout
+    # a nano-rough metal against its microfacet model: a colour difference that is there (> 0) and finite
+    assert all(0 < float(r[c]) < 100 for r in rows for c in SPHERE_COLUMNS)
 
 
 # ------------------------------------------------------------------------------------------------ memory refusal

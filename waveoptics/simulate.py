@@ -492,7 +492,7 @@ def _write_outputs(sim, out, files, env, sphere_size, space, spp, env_size, prog
         "nano_band": sim.band,
         **({"nano_field": nano_field(sim.nano)} if sim.nano is not None and sim.nano.surface is not None else {}),
         **({"nano_polarized_albedo": polarized} if polarized is not None else {}),
-        **({"skipped": {"sphere renders": no_sphere_reason}} if delta_e is None else {}),
+        **({"skipped": render.skipped_spheres(no_sphere_reason)} if delta_e is None else {}),
         "timings_s": timings,
         "parameters": sim.params,
         "files": list(files),

@@ -50,6 +50,17 @@ def field_flags(parser) -> dict:
     return flags
 
 
+def not_asked(flag: str) -> str:
+    """Why a command skipped work a flag turned off, as its outputs' ``skipped`` entries write it
+    (``"not asked: --no-spheres"``)."""
+    return f"not asked: {flag}"
+
+
+def spheres_skipped_text(reason: str) -> str:
+    """The text-output words for sphere renders skipped for *reason*: ``spheres skipped (not asked: --no-spheres)``."""
+    return f"spheres skipped ({reason})"
+
+
 def add_common(parser, *, json: bool = True, device: bool = True) -> None:
     """Add ``--device``, ``--json``, ``--debug`` and ``--quiet`` to a sub-command parser."""
     if device:

@@ -8,7 +8,8 @@ from ..io.files import prepare_outdir
 from ..request import SimulationRequest, request_default
 from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS
 from ..units import parse_direction, parse_wavelengths
-from ._common import add_common, add_output, add_surface, emit, load_surface, progress, warn_if_long
+from ._common import (add_common, add_output, add_surface, emit, load_surface, not_asked, progress,
+                      spheres_skipped_text, warn_if_long)
 from ._options import option, renamed
 
 
@@ -125,6 +126,7 @@ def register(sub):
 
 def run(args):
     from .. import simulate as sim_mod
+    from ..renderers.sphere import SKIPPED_KEY
 
     if not (16 <= args.sphere_size <= 4096):
         raise FieldError(f"{{sphere_size}} {args.sphere_size} is not allowed; use 16..4096 pixels (--no-spheres "
@@ -152,10 +154,10 @@ def run(args):
         bar.close()
     summary = sim_mod.write_outputs(sim, args.output, overwrite=args.overwrite, sphere_size=args.sphere_size,
                                     space=args.colourspace, environment=env, spp=args.spp,
-                                    env_size=args.sphere_size, no_sphere_reason="not asked: --no-spheres")
+                                    env_size=args.sphere_size, no_sphere_reason=not_asked("--no-spheres"))
     d = summary["delta_e2000"]
     spheres_text = (f"sphere ΔE2000 mean {d['mean']:.2f} max {d['max']:.2f}" if d is not None
-                    else f"spheres skipped ({summary['skipped']['sphere renders']})")
+                    else spheres_skipped_text(summary["skipped"][SKIPPED_KEY]))
     theta = sim.params["incident_deg"][0]
     text = (f"{sim.params['material']} θi={theta:g}°: albedo {summary['rgb_albedo'].round(3).tolist()} (two-scale) vs "
             f"{summary['microfacet_rgb_albedo'].round(3).tolist()} (microfacet), {spheres_text}, "

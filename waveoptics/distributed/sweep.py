@@ -14,6 +14,7 @@ from typing import Callable
 import numpy as np
 
 from .. import colour, io, simulate, surfaces
+from ..renderers.sphere import skipped_spheres
 from ..errors import FieldError, WaveopticsError, unknown
 from ..request import NANO_PARAMS, SimulationRequest, nano_key, parse_nano
 from ..units import LENGTH_UNITS, parse_length, parse_number_list
@@ -167,7 +168,8 @@ def sweep_point(case: SimulationRequest, *, surface=None, sphere_size: int = 64,
         ``albedo_{R,G,B}`` and ``microfacet_albedo_{R,G,B}`` (linear sRGB of the directional albedo at the
         incident direction), ``albedo_mean`` / ``microfacet_albedo_mean`` (mean over wavelengths),
         ``dE_albedo`` (CIEDE2000 between the two albedo colours), ``dE_sphere_mean`` / ``dE_sphere_max``
-        (per-pixel CIEDE2000 of sphere renders of both models, 0 with *sphere_size* 0), ``coherent_fraction``
+        (per-pixel CIEDE2000 of sphere renders of both models; None, not computed, with *sphere_size* 0),
+        ``coherent_fraction``
         (mean over wavelengths), ``sigma_nano_m``, ``solver``, ``n_wavelengths``, ``cost_s`` (wall time, s).
     """
     t0 = time.perf_counter()
@@ -182,8 +184,8 @@ def sweep_point(case: SimulationRequest, *, surface=None, sphere_size: int = 64,
         _, _, dE, mask = simulate.render_spheres(sim, sphere_size)
         row["dE_sphere_mean"] = float(dE[mask].mean()) if mask.any() else 0.0
         row["dE_sphere_max"] = float(dE[mask].max()) if mask.any() else 0.0
-    else:
-        row["dE_sphere_mean"] = row["dE_sphere_max"] = 0.0
+    else:   # not computed: None (an empty CSV cell, JSON null), never a 0 that would read as "no difference"
+        row["dE_sphere_mean"] = row["dE_sphere_max"] = None
     row["coherent_fraction"] = float(np.mean(sim.lobes.coherent_specular_fraction()))
     row["sigma_nano_m"] = float(sim.params["sigma_nano_m"])
     row["solver"] = sim.params["solver"]
@@ -213,11 +215,15 @@ def value_text(name: str, v) -> str:
 def run_sweep(base: SimulationRequest, varies: list[tuple[str, list]], output, *, surface=None, sphere_size: int = 64,
               workers: int | None = None, scheduler: str | None = None, client=None, resume: bool = False,
               overwrite: bool = False, device: str | None = None, progress=None,
-              retries: int = DEFAULT_RETRIES, task_fn: Callable = sweep_point) -> dict:
+              retries: int = DEFAULT_RETRIES, task_fn: Callable = sweep_point,
+              no_sphere_reason: str = "not asked (sphere_size=0)") -> dict:
     """Run a parameter sweep on Dask and write a table of summaries (CSV, or JSON if *output* ends in .json).
 
     One task per sweep point; finished rows stream into ``OUT.partial/`` exactly like table blocks (see
     :func:`run_table` for *surface*, *resume*, *overwrite*, *workers*, *scheduler*, *client*, *retries*).
+    With *sphere_size* 0 the ``dE_sphere_*`` values are null (not computed) and each row's ``skipped`` entry
+    (:func:`waveoptics.renderers.sphere.skipped_spheres`, as in ``waveoptics simulate``'s summary) says why:
+    *no_sphere_reason*.
 
     Returns
     -------
@@ -268,9 +274,10 @@ def run_sweep(base: SimulationRequest, varies: list[tuple[str, list]], output, *
     run_timed(client, workers, scheduler, bool(todo), submit, on_result, timings, retries=retries,
                progress=progress)
     rows = []
+    skipped = {"skipped": skipped_spheres(no_sphere_reason)} if sphere_size == 0 else {}
     for i, (vals, case) in enumerate(points):
         row = json.loads(store.path(names[i], ".json").read_text())
-        rows.append({"point": i, **{n: value_text(n, v) for n, v in vals.items()}, **row})
+        rows.append({"point": i, **{n: value_text(n, v) for n, v in vals.items()}, **row, **skipped})
     _write_rows(rows, final, [n for n, _ in varies], overwrite=overwrite or resume)
     store.remove()
     return {"output": str(final), "rows": rows, "points": len(points), "computed": len(computed),
@@ -287,19 +294,35 @@ def _write_rows(rows, final: Path, varied: list[str], *, overwrite: bool) -> Non
         io.write_json(final, rows, overwrite=overwrite)
         return
 
-    cols = ["point", *varied, *SWEEP_COLUMNS]
+    cols = ["point", *varied, *SWEEP_COLUMNS, *(["skipped"] if any("skipped" in r for r in rows) else [])]
     with io.atomic_path(final, overwrite=overwrite) as tmp, open(tmp, "w", newline="") as fh:
         wr = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
         wr.writeheader()
-        for r in rows:
-            wr.writerow({k: (f"{v:.9g}" if isinstance(v, float) else v) for k, v in r.items()})
+        for r in rows:   # None (not computed) is an empty cell
+            wr.writerow({k: _csv_cell(v) for k, v in r.items()})
+
+
+def _csv_cell(v):
+    if isinstance(v, dict):   # a ``skipped`` entry: "WHAT: WHY; ..."
+        return "; ".join(f"{what}: {why}" for what, why in v.items())
+    return f"{v:.9g}" if isinstance(v, float) else v
+
+
+def _from_csv(key: str, text: str):
+    if text == "":
+        return None
+    if key == "skipped":
+        return dict(item.split(": ", 1) for item in text.split("; "))
+    return text
 
 
 def read_sweep(path) -> list[dict]:
-    """Rows of a sweep table (CSV values as text, JSON as written)."""
+    """Rows of a sweep table: JSON as written; CSV values as text, except an empty cell, which is None (a value
+    not computed, JSON's null), and the ``skipped`` column, read back into the entry JSON holds
+    (``{"sphere renders": why}``)."""
     p = Path(path)
     if p.suffix.lower() == ".json":
         return json.loads(p.read_text())
 
     with open(p, newline="") as fh:
-        return list(csv.DictReader(fh))
+        return [{k: _from_csv(k, v) for k, v in row.items()} for row in csv.DictReader(fh)]

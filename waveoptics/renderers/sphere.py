@@ -26,7 +26,18 @@ from ..io import figures
 __all__ = ['sphere_geometry', 'tangent_frames', 'local_directions', 'PIXEL_CHUNK', 'render_sphere',
            'render_sphere_environment', 'KEY', 'EXPOSURE_MAX', 'key_exposure',
            'percentile_exposure', 'tonemap',
-           'plot_spheres']
+           'plot_spheres', 'SKIPPED_KEY', 'skipped_spheres']
+
+#: how an output names the sphere renders in its ``skipped`` entry (what was not computed → why)
+SKIPPED_KEY = "sphere renders"
+
+
+def skipped_spheres(reason: str) -> dict:
+    """The ``skipped`` entry of an output made without the sphere renders, ``{"sphere renders": reason}``: *reason*
+    says why (e.g. "not asked (sphere=False)"). ``waveoptics simulate``'s summary.json carries it, and so does each
+    row of a sweep table whose ΔE2000 columns over sphere renders are therefore null (not computed, not 0)."""
+    return {SKIPPED_KEY: reason}
+
 
 def sphere_geometry(size: int):
     """Normals (size, size, 3) of a unit sphere seen orthographically, and the mask of pixels on it."""
