@@ -48,7 +48,7 @@ from .vocabulary import (DEFAULT_MATERIAL, DEFAULT_NANO, DEFAULT_NDF, DIFFRACTIO
                          PARAMETRIC_NDF_NAMES, POLARIZATIONS, PRECISIONS, ROUGHNESS_CORRELATIONS,
                          SHADOWING_NAMES)
 
-__all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "NANO_ALIASES", "NANO_RENAMED", "nano_key", "RESOLUTION_RANGE",
+__all__ = ["DEFAULT_NANO", "NO_NANO", "NANO_PARAMS", "NANO_ALIASES", "NANO_RENAMED", "nano_key", "psd_statistics", "RESOLUTION_RANGE",
            "MAX_NANO_SAMPLES", "SimulationRequest", "request_default", "parse_nano", "nano_surface_size",
            "make_nano", "crop"]
 
@@ -117,6 +117,21 @@ def parse_nano(text: str) -> tuple[str, dict]:
     if missing:
         raise FieldError(f"{{nano}} {text!r} lacks {', '.join(missing)} (units: 5nm, 1.2um)", "nano")
     return model, params
+
+
+def psd_statistics(text: str, user: str):
+    """The height statistics (:class:`~waveoptics.surfaces.PSDModel`) of nano-roughness text ``MODEL:params``
+    (:func:`parse_nano`) for a first-order model *user* (named in the refusal), or None for σ = 0. A generator
+    that is not a PSD family (a grating, a height-field file) is refused naming ``nano``."""
+    from . import surfaces
+
+    model, p = parse_nano(text)
+    if model not in surfaces.PSD_MODELS:
+        raise FieldError(f"{{nano}} {text!r}: {user} needs height statistics ({', '.join(surfaces.PSD_MODELS)}), "
+                         f"not {model!r}", "nano")
+    if p["sigma"] <= 0:
+        return None
+    return surfaces.PSDModel(model, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"), C=p.get("C"))
 
 
 def nano_key(key: str) -> str:

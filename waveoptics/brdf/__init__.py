@@ -47,13 +47,16 @@ from .twoscale_coherent import (coherent_lobe, STACK_SUBCELL, COHERENT_CELLS_PER
                                 micro_lobe_width, lobe_cells, coarse_micro_lobe, SubCells)
 from .twoscale import (Lobes, CAP_TOLERANCE, diffracted_lobe, diffuse_lobe, multiple_scattering_lobe, evaluate)
 from .sampling import (NormalSampler, NORMAL_SAMPLERS, sample_normal, pdf_normal, pdf_reflected, sample_reflected, sample_normal_dcos)
-from .protocol import (BRDFSample, BRDF, MicrofacetBRDF, TwoScaleParts, sample_cosine, pdf_cosine, lobe_choice,
+from .protocol import (BRDFSample, BRDF, SphereBSDF, MicrofacetBRDF, TwoScaleParts, sample_cosine, pdf_cosine, lobe_choice,
     check_uniform)
 from .pointwise import (QUADRATURE_NODES, QUADRATURE_NODES_WIDE, QUADRATURE_WIDE_ALPHA, wide_micro_lobe, RADIAL_BINS, COS_LEVELS, TwoScaleBRDF, unit_nodes, NanoRadial, facet_basis,
     to_facet, from_facet)
 from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, PHI_NODES_ANISOTROPIC_NDF, light_azimuth_nodes,
     reads_by_half_vector, TabulatedTwoScaleBRDF)
 from .spectral import (SpectralNodes)
+from .tabulated_glass import (GLASS_SIDES, GLASS_HEMISPHERES, SUBCELL_SIZE, SUBCELLS_RIM_FACTOR, SUBCELLS_MAX, LOBE_REACH,
+    incident_direction, specular_exit, exit_lobe_width, cell_subdivisions, cell_averages, glass_cells, NODE_TOLERANCE,
+    NODE_MIN_STEP_DEG, refined_incidence_nodes, TabulatedGlassBSDF, tabulate_glass)
 from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
 from .chi2 import (Chi2Result, chi2_test, reflected_samples)
 from .multiscatter import (MS_NODES, AlbedoTable, albedo_table, f_ms, F_ms)
@@ -72,6 +75,6 @@ from .twoscale_dielectric import (TWOSCALE_DIELECTRIC_NODES, ALBEDO_MU_NODES, AL
 from .models import (ModelEvaluation, function_evaluation, microfacet_model, kirchhoff_model, rayleigh_rice_model,
     twoscale_model, rough_dielectric_model, table_model, BRDF_MODELS, BRDF_MODEL_PARAMETERS, BRDF_MODEL_HELP,
     build_brdf_model)
-from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, field_lobe, roughness_scales, scale_split, twoscale_grid, nano_grid, facet_polarization, facet_energy, twoscale_paraxial, twoscale_frame, twoscale_coherent, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, facet_interface, nano_interface, btdf, nano_dielectric, twoscale_dielectric, spectral, ndf_fit, models  # noqa: F401
+from . import measured_ndf, roughness, directions, smith, anisotropy, ndf_closed, ndf_shaped, ndf, shadowing, fresnel_terms, diffuse, microfacet, quadrature, opencl, field_lobe, roughness_scales, scale_split, twoscale_grid, nano_grid, facet_polarization, facet_energy, twoscale_paraxial, twoscale_frame, twoscale_coherent, twoscale, sampling, protocol, pointwise, tabulated, chi2, multiscatter, facet_interface, nano_interface, btdf, nano_dielectric, twoscale_dielectric, spectral, tabulated_glass, ndf_fit, models  # noqa: F401
 
-__all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + field_lobe.__all__ + roughness_scales.__all__ + scale_split.__all__ + twoscale_grid.__all__ + nano_grid.__all__ + facet_polarization.__all__ + facet_energy.__all__ + twoscale_paraxial.__all__ + twoscale_frame.__all__ + twoscale_coherent.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + facet_interface.__all__ + nano_interface.__all__ + btdf.__all__ + nano_dielectric.__all__ + twoscale_dielectric.__all__ + spectral.__all__ + ndf_fit.__all__ + models.__all__
+__all__ = measured_ndf.__all__ + roughness.__all__ + directions.__all__ + smith.__all__ + anisotropy.__all__ + ndf_closed.__all__ + ndf_shaped.__all__ + ndf.__all__ + shadowing.__all__ + fresnel_terms.__all__ + diffuse.__all__ + microfacet.__all__ + quadrature.__all__ + opencl.__all__ + field_lobe.__all__ + roughness_scales.__all__ + scale_split.__all__ + twoscale_grid.__all__ + nano_grid.__all__ + facet_polarization.__all__ + facet_energy.__all__ + twoscale_paraxial.__all__ + twoscale_frame.__all__ + twoscale_coherent.__all__ + twoscale.__all__ + sampling.__all__ + protocol.__all__ + pointwise.__all__ + tabulated.__all__ + chi2.__all__ + multiscatter.__all__ + facet_interface.__all__ + nano_interface.__all__ + btdf.__all__ + nano_dielectric.__all__ + twoscale_dielectric.__all__ + spectral.__all__ + tabulated_glass.__all__ + ndf_fit.__all__ + models.__all__

@@ -88,7 +88,7 @@ from .directions import dot_last, reflect
 from .facet_interface import as_interface, facet_interface_of
 from .fresnel_terms import F_mean
 from .ndf import COS_MIN, check_alpha, ndf_by_name
-from .protocol import BRDF, BRDFSample, broadcast_incidence, broadcast_pair, check_uniform, lobe_choice
+from .protocol import SphereBSDF, broadcast_incidence, broadcast_pair, lobe_choice
 from .mu_pieces import albedo_cuts, piece_cosine, read_pieces, split_pieces
 from .incidence_quadrature import INCIDENCE_ALPHA_MIN, incidence_normal_quadrature
 from .quadrature import normal_quadrature
@@ -413,7 +413,7 @@ def albedo_multiple(w1, tab: DielectricTables):
 
 
 @dataclass(frozen=True)
-class RoughDielectricBSDF(BRDF):
+class RoughDielectricBSDF(SphereBSDF):
     """The BSDF of a rough interface between air (z > 0) and a dielectric (z < 0): reflection and transmission
     over the whole sphere (module doc), as a function with ``eval`` / ``pdf`` / ``sample`` / ``albedo``.
 
@@ -546,23 +546,6 @@ class RoughDielectricBSDF(BRDF):
             wo[ms] = np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=-1)
         return wo
 
-    # -- protocol over the sphere ---------------------------------------------------------------------------------
-    def sample(self, wi, wavelength_nm, u) -> BRDFSample:
-        """Importance-sample ω_o on the sphere for ω_i at λ from u (..., 2) uniform in [0, 1)²; invalid samples
-        have ``wo`` = 0, weight 0 and pdf 0."""
-        u = check_uniform(u)
-        wi_b, _, lam, shape = broadcast_pair(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
-        u_flat = np.broadcast_to(u, shape + (2,)).reshape(-1, 2)
-        wo = self._sample_flat(wi_b, u_flat, lam)
-        valid = np.linalg.norm(wo, axis=-1) > 0.5
-        wo_ok = np.where(valid[:, None], wo, np.array([0.0, 0.0, 1.0]))
-        f = self._eval_flat(wi_b, wo_ok, lam)
-        p = self._pdf_flat(wi_b, wo_ok, lam)
-        ok = valid & (p > 0)
-        weight = np.where(ok, f * np.abs(wo_ok[:, 2]) / np.where(ok, p, 1.0), 0.0)
-        return BRDFSample(wo=np.where(ok[:, None], wo, 0.0).reshape(shape + (3,)), weight=weight.reshape(shape),
-                          pdf=np.where(ok, p, 0.0).reshape(shape))
-
     def albedo_parts(self, wi, wavelength_nm) -> dict:
         """∫ f |cos θ_o| dω_o of each part (dimensionless): ``reflection`` and ``transmission`` by quadrature over
         microfacet normals (:func:`albedo_single`), ``multiple_reflection`` and ``multiple_transmission`` by
@@ -580,8 +563,3 @@ class RoughDielectricBSDF(BRDF):
                 out["multiple_reflection"][j], out["multiple_transmission"][j] = albedo_multiple(
                     w1, self._tables(float(l1)))
         return {k: v.reshape(shape) for k, v in out.items()}
-
-    def albedo(self, wi, wavelength_nm):
-        """Directional albedo ∫ f |cos θ_o| dω_o over the sphere (dimensionless; R + T, 1 for a lossless interface
-        with every bounce counted): the sum of :meth:`albedo_parts`."""
-        return sum(self.albedo_parts(wi, wavelength_nm).values())

@@ -45,7 +45,7 @@ from .sampling import pdf_reflected, sample_reflected
 from .shadowing import shadowing_by_name
 from .roughness_scales import Micro
 
-__all__ = ['BRDFSample', 'BRDF', 'MicrofacetBRDF', 'TwoScaleParts', 'sample_cosine', 'pdf_cosine', 'lobe_choice',
+__all__ = ['BRDFSample', 'BRDF', 'SphereBSDF', 'MicrofacetBRDF', 'TwoScaleParts', 'sample_cosine', 'pdf_cosine', 'lobe_choice',
            'check_uniform']
 
 
@@ -198,6 +198,41 @@ class BRDF:
 
     def _albedo_parts(self, lam):
         raise NotImplementedError
+
+
+class SphereBSDF(BRDF):
+    """Base of the BSDFs over the whole sphere (reflection and transmission): directions may lie on either side,
+    ``eval`` gives f in the radiance convention (Veach 1997, §5.2), ``sample`` weights f |cos θ_o| / pdf, and
+    ``albedo`` is ∫ f |cos θ_o| dω_o over the sphere, the sum of the subclass's ``albedo_parts``.
+
+    References
+    ----------
+    .. [1] E. Veach, PhD thesis, Stanford, 1997, §5.2 (the η² factor of radiance in transmission).
+    """
+
+    def sample(self, wi, wavelength_nm, u) -> BRDFSample:
+        """Importance-sample ω_o on the sphere for ω_i at λ from u (..., 2) uniform in [0, 1)²; invalid samples
+        have ``wo`` = 0, weight 0 and pdf 0."""
+        u = check_uniform(u)
+        wi_b, _, lam, shape = broadcast_pair(wi, np.zeros(u.shape[:-1] + (3,)) + [0, 0, 1], wavelength_nm)
+        u_flat = np.broadcast_to(u, shape + (2,)).reshape(-1, 2)
+        wo = self._sample_flat(wi_b, u_flat, lam)
+        valid = np.linalg.norm(wo, axis=-1) > 0.5
+        wo_ok = np.where(valid[:, None], wo, np.array([0.0, 0.0, 1.0]))
+        f = self._eval_flat(wi_b, wo_ok, lam)
+        p = self._pdf_flat(wi_b, wo_ok, lam)
+        ok = valid & (p > 0)
+        weight = np.where(ok, f * np.abs(wo_ok[:, 2]) / np.where(ok, p, 1.0), 0.0)
+        return BRDFSample(wo=np.where(ok[:, None], wo, 0.0).reshape(shape + (3,)), weight=weight.reshape(shape),
+                          pdf=np.where(ok, p, 0.0).reshape(shape))
+
+    def albedo_parts(self, wi, wavelength_nm) -> dict:
+        raise NotImplementedError
+
+    def albedo(self, wi, wavelength_nm):
+        """Directional albedo ∫ f |cos θ_o| dω_o over the sphere (dimensionless; R + T, 1 for a lossless interface
+        with every bounce counted): the sum of :meth:`albedo_parts`."""
+        return sum(self.albedo_parts(wi, wavelength_nm).values())
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ from pathlib import Path
 from ..errors import WaveopticsError
 from ..request import request_default
 from ..units import ANGLE_UNITS, parse_number_list, parse_wavelengths
-from ..vocabulary import DIFFRACTION, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, PRECISIONS
+from ..vocabulary import DIFFRACTION, NANO_FRAMES, NANO_SOLVERS, PARAMETRIC_NDF_NAMES, PRECISIONS
 from ._common import SURFACE_FORMATS_HELP, add_common, add_workers, emit, progress
 from ._options import option, renamed
 
@@ -129,6 +129,16 @@ def register(sub):
     option(p, "--realizations", default=1, note="seeds of a generated --nano surface need --solver fft/direct")
     p.add_argument("--batch", type=int, default=None, metavar="B",
                    help="wavelengths per task (default 8)")
+    p.add_argument("--transmission", action="store_true",
+                   help="tabulate the rough glass's BSDF over the sphere instead (a transparent --material, --nano "
+                        "statistics): reflection and transmission, light from the air and from inside, cell "
+                        "averages on direction-cosine grids, incidence nodes added where the read between them "
+                        "would miss more than 0.5%% of the light (layout: docs/scaling.md)")
+    p.add_argument("--exact-angles", action="store_true",
+                   help="with --transmission: tabulate exactly --incident-angles (no nodes added)")
+    option(p, "--nano-frame", choices=NANO_FRAMES, default="macro", note="with --transmission (default macro)")
+    option(p, "--multiple-scattering", action="store_true", default=False,
+           note="with --transmission: the rough dielectric's compensation lobes")
     add_case_options(p, command="table", resolution=128)
     option(p, "--output", short="-o", required=True, metavar="OUT.h5", note="an HDF5 file")
     option(p, "--max-memory", note="of one task")
@@ -137,16 +147,29 @@ def register(sub):
     p.set_defaults(func=run)
 
 
-def run(args):
+def _glass_options(args) -> dict:
+    """The TableSpec fields of --transmission; its companions refused without it (one line naming them)."""
+    if not args.transmission:
+        for flag, given in (("--exact-angles", args.exact_angles), ("--nano-frame", args.nano_frame != "macro")):
+            if given:
+                raise WaveopticsError(f"{flag} applies to a glass table; add --transmission")
+        return {}
+    return {"transmission": True, "nano_frame": args.nano_frame, "refine": not args.exact_angles}
 
+
+def run(args):
+    import dataclasses
 
     from .. import distributed
     import numpy as np
 
     case, surface = case_from_args(args, source=args.source)
     thetas = parse_number_list(args.incident_angles, name="thetas_deg", units=ANGLE_UNITS)
+    glass = _glass_options(args)
+    if args.multiple_scattering:
+        case = dataclasses.replace(case, multiple_scattering=True)
     spec = distributed.TableSpec(case, thetas_deg=tuple(thetas), phi_deg=args.phi, realizations=args.realizations,
-                                 batch=args.batch if args.batch is not None else distributed.DEFAULT_BATCH)
+                                 batch=args.batch if args.batch is not None else distributed.DEFAULT_BATCH, **glass)
     plan = distributed.table_plan(spec, args.output, resume=args.resume)
     bar = progress(total=plan["todo"], desc="table", args=args)
     try:
@@ -160,8 +183,11 @@ def run(args):
     out.update(incident_angles_deg=list(spec.thetas_deg), wavelengths=plan["wavelengths"],
                resolution=case.resolution, task_cost_mean_s=res["task_cost_s"] / n if n else None,
                task_cpu_median_s=float(np.median(res["task_cpu_s"])) if n else None)
-    text = (f"table {res['output']}: {len(spec.thetas_deg)} incident angles × {plan['wavelengths']} wavelengths × "
-            f"{case.resolution}² directions"
+    if spec.transmission:
+        out["incident_angles_deg"] = list(distributed.glass_nodes(spec))
+    text = (f"table {res['output']}: {len(out['incident_angles_deg'])} incident angles"
+            + (" × 2 sides × 2 hemispheres" if spec.transmission else "")
+            + f" × {plan['wavelengths']} wavelengths × {case.resolution}² directions"
             + (f" × {spec.realizations} realizations" if spec.realizations > 1 else "")
             + f"; {res['tasks']} tasks ({n} computed, {res['skipped']} already done) in {res['wall_s']:.1f} s"
             + (f", {out['task_cost_mean_s']:.2f} s per task" if n else ""))

@@ -25,6 +25,8 @@ from ..scatter.solvers import split_patch
 from ..units import check_theta, direction_from_angles
 from .cases import case_nano, case_token, surface_digest
 from .cluster import DEFAULT_RETRIES, check_cluster_args, Job, run_timed, warm_workers
+from .glass_table import (GLASS_TABLE_FORMAT, assemble_glass_table, compute_glass_block, glass_incidences,
+                          glass_models, open_glass_table)
 from .store import refuse_or_prepare, Store, check_resume_overwrite, partial_path
 
 __all__ = ['TABLE_FORMAT', 'TABLE_VERSION', 'DEFAULT_BATCH', 'TABLE_LAYOUT', 'TableSpec', 'TableTask', 'table_tasks', 'compute_block', 'table_size', 'check_table_size', 'run_table', 'table_plan', 'BRDFTable', 'table_info', 'read_table', 'open_table']
@@ -66,17 +68,15 @@ TABLE_LAYOUT = {
 }
 
 
-# ----------------------------------------------------------------------------------------------------------------
-# Tables
-# ----------------------------------------------------------------------------------------------------------------
-
+# -- tables ------------------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class TableSpec:
     """A BRDF table: *case* evaluated at every incident zenith angle (degrees, azimuth *phi_deg*) and wavelength.
 
     *realizations* > 1 averages over surface realizations: tiles of a height-field file
     (:func:`waveoptics.scatter.split_patch`) or generated surfaces with seeds ``seed .. seed + n − 1``.
-    *batch* is the number of wavelengths per task.
+    *batch* is the number of wavelengths per task. *transmission*: the rough glass's BSDF over the sphere instead
+    (:mod:`waveoptics.distributed.glass_table`; its nano lobes in *nano_frame*, its angles *refine*-d).
     """
 
     case: SimulationRequest
@@ -85,6 +85,9 @@ class TableSpec:
     realizations: int = 1
     batch: int = DEFAULT_BATCH
     surface_digest: str | None = None
+    transmission: bool = False
+    nano_frame: str = "macro"
+    refine: bool = True
 
     def __post_init__(self):
         object.__setattr__(self, "case", self.case.resolved())
@@ -102,6 +105,9 @@ class TableSpec:
             raise FieldError(f"{{phi_deg}} {self.phi_deg!r} is not finite", 'phi_deg')
         if int(self.realizations) != self.realizations or self.realizations < 1:
             raise FieldError(f"{{realizations}} {self.realizations!r} is not allowed; use an integer >= 1", 'realizations')
+        if self.transmission and self.realizations != 1:
+            raise FieldError("{realizations}: a glass table ({transmission}) is of nano statistics, one realization",
+                             "realizations", "transmission")
         if int(self.batch) != self.batch or self.batch < 1:
             raise FieldError(f"{{batch}} {self.batch!r} is not allowed; use an integer >= 1 (wavelengths per task)", 'batch')
 
@@ -112,7 +118,9 @@ class TableSpec:
     def params(self) -> dict:
         return {**self.case.params(), "incident_theta_deg": list(self.thetas_deg), "incident_phi_deg": self.phi_deg,
                 "realizations": int(self.realizations), "batch": int(self.batch),
-                "surface_digest": self.surface_digest}
+                "surface_digest": self.surface_digest,
+                **({"transmission": True, "nano_frame": self.nano_frame, "refine": bool(self.refine)}
+                   if self.transmission else {})}
 
     def token(self) -> str:
         return case_token({**self.params(), "format_version": TABLE_VERSION})
@@ -137,8 +145,9 @@ def table_tasks(spec: TableSpec) -> list[TableTask]:
     n = len(spec.case.wavelengths())
     nb = spec.n_batches
     edges = np.linspace(0, n, nb + 1).round().astype(int)
+    n_t = len(glass_incidences(spec)) if spec.transmission else len(spec.thetas_deg)
     return [TableTask(r, t, b, int(edges[b]), int(edges[b + 1]))
-            for r in range(spec.realizations) for t in range(len(spec.thetas_deg)) for b in range(nb)]
+            for r in range(spec.realizations) for t in range(n_t) for b in range(nb)]
 
 
 def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -> dict:
@@ -160,6 +169,8 @@ def compute_block(spec: TableSpec, task: TableTask, surface=None, device=None) -
         ``cost_s`` (wall time, s), ``cpu_s`` (CPU time of the task's thread, s), ``solver`` and the worker's
         ``host``/``pid``.
     """
+    if spec.transmission:
+        return compute_glass_block(spec, task, device)
     t0, c0 = time.perf_counter(), time.thread_time()
     case = spec.case
     w = case.wavelengths()
@@ -237,8 +248,10 @@ def table_size(spec: TableSpec) -> dict:
     n = int(spec.case.resolution)
     n_l = len(spec.case.wavelengths())
     per = len(spec.thetas_deg) * n_l * n * n * 4.0
+    # a glass table: 2 sides × 4 datasets on its nodes (refined, at least the angles asked for)
+    datasets = 8 if spec.transmission else 3 + (spec.realizations if spec.realizations > 1 else 0)
     return {"memory_bytes": memory_estimate(spec.case, sphere=False, n_lambda=min(spec.batch, n_l)),
-            "file_bytes": per * (3 + (spec.realizations if spec.realizations > 1 else 0))}
+            "file_bytes": per * datasets}
 
 
 def check_table_size(spec: TableSpec, output, max_memory=None) -> None:
@@ -315,6 +328,8 @@ def run_table(spec: TableSpec, output, *, surface=None, workers: int | None = No
                 "timings_s": {}, "complete": True}
     case = spec.case.validate()
     _check_realizations(case, spec.realizations)
+    if spec.transmission:
+        glass_models(case, spec.nano_frame)   # refuses what a glass table does not take, before any work
     check_cluster_args(workers, scheduler)
     check_table_size(spec, final, max_memory)
     refuse_or_prepare(final, partial, resume=resume, overwrite=overwrite)
@@ -384,6 +399,8 @@ def _table_token(spec: TableSpec, surface=None) -> str:
 
 def _assemble_table(spec: TableSpec, token: str, store: Store, final: Path, *, overwrite: bool) -> None:
     """Write the HDF5 table from the block files (streaming one (θ, batch) at a time), atomically."""
+    if spec.transmission:
+        return assemble_glass_table(spec, token, store, table_tasks(spec), final, overwrite=overwrite)
 
     case = spec.case
     w = case.wavelengths()
@@ -512,7 +529,7 @@ def table_info(path) -> dict:
             attrs = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
     except OSError as exc:
         raise WaveopticsError(f"{str(p)!r} is not a readable HDF5 file ({exc})") from None
-    if attrs.get("format") != TABLE_FORMAT:
+    if attrs.get("format") not in (TABLE_FORMAT, GLASS_TABLE_FORMAT):
         raise WaveopticsError(f"{str(p)!r} is not a waveoptics BRDF table (format attribute {attrs.get('format')!r})")
     attrs["parameters"] = json.loads(attrs["parameters"])
     return attrs
@@ -522,6 +539,8 @@ def read_table(path) -> BRDFTable:
     """Load a table written by :func:`run_table` into memory."""
 
     info = table_info(path)
+    if info["format"] == GLASS_TABLE_FORMAT:
+        raise FieldError(f"{str(path)!r} is a glass table (layout GLASS_TABLE_LAYOUT); read it with open_table", "table")
     with h5py.File(path, "r") as f:
         def get(name):
             return f[name][()] if name in f else None
@@ -558,6 +577,8 @@ def open_table(path, *, surface=None):
     """
     from ..brdf import TabulatedTwoScaleBRDF
 
+    if table_info(path)["format"] == GLASS_TABLE_FORMAT:
+        return open_glass_table(path)
     t = read_table(path)
     if t.diffraction is None:
         raise FieldError(f"table {str(path)!r} was written by an older waveoptics (format version "

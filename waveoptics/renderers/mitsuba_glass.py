@@ -53,7 +53,7 @@ from .. import brdf
 from ..brdf.btdf import pack_third_uniform
 from ..brdf.protocol import lobe_choice
 from ..errors import FieldError, WaveopticsError
-from ..request import parse_nano
+from ..request import psd_statistics
 from ..vocabulary import DEFAULT_NANO
 from .mitsuba import array_converters, load_mitsuba, plugin_inputs
 from .model import DEFAULT_WAVELENGTH_STEP_NM, wavelength_nodes
@@ -103,20 +103,11 @@ def glass_model(material: str = "glass", alpha: float = 0.1, alpha_y: float | No
         (:class:`waveoptics.brdf.NanoRoughDielectricBSDF`), ``facet`` in each micro facet's frame
         (:class:`waveoptics.brdf.TwoScaleDielectricBSDF`, ~200x slower per evaluation).
     """
-    from .. import surfaces
-
     nodes = wavelength_nodes(wavelength_step_nm)
     micro = brdf.Micro(alpha=float(alpha), alpha_y=None if alpha_y is None else float(alpha_y), ndf=ndf,
                        shadowing=shadowing)
     spec = DEFAULT_NANO if nano is None else nano
-    psd = None
-    if spec.strip().lower() not in ("none", "flat", "0"):
-        name, p = parse_nano(spec)
-        if name not in surfaces.PSD_MODELS:
-            raise FieldError(f"{{nano}} {spec!r}: the nano-rough glass needs height statistics "
-                             f"({', '.join(surfaces.PSD_MODELS)}), not {name!r}", "nano")
-        if p["sigma"] > 0:
-            psd = surfaces.PSDModel(name, sigma=p["sigma"], T=p.get("corr_length"), B=p.get("B"), C=p.get("C"))
+    psd = None if spec.strip().lower() in ("none", "flat", "0") else psd_statistics(spec, "the nano-rough glass")
     if psd is None:
         if nano_frame != "macro":
             raise FieldError(f"{{nano_frame}} {nano_frame!r} needs {{nano}} statistics (nano-roughness)",
