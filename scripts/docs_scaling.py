@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from waveoptics import distributed as D
+from waveoptics.brdf.tabulated_glass import NODE_TOLERANCE
 from waveoptics.request import SimulationRequest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -240,7 +241,9 @@ def compute() -> dict:
     ]
     _figure(s, [(c["label"], c, st) for c, st in zip(configs, ("-", "--", "-."))])
     eff = [statistics.median(s[1]["eff"]), statistics.median(s[2]["eff"])]
-    return {"layout": [[k, v] for k, v in D.TABLE_LAYOUT.items()], "sweep_columns": list(D.SWEEP_COLUMNS),
+    return {"layout": [[k, v] for k, v in D.TABLE_LAYOUT.items()],
+            "glass_layout": [[k, v] for k, v in D.GLASS_TABLE_LAYOUT.items()],
+            "glass_tolerance": NODE_TOLERANCE, "sweep_columns": list(D.SWEEP_COLUMNS),
             "vary": list(D.VARY), "cpus": os.cpu_count(), "load": load,
             "case": {"angles": len(THETAS), "wavelengths": len(BENCH_CASE.wavelengths_nm),
                      "resolution": BENCH_CASE.resolution, "batch": BATCH, "tasks": n, "mb": bench_bytes / 1e6},

@@ -143,8 +143,9 @@ BRDF_MODEL_HELP = {
                         "lights it from inside; --albedo gives R and T); JSON also gives its reflection, "
                         "transmission and multiple parts",
     "table": "a BRDF table file (waveoptics table) as a function: its diffracted lobes interpolated between "
-             "incidences relative to the specular direction, coherent and diffuse parts exact; at the table's "
-             "wavelengths",
+             "incidences relative to the specular direction, coherent and diffuse parts exact; a glass table "
+             "(table --transmission) as a BSDF over the sphere (θ > 90: transmitted, or light from inside; "
+             "--albedo gives R and T); at the table's wavelengths",
 }
 
 #: the parameters of each BRDF model factory besides ``wavelengths_nm`` (nm), in the factory's order

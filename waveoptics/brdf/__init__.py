@@ -55,7 +55,8 @@ from .tabulated import (THETA_NODES_DEG, PHI_NODES_ANISOTROPIC, PHI_NODES_ANISOT
     reads_by_half_vector, TabulatedTwoScaleBRDF)
 from .spectral import (SpectralNodes)
 from .tabulated_glass import (GLASS_SIDES, GLASS_HEMISPHERES, SUBCELL_SIZE, SUBCELLS_RIM_FACTOR, SUBCELLS_MAX, LOBE_REACH,
-    incident_direction, specular_exit, exit_lobe_width, cell_subdivisions, cell_averages, glass_cells, NODE_TOLERANCE,
+    incident_direction, specular_exit, exit_lobe_width, cell_subdivisions, DISC_SUBCELLS, disc_fraction, cells_light,
+    cell_averages, glass_cells, NODE_TOLERANCE,
     NODE_MIN_STEP_DEG, refined_incidence_nodes, TabulatedGlassBSDF, tabulate_glass)
 from .ndf_fit import (slope_magnitude_cdf, alpha_for_median_slope, GGX_AXIS_MEDIAN)
 from .chi2 import (Chi2Result, chi2_test, reflected_samples)

@@ -4,8 +4,9 @@ grids, for light from the air and from inside the glass, and the function that r
 **The table** (:func:`glass_cells`) holds, for each side of the light (air above, the dielectric below), incidence
 angle θ_k (azimuth 0) and wavelength, two direction-cosine grids of the exit direction ω_o = (u, v, ±√(1 − u² − v²)):
 the reflected hemisphere (ω_o on the light's side) and the transmitted one. Each cell holds the *average of f over
-the cell's area in the (u, v) plane*, f in 1/sr in the radiance convention (Veach 1997, §5.2: f_t carries η_o²).
-Since |cos θ_o| dω_o = du dv, the light a cell receives is exactly its average times du dv, so the cells' sums are
+the cell's area in the (u, v) plane* inside the unit disc, f in 1/sr in the radiance convention (Veach 1997, §5.2:
+f_t carries η_o²). Since |cos θ_o| dω_o = du dv, the light a cell receives is exactly its average times that area
+(:func:`disc_fraction` du dv), so the cells' sums are
 the reflectance R and transmittance T of the model at θ_k with no quadrature error of their own, however narrow the
 lobes: a smooth-ish glass's microfacet lobes are a fraction of a cell wide (GGX α 0.01 has a reflected lobe of
 deviation √2 α cos θ_i ≈ 0.014 in direction cosines at normal incidence; a 128² cell is 0.0156). The averages are
@@ -23,9 +24,20 @@ direction cosines, where first-order scatter and a facet's refraction shift lobe
 a transmitted lobe moves with its refracted direction as θ_i changes. The two reads are blended linearly in θ_i;
 each read is the value of the cell it falls in (piecewise constant: the cell averages are the data), 0 beyond the
 unit disc. Sampling picks one of the two nodes by its weight, then the hemisphere by the node's R/(R + T), then a
-cell by its share and a uniform point in it, and maps the point back by the inverse shift (a point beyond the
+cell by its light and a uniform point in it, and maps the point back by the inverse shift (a point beyond the
 horizon is an invalid sample, the light the shift moves past it); :meth:`pdf` is that mixture's exact density,
-Σ_k w_k f_k(read_k) / (R_k + T_k) · |cos θ_o| (the translation has Jacobian 1 in (u, v)).
+Σ_k w_k f_k(read_k) a_k / (R_k + T_k) · |cos θ_o| (a_k the read cell's fraction inside the disc; the translation
+has Jacobian 1 in (u, v)).
+
+**Reciprocity.** The read holds a pair (ω_i, ω_o) in the cell of ω_o at a node near θ_i and its swap in the cell
+of ω_i at a node near θ_o, so it is reciprocal only to the size of its cells: BK7, α 0.3, 64² cells, refined
+nodes, 4000 pairs sampled from the model up to 80°: |ln(f(i, o)/η_o² ÷ f(o, i)/η_i²)| median 0.09 (0.036
+reflected, 0.096 transmitted), 90th percentile 0.29. :meth:`~TabulatedGlassBSDF.eval` keeps the read, whose
+light is the cells' (energy first: a white furnace); :meth:`~TabulatedGlassBSDF.eval_reciprocal` is the mean
+½ [f(ω_i, ω_o) + (η_o/η_i)² f(ω_o, ω_i)], reciprocal with the η² factor by construction (Veach 1997, §5.2) and
+closer to the model point by point (lobe-weighted mean |f/f_model − 1| 0.077 → 0.048 on the same pairs), but its
+light is not the cells': off by up to 0.7 % of the incident light on 64² cells (air 61°: T 0.888 for 0.895) and
+up to 4.4 % on 16² (T at normal incidence 0.916 for 0.959), the swap read through cells of the other incidence.
 
 References
 ----------
@@ -42,6 +54,7 @@ References
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,11 +63,11 @@ from ..errors import FieldError
 from ..scatter.grid import DirectionGrid
 from .btdf import refract
 from .facet_interface import facet_interface_of
-from .protocol import SphereBSDF, broadcast_incidence, lobe_choice
+from .protocol import SphereBSDF, broadcast_incidence, broadcast_pair, lobe_choice
 
 __all__ = ['GLASS_SIDES', 'GLASS_HEMISPHERES', 'SUBCELL_SIZE', 'SUBCELLS_RIM_FACTOR', 'SUBCELLS_MAX', 'LOBE_REACH',
            'incident_direction', 'specular_exit', 'exit_lobe_width', 'cell_subdivisions', 'cell_averages',
-           'glass_cells', 'NODE_TOLERANCE', 'NODE_MIN_STEP_DEG', 'refined_incidence_nodes',
+           'DISC_SUBCELLS', 'disc_fraction', 'cells_light', 'glass_cells', 'NODE_TOLERANCE', 'NODE_MIN_STEP_DEG', 'refined_incidence_nodes',
            'TabulatedGlassBSDF', 'tabulate_glass']
 
 #: sides the light comes from: the air above (z > 0) and the dielectric below
@@ -143,10 +156,36 @@ def cell_subdivisions(grid: DirectionGrid, centre, width: float) -> np.ndarray:
     return s
 
 
+#: sub-cells per side of the quadrature of a rim cell's area inside the unit disc (:func:`disc_fraction`)
+DISC_SUBCELLS = 64
+
+
+@functools.lru_cache(maxsize=8)
+def disc_fraction(grid: DirectionGrid) -> np.ndarray:
+    """The fraction (n_v, n_u) of each cell's area that lies inside the unit disc (directions above the horizon):
+    1 inside, 0 beyond, the midpoint rule on :data:`DISC_SUBCELLS`² sub-cells where the rim cuts the cell."""
+    uu, vv = np.meshgrid(grid.u, grid.v)
+    near = np.hypot(np.abs(uu) - grid.du / 2, np.abs(vv) - grid.dv / 2)
+    far = np.hypot(np.abs(uu) + grid.du / 2, np.abs(vv) + grid.dv / 2)
+    frac = np.where(far <= 1.0, 1.0, 0.0)
+    off = (np.arange(DISC_SUBCELLS) + 0.5) / DISC_SUBCELLS - 0.5
+    ou, ov = np.meshgrid(off * grid.du, off * grid.dv)
+    for iv, iu in zip(*np.nonzero((far > 1.0) & (near < 1.0))):
+        frac[iv, iu] = np.mean(np.hypot(uu[iv, iu] + ou, vv[iv, iu] + ov) < 1.0)
+    return frac
+
+
+def cells_light(cells, grid: DirectionGrid):
+    """The light Σ f du dv (dimensionless, per unit incident light) of cell averages (..., n_v, n_u): each cell's
+    average times its area inside the unit disc (:func:`disc_fraction`)."""
+    return np.sum(np.asarray(cells) * disc_fraction(grid), axis=(-2, -1)) * grid.du * grid.dv
+
+
 def cell_averages(f_of, grid: DirectionGrid, below: bool, subdivisions: np.ndarray, n_out: int) -> np.ndarray:
-    """Averages (n_out, n_v, n_u) over each cell's area in the (u, v) plane of ``f_of(wo)`` → (n, n_out), exits
-    ω_o = (u, v, ±√(1 − u² − v²)) below the interface when *below*: midpoint sums over *subdivisions*² sub-cells
-    (:func:`cell_subdivisions`); sub-cells beyond the unit disc hold 0."""
+    """Averages (n_out, n_v, n_u) over the part inside the unit disc of each cell's area in the (u, v) plane of
+    ``f_of(wo)`` → (n, n_out), exits ω_o = (u, v, ±√(1 − u² − v²)) below the interface when *below*: midpoint sums
+    over the *subdivisions*² sub-cells (:func:`cell_subdivisions`) inside the disc (0 for a cell beyond it). The
+    light of a cell is its average times its area inside the disc (:func:`disc_fraction`)."""
     out = np.zeros((n_out, grid.n_v, grid.n_u))
     uu, vv = np.meshgrid(grid.u, grid.v)
     for s in np.unique(subdivisions):
@@ -160,7 +199,8 @@ def cell_averages(f_of, grid: DirectionGrid, below: bool, subdivisions: np.ndarr
         z = np.sqrt(np.maximum(1.0 - r2[inside], 0.0)) * (-1.0 if below else 1.0)
         vals = np.zeros(u.shape + (n_out,))
         vals[inside] = f_of(np.stack([u[inside], v[inside], z], axis=-1))
-        out[:, iv, iu] = vals.mean(axis=1).T
+        count = inside.sum(axis=1)
+        out[:, iv, iu] = (vals.sum(axis=1) / np.maximum(count, 1)[:, None]).T
     return out
 
 
@@ -245,13 +285,12 @@ def refined_incidence_nodes(model, thetas_deg, wavelengths_nm, grid: DirectionGr
         table = TabulatedGlassBSDF(wavelengths_nm=lam, thetas_deg=(a, b), grid=grid, eta=pair[0][0]["eta"],
                                    **{h: np.array([[pair[k][i][h] for k in (0, 1)] for i in (0, 1)])
                                       for h in GLASS_HEMISPHERES})
-        da = grid.du * grid.dv
         for i, side in enumerate(GLASS_SIDES):
             for j in range(len(lam)):
                 read = _read_cells(table, side, m, j)
                 for h in GLASS_HEMISPHERES:
                     d = at(m)[i][h][j]
-                    if abs(read[h].sum() - d.sum()) * da > tolerance:
+                    if abs(cells_light(read[h] - d, grid)) > tolerance:
                         return False
         return True
 
@@ -307,7 +346,9 @@ class TabulatedGlassBSDF(SphereBSDF):
         for name in GLASS_HEMISPHERES:
             if np.shape(getattr(self, name)) != shape:
                 raise FieldError(f"{{{name}}} has shape {np.shape(getattr(self, name))}, not {shape}", name)
-        cells = self.grid.du * self.grid.dv
+        frac = disc_fraction(self.grid)
+        object.__setattr__(self, "_frac", frac)
+        cells = (frac * self.grid.du * self.grid.dv).ravel()
         sums = np.stack([np.asarray(getattr(self, h), dtype=float).reshape(shape[:3] + (-1,)) * cells
                          for h in GLASS_HEMISPHERES], axis=-2)            # (side, θ, λ, hemi, cell)
         object.__setattr__(self, "_sums", sums.sum(axis=-1))            # R and T of each node (side, θ, λ, 2)
@@ -343,8 +384,9 @@ class TabulatedGlassBSDF(SphereBSDF):
         return ratio[:, None] * np.stack([wi0[:, 0] - np.sin(t), wi0[:, 1]], axis=-1)
 
     def _cell(self, p):
-        """Cell indices (iv, iu) of points p (n, 2) in (u, v) and whether they lie on the grid (a rim cell holds
-        its average over the whole cell, which is what the sampler draws from: the part beyond the disc included)."""
+        """Cell indices (iv, iu) of points p (n, 2) in (u, v) and whether they lie on the grid (a read point may lie
+        beyond the disc in a rim cell: the cell's value stands for the whole cell, which is where the sampler
+        draws points from)."""
         g = self.grid
         iu = np.floor((p[:, 0] - g.u_range[0]) / g.du).astype(int)
         iv = np.floor((p[:, 1] - g.v_range[0]) / g.dv).astype(int)
@@ -365,13 +407,30 @@ class TabulatedGlassBSDF(SphereBSDF):
             val = np.where(refl, self.reflection[side, k, j, iv, iu], self.transmission[side, k, j, iv, iu])
             val = np.where(ok, val, 0.0)
             total = self._sums[side, k, j].sum(axis=-1)
-            f += wk * val
-            p += wk * np.where(total > 0, val / np.where(total > 0, total, 1.0), 0.0)
+            f += wk * val       # the sampler draws a cell by its light and a point uniformly on the whole cell
+            p += wk * np.where(total > 0, val * self._frac[iv, iu] / np.where(total > 0, total, 1.0), 0.0)
         below_horizon = (wi[:, 2] == 0) | (wo[:, 2] == 0)
         return np.where(below_horizon, 0.0, f), np.where(below_horizon, 0.0, p)
 
     def _eval1(self, wi, wo, lam):
         return self._reads(wi, wo, lam)[0]
+
+    def eval_reciprocal(self, wi, wo, wavelength_nm):
+        """½ [f(ω_i, ω_o) + (η_o/η_i)² f(ω_o, ω_i)] (1/sr): reciprocal with the η² factor by construction, closer
+        to the model point by point, its light off by up to a few % on coarse cells (module doc)."""
+        wi, wo, lam, shape = broadcast_pair(wi, wo, wavelength_nm)
+        eta = np.array([float(self.eta[self._lam_index(float(x))]) for x in lam])
+        ratio2 = np.where((wi[:, 2] > 0) == (wo[:, 2] > 0), 1.0, np.where(wi[:, 2] > 0, eta * eta, 1.0 / (eta * eta)))
+        return (0.5 * (self._eval_flat(wi, wo, lam) + ratio2 * self._eval_flat(wo, wi, lam))).reshape(shape)
+
+    def eval_parts(self, wi, wo, wavelength_nm) -> dict:
+        """:meth:`eval` split by exit hemisphere (1/sr): ``reflection`` (ω_o on the light's side) and
+        ``transmission``."""
+        f = self.eval(wi, wo, wavelength_nm)
+        wi, wo = np.broadcast_arrays(np.asarray(wi, dtype=float), np.asarray(wo, dtype=float))
+        same = (wi[..., 2] > 0) == (wo[..., 2] > 0)
+        same = np.broadcast_to(same, f.shape) if same.shape != f.shape else same
+        return {"reflection": np.where(same, f, 0.0), "transmission": np.where(same, 0.0, f)}
 
     def _pdf1(self, wi, wo, lam):
         return self._reads(wi, wo, lam)[1] * np.abs(wo[:, 2])
@@ -423,7 +482,7 @@ class TabulatedGlassBSDF(SphereBSDF):
             for h in GLASS_HEMISPHERES:
                 cells = cell_averages(lambda wo: self.eval(w1, wo, float(l1))[:, None], g,
                                       (w1[2] > 0) == (h == "transmission"), sub, 1)
-                out[h][n] = cells.sum() * g.du * g.dv
+                out[h][n] = cells_light(cells[0], g)
         return {k: v.reshape(shape) for k, v in out.items()}
 
 

@@ -397,7 +397,8 @@ def _rough_dielectric_describe(args) -> dict:
 
 
 def _table_arguments(g) -> None:
-    g.add_argument("--table", metavar="FILE", help="BRDF table written by 'waveoptics table' (.h5)")
+    g.add_argument("--table", metavar="FILE", help="BRDF table written by 'waveoptics table' (.h5; a glass table "
+                                                   "of 'table --transmission' is a BSDF over the sphere)")
 
 
 def _table_inputs(args, wavelength_nm) -> dict:
@@ -481,12 +482,21 @@ def _reflected_transmitted(parts: dict) -> dict:
     return {side: sum(v for k, v in parts.items() if k.endswith(side)) for side in ("reflection", "transmission")}
 
 
+def _over_sphere(args) -> bool:
+    """Whether the model is a BSDF over the whole sphere: :data:`SPHERE_MODELS`, or a glass table file."""
+    if args.model == "table" and args.table:
+        from ..distributed.table import GLASS_TABLE_FORMAT, table_info
+
+        return table_info(args.table)["format"] == GLASS_TABLE_FORMAT
+    return args.model in SPHERE_MODELS
+
+
 def _print_albedo(args, ev, wi, inc, wl, head) -> int:
     """--albedo: ∫ f cos θo dωo per incident direction and λ; a BSDF over the sphere also prints its reflected
     and transmitted parts (R, T)."""
     import numpy as np
 
-    if args.model in SPHERE_MODELS and ev.albedo_components is not None:
+    if _over_sphere(args) and ev.albedo_components is not None:
         split = {k: np.asarray(v) for k, v in _reflected_transmitted(ev.albedo_components(wi)).items()}
         E = split["reflection"] + split["transmission"]
     else:
@@ -515,8 +525,8 @@ def run(args) -> int:
                               f"not {args.model!r}")
     wl = parse_wavelengths(args.wavelengths, name="--wavelengths")
     # a BSDF over the whole sphere also takes light from inside the material: θ > 90°
-    inc = [parse_direction(t, name="--incident", max_theta_deg=180.0 if args.model in SPHERE_MODELS else 90.0)
-           for t in args.incident]
+    sphere = _over_sphere(args)
+    inc = [parse_direction(t, name="--incident", max_theta_deg=180.0 if sphere else 90.0) for t in args.incident]
     wi = direction_from_angles([t for t, _ in inc], [p for _, p in inc])
     head = {"model": args.model, "parameters": model.describe(args),
             "units": {"brdf": "1/sr", "albedo": "1", "wavelength_nm": "nm", "incident": "deg", "outgoing": "deg"}}
@@ -525,7 +535,6 @@ def run(args) -> int:
     if not args.outgoing:
         raise WaveopticsError("give at least one --outgoing THETA,PHI (or --albedo)")
     # a BSDF over the whole sphere (the rough dielectric) is also evaluated below the surface: θ > 90°
-    sphere = args.model in SPHERE_MODELS
     out = [parse_direction(t, name="--outgoing", need_phi=True, max_theta_deg=180.0 if sphere else 90.0)
            for t in args.outgoing]
     wo = direction_from_angles([t for t, _ in out], [p for _, p in out])

@@ -47,12 +47,13 @@ GLASS_TABLE_LAYOUT = {
     "v": "(n_v,) float64 — direction cosine of the exit's cell centres, rows (dimension scale)",
     "u": "(n_u,) float64 — direction cosine of the exit's cell centres, columns (dimension scale)",
     "eta": "(n_lambda,) float64 — the glass's real index",
-    "reflection": f"{_CELLS} — cell averages over (u, v) of the BSDF f into the light's hemisphere",
+    "reflection": f"{_CELLS} — averages of the BSDF f into the light's hemisphere over each cell's part inside "
+                  "the unit disc (its light: the average times that area, waveoptics.brdf.cells_light)",
     "transmission": f"{_CELLS} — cell averages of f (radiance convention, with its η_o² factor) into the other "
                     "hemisphere",
     "microfacet_reflection": f"{_CELLS} — the same of the rough dielectric without nano-roughness",
     "microfacet_transmission": f"{_CELLS}",
-    "albedo_reflection": "(side, theta_i, wavelength) float64 — R: the cells' sum Σ f du dv",
+    "albedo_reflection": "(side, theta_i, wavelength) float64 — R: the cells' light Σ f du dv",
     "albedo_transmission": "(side, theta_i, wavelength) float64 — T: the cells' sum",
     "model_albedo_reflection": "(side, theta_i, wavelength) float64 — R of the model's own quadrature "
                                "(albedo_parts), against which the cells' sums are checked",
@@ -118,7 +119,7 @@ def compute_glass_block(spec, task, device=None) -> dict:
     """One glass-table task on a worker: the cells of the model and of the plain rough dielectric for one (side,
     node) and wavelength batch (:func:`waveoptics.brdf.tabulated_glass.glass_cells`), with the model's own R and
     T; ``cost_s``, ``cpu_s``, ``host``, ``pid``, ``solver``."""
-    from ..brdf.tabulated_glass import GLASS_HEMISPHERES, glass_cells, incident_direction
+    from ..brdf.tabulated_glass import GLASS_HEMISPHERES, cells_light, glass_cells, incident_direction
 
     t0, c0 = time.perf_counter(), time.thread_time()
     case = spec.case
@@ -137,7 +138,7 @@ def compute_glass_block(spec, task, device=None) -> dict:
                 raise WaveopticsError(f"glass table task {task.name} ({side}, θi={theta:g}°): the {name} cells "
                                       "have NaN, Inf or negative values")
             out[name] = a.astype(np.float32)
-        out[f"albedo_{h}"] = cells[h].sum(axis=(1, 2)) * grid.du * grid.dv
+        out[f"albedo_{h}"] = cells_light(cells[h], grid)
         out[f"model_albedo_{h}"] = sum(v for k, v in parts.items() if k.endswith(h))
     out["cost_s"], out["cpu_s"] = time.perf_counter() - t0, time.thread_time() - c0
     return out
