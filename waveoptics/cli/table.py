@@ -185,6 +185,8 @@ def run(args):
                task_cpu_median_s=float(np.median(res["task_cpu_s"])) if n else None)
     if spec.transmission:
         out["incident_angles_deg"] = list(distributed.glass_nodes(spec))
+    out["units"] = {"wall_s": "s", "task_cost_s": "s", "timings_s": "s", "incident_angles_deg": "deg",
+                    "task_cost_mean_s": "s", "task_cpu_median_s": "s", "resolution": "cells per axis"}
     text = (f"table {res['output']}: {len(out['incident_angles_deg'])} incident angles"
             + (" × 2 sides × 2 hemispheres" if spec.transmission else "")
             + f" × {plan['wavelengths']} wavelengths × {case.resolution}² directions"
