@@ -111,3 +111,18 @@ def pytest_sessionfinish(session, exitstatus):
     config = session.config
     if config.getoption("--store-durations") and not hasattr(config, "workerinput"):
         DURATIONS.write_text(json.dumps({k: round(v, 3) for k, v in sorted(_measured.items())}, indent=0) + "\n")
+
+
+@pytest.fixture(autouse=True)
+def _process_settings_restored():
+    """A command's process-wide settings (``--max-memory`` sets ``WAVEOPTICS_MAX_MEMORY`` for the rest of its
+    process) end with the test that ran the command in-process: a 100 kB budget of one test refused every later
+    surface of its pytest-xdist worker."""
+    import os
+
+    old = os.environ.get("WAVEOPTICS_MAX_MEMORY")
+    yield
+    if old is None:
+        os.environ.pop("WAVEOPTICS_MAX_MEMORY", None)
+    else:
+        os.environ["WAVEOPTICS_MAX_MEMORY"] = old
