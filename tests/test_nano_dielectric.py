@@ -146,3 +146,21 @@ def test_tables_against_direct_computation_across_the_critical_angle():
                 worst = max(worst, err)
                 assert err < 2e-4, (above, th, name, float(tab.at(name, mu, above)), v)
     print(f"worst {worst:.2e}")
+
+
+def test_roughness_beyond_the_perturbation_theory_is_refused():
+    """Light from inside BK7 at normal incidence, 380 nm, σ 20 nm (ABC B 200 µm, C 3.5): phase variance
+    g = (4πσ n/λ)² ≈ 1, where the second-order loss of the weak internal reflection exceeds it (the coherent
+    reflection lobe came out negative: albedo −0.0014). The glass refuses it in one line naming the PSD and g;
+    σ 5 nm (g ≈ 0.06) is taken, its coherent shares positive."""
+    psd = PSDModel("abc", sigma=20e-9, B=200e-6, C=3.5)
+    wi = np.array([0.0, 0.0, -1.0])
+    glass = NanoRoughDielectricBSDF("BK7", Micro(alpha=0.3), psd=psd)
+    with pytest.raises(FieldError) as e:
+        glass.eval(wi, np.array([0.0, 0.6, -0.8]), 380.0)
+    g = (4 * math.pi * 20e-9 * 1.5 / 380e-9) ** 2          # n ≈ 1.5 at the node's cosine ≈ 1
+    said = float(str(e.value).split("cosθ/λ)² = ")[1].split(",")[0])
+    assert e.value.fields[0] == "psd" and 0.8 * g < said < 1.2 * g
+    fine = NanoRoughDielectricBSDF("BK7", Micro(alpha=0.3), psd=PSDModel("abc", sigma=5e-9, B=200e-6, C=3.5))
+    parts = fine.albedo_parts(wi, 380.0)
+    assert all(float(v) >= 0 for v in parts.values())

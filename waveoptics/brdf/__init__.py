@@ -69,7 +69,7 @@ from .btdf import (DIELECTRIC_SHADOWINGS, DIELECTRIC_MS_NODES, UNIFORM_DIGITS, p
 from .mu_pieces import (critical_cosine, albedo_cuts, table_pieces, split_pieces, piece_variable, piece_cosine, read_pieces)
 from .nano_interface import (BareNano, CoatedNano, NANO_INTERFACES, nano_interface_of, coherent_shares,
                              check_film_psd)
-from .nano_dielectric import (NANO_MU_NODES, NanoTables,
+from .nano_dielectric import (check_perturbative, NANO_MU_NODES, NanoTables,
                               coherent_split, nano_tables, NanoRoughDielectricBSDF)
 from .twoscale_dielectric import (TWOSCALE_DIELECTRIC_NODES, ALBEDO_MU_NODES, ALBEDO_PHI_NODES, pair_half_vector,
     coherent_transmission_share, TwoScaleDielectricBSDF, NANO_FRAME_BSDFS, nano_rough_glass)

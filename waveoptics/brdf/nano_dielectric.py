@@ -70,7 +70,7 @@ from .nano_interface import BareNano, check_film_psd, coherent_shares, nano_inte
 from .mu_pieces import critical_cosine, piece_cosine, read_pieces, table_pieces
 from .protocol import broadcast_incidence, broadcast_pair, lobe_choice
 
-__all__ = ["NANO_MU_NODES", "NanoTables", "coherent_split", "nano_tables", "NanoRoughDielectricBSDF"]
+__all__ = ["check_perturbative", "NANO_MU_NODES", "NanoTables", "coherent_split", "nano_tables", "NanoRoughDielectricBSDF"]
 
 #: intervals per piece of the coherent-factor and TIS tables (nodes uniform in the piece's variable t, both ends
 #: included; :func:`table_pieces`)
@@ -140,6 +140,31 @@ def _piece_nodes(piece):
     return np.maximum(mu, MU_GRAZING)
 
 
+def check_perturbative(shares, mus, above: bool, psd: PSDModel, eta: float, wavelength_nm: float) -> None:
+    """Refuse (a :class:`~waveoptics.errors.FieldError` naming ``psd``) nano-roughness beyond the perturbation
+    theory of the nano-rough glass: where a coherent share A_R or A_T (*shares* (n, 2) at cosines *mus*) comes out
+    negative, the second-order loss exceeds the light it is taken from (the series in the phase variance
+    g = (4π σ n_i cos θ / λ)² has left its domain, g ≪ 1), and a negative coherent lobe would follow.
+
+    References
+    ----------
+    .. [1] A. A. Maradudin, D. L. Mills, Phys. Rev. B 11(4), 1392–1415, 1975 (the second-order mean field, valid
+       for small k σ).
+    """
+    bad = np.nonzero(np.min(shares, axis=1) < 0)[0]
+    if bad.size == 0:
+        return
+    j = int(bad[np.argmin(np.min(shares[bad], axis=1))])
+    n_i = 1.0 if above else float(eta)
+    mu = float(mus[j])
+    g = (4 * np.pi * psd.sigma * n_i * mu / (wavelength_nm * 1e-9)) ** 2
+    side = "from the air" if above else "from inside the dielectric"
+    raise FieldError(f"{{psd}} σ = {psd.sigma * 1e9:.3g} nm is beyond the nano-rough glass's perturbation theory at "
+                     f"{wavelength_nm:g} nm: light {side} at θ = {np.degrees(np.arccos(mu)):.3g}° has phase "
+                     f"variance g = (4πσ n cosθ/λ)² = {g:.2g}, where its second-order coherent share comes out "
+                     f"{float(np.min(shares[j])):.3g} < 0; lower σ or the shortest wavelength", "psd")
+
+
 def nano_tables(psd: PSDModel, eta, wavelength_nm: float) -> NanoTables:
     """The tables (:class:`NanoTables`) of air over a dielectric of real index *eta* (or the nano interface *eta*
     of :mod:`waveoptics.brdf.nano_interface`: bare or coated) with nano-roughness *psd* at *wavelength_nm* (nm): on
@@ -165,7 +190,9 @@ def _nano_tables(psd: PSDModel, nano, wavelength_nm: float) -> NanoTables:
     for above in (True, False):
         rows = {name: [] for name in TABLE_NAMES}
         for piece in table_pieces(mu_c[above]):
-            vals = np.array([_direct(m, above, psd, nano, wavelength_nm) for m in _piece_nodes(piece)])
+            mus = _piece_nodes(piece)
+            vals = np.array([_direct(m, above, psd, nano, wavelength_nm) for m in mus])
+            check_perturbative(vals[:, :2], mus, above, psd, eta, wavelength_nm)
             for k, name in enumerate(TABLE_NAMES):
                 rows[name].append(CubicSpline(t_nodes, vals[:, k])(t))
         values.update({(name, above): np.array(r) for name, r in rows.items()})

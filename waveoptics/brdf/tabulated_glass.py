@@ -11,10 +11,10 @@ the reflectance R and transmittance T of the model at θ_k with no quadrature er
 lobes: a smooth-ish glass's microfacet lobes are a fraction of a cell wide (GGX α 0.01 has a reflected lobe of
 deviation √2 α cos θ_i ≈ 0.014 in direction cosines at normal incidence; a 128² cell is 0.0156). The averages are
 midpoint sums over sub-cells: at most :data:`SUBCELL_SIZE` wide far from the specular directions, and near them
-(within :data:`LOBE_REACH` lobe deviations plus two cells) sub-cells at most half a deviation wide
+(within :data:`LOBE_REACH` lobe deviations plus a cell) sub-cells at most half a deviation wide
 (:func:`exit_lobe_width`: the micro lobe's deviation (α/√2) σ_min(J), J the Jacobian of the exit's direction
 cosines with respect to the facet's slope, reflected or refracted, and the nano lobe's
-:meth:`~waveoptics.surfaces.PSDModel.lobe_width` scaled by 1/η_o), up to :data:`SUBCELLS_MAX`; cells cut by the
+:meth:`~waveoptics.surfaces.PSDModel.lobe_width` scaled by 1/η_o), up to :data:`SUBCELLS_MAX`, a narrower lobe refused; cells cut by the
 horizon take :data:`SUBCELLS_RIM_FACTOR` times more (the part of the cell beyond it holds no light).
 
 **Reading** (:class:`TabulatedGlassBSDF`): the light's azimuth is turned to 0 (the glass is isotropic), θ_i is
@@ -79,8 +79,8 @@ GLASS_HEMISPHERES = ("reflection", "transmission")
 SUBCELL_SIZE = 2.0 / 256
 #: sub-cells per side of a cell cut by the horizon, relative to the cell's far count (its area inside the disc)
 SUBCELLS_RIM_FACTOR = 2
-#: most sub-cells per side of a cell near a specular direction
-SUBCELLS_MAX = 32
+#: most sub-cells per side of a cell near a specular direction (a lobe narrower than two of them is refused)
+SUBCELLS_MAX = 256
 #: reach (lobe deviations, plus two cells) about a specular direction of the cells that take finer sub-cells
 LOBE_REACH = 6.0
 
@@ -143,15 +143,22 @@ def exit_lobe_width(wi, eta_i: float, eta_o: float, hemisphere: str, alpha: floa
 def cell_subdivisions(grid: DirectionGrid, centre, width: float) -> np.ndarray:
     """Sub-cells per side (n_v, n_u) of each cell (module doc): enough for sub-cells of :data:`SUBCELL_SIZE`,
     :data:`SUBCELLS_RIM_FACTOR` times that where the horizon cuts the cell, and within :data:`LOBE_REACH` deviations *width* plus two cells of *centre* (None:
-    no specular exit) enough that a sub-cell is at most half a deviation wide, up to :data:`SUBCELLS_MAX`."""
+    no specular exit) enough that a sub-cell is at most half a deviation wide; a lobe that would need more than
+    :data:`SUBCELLS_MAX` is refused (naming ``micro_alpha`` and ``resolution``: between two sub-points it would
+    be missed)."""
     uu, vv = np.meshgrid(grid.u, grid.v)
     du, dv = grid.du, grid.dv
     base = max(2, int(np.ceil(max(du, dv) / SUBCELL_SIZE)))
     far = np.hypot(np.abs(uu) + du / 2, np.abs(vv) + dv / 2)
     s = np.where(far > 1.0, SUBCELLS_RIM_FACTOR * base, base)
     if centre is not None and width > 0:
-        near = np.hypot(uu - centre[0], vv - centre[1]) < LOBE_REACH * width + 2.0 * max(du, dv)
-        fine = int(min(SUBCELLS_MAX, max(base, np.ceil(2.0 * max(du, dv) / width))))
+        near = np.hypot(uu - centre[0], vv - centre[1]) < LOBE_REACH * width + max(du, dv)
+        need = int(np.ceil(2.0 * max(du, dv) / width))
+        if need > SUBCELLS_MAX:
+            raise FieldError(f"a specular lobe {width:.2g} wide (direction cosines) is too narrow for cells "
+                             f"{max(du, dv):.3g} wide: it needs {need} sub-cells per cell side, at most "
+                             f"{SUBCELLS_MAX}; raise {{micro_alpha}} or {{resolution}}", "micro_alpha", "resolution")
+        fine = max(base, need)
         s = np.where(near, np.maximum(s, fine), s)
     return s
 
