@@ -102,8 +102,8 @@ def summarize(runs: dict, names: dict) -> list[dict]:
     rate of 08faf07 over this tree's) and whether the issue's bound holds."""
     rows = []
     for key, label, unit, fn, bound, kind in MEASURES:
-        new = best([_value(fn, r) for r in runs["this"]], kind)
-        old = best([_value(fn, r) for r in runs["08faf07"]], kind)
+        this_runs, old_runs = ([_value(fn, r) for r in runs[t]] for t in ("this", "08faf07"))
+        new, old = best(this_runs, kind), best(old_runs, kind)
         if new is None or old is None:
             ratio = None
         else:
@@ -116,19 +116,19 @@ def summarize(runs: dict, names: dict) -> list[dict]:
             holds = None if ratio is None else ratio <= bound
         rows.append({"key": key, "measure": label, "unit": unit, "this": new, "old": old,
                      "cost_ratio": ratio, "bound": bound, "bound_kind": "at least" if kind == "floor" else "at most ×",
-                     "holds": holds, "old_error": names.get(key)})
+                     "holds": holds, "old_error": names.get(key), "this_runs": this_runs, "old_runs": old_runs})
     return rows
 
 
-def measure(old: Path, repeats: int) -> dict:
-    """Alternate the trees, *repeats* fresh processes per tree and measure; every child's result kept."""
+def measure(old: Path, repeats: int, whats=("eval", "simulate")) -> dict:
+    """Alternate the trees, *repeats* fresh processes per tree and measure *whats*; every child's result kept."""
     runs = {"this": [], "08faf07": []}
     errors = {}
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(repeats):
             for name, tree in (("this", ROOT), ("08faf07", old)):
                 run = {}
-                for what in ("eval", "simulate"):
+                for what in whats:
                     out = child(tree, what, Path(tmp) / f"{name}-{i}-{what}")
                     if "error" in out:
                         errors.setdefault(name, {})[what] = out["error"]
@@ -138,6 +138,23 @@ def measure(old: Path, repeats: int) -> dict:
                 runs[name].append(run)
                 print(f"bench_vs_08faf07: {name} run {i + 1}/{repeats} done", file=sys.stderr)
     return {"runs": runs, "errors": errors}
+
+
+def merged(new: dict, kept: dict | None, whats) -> dict:
+    """*new* runs of the measures *whats* put into the *kept* result's runs (same number of repeats), the kept
+    measures' runs and loads staying; each run's ``loads`` lists the load average per measure."""
+    if kept is None or kept["repeats"] != new["repeats"]:
+        raise SystemExit("bench_vs_08faf07: --what needs kept runs of the same --repeats (run both measures first)")
+    out = dict(kept, runs={t: [dict(r) for r in rs] for t, rs in kept["runs"].items()})
+    for tree, runs in new["runs"].items():
+        for old_run, run in zip(out["runs"][tree], runs):
+            old_run.update({w: run[w] for w in whats if w in run})
+            old_run.setdefault("loads", {}).update({w: l for w, l in zip(whats, run.get("load", []))})
+    out["errors"] = {t: {**kept["errors"].get(t, {}), **new["errors"].get(t, {})}
+                     for t in set(kept["errors"]) | set(new["errors"])}
+    out["remeasured"] = {"what": list(whats), "load_average_1min_before": new["load_average_1min_before"],
+                         "load_average_1min_after": new["load_average_1min_after"], "this_commit": new["this_commit"]}
+    return out
 
 
 def commit_of(tree: Path) -> str | None:
@@ -151,6 +168,8 @@ def main(argv=None) -> int:
     ap.add_argument("--old", default="/tmp/audit28/old", help="an unpacked copy of 08faf07")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--write", action="store_true", help="store in docs/data/performance.json and re-render")
+    ap.add_argument("--what", nargs="+", choices=("eval", "simulate"), default=["eval", "simulate"],
+                    help="measure only these; with --write the others' kept runs stay")
     ap.add_argument("--from-data", action="store_true",
                     help="measure nothing: summarize the runs kept in docs/data/performance.json again")
     args = ap.parse_args(argv)
@@ -161,10 +180,12 @@ def main(argv=None) -> int:
         out = docs_render.load_data("performance")["vs_08faf07"]
     else:
         load0 = os.getloadavg()[0]
-        got = measure(Path(args.old).resolve(), args.repeats)
+        got = measure(Path(args.old).resolve(), args.repeats, args.what)
         out = {"machine": machine(), "load_average_1min_after": os.getloadavg()[0],
                "load_average_1min_before": load0, "repeats": args.repeats, "workers": 1,
                "this_commit": commit_of(ROOT), "old_commit": "08faf07", "errors": got["errors"], "runs": got["runs"]}
+        if len(args.what) < 2:
+            out = merged(out, docs_render.load_data("performance").get("vs_08faf07"), args.what)
     old_errors = {key: out["errors"].get("08faf07", {}).get("simulate" if key.startswith(("simulate", "no_"))
                                                                else "eval") for key, *_ in MEASURES}
     out["rows"] = summarize(out["runs"], old_errors)

@@ -367,7 +367,7 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         step(1)
         out["fft_pipeline"] = fft_pipeline(sizes=(32, 48, 64, 96), repeat=1, check_cells=50, rt=rt)
         step(1)
-        out["brdf_eval"] = brdf_eval_rates(n=5_000, loop=50, resolution=32)
+        out["brdf_eval"] = brdf_eval_rates(n=5_000, loop=50, resolution=32, min_time=0.0)
         step(1)
         out["fft_threads"] = fft_threads(n=64, n_wavelengths=4, repeat=1)
         step(1)

@@ -31,13 +31,15 @@ SIMULATE_UNITS = {"wall_s": "s, wall clock", "cpu_s": "s, CPU time of this proce
                   "no_spheres_vs_default": "1, warm wall time of --no-spheres over the default's"}
 
 
-def brdf_eval_rates(n: int = 100_000, loop: int = 300, resolution: int = 128) -> dict:
+def brdf_eval_rates(n: int = 100_000, loop: int = 300, resolution: int = 128, min_time: float = 1.0) -> dict:
     """Evaluations per second of ``eval()`` (:mod:`waveoptics.brdf.protocol`) for the microfacet model and the
     two-scale PSD model (gold, micro GGX α = 0.1, the default nano statistics, 550 nm) by quadrature and from its
     tabulated diffracted lobes, batched against a plain Python loop calling it one (ω_i, ω_o, λ) at a time; with one
     shared ω_i and with every pair its own ω_i (as a renderer asks); ``vs_microfacet``: the own-ω_i rate relative to
     the microfacet model's in the same run. *resolution*: the tabulated lobes' grid (its build dominates the
-    measure's own cost; a look-up's cost barely depends on it)."""
+    measure's own cost; a look-up's cost barely depends on it). *min_time* (s): each batch is repeated until this
+    much time has passed (at most 50 times) and the best kept: a batch of the fast models takes ~0.1 s, which a
+    loaded machine's scheduler can double."""
     from waveoptics import brdf
     from waveoptics.request import DEFAULT_NANO, make_nano
 
@@ -61,8 +63,8 @@ def brdf_eval_rates(n: int = 100_000, loop: int = 300, resolution: int = 128) ->
     for name, b in models.items():
         m = n // 10 if "quadrature" in name else n
         b.eval(wi_one, wo[:16], 550.0)  # build tables once
-        t_one = best_time(lambda: b.eval(wi_one, wo[:m], 550.0), repeat=2)
-        t_many = best_time(lambda: b.eval(wi_many[:m], wo[:m], 550.0), repeat=2)
+        t_one = best_time(lambda: b.eval(wi_one, wo[:m], 550.0), repeat=2, min_time=min_time)
+        t_many = best_time(lambda: b.eval(wi_many[:m], wo[:m], 550.0), repeat=2, min_time=min_time)
         t_loop = best_time(lambda: [b.eval(wi_many[j], wo[j], 550.0) for j in range(loop)], repeat=1)
         rows.append({"model": name, "pairs": m, "shared_wi_per_s": m / t_one, "own_wi_per_s": m / t_many,
                      "loop_per_s": loop / t_loop, "batch_vs_loop": (m / t_many) / (loop / t_loop)})
