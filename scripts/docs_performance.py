@@ -1,6 +1,7 @@
 """Data of docs/performance.md (docs/data/performance.json; prose in docs/templates/performance.md) from the
 benchmark's own output (``waveoptics.bench.run_all``): the raw results, the tables of ``waveoptics bench``, the
-numbers the conclusions quote (FFT choice, speed-ups), and the scaling figure."""
+numbers the conclusions quote (FFT choice, speed-ups), and the scaling figure. The entry ``vs_08faf07`` (this tree
+against issue 28's "today") is written by ``scripts/bench_vs_08faf07.py --write`` and kept here."""
 from __future__ import annotations
 
 import sys
@@ -94,7 +95,7 @@ def summarize(res) -> dict:
            "pipeline": {"n": p["n"], **{k: {"time_s": p[name]["time_s"], "error": p[name]["error"]} for k, name in
                         (("order0", "fft solver order 0"), ("auto", "fft solver order auto"),
                          ("numpy", "numpy fft2 + interpolation"))}},
-           "brdf_eval": None, "fft_threads": None}
+           "brdf_eval": None, "fft_threads": None, "simulate": None}
     lp = res["direct"].get("large_patch_errors")
     if lp:
         out["large_patch"] = {"length_wavelengths": lp["length_wavelengths"], "naive": lp[bench.NAIVE],
@@ -107,7 +108,20 @@ def summarize(res) -> dict:
         out["fft_threads"] = {"cores": ft["cores"], "wavelengths": ft["wavelengths"],
                               "speedup": ft["rows"][-1]["speedup"], "wall_s": [ft["rows"][0]["wall_s"],
                                                                                ft["rows"][-1]["wall_s"]]}
+    if "simulate" in res:
+        sm = res["simulate"]
+        out["simulate"] = {"first_s": sm["first"]["wall_s"], "warm_s": sm["default"]["wall_s"],
+                           "no_spheres_s": sm["no_spheres"]["wall_s"], "no_spheres_vs_default": sm["no_spheres_vs_default"]}
     return out
+
+
+def kept_comparison():
+    """The comparison with 08faf07 that ``scripts/bench_vs_08faf07.py --write`` stored in docs/data/performance.json
+    (None if none): a recompute of the rest keeps it."""
+    import docs_render
+
+    path = docs_render.data_path("performance")
+    return docs_render.load_data("performance").get("vs_08faf07") if path.exists() else None
 
 
 def data(res) -> dict:
@@ -122,7 +136,11 @@ def compute(quick: bool = False) -> dict:
 
     res = bench.run_all(get_runtime(), quick=quick)
     figure(res)
-    return data(res)
+    out = data(res)
+    kept = kept_comparison()
+    if kept is not None:
+        out["vs_08faf07"] = kept
+    return out
 
 
 def main(argv=None):

@@ -148,5 +148,12 @@ def test_bench_cli_quick_json(tmp_path):
     for row in res["direct"]["rows"]:
         assert row["terms_per_s"] > 0 and row["error"] < 1e-3
     assert (out / "bench.json").is_file() and "Direct Kirchhoff sum" in (out / "bench.md").read_text()
+    sim = res["simulate"]    # simulate() against --no-spheres, in one process (the quick run's small request)
+    assert sim["fields"] == {"resolution": 16, "wavelengths": [550.0]} and sim["units"]["wall_s"].startswith("s")
+    for key in ("first", "default", "no_spheres"):
+        assert sim[key]["wall_s"] > 0 and sim[key]["cpu_s"] > 0
+    assert 10 * sim["no_spheres"]["parts_s"]["sphere_table"] < sim["default"]["parts_s"]["sphere_table"]
+    assert 0 < sim["no_spheres_vs_default"] < 1      # the sphere table is work on top of the lobe at the light
+    assert "simulate() (resolution=16" in (out / "bench.md").read_text()
     rc, _, stderr, _ = run_cli(["bench", "--quick", "-o", str(out)])
     assert rc == 2 and "already exists" in stderr

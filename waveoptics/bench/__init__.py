@@ -22,6 +22,11 @@ and ``scripts/docs_performance.py`` turns them into ``docs/performance.md``):
   pairs by the direct sum (:func:`waveoptics.scatter.pixel_brdf`, NumPy twin and OpenCL kernel) and by Yan et
   al. 2018's Gabor kernels (:func:`waveoptics.scatter.gabor_footprint_brdf`): time per pair, and the errors of
   energy and peak against an exact float64 sum over ±5σ (:func:`footprint_exact_brdf`).
+* :func:`brdf_eval_rates` — ``eval()`` evaluations per second of the microfacet BRDF and of the two-scale BRDF
+  (pointwise quadrature, tabulated), batched and in a Python loop.
+* :func:`simulate_times` — wall and CPU time (s) of ``simulate()`` with every field at its default (the first call
+  of the process apart, then the best of the next ones) against the same request without the sphere renders'
+  table (``--no-spheres``), in one process.
 * :func:`math_errors` — largest absolute error of the device's sin/cos/sinpi/cospi/native_/half_ built-ins and of
   the kernels' own sin/cos polynomial (``kernels/wo_sincos.h``) against float64 NumPy, on reduced (|x| ≤ π) and
   large (|x| ≤ 10⁴) arguments.
@@ -30,7 +35,9 @@ Times are the best of several repeats (wall clock, after a warm-up call that bui
 the machine and on its load; :func:`machine` records what it was.
 
 Files: common (timer, machine record, test problem), baselines (what a user would otherwise write, and the launch code
-of the benchmark-only kernels), measures (the benchmarks and :func:`run_all`), tables (:func:`report`, :func:`write_report`).
+of the benchmark-only kernels), model_speed (the BRDF models' and simulate's times, in public names only, so that
+``scripts/bench_vs_08faf07.py`` runs the same file on an older tree), measures (the kernels' benchmarks and
+:func:`run_all`), tables (:func:`report`, :func:`write_report`).
 
 References
 ----------
@@ -39,9 +46,10 @@ References
 """
 from .common import (WAVELENGTH_NM, best_time, machine)
 from .baselines import (numpy_direct_sum, footprint_exact_brdf, NAIVE, kirchhoff_U_sinpi_cl, kirchhoff_U_naive_cl, numpy_fft_pipeline)
+from .model_speed import (brdf_eval_rates, SIMULATE_QUICK, SIMULATE_UNITS, simulate_times)
 from .measures import (MATH_FUNCTIONS, large_patch_errors, direct_kernels, direct_scaling, fft_backends,
-    fft_pipeline, math_errors, brdf_eval_rates, fft_threads, footprint_evaluations, run_all)
-from .tables import (report, REPORT_FILES, write_report)
-from . import common, baselines, measures, tables  # noqa: F401
+    fft_pipeline, math_errors, fft_threads, footprint_evaluations, run_all)
+from .tables import (report, simulate_table, REPORT_FILES, write_report)
+from . import common, baselines, model_speed, measures, tables  # noqa: F401
 
-__all__ = common.__all__ + baselines.__all__ + measures.__all__ + tables.__all__
+__all__ = common.__all__ + baselines.__all__ + model_speed.__all__ + measures.__all__ + tables.__all__

@@ -25,9 +25,10 @@ from ..units import direction_from_angles
 from .baselines import (NAIVE, footprint_exact_brdf, naive_sum, kirchhoff_U_sinpi_cl, numpy_direct_sum,
                         numpy_fft_pipeline)
 from .common import WAVELENGTH_NM, bench_problem, best_time, machine
+from .model_speed import brdf_eval_rates, simulate_times
 
 __all__ = ['MATH_FUNCTIONS', 'large_patch_errors', 'direct_kernels', 'direct_scaling', 'fft_backends', 'fft_pipeline',
-           'math_errors', 'brdf_eval_rates', 'fft_threads', 'footprint_evaluations', 'run_all']
+           'math_errors', 'fft_threads', 'footprint_evaluations', 'run_all']
 
 #: OpenCL math functions measured by :func:`math_errors`, in the row order of ``kernels/bench_math.cl``
 MATH_FUNCTIONS = ("sin", "cos", "sinpi", "cospi", "wo_sin_2pi", "wo_cos_2pi", "native_sin", "native_cos",
@@ -281,46 +282,6 @@ def math_errors(rt, n: int = 200_001) -> dict:
     return out
 
 
-def brdf_eval_rates(n: int = 100_000, loop: int = 300, resolution: int = 128) -> dict:
-    """Evaluations per second of ``eval()`` (:mod:`waveoptics.brdf.protocol`) for the microfacet model and the
-    two-scale PSD model (gold, micro GGX α = 0.1, the default nano statistics, 550 nm) by quadrature and from its
-    tabulated diffracted lobes, batched against a plain Python loop calling it one (ω_i, ω_o, λ) at a time; with one
-    shared ω_i and with every pair its own ω_i (as a renderer asks); ``vs_microfacet``: the own-ω_i rate relative to
-    the microfacet model's in the same run. *resolution*: the tabulated lobes' grid (its build dominates the
-    measure's own cost; a look-up's cost barely depends on it)."""
-    from .. import brdf
-    from ..request import DEFAULT_NANO, make_nano
-
-    rng = np.random.default_rng(7)
-
-    def dirs(k):
-        d = rng.normal(size=(k, 3))
-        d[:, 2] = np.abs(d[:, 2])
-        return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-    micro = brdf.Micro(alpha=0.1, ndf="ggx")   # the NDF the recorded baselines were timed with
-    nano = make_nano(DEFAULT_NANO, [550.0])
-    models = {"microfacet": brdf.MicrofacetBRDF("gold", micro),
-              "twoscale (PSD, quadrature)": brdf.TwoScaleBRDF("gold", micro, nano=nano),
-              f"twoscale (PSD, tabulated {resolution}²)": brdf.TabulatedTwoScaleBRDF(
-                  "gold", micro, nano=nano, wavelengths_nm=(550.0,), resolution=resolution)}
-    wo = dirs(n)
-    wi_one = np.array([0.5, 0.0, np.sqrt(0.75)])
-    wi_many = dirs(n)
-    rows = []
-    for name, b in models.items():
-        m = n // 10 if "quadrature" in name else n
-        b.eval(wi_one, wo[:16], 550.0)  # build tables once
-        t_one = best_time(lambda: b.eval(wi_one, wo[:m], 550.0), repeat=2)
-        t_many = best_time(lambda: b.eval(wi_many[:m], wo[:m], 550.0), repeat=2)
-        t_loop = best_time(lambda: [b.eval(wi_many[j], wo[j], 550.0) for j in range(loop)], repeat=1)
-        rows.append({"model": name, "pairs": m, "shared_wi_per_s": m / t_one, "own_wi_per_s": m / t_many,
-                     "loop_per_s": loop / t_loop, "batch_vs_loop": (m / t_many) / (loop / t_loop)})
-    for r in rows:   # the cost of the two-scale models relative to the plain microfacet BRDF, in the same run
-        r["vs_microfacet"] = r["own_wi_per_s"] / rows[0]["own_wi_per_s"]
-    return {"rows": rows}
-
-
 def fft_threads(n: int = 256, n_wavelengths: int = 8, repeat: int = 2) -> dict:
     """The fft solver's wall and CPU time on one core and on all of them (wavelengths in parallel threads,
     :func:`waveoptics.runtime.cpu_workers`): an n × n Gaussian patch onto an n × n grid at *n_wavelengths*."""
@@ -406,11 +367,13 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         step(1)
         out["fft_pipeline"] = fft_pipeline(sizes=(32, 48, 64, 96), repeat=1, check_cells=50, rt=rt)
         step(1)
-        out["brdf_eval"] = brdf_eval_rates(n=5_000, loop=50, resolution=32)
+        out["brdf_eval"] = brdf_eval_rates(n=5_000, loop=50, resolution=32, min_time=0.0)
         step(1)
         out["fft_threads"] = fft_threads(n=64, n_wavelengths=4, repeat=1)
         step(1)
         out["footprints"] = footprint_evaluations(rt, sigmas_um=(2.0, 5.0), grid=3, repeat=1)
+        step(1)
+        out["simulate"] = simulate_times(quick=True, repeat=1)
     else:
         out["math_errors"] = math_errors(rt)
         step(1)
@@ -427,6 +390,8 @@ def run_all(rt=None, quick: bool = False, progress=None) -> dict:
         out["fft_threads"] = fft_threads()
         step(1)
         out["footprints"] = footprint_evaluations(rt)
+        step(1)
+        out["simulate"] = simulate_times()
     step(1)
     out["machine"]["load_average_1min_after"] = machine()["load_average_1min"] if hasattr(os, "getloadavg") else None
     out["time_s"] = time.perf_counter() - t0

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from .measures import MATH_FUNCTIONS
 
-__all__ = ['report', 'REPORT_FILES', 'write_report']
+__all__ = ['report', 'simulate_table', 'REPORT_FILES', 'write_report']
 
 
 def _g(v, fmt=".3g"):
@@ -88,6 +88,8 @@ def report(res: dict) -> str:
                          f"| {r['gabor_s_per_pair'] * 1e3:.3g} | {r['gabor_vs_numpy_time']:.3g} "
                          f"| {r['gabor_vs_opencl_time']:.3g} | {err['numpy']} | {err['opencl']} | {err['gabor']} "
                          f"| {r['gabor_vs_numpy_peak_error']:.3g} |")
+    if "simulate" in res:
+        lines += ["", *simulate_table(res["simulate"])]
     me = res["math_errors"]
     lines += ["", "### Math built-ins: largest absolute error against float64 NumPy", "",
               "| function | " + " | ".join(f"{p} {lab}" for p in me for lab in next(iter(me[p].values()))) + " |",
@@ -99,6 +101,22 @@ def report(res: dict) -> str:
                 cells.append(_g(me[p].get(name, {}).get(lab), ".2e"))
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def simulate_table(sim: dict) -> list[str]:
+    """The lines of the ``simulate()`` table (:func:`waveoptics.bench.simulate_times`'s result *sim*)."""
+    fields = ", ".join(f"{k}={v}" for k, v in sim["fields"].items()) or "every field at its default"
+    lines = [f"### simulate() ({fields}) against --no-spheres, one process: time (s)", "",
+             "| run | wall (s) | CPU (s) | setup (s) | lobe at the light (s) | sphere table (s) |",
+             "|---|---|---|---|---|---|"]
+    for key, label in (("first", "default, first call of the process"), ("default", "default, warm"),
+                       ("no_spheres", "--no-spheres, warm")):
+        r = sim[key]
+        parts = r.get("parts_s", {})
+        lines.append(f"| {label} | {r['wall_s']:.3g} | {r['cpu_s']:.3g} | {_g(parts.get('setup'))} "
+                     f"| {_g(parts.get('lobe'))} | {_g(parts.get('sphere_table'))} |")
+    lines += ["", f"--no-spheres ÷ default (warm wall time): {sim['no_spheres_vs_default']:.3g}"]
+    return lines
 
 
 #: files of ``bench -o DIR``

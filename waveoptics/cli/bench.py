@@ -18,7 +18,8 @@ def register(sub) -> None:
                        description="Measure, in one run on this machine, the direct Kirchhoff kernel (float32, "
                                    "float64, fast-math) against a naive native_sin OpenCL kernel, a NumPy direct sum "
                                    "and the NumPy twin; FFT implementations; the fft solver against a NumPy FFT "
-                                   "pipeline; scaling with samples and directions; math built-in errors.")
+                                   "pipeline; scaling with samples and directions; math built-in errors; BRDF eval() "
+                                   "rates; simulate() at its defaults against --no-spheres.")
     p.add_argument("--quick", action="store_true", help="small sizes only (seconds; for smoke tests)")
     add_output(p, required=False, note="a directory: also write bench.json and bench.md")
     add_common(p)
@@ -32,7 +33,7 @@ def run(args) -> int:
 
     out = prepare_outdir(args.output, overwrite=args.overwrite, expected=FILES) if args.output else None
     rt = get_runtime(args.device)
-    bar = progress(total=8, desc="bench", args=args)
+    bar = progress(total=9, desc="bench", args=args)
     res = bench.run_all(rt, quick=args.quick, progress=bar.update)
     bar.close()
     text = bench.report(res)
