@@ -431,6 +431,19 @@ class TwoScaleParts(MicrofacetBRDF):
     # not reshape it. The white furnace this gives is measured in tests/test_multiscatter.py.
 
     @property
+    def lobe_material(self) -> Material:
+        """The material whose reflectance the nano lobe carries, as a grid evaluation takes it
+        (:func:`waveoptics.brdf.evaluate`): the surface's own with ``fresnel="exact"``; with ``fresnel="one"`` the
+        reflector of F = 1 (``"f0:1"``: F = 1 at every angle, a conductor's coherent fraction 1 − E, the scalar
+        Q = 1 first-order lobe), which the coherent part (:meth:`_A`) and the pointwise form's facets take as
+        material None. A tabulated form built with the surface's material under ``fresnel="one"`` held the metal's
+        lobes (its F(θ) < 1, its vector first-order factor) beside a coherent part of F = 1: its white furnace (Al,
+        ABC σ 20 nm, B 2 µm, C 2.6, 550 nm, Beckmann α 0.3) was 0.991 at normal incidence and 1.010 at 89.5°
+        where the microfacet albedo is 1.000 and 0.994 (GGX α 0.05: 0.932 at 85° against 0.903); now within
+        2.2e-3 of it (tests/test_tabulated_white_furnace.py)."""
+        return self.material if self.fresnel == "exact" else get_material("f0:1")
+
+    @property
     def _rough(self) -> bool:
         return self.nano is not None and self.nano.sigma > 0
 

@@ -114,7 +114,8 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
     Parameters
     ----------
     material, micro, kd, diffuse, fresnel, ndf_shape
-        As :class:`waveoptics.brdf.MicrofacetBRDF`.
+        As :class:`waveoptics.brdf.MicrofacetBRDF`. The lobes are tabulated for :attr:`lobe_material` (with
+        ``fresnel="one"`` the reflector of F = 1, as the coherent part).
     nano : Nano or None
         PSD statistics or a height field.
     wavelengths_nm : tuple of float
@@ -276,7 +277,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
         if (not self.rim or self.lobes_at is not None or (n_phi != 1 and self.nano.model is None)
                 or L.info["facet_integration"] != "frame"):
             return None
-        return rim_lobes(wi, self.wavelengths_nm, self.material, self.micro, self.nano, L.grid,
+        return rim_lobes(wi, self.wavelengths_nm, self.lobe_material, self.micro, self.nano, L.grid,
                          diffraction=self.diffraction, energy_scale=L.info["diffraction_energy_scale"],
                          device=self.device, precision=self.precision)
 
@@ -310,7 +311,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
             q, k = qk
             ph, th = 2 * np.pi * q / n_q, thetas[k]
             wi = np.array([np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)])
-            return rim_lobes(wi, self.wavelengths_nm, self.material, self.micro, self.nano, grid,
+            return rim_lobes(wi, self.wavelengths_nm, self.lobe_material, self.micro, self.nano, grid,
                              diffraction=self.diffraction, device=self.device, precision=self.precision)
 
         jobs = [(q, k) for q in computed for k in range(thetas.size)]
@@ -337,7 +338,7 @@ class TabulatedTwoScaleBRDF(TwoScaleParts):
             held = []   # the energy guard's lines: one for the whole table (_build), the others passed on
             with scatter.diffraction_warnings_held(held):
                 L = self.lobes_at(wi) if self.lobes_at is not None else evaluate(
-                    wi, w, self.material, self.micro, self.nano, grid, solver=self.solver, kd=0.0,
+                    wi, w, self.lobe_material, self.micro, self.nano, grid, solver=self.solver, kd=0.0,
                     device=self.device, precision=self.precision, diffraction=self.diffraction)
             for msg in held:
                 if not msg.startswith(ENERGY_GUARD_PREFIX):
