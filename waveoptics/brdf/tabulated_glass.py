@@ -257,12 +257,14 @@ def _read_cells(table, side: str, theta_deg: float, j: int) -> dict:
 
 
 def refined_incidence_nodes(model, thetas_deg, wavelengths_nm, grid: DirectionGrid, psd=None,
-                            tolerance=NODE_TOLERANCE, min_step_deg: float = NODE_MIN_STEP_DEG) -> tuple:
+                            tolerance=NODE_TOLERANCE, min_step_deg: float = NODE_MIN_STEP_DEG,
+                            progress=None) -> tuple:
     """The incidence nodes *thetas_deg* (degrees) with nodes added where the read between two nodes (module doc)
     misses the light of the cells computed at the interval's middle (:func:`glass_cells`, light from either side,
     at the first and last of *wavelengths_nm*) in either exit hemisphere by more than *tolerance* of the incident
     light (:data:`NODE_TOLERANCE`), down to
-    *min_step_deg*. A glass's R(θ) and T(θ) bend sharply where its facets pass the critical angle (light from
+    *min_step_deg*; *progress* (optional) is called with 1 after each interval tested. A glass's R(θ) and T(θ) bend
+    sharply where its facets pass the critical angle (light from
     inside: R 0.05 → 1 within a few degrees of θ_c ± the facets' tilt), and near grazing the lobes are pressed
     against the horizon, where the shifted read of a node 5° away loses light past it: BK7, α 0.1, 64² cells,
     nodes 5° apart, read at the middles: from inside at 32.5° R 19 % high, at 72.5° 4.7 % of the light lost.
@@ -305,7 +307,10 @@ def refined_incidence_nodes(model, thetas_deg, wavelengths_nm, grid: DirectionGr
     while todo:
         a, b = todo.pop()
         m = 0.5 * (a + b)
-        if b - a <= 2.0 * min_step_deg or close(a, b, m):
+        fine = b - a <= 2.0 * min_step_deg or close(a, b, m)
+        if progress is not None:
+            progress(1)
+        if fine:
             continue
         nodes.append(m)
         todo += [(a, m), (m, b)]

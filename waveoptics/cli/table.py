@@ -170,6 +170,12 @@ def run(args):
         case = dataclasses.replace(case, multiple_scattering=True)
     spec = distributed.TableSpec(case, thetas_deg=tuple(thetas), phi_deg=args.phi, realizations=args.realizations,
                                  batch=args.batch if args.batch is not None else distributed.DEFAULT_BATCH, **glass)
+    if spec.transmission and spec.refine:   # the nodes come before the tasks: say so on a terminal
+        bar = progress(desc="incidence nodes (intervals tested)", args=args)
+        try:
+            distributed.glass_nodes(spec, progress=bar.update)
+        finally:
+            bar.close()
     plan = distributed.table_plan(spec, args.output, resume=args.resume)
     bar = progress(total=plan["todo"], desc="table", args=args)
     try:

@@ -15,7 +15,6 @@ References
 """
 from __future__ import annotations
 
-import functools
 import os
 import socket
 import time
@@ -92,23 +91,25 @@ def glass_models(case, nano_frame: str = "macro"):
     return model, plain, psd
 
 
-@functools.lru_cache(maxsize=8)
-def _nodes(case, thetas_deg: tuple) -> tuple:
+#: refined incidence nodes by (request, angles asked for), once per process
+_NODES: dict = {}
+
+
+def glass_nodes(spec, progress=None) -> tuple:
+    """The incidence nodes (degrees) of a glass table: the spec's angles, refined (module doc; once per process,
+    *progress* called with 1 per interval tested) unless ``spec.refine`` is False."""
     from ..brdf.tabulated_glass import refined_incidence_nodes
 
-    # the nano lobes about the macro normal stand in for the facet frame's (~200x the cost per evaluation): the
-    # nodes follow R(θ), T(θ) and the lobes at the horizon, which the micro facets set
-    model, _, psd = glass_models(case, "macro")
-    grid = DirectionGrid.hemisphere(min(int(case.resolution), REFINE_RESOLUTION))
-    return refined_incidence_nodes(model, thetas_deg, case.wavelengths(), grid, psd)
-
-
-def glass_nodes(spec) -> tuple:
-    """The incidence nodes (degrees) of a glass table: the spec's angles, refined (module doc; once per process)
-    unless ``spec.refine`` is False."""
     if not spec.refine:
         return tuple(sorted(spec.thetas_deg))
-    return _nodes(spec.case, tuple(spec.thetas_deg))
+    key = (spec.case, tuple(spec.thetas_deg))
+    if key not in _NODES:
+        # the nano lobes about the macro normal stand in for the facet frame's (~200x the cost per evaluation):
+        # the nodes follow R(θ), T(θ) and the lobes at the horizon, which the micro facets set
+        model, _, psd = glass_models(spec.case, "macro")
+        grid = DirectionGrid.hemisphere(min(int(spec.case.resolution), REFINE_RESOLUTION))
+        _NODES[key] = refined_incidence_nodes(model, key[1], spec.case.wavelengths(), grid, psd, progress=progress)
+    return _NODES[key]
 
 
 def glass_incidences(spec) -> list:
