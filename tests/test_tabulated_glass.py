@@ -176,7 +176,8 @@ def test_cli_table_transmission(tmp_path):
     assert (r, t) == pytest.approx((float(want["reflection"]), float(want["transmission"])), abs=2e-6)
     with h5py.File(out) as f:   # on a node the read's light is the cells'
         assert (r, t) == pytest.approx((f["albedo_reflection"][1, 1, 0], f["albedo_transmission"][1, 1, 0]), abs=2e-3)
-    for argv, flag in ((["--material", "Al", "--transmission"], "material"), (["--exact-angles"], "--transmission")):
+    for argv, flag in ((["--material", "Al", "--transmission"], "material"), (["--exact-angles"], "--transmission"),
+                       (["--multiple-scattering"], "--transmission")):
         code, _, err, _ = run_cli(["table", "--nano", "abc:sigma=10nm,B=2um,C=2.6", "--wavelengths", "550",
                                    "--resolution", "16", "-o", str(tmp_path / "x.h5"), *argv])
         assert code == 2 and flag in err and "Traceback" not in err

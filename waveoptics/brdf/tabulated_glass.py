@@ -81,7 +81,7 @@ SUBCELL_SIZE = 2.0 / 256
 SUBCELLS_RIM_FACTOR = 2
 #: most sub-cells per side of a cell near a specular direction (a lobe narrower than two of them is refused)
 SUBCELLS_MAX = 256
-#: reach (lobe deviations, plus two cells) about a specular direction of the cells that take finer sub-cells
+#: reach (lobe deviations, plus a cell) about a specular direction of the cells that take finer sub-cells
 LOBE_REACH = 6.0
 
 

@@ -150,7 +150,8 @@ def register(sub):
 def _glass_options(args) -> dict:
     """The TableSpec fields of --transmission; its companions refused without it (one line naming them)."""
     if not args.transmission:
-        for flag, given in (("--exact-angles", args.exact_angles), ("--nano-frame", args.nano_frame != "macro")):
+        for flag, given in (("--exact-angles", args.exact_angles), ("--nano-frame", args.nano_frame != "macro"),
+                            ("--multiple-scattering", args.multiple_scattering)):
             if given:
                 raise WaveopticsError(f"{flag} applies to a glass table; add --transmission")
         return {}
@@ -166,7 +167,7 @@ def run(args):
     case, surface = case_from_args(args, source=args.source)
     thetas = parse_number_list(args.incident_angles, name="thetas_deg", units=ANGLE_UNITS)
     glass = _glass_options(args)
-    if args.multiple_scattering:
+    if args.multiple_scattering:   # a glass table's (refused without --transmission above)
         case = dataclasses.replace(case, multiple_scattering=True)
     spec = distributed.TableSpec(case, thetas_deg=tuple(thetas), phi_deg=args.phi, realizations=args.realizations,
                                  batch=args.batch if args.batch is not None else distributed.DEFAULT_BATCH, **glass)
