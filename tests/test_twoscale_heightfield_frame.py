@@ -17,7 +17,7 @@ import pytest
 import twoscale_reference as R
 from waveoptics import brdf, scatter, surfaces
 from waveoptics.brdf import Micro, Nano
-from waveoptics.errors import FieldError
+from waveoptics.errors import WaveopticsError
 from waveoptics.materials import get_material
 from waveoptics.scatter.direct import kirchhoff_U_cl, phase_coefficients
 from waveoptics.scatter.grid import DirectionGrid
@@ -78,17 +78,19 @@ def test_exact_lobe_is_the_fields_lobe():
 
 
 def test_route_choice():
-    """auto: the frame route for an isotropic field, paraxial (with the reason) for an anisotropic one; frame
-    asked by name for an anisotropic field is refused."""
+    """auto: the frame route for an isotropic field and for an anisotropic one (its tables run over the azimuth of
+    incidence too: tests/test_twoscale_anisotropic_frame.py), which was paraxial before; an unknown route is
+    refused."""
     micro = Micro(alpha=0.1)
     assert brdf.facet_route(micro, Nano(surface=FIELD), GRID, [LAM]) == "frame"
     assert brdf.field_anisotropy(surfaces.HeightField(FIELD.heights, FIELD.dx)) is None   # measured: same test
     sin = surfaces.sinusoid(10e-9, 2e-6, 20e-6, 128)
-    assert brdf.facet_route(micro, Nano(surface=sin), GRID, [LAM]) == "paraxial"
-    assert "anisotropic" in brdf.paraxial_reason(micro, Nano(surface=sin), GRID, [LAM])
+    assert brdf.facet_route(micro, Nano(surface=sin), GRID, [LAM]) == "frame"
+    assert brdf.paraxial_reason(micro, Nano(surface=sin), GRID, [LAM]) is None
     assert "varies" in brdf.field_anisotropy(surfaces.HeightField(sin.heights, sin.dx))
-    with pytest.raises(FieldError):
-        brdf.facet_route(micro, Nano(surface=sin), GRID, [LAM], "frame")
+    assert brdf.facet_route(micro, Nano(surface=sin), GRID, [LAM], "frame") == "frame"
+    with pytest.raises(WaveopticsError, match="unknown facet"):
+        brdf.facet_route(micro, Nano(surface=sin), GRID, [LAM], "turned")
 
 
 @pytest.mark.parametrize("alpha,theta", [(0.1, 30.0), (0.1, 60.0), (0.3, 30.0), (0.3, 60.0)])

@@ -307,7 +307,7 @@ def _mis_sum(y_by_technique):
 # the facet-frame two-scale integral (Walter et al. 2007, facets carrying a BRDF)
 # ----------------------------------------------------------------------------------------------------------------
 
-def facet_integrand(f_nano, wi, wo, m, wavelength_nm, alpha, ndf="beckmann"):
+def facet_integrand(f_nano, wi, wo, m, wavelength_nm, alpha, ndf="beckmann", frame=None):
     """|i·m| |o·m| / (|i·n| |o·n|) · f_nano(i_m, o_m; λ) · G2(i, o, m) · D(m) at micro-normals m.
 
     Parameters
@@ -315,9 +315,12 @@ def facet_integrand(f_nano, wi, wo, m, wavelength_nm, alpha, ndf="beckmann"):
     f_nano : callable (wi (N, 3), wo (N, 3), wavelength_nm) -> (N,), in the facet frame
     wi, wo : arrays (P, 3), macro frame
     m : array (P, n, 3), micro-normals
+    frame : callable (w (..., 3), m (..., 3)) -> local directions (..., 3), z = w·m; None: :func:`to_facet_frame`
+        (the azimuth of the local frame matters for an anisotropic nano lobe only)
     """
     wi_, wo_ = np.broadcast_to(wi[:, None], m.shape), np.broadcast_to(wo[:, None], m.shape)
-    im, om = to_facet_frame(wi_, m), to_facet_frame(wo_, m)
+    frame = frame or to_facet_frame
+    im, om = frame(wi_, m), frame(wo_, m)
     fn = np.asarray(f_nano(im.reshape(-1, 3), om.reshape(-1, 3), wavelength_nm), float).reshape(m.shape[:-1])
     ok = (im[..., 2] > 0) & (om[..., 2] > 0) & (m[..., 2] > 0)
     jac = np.abs(im[..., 2] * om[..., 2]) / np.abs(wi[:, None, 2] * wo[:, None, 2])
@@ -326,7 +329,7 @@ def facet_integrand(f_nano, wi, wo, m, wavelength_nm, alpha, ndf="beckmann"):
 
 
 def facet_integral(f_nano, wi, wo, wavelength_nm, alpha, ndf="beckmann", nano_width=None, n_samples=4096,
-                   seed=0, ndf_fraction=0.5):
+                   seed=0, ndf_fraction=0.5, frame=None):
     """Diffracted part of a two-scale BRDF as the facet-frame integral, by Monte Carlo.
 
         f_diff(i, o) = ∫ |i·m| |o·m| / (|i·n| |o·n|) · f_nano(i_m, o_m; λ) · G2(i, o, m) · D(m) dω_m
@@ -348,6 +351,7 @@ def facet_integral(f_nano, wi, wo, wavelength_nm, alpha, ndf="beckmann", nano_wi
     n_samples : int, samples per (i, o) pair (split between the techniques)
     seed : int, of ``np.random.default_rng``
     ndf_fraction : float in (0, 1], share of the samples drawn by technique (a)
+    frame : the facet frame of :func:`facet_integrand` (None: :func:`to_facet_frame`)
 
     Returns
     -------
@@ -377,7 +381,7 @@ def facet_integral(f_nano, wi, wo, wavelength_nm, alpha, ndf="beckmann", nano_wi
         q = na * pdf_ndf(m, alpha, ndf)
         if nb:
             q = q + nb * _pdf_about(m, h, 0.5 * nano_width)
-        g = facet_integrand(f_nano, wi, wo, m, wavelength_nm, alpha, ndf)
+        g = facet_integrand(f_nano, wi, wo, m, wavelength_nm, alpha, ndf, frame)
         with np.errstate(divide="ignore", invalid="ignore"):
             ys.append(np.where(ok & (q > 0), g / np.where(q > 0, q, 1.0), 0.0))
     return _mis_sum(ys)

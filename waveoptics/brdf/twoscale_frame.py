@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import scatter
-from ..errors import FieldError, unknown
+from ..errors import unknown
 from ..materials import cos2_eta_i, facet_sp_mix
 from ..runtime import parallel_map
 from ..scatter.grid import DirectionGrid
@@ -21,8 +21,9 @@ from .facet import (FACET_NODE_SPLIT, FACET_REFERENCE_NM, bridge_nodes, bridge_p
                     wide_micro_lobe, with_bridge_density)
 from .facet_frame_cl import facet_frame_backend, facet_frame_sum_cl
 from .facet_energy import facet_budget
-from .field_lobe import (field_anisotropy, field_cell_split, field_first_order_over_fresnel,
-                         field_proposal_model, kirchhoff_scattered_lobe, lobe_sampling_warnings)
+from .facet_field_tables import (FACET_NODES_ANISOTROPIC_FIELD, anisotropic_field, anisotropic_field_read,
+                                 anisotropic_field_stack, cell_shifted_nodes, field_facet_table)
+from .field_lobe import field_proposal_model
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
 from .twoscale_grid import sharp_micro_lobe
@@ -86,29 +87,19 @@ FACET_ROUTES = ("auto", "frame", "paraxial")
 def facet_route(micro: Micro, nano: Nano | None, grid: DirectionGrid, wavelengths_nm, facet: str = "auto") -> str:
     """``frame`` or ``paraxial``: how :func:`waveoptics.brdf.evaluate` carries the nano lobe by the facets.
 
-    ``auto`` takes ``frame`` for PSD statistics and for a statistically isotropic height field
-    (:func:`waveoptics.brdf.field_anisotropy`) whose nano lobe (width λ_min/(π ℓ), ℓ the correlation length of the
-    statistics or of the field, :func:`nano_statistics`) is wider than :data:`waveoptics.brdf.NARROW_CELLS` grid
-    cells; else ``paraxial`` (:func:`paraxial_reason` says why): an anisotropic height field (its lobe depends on the
-    azimuth of incidence, which the tables over local incidence at azimuth 0 do not hold); a micro lobe narrower
-    than a cell (its facets tilt by less than a cell, where the shift and the turn of their lobes agree); nano lobes
-    the grid cannot resolve, which :func:`waveoptics.brdf.nano_lobe` deposits with their energy, where a facet's lobe
-    lies within a cell or two of its mirror direction. ``frame`` asked by name for an anisotropic height field is
-    refused.
+    ``auto`` takes ``frame`` for PSD statistics and for a height field, isotropic or not (an anisotropic one's
+    tables run over the azimuth of incidence too: :func:`waveoptics.brdf.anisotropic_field_stack`), whose nano lobe
+    (width λ_min/(π ℓ), ℓ the correlation length of the statistics or of the field, :func:`nano_statistics`) is
+    wider than :data:`waveoptics.brdf.NARROW_CELLS` grid cells; else ``paraxial`` (:func:`paraxial_reason` says
+    why): a micro lobe narrower than a cell (its facets tilt by less than a cell, where the shift and the turn of
+    their lobes agree); nano lobes the grid cannot resolve, which :func:`waveoptics.brdf.nano_lobe` deposits with
+    their energy, where a facet's lobe lies within a cell or two of its mirror direction.
     """
     if facet not in FACET_ROUTES:
         raise unknown("facet", facet, FACET_ROUTES)
     if nano is None:
         return "paraxial"
-    if facet == "paraxial":
-        return facet
-    why = field_anisotropy(nano.surface) if nano.surface is not None else None
-    if why is not None:
-        if facet == "frame":
-            raise FieldError(f"facet 'frame' needs nano statistics or an isotropic height field: {why}; its lobe is "
-                             "carried paraxially", "facet")
-        return "paraxial"
-    if facet == "frame":
+    if facet in ("paraxial", "frame"):
         return facet
     return "paraxial" if paraxial_reason(micro, nano, grid, wavelengths_nm) else "frame"
 
@@ -116,10 +107,6 @@ def facet_route(micro: Micro, nano: Nano | None, grid: DirectionGrid, wavelength
 def paraxial_reason(micro: Micro, nano: Nano, grid: DirectionGrid, wavelengths_nm) -> str | None:
     """Why ``facet="auto"`` carries *nano* paraxially (a sentence), or None where :func:`facet_route` takes the
     frame route."""
-    if nano.surface is not None:
-        why = field_anisotropy(nano.surface)
-        if why is not None:
-            return why + ": the facet tables hold the lobe at azimuth 0 only"
     if sharp_micro_lobe(micro, grid):
         return "the micro lobe is narrower than a grid cell"
     wn = float(np.min(wavelengths_nm)) * 1e-9 / (np.pi * nano_statistics(nano).length_scale)
@@ -144,9 +131,9 @@ def facet_nodes(micro: Micro, nano: Nano, wavelengths_nm) -> tuple[int, int]:
     the micro lobe's mirror directions spread over less than :data:`FACET_NODE_SPLIT` nano lobe widths (2α < 0.5
     λ/(π ℓ) at λ = :data:`FACET_REFERENCE_NM`), where the NDF's normals carry the integral, else
     :data:`FACET_NODES_WIDE` (*wavelengths_nm* is not used: every wavelength gets the same nodes); for a height field
-    :data:`FACET_NODES_FIELD`."""
+    :data:`FACET_NODES_FIELD`, an anisotropic one :data:`waveoptics.brdf.FACET_NODES_ANISOTROPIC_FIELD`."""
     if nano.surface is not None:
-        return FACET_NODES_FIELD
+        return FACET_NODES_ANISOTROPIC_FIELD if anisotropic_field(nano) else FACET_NODES_FIELD
     kw = micro.kw()
     a = max(kw["alpha"], kw["alpha_y"] or 0.0)
     return FACET_NODES_WIDE if wide_micro_lobe(a, nano_statistics(nano).length_scale) else FACET_NODES_NARROW
@@ -231,61 +218,10 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
 
 
 def _field_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
-    """:func:`_facet_table` of a height field, (g, first): g = f cos θ_o of its diffracted lobe at local incidence
-    :data:`FACET_THETAS_DEG` [k] at azimuth 0, by the field's own solver on *grid* (the FFT route of
-    :func:`waveoptics.brdf.kirchhoff_scattered_lobe` with F = 1, the Kirchhoff family's F(θ_d) applied afterwards;
-    Rayleigh-Rice: the lobe of its periodogram with its own Q, first None), and for the Kirchhoff family first =
-    f_RR / F cos θ_o, the first-order lobe of the field's periodogram it hands over to towards grazing angles
-    (:func:`waveoptics.brdf.field_first_order_over_fresnel`; W applied at the facets' exact local directions by
-    :func:`_facet_read`, as for PSD statistics). Read for a facet at any azimuth: the lobe of a
-    statistically isotropic field (:func:`waveoptics.brdf.field_anisotropy`) turned with the facet, the azimuth of
-    the one realization's speckle aside. Cells beyond the rim of the disc take the value of the nearest cell
-    inside (the statistics table's rim values).
-
-    Each cell holds the lobe's average over the cell, from a grid r times finer per axis whose cells are at most
-    2 λ_min / (:data:`waveoptics.brdf.FIELD_GRID_OVERSAMPLING` L) wide (L the patch's larger side; the cells of
-    :func:`waveoptics.brdf.field_scattered_albedo`'s hemisphere, on which the budget is integrated): a windowed
-    patch's |U|² varies on the scale λ/(2L) (grating orders of a periodic field, speckle of a random one), which
-    point samples at coarser cell centres alias (measured on a 32 λ Gaussian patch, against
-    :func:`waveoptics.brdf.field_scattered_albedo`: point samples on 32² cells +4 to +6 %, on 24² +18 %; the cell
-    averages on 32² within 0.8 % up to 65° and 1.8 % at grazing incidence, where rim cells are partly below the
-    horizon; 96² cells need no finer grid and hold it within 0.3 %).
-
-    References
-    ----------
-    .. [1] M. Parseval; Bracewell, *The Fourier Transform and its Applications*, 3rd ed., ch. 6 (the power of
-       the field's samples); Beckmann & Spizzichino 1963, ch. 5 (coherent and incoherent fields).
-    """
-    from scipy import ndimage
-
+    """:func:`_facet_table` of a height field, (g, first): :func:`waveoptics.brdf.field_facet_table` at local
+    incidence :data:`FACET_THETAS_DEG` [k] at azimuth 0."""
     th = np.radians(FACET_THETAS_DEG[k])
-    wi = np.array([np.sin(th), 0.0, np.cos(th)])
-    r = field_cell_split(nano.surface, grid, float(np.min(w)))
-    fine = DirectionGrid(grid.n_u * r, grid.n_v * r, tuple(grid.u_range), tuple(grid.v_range))
-    wo = fine.directions()
-    inside = fine.inside
-    if dm.perturbative:
-        # the periodogram of samples coarser than λ/4 folds the band, as the Kirchhoff sum aliases: the same line
-        for msg in lobe_sampling_warnings(scatter.samples(nano.surface), wi, fine, w):
-            scatter.solvers.warn_or_collect(msg)
-        f = np.stack([np.where(inside, scatter.rayleigh_rice_lobe(wi[None, None, :], wo, lam, nano.periodogram(),
-                                                                  material, polarization), 0.0) for lam in w])
-        first = None
-    else:
-        # its warnings pass on (aliasing: a field sampled coarser than λ/4, as on the paraxial route); the fine
-        # grid resolves the patch's diffraction width
-        f = kirchhoff_scattered_lobe(nano.surface, wi, fine, w, None, solver="fft", diffraction=dm)
-        wo_in = wo[inside]
-        first = np.zeros_like(f)
-        for i, lam in enumerate(w):
-            first[i][inside] = field_first_order_over_fresnel(nano.periodogram(), np.broadcast_to(wi, wo_in.shape),
-                                                              wo_in, lam, material, polarization)
-    _, (iy, ix) = ndimage.distance_transform_edt(~grid.inside, return_indices=True)
-
-    def cells(a):   # cell averages of a cos θ_o, rim cells extended outwards, (n_v, n_u, n_λ)
-        g = (a * np.where(inside, wo[..., 2], 0.0)[None]).reshape(len(w), grid.n_v, r, grid.n_u, r).mean(axis=(2, 4))
-        return np.ascontiguousarray(np.moveaxis(g[:, iy, ix], 0, -1), dtype=np.float32)
-    return cells(f), (None if first is None else cells(first))
+    return field_facet_table(nano, np.array([np.sin(th), 0.0, np.cos(th)]), w, grid, dm, material, polarization)
 
 
 def _v_symmetric(grid: DirectionGrid) -> bool:
@@ -418,6 +354,25 @@ def _facet_read(stack, grid: DirectionGrid, theta, lo, blend=False, projected=Fa
     return np.where(den[:, None] > 0, val / np.where(den > 0, den, 1.0)[:, None], 0.0)
 
 
+def _facet_reader(wi, wo, m, cos_i, cos_o, tgrid: DirectionGrid, projected: bool, thetas_deg, anisotropic: bool):
+    """read(stack, blend) → g (n, n_λ) of the facets *m* ((3,) or (n, 3)) for the light *wi* and the exits *wo*
+    (n, 3) (:func:`facet_frame_diffraction`), *cos_i* = ω_i·m, *cos_o* = ω_o·m: an anisotropic field's tables in
+    its axes on each facet (:func:`waveoptics.brdf.anisotropic_field_read`), else :func:`_facet_read` of the
+    local directions turned so that ω_i^m lies in the x–z plane."""
+    from .facet import facet_basis
+
+    if anisotropic:
+        return lambda stack, blend: anisotropic_field_read(stack, tgrid, wi, wo, m, blend)
+    t, b = facet_basis(m)
+    lx, ly = np.sum(t * wi, axis=-1), np.sum(b * wi, axis=-1)
+    r = np.hypot(lx, ly)
+    cp, sp = np.where(r > 0, lx / np.where(r > 0, r, 1), 1.0), np.where(r > 0, ly / np.where(r > 0, r, 1), 0.0)
+    ux, uy = np.sum(wo * t, axis=-1), np.sum(wo * b, axis=-1)   # turned so that ω_i^m lies in x–z
+    lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, cos_o], axis=-1)
+    theta = np.arccos(np.clip(cos_i, 0.0, 1.0))
+    return lambda stack, blend: _facet_read(stack, tgrid, theta, lo, blend, projected, thetas_deg)
+
+
 def _extra_nodes(symmetric: bool, nodes, wi, wo, h, cos_d, rad, level, na: int, nb: int, **ndf):
     """PSD statistics' extra normals in :func:`facet_frame_diffraction`: the cells that graze (2 N_a NDF normals,
     :func:`grazing_cells`, with the default narrow-lobe nodes of an analytic NDF only: :data:`FACET_GRAZING_DEG`),
@@ -454,9 +409,11 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     incidence (96² cells). Each facet's nano lobe is read from tables
     over local incidence (:func:`facet_thetas`, :func:`_facet_read`) on *table_grid* (default *grid*, a
     hemisphere); F(θ_d), the same in every facet's frame, multiplies the sum. A nano height field's tables are its
-    own lobe at azimuth 0 (:func:`_field_table`), read for facets of every azimuth: for a statistically isotropic
-    field only (:func:`facet_route` keeps anisotropic ones paraxial); its half-vector normals are placed by the
-    lobe width of its rms height and correlation length (:func:`nano_statistics`).
+    own lobe at azimuth 0 (:func:`_field_table`), read turned for facets of every azimuth, where the field is
+    statistically isotropic; an anisotropic field's (:func:`waveoptics.brdf.field_anisotropy`) run over the
+    azimuth of incidence in the field's axes on each facet too (:func:`waveoptics.brdf.anisotropic_field_stack`,
+    read by :func:`waveoptics.brdf.anisotropic_field_read`); its half-vector normals are placed by the lobe width
+    of its rms height and correlation length (:func:`nano_statistics`).
 
     Polarized light (s or p of the macro plane of incidence): each facet sees cos²η_i of its own s or p light and
     sin²η_i of the other (:func:`waveoptics.materials.cos2_eta_i`, Priest & Germer 2000). The Kirchhoff family's F
@@ -523,10 +480,11 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     symmetric = nano.surface is None
     visible = sampler_for(ndf).visible
     tgrid = facet_table_grid(table_grid or grid) if symmetric else table_grid or grid
-    stack, first = _facet_stack(nano, w, tgrid, dm, material, polarization)
+    tables = anisotropic_field_stack if anisotropic_field(nano) else _facet_stack   # over (θ', φ') or θ' only
+    stack, first = tables(nano, w, tgrid, dm, material, polarization)
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
     other = {"s": "p", "p": "s"}.get(polarization) if dm.perturbative and material is not None else None
-    stack_other = None if other is None else _facet_stack(nano, w, tgrid, dm, material, other)[0]
+    stack_other = None if other is None else tables(nano, w, tgrid, dm, material, other)[0]
     graze, na_cell, (mc, bw, beta) = _extra_nodes(symmetric, nodes, wi, wo, h, cos_d, rad, level, na, nb, ndf=ndf,
                                                   ax=ax, ay=ay, c=c)
     out = (facet_frame_sum_cl(wi, wo, h, cos_d, level, Lo, Li, micro, (na, nb), rad, stack, stack_other, tgrid,
@@ -556,21 +514,18 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
         G = gfn(np.broadcast_to(wi, wok.shape), wok, mk, lambda d: Lok if d is wok else Lik)
         share = share[cells][ok] if np.ndim(share) else share   # × |ω_o·m| f_nano below
         weight = (im * D if m.ndim == 1 else (im * D)[ok]) * G * share / (wi[2] * wok[:, 2] * den[ok])
-        t, b = facet_basis(mk if m.ndim > 1 else m)
-        lx, ly = np.sum(t * wi, axis=-1), np.sum(b * wi, axis=-1)
-        r = np.hypot(lx, ly)
-        cp, sp = np.where(r > 0, lx / np.where(r > 0, r, 1), 1.0), np.where(r > 0, ly / np.where(r > 0, r, 1), 0.0)
-        ux, uy = np.sum(wok * t, axis=-1), np.sum(wok * b, axis=-1)   # turned so that ω_i^m lies in x–z
-        lo = np.stack([cp * ux + sp * uy, -sp * ux + cp * uy, om[ok]], axis=-1)
-        theta = np.arccos(np.clip(im if m.ndim == 1 else im[ok], 0.0, 1.0))
-        g = _facet_read(pair, tgrid, theta, lo, first is not None, symmetric, facet_thetas(nano))
+        read = _facet_reader(wi, wok, mk if m.ndim > 1 else m, im if m.ndim == 1 else im[ok], om[ok], tgrid,
+                             symmetric, facet_thetas(nano), tables is not _facet_stack)
+        g = read(pair, first is not None)
         if stack_other is not None:   # cos²η_i g_pol + sin²η_i g_other (the s-p term is odd about the facet plane)
-            g_sp = {polarization: g, other: _facet_read(stack_other, tgrid, theta, lo, projected=symmetric,
-                                                        thetas_deg=facet_thetas(nano))}
+            g_sp = {polarization: g, other: read(stack_other, False)}
             g = facet_sp_mix(g_sp["s"], g_sp["p"], cos2_eta_i(wi, mk)[:, None], polarization)
         out[np.arange(wo.shape[0])[cells][ok]] += weight[:, None] * g
 
     e1, e2 = meridian_basis(h) if symmetric else facet_basis(h)
+    if tables is not _facet_stack:   # an anisotropic field's normals drawn apart per cell (cell_shifted_nodes)
+        m_a, (e1, e2) = cell_shifted_nodes(wi, e1, e2, unit_nodes(na), lambda a, u: sample_normal(
+            a, u, ndf=ndf, ax=ax, ay=ay, c=c))
     if out is None:   # the NumPy twin of kernels/facet_frame.cl
         out = np.zeros((wo.shape[0], w.size))
         pair = stack if first is None else np.concatenate([stack, first], axis=-1)   # one gather for both
