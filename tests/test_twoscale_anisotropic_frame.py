@@ -28,7 +28,7 @@ PERIOD = 1100.0
 GRATING = surfaces.sinusoid(50e-9, PERIOD * 1e-9, 64 * LAM / 4 * 1e-9, 64)
 #: the reference's half-vector technique spreads its normals over the first orders' facet tilts (λ/(2Λ) from h)
 WIDTH = LAM / PERIOD
-GRID = DirectionGrid.hemisphere(96)
+GRID = DirectionGrid.hemisphere(64)
 BLOCK = 8
 #: |package − reference| ≤ TOL × reference + K_SE standard errors, per block average
 TOL, K_SE = 0.03, 3.0
@@ -77,8 +77,9 @@ def test_route_choice():
 
 @functools.lru_cache(maxsize=None)
 def _case(alpha, theta, phi=30.0):
-    """(blocks' package means by route, reference means, reference s.e.) of 6 blocks of 8 × 8 cells (θ_o ≤ 70°,
-    lobe > 5 % of its peak) of the light at (θ, φ)."""
+    """(blocks' package means by route, reference means, reference s.e., the frame route's lobes) of 6 blocks of
+    8 × 8 cells (θ_o ≤ 70°, the block's mean > 10 % of the largest block's) of the light at (θ, φ); the reference
+    at every cell centre of the blocks, 400 normals a cell (α 0.1), 800 (α 0.3)."""
     wi = R.direction(theta, phi)
     lobes = {facet: brdf.evaluate(wi, [LAM], "aluminium", Micro(alpha=alpha, ndf="beckmann"), NANO, GRID,
                                   facet=facet) for facet in ("frame", "paraxial")}
@@ -86,22 +87,27 @@ def _case(alpha, theta, phi=30.0):
     blocks = {k: L.diffraction[0].reshape(nb, BLOCK, nb, BLOCK) for k, L in lobes.items()}
     D = blocks["frame"]
     wo = GRID.directions().reshape(nb, BLOCK, nb, BLOCK, 3)
-    ok = (wo[..., 2] > np.cos(np.radians(70))).all(axis=(1, 3)) & (D.min(axis=(1, 3)) > 0.05 * D.max())
+    Dm = D.mean(axis=(1, 3))
+    ok = (wo[..., 2] > np.cos(np.radians(70))).all(axis=(1, 3)) & (Dm > 0.1 * Dm.max())
     cand = np.argwhere(ok)
     sel = cand[np.random.default_rng(5).choice(len(cand), min(6, len(cand)), replace=False)]
     wos = np.concatenate([wo[i, :, j, :].reshape(-1, 3) for i, j in sel])
     ref, se = R.facet_integral(_f_nano, np.broadcast_to(wi, wos.shape), wos, LAM, alpha, "beckmann",
-                               nano_width=WIDTH, n_samples=400, seed=3, frame=field_axes)
+                               nano_width=WIDTH, n_samples=400 if alpha < 0.2 else 800, seed=3,
+                               frame=field_axes)
     ref_b = ref.reshape(len(sel), -1).mean(1)
     se_b = np.sqrt(np.sum(se.reshape(len(sel), -1) ** 2, axis=1)) / BLOCK ** 2
     got = {k: np.array([B[i, :, j, :].mean() for i, j in sel]) for k, B in blocks.items()}
     return got, ref_b, se_b, lobes["frame"]
 
 
-@pytest.mark.parametrize("alpha,theta", [(0.1, 0.0), (0.1, 45.0), (0.3, 0.0), (0.3, 45.0)])
+@pytest.mark.parametrize("alpha,theta", [(0.1, 45.0), (0.3, 0.0), (0.3, 45.0)])
 def test_grid_lobes_are_the_facet_frame_integral(alpha, theta):
-    """evaluate's diffracted lobe (the frame route) averaged over 6 blocks within 3 % + 3 s.e. of the reference;
-    the energy guard idle."""
+    """evaluate's diffracted lobe (the frame route) averaged over up to 6 blocks of 8 × 8 cells within 3 % + 3
+    s.e. of the reference, the light at 30° from the grating vector (measured 0.96-1.12 with 2.2-6.4 % s.e.; the
+    paraxial shift on the same blocks 0.53-1.25, outside the tolerance in 3, 1, 5 of the blocks at α 0.1 / 45°,
+    0.3 / 0°, 0.3 / 45°; at α 0.1 / 0°, left out for time, 0.96-1.03 against 0.91-0.97); the energy guard
+    idle."""
     got, ref_b, se_b, L = _case(alpha, theta)
     assert L.info["facet_integration"] == "frame" and L.info["facet_integration_reason"] is None
     bad = np.abs(got["frame"] - ref_b) > TOL * ref_b + K_SE * se_b
