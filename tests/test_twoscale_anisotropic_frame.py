@@ -68,11 +68,12 @@ def test_field_axes_keep_the_grating_on_a_facet_tilted_about_x():
 
 
 def test_route_choice():
-    """auto: the frame route for the grating (no reason), the same as asked by name."""
+    """auto keeps the grating on the paraxial shift (the frame route's cost, in the reason); asked by name, the
+    frame route takes it (it was refused)."""
     assert "anisotropic" in brdf.field_anisotropy(GRATING)
-    for facet in ("auto", "frame"):
-        assert brdf.facet_route(Micro(alpha=0.1), NANO, GRID, [LAM], facet) == "frame"
-    assert brdf.paraxial_reason(Micro(alpha=0.1), NANO, GRID, [LAM]) is None
+    assert brdf.facet_route(Micro(alpha=0.1), NANO, GRID, [LAM]) == "paraxial"
+    assert "facet 'frame'" in brdf.paraxial_reason(Micro(alpha=0.1), NANO, GRID, [LAM])
+    assert brdf.facet_route(Micro(alpha=0.1), NANO, GRID, [LAM], "frame") == "frame"
 
 
 @functools.lru_cache(maxsize=None)

@@ -78,15 +78,14 @@ def test_exact_lobe_is_the_fields_lobe():
 
 
 def test_route_choice():
-    """auto: the frame route for an isotropic field and for an anisotropic one (its tables run over the azimuth of
-    incidence too: tests/test_twoscale_anisotropic_frame.py), which was paraxial before; an unknown route is
-    refused."""
+    """auto: the frame route for an isotropic field, paraxial (with the reason) for an anisotropic one, whose frame
+    route (tables over the azimuth of incidence too: tests/test_twoscale_anisotropic_frame.py) is taken by name."""
     micro = Micro(alpha=0.1)
     assert brdf.facet_route(micro, Nano(surface=FIELD), GRID, [LAM]) == "frame"
     assert brdf.field_anisotropy(surfaces.HeightField(FIELD.heights, FIELD.dx)) is None   # measured: same test
     sin = surfaces.sinusoid(10e-9, 2e-6, 20e-6, 128)
-    assert brdf.facet_route(micro, Nano(surface=sin), GRID, [LAM]) == "frame"
-    assert brdf.paraxial_reason(micro, Nano(surface=sin), GRID, [LAM]) is None
+    assert brdf.facet_route(micro, Nano(surface=sin), GRID, [LAM]) == "paraxial"
+    assert "anisotropic" in brdf.paraxial_reason(micro, Nano(surface=sin), GRID, [LAM])
     assert "varies" in brdf.field_anisotropy(surfaces.HeightField(sin.heights, sin.dx))
     assert brdf.facet_route(micro, Nano(surface=sin), GRID, [LAM], "frame") == "frame"
     with pytest.raises(WaveopticsError, match="unknown facet"):
