@@ -21,7 +21,9 @@ cosθ_o dω_o = du dv. For PSD statistics the diffracted part is the facet integ
 (:func:`facet_frame_diffraction`): per cell, a balance-heuristic quadrature over facet normals drawn from the micro
 NDF and about the cell's half-vector, each facet's nano lobe read from tables over local incidence
 (:data:`waveoptics.brdf.FACET_THETAS_DEG`) in that facet's frame; so it is for a statistically isotropic nano height
-field, whose tables are its own lobe by the FFT solver at azimuth 0. For an anisotropic height field, and for a PSD
+field, whose tables are its own lobe by the FFT solver at azimuth 0, and asked by name (``facet="frame"``) for an
+anisotropic one, whose tables run over the azimuth of incidence too (:func:`waveoptics.brdf.anisotropic_field_stack`).
+By default for an anisotropic height field, and for a PSD
 lobe narrower than the cells, it is the paraxial form (:func:`facet_route`; ``facet="paraxial"`` by name): the nano lobe
 at the macro incidence is convolved with the *micro kernel* K, the F = 1 microfacet lobe f_mf(ω_i, ·) du dv re-centred on the
 mirror direction, i.e. shifted to each facet's mirror direction instead of being turned with the facet (accurate
@@ -335,7 +337,9 @@ def evaluate(wi, wavelengths_nm, material, micro: Micro, nano: Nano | None, grid
         frame route). A height field's frame route costs 21 field lobes per wavelength once (its tables, on a grid
         fine enough for the patch's speckle) and a quadrature of 64 + 128 normals per cell per incidence
         (:data:`waveoptics.brdf.FACET_NODES_FIELD`): about 1.3 s per incidence on 96² cells and 3 wavelengths,
-        where the paraxial convolution takes 0.1 s.
+        where the paraxial convolution takes 0.1 s. An anisotropic height field takes the frame route by name only:
+        1 + 13 × 6 field lobes per wavelength (:data:`waveoptics.brdf.ANISOTROPIC_THETAS_DEG`) and 256 + 512
+        normals per cell (:data:`waveoptics.brdf.FACET_NODES_ANISOTROPIC_FIELD`), ~5x the isotropic field's time.
 
     Returns
     -------
