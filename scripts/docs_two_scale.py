@@ -203,14 +203,14 @@ def default_case() -> dict:
 
 
 def compute() -> dict:
-    """Every number of docs/two-scale.md (minutes). The facet-frame sweep's rows are written by
-    ``scripts/facet_frame_sweep.py --write`` (slow) and kept here from the committed data."""
+    """Every number of docs/two-scale.md (minutes). The facet-frame sweeps' rows are written by
+    ``scripts/facet_frame_sweep.py [--narrow] --write`` (slow) and kept here from the committed data."""
     import docs_render
 
-    kept = docs_render.load_data("two_scale")["facet_frame_sweep"] if docs_render.data_path("two_scale").exists() \
-        else []
+    old = docs_render.load_data("two_scale") if docs_render.data_path("two_scale").exists() else {}
     return {"limits": limits_table(), "guard": guard_table(), "band": band_table(), "field": field_table(),
-            "horizon": horizon_table(), "default": default_case(), "facet_frame_sweep": kept}
+            "horizon": horizon_table(), "default": default_case(),
+            "facet_frame_sweep": old.get("facet_frame_sweep", []), "narrow_lobe_sweep": old.get("narrow_lobe_sweep", [])}
 
 
 def main():
