@@ -99,7 +99,7 @@ def narrow_table() -> list:
     rows = []
     for B, C in ((200e-6, 3.0), (50e-6, 2.4)):
         nano = brdf.Nano(model=surfaces.PSDModel("abc", 10e-9, B=B, C=C))
-        for alpha in (0.05, 0.1, 0.3):
+        for alpha in (0.005, 0.05, 0.1, 0.3):   # 0.005: a micro lobe narrower than a cell (the paraxial route)
             for theta in (0.0, 30.0, 60.0, 70.0, 80.0, 85.0):
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")

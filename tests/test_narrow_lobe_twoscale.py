@@ -72,8 +72,8 @@ def test_narrow_lobe_tail_on_128_cells_is_the_facet_frame_form(B, C, theta):
 
 def test_the_paraxial_shift_fails_narrow_lobes_under_grazing_light():
     """The route such lobes took before (issue 28's planner note): the macro incidence's lobe shifted to each facet
-    holds 1.27-1.51x the pointwise form's light in these rings at θ_i = 80° (α 0.05, B 200 µm, C 3): the check
-    above can fail."""
-    got, want, route = _rings(200e-6, 3.0, 0.05, 80.0, facet="paraxial")
+    holds 1.03-1.78x the pointwise form's light in these rings at θ_i = 85° (α 0.1, B 200 µm, C 3; 1.27-2.4x at 80-85°
+    with α 0.05 while that route kept the tangent-plane shape): the check above can fail."""
+    got, want, route = _rings(200e-6, 3.0, 0.1, 85.0, facet="paraxial")
     assert route == "paraxial"
-    assert np.max(got / want) > 1.2
+    assert np.max(got / want) > 1.3
