@@ -309,16 +309,15 @@ def test_diffracted_light_is_the_coherent_loss_less_what_masking_takes(alpha, th
     _assert_not_one(ref)
 
 
-@pytest.mark.parametrize("alpha,theta", [(0.3, 0.0), pytest.param(0.3, 70.0, marks=pytest.mark.slow),
-                                         pytest.param(0.5, 0.0, marks=pytest.mark.slow),
-                                         pytest.param(0.5, 60.0, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("alpha,theta", [(0.3, 0.0)])
 def test_the_ratio_with_the_papers_rayleigh_rice_lobe(alpha, theta):
     """A reference that takes nothing from the package: facets carrying the reference's own first-order
     Rayleigh-Rice lobe and coherent fraction 1 − TIS/R (:func:`rayleigh_rice_lobe`). Its ratio is the Kirchhoff
     lobe's: 0.9802 / 1.0603 / 0.9656 / 1.0391 (± 0.0000 / 0.0018 / 0.0010 / 0.0017, 4000 facets) at α 0.3, 0° / 70°
     and α 0.5, 0° / 60°, against 0.981 / 1.062 / 0.964 / 1.040 in the module table; and the package's
     ``diffraction="rayleigh-rice"`` form is it within 1 % of the loss + 3 s.e. (measured ratios 0.9797 / 1.0615 /
-    0.9652 / 1.0393, diffracted albedos within 0.12 %)."""
+    0.9652 / 1.0393, diffracted albedos within 0.12 %; the suite runs α 0.3, 0° for time, the other three were
+    measured with this test parametrized over them)."""
     ref, pkg = _energy(Micro(alpha=alpha, ndf="beckmann"), NANO, theta, diffraction="rayleigh-rice",
                        lobe=rayleigh_rice_lobe())
     _assert_energy(ref, pkg, ("rayleigh-rice", alpha, theta))
@@ -326,11 +325,10 @@ def test_the_ratio_with_the_papers_rayleigh_rice_lobe(alpha, theta):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("alpha,theta", [(a, t) for a in (0.05, 0.1) for t in (0.0, 60.0)]
-                         + [(a, t) for a in (0.3, 0.5) for t in (0.0, 30.0, 60.0, 70.0) if (a, t) not in FAST])
+@pytest.mark.parametrize("alpha,theta", [(0.1, 60.0), (0.5, 0.0), (0.5, 60.0)])
 def test_energy_table_against_the_reference(alpha, theta):
-    """Most of the module table (θ_i 30° and 70° at α 0.05 and 0.1, where the ratio is 1 within 0.2 %, left out for
-    time), as the fast test."""
+    """Three more rows of the module table (the ratio below 1 and above it at α 0.5), as the fast test; the whole
+    table was measured with this test parametrized over it (the suite's time allows these)."""
     ref, pkg = _energy(Micro(alpha=alpha, ndf="beckmann"), NANO, theta)
     _assert_energy(ref, pkg, (alpha, theta))
 
@@ -350,7 +348,11 @@ WHITE_SURFACES = [("beckmann", 0.05), ("beckmann", 0.3), ("ggx", 0.05)]
 TAB_GRAZING = 2.5e-3
 
 
-@pytest.fixture(scope="module", params=WHITE_SURFACES, ids=[f"{n}-{a}" for n, a in WHITE_SURFACES])
+#: the suite's share of the white-furnace table (the whole of it measured with WHITE_SURFACES and 0-89.5°)
+WHITE_RUN = [("beckmann", 0.3)]
+
+
+@pytest.fixture(scope="module", params=WHITE_RUN, ids=[f"{n}-{a}" for n, a in WHITE_RUN])
 def white_table(request):
     ndf, alpha = request.param
     micro = Micro(alpha=alpha, ndf=ndf)
@@ -359,7 +361,7 @@ def white_table(request):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("theta", [0.0, 60.0, 80.0, 89.5])
+@pytest.mark.parametrize("theta", [60.0, 89.5])
 def test_white_furnace_table_against_the_reference(white_table, theta):
     """F = 1 (σ 20 nm): pointwise as the fast test, up to 89.5°. Tabulated (64² tables): albedo − the reference's
     microfacet albedo within 1 % of the coherent loss of the reference's gap up to 70° (measured ≤ 0.6 %), within
