@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from waveoptics import brdf, scatter, surfaces
+from waveoptics.scatter import tangent_blend
 from waveoptics import compare, simulate
 from waveoptics import materials
 from waveoptics.brdf import twoscale
@@ -43,11 +44,13 @@ def limits_table() -> dict:
     nano = twoscale.Nano(model=model)
 
     def nano_lobe(lam):
-        """The pure nano lobe the facets carry at α = 0: the F = 1 lobe times ½ (r_s F_s + r_p F_p), r the
-        hand-over's albedo ratio of each polarization (scatter.tangent_blend; the route keeps the lobe's shape)."""
-        r = {p: float(nano.lobe_energy_scale(wi[2], lam, "kirchhoff", mat, p)) for p in ("s", "p")}
-        F = 0.5 * sum(r[p] * mat.F_facet(wi, wo, lam, p) for p in ("s", "p"))
-        return np.where(grid.inside, scatter.scattered_lobe(wi, wo, lam, model, F=F), 0) * rho
+        """The pure nano lobe the facets carry at α = 0: W F f_K + (1 − W) f_RR, W = w(θ_i) w(θ_o) of the hand-over
+        to first order towards grazing angles (scatter.tangent_blend), F the unpolarized Fresnel factor."""
+        cos_d = np.clip(np.linalg.norm(wi + wo, axis=-1) / 2, 0, 1)
+        k = scatter.scattered_lobe(wi, wo, lam, model, F=mat.F(cos_d, lam))
+        rr = scatter.rayleigh_rice_lobe(wi, wo, lam, model, mat, "unpolarized")
+        W = tangent_blend.blend_weight(wi, wo)
+        return np.where(grid.inside, W * k + (1 - W) * rr, 0) * rho
 
     err = max(np.abs(L.diffraction[i] - nano_lobe(lam)).max() / L.diffraction[i].max() for i, lam in enumerate(w))
     out["alpha0_max_rel"] = float(err)
@@ -203,14 +206,14 @@ def default_case() -> dict:
 
 
 def compute() -> dict:
-    """Every number of docs/two-scale.md (minutes). The facet-frame sweep's rows are written by
-    ``scripts/facet_frame_sweep.py --write`` (slow) and kept here from the committed data."""
+    """Every number of docs/two-scale.md (minutes). The facet-frame sweeps' rows are written by
+    ``scripts/facet_frame_sweep.py [--narrow] --write`` (slow) and kept here from the committed data."""
     import docs_render
 
-    kept = docs_render.load_data("two_scale")["facet_frame_sweep"] if docs_render.data_path("two_scale").exists() \
-        else []
+    old = docs_render.load_data("two_scale") if docs_render.data_path("two_scale").exists() else {}
     return {"limits": limits_table(), "guard": guard_table(), "band": band_table(), "field": field_table(),
-            "horizon": horizon_table(), "default": default_case(), "facet_frame_sweep": kept}
+            "horizon": horizon_table(), "default": default_case(),
+            "facet_frame_sweep": old.get("facet_frame_sweep", []), "narrow_lobe_sweep": old.get("narrow_lobe_sweep", [])}
 
 
 def main():

@@ -8,7 +8,14 @@ Al at 550 nm, ABC σ = 10 nm, B = 2 µm, C = 2.6, Beckmann micro NDF. For each �
 ``TwoScaleBRDF.facet_nano_brdf``) of: the pointwise form; the grid form (``evaluate``, 128², read bilinearly, θ_o ≤
 70°); and the paraxial shift (``evaluate(..., facet="paraxial")``, the former default).
 
-Usage: ``PYTHONPATH=$PWD python scripts/facet_frame_sweep.py [--write]``.
+``--narrow``: nano lobes narrower than the grid's cells (ABC σ = 10 nm, B 200 µm / C 3 and B 50 µm / C 2.4, Al,
+450 nm, 128²): the diffracted light in rings 0.1-0.2, 0.2-0.4 and beyond 0.4 direction cosines from the mirror (exits
+up to 85°) of the grid form (``facet="auto"``, now the frame route with finer tables,
+``waveoptics.brdf.facet_tables``) and of the paraxial shift (the route such lobes took before) over the pointwise
+facet-frame form averaged over the same cells (tests/test_narrow_lobe_twoscale.py's rule); stored as
+``narrow_lobe_sweep``.
+
+Usage: ``PYTHONPATH=$PWD python scripts/facet_frame_sweep.py [--narrow] [--write]``.
 """
 from __future__ import annotations
 
@@ -59,17 +66,62 @@ def table() -> list:
     return [row(alpha, theta, grid) for alpha in (0.05, 0.1, 0.3, 0.5) for theta in (0.0, 30.0, 60.0, 80.0)]
 
 
+def narrow_row(nano, alpha, theta, grid):
+    """Ring ratios (min, max) of the grid form and of the paraxial shift over the pointwise form, one (α, θ_i)."""
+    from test_narrow_lobe_twoscale import RINGS, _cell_averages
+
+    micro = brdf.Micro(alpha=alpha, ndf="beckmann")
+    wi = R.direction(theta)
+    ref = brdf.TwoScaleBRDF("aluminium", micro, nano=nano)
+    d = grid.directions()
+    r = np.hypot(d[..., 0] + wi[0], d[..., 1] + wi[1])
+    want, got = [], {"auto": [], "paraxial": []}
+    for a, b, s in RINGS:
+        iv, iu = np.nonzero((r > a) & (r <= b) & grid.inside & (d[..., 2] > np.cos(np.radians(85.0))))
+        want.append(_cell_averages(lambda wo: ref.eval_parts(wi, wo, 450.0)["diffraction"], grid, iv, iu, s).sum())
+        for route in got:
+            got[route].append((iv, iu))
+    out = {}
+    for route, cells in got.items():
+        L = brdf.evaluate(wi, [450.0], "aluminium", micro, nano, grid, facet=route)
+        ratio = [L.diffraction[0][iv, iu].sum() / w for (iv, iu), w in zip(cells, want)]
+        out["grid" if route == "auto" else route] = [float(min(ratio)), float(max(ratio))]
+        if route == "auto":
+            out["route"] = L.info["facet_integration"]
+    return out
+
+
+def narrow_table() -> list:
+    """One row per (B, C, α, θ_i) of narrow nano lobes on 128² (module doc)."""
+    import warnings
+
+    grid = DirectionGrid.hemisphere(128)
+    rows = []
+    for B, C in ((200e-6, 3.0), (50e-6, 2.4)):
+        nano = brdf.Nano(model=surfaces.PSDModel("abc", 10e-9, B=B, C=C))
+        for alpha in (0.005, 0.05, 0.1, 0.3):   # 0.005: a micro lobe narrower than a cell (the paraxial route)
+            for theta in (0.0, 30.0, 60.0, 70.0, 80.0, 85.0):
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    row_ = narrow_row(nano, alpha, theta, grid)
+                rows.append({"B_um": B * 1e6, "C": C, "alpha": alpha, "theta_deg": theta, **row_})
+                print(rows[-1], flush=True)
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--write", action="store_true", help="store the rows in docs/data/two_scale.json and "
                                                           "re-render docs/two-scale.md")
+    ap.add_argument("--narrow", action="store_true", help="the sweep of narrow nano lobes (module doc)")
     args = ap.parse_args(argv)
-    rows = table()
-    for r in rows:
-        print(r)
+    rows = narrow_table() if args.narrow else table()
+    if not args.narrow:
+        for r in rows:
+            print(r)
     if args.write:
         data = docs_render.load_data("two_scale")
-        data["facet_frame_sweep"] = rows
+        data["narrow_lobe_sweep" if args.narrow else "facet_frame_sweep"] = rows
         docs_render.write_data("two_scale", data)
         docs_render.write("two_scale")
     return 0

@@ -301,3 +301,23 @@ def test_s_and_p_lobes_average_to_unpolarized_direction_by_direction_near_grazin
     avg = 0.5 * (L["s"].diffraction + L["p"].diffraction)
     assert np.max(avg) > 0
     assert np.max(np.abs(L["unpolarized"].diffraction - avg)) <= 1e-12 * np.max(avg)
+
+
+def test_the_default_model_of_this_glass_scatters_the_first_order_tis_at_brewster():
+    """The bullet as a user meets it: the planner (``simulate``'s default, no ``--diffraction``) picks the model for
+    this glass from the validity map (first order holds at kσ ≈ 0.06, the tangent plane's p light does not; the
+    nano lobe forced on, which the planner otherwise skips here: ΔE2000 0.19 under D65), and
+    that model's diffracted albedo of p light at Brewster's angle is first-order TIS_p (written above) within 5 %
+    with no guard acting. The tangent-plane lobe, 1.23× TIS_p here (test above), is not the default."""
+    from waveoptics.planning import plan_scene
+    from waveoptics.planning.scene import parse
+
+    scene = parse({"name": "brewster", "materials": [{"name": "glass", "ior": N_GLASS, "roughness": 0.0,
+                                                       "nano": {"statistics": "abc:sigma=5nm,B=3um,C=2.8"}}],
+                   "lights": [{"name": "l", "spd": "D65", "directions_deg": [[THETA_B, 0]]}],
+                   "view": {"directions_deg": [[THETA_B, 180]]}, "output": {"rgb_images": False, "tables": True}})
+    e = plan_scene(scene, force={"diffraction": True}).entries[0]
+    assert e.nano is not None and e.diffraction == "rayleigh-rice", e.decisions
+    L = _evaluate(THETA_B, "p", e.diffraction)
+    assert float(L.albedo("diffraction")[0]) == pytest.approx(tis_p(THETA_B), rel=5e-2)
+    assert L.info["diffraction_energy_scale"] == [1.0]

@@ -36,7 +36,7 @@ from .roughness_scales import (SERIES_MIN_CAPTURED, check_series, Micro, Nano, i
 from .scale_split import (SPLIT_PERIODS_OF_LAMBDA, split_scales)
 from .twoscale_grid import (mirror_direction, fresnel_at_mirror, mirror_cell, sharp_micro_lobe, azimuth_deg,
     FACET_TAIL_SHARE, significant_cells)
-from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP, CORE_MAX_SUBSAMPLES, energy_weighted_fresnel)
+from .nano_grid import (NARROW_CELLS, nano_lobe, CORE_CELLS, CORE_SUBSAMPLE_STEP, CORE_MAX_SUBSAMPLES)
 from .facet_polarization import (facet_scattered_share, facet_coherent_fraction)
 from .twoscale_paraxial import (micro_kernel, kernel_cos_theta_d, kernel_half_vectors, facet_scatter_weights, facet_incidences_deg,
     field_albedo_evaluations, PARAXIAL_SHARE_RATIO, carried_share_warning, paraxial_diffraction)

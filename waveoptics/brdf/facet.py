@@ -81,9 +81,16 @@ class NanoRadial:
     roughness g_i = g(θ_i) without the obliquity and Fresnel factors, piecewise constant on :data:`RADIAL_BINS`
     annuli geometric in q and tabulated at :data:`COS_LEVELS` values of cos θ_i (nearest level used). Sampling and
     density use the same table, so they agree exactly.
+
+    *floor* (direction cosines, 0: none) spreads the mass within that offset uniformly over the disc of the first
+    annulus edge beyond it: the proposal of a lobe read from tables whose cells are *floor* wide, which hold a core
+    narrower than a cell as its cell average (:func:`waveoptics.brdf.facet_tables.narrow_core_cells`). Nodes drawn
+    inside the true core would read that average at the true core's density, and so count the light of the core
+    times (core area / cell area): ABC B 200 µm, C 3, 450 nm on 128² tables lost 64 % of the diffracted light
+    0.1-0.2 from the mirror (θ_i 30°, α 0.05) before the floor.
     """
 
-    def __init__(self, model, wavelength_nm: float, diffraction, n_nodes: int = 128):
+    def __init__(self, model, wavelength_nm: float, diffraction, n_nodes: int = 128, floor: float = 0.0):
         self._n_nodes = int(n_nodes)
         self.k = 2 * np.pi / (wavelength_nm * 1e-9)
         q_hi = 2.0 * self.k
@@ -107,6 +114,9 @@ class NanoRadial:
         # shape: it is only a proposal, and its density below stays consistent with it
         fallback = Hm[0] * area
         mass = np.where(total > 0, mass, fallback[None, :])
+        if floor > 0:   # the lobe as a table holds it: no finer than its cells about the mirror (class doc)
+            j = int(np.searchsorted(self.edges, self.k * floor))
+            mass[:, :j] = mass[:, :j].sum(axis=1, keepdims=True) * area[None, :j] / (np.pi * self.edges[j] ** 2)
         self.cdf = np.cumsum(mass, axis=1)
         self.cdf /= self.cdf[:, -1:]
         self.density = (mass / mass.sum(axis=1, keepdims=True)) / area[None, :]   # per unit q area

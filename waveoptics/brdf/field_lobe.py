@@ -203,8 +203,7 @@ def field_first_order_over_fresnel(psd, wi, wo, wavelength_nm, material=None,
 
 def field_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, wavelengths_nm, F, *, psd=None,
                          material=None, polarization: str | None = None, solver: str = "fft", device=None,
-                         precision: str = "float32", warnings=None, diffraction="kirchhoff",
-                         keep_shape: bool = False) -> np.ndarray:
+                         precision: str = "float32", warnings=None, diffraction="kirchhoff") -> np.ndarray:
     """The diffracted lobe (n_λ, n_v, n_u) in 1/sr a height field's facets carry: its Kirchhoff lobe
     (:func:`kirchhoff_scattered_lobe`) handed over to first order towards grazing angles as the PSD route's is,
 
@@ -217,11 +216,9 @@ def field_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, waveleng
     (Thorsos & Jackson 1989), and W is symmetric in ω_i and ω_o. From θ_i ≥ 80° (W = 0) the Kirchhoff lobe is not
     computed. Rayleigh-Rice (*diffraction* perturbative) is the Kirchhoff lobe's own route and is returned as it is.
 
-    *keep_shape*: the Kirchhoff lobe scaled per wavelength to the blended lobe's albedo on *grid* instead, as the
-    PSD route's paraxial grid lobe is (:meth:`waveoptics.brdf.Nano.lobe_energy_scale`; the shape the micro kernel
-    shifts, :func:`waveoptics.brdf.nano_lobe`): the two routes' lobes then agree direction by direction (8 ABC and
-    Gaussian fields at 20°, tests/test_generated_fields.py), where the blended shape falls 12-16 % (3.6-5.8
-    standard errors) below the PSD route's grid lobe 0.6-1.9 direction-cosine units from the mirror.
+    The PSD route's grid lobe is the same blend (:func:`waveoptics.brdf.nano_lobe`), as are the facet tables and
+    the pointwise form's lobe: ensembles of generated fields follow the PSD route direction by direction
+    (tests/test_generated_fields.py).
 
     References
     ----------
@@ -238,7 +235,7 @@ def field_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, waveleng
     wo = grid.directions()
     W = blend_weight(wi, wo)
     far = grid.inside & (W < 1.0)
-    grazing = float(tangent_plane_weight(wi[2])) == 0.0 and not keep_shape
+    grazing = float(tangent_plane_weight(wi[2])) == 0.0
     f_k = (np.zeros((w.size, grid.n_v, grid.n_u)) if grazing
            else np.array(kirchhoff_scattered_lobe(surface, wi, grid, w, F, **kw), dtype=float))
     if not far.any():
@@ -255,9 +252,6 @@ def field_scattered_lobe(surface: HeightField, wi, grid: DirectionGrid, waveleng
         rr = field_first_order_over_fresnel(psd, wi_f, wo_f, lam, material, pol) * fresnel_at_pairs(F, wi_f, wo_f,
                                                                                                      lam)
         out[i][far] = W[far] * out[i][far] + (1.0 - W[far]) * rr
-    if keep_shape:   # guard: a lobe with no light needs no scaling
-        got, want = integrate(f_k, grid), integrate(out, grid)
-        return f_k * np.where(got > 0, want / np.where(got > 0, got, 1.0), 1.0)[:, None, None]
     return out
 
 

@@ -16,10 +16,11 @@ from ..scatter.grid import DirectionGrid, integrate
 from ..units import check_wavelengths
 from .field_lobe import (field_cell_averages, field_cell_split, field_cells_resolve, field_scattered_lobe,
                          lobe_sampling_warnings)
+from ..scatter.tangent_blend import blend_with_first_order
 from .roughness_scales import SERIES_MIN_CAPTURED, Nano
 from .twoscale_grid import fresnel_at_mirror, mirror_cell
 
-__all__ = ['NARROW_CELLS', 'nano_lobe', 'energy_weighted_fresnel', 'CORE_CELLS', 'CORE_SUBSAMPLE_STEP',
+__all__ = ['NARROW_CELLS', 'nano_lobe', 'CORE_CELLS', 'CORE_SUBSAMPLE_STEP',
            'CORE_MAX_SUBSAMPLES']
 
 
@@ -63,13 +64,15 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
         if nano.model is None:
             raise WaveopticsError("solver 'psd' needs nano statistics, not a height field; use fft or direct")
         out = np.empty((w.size, grid.n_v, grid.n_u))
+        pol = getattr(F, "polarization", "unpolarized")
         for i, lam in enumerate(w):
-            # the Fresnel weight per direction and the ratio that gives the lobe the continued albedo beyond the
-            # tangent plane's validity (BandSeries.scattered_albedo)
-            Fi, ratio = energy_weighted_fresnel(wi, wo, cos_d, lam, nano, F, diffraction, material)
-            out[i], cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=Fi, return_captured=True,
-                                                 diffraction=diffraction)
-            out[i] *= ratio
+            Fi = F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam)
+            f_k, cap = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, return_captured=True,
+                                              diffraction=diffraction)
+            # beyond the tangent plane's validity the lobe hands over to first order (W f_K + (1 − W) f_RR,
+            # W = w(θ_i) w(θ_o): waveoptics.scatter.tangent_blend), the lobe the facet tables and the pointwise
+            # form carry; its albedo is the continued one (BandSeries.scattered_albedo)
+            out[i] = Fi * blend_with_first_order(f_k, wi, wo, lam, nano.model, material, pol, Fi)
             # guard: the truncated series misses the light of its terms m > m_max once g = (kσ(cosθ_i + cosθ_o))²
             # ≳ 30 (σ ≳ λ/2): refuse rather than return a lobe that silently lacks that energy
             low = float(np.min(np.where(grid.inside, cap, 1.0)))
@@ -86,9 +89,9 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
     if solver in ("fft", "direct"):
         if nano.surface is None:
             raise FieldError(f"solver {solver!r} needs a nano height field ({{surface}} or {{nano}} MODEL:...)", 'surface', 'nano')
-        # the Kirchhoff lobe with the albedo of the lobe handed over to the first order of the field's periodogram
-        # towards grazing angles, its shape kept as the PSD route keeps it (energy_weighted_fresnel); averaged over
-        # each cell where the cells are coarser than λ/L, which their centres no longer sum exactly
+        # the Kirchhoff lobe handed over to the first order of the field's periodogram towards grazing angles, as
+        # the PSD route's; averaged over each cell where the cells are coarser than λ/L, which their centres no
+        # longer sum exactly
         held = {float(lam): [] for lam in w}
 
         def one(lam):
@@ -96,7 +99,7 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
                 return field_cell_averages(
                     lambda g: field_scattered_lobe(nano.surface, wi, g, [lam], F, psd=nano.periodogram(),
                                                    material=material, solver=solver, device=device,
-                                                   diffraction=diffraction, precision=precision, keep_shape=True),
+                                                   diffraction=diffraction, precision=precision),
                     grid, 1 if field_cells_resolve(nano.surface, grid, lam) else field_cell_split(nano.surface, grid,
                                                                                                   lam))
         out = np.concatenate([one(lam) for lam in w])
@@ -106,35 +109,6 @@ def nano_lobe(wi, wavelengths_nm, nano: Nano, grid: DirectionGrid, F, *, solver:
             scatter.solvers.warn_or_collect(msg)
         return out
     raise unknown("solver", solver, ("auto", "psd", "fft", "direct"))
-
-
-def energy_weighted_fresnel(wi, wo, cos_d, wavelength_nm, nano: Nano, F, diffraction="kirchhoff", material=None):
-    """(F, r): the Fresnel factor per direction *wo* (..., 3) the statistics series takes at incidence *wi*
-    (:func:`waveoptics.scatter.scattered_lobe` multiplies it in) and the factor r of the whole lobe, in the paraxial
-    grid route. F is that of *F* at each half-vector (*cos_d* its angle) and r the ratio
-    :meth:`waveoptics.brdf.Nano.lobe_energy_scale` of the light's polarization, which gives the tangent-plane lobe
-    the albedo of the lobe handed over to first order towards grazing angles.
-
-    Unpolarized light is the incoherent average of s and p light. On a *material* with a complex index the two
-    have their own ratios r_s ≠ r_p, so r_u F_u would not be the average of the s and p lobes; the weight is then
-    ½ (r_s F_s + r_p F_p) with r = 1, F_s and F_p the facet reflectances of each polarization in the macro plane
-    (:meth:`waveoptics.materials.Material.F_facet`, whose average is F_u), which keeps the route linear in the
-    polarization and each polarization's own scattered energy (the s and p albedo tables are built instead of the
-    unpolarized one: twice the table cost of r_u alone, once per model and wavelength). Without a complex index
-    (F = 1, F0 only, thin-film stacks) it is (F_u, r_u).
-
-    References
-    ----------
-    .. [1] M. Born, E. Wolf, *Principles of Optics*, 7th ed., §1.5 and §10.9 (Fresnel equations; unpolarized light
-       as the incoherent sum of two orthogonal polarizations).
-    """
-    pol = getattr(F, "polarization", "unpolarized")
-    lam = float(wavelength_nm)
-    if pol == "unpolarized" and getattr(material, "has_index", False):   # r_u itself is not needed (nor built)
-        r_s, r_p = (float(nano.lobe_energy_scale(wi[2], lam, diffraction, material, p)) for p in ("s", "p"))
-        return 0.5 * (r_s * material.F_facet(wi, wo, lam, "s") + r_p * material.F_facet(wi, wo, lam, "p")), 1.0
-    r = float(nano.lobe_energy_scale(wi[2], lam, diffraction, material, pol))
-    return (F.at(wi, wo, lam) if hasattr(F, "at") else F(cos_d, lam)), r
 
 
 #: cells whose centre lies within this many cells of the mirror direction form the core of a narrow nano lobe:

@@ -38,8 +38,8 @@ def check_series(model, lam):
     if captured < SERIES_MIN_CAPTURED:
         raise WaveopticsError(
             f"nano-roughness sigma = {model.sigma * 1e9:.4g} nm is too rough for the PSD series at {lam:g} nm (it "
-            f"holds only {100 * captured:.3g}% of the scattered light); describe roughness this large by the "
-            "micro NDF (alpha)")
+            f"holds only {100 * captured:.3g}% of the scattered light); use a nano height field (solver fft or "
+            "direct), or describe roughness this large by the micro NDF (alpha)")
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,8 @@ from .facet_field_tables import (FACET_NODES_ANISOTROPIC_FIELD, anisotropic_fiel
 from .field_lobe import field_anisotropy, field_proposal_model
 from .nano_grid import NARROW_CELLS
 from .roughness_scales import Micro, Nano, check_series
+from .facet_tables import (FACET_TABLE_MAX_CELLS, RIM_RADIUS, cell_centres, equal_area, facet_table_grid,
+                           from_equal_area, narrow_core_cells, narrow_table_lobe, proposal_floor, v_symmetric)
 from .twoscale_grid import sharp_micro_lobe
 
 __all__ = ['FACET_THETAS_DEG', 'FACET_THETAS_PSD_DEG', 'facet_thetas', 'FACET_NODES_NARROW', 'FACET_NODES_WIDE', 'FACET_NODES_FIELD', 'FACET_NODE_SPLIT', 'FACET_REFERENCE_NM',
@@ -87,16 +89,20 @@ FACET_ROUTES = ("auto", "frame", "paraxial")
 def facet_route(micro: Micro, nano: Nano | None, grid: DirectionGrid, wavelengths_nm, facet: str = "auto") -> str:
     """``frame`` or ``paraxial``: how :func:`waveoptics.brdf.evaluate` carries the nano lobe by the facets.
 
-    ``auto`` takes ``frame`` for PSD statistics and for a statistically isotropic height field
+    ``auto`` takes ``frame`` for PSD statistics (a lobe narrower than the table cells held as their averages on
+    finer tables: :func:`facet_table_grid`) and for a statistically isotropic height field
     (:func:`waveoptics.brdf.field_anisotropy`) whose nano lobe (width λ_min/(π ℓ), ℓ the correlation length of the
-    statistics or of the field, :func:`nano_statistics`) is wider than :data:`waveoptics.brdf.NARROW_CELLS` grid
-    cells; else ``paraxial`` (:func:`paraxial_reason` says why): an anisotropic height field (its facet tables run
-    over the azimuth of incidence too, :func:`waveoptics.brdf.anisotropic_field_stack`, and its lobe's few narrow
-    peaks take 4x the normals: ~5x the isotropic field's time, ~40x the shift's, 128² cells, 3 wavelengths; asked
-    by name, ``frame`` takes them); a micro lobe narrower than a cell (its facets tilt by less than a cell, where
-    the shift and the turn of their lobes agree); nano lobes the grid cannot resolve, which
-    :func:`waveoptics.brdf.nano_lobe` deposits with their energy, where a facet's lobe lies within a cell or two of
-    its mirror direction.
+    field, :func:`nano_statistics`) is wider than :data:`waveoptics.brdf.NARROW_CELLS` grid cells; else ``paraxial``
+    (:func:`paraxial_reason` says why): an anisotropic height field (its facet tables run over the azimuth of
+    incidence too, :func:`waveoptics.brdf.anisotropic_field_stack`, and its lobe's few narrow peaks take 4x the
+    normals: ~5x the isotropic field's time, ~40x the shift's, 128² cells, 3 wavelengths; asked by name, ``frame``
+    takes them); a micro lobe narrower than a cell (its facets tilt by less than a cell, where the shift and the
+    turn of their lobes agree); a height field's nano lobe the grid cannot resolve.
+
+    For narrow PSD lobes the paraxial shift, the route before, lost or gained the light of grazing light's tail
+    (ABC B 200 µm, C 3, 450 nm, 128²: 1.27-1.51x the pointwise facet-frame form 0.1-3 from the mirror at θ_i 80°,
+    α 0.05; 0.65-1.55x at 85°, α 0.3); the frame route holds it within 1.5 % there and within 2.8 % at 0-70°
+    (docs/two-scale.md, "Narrow nano lobes").
     """
     if facet not in FACET_ROUTES:
         raise unknown("facet", facet, FACET_ROUTES)
@@ -115,9 +121,11 @@ def paraxial_reason(micro: Micro, nano: Nano, grid: DirectionGrid, wavelengths_n
                 "isotropic field's (facet 'frame' takes them)")
     if sharp_micro_lobe(micro, grid):
         return "the micro lobe is narrower than a grid cell"
+    # PSD statistics' tables hold a narrow core as cell averages on finer cells (facet_table_grid); a height
+    # field's tables and proposal are not measured there
     wn = float(np.min(wavelengths_nm)) * 1e-9 / (np.pi * nano_statistics(nano).length_scale)
-    if wn < NARROW_CELLS * max(grid.du, grid.dv):
-        return "the nano lobe is narrower than the grid resolves"
+    if nano.surface is not None and wn < NARROW_CELLS * max(grid.du, grid.dv):
+        return "the height field's nano lobe is narrower than the grid resolves"
     return None
 
 
@@ -191,36 +199,49 @@ def _facet_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     if key not in cache:
         th = np.radians(FACET_THETAS_PSD_DEG[k])
         wi = np.array([np.sin(th), 0.0, np.cos(th)])
-        x, y = _centres(grid)
+        x, y = cell_centres(grid)
         # the lobe of an isotropic PSD is even in v: rows from the middle up, mirrored onto the rows below; cells
         # further than 3 cells beyond the rim are never read (a read lies inside the disc) and hold 0
-        half = slice(grid.n_v // 2 - 1, grid.n_v) if _v_symmetric(grid) else slice(0, grid.n_v)
+        half = slice(grid.n_v // 2 - 1, grid.n_v) if v_symmetric(grid) else slice(0, grid.n_v)
         sel = np.zeros(x.shape, bool)
         sel[half] = np.hypot(x[half], y[half]) < 1.0 + 3.0 * max(grid.du, grid.dv)
         wo = from_equal_area(x[sel], y[sel])
         out = np.zeros((grid.n_v, grid.n_u, len(w)), dtype=np.float32)
         first = None if dm.perturbative else np.zeros_like(out)
         for i, lam in enumerate(w):
-            if dm.perturbative:
-                # first order: q = f_RR / cos θ_o, read times the facet's cos²θ_o' (docstring)
-                out[sel, i] = scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization) / wo[:, 2]
-                continue
-            check_series(nano.model, lam)
-            f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
-            # beyond the tangent plane's validity the lobe hands over to first order, reciprocal (W f_K +
-            # (1 − W) f_RR / F, F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9):
-            # f_K and f_RR / F held apart, W applied at each facet's exact local directions
-            Fl = ((lambda a, b, lam=lam: material.F_facet(a, b, lam, polarization))
-                  if uses_vector_first_order(material) else None)
-            rr = first_order_over_fresnel(np.broadcast_to(wi, wo.shape), wo, lam, nano.model, material,
-                                          polarization, Fl)
-            first[sel, i] = rr / wo[:, 2]   # q = f_RR / (F cos θ_o), read times cos²θ_o' (docstring)
-            out[sel, i] = f * wo[:, 2]
+            if not dm.perturbative:
+                check_series(nano.model, lam)
+            out[sel, i], q = _table_values(nano, wi, wo, lam, dm, material, polarization)
+            if first is not None:
+                first[sel, i] = q
         for a in (out, first):
             if half.start > 0 and a is not None:
                 a[:half.start] = a[grid.n_v - 1:grid.n_v - 1 - half.start:-1]
+        for i, lam in enumerate(w):   # a core narrower than a cell: its cells hold their averages
+            if narrow_table_lobe(nano.model.length_scale, lam, grid):
+                r, c, avg = narrow_core_cells(lambda d: np.stack([x for x in _table_values(
+                    nano, wi, d, lam, dm, material, polarization) if x is not None], -1), wi, grid,
+                    lam * 1e-9 / (np.pi * nano.model.length_scale))
+                out[r, c, i] = avg[:, 0]
+                if first is not None:
+                    first[r, c, i] = avg[:, 1]
         cache[key] = (out, first)
     return cache[key]
+
+
+def _table_values(nano: Nano, wi, wo, lam, dm, material, polarization):
+    """(g, first) of :func:`_facet_table` for PSD statistics at directions *wo* (n, 3): first-order q = f_RR / cos θ_o
+    (first None) under Rayleigh-Rice; else g = f_K cos θ_o (F = 1) and q = f_RR / (F cos θ_o) (its docstring)."""
+    if dm.perturbative:   # first order: q = f_RR / cos θ_o, read times the facet's cos²θ_o'
+        return scatter.rayleigh_rice_lobe(wi, wo, lam, nano.model, material, polarization) / wo[:, 2], None
+    f = scatter.scattered_lobe(wi, wo, lam, nano.model, F=1.0, diffraction=dm)
+    # beyond the tangent plane's validity the lobe hands over to first order, reciprocal (W f_K + (1 − W) f_RR / F,
+    # F applied afterwards: waveoptics.scatter.tangent_blend; docs/physics.md §9): f_K and f_RR / F held apart,
+    # W applied at each facet's exact local directions
+    Fl = ((lambda a, b, lam=lam: material.F_facet(a, b, lam, polarization))
+          if uses_vector_first_order(material) else None)
+    rr = first_order_over_fresnel(np.broadcast_to(wi, wo.shape), wo, lam, nano.model, material, polarization, Fl)
+    return f * wo[:, 2], rr / wo[:, 2]
 
 
 def _field_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polarization):
@@ -229,64 +250,6 @@ def _field_table(nano: Nano, k: int, w, grid: DirectionGrid, dm, material, polar
     th = np.radians(FACET_THETAS_DEG[k])
     return field_facet_table(nano, np.array([np.sin(th), 0.0, np.cos(th)]), w, grid, dm, material, polarization)
 
-
-def _v_symmetric(grid: DirectionGrid) -> bool:
-    """Whether the rows of *grid* are symmetric about v = 0 (row i and n_v − 1 − i at opposite v)."""
-    return grid.n_v % 2 == 0 and np.isclose(grid.v_range[0], -grid.v_range[1])
-
-
-def _centres(grid: DirectionGrid):
-    """(u, v) of the cell centres of *grid*, (n_v, n_u) each."""
-    u = grid.u_range[0] + (np.arange(grid.n_u) + 0.5) * grid.du
-    v = grid.v_range[0] + (np.arange(grid.n_v) + 0.5) * grid.dv
-    return np.meshgrid(u, v)
-
-
-
-#: radius of the disc (of the equal-area projection, in direction cosines for a height field's tables) at which
-#: :func:`_facet_table` evaluates the cells beyond its rim
-RIM_RADIUS = 1.0 - 1e-6
-#: the finest facet table of PSD statistics (cells per axis; 0.2° a cell)
-FACET_TABLE_MAX_CELLS = 1024
-
-
-def facet_table_grid(grid: DirectionGrid) -> DirectionGrid:
-    """The grid of PSD statistics' facet tables for lobes on *grid* (a hemisphere): cells of Lambert's azimuthal
-    equal-area projection (:func:`equal_area`), as many per axis as *grid* has over the disc (2 / du, even, at most
-    :data:`FACET_TABLE_MAX_CELLS`): a cell spans 1.7-2.4° at any angle on 96², where direction cosines give a
-    cell at θ an angle du / cos θ (1.2° at the pole, 5.7° at 78°, 11° at the rim on 96²), too coarse for the
-    lobe's bend over the hand-over window (70-80°, :mod:`waveoptics.scatter.tangent_blend`) and its fall towards
-    grazing exit. Read there bilinearly, the facet-frame sum was non-reciprocal by up to 3.5 % (Beckmann α 0.1,
-    96²; 384² cells in direction cosines: 0.8 %); as many cells as the lobe grid, so the tables cost the same per
-    incidence node."""
-    n = 2 * int(np.ceil(1.0 / max(grid.du, grid.dv)))
-    return DirectionGrid.hemisphere(min(max(n, 16), FACET_TABLE_MAX_CELLS))
-
-
-def equal_area(u, v, z):
-    """(x, y) of directions (u, v, z) in Lambert's azimuthal equal-area projection about the normal, scaled so that
-    the horizon is the unit circle: (u, v) / √(1 + z), radius √(1 − cos θ) = √2 sin(θ/2). A cell spans an angle
-    between dx/0.71 at the pole and dx/0.5 at the horizon (1.7° and 2.4° on 96² cells), nearly uniform, where
-    direction cosines give du / cos θ; one square root a point.
-
-    References
-    ----------
-    .. [1] J. P. Snyder, *Map Projections: A Working Manual*, USGS Prof. Paper 1395, 1987, §24 (Lambert azimuthal
-       equal-area projection).
-    """
-    k = 1.0 / np.sqrt(1.0 + np.maximum(z, 0.0))
-    return u * k, v * k
-
-
-def from_equal_area(x, y):
-    """Unit directions (..., 3) at the points (x, y) of :func:`equal_area`; points beyond its rim are taken at
-    radius :data:`RIM_RADIUS` on their azimuth."""
-    r = np.hypot(x, y)
-    s = np.where(r > RIM_RADIUS, RIM_RADIUS / np.where(r > 0, r, 1.0), 1.0)
-    x, y = x * s, y * s
-    z = 1.0 - (x * x + y * y)
-    k = np.sqrt(1.0 + z)
-    return np.stack([x * k, y * k, z], axis=-1)
 
 
 def _facet_stack(nano: Nano, w, grid: DirectionGrid, dm, material, polarization):
@@ -391,6 +354,19 @@ def _extra_nodes(symmetric: bool, nodes, wi, wo, h, cos_d, rad, level, na: int, 
     return graze, np.where(graze, 2 * na, na), bridge
 
 
+def _tables_and_proposal(nano: Nano, w, grid: DirectionGrid, dm, nb: int):
+    """(the facet tables' grid, the half-vector nodes' radial law) of :func:`facet_frame_diffraction` for lobes on
+    *grid*: PSD statistics' equal-area tables (:func:`facet_table_grid`) and a proposal no finer than they hold a
+    core (:func:`proposal_floor`); a height field's tables on *grid* itself."""
+    from .facet import NanoRadial
+
+    if nano.surface is not None:
+        return grid, NanoRadial(nano_statistics(nano), FACET_REFERENCE_NM, dm, nb)
+    ell, lam = nano.model.length_scale, float(np.min(w))
+    tgrid = facet_table_grid(grid, ell, lam)
+    return tgrid, NanoRadial(nano.model, FACET_REFERENCE_NM, dm, nb, proposal_floor(ell, lam, tgrid))
+
+
 def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Nano, grid: DirectionGrid, F, *,
                             diffraction="kirchhoff", polarization: str = "unpolarized",
                             table_grid: DirectionGrid | None = None, nodes: tuple[int, int] | None = None,
@@ -459,7 +435,7 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     .. [3] R. G. Priest, T. A. Germer, Proc. 2000 MSS Specialty Group on Passive Sensors, 2000 (facet frames of
        polarized light).
     """
-    from .facet import NanoRadial, facet_basis, meridian_basis, unit_nodes
+    from .facet import facet_basis, meridian_basis, unit_nodes
     from .ndf import ndf_by_name
     from .sampling import sample_normal, sampler_for
     from .shadowing import shadowing_by_name
@@ -476,16 +452,15 @@ def facet_frame_diffraction(wi, wavelengths_nm, material, micro: Micro, nano: Na
     wo = grid.directions()[inside]
     h = (wi + wo) / np.linalg.norm(wi + wo, axis=-1, keepdims=True)
     cos_d = np.maximum(h @ wi, 1e-6)
-    rad = NanoRadial(nano_statistics(nano), FACET_REFERENCE_NM, dm, nb)
+    symmetric = nano.surface is None
+    tgrid, rad = _tables_and_proposal(nano, w, table_grid or grid, dm, nb)
     level = rad.level(cos_d)
     Li, Lo = float(spec.Lambda(wi, ax, ay, c)), spec.Lambda(wo, ax, ay, c)
     gfn, _ = shadowing_by_name(micro.shadowing)
     # PSD statistics: nodes laid out about each cell's half-vector, reciprocal (:func:`.facet.ndf_nodes`); a height
     # field's speckle keeps the NDF sampler's nodes for ω_i shared by all cells and the Sobol half-vector nodes
     # (FACET_NODES_FIELD was measured with them; the symmetric layout read its speckle 5-11 % off the reference)
-    symmetric = nano.surface is None
     visible = sampler_for(ndf).visible
-    tgrid = facet_table_grid(table_grid or grid) if symmetric else table_grid or grid
     tables = anisotropic_field_stack if anisotropic_field(nano) else _facet_stack   # over (θ', φ') or θ' only
     stack, first = tables(nano, w, tgrid, dm, material, polarization)
     # Rayleigh-Rice tables hold Q of the facet's own s or p light: macro s or p light mixes both (Priest & Germer)
