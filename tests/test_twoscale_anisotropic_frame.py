@@ -118,6 +118,6 @@ def test_grid_lobes_are_the_facet_frame_integral(alpha, theta):
 
 
 def test_paraxial_route_fails_the_same_assertion():
-    """The paraxial shift (the route anisotropic fields took before) on the same blocks: outside the tolerance."""
+    """The paraxial shift (the route `auto` takes for anisotropic fields) on the same blocks: outside the tolerance."""
     got, ref_b, se_b, _ = _case(0.3, 45.0)
     assert np.any(np.abs(got["paraxial"] - ref_b) > TOL * ref_b + K_SE * se_b)
