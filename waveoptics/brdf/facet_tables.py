@@ -94,8 +94,9 @@ def from_equal_area(x, y):
 
 def narrow_table_lobe(length_scale_m: float, wavelength_nm: float, grid: DirectionGrid) -> bool:
     """Whether a nano lobe of width λ/(π ℓ) (direction cosines) is narrower than :data:`NARROW_CELLS` cells of the
-    table *grid* (equal-area units, a cell spanning up to √2 its width in direction cosines: :func:`equal_area`)."""
-    return wavelength_nm * 1e-9 / (np.pi * length_scale_m) < NARROW_CELLS * np.sqrt(2.0) * max(grid.du, grid.dv)
+    table *grid* (the lobe grid's rule, :func:`waveoptics.brdf.nano_lobe`; a cell of the equal-area tables spans 1 to
+    √2 its width in direction cosines, :func:`equal_area`)."""
+    return wavelength_nm * 1e-9 / (np.pi * length_scale_m) < NARROW_CELLS * max(grid.du, grid.dv)
 
 
 def narrow_core_cells(values, wi, grid: DirectionGrid, width: float):
