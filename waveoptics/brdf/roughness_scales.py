@@ -134,7 +134,7 @@ class Nano:
         c = np.clip(np.asarray(cos_theta_d, dtype=float), 0.0, 1.0)
         dm = scatter.get_model(diffraction, perturbative=True)
         if dm.perturbative and self.surface is not None:   # Rayleigh-Rice of the field's periodogram
-            return self._rayleigh_rice_coherent(c, wavelength_nm, material)
+            return self._rayleigh_rice_coherent(c, wavelength_nm, material, azimuth_deg)
         if self.model is not None:   # conductor: 1 − E(θ_d); dielectric: exp(−g_rel(θ_d))
             return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.coherent_fraction(cc, dm, material,
                                                                                               polarization))
@@ -188,9 +188,11 @@ class Nano:
             cache["psd"] = surfaces.PeriodogramPSD(self.surface)
         return cache["psd"]
 
-    def _rayleigh_rice_coherent(self, c, wavelength_nm, material):
-        """1 − E_RR(θ) of the height field's periodogram (:func:`waveoptics.scatter.rayleigh_rice_albedo`),
-        tabulated on :data:`waveoptics.scatter.band_energy.RR_THETAS_DEG` per wavelength and material, on a conductor; on a
+    def _rayleigh_rice_coherent(self, c, wavelength_nm, material, azimuth_deg: float = 0.0):
+        """1 − E_RR(θ) of the height field's periodogram (:func:`waveoptics.scatter.rayleigh_rice_albedo`, summed
+        over its bins), on a conductor: one or two incidences (the macro one) exactly at *azimuth_deg*, as
+        :meth:`_field_coherent` takes them, a spread of facet incidences from a table on
+        :data:`waveoptics.scatter.band_energy.RR_THETAS_DEG` per wavelength and material at azimuth 0; on a
         dielectric the Debye-Waller factor of the periodogram's band (:meth:`_periodogram_debye_waller`)."""
         from ..scatter.band_energy import RR_THETAS_DEG, rr_interp
 
@@ -202,10 +204,20 @@ class Nano:
         out = np.empty(c_b.shape)
         for l_val in np.unique(lam_b):
             key = ("rr", float(l_val), None if material is None else getattr(material, "cache_name", material.name))
+            sel = lam_b == l_val
+            asked = np.unique(c_b[sel])
+            if asked.size <= 2 and float(azimuth_deg) != 0.0:   # the macro incidence: exactly, at its azimuth
+                exact = cache.setdefault(key + ("exact", round(float(azimuth_deg), 9)), {})
+                for a in asked:
+                    if float(a) not in exact:
+                        exact[float(a)] = float(scatter.rayleigh_rice_albedo(
+                            float(np.degrees(np.arccos(a))), float(l_val), self.periodogram(), material,
+                            azimuth_deg=float(azimuth_deg)))
+                out[sel] = np.clip(1.0 - np.array([exact[float(a)] for a in c_b[sel]]), 0.0, 1.0)
+                continue
             if key not in cache:
                 cache[key] = np.array([scatter.rayleigh_rice_albedo(t, float(l_val), self.periodogram(), material)
                                        for t in RR_THETAS_DEG])
-            sel = lam_b == l_val
             E = rr_interp(np.degrees(np.arccos(c_b[sel])), cache[key])
             out[sel] = np.clip(1.0 - E, 0.0, 1.0)   # guard: first-order TIS above R means σ far outside its domain
         return out if out.ndim else float(out)

@@ -35,7 +35,7 @@ from .band import (band_arc, relevant_variance, relevant_variance_of_field, beyo
     series_arrays)
 from .perturbation import (POLARIZATIONS, COMPONENTS, PEC_PERMITTIVITY, q_factors, Q,
     rayleigh_rice_components, rayleigh_rice_brdf, permittivity, rayleigh_rice_lobe, rayleigh_rice_albedo,
-    rayleigh_rice_tis, is_stack, stack_correlation)
+    rayleigh_rice_tis, periodogram_bin_sum, is_stack, stack_correlation)
 from .transmission import (q_transmission, rr_psd, rr_btdf_components, rr_brdf_components, rr_bsdf_components,
     rr_bsdf, TIS_METHODS, WIDE_LOBE, hemisphere_albedo, rr_tis_transmission, rr_tis_reflection,
     incident_polarization)

@@ -48,7 +48,7 @@ from .series import rayleigh_rice
 
 __all__ = ["POLARIZATIONS", "COMPONENTS", "PEC_PERMITTIVITY", "q_factors", "Q",
            "rayleigh_rice_components", "rayleigh_rice_brdf", "permittivity", "rayleigh_rice_lobe",
-           "rayleigh_rice_albedo", "rayleigh_rice_tis", "is_stack", "stack_correlation"]
+           "rayleigh_rice_albedo", "rayleigh_rice_tis", "periodogram_bin_sum", "is_stack", "stack_correlation"]
 
 #: relative permittivity standing for a perfect conductor (|ε| → ∞: every q tends to Rice's limit, reflectance 1)
 PEC_PERMITTIVITY = -1e12 + 0j
@@ -184,7 +184,7 @@ def _specular_reflectance(theta, wavelength_nm, material, polarization):
 
 
 def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization: str = "unpolarized",
-                      scalar: bool = False) -> float:
+                      scalar: bool = False, azimuth_deg: float = 0.0) -> float:
     """TIS(θ) = ∫ f_RR cosθ_o dω_o (unitless, a share of the incident light) over the hemisphere
     (:func:`waveoptics.scatter.polar_albedo`): the light first-order roughness scatters into reflection.
 
@@ -192,7 +192,9 @@ def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization
     problem, Q = 1; the Kirchhoff lobe with F = 1 is the tangent-plane approximation of that problem) in place of
     the vector Q of the *material*. A thin-film :class:`~waveoptics.materials.Stack` gives the TIS of the stack
     with *psd* on every interface (:func:`waveoptics.scatter.rough_stack_tis`). A 1-D array of incidences
-    *theta_deg* gives the TIS at each (one quadrature over all of them, :func:`~waveoptics.scatter.polar_albedo`).
+    *theta_deg* gives the TIS at each (one quadrature over all of them, :func:`~waveoptics.scatter.polar_albedo`). A
+    height field's periodogram is summed over its own bins (:func:`periodogram_bin_sum`) at *azimuth_deg* (degrees;
+    the light's azimuth in the field's axes, which an anisotropic field's TIS depends on; a PSD model is isotropic).
 
     References
     ----------
@@ -221,10 +223,42 @@ def rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material=None, polarization
 
         def lobe(wi_b, wo, q):
             return rayleigh_rice_brdf(wi_b, wo, lam, psd, eps, polarization)
+    if hasattr(psd, "P") and hasattr(psd, "fx"):   # a height field's periodogram: its own bins
+        out = np.array([periodogram_bin_sum(x, lam, psd, lobe, math.radians(azimuth_deg)) for x in np.ravel(t)])
+        return out if many else float(out[0])
     return polar_albedo(t, k, psd.length_scale, lobe)
 
 
-def rayleigh_rice_albedo(theta_deg, wavelength_nm, psd, material=None, polarization: str = "unpolarized") -> float:
+def periodogram_bin_sum(theta, wavelength_nm, psd, lobe, azimuth: float = 0.0) -> float:
+    """∫ f cosθ_o dω_o = ∫ f du dv of a first-order *lobe* (``lobe(wi, wo, q)``, 1/sr) of a height field's periodogram
+    *psd* (:class:`waveoptics.surfaces.PeriodogramPSD`) at incidence *theta*, *azimuth* (rad), summed over the
+    periodogram's own bins: each frequency (f_x, f_y) sends the light to (u, v) = (λ f_x − u_i, λ f_y − v_i) (the
+    grating equation), a cell of λ² Δf_x Δf_y; bins beyond the unit disc are evanescent. The exact integral of the discrete
+    spectrum: the polar quadrature of :func:`waveoptics.scatter.polar_albedo` (48 azimuths) samples a periodogram's
+    narrow streaks (oriented scratches, gratings) by chance (a scratch field's TIS came out 26 % low, and the energy
+    guard cut its lobe by that, 32-42 % with micro roughness).
+
+    References
+    ----------
+    .. [1] J. C. Stover, *Optical Scattering*, 3rd ed., SPIE 2012, §4.4 (TIS of the Rayleigh-Rice BRDF), §2.5 (the
+       grating equation).
+    """
+    lam = float(wavelength_nm) * 1e-9
+    FX, FY = np.meshgrid(psd.fx, psd.fy)
+    w_i = np.array([np.sin(theta) * np.cos(azimuth), np.sin(theta) * np.sin(azimuth), np.cos(theta)])
+    u, v = lam * FX - w_i[0], lam * FY - w_i[1]
+    ok = u * u + v * v < 1.0
+    if not ok.any():
+        return 0.0
+    wo = np.stack([u[ok], v[ok], np.sqrt(1.0 - u[ok] ** 2 - v[ok] ** 2)], axis=-1)
+    wi = np.broadcast_to(w_i, wo.shape)
+    dfx, dfy = float(psd.fx[1] - psd.fx[0]), float(psd.fy[1] - psd.fy[0])
+    f = lobe(wi, wo, None)
+    return float(np.sum(f) * lam * lam * dfx * dfy)
+
+
+def rayleigh_rice_albedo(theta_deg, wavelength_nm, psd, material=None, polarization: str = "unpolarized",
+                         azimuth_deg: float = 0.0) -> float:
     """E_RR(θ) = TIS(θ) / R(θ): the share of the specularly reflected light R (Fresnel, s, p or unpolarized; 1 for a
     perfect conductor) that first-order roughness scatters, with TIS = ∫ f_RR cosθ_o dω_o over the hemisphere
     (:func:`rayleigh_rice_tis`). On a conductor the coherent fraction of the two-scale model is 1 − E_RR (energy
@@ -238,7 +272,7 @@ def rayleigh_rice_albedo(theta_deg, wavelength_nm, psd, material=None, polarizat
     """
     import math
 
-    tis = rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material, polarization)
+    tis = rayleigh_rice_tis(theta_deg, wavelength_nm, psd, material, polarization, azimuth_deg=azimuth_deg)
     if np.ndim(theta_deg) > 0:
         R = np.array([_specular_reflectance(math.radians(float(x)), float(wavelength_nm), material, polarization)
                       for x in np.ravel(theta_deg)])
