@@ -290,14 +290,11 @@ def test_rayleigh_rice_of_a_height_field_on_glass_keeps_its_p_lobe_at_brewster()
 
 
 def test_s_and_p_lobes_average_to_unpolarized_direction_by_direction_near_grazing():
-    """At 80° the tangent-plane lobe hands over to first order, with a ratio of its own for s and p light (they
-    differ by more than 1e-3 here); the unpolarized lobe is still the average of the s and p lobes in every
-    direction (unpolarized light is their incoherent sum, Born & Wolf §10.9), to rounding."""
-    nano = twoscale.Nano(model=MODEL)
-    r = {p: float(nano.lobe_energy_scale(math.cos(math.radians(80.0)), LAM, "kirchhoff", GLASS, p))
-         for p in ("s", "p")}
-    assert abs(r["s"] - r["p"]) > 1e-3 * r["s"]
+    """At 80° the tangent-plane lobe hands over to first order, whose s and p lobes differ (here by more than 10 %
+    somewhere); the unpolarized lobe is still the average of the s and p lobes in every direction (unpolarized
+    light is their incoherent sum, Born & Wolf §10.9), to rounding."""
     L = {p: _evaluate(80.0, p, n=64) for p in ("s", "p", "unpolarized")}
+    assert np.max(np.abs(L["s"].diffraction - L["p"].diffraction)) > 0.1 * np.max(L["s"].diffraction)
     avg = 0.5 * (L["s"].diffraction + L["p"].diffraction)
     assert np.max(avg) > 0
     assert np.max(np.abs(L["unpolarized"].diffraction - avg)) <= 1e-12 * np.max(avg)

@@ -157,19 +157,6 @@ class Nano:
         return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.scattered_share(cc, dm, material,
                                                                                          polarization))
 
-    def lobe_energy_scale(self, cos_theta_i, wavelength_nm, diffraction="kirchhoff", material=None,
-                          polarization: str = "unpolarized"):
-        """The factor that gives a statistics lobe of tangent-plane shape at incidence θ_i the scattered albedo of
-        the lobe handed over to first order towards grazing angles (:meth:`waveoptics.scatter.BandSeries.
-        lobe_energy_scale`; 1 for Rayleigh-Rice and for height fields, whose grid lobe
-        :func:`waveoptics.brdf.nano_lobe` scales itself: :func:`waveoptics.brdf.field_scattered_lobe`)."""
-        c = np.clip(np.asarray(cos_theta_i, dtype=float), 0.0, 1.0)
-        if self.model is None:
-            return np.ones(np.broadcast_shapes(c.shape, np.shape(wavelength_nm)))
-        dm = scatter.get_model(diffraction, perturbative=True)
-        return self._per_wavelength(c, wavelength_nm, lambda bs, cc: bs.lobe_energy_scale(
-            np.degrees(np.arccos(cc)), dm, material, polarization))
-
     def _per_wavelength(self, c, wavelength_nm, fn):
         """fn(band_series(λ), cos) over broadcast (cos, λ) arrays, one band series per distinct λ."""
         lam = np.asarray(wavelength_nm, dtype=float)

@@ -132,8 +132,9 @@ class BandAlbedos:
         nano-roughness (kσ cosθ → 0), whose scatter falls to 0 at grazing incidence (Tatarskii & Charnotskii 1998).
         f_RR carries the vector Q of a *material* with a complex index, else (F = 1, F0 only, thin-film stacks) it
         is the scalar Q = 1 lobe times the Fresnel factor the tangent-plane lobe has. E here is the albedo of that
-        blended lobe (the tables' *continued* column; the *raw* one is the tangent-plane lobe's own, which
-        :meth:`lobe_energy_scale` scales to it). Rayleigh-Rice itself is taken as it is.
+        blended lobe (the tables' *continued* column; the *raw* one is the tangent-plane lobe's own), the lobe every
+        form carries (the paraxial grid route too, :func:`waveoptics.brdf.nano_lobe`). Rayleigh-Rice itself is taken
+        as it is.
         TANGENT_PLANE_MAX_DEG (75°) is the incidence up to which the tangent-plane lobe's own albedo is trusted
         elsewhere (the planner, the validity docs).
 
@@ -152,23 +153,6 @@ class BandAlbedos:
         if dm.perturbative:
             return rr_interp(theta_deg, tab)
         return np.interp(np.asarray(theta_deg, dtype=float), nodes, tab)
-
-    def lobe_energy_scale(self, theta_deg, diffraction="kirchhoff", material=None,
-                          polarization: str = "unpolarized") -> np.ndarray:
-        """The factor that gives the tangent-plane lobe at incidence θ (degrees) the scattered albedo of
-        :meth:`scattered_albedo` (the lobe handed over to first order towards grazing angles) instead of its own,
-        for a caller that keeps the tangent-plane lobe's shape (the paraxial grid route): ≤ 1 near grazing, within
-        a few % of 1 up to 60° (the share of the lobe beyond 70° exit), 1 for Rayleigh-Rice."""
-        from .models import get_model
-
-        dm = get_model(diffraction, perturbative=True)
-        t = np.asarray(theta_deg, dtype=float)
-        if dm.perturbative:
-            return np.ones(t.shape)
-        nodes, raw, cont = self._tables(dm, material, polarization, not is_conductor(material))
-        got = np.interp(t, nodes, raw)
-        # guard: a lobe with no light needs no scaling
-        return np.where(got > 0, np.interp(t, nodes, cont) / np.where(got > 0, got, 1.0), 1.0)
 
     def debye_waller(self, cos_theta, diffraction="kirchhoff") -> np.ndarray:
         """exp(−g_rel), g_rel = (k σ_rel(θ) c)², c the *diffraction* model's specular cos_sum (2 cosθ, or 2 for
