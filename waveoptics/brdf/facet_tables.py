@@ -30,7 +30,6 @@ def cell_centres(grid: DirectionGrid):
     return np.meshgrid(u, v)
 
 
-
 #: radius of the disc (of the equal-area projection, in direction cosines for a height field's tables) at which
 #: :func:`_facet_table` evaluates the cells beyond its rim
 RIM_RADIUS = 1.0 - 1e-6
@@ -138,8 +137,8 @@ def narrow_core_cells(values, wi, grid: DirectionGrid, width: float):
     return rows, cols, avg / count[:, None]
 
 
-#: the half-vector proposal of a lobe narrower than the table's cells spreads its core over a disc this many
-#: table cells wide (direction cosines, at the largest scale of a cell: √2 its equal-area width)
+#: the half-vector proposal of a lobe narrower than the table's cells spreads its core uniformly over a disc whose
+#: radius is this many table cells (direction cosines, at the largest scale of a cell: √2 its equal-area width)
 FLOOR_CELLS = 1.0
 
 

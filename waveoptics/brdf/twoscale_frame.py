@@ -101,8 +101,9 @@ def facet_route(micro: Micro, nano: Nano | None, grid: DirectionGrid, wavelength
 
     For narrow PSD lobes the paraxial shift, the route before, lost or gained the light of grazing light's tail
     (ABC B 200 µm, C 3, 450 nm, 128²: 1.27-1.51x the pointwise facet-frame form 0.1-3 from the mirror at θ_i 80°,
-    α 0.05; 0.65-1.55x at 85°, α 0.3); the frame route holds it within 1.5 % there and within 2.8 % at 0-70°
-    (docs/two-scale.md, "Narrow nano lobes").
+    α 0.05, while it carried the tangent-plane shape; with the blended lobe it carries now still 1.03-1.78x at 85°,
+    α 0.1); the frame route holds it within 1.5 % there and within 2.8 % at 0-70° (docs/two-scale.md, "Narrow
+    nano lobes").
     """
     if facet not in FACET_ROUTES:
         raise unknown("facet", facet, FACET_ROUTES)
